@@ -1,0 +1,1 @@
+fn main(){ let c = shaderc::Compiler::new().unwrap(); let r = c.compile_into_spirv("#version 450\nvoid main(){}", shaderc::ShaderKind::Compute, "x.comp", "main", None).unwrap(); println!("cargo:warning=spv {} words", r.as_binary().len()); }

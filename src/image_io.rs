@@ -1,0 +1,94 @@
+//! Image files: 32-bit float OpenEXR for the physical AOVs, 8-bit PNG for `beauty`. Every write goes to a
+//! temporary file in the same directory and is renamed into place, so a failed run never leaves a half-written
+//! file behind.
+
+use crate::error::{AppError, AppResult};
+use std::path::{Path, PathBuf};
+
+/// An RGB float image, row-major, row 0 at the top.
+#[derive(Clone, Debug)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<[f32; 3]>,
+}
+
+impl RgbImage {
+    pub fn new(width: u32, height: u32) -> Self {
+        RgbImage { width, height, data: vec![[0.0; 3]; (width * height) as usize] }
+    }
+
+    pub fn at(&self, x: u32, y: u32) -> [f32; 3] {
+        self.data[(y * self.width + x) as usize]
+    }
+
+    /// One channel as a plane of floats.
+    pub fn channel(&self, c: usize) -> Vec<f32> {
+        self.data.iter().map(|p| p[c]).collect()
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.partial-{}", std::process::id()))
+}
+
+/// Write through a temporary file and rename it into place.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> AppResult<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if !dir.is_dir() {
+            return Err(AppError::BadInput(format!("{}: output directory does not exist", path.display())));
+        }
+    }
+    let tmp = temp_path(path);
+    match write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
+        Ok(()) => Ok(()),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(AppError::Io(format!("{}: cannot write: {e}", path.display())))
+        }
+    }
+}
+
+pub fn write_exr(path: &Path, img: &RgbImage) -> AppResult<()> {
+    write_atomic(path, |tmp| {
+        exr::prelude::write_rgb_file(tmp, img.width as usize, img.height as usize, |x, y| {
+            let p = img.data[y * img.width as usize + x];
+            (p[0], p[1], p[2])
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
+pub fn read_exr(path: &Path) -> AppResult<RgbImage> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| RgbImage::new(res.width() as u32, res.height() as u32),
+        |img: &mut RgbImage, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width as usize;
+            img.data[pos.y() * w + pos.x()] = [r, g, b];
+        },
+    )
+    .map_err(|e| AppError::BadInput(format!("{}: cannot read EXR: {e}", path.display())))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+/// Write 8-bit RGBA (already tone-mapped and sRGB-encoded).
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> AppResult<()> {
+    write_atomic(path, |tmp| {
+        image::save_buffer_with_format(tmp, rgba, width, height, image::ColorType::Rgba8, image::ImageFormat::Png)
+            .map_err(|e| e.to_string())
+    })
+}
+
+pub fn read_png(path: &Path) -> AppResult<(u32, u32, Vec<u8>)> {
+    let img = image::open(path).map_err(|e| AppError::BadInput(format!("{}: cannot read PNG: {e}", path.display())))?;
+    let rgba = img.to_rgba8();
+    Ok((rgba.width(), rgba.height(), rgba.into_raw()))
+}
+
+/// Write text (JSON, Markdown, SVG) atomically.
+pub fn write_text(path: &Path, text: &str) -> AppResult<()> {
+    write_atomic(path, |tmp| std::fs::write(tmp, text).map_err(|e| e.to_string()))
+}

@@ -1,0 +1,511 @@
+//! Scenes: the TOML format of DESIGN.md, validated into world-space meshes, lights and cameras.
+//!
+//! Errors name the file, the line and the field (`sphere.toml:23: object[1] "glass".material.ior: ...`), and are
+//! reported by the CLI with exit code 2.
+
+pub mod mesh;
+mod schema;
+pub mod view;
+
+use glam::{EulerRot, Mat4, Quat, Vec3};
+use schema::*;
+use std::path::{Path, PathBuf};
+
+pub use mesh::Mesh;
+pub use view::{CameraView, LightView, Window};
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{file}: {message}")]
+    Io { file: String, message: String },
+    #[error("{file}:{line}:{column}: {message}")]
+    Syntax { file: String, line: usize, column: usize, message: String },
+    #[error("{file}:{line}: {field}: {message}")]
+    Field { file: String, line: usize, field: String, message: String },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    Spot,
+    Directional,
+}
+
+#[derive(Clone, Debug)]
+pub struct Light {
+    pub kind: LightKind,
+    pub position: Vec3,
+    pub target: Vec3,
+    /// Cone half-angle in radians (spot lights).
+    pub cone: f32,
+    /// W/sr for spot lights, W/m² (perpendicular to the beam) for directional lights.
+    pub intensity: f32,
+    pub color: Vec3,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    Orthographic { half_height: f32 },
+    /// Vertical field of view in radians.
+    Perspective { fov: f32 },
+}
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub name: String,
+    pub projection: Projection,
+    pub position: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    Diffuse { albedo: Vec3 },
+    Dielectric { ior: f32 },
+}
+
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub name: String,
+    pub material: Material,
+    pub mesh: Mesh,
+}
+
+impl Object {
+    pub fn is_refractor(&self) -> bool {
+        matches!(self.material, Material::Dielectric { .. })
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub path: PathBuf,
+    pub lights: Vec<Light>,
+    pub cameras: Vec<Camera>,
+    pub objects: Vec<Object>,
+}
+
+struct Ctx<'a> {
+    file: String,
+    text: &'a str,
+    dir: PathBuf,
+}
+
+impl Ctx<'_> {
+    fn line(&self, offset: usize) -> usize {
+        self.text[..offset.min(self.text.len())].bytes().filter(|&b| b == b'\n').count() + 1
+    }
+    fn err(&self, span: std::ops::Range<usize>, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::Field { file: self.file.clone(), line: self.line(span.start), field: field.into(), message: message.into() }
+    }
+}
+
+fn finite3(v: [f32; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl Scene {
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::Io { file: path.display().to_string(), message: format!("cannot read scene: {e}") })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse scene text; `path` locates the file for messages and relative mesh paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let cx = Ctx {
+            file: path.display().to_string(),
+            text,
+            dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        };
+        let file: SceneFile = toml::from_str(text).map_err(|e| {
+            let start = e.span().map(|s| s.start).unwrap_or(0);
+            let line = cx.line(start);
+            let column = start - text[..start.min(text.len())].rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+            SceneError::Syntax { file: cx.file.clone(), line, column, message: e.message().trim().to_string() }
+        })?;
+        let lights = file.light.iter().enumerate().map(|(i, l)| light(&cx, i, l)).collect::<Result<Vec<_>, _>>()?;
+        if lights.is_empty() {
+            return Err(cx.err(0..0, "light", "the scene needs at least one [[light]]"));
+        }
+        let mut cameras = Vec::new();
+        for (i, c) in file.camera.iter().enumerate() {
+            let cam = camera(&cx, i, c)?;
+            if cameras.iter().any(|o: &Camera| o.name == cam.name) {
+                return Err(cx.err(c.get_ref().name.span(), format!("camera[{i}].name"), format!("duplicate camera name `{}`", cam.name)));
+            }
+            cameras.push(cam);
+        }
+        let mut objects = Vec::new();
+        for (i, o) in file.object.iter().enumerate() {
+            let obj = object(&cx, i, o)?;
+            if objects.iter().any(|x: &Object| x.name == obj.name) {
+                return Err(cx.err(o.get_ref().name.span(), format!("object[{i}].name"), format!("duplicate object name `{}`", obj.name)));
+            }
+            objects.push(obj);
+        }
+        if objects.is_empty() {
+            return Err(cx.err(0..0, "object", "the scene needs at least one [[object]]"));
+        }
+        Ok(Scene { path: path.to_path_buf(), lights, cameras, objects })
+    }
+
+    pub fn camera(&self, name: Option<&str>) -> Result<&Camera, String> {
+        let names = || self.cameras.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ");
+        match name {
+            Some(n) => self
+                .cameras
+                .iter()
+                .find(|c| c.name == n)
+                .ok_or_else(|| format!("{}: no camera named `{n}` (cameras: {})", self.path.display(), names())),
+            None => self.cameras.first().ok_or_else(|| format!("{}: the scene has no [[camera]]", self.path.display())),
+        }
+    }
+
+    pub fn refractors(&self) -> impl Iterator<Item = &Object> {
+        self.objects.iter().filter(|o| o.is_refractor())
+    }
+
+    pub fn receivers(&self) -> impl Iterator<Item = &Object> {
+        self.objects.iter().filter(|o| !o.is_refractor())
+    }
+
+    pub fn has_refractors(&self) -> bool {
+        self.refractors().next().is_some()
+    }
+
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.objects.iter().map(|o| o.mesh.bounds()).fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+        )
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.triangle_count()).sum()
+    }
+}
+
+fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
+    let d = l.get_ref();
+    let f = |name: &str| format!("light[{i}].{name}");
+    let kind = match d.kind.get_ref().as_str() {
+        "spot" => LightKind::Spot,
+        "directional" => LightKind::Directional,
+        other => return Err(cx.err(d.kind.span(), f("kind"), format!("unknown light kind `{other}` (expected \"spot\" or \"directional\")"))),
+    };
+    let position = *d.position.get_ref();
+    let target = *d.target.get_ref();
+    if !finite3(position) {
+        return Err(cx.err(d.position.span(), f("position"), "must be finite"));
+    }
+    if !finite3(target) {
+        return Err(cx.err(d.target.span(), f("target"), "must be finite"));
+    }
+    if (Vec3::from(target) - Vec3::from(position)).length() < 1e-6 {
+        return Err(cx.err(d.target.span(), f("target"), "must differ from the position"));
+    }
+    let cone = match (kind, &d.cone_deg) {
+        (LightKind::Spot, Some(c)) => {
+            let v = *c.get_ref();
+            if !(v > 0.0 && v < 90.0) {
+                return Err(cx.err(c.span(), f("cone_deg"), format!("cone half-angle must lie in (0, 90) degrees (got {v})")));
+            }
+            v.to_radians()
+        }
+        (LightKind::Spot, None) => return Err(cx.err(l.span(), f("cone_deg"), "a spot light needs `cone_deg`")),
+        (LightKind::Directional, Some(c)) => {
+            return Err(cx.err(c.span(), f("cone_deg"), "a directional light has no cone"));
+        }
+        (LightKind::Directional, None) => 0.0,
+    };
+    let intensity = *d.intensity.get_ref();
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(cx.err(d.intensity.span(), f("intensity"), format!("must be finite and >= 0 (got {intensity})")));
+    }
+    let color = match &d.color {
+        Some(c) => {
+            let v = *c.get_ref();
+            if !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                return Err(cx.err(c.span(), f("color"), "components must be finite and >= 0"));
+            }
+            Vec3::from(v)
+        }
+        None => Vec3::ONE,
+    };
+    Ok(Light { kind, position: position.into(), target: target.into(), cone, intensity, color })
+}
+
+fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {
+    let d = c.get_ref();
+    let f = |name: &str| format!("camera[{i}].{name}");
+    let name = d.name.get_ref().clone();
+    if name.is_empty() {
+        return Err(cx.err(d.name.span(), f("name"), "must not be empty"));
+    }
+    let position = Vec3::from(*d.position.get_ref());
+    let target = Vec3::from(*d.target.get_ref());
+    if !position.is_finite() || !target.is_finite() || (target - position).length() < 1e-6 {
+        return Err(cx.err(d.target.span(), f("target"), "position and target must be finite and distinct"));
+    }
+    let up = d.up.as_ref().map(|u| Vec3::from(*u.get_ref())).unwrap_or(Vec3::Y);
+    let forward = (target - position).normalize();
+    if !up.is_finite() || up.length() < 1e-6 || forward.cross(up.normalize()).length() < 1e-4 {
+        let span = d.up.as_ref().map(|u| u.span()).unwrap_or(c.span());
+        return Err(cx.err(span, f("up"), "must be a non-zero vector not parallel to the view direction"));
+    }
+    let projection = match d.kind.get_ref().as_str() {
+        "orthographic" => {
+            if let Some(v) = &d.fov_deg {
+                return Err(cx.err(v.span(), f("fov_deg"), "an orthographic camera takes `half_height`, not `fov_deg`"));
+            }
+            let h = d.half_height.as_ref().ok_or_else(|| cx.err(c.span(), f("half_height"), "an orthographic camera needs `half_height`"))?;
+            let v = *h.get_ref();
+            if !(v.is_finite() && v > 0.0) {
+                return Err(cx.err(h.span(), f("half_height"), format!("must be > 0 (got {v})")));
+            }
+            Projection::Orthographic { half_height: v }
+        }
+        "perspective" => {
+            if let Some(v) = &d.half_height {
+                return Err(cx.err(v.span(), f("half_height"), "a perspective camera takes `fov_deg`, not `half_height`"));
+            }
+            let h = d.fov_deg.as_ref().ok_or_else(|| cx.err(c.span(), f("fov_deg"), "a perspective camera needs `fov_deg`"))?;
+            let v = *h.get_ref();
+            if !(v > 0.0 && v < 180.0) {
+                return Err(cx.err(h.span(), f("fov_deg"), format!("must lie in (0, 180) degrees (got {v})")));
+            }
+            Projection::Perspective { fov: v.to_radians() }
+        }
+        other => {
+            return Err(cx.err(d.kind.span(), f("kind"), format!("unknown camera kind `{other}` (expected \"orthographic\" or \"perspective\")")))
+        }
+    };
+    Ok(Camera { name, projection, position, target, up: up.normalize() })
+}
+
+fn positive_size(cx: &Ctx, field: String, v: &S<toml::Value>, n: usize) -> Result<Vec3, SceneError> {
+    let bad = || cx.err(v.span(), field.clone(), format!("must be a positive number or an array of {n} positive numbers"));
+    let num = |x: &toml::Value| match x {
+        toml::Value::Float(f) => Some(*f as f32),
+        toml::Value::Integer(i) => Some(*i as f32),
+        _ => None,
+    };
+    let vals: Vec<f32> = match v.get_ref() {
+        toml::Value::Array(a) if a.len() == n => a.iter().map(num).collect::<Option<Vec<_>>>().ok_or_else(bad)?,
+        x => vec![num(x).ok_or_else(bad)?; n],
+    };
+    if !vals.iter().all(|x| x.is_finite() && *x > 0.0) {
+        return Err(bad());
+    }
+    Ok(if n == 2 { Vec3::new(vals[0], 0.0, vals[1]) } else { Vec3::new(vals[0], vals[1], vals[2]) })
+}
+
+fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
+    let d = o.get_ref();
+    let name = d.name.get_ref().clone();
+    let f = |field: &str| format!("object[{i}] \"{name}\".{field}");
+    if name.is_empty() {
+        return Err(cx.err(d.name.span(), format!("object[{i}].name"), "must not be empty"));
+    }
+    let shape = d.shape.get_ref().as_str();
+    // Reject fields that do not apply to the shape, so that a typo'd scene never silently ignores a value.
+    let allowed: &[&str] = match shape {
+        "plane" => &["size"],
+        "sphere" => &["radius", "subdivisions"],
+        "cube" => &["size"],
+        "mesh" => &["path"],
+        other => {
+            return Err(cx.err(d.shape.span(), f("shape"), format!("unknown shape `{other}` (expected plane, sphere, cube or mesh)")))
+        }
+    };
+    let present: [(&str, Option<std::ops::Range<usize>>); 4] = [
+        ("size", d.size.as_ref().map(|v| v.span())),
+        ("radius", d.radius.as_ref().map(|v| v.span())),
+        ("subdivisions", d.subdivisions.as_ref().map(|v| v.span())),
+        ("path", d.path.as_ref().map(|v| v.span())),
+    ];
+    for (field, span) in present {
+        if let Some(span) = span {
+            if !allowed.contains(&field) {
+                return Err(cx.err(span, f(field), format!("`{field}` does not apply to shape `{shape}`")));
+            }
+        }
+    }
+    let mesh = match shape {
+        "plane" => {
+            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a plane needs `size = [x, z]`"))?;
+            let v = positive_size(cx, f("size"), s, 2)?;
+            mesh::plane(v.x, v.z)
+        }
+        "cube" => {
+            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a cube needs `size`"))?;
+            mesh::cube(positive_size(cx, f("size"), s, 3)?)
+        }
+        "sphere" => {
+            let r = d.radius.as_ref().ok_or_else(|| cx.err(o.span(), f("radius"), "a sphere needs `radius`"))?;
+            let radius = *r.get_ref();
+            if !(radius.is_finite() && radius > 0.0) {
+                return Err(cx.err(r.span(), f("radius"), format!("must be > 0 (got {radius})")));
+            }
+            let subdivisions = match &d.subdivisions {
+                Some(s) => {
+                    let v = *s.get_ref();
+                    if !(0..=8).contains(&v) {
+                        return Err(cx.err(s.span(), f("subdivisions"), format!("must lie in 0..=8 (got {v}; 20*4^s triangles)")));
+                    }
+                    v as u32
+                }
+                None => 6,
+            };
+            mesh::icosphere(radius, subdivisions)
+        }
+        _ => {
+            let p = d.path.as_ref().ok_or_else(|| cx.err(o.span(), f("path"), "a mesh needs `path`"))?;
+            let full = cx.dir.join(p.get_ref());
+            if !full.is_file() {
+                return Err(cx.err(p.span(), f("path"), format!("mesh file not found: {}", full.display())));
+            }
+            mesh::load_obj(&full).map_err(|e| cx.err(p.span(), f("path"), format!("{}: {e}", full.display())))?
+        }
+    };
+    let mut transform = Mat4::IDENTITY;
+    let translate = match &d.translate {
+        Some(t) if !finite3(*t.get_ref()) => return Err(cx.err(t.span(), f("translate"), "must be finite")),
+        Some(t) => Vec3::from(*t.get_ref()),
+        None => Vec3::ZERO,
+    };
+    let rotate = match &d.rotate_deg {
+        Some(r) if !finite3(*r.get_ref()) => return Err(cx.err(r.span(), f("rotate_deg"), "must be finite")),
+        Some(r) => Vec3::from(*r.get_ref()),
+        None => Vec3::ZERO,
+    };
+    let scale = match &d.scale {
+        Some(s) => {
+            let v = Vec3::from(s.get_ref().to_array());
+            if !v.is_finite() || v.abs().min_element() < 1e-9 {
+                return Err(cx.err(s.span(), f("scale"), "must be finite and non-zero"));
+            }
+            v
+        }
+        None => Vec3::ONE,
+    };
+    if d.translate.is_some() || d.rotate_deg.is_some() || d.scale.is_some() {
+        // Scale, then rotate about x, then y, then z, then translate.
+        let q = Quat::from_euler(EulerRot::ZYX, rotate.z.to_radians(), rotate.y.to_radians(), rotate.x.to_radians());
+        transform = Mat4::from_scale_rotation_translation(scale, q, translate);
+    }
+    let mesh = if transform == Mat4::IDENTITY { mesh } else { mesh.transformed(transform) };
+    let m = d.material.get_ref();
+    let mf = |field: &str| f(&format!("material.{field}"));
+    let material = match m.kind.get_ref().as_str() {
+        "diffuse" => {
+            if let Some(x) = &m.ior {
+                return Err(cx.err(x.span(), mf("ior"), "a diffuse material has no `ior`"));
+            }
+            let albedo = match &m.albedo {
+                Some(a) => {
+                    let v = Vec3::from(a.get_ref().to_array());
+                    if !v.is_finite() || v.min_element() < 0.0 || v.max_element() > 1.0 {
+                        return Err(cx.err(a.span(), mf("albedo"), "must lie in [0, 1]"));
+                    }
+                    v
+                }
+                None => Vec3::splat(0.8),
+            };
+            Material::Diffuse { albedo }
+        }
+        "dielectric" => {
+            if let Some(x) = &m.albedo {
+                return Err(cx.err(x.span(), mf("albedo"), "a dielectric material has no `albedo`"));
+            }
+            let ior = m.ior.as_ref().ok_or_else(|| cx.err(d.material.span(), mf("ior"), "a dielectric needs `ior`"))?;
+            let v = *ior.get_ref();
+            if !(v.is_finite() && v > 0.0) {
+                return Err(cx.err(ior.span(), mf("ior"), format!("index of refraction must be finite and > 0 (got {v})")));
+            }
+            Material::Dielectric { ior: v }
+        }
+        other => {
+            return Err(cx.err(m.kind.span(), mf("kind"), format!("unknown material `{other}` (expected \"diffuse\" or \"dielectric\")")))
+        }
+    };
+    Ok(Object { name, material, mesh })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"
+[[light]]
+kind = "spot"
+position = [0.0, 2.0, 0.0]
+target = [0.0, 0.5, 0.0]
+cone_deg = 40.0
+intensity = 1.0
+
+[[camera]]
+name = "top"
+kind = "orthographic"
+position = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+half_height = 1.0
+
+[[object]]
+name = "floor"
+shape = "plane"
+size = [2.0, 2.0]
+material = { kind = "diffuse", albedo = 0.8 }
+
+[[object]]
+name = "glass"
+shape = "sphere"
+radius = 0.3
+subdivisions = 2
+translate = [0.0, 0.5, 0.0]
+material = { kind = "dielectric", ior = 1.5 }
+"#;
+
+    fn parse(s: &str) -> Result<Scene, SceneError> {
+        Scene::parse(s, Path::new("test.toml"))
+    }
+
+    #[test]
+    fn parses_the_canonical_scene() {
+        let s = parse(BASE).unwrap();
+        assert_eq!(s.objects.len(), 2);
+        assert!(s.has_refractors());
+        let (lo, hi) = s.objects[1].mesh.bounds();
+        assert!((lo.y - 0.2).abs() < 1e-5 && (hi.y - 0.8).abs() < 1e-5);
+    }
+
+    #[test]
+    fn bad_ior_names_line_and_field() {
+        for bad in ["ior = -1.0", "ior = nan", "ior = 0.0"] {
+            let text = BASE.replace("ior = 1.5", bad);
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(e.starts_with("test.toml:29: object[1] \"glass\".material.ior"), "{e}");
+        }
+    }
+
+    #[test]
+    fn unknown_key_is_an_error() {
+        let e = parse(&BASE.replace("radius = 0.3", "radius = 0.3\nradiuss = 1")).unwrap_err().to_string();
+        assert!(e.contains("test.toml:27:") && e.contains("unknown field `radiuss`"), "{e}");
+    }
+
+    #[test]
+    fn cone_out_of_range() {
+        let e = parse(&BASE.replace("cone_deg = 40.0", "cone_deg = 90.0")).unwrap_err().to_string();
+        assert!(e.contains("test.toml:6: light[0].cone_deg"), "{e}");
+    }
+
+    #[test]
+    fn missing_mesh_is_an_error() {
+        let text = BASE.replace("shape = \"sphere\"\nradius = 0.3\nsubdivisions = 2", "shape = \"mesh\"\npath = \"nope.obj\"");
+        let e = parse(&text).unwrap_err().to_string();
+        assert!(e.contains("object[1] \"glass\".path") && e.contains("nope.obj"), "{e}");
+    }
+}

@@ -1,0 +1,81 @@
+//! The TOML schema, as written in scene files. Every field carries its span so that validation errors can name
+//! the line. Unknown keys are rejected by serde.
+
+use serde::Deserialize;
+use toml::Spanned;
+
+pub type S<T> = Spanned<T>;
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    #[serde(default)]
+    pub light: Vec<S<LightDef>>,
+    #[serde(default)]
+    pub camera: Vec<S<CameraDef>>,
+    #[serde(default)]
+    pub object: Vec<S<ObjectDef>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct LightDef {
+    pub kind: S<String>,
+    pub position: S<[f32; 3]>,
+    pub target: S<[f32; 3]>,
+    pub cone_deg: Option<S<f32>>,
+    pub intensity: S<f32>,
+    pub color: Option<S<[f32; 3]>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDef {
+    pub name: S<String>,
+    pub kind: S<String>,
+    pub position: S<[f32; 3]>,
+    pub target: S<[f32; 3]>,
+    pub up: Option<S<[f32; 3]>>,
+    pub half_height: Option<S<f32>>,
+    pub fov_deg: Option<S<f32>>,
+}
+
+/// A number or a 3-vector (scale, cube size, albedo).
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(untagged)]
+pub enum ScalarOr3 {
+    Scalar(f32),
+    Vec3([f32; 3]),
+}
+
+impl ScalarOr3 {
+    pub fn to_array(self) -> [f32; 3] {
+        match self {
+            ScalarOr3::Scalar(s) => [s; 3],
+            ScalarOr3::Vec3(v) => v,
+        }
+    }
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDef {
+    pub name: S<String>,
+    pub shape: S<String>,
+    pub size: Option<S<toml::Value>>,
+    pub radius: Option<S<f32>>,
+    pub subdivisions: Option<S<i64>>,
+    pub path: Option<S<String>>,
+    pub translate: Option<S<[f32; 3]>>,
+    pub rotate_deg: Option<S<[f32; 3]>>,
+    pub scale: Option<S<ScalarOr3>>,
+    pub material: S<MaterialDef>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDef {
+    pub kind: S<String>,
+    pub albedo: Option<S<ScalarOr3>>,
+    pub ior: Option<S<f32>>,
+}

@@ -1,0 +1,382 @@
+//! Light and camera views: the light-space parametrization that photons, the caustic map and the shadow map
+//! share, and the eye camera. Everything the shaders compute from these comes from the same numbers (see
+//! `glsl/common/light.glsl`), so the Rust and GLSL sides agree to float rounding.
+//!
+//! Light image coordinates: a spot light's image plane sits at distance 1 along its forward axis, so the point
+//! (x, y) on it is the direction x·right + y·down + forward. A directional light's image coordinates are meters
+//! across the beam. A square [`Window`] of that plane is mapped to uv ∈ [0, 1]², columns along `right` and rows
+//! along `down`.
+
+use super::{Camera, Light, LightKind, Projection};
+use glam::{Mat4, Vec2, Vec3};
+
+/// A square window of the light's image plane: [x0, x0 + w] × [y0, y0 + w].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Window {
+    pub x0: f32,
+    pub y0: f32,
+    pub w: f32,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct LightView {
+    pub kind: LightKind,
+    pub origin: Vec3,
+    pub right: Vec3,
+    pub down: Vec3,
+    pub forward: Vec3,
+    pub window: Window,
+    pub near: f32,
+    pub far: f32,
+    /// Cosine of the cone half-angle (spot); -1 for directional lights.
+    pub cos_cone: f32,
+}
+
+fn rows_to_mat(rows: [[f32; 4]; 4]) -> Mat4 {
+    Mat4::from_cols_array_2d(&rows).transpose()
+}
+
+impl LightView {
+    /// The light's orthonormal frame (right, down, forward), right-handed: right × down = forward.
+    pub fn basis(light: &Light) -> (Vec3, Vec3, Vec3) {
+        let f = (light.target - light.position).normalize();
+        let hint = if f.dot(Vec3::Y).abs() > 0.99 { Vec3::NEG_Z } else { Vec3::Y };
+        let right = f.cross(hint).normalize();
+        let down = f.cross(right).normalize();
+        (right, down, f)
+    }
+
+    fn frame(light: &Light) -> LightView {
+        let (right, down, forward) = Self::basis(light);
+        LightView {
+            kind: light.kind,
+            origin: light.position,
+            right,
+            down,
+            forward,
+            window: Window { x0: -1.0, y0: -1.0, w: 2.0 },
+            near: 0.01,
+            far: 100.0,
+            cos_cone: if light.kind == LightKind::Spot { light.cone.cos() } else { -1.0 },
+        }
+    }
+
+    /// (x, y) on the image plane and the depth along `forward`.
+    pub fn image_coords(&self, p: Vec3) -> (Vec2, f32) {
+        let d = p - self.origin;
+        let (a, b, c) = (d.dot(self.right), d.dot(self.down), d.dot(self.forward));
+        match self.kind {
+            LightKind::Spot => (Vec2::new(a / c, b / c), c),
+            LightKind::Directional => (Vec2::new(a, b), c),
+        }
+    }
+
+    pub fn uv(&self, p: Vec3) -> Vec2 {
+        let (xy, _) = self.image_coords(p);
+        (xy - Vec2::new(self.window.x0, self.window.y0)) / self.window.w
+    }
+
+    /// The ray through uv: origin and unit direction.
+    pub fn ray(&self, uv: Vec2) -> (Vec3, Vec3) {
+        let x = self.window.x0 + uv.x * self.window.w;
+        let y = self.window.y0 + uv.y * self.window.w;
+        match self.kind {
+            LightKind::Spot => (self.origin, (self.right * x + self.down * y + self.forward).normalize()),
+            LightKind::Directional => (self.origin + self.right * x + self.down * y, self.forward),
+        }
+    }
+
+    /// World → clip (Vulkan conventions: NDC x, y ∈ [-1, 1] with +y = +v (down), z ∈ [0, 1]).
+    pub fn view_proj(&self) -> Mat4 {
+        let (u, v, f, l) = (self.right, self.down, self.forward, self.origin);
+        let view = rows_to_mat([
+            [u.x, u.y, u.z, -u.dot(l)],
+            [v.x, v.y, v.z, -v.dot(l)],
+            [f.x, f.y, f.z, -f.dot(l)],
+            [0.0, 0.0, 0.0, 1.0],
+        ]);
+        let Window { x0, y0, w } = self.window;
+        let (n, fa) = (self.near, self.far);
+        let proj = match self.kind {
+            LightKind::Spot => rows_to_mat([
+                [2.0 / w, 0.0, -(2.0 * x0 + w) / w, 0.0],
+                [0.0, 2.0 / w, -(2.0 * y0 + w) / w, 0.0],
+                [0.0, 0.0, fa / (fa - n), -fa * n / (fa - n)],
+                [0.0, 0.0, 1.0, 0.0],
+            ]),
+            LightKind::Directional => rows_to_mat([
+                [2.0 / w, 0.0, 0.0, -(2.0 * x0 + w) / w],
+                [0.0, 2.0 / w, 0.0, -(2.0 * y0 + w) / w],
+                [0.0, 0.0, 1.0 / (fa - n), -n / (fa - n)],
+                [0.0, 0.0, 0.0, 1.0],
+            ]),
+        };
+        proj * view
+    }
+
+    /// The square bounding the spot cone on the image plane, if any.
+    fn cone_square(&self) -> Option<(Vec2, Vec2)> {
+        (self.kind == LightKind::Spot).then(|| {
+            let t = self.cos_cone.acos().tan();
+            (Vec2::splat(-t), Vec2::splat(t))
+        })
+    }
+
+    /// Fit a square window around `points` (clipped to the cone), padded by `pad_texels` texels of a
+    /// `resolution`² map, with near/far planes around `depth_points`. Points behind a spot light make the window
+    /// the whole cone. Returns None when nothing of `points` lies inside the cone.
+    pub fn fit(
+        light: &Light,
+        points: impl Iterator<Item = Vec3>,
+        depth_points: impl Iterator<Item = Vec3>,
+        resolution: u32,
+        pad_texels: f32,
+    ) -> Option<LightView> {
+        let mut view = Self::frame(light);
+        let mut lo = Vec2::splat(f32::INFINITY);
+        let mut hi = Vec2::splat(f32::NEG_INFINITY);
+        let mut behind = false;
+        for p in points {
+            let (xy, c) = view.image_coords(p);
+            if view.kind == LightKind::Spot && c <= 1e-6 {
+                behind = true;
+                continue;
+            }
+            lo = lo.min(xy);
+            hi = hi.max(xy);
+        }
+        if let Some((clo, chi)) = view.cone_square() {
+            if behind {
+                lo = clo;
+                hi = chi;
+            }
+            lo = lo.max(clo);
+            hi = hi.min(chi);
+        }
+        if !(lo.x <= hi.x && lo.y <= hi.y) {
+            return None;
+        }
+        let center = (lo + hi) * 0.5;
+        let half = ((hi - lo) * 0.5).max_element().max(1e-6);
+        let half = half * (1.0 + 2.0 * pad_texels / resolution as f32) + 1e-7;
+        view.window = Window { x0: center.x - half, y0: center.y - half, w: 2.0 * half };
+        let (mut dmin, mut dmax) = (f32::INFINITY, 0.0f32);
+        for p in depth_points {
+            let (_, c) = view.image_coords(p);
+            dmin = dmin.min(c);
+            dmax = dmax.max(c);
+        }
+        if !dmax.is_finite() || dmax <= 0.0 {
+            dmax = 1.0;
+        }
+        view.far = dmax * 1.05 + 1e-3;
+        view.near = match view.kind {
+            LightKind::Spot => (dmin * 0.5).max(view.far * 1e-4),
+            LightKind::Directional => dmin.min(0.0) - 1e-3,
+        };
+        Some(view)
+    }
+
+    /// Solid angle (spot, sr) or area (directional, m²) of a texel-sized square cell of side `d` (in image-plane
+    /// units) centered at image point `xy`: the DESIGN.md midpoint formula Δ²/(1+x²+y²)^{3/2}.
+    pub fn cell_measure(&self, xy: Vec2, d: f32) -> f32 {
+        match self.kind {
+            LightKind::Spot => d * d / (1.0 + xy.length_squared()).powf(1.5),
+            LightKind::Directional => d * d,
+        }
+    }
+}
+
+/// The eye camera for a given output size.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraView {
+    pub position: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+    pub projection: Projection,
+    pub width: u32,
+    pub height: u32,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl CameraView {
+    pub fn new(camera: &Camera, width: u32, height: u32, bounds: (Vec3, Vec3)) -> Self {
+        let forward = (camera.target - camera.position).normalize();
+        let right = forward.cross(camera.up).normalize();
+        let up = right.cross(forward);
+        let mut view = CameraView {
+            position: camera.position,
+            right,
+            up,
+            forward,
+            projection: camera.projection,
+            width,
+            height,
+            near: 0.01,
+            far: 100.0,
+        };
+        view.fit_depth(bounds);
+        view
+    }
+
+    /// Orbit helpers and fitting need to rebuild after moving.
+    pub fn look_at(&mut self, position: Vec3, target: Vec3, up_hint: Vec3) {
+        self.position = position;
+        self.forward = (target - position).normalize();
+        self.right = self.forward.cross(up_hint).normalize();
+        self.up = self.right.cross(self.forward);
+    }
+
+    pub fn fit_depth(&mut self, (lo, hi): (Vec3, Vec3)) {
+        let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            let d = (c - self.position).dot(self.forward);
+            dmin = dmin.min(d);
+            dmax = dmax.max(d);
+        }
+        let span = (dmax - dmin).max(1e-3);
+        match self.projection {
+            Projection::Orthographic { .. } => {
+                self.near = dmin - 0.05 * span;
+                self.far = dmax + 0.05 * span;
+            }
+            Projection::Perspective { .. } => {
+                self.far = dmax.max(1e-2) * 1.05;
+                self.near = (dmin * 0.9).max(self.far * 1e-4);
+            }
+        }
+    }
+
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height as f32
+    }
+
+    /// Half extents of the image at distance 1 (perspective) or in meters (orthographic).
+    pub fn half_extents(&self) -> Vec2 {
+        let hh = match self.projection {
+            Projection::Orthographic { half_height } => half_height,
+            Projection::Perspective { fov } => (fov * 0.5).tan(),
+        };
+        Vec2::new(hh * self.aspect(), hh)
+    }
+
+    pub fn view_proj(&self) -> Mat4 {
+        let (r, u, f, p) = (self.right, self.up, self.forward, self.position);
+        // Camera frame with +y down so that image row 0 is the top (Vulkan NDC).
+        let view = rows_to_mat([
+            [r.x, r.y, r.z, -r.dot(p)],
+            [-u.x, -u.y, -u.z, u.dot(p)],
+            [f.x, f.y, f.z, -f.dot(p)],
+            [0.0, 0.0, 0.0, 1.0],
+        ]);
+        let h = self.half_extents();
+        let (n, fa) = (self.near, self.far);
+        let proj = match self.projection {
+            Projection::Perspective { .. } => rows_to_mat([
+                [1.0 / h.x, 0.0, 0.0, 0.0],
+                [0.0, 1.0 / h.y, 0.0, 0.0],
+                [0.0, 0.0, fa / (fa - n), -fa * n / (fa - n)],
+                [0.0, 0.0, 1.0, 0.0],
+            ]),
+            Projection::Orthographic { .. } => rows_to_mat([
+                [1.0 / h.x, 0.0, 0.0, 0.0],
+                [0.0, 1.0 / h.y, 0.0, 0.0],
+                [0.0, 0.0, 1.0 / (fa - n), -n / (fa - n)],
+                [0.0, 0.0, 0.0, 1.0],
+            ]),
+        };
+        proj * view
+    }
+
+    /// Continuous pixel coordinates (x right, y down) of a world point, if it is in front of the camera.
+    pub fn project(&self, p: Vec3) -> Option<Vec2> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        let h = self.half_extents();
+        let (x, y) = match self.projection {
+            Projection::Orthographic { .. } => (d.dot(self.right), d.dot(self.up)),
+            Projection::Perspective { .. } => {
+                if z <= 0.0 {
+                    return None;
+                }
+                (d.dot(self.right) / z, d.dot(self.up) / z)
+            }
+        };
+        Some(Vec2::new((x / h.x + 1.0) * 0.5 * self.width as f32, (1.0 - y / h.y) * 0.5 * self.height as f32))
+    }
+
+    /// Ray through continuous pixel coordinates.
+    pub fn ray(&self, px: Vec2) -> (Vec3, Vec3) {
+        let h = self.half_extents();
+        let x = (px.x / self.width as f32 * 2.0 - 1.0) * h.x;
+        let y = (1.0 - px.y / self.height as f32 * 2.0) * h.y;
+        match self.projection {
+            Projection::Orthographic { .. } => (self.position + self.right * x + self.up * y, self.forward),
+            Projection::Perspective { .. } => (self.position, (self.right * x + self.up * y + self.forward).normalize()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spot() -> Light {
+        Light {
+            kind: LightKind::Spot,
+            position: Vec3::new(0.0, 2.0, 0.0),
+            target: Vec3::new(0.0, 0.5, 0.0),
+            cone: 40f32.to_radians(),
+            intensity: 1.0,
+            color: Vec3::ONE,
+        }
+    }
+
+    #[test]
+    fn light_basis_matches_top_camera_axes() {
+        let (r, d, f) = LightView::basis(&spot());
+        assert!((r - Vec3::X).length() < 1e-6 && (d - Vec3::Z).length() < 1e-6 && (f - Vec3::NEG_Y).length() < 1e-6);
+    }
+
+    #[test]
+    fn view_proj_agrees_with_uv_and_ray() {
+        let pts = [Vec3::new(0.3, 0.5, 0.1), Vec3::new(-0.3, 0.2, -0.2)];
+        let v = LightView::fit(&spot(), pts.iter().copied(), pts.iter().copied(), 1024, 1.0).unwrap();
+        for p in pts {
+            let clip = v.view_proj() * p.extend(1.0);
+            let ndc = clip.truncate() / clip.w;
+            let uv = v.uv(p);
+            assert!((ndc.x - (uv.x * 2.0 - 1.0)).abs() < 1e-5 && (ndc.y - (uv.y * 2.0 - 1.0)).abs() < 1e-5);
+            assert!(ndc.z > 0.0 && ndc.z < 1.0);
+            let (o, dir) = v.ray(uv);
+            assert!(((p - o).normalize() - dir).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn camera_projection_roundtrip() {
+        let cam = Camera {
+            name: "top".into(),
+            projection: Projection::Orthographic { half_height: 1.0 },
+            position: Vec3::new(0.0, 3.0, 0.0),
+            target: Vec3::ZERO,
+            up: Vec3::NEG_Z,
+        };
+        let v = CameraView::new(&cam, 256, 256, (Vec3::splat(-1.0), Vec3::splat(1.0)));
+        // Row 0 is z = -1 and columns run along +x (DESIGN.md's `top` camera).
+        let px = v.project(Vec3::new(-1.0, 0.0, -1.0)).unwrap();
+        assert!(px.length() < 1e-4, "{px}");
+        let px = v.project(Vec3::new(1.0, 0.0, 1.0)).unwrap();
+        assert!((px - Vec2::splat(256.0)).length() < 1e-3);
+        let clip = v.view_proj() * Vec3::new(0.5, 0.0, -0.5).extend(1.0);
+        let want = v.project(Vec3::new(0.5, 0.0, -0.5)).unwrap() / 128.0 - Vec2::ONE;
+        assert!((clip.truncate().truncate() / clip.w - want).length() < 1e-5);
+    }
+}

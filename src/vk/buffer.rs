@@ -1,0 +1,111 @@
+//! RAII buffers on gpu-allocator.
+
+use super::context::Device;
+use super::error::{Check, VkError, VkResult};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+pub struct Buffer {
+    device: Arc<Device>,
+    pub raw: vk::Buffer,
+    pub size: u64,
+    allocation: Option<Allocation>,
+    pub name: String,
+}
+
+impl Buffer {
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> VkResult<Self> {
+        let size = size.max(4);
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { device.create_buffer(&info, None) }.check("vkCreateBuffer")?;
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let allocation = device.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(VkError::Alloc { what: format!("buffer `{name}` ({size} bytes)"), source });
+            }
+        };
+        if let Err(e) = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            let _ = device.allocator().free(allocation);
+            unsafe { device.destroy_buffer(raw, None) };
+            return Err(VkError::Call { call: "vkBindBufferMemory", result: e });
+        }
+        device.set_name(raw, name);
+        Ok(Buffer { device: device.clone(), raw, size, allocation: Some(allocation), name: name.to_string() })
+    }
+
+    /// A host-visible buffer filled with `data` (uniforms, readbacks, staging).
+    pub fn with_data<T: bytemuck::Pod>(
+        device: &Arc<Device>,
+        name: &str,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> VkResult<Self> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut b = Buffer::new(device, name, bytes.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        b.write(0, data)?;
+        Ok(b)
+    }
+
+    pub fn is_mapped(&self) -> bool {
+        self.allocation.as_ref().and_then(|a| a.mapped_ptr()).is_some()
+    }
+
+    /// Write into a host-visible buffer at a byte offset.
+    pub fn write<T: bytemuck::Pod>(&mut self, offset: u64, data: &[T]) -> VkResult<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let name = self.name.clone();
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .ok_or_else(|| VkError::Unsupported(format!("buffer `{name}` is not host-visible")))?;
+        let start = offset as usize;
+        let end = start + bytes.len();
+        if end > slice.len() {
+            return Err(VkError::Unsupported(format!("write of {} bytes past the end of `{name}`", bytes.len())));
+        }
+        slice[start..end].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    /// Read a host-visible buffer (call only after the GPU work that wrote it has completed).
+    pub fn read<T: bytemuck::Pod>(&self, offset: u64, count: usize) -> VkResult<Vec<T>> {
+        let slice = self
+            .allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .ok_or_else(|| VkError::Unsupported(format!("buffer `{}` is not host-visible", self.name)))?;
+        let start = offset as usize;
+        let end = start + count * std::mem::size_of::<T>();
+        if end > slice.len() {
+            return Err(VkError::Unsupported(format!("read past the end of `{}`", self.name)));
+        }
+        Ok(bytemuck::pod_collect_to_vec(&slice[start..end]))
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        unsafe { self.device.destroy_buffer(self.raw, None) };
+        if let Some(a) = self.allocation.take() {
+            let _ = self.device.allocator().free(a);
+        }
+    }
+}

@@ -1,0 +1,122 @@
+//! Command pool, a reusable command buffer with its fence, and helpers for one-off transfers.
+
+use super::buffer::Buffer;
+use super::context::Device;
+use super::error::{Check, VkResult};
+use ash::vk;
+use std::sync::Arc;
+
+/// One primary command buffer with a fence: begin, record, submit, wait. Used by the headless renderer (and by
+/// the CPU-driven traversal, which submits several times per frame).
+pub struct Recorder {
+    device: Arc<Device>,
+    pool: vk::CommandPool,
+    pub cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    pending: bool,
+}
+
+impl Recorder {
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(device.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let pool = unsafe { device.create_command_pool(&info, None) }.check("vkCreateCommandPool")?;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = match unsafe { device.allocate_command_buffers(&alloc) } {
+            Ok(v) => v[0],
+            Err(e) => {
+                unsafe { device.destroy_command_pool(pool, None) };
+                return Err(super::VkError::Call { call: "vkAllocateCommandBuffers", result: e });
+            }
+        };
+        let fence = match unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) } {
+            Ok(f) => f,
+            Err(e) => {
+                unsafe { device.destroy_command_pool(pool, None) };
+                return Err(super::VkError::Call { call: "vkCreateFence", result: e });
+            }
+        };
+        Ok(Recorder { device: device.clone(), pool, cmd, fence, pending: false })
+    }
+
+    pub fn begin(&mut self) -> VkResult<vk::CommandBuffer> {
+        self.wait()?;
+        unsafe {
+            self.device
+                .reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty())
+                .check("vkResetCommandBuffer")?;
+            let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            self.device.begin_command_buffer(self.cmd, &info).check("vkBeginCommandBuffer")?;
+        }
+        Ok(self.cmd)
+    }
+
+    /// End and submit; the fence signals when the GPU is done.
+    pub fn submit(&mut self) -> VkResult<()> {
+        unsafe {
+            self.device.end_command_buffer(self.cmd).check("vkEndCommandBuffer")?;
+            self.device.reset_fences(&[self.fence]).check("vkResetFences")?;
+            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
+            let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
+            self.device.queue_submit2(self.device.queue, &[submit], self.fence).check("vkQueueSubmit2")?;
+        }
+        self.pending = true;
+        Ok(())
+    }
+
+    /// Wait for the last submit. A device loss is reported, never waited on forever.
+    pub fn wait(&mut self) -> VkResult<()> {
+        if self.pending {
+            unsafe { self.device.wait_for_fences(&[self.fence], true, 60_000_000_000) }.check("vkWaitForFences")?;
+            self.pending = false;
+        }
+        Ok(())
+    }
+
+    pub fn submit_and_wait(&mut self) -> VkResult<()> {
+        self.submit()?;
+        self.wait()
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        unsafe {
+            if self.pending {
+                let _ = self.device.wait_for_fences(&[self.fence], true, 10_000_000_000);
+            }
+            self.device.destroy_fence(self.fence, None);
+            self.device.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// Copy `data` into a device-local buffer through a staging buffer (works whether or not device memory is
+/// host-visible).
+pub fn upload_buffer<T: bytemuck::Pod>(
+    device: &Arc<Device>,
+    recorder: &mut Recorder,
+    name: &str,
+    data: &[T],
+    usage: vk::BufferUsageFlags,
+) -> VkResult<Buffer> {
+    let bytes = std::mem::size_of_val(data) as u64;
+    let staging = Buffer::with_data(device, &format!("{name} (staging)"), data, vk::BufferUsageFlags::TRANSFER_SRC)?;
+    let dst = Buffer::new(
+        device,
+        name,
+        bytes,
+        usage | vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuOnly,
+    )?;
+    let cmd = recorder.begin()?;
+    unsafe {
+        device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }]);
+    }
+    recorder.submit_and_wait()?;
+    Ok(dst)
+}

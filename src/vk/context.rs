@@ -1,0 +1,387 @@
+//! Instance and device creation: validation (with synchronization validation), device selection, the queue and
+//! the memory allocator. Everything else holds an `Arc<Device>`, so the device outlives every resource.
+
+use super::debug::messenger_info;
+use super::error::{Check, VkError, VkResult};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_char, CStr};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create the Vulkan context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextDesc {
+    /// Enable the Khronos validation layer with synchronization validation.
+    pub validation: bool,
+    /// Pick a device: "cpu"/"lavapipe"/"llvmpipe", "gpu", an index, or a substring of the device name.
+    pub device_hint: Option<String>,
+    /// Extra instance extensions (window-system surfaces).
+    pub instance_extensions: Vec<&'static CStr>,
+    /// The device must support `VK_KHR_swapchain`.
+    pub swapchain: bool,
+}
+
+impl ContextDesc {
+    /// Validation defaults to on in debug builds and off in release; `CAUSTICS_VALIDATION=0|1` overrides it.
+    /// The device comes from `CAUSTICS_DEVICE` when set.
+    pub fn from_env() -> Self {
+        let validation = match std::env::var("CAUSTICS_VALIDATION").ok().as_deref() {
+            Some("0") | Some("false") | Some("off") => false,
+            Some(_) => true,
+            None => cfg!(debug_assertions),
+        };
+        ContextDesc {
+            validation,
+            device_hint: std::env::var("CAUSTICS_DEVICE").ok().filter(|s| !s.is_empty()),
+            ..Default::default()
+        }
+    }
+}
+
+pub struct Instance {
+    pub entry: ash::Entry,
+    pub raw: ash::Instance,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    pub validation: bool,
+}
+
+impl Instance {
+    pub fn new(desc: &ContextDesc) -> VkResult<Arc<Self>> {
+        let entry = unsafe { ash::Entry::load()? };
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }.check("vkEnumerateInstanceLayerProperties")?;
+        let has_validation = layers
+            .iter()
+            .any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
+        if desc.validation && !has_validation {
+            return Err(VkError::NoValidationLayer);
+        }
+        let available = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .check("vkEnumerateInstanceExtensionProperties")?;
+        let has_ext = |name: &CStr| {
+            available
+                .iter()
+                .any(|e| e.extension_name_as_c_str().map(|n| n == name).unwrap_or(false))
+        };
+        let mut extensions: Vec<*const c_char> = desc.instance_extensions.iter().map(|e| e.as_ptr()).collect();
+        let debug_utils = has_ext(ash::ext::debug_utils::NAME);
+        if debug_utils {
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        if desc.validation {
+            extensions.push(ash::ext::validation_features::NAME.as_ptr());
+        }
+        let layer_names: Vec<*const c_char> = if desc.validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"caustics")
+            .engine_name(c"caustics")
+            .api_version(vk::API_VERSION_1_3);
+        // Synchronization validation is off by default in the layer; it must be enabled explicitly.
+        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+        let mut messenger = messenger_info();
+        let mut info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layer_names)
+            .enabled_extension_names(&extensions);
+        if desc.validation {
+            info = info.push_next(&mut features);
+        }
+        if debug_utils {
+            // Chained so that instance creation and destruction are covered too.
+            info = info.push_next(&mut messenger);
+        }
+        let raw = unsafe { entry.create_instance(&info, None) }.check("vkCreateInstance")?;
+        let debug = if debug_utils {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &raw);
+            match unsafe { loader.create_debug_utils_messenger(&messenger_info(), None) } {
+                Ok(m) => Some((loader, m)),
+                Err(e) => {
+                    unsafe { raw.destroy_instance(None) };
+                    return Err(VkError::Call { call: "vkCreateDebugUtilsMessengerEXT", result: e });
+                }
+            }
+        } else {
+            None
+        };
+        Ok(Arc::new(Instance { entry, raw, debug, validation: desc.validation }))
+    }
+}
+
+impl Drop for Instance {
+    fn drop(&mut self) {
+        unsafe {
+            if let Some((loader, messenger)) = self.debug.take() {
+                loader.destroy_debug_utils_messenger(messenger, None);
+            }
+            self.raw.destroy_instance(None);
+        }
+    }
+}
+
+/// Facts about the chosen physical device that the renderer needs.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub driver: String,
+    pub kind: vk::PhysicalDeviceType,
+    pub api_version: u32,
+    pub limits: vk::PhysicalDeviceLimits,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    pub timestamp_valid_bits: u32,
+}
+
+impl DeviceInfo {
+    pub fn is_cpu(&self) -> bool {
+        self.kind == vk::PhysicalDeviceType::CPU
+    }
+}
+
+/// The logical device, its one queue, and the allocator. Derefs to `ash::Device`.
+pub struct Device {
+    pub instance: Arc<Instance>,
+    raw: ash::Device,
+    pub physical: vk::PhysicalDevice,
+    pub info: DeviceInfo,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub push_descriptor: ash::khr::push_descriptor::Device,
+    pub debug_utils: Option<ash::ext::debug_utils::Device>,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+}
+
+impl std::ops::Deref for Device {
+    type Target = ash::Device;
+    fn deref(&self) -> &ash::Device {
+        &self.raw
+    }
+}
+
+struct Candidate {
+    physical: vk::PhysicalDevice,
+    info: DeviceInfo,
+    queue_family: u32,
+}
+
+fn rank(kind: vk::PhysicalDeviceType) -> u32 {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+impl Device {
+    /// Create a device. `present` filters queue families that can present to a surface (windowed use).
+    pub fn new(
+        instance: Arc<Instance>,
+        desc: &ContextDesc,
+        present: Option<&dyn Fn(vk::PhysicalDevice, u32) -> bool>,
+    ) -> VkResult<Arc<Self>> {
+        let candidates = Self::candidates(&instance, desc, present)?;
+        let chosen = Self::choose(candidates, desc.device_hint.as_deref())?;
+        Self::create(instance, chosen, desc)
+    }
+
+    fn candidates(
+        instance: &Instance,
+        desc: &ContextDesc,
+        present: Option<&dyn Fn(vk::PhysicalDevice, u32) -> bool>,
+    ) -> VkResult<Vec<Candidate>> {
+        let raw = &instance.raw;
+        let physicals = unsafe { raw.enumerate_physical_devices() }.check("vkEnumeratePhysicalDevices")?;
+        let mut out = Vec::new();
+        for physical in physicals {
+            let props = unsafe { raw.get_physical_device_properties(physical) };
+            let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            if vk::api_version_minor(props.api_version) < 3 && vk::api_version_major(props.api_version) == 1 {
+                log::info!("skipping {name}: Vulkan 1.3 required");
+                continue;
+            }
+            let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+            let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+            unsafe { raw.get_physical_device_features2(physical, &mut f2) };
+            let core = f2.features;
+            if f13.synchronization2 == 0 || f13.dynamic_rendering == 0 || core.large_points == 0 {
+                log::info!("skipping {name}: needs synchronization2, dynamicRendering and largePoints");
+                continue;
+            }
+            let exts = unsafe { raw.enumerate_device_extension_properties(physical) }
+                .check("vkEnumerateDeviceExtensionProperties")?;
+            let has = |n: &CStr| exts.iter().any(|e| e.extension_name_as_c_str().map(|x| x == n).unwrap_or(false));
+            if !has(ash::khr::push_descriptor::NAME) || (desc.swapchain && !has(ash::khr::swapchain::NAME)) {
+                log::info!("skipping {name}: missing VK_KHR_push_descriptor or VK_KHR_swapchain");
+                continue;
+            }
+            let families = unsafe { raw.get_physical_device_queue_family_properties(physical) };
+            let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+            let family = families.iter().enumerate().position(|(i, f)| {
+                f.queue_flags.contains(wanted)
+                    && f.timestamp_valid_bits > 0
+                    && present.map(|p| p(physical, i as u32)).unwrap_or(true)
+            });
+            let Some(family) = family else {
+                log::info!("skipping {name}: no graphics+compute queue with timestamps");
+                continue;
+            };
+            let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+            unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
+            let driver = format!(
+                "{} {}",
+                driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+                driver_props.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+            );
+            out.push(Candidate {
+                physical,
+                info: DeviceInfo {
+                    name,
+                    driver: driver.trim().to_string(),
+                    kind: props.device_type,
+                    api_version: props.api_version,
+                    limits: props.limits,
+                    timestamp_period: props.limits.timestamp_period,
+                    timestamp_valid_bits: families[family].timestamp_valid_bits,
+                },
+                queue_family: family as u32,
+            });
+        }
+        Ok(out)
+    }
+
+    fn choose(mut candidates: Vec<Candidate>, hint: Option<&str>) -> VkResult<Candidate> {
+        if candidates.is_empty() {
+            return Err(VkError::NoDevice("no Vulkan 1.3 device with graphics and compute was found".into()));
+        }
+        candidates.sort_by_key(|c| rank(c.info.kind));
+        let names = || candidates.iter().map(|c| c.info.name.clone()).collect::<Vec<_>>().join(", ");
+        let Some(hint) = hint else {
+            return Ok(candidates.remove(0));
+        };
+        let h = hint.to_ascii_lowercase();
+        let pos = match h.as_str() {
+            "cpu" | "lavapipe" | "llvmpipe" => candidates.iter().position(|c| c.info.kind == vk::PhysicalDeviceType::CPU),
+            "gpu" => candidates.iter().position(|c| c.info.kind != vk::PhysicalDeviceType::CPU),
+            _ => match h.parse::<usize>() {
+                Ok(i) if i < candidates.len() => Some(i),
+                _ => candidates.iter().position(|c| c.info.name.to_ascii_lowercase().contains(&h)),
+            },
+        };
+        match pos {
+            Some(i) => Ok(candidates.remove(i)),
+            None => Err(VkError::NoDevice(format!("no device matches `{hint}` (available: {})", names()))),
+        }
+    }
+
+    fn create(instance: Arc<Instance>, c: Candidate, desc: &ContextDesc) -> VkResult<Arc<Self>> {
+        let raw_instance = &instance.raw;
+        let supported = unsafe { raw_instance.get_physical_device_features(c.physical) };
+        let core = vk::PhysicalDeviceFeatures::default()
+            .large_points(true)
+            .vertex_pipeline_stores_and_atomics(supported.vertex_pipeline_stores_and_atomics != 0)
+            .fragment_stores_and_atomics(supported.fragment_stores_and_atomics != 0)
+            .shader_int64(supported.shader_int64 != 0);
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut f13);
+        let mut extensions = vec![ash::khr::push_descriptor::NAME.as_ptr()];
+        if desc.swapchain {
+            extensions.push(ash::khr::swapchain::NAME.as_ptr());
+        }
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(c.queue_family).queue_priorities(&priorities)];
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(&extensions)
+            .push_next(&mut f2);
+        let raw = unsafe { raw_instance.create_device(c.physical, &info, None) }.check("vkCreateDevice")?;
+        let queue = unsafe { raw.get_device_queue(c.queue_family, 0) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: raw_instance.clone(),
+            device: raw.clone(),
+            physical_device: c.physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| {
+            unsafe { raw.destroy_device(None) };
+            VkError::Alloc { what: "allocator".into(), source }
+        })?;
+        let push_descriptor = ash::khr::push_descriptor::Device::new(raw_instance, &raw);
+        let debug_utils = instance.debug.as_ref().map(|_| ash::ext::debug_utils::Device::new(raw_instance, &raw));
+        log::info!("device: {} ({}), driver {}", c.info.name, kind_name(c.info.kind), c.info.driver);
+        Ok(Arc::new(Device {
+            instance,
+            raw,
+            physical: c.physical,
+            info: c.info,
+            queue,
+            queue_family: c.queue_family,
+            push_descriptor,
+            debug_utils,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+        }))
+    }
+
+    pub fn raw(&self) -> &ash::Device {
+        &self.raw
+    }
+
+    pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        // A poisoned lock only means another thread panicked mid-allocation; the allocator itself is still usable.
+        self.allocator.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub fn wait_idle(&self) -> VkResult<()> {
+        unsafe { self.raw.device_wait_idle() }.check("vkDeviceWaitIdle")
+    }
+
+    /// Give an object a name in validation messages and debuggers.
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(d) = &self.debug_utils {
+            if let Ok(name) = std::ffi::CString::new(name) {
+                let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+                // Naming is best effort: failure only loses a label in validation messages.
+                let _ = unsafe { d.set_debug_utils_object_name(&info) };
+            }
+        }
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.raw.destroy_device(None);
+        }
+    }
+}
+
+pub fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU",
+        _ => "other",
+    }
+}
+
+/// Instance plus device: what a headless renderer needs.
+pub struct Context {
+    pub device: Arc<Device>,
+}
+
+impl Context {
+    pub fn headless(desc: &ContextDesc) -> VkResult<Self> {
+        let instance = Instance::new(desc)?;
+        let device = Device::new(instance, desc, None)?;
+        Ok(Context { device })
+    }
+}

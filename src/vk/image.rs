@@ -1,0 +1,166 @@
+//! RAII 2D images on gpu-allocator, with a view over all mips.
+
+use super::context::Device;
+use super::error::{Check, VkError, VkResult};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+pub struct Image {
+    device: Arc<Device>,
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    pub aspect: vk::ImageAspectFlags,
+    allocation: Option<Allocation>,
+    pub name: String,
+}
+
+pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
+    match format {
+        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::X8_D24_UNORM_PACK32 => vk::ImageAspectFlags::DEPTH,
+        vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+impl Image {
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        usage: vk::ImageUsageFlags,
+    ) -> VkResult<Self> {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width: extent.width.max(1), height: extent.height.max(1), depth: 1 })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { device.create_image(&info, None) }.check("vkCreateImage")?;
+        let requirements = unsafe { device.get_image_memory_requirements(raw) };
+        let allocation = match device.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        }) {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { device.destroy_image(raw, None) };
+                return Err(VkError::Alloc { what: format!("image `{name}` {}x{}", extent.width, extent.height), source });
+            }
+        };
+        let aspect = aspect_of(format);
+        let bound = unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.check("vkBindImageMemory");
+        let view = bound.and_then(|_| {
+            let view_info = vk::ImageViewCreateInfo::default()
+                .image(raw)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(format)
+                .subresource_range(vk::ImageSubresourceRange {
+                    aspect_mask: aspect,
+                    base_mip_level: 0,
+                    level_count: 1,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                });
+            unsafe { device.create_image_view(&view_info, None) }.check("vkCreateImageView")
+        });
+        let view = match view {
+            Ok(v) => v,
+            Err(e) => {
+                let _ = device.allocator().free(allocation);
+                unsafe { device.destroy_image(raw, None) };
+                return Err(e);
+            }
+        };
+        device.set_name(raw, name);
+        Ok(Image {
+            device: device.clone(),
+            raw,
+            view,
+            format,
+            extent,
+            aspect,
+            allocation: Some(allocation),
+            name: name.to_string(),
+        })
+    }
+
+    pub fn range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            aspect_mask: self.aspect,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        }
+    }
+
+    pub fn bytes_per_texel(&self) -> u32 {
+        format_size(self.format)
+    }
+}
+
+pub fn format_size(format: vk::Format) -> u32 {
+    match format {
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R8G8B8A8_UNORM
+        | vk::Format::R8G8B8A8_SRGB
+        | vk::Format::B8G8R8A8_UNORM
+        | vk::Format::B8G8R8A8_SRGB => 4,
+        _ => 16,
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.destroy_image_view(self.view, None);
+            self.device.destroy_image(self.raw, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.device.allocator().free(a);
+        }
+    }
+}
+
+/// A sampler that frees itself.
+pub struct Sampler {
+    device: Arc<Device>,
+    pub raw: vk::Sampler,
+}
+
+impl Sampler {
+    pub fn new(device: &Arc<Device>, filter: vk::Filter) -> VkResult<Self> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(filter)
+            .min_filter(filter)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(0.0);
+        let raw = unsafe { device.create_sampler(&info, None) }.check("vkCreateSampler")?;
+        Ok(Sampler { device: device.clone(), raw })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.device.destroy_sampler(self.raw, None) };
+    }
+}

@@ -1,0 +1,22 @@
+//! A thin, safe-ish layer over ash: instance and device, RAII buffers and images, push-descriptor pipelines,
+//! synchronization2 barriers, command recording and timestamp queries.
+
+pub mod buffer;
+pub mod cmd;
+pub mod context;
+pub mod debug;
+pub mod error;
+pub mod image;
+pub mod pipeline;
+pub mod query;
+pub mod sync;
+
+pub use buffer::Buffer;
+pub use cmd::Recorder;
+pub use context::{Context, ContextDesc, Device, DeviceInfo, Instance};
+pub use debug::validation_message_count;
+pub use error::{Check, VkError, VkResult};
+pub use image::{Image, Sampler};
+pub use pipeline::{Bind, BindKind, Blend, ColorTarget, GraphicsDesc, Pipeline};
+pub use query::Timestamps;
+pub use sync::{Access, Barriers};

@@ -1,0 +1,335 @@
+//! Pipelines with one push-descriptor set (VK_KHR_push_descriptor) and a push-constant block.
+//! Binding `i` of a pipeline is the `i`-th entry of its [`BindKind`] list, so passes bind by position.
+
+use super::buffer::Buffer;
+use super::context::Device;
+use super::error::{Check, VkResult};
+use super::image::{Image, Sampler};
+use ash::vk;
+use std::sync::Arc;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindKind {
+    Uniform,
+    Storage,
+    /// Combined image sampler.
+    Sampled,
+    StorageImage,
+}
+
+impl BindKind {
+    fn descriptor_type(self) -> vk::DescriptorType {
+        match self {
+            BindKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
+            BindKind::Storage => vk::DescriptorType::STORAGE_BUFFER,
+            BindKind::Sampled => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            BindKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
+}
+
+/// A resource bound at record time.
+pub enum Bind<'a> {
+    Uniform(&'a Buffer),
+    Storage(&'a Buffer),
+    /// Sampled image in SHADER_READ_ONLY_OPTIMAL.
+    Sampled(&'a Image, &'a Sampler),
+    /// Storage image in GENERAL.
+    StorageImage(&'a Image),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blend {
+    None,
+    /// dst += src: flux accumulation in the caustic map.
+    Additive,
+}
+
+pub struct ColorTarget {
+    pub format: vk::Format,
+    pub blend: Blend,
+}
+
+pub struct GraphicsDesc<'a> {
+    pub vertex: &'a [u32],
+    pub fragment: &'a [u32],
+    pub binds: &'a [BindKind],
+    pub push_size: u32,
+    /// Interleaved vertex attributes, as (format, offset); stride in `vertex_stride`. Empty: no vertex buffer.
+    pub vertex_attributes: &'a [(vk::Format, u32)],
+    pub vertex_stride: u32,
+    pub topology: vk::PrimitiveTopology,
+    pub cull: vk::CullModeFlags,
+    pub depth: Option<(vk::Format, vk::CompareOp, bool)>,
+    pub colors: &'a [ColorTarget],
+}
+
+pub struct Pipeline {
+    device: Arc<Device>,
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    pub bind_point: vk::PipelineBindPoint,
+    kinds: Vec<BindKind>,
+    push_stages: vk::ShaderStageFlags,
+}
+
+struct Module<'a> {
+    device: &'a Device,
+    raw: vk::ShaderModule,
+}
+
+impl<'a> Module<'a> {
+    fn new(device: &'a Device, spv: &[u32]) -> VkResult<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(spv);
+        let raw = unsafe { device.create_shader_module(&info, None) }.check("vkCreateShaderModule")?;
+        Ok(Module { device, raw })
+    }
+}
+
+impl Drop for Module<'_> {
+    fn drop(&mut self) {
+        unsafe { self.device.destroy_shader_module(self.raw, None) };
+    }
+}
+
+/// Layout objects that clean up after themselves if pipeline creation fails part-way.
+struct Layouts<'a> {
+    device: &'a Device,
+    set: vk::DescriptorSetLayout,
+    pipeline: vk::PipelineLayout,
+}
+
+impl<'a> Layouts<'a> {
+    fn new(device: &'a Device, kinds: &[BindKind], stages: vk::ShaderStageFlags, push_size: u32) -> VkResult<Self> {
+        let bindings: Vec<_> = kinds
+            .iter()
+            .enumerate()
+            .map(|(i, k)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(k.descriptor_type())
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&bindings);
+        let set = unsafe { device.create_descriptor_set_layout(&info, None) }.check("vkCreateDescriptorSetLayout")?;
+        let mut me = Layouts { device, set, pipeline: vk::PipelineLayout::null() };
+        let sets = [set];
+        let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_size }];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets);
+        if push_size > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        me.pipeline = unsafe { device.create_pipeline_layout(&info, None) }.check("vkCreatePipelineLayout")?;
+        Ok(me)
+    }
+
+    fn release(mut self) -> (vk::DescriptorSetLayout, vk::PipelineLayout) {
+        let out = (self.set, self.pipeline);
+        self.set = vk::DescriptorSetLayout::null();
+        self.pipeline = vk::PipelineLayout::null();
+        out
+    }
+}
+
+impl Drop for Layouts<'_> {
+    fn drop(&mut self) {
+        unsafe {
+            if self.pipeline != vk::PipelineLayout::null() {
+                self.device.destroy_pipeline_layout(self.pipeline, None);
+            }
+            if self.set != vk::DescriptorSetLayout::null() {
+                self.device.destroy_descriptor_set_layout(self.set, None);
+            }
+        }
+    }
+}
+
+impl Pipeline {
+    pub fn compute(device: &Arc<Device>, name: &str, spv: &[u32], kinds: &[BindKind], push_size: u32) -> VkResult<Self> {
+        let stages = vk::ShaderStageFlags::COMPUTE;
+        let layouts = Layouts::new(device, kinds, stages, push_size)?;
+        let module = Module::new(device, spv)?;
+        let stage = vk::PipelineShaderStageCreateInfo::default().stage(stages).module(module.raw).name(c"main");
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layouts.pipeline);
+        let raw = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
+            .map_err(|(_, e)| e)
+            .check("vkCreateComputePipelines")?[0];
+        device.set_name(raw, name);
+        let (set_layout, layout) = layouts.release();
+        Ok(Pipeline {
+            device: device.clone(),
+            raw,
+            layout,
+            set_layout,
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            kinds: kinds.to_vec(),
+            push_stages: stages,
+        })
+    }
+
+    pub fn graphics(device: &Arc<Device>, name: &str, desc: &GraphicsDesc) -> VkResult<Self> {
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let layouts = Layouts::new(device, desc.binds, stages, desc.push_size)?;
+        let vs = Module::new(device, desc.vertex)?;
+        let fs = Module::new(device, desc.fragment)?;
+        let shader_stages = [
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs.raw).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs.raw).name(c"main"),
+        ];
+        let vb = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: desc.vertex_stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attrs: Vec<_> = desc
+            .vertex_attributes
+            .iter()
+            .enumerate()
+            .map(|(i, (format, offset))| vk::VertexInputAttributeDescription {
+                location: i as u32,
+                binding: 0,
+                format: *format,
+                offset: *offset,
+            })
+            .collect();
+        let mut vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+        if !attrs.is_empty() {
+            vertex_input = vertex_input.vertex_binding_descriptions(&vb).vertex_attribute_descriptions(&attrs);
+        }
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let (depth_format, depth_state) = match desc.depth {
+            Some((format, op, write)) => (
+                format,
+                vk::PipelineDepthStencilStateCreateInfo::default()
+                    .depth_test_enable(true)
+                    .depth_write_enable(write)
+                    .depth_compare_op(op),
+            ),
+            None => (vk::Format::UNDEFINED, vk::PipelineDepthStencilStateCreateInfo::default()),
+        };
+        let blends: Vec<_> = desc
+            .colors
+            .iter()
+            .map(|c| {
+                let b = vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+                match c.blend {
+                    Blend::None => b,
+                    Blend::Additive => b
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD),
+                }
+            })
+            .collect();
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blends);
+        let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+        let color_formats: Vec<_> = desc.colors.iter().map(|c| c.format).collect();
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(&color_formats)
+            .depth_attachment_format(depth_format);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&shader_stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth_state)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic_state)
+            .layout(layouts.pipeline)
+            .push_next(&mut rendering);
+        let raw = unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+            .map_err(|(_, e)| e)
+            .check("vkCreateGraphicsPipelines")?[0];
+        device.set_name(raw, name);
+        let (set_layout, layout) = layouts.release();
+        Ok(Pipeline {
+            device: device.clone(),
+            raw,
+            layout,
+            set_layout,
+            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            kinds: desc.binds.to_vec(),
+            push_stages: stages,
+        })
+    }
+
+    /// Bind the pipeline and push its descriptors (binding i = binds[i]).
+    pub fn bind(&self, cmd: vk::CommandBuffer, binds: &[Bind]) {
+        debug_assert_eq!(binds.len(), self.kinds.len(), "binding count mismatch");
+        let mut buffer_infos = Vec::with_capacity(binds.len());
+        let mut image_infos = Vec::with_capacity(binds.len());
+        for b in binds {
+            match b {
+                Bind::Uniform(buf) | Bind::Storage(buf) => {
+                    buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE })
+                }
+                Bind::Sampled(img, sampler) => image_infos.push(vk::DescriptorImageInfo {
+                    sampler: sampler.raw,
+                    image_view: img.view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }),
+                Bind::StorageImage(img) => image_infos.push(vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: img.view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }),
+            }
+        }
+        let (mut bi, mut ii) = (0, 0);
+        let writes: Vec<_> = binds
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(self.kinds[i].descriptor_type());
+                match b {
+                    Bind::Uniform(_) | Bind::Storage(_) => {
+                        bi += 1;
+                        w.buffer_info(std::slice::from_ref(&buffer_infos[bi - 1]))
+                    }
+                    Bind::Sampled(..) | Bind::StorageImage(_) => {
+                        ii += 1;
+                        w.image_info(std::slice::from_ref(&image_infos[ii - 1]))
+                    }
+                }
+            })
+            .collect();
+        unsafe {
+            self.device.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+            self.device.push_descriptor.cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes);
+        }
+    }
+
+    pub fn push<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, data: &T) {
+        unsafe { self.device.cmd_push_constants(cmd, self.layout, self.push_stages, 0, bytemuck::bytes_of(data)) };
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.destroy_pipeline(self.raw, None);
+            self.device.destroy_pipeline_layout(self.layout, None);
+            self.device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}

@@ -1,0 +1,85 @@
+//! Timestamp queries. A frame writes a timestamp at each stage boundary ([`Timestamps::mark`]); the interval
+//! from one mark to the next is charged to the first mark's label, and intervals with the same label are summed
+//! (traversal levels across batches, say).
+
+use super::context::Device;
+use super::error::{Check, VkResult};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct Timestamps {
+    device: Arc<Device>,
+    pool: vk::QueryPool,
+    capacity: u32,
+    labels: Vec<&'static str>,
+    overflowed: bool,
+}
+
+impl Timestamps {
+    pub fn new(device: &Arc<Device>, capacity: u32) -> VkResult<Self> {
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
+        let pool = unsafe { device.create_query_pool(&info, None) }.check("vkCreateQueryPool")?;
+        Ok(Timestamps { device: device.clone(), pool, capacity, labels: Vec::new(), overflowed: false })
+    }
+
+    /// Reset the pool at the start of a command buffer.
+    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
+        unsafe { self.device.cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
+        self.labels.clear();
+        self.overflowed = false;
+    }
+
+    /// Write a timestamp once all previously recorded work is complete, and start a stage called `label`.
+    pub fn mark(&mut self, cmd: vk::CommandBuffer, label: &'static str) {
+        let index = self.labels.len() as u32;
+        if index >= self.capacity {
+            self.overflowed = true;
+            return;
+        }
+        unsafe {
+            self.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index)
+        };
+        self.labels.push(label);
+    }
+
+    /// Per-stage GPU milliseconds, in first-seen order. Call after the work has completed.
+    pub fn resolve(&self) -> VkResult<Vec<(&'static str, f64)>> {
+        let n = self.labels.len();
+        if n < 2 {
+            return Ok(Vec::new());
+        }
+        let mut ticks = vec![0u64; n];
+        unsafe {
+            self.device
+                .get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                .check("vkGetQueryPoolResults")?;
+        }
+        let bits = self.device.info.timestamp_valid_bits;
+        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        let period = self.device.info.timestamp_period as f64;
+        let mut out: Vec<(&'static str, f64)> = Vec::new();
+        for i in 0..n - 1 {
+            let dt = (ticks[i + 1].wrapping_sub(ticks[i])) & mask;
+            let ms = dt as f64 * period * 1e-6;
+            let label = self.labels[i];
+            if label.is_empty() {
+                continue;
+            }
+            match out.iter_mut().find(|(l, _)| *l == label) {
+                Some(e) => e.1 += ms,
+                None => out.push((label, ms)),
+            }
+        }
+        Ok(out)
+    }
+
+    pub fn overflowed(&self) -> bool {
+        self.overflowed
+    }
+}
+
+impl Drop for Timestamps {
+    fn drop(&mut self) {
+        unsafe { self.device.destroy_query_pool(self.pool, None) };
+    }
+}
