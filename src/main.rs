@@ -1,1 +1,36 @@
-fn main(){}
+//! `caustics`: command-line entry. Parses arguments, dispatches to the library, maps errors to exit codes
+//! (2: bad input, 1: any other failure).
+
+use caustics::error::AppResult;
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(name = "caustics", version, about = "Real-time refractive caustics: adaptive caustic maps on Vulkan")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Exact CPU photon tracer: ground truth for orthographic cameras.
+    Reference(caustics::reference::ReferenceArgs),
+    /// Compare two EXR images with the project's error metric.
+    Compare(caustics::metrics::CompareArgs),
+}
+
+fn run(cli: Cli) -> AppResult<()> {
+    match cli.command {
+        Command::Reference(a) => caustics::reference::run(&a),
+        Command::Compare(a) => caustics::metrics::run_compare(&a),
+    }
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).format_timestamp(None).init();
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e}");
+        std::process::exit(e.exit_code());
+    }
+}
