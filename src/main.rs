@@ -13,6 +13,10 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Render a frame headless and write an AOV (beauty PNG, caustics or direct EXR in W/m²).
+    Render(caustics::commands::RenderArgs),
+    /// Render frames and print per-stage GPU timings (timestamp queries).
+    Profile(caustics::commands::ProfileArgs),
     /// Exact CPU photon tracer: ground truth for orthographic cameras.
     Reference(caustics::reference::ReferenceArgs),
     /// Compare two EXR images with the project's error metric.
@@ -21,6 +25,8 @@ enum Command {
 
 fn run(cli: Cli) -> AppResult<()> {
     match cli.command {
+        Command::Render(a) => caustics::commands::run_render(&a),
+        Command::Profile(a) => caustics::commands::run_profile(&a),
         Command::Reference(a) => caustics::reference::run(&a),
         Command::Compare(a) => caustics::metrics::run_compare(&a),
     }

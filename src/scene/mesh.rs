@@ -47,7 +47,8 @@ impl Mesh {
     pub fn compute_normals(&mut self) {
         let mut acc = vec![Vec3::ZERO; self.positions.len()];
         for t in self.indices.chunks_exact(3) {
-            let (a, b, c) = (self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]);
+            let (a, b, c) =
+                (self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]);
             let n = (b - a).cross(c - a); // length = 2 * area
             for &i in t {
                 acc[i as usize] += n;

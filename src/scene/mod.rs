@@ -44,9 +44,13 @@ pub struct Light {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
-    Orthographic { half_height: f32 },
+    Orthographic {
+        half_height: f32,
+    },
     /// Vertical field of view in radians.
-    Perspective { fov: f32 },
+    Perspective {
+        fov: f32,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -96,7 +100,12 @@ impl Ctx<'_> {
         self.text[..offset.min(self.text.len())].bytes().filter(|&b| b == b'\n').count() + 1
     }
     fn err(&self, span: std::ops::Range<usize>, field: impl Into<String>, message: impl Into<String>) -> SceneError {
-        SceneError::Field { file: self.file.clone(), line: self.line(span.start), field: field.into(), message: message.into() }
+        SceneError::Field {
+            file: self.file.clone(),
+            line: self.line(span.start),
+            field: field.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -106,8 +115,10 @@ fn finite3(v: [f32; 3]) -> bool {
 
 impl Scene {
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::Io { file: path.display().to_string(), message: format!("cannot read scene: {e}") })?;
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+            file: path.display().to_string(),
+            message: format!("cannot read scene: {e}"),
+        })?;
         Self::parse(&text, path)
     }
 
@@ -132,7 +143,11 @@ impl Scene {
         for (i, c) in file.camera.iter().enumerate() {
             let cam = camera(&cx, i, c)?;
             if cameras.iter().any(|o: &Camera| o.name == cam.name) {
-                return Err(cx.err(c.get_ref().name.span(), format!("camera[{i}].name"), format!("duplicate camera name `{}`", cam.name)));
+                return Err(cx.err(
+                    c.get_ref().name.span(),
+                    format!("camera[{i}].name"),
+                    format!("duplicate camera name `{}`", cam.name),
+                ));
             }
             cameras.push(cam);
         }
@@ -140,7 +155,11 @@ impl Scene {
         for (i, o) in file.object.iter().enumerate() {
             let obj = object(&cx, i, o)?;
             if objects.iter().any(|x: &Object| x.name == obj.name) {
-                return Err(cx.err(o.get_ref().name.span(), format!("object[{i}].name"), format!("duplicate object name `{}`", obj.name)));
+                return Err(cx.err(
+                    o.get_ref().name.span(),
+                    format!("object[{i}].name"),
+                    format!("duplicate object name `{}`", obj.name),
+                ));
             }
             objects.push(obj);
         }
@@ -175,10 +194,12 @@ impl Scene {
     }
 
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.objects.iter().map(|o| o.mesh.bounds()).fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
-        )
+        self.objects
+            .iter()
+            .map(|o| o.mesh.bounds())
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), (a, b)| {
+                (lo.min(a), hi.max(b))
+            })
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -192,7 +213,13 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
     let kind = match d.kind.get_ref().as_str() {
         "spot" => LightKind::Spot,
         "directional" => LightKind::Directional,
-        other => return Err(cx.err(d.kind.span(), f("kind"), format!("unknown light kind `{other}` (expected \"spot\" or \"directional\")"))),
+        other => {
+            return Err(cx.err(
+                d.kind.span(),
+                f("kind"),
+                format!("unknown light kind `{other}` (expected \"spot\" or \"directional\")"),
+            ))
+        }
     };
     let position = *d.position.get_ref();
     let target = *d.target.get_ref();
@@ -209,7 +236,11 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
         (LightKind::Spot, Some(c)) => {
             let v = *c.get_ref();
             if !(v > 0.0 && v < 90.0) {
-                return Err(cx.err(c.span(), f("cone_deg"), format!("cone half-angle must lie in (0, 90) degrees (got {v})")));
+                return Err(cx.err(
+                    c.span(),
+                    f("cone_deg"),
+                    format!("cone half-angle must lie in (0, 90) degrees (got {v})"),
+                ));
             }
             v.to_radians()
         }
@@ -257,9 +288,16 @@ fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {
     let projection = match d.kind.get_ref().as_str() {
         "orthographic" => {
             if let Some(v) = &d.fov_deg {
-                return Err(cx.err(v.span(), f("fov_deg"), "an orthographic camera takes `half_height`, not `fov_deg`"));
+                return Err(cx.err(
+                    v.span(),
+                    f("fov_deg"),
+                    "an orthographic camera takes `half_height`, not `fov_deg`",
+                ));
             }
-            let h = d.half_height.as_ref().ok_or_else(|| cx.err(c.span(), f("half_height"), "an orthographic camera needs `half_height`"))?;
+            let h = d
+                .half_height
+                .as_ref()
+                .ok_or_else(|| cx.err(c.span(), f("half_height"), "an orthographic camera needs `half_height`"))?;
             let v = *h.get_ref();
             if !(v.is_finite() && v > 0.0) {
                 return Err(cx.err(h.span(), f("half_height"), format!("must be > 0 (got {v})")));
@@ -268,9 +306,16 @@ fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {
         }
         "perspective" => {
             if let Some(v) = &d.half_height {
-                return Err(cx.err(v.span(), f("half_height"), "a perspective camera takes `fov_deg`, not `half_height`"));
+                return Err(cx.err(
+                    v.span(),
+                    f("half_height"),
+                    "a perspective camera takes `fov_deg`, not `half_height`",
+                ));
             }
-            let h = d.fov_deg.as_ref().ok_or_else(|| cx.err(c.span(), f("fov_deg"), "a perspective camera needs `fov_deg`"))?;
+            let h = d
+                .fov_deg
+                .as_ref()
+                .ok_or_else(|| cx.err(c.span(), f("fov_deg"), "a perspective camera needs `fov_deg`"))?;
             let v = *h.get_ref();
             if !(v > 0.0 && v < 180.0) {
                 return Err(cx.err(h.span(), f("fov_deg"), format!("must lie in (0, 180) degrees (got {v})")));
@@ -278,14 +323,19 @@ fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {
             Projection::Perspective { fov: v.to_radians() }
         }
         other => {
-            return Err(cx.err(d.kind.span(), f("kind"), format!("unknown camera kind `{other}` (expected \"orthographic\" or \"perspective\")")))
+            return Err(cx.err(
+                d.kind.span(),
+                f("kind"),
+                format!("unknown camera kind `{other}` (expected \"orthographic\" or \"perspective\")"),
+            ))
         }
     };
     Ok(Camera { name, projection, position, target, up: up.normalize() })
 }
 
 fn positive_size(cx: &Ctx, field: String, v: &S<toml::Value>, n: usize) -> Result<Vec3, SceneError> {
-    let bad = || cx.err(v.span(), field.clone(), format!("must be a positive number or an array of {n} positive numbers"));
+    let bad =
+        || cx.err(v.span(), field.clone(), format!("must be a positive number or an array of {n} positive numbers"));
     let num = |x: &toml::Value| match x {
         toml::Value::Float(f) => Some(*f as f32),
         toml::Value::Integer(i) => Some(*i as f32),
@@ -316,7 +366,11 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
         "cube" => &["size"],
         "mesh" => &["path"],
         other => {
-            return Err(cx.err(d.shape.span(), f("shape"), format!("unknown shape `{other}` (expected plane, sphere, cube or mesh)")))
+            return Err(cx.err(
+                d.shape.span(),
+                f("shape"),
+                format!("unknown shape `{other}` (expected plane, sphere, cube or mesh)"),
+            ))
         }
     };
     let present: [(&str, Option<std::ops::Range<usize>>); 4] = [
@@ -352,7 +406,11 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
                 Some(s) => {
                     let v = *s.get_ref();
                     if !(0..=8).contains(&v) {
-                        return Err(cx.err(s.span(), f("subdivisions"), format!("must lie in 0..=8 (got {v}; 20*4^s triangles)")));
+                        return Err(cx.err(
+                            s.span(),
+                            f("subdivisions"),
+                            format!("must lie in 0..=8 (got {v}; 20*4^s triangles)"),
+                        ));
                     }
                     v as u32
                 }
@@ -422,12 +480,20 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             let ior = m.ior.as_ref().ok_or_else(|| cx.err(d.material.span(), mf("ior"), "a dielectric needs `ior`"))?;
             let v = *ior.get_ref();
             if !(v.is_finite() && v > 0.0) {
-                return Err(cx.err(ior.span(), mf("ior"), format!("index of refraction must be finite and > 0 (got {v})")));
+                return Err(cx.err(
+                    ior.span(),
+                    mf("ior"),
+                    format!("index of refraction must be finite and > 0 (got {v})"),
+                ));
             }
             Material::Dielectric { ior: v }
         }
         other => {
-            return Err(cx.err(m.kind.span(), mf("kind"), format!("unknown material `{other}` (expected \"diffuse\" or \"dielectric\")")))
+            return Err(cx.err(
+                m.kind.span(),
+                mf("kind"),
+                format!("unknown material `{other}` (expected \"diffuse\" or \"dielectric\")"),
+            ))
         }
     };
     Ok(Object { name, material, mesh })
@@ -504,7 +570,8 @@ material = { kind = "dielectric", ior = 1.5 }
 
     #[test]
     fn missing_mesh_is_an_error() {
-        let text = BASE.replace("shape = \"sphere\"\nradius = 0.3\nsubdivisions = 2", "shape = \"mesh\"\npath = \"nope.obj\"");
+        let text =
+            BASE.replace("shape = \"sphere\"\nradius = 0.3\nsubdivisions = 2", "shape = \"mesh\"\npath = \"nope.obj\"");
         let e = parse(&text).unwrap_err().to_string();
         assert!(e.contains("object[1] \"glass\".path") && e.contains("nope.obj"), "{e}");
     }

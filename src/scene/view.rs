@@ -319,7 +319,9 @@ impl CameraView {
         let y = (1.0 - px.y / self.height as f32 * 2.0) * h.y;
         match self.projection {
             Projection::Orthographic { .. } => (self.position + self.right * x + self.up * y, self.forward),
-            Projection::Perspective { .. } => (self.position, (self.right * x + self.up * y + self.forward).normalize()),
+            Projection::Perspective { .. } => {
+                (self.position, (self.right * x + self.up * y + self.forward).normalize())
+            }
         }
     }
 }

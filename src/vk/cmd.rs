@@ -6,6 +6,13 @@ use super::error::{Check, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
+/// Semaphores for a submission.
+#[derive(Default, Clone)]
+pub struct SubmitSync {
+    pub wait: Vec<(vk::Semaphore, vk::PipelineStageFlags2)>,
+    pub signal: Vec<vk::Semaphore>,
+}
+
 /// One primary command buffer with a fence: begin, record, submit, wait. Used by the headless renderer (and by
 /// the CPU-driven traversal, which submits several times per frame).
 pub struct Recorder {
@@ -57,11 +64,31 @@ impl Recorder {
 
     /// End and submit; the fence signals when the GPU is done.
     pub fn submit(&mut self) -> VkResult<()> {
+        self.submit_with(&SubmitSync::default())
+    }
+
+    /// End and submit, waiting on and signalling semaphores (presentation).
+    pub fn submit_with(&mut self, sync: &SubmitSync) -> VkResult<()> {
         unsafe {
             self.device.end_command_buffer(self.cmd).check("vkEndCommandBuffer")?;
             self.device.reset_fences(&[self.fence]).check("vkResetFences")?;
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
-            let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
+            let waits: Vec<_> = sync
+                .wait
+                .iter()
+                .map(|(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(*s).stage_mask(*stage))
+                .collect();
+            let signals: Vec<_> = sync
+                .signal
+                .iter()
+                .map(|s| {
+                    vk::SemaphoreSubmitInfo::default().semaphore(*s).stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                })
+                .collect();
+            let submit = vk::SubmitInfo2::default()
+                .command_buffer_infos(&cmds)
+                .wait_semaphore_infos(&waits)
+                .signal_semaphore_infos(&signals);
             self.device.queue_submit2(self.device.queue, &[submit], self.fence).check("vkQueueSubmit2")?;
         }
         self.pending = true;
@@ -115,7 +142,12 @@ pub fn upload_buffer<T: bytemuck::Pod>(
     )?;
     let cmd = recorder.begin()?;
     unsafe {
-        device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }]);
+        device.cmd_copy_buffer(
+            cmd,
+            staging.raw,
+            dst.raw,
+            &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }],
+        );
     }
     recorder.submit_and_wait()?;
     Ok(dst)

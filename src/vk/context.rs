@@ -51,20 +51,17 @@ pub struct Instance {
 impl Instance {
     pub fn new(desc: &ContextDesc) -> VkResult<Arc<Self>> {
         let entry = unsafe { ash::Entry::load()? };
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }.check("vkEnumerateInstanceLayerProperties")?;
-        let has_validation = layers
-            .iter()
-            .any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
+        let layers =
+            unsafe { entry.enumerate_instance_layer_properties() }.check("vkEnumerateInstanceLayerProperties")?;
+        let has_validation =
+            layers.iter().any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
         if desc.validation && !has_validation {
             return Err(VkError::NoValidationLayer);
         }
         let available = unsafe { entry.enumerate_instance_extension_properties(None) }
             .check("vkEnumerateInstanceExtensionProperties")?;
-        let has_ext = |name: &CStr| {
-            available
-                .iter()
-                .any(|e| e.extension_name_as_c_str().map(|n| n == name).unwrap_or(false))
-        };
+        let has_ext =
+            |name: &CStr| available.iter().any(|e| e.extension_name_as_c_str().map(|n| n == name).unwrap_or(false));
         let mut extensions: Vec<*const c_char> = desc.instance_extensions.iter().map(|e| e.as_ptr()).collect();
         let debug_utils = has_ext(ash::ext::debug_utils::NAME);
         if debug_utils {
@@ -265,7 +262,9 @@ impl Device {
         };
         let h = hint.to_ascii_lowercase();
         let pos = match h.as_str() {
-            "cpu" | "lavapipe" | "llvmpipe" => candidates.iter().position(|c| c.info.kind == vk::PhysicalDeviceType::CPU),
+            "cpu" | "lavapipe" | "llvmpipe" => {
+                candidates.iter().position(|c| c.info.kind == vk::PhysicalDeviceType::CPU)
+            }
             "gpu" => candidates.iter().position(|c| c.info.kind != vk::PhysicalDeviceType::CPU),
             _ => match h.parse::<usize>() {
                 Ok(i) if i < candidates.len() => Some(i),
@@ -293,7 +292,8 @@ impl Device {
             extensions.push(ash::khr::swapchain::NAME.as_ptr());
         }
         let priorities = [1.0f32];
-        let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(c.queue_family).queue_priorities(&priorities)];
+        let queues =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(c.queue_family).queue_priorities(&priorities)];
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_extension_names(&extensions)

@@ -58,11 +58,15 @@ impl Image {
             Ok(a) => a,
             Err(source) => {
                 unsafe { device.destroy_image(raw, None) };
-                return Err(VkError::Alloc { what: format!("image `{name}` {}x{}", extent.width, extent.height), source });
+                return Err(VkError::Alloc {
+                    what: format!("image `{name}` {}x{}", extent.width, extent.height),
+                    source,
+                });
             }
         };
         let aspect = aspect_of(format);
-        let bound = unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.check("vkBindImageMemory");
+        let bound = unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
+            .check("vkBindImageMemory");
         let view = bound.and_then(|_| {
             let view_info = vk::ImageViewCreateInfo::default()
                 .image(raw)

@@ -12,7 +12,7 @@ pub mod query;
 pub mod sync;
 
 pub use buffer::Buffer;
-pub use cmd::Recorder;
+pub use cmd::{Recorder, SubmitSync};
 pub use context::{Context, ContextDesc, Device, DeviceInfo, Instance};
 pub use debug::validation_message_count;
 pub use error::{Check, VkError, VkResult};

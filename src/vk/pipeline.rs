@@ -150,7 +150,13 @@ impl Drop for Layouts<'_> {
 }
 
 impl Pipeline {
-    pub fn compute(device: &Arc<Device>, name: &str, spv: &[u32], kinds: &[BindKind], push_size: u32) -> VkResult<Self> {
+    pub fn compute(
+        device: &Arc<Device>,
+        name: &str,
+        spv: &[u32],
+        kinds: &[BindKind],
+        push_size: u32,
+    ) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::COMPUTE;
         let layouts = Layouts::new(device, kinds, stages, push_size)?;
         let module = Module::new(device, spv)?;
@@ -178,8 +184,14 @@ impl Pipeline {
         let vs = Module::new(device, desc.vertex)?;
         let fs = Module::new(device, desc.fragment)?;
         let shader_stages = [
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs.raw).name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs.raw).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vs.raw)
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fs.raw)
+                .name(c"main"),
         ];
         let vb = [vk::VertexInputBindingDescription {
             binding: 0,
@@ -224,7 +236,8 @@ impl Pipeline {
             .colors
             .iter()
             .map(|c| {
-                let b = vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+                let b =
+                    vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
                 match c.blend {
                     Blend::None => b,
                     Blend::Additive => b
@@ -300,7 +313,9 @@ impl Pipeline {
             .iter()
             .enumerate()
             .map(|(i, b)| {
-                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(self.kinds[i].descriptor_type());
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_binding(i as u32)
+                    .descriptor_type(self.kinds[i].descriptor_type());
                 match b {
                     Bind::Uniform(_) | Bind::Storage(_) => {
                         bi += 1;
@@ -315,7 +330,9 @@ impl Pipeline {
             .collect();
         unsafe {
             self.device.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
-            self.device.push_descriptor.cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes);
+            if !writes.is_empty() {
+                self.device.push_descriptor.cmd_push_descriptor_set(cmd, self.bind_point, self.layout, 0, &writes);
+            }
         }
     }
 

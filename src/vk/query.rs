@@ -36,14 +36,12 @@ impl Timestamps {
             self.overflowed = true;
             return;
         }
-        unsafe {
-            self.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index)
-        };
+        unsafe { self.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index) };
         self.labels.push(label);
     }
 
-    /// Per-stage GPU milliseconds, in first-seen order. Call after the work has completed.
-    pub fn resolve(&self) -> VkResult<Vec<(&'static str, f64)>> {
+    /// Every interval: (label, start ms from the first timestamp, duration ms). Call after the work completed.
+    pub fn resolve(&self) -> VkResult<Vec<(&'static str, f64, f64)>> {
         let n = self.labels.len();
         if n < 2 {
             return Ok(Vec::new());
@@ -51,25 +49,21 @@ impl Timestamps {
         let mut ticks = vec![0u64; n];
         unsafe {
             self.device
-                .get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+                .get_query_pool_results(
+                    self.pool,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
                 .check("vkGetQueryPoolResults")?;
         }
         let bits = self.device.info.timestamp_valid_bits;
         let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
-        let period = self.device.info.timestamp_period as f64;
-        let mut out: Vec<(&'static str, f64)> = Vec::new();
-        for i in 0..n - 1 {
-            let dt = (ticks[i + 1].wrapping_sub(ticks[i])) & mask;
-            let ms = dt as f64 * period * 1e-6;
-            let label = self.labels[i];
-            if label.is_empty() {
-                continue;
-            }
-            match out.iter_mut().find(|(l, _)| *l == label) {
-                Some(e) => e.1 += ms,
-                None => out.push((label, ms)),
-            }
-        }
+        let ms = |dt: u64| (dt & mask) as f64 * self.device.info.timestamp_period as f64 * 1e-6;
+        let out = (0..n - 1)
+            .filter(|&i| !self.labels[i].is_empty())
+            .map(|i| (self.labels[i], ms(ticks[i].wrapping_sub(ticks[0])), ms(ticks[i + 1].wrapping_sub(ticks[i]))))
+            .collect();
         Ok(out)
     }
 
@@ -82,4 +76,16 @@ impl Drop for Timestamps {
     fn drop(&mut self) {
         unsafe { self.device.destroy_query_pool(self.pool, None) };
     }
+}
+
+/// Sum intervals by label, in first-seen order.
+pub fn sum_by_label(segments: &[(&'static str, f64, f64)]) -> Vec<(&'static str, f64)> {
+    let mut out: Vec<(&'static str, f64)> = Vec::new();
+    for (label, _, ms) in segments {
+        match out.iter_mut().find(|(l, _)| l == label) {
+            Some(e) => e.1 += ms,
+            None => out.push((label, *ms)),
+        }
+    }
+    out
 }

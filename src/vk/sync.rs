@@ -12,8 +12,11 @@ type Layout = vk::ImageLayout;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
-    /// Previous contents are irrelevant (first use in a frame).
+    /// Previous contents are irrelevant, and nothing earlier on the queue needs waiting for.
     Nothing,
+    /// First use in a frame: contents are discarded, but whatever earlier frames did with the resource on this
+    /// queue must be finished (an execution and memory dependency on all prior commands).
+    FrameStart,
     /// Storage buffer/image read in a compute shader.
     ComputeRead,
     /// Storage buffer/image write (or read-modify-write, atomics) in a compute shader.
@@ -24,6 +27,8 @@ pub enum Access {
     IndirectRead,
     /// Storage buffer read in a vertex shader.
     VertexRead,
+    /// Storage buffer written (atomics) in a vertex shader.
+    VertexWrite,
     /// Sampled image read in a vertex shader.
     VertexSampled,
     /// Sampled image read in a fragment shader.
@@ -43,6 +48,7 @@ impl Access {
         use Access::*;
         match self {
             Nothing => (Stage::NONE, Acc::NONE, Layout::UNDEFINED),
+            FrameStart => (Stage::ALL_COMMANDS, Acc::MEMORY_WRITE | Acc::MEMORY_READ, Layout::UNDEFINED),
             ComputeRead => (Stage::COMPUTE_SHADER, Acc::SHADER_STORAGE_READ, Layout::GENERAL),
             ComputeWrite => {
                 (Stage::COMPUTE_SHADER, Acc::SHADER_STORAGE_WRITE | Acc::SHADER_STORAGE_READ, Layout::GENERAL)
@@ -50,6 +56,9 @@ impl Access {
             ComputeSampled => (Stage::COMPUTE_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
             IndirectRead => (Stage::DRAW_INDIRECT, Acc::INDIRECT_COMMAND_READ, Layout::UNDEFINED),
             VertexRead => (Stage::VERTEX_SHADER, Acc::SHADER_STORAGE_READ, Layout::GENERAL),
+            VertexWrite => {
+                (Stage::VERTEX_SHADER, Acc::SHADER_STORAGE_WRITE | Acc::SHADER_STORAGE_READ, Layout::GENERAL)
+            }
             VertexSampled => (Stage::VERTEX_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
             FragmentSampled => (Stage::FRAGMENT_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
             ColorAttachment => (
@@ -71,7 +80,15 @@ impl Access {
     }
 
     pub fn is_write(self) -> bool {
-        matches!(self, Access::ComputeWrite | Access::ColorAttachment | Access::DepthAttachment | Access::TransferDst)
+        matches!(
+            self,
+            Access::FrameStart
+                | Access::ComputeWrite
+                | Access::VertexWrite
+                | Access::ColorAttachment
+                | Access::DepthAttachment
+                | Access::TransferDst
+        )
     }
 }
 
@@ -162,7 +179,8 @@ impl Barriers {
         if self.is_empty() {
             return;
         }
-        let dep = vk::DependencyInfo::default().buffer_memory_barriers(&self.buffers).image_memory_barriers(&self.images);
+        let dep =
+            vk::DependencyInfo::default().buffer_memory_barriers(&self.buffers).image_memory_barriers(&self.images);
         unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
         self.buffers.clear();
         self.images.clear();

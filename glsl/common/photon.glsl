@@ -1,0 +1,83 @@
+// Tracing one photon from the light through the refractor to the receivers (DESIGN.md step 5): front surface
+// from the light-view front buffer, refraction with Fresnel transmittance, the exit point on the back surface by
+// a bracketed search, refraction out (total internal reflection drops the photon: a two-interface method cannot
+// follow it), and the receiver hit by a bracketed secant search. Used by the splat for every emitted photon and
+// by traversal (the max-error metric traces a cell's four children). Needs photon_bindings and coverage.
+#ifndef PHOTON_GLSL
+#define PHOTON_GLSL
+#include "common/view.glsl"
+#include "common/optics.glsl"
+#include "common/march.glsl"
+
+const uint HIT_OK = 0u;
+const uint HIT_OUTSIDE_CONE = 1u;
+const uint HIT_MISS = 2u;        // the cell's center does not see a refractor
+const uint HIT_BLOCKED = 3u;     // a receiver lies between the light and the refractor
+const uint HIT_NO_EXIT = 4u;     // no back surface found along the refracted ray
+const uint HIT_TIR = 5u;         // total internal reflection
+const uint HIT_ESCAPED = 6u;     // left the caustic map without meeting a receiver
+
+struct Hit {
+    vec2 map_px;   // landing point in caustic-map texels
+    vec3 flux;     // W per channel
+    vec3 pos;      // landing point, world space
+    uint status;
+};
+
+Hit trace_photon(vec2 uv, float side, bool covered) {
+    Hit h;
+    h.status = HIT_OK;
+    h.flux = vec3(0.0);
+    h.map_px = vec2(-1e9);
+    h.pos = vec3(0.0);
+    View v = u_frame.photon_view;
+    View rv = u_frame.receiver_view;
+    vec2 xy = view_xy_of_uv(v, uv);
+    if (!view_in_cone(v, xy)) { h.status = HIT_OUTSIDE_CONE; return h; }
+    vec4 front;
+    if (!covered || !geo_sample(t_front, uv, front)) { h.status = HIT_MISS; return h; }
+    vec3 ro, rd;
+    view_ray_xy(v, xy, ro, rd);
+    vec3 p1 = ro + rd * front.w;
+    // A receiver between the light and the refractor shadows it.
+    float rdist;
+    vec2 ruv = view_uv(rv, p1);
+    if (uv_inside(ruv) && dist_sample(t_recv, ruv, rdist) && rdist < view_dist(rv, p1) * (1.0 - 1e-3)) {
+        h.status = HIT_BLOCKED;
+        return h;
+    }
+    ivec2 aux_size = textureSize(t_front_aux, 0);
+    float ior = texelFetch(t_front_aux, clamp(ivec2(uv * vec2(aux_size)), ivec2(0), aux_size - 1), 0).x;
+    vec3 n1 = dot(front.xyz, rd) > 0.0 ? -front.xyz : front.xyz;
+    float F1 = fresnel_dielectric(-dot(rd, n1), 1.0, ior);
+    vec3 t1;
+    if (!refract_dir(rd, n1, 1.0 / ior, t1)) { h.status = HIT_TIR; return h; }
+    vec3 p2, n2;
+    if (!find_exit(v, t_back, u_frame.scene_min.w, p1, t1, p2, n2)) { h.status = HIT_NO_EXIT; return h; }
+    if (dot(n2, t1) < 0.0) n2 = -n2;  // outward, along the ray
+    float F2 = fresnel_dielectric(dot(t1, n2), ior, 1.0);
+    vec3 t2;
+    if (!refract_dir(t1, -n2, ior, t2)) { h.status = HIT_TIR; return h; }
+    vec3 lo = u_frame.scene_min.xyz, hi = u_frame.scene_max.xyz;
+    vec3 pad = 1e-3 * max(hi - lo, vec3(1.0));
+    vec3 p3;
+    if (!find_surface(rv, t_recv, p2, t2, ray_box_exit(p2, t2, lo - pad, hi + pad), p3)) {
+        h.status = HIT_ESCAPED;
+        return h;
+    }
+    h.pos = p3;
+    h.map_px = view_uv(rv, p3) * rv.extent.xy;
+    h.flux = u_frame.light_power.rgb * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
+    return h;
+}
+
+float cell_side(uint level) { return u_frame.photon_view.window.z / float(LEVEL0_RES << level); }
+
+// Exact: (x + 0.5) needs at most 23 bits at level 16 and the divisor is a power of two.
+vec2 cell_center_uv(uint level, uvec2 xy) { return (vec2(xy) + 0.5) / float(LEVEL0_RES << level); }
+
+Hit trace_cell(uint level, uvec2 xy) {
+    return trace_photon(cell_center_uv(level, xy), cell_side(level), leaf_covered(level, xy));
+}
+
+#endif

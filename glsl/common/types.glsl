@@ -1,0 +1,75 @@
+// Structs shared with Rust (src/gpu_types.rs mirrors each with size asserts). std140/std430-safe: vec4/uvec4 only.
+#ifndef TYPES_GLSL
+#define TYPES_GLSL
+
+// A view from a point (perspective: spot light, perspective camera) or along a direction (orthographic:
+// directional light, orthographic camera). See src/scene/view.rs.
+struct View {
+    mat4 view_proj;   // world -> clip
+    vec4 origin;      // xyz; w: 0 perspective, 1 orthographic
+    vec4 right;       // xyz; w: cosine of the spot cone (-1: no cone)
+    vec4 down;        // xyz; w: near
+    vec4 forward;     // xyz; w: far
+    vec4 window;      // image-plane window: x0, y0, width, height
+    vec4 extent;      // texels: width, height, 1/width, 1/height
+};
+
+struct FrameData {
+    View photon_view;    // light view fitted to the refractors: photon grid and refractor g-buffers
+    View receiver_view;  // light view over the receivers: caustic map, receiver g-buffer, shadow map
+    View camera;         // eye
+    vec4 light_power;    // rgb: I*color (W/sr; W/m^2 for directional lights); w: intensity
+    vec4 scene_min;      // xyz: scene bounds; w: refractor bounding diameter (m)
+    vec4 scene_max;      // xyz; w: exposure (1 / reference radiance)
+    uvec4 grid;          // x: refractor g-buffer res R; y: log2(R/64); z: caustic map res M; w: pyramid mips
+    uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error), bit 8 batching;
+                         // z: first level checked for convergence; w: photon-buffer capacity (entries)
+    vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z,w: unused
+    uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
+};
+
+struct LevelCounters {
+    uint candidates;
+    uint refined;
+    uint emitted;
+    uint dropped;
+};
+
+// Traversal state, read and written by init, traverse and stats (Piao's shared command buffer), extended with a
+// tile stack for batching: a batch traverses one tile (a block of level-0 cells, or one cell of a deeper level).
+// If the batch would overflow the photon buffer it is aborted and its tile split into four, so the committed
+// batches partition the photons exactly and a tiny budget gives the same image as a large one.
+struct TraversalState {
+    uint read_offset;    // current level's candidates: [read_offset, read_offset + read_count)
+    uint read_count;
+    uint write_count;    // children appended this level (atomic); they follow the candidates
+    uint emit_count;     // photons emitted this batch (atomic); they fill the buffer from the top down
+    uint used;           // entries reserved this batch (atomic): candidates + children + emitted
+    uint capacity;       // photon buffer entries
+    uint start_level;    // the batch's first traversal level (MAX_LEVELS: no tile, nothing to do)
+    uint aborted;        // the batch overflowed
+    uint batching;       // 1: an overflow aborts and splits the batch; 0: the overflowing work is dropped
+    uint stack_size;     // pending tiles
+    uint batches_committed;
+    uint batches_aborted;  // overflow events that split a batch
+    uint overflow_dropped; // entries dropped by overflows with batching off
+    uint peak_used;
+    uint photons_total;    // photons splatted, all batches
+    uint slots_used;       // batch slots that found a tile
+    ivec4 tile;            // the batch's tile: (t, x, y, -); t < 0: a 2^-t block of level-0 cells; t >= 0: a cell
+    LevelCounters batch_levels[MAX_LEVELS];  // this batch's counts, committed into `levels` on success
+    LevelCounters levels[MAX_LEVELS];
+    ivec4 stack[TILE_STACK];
+};
+
+// Photon encoding: a quadtree cell (level, x, y) with exact integer addressing.
+//   .x: bits 0..23 cell x, bits 24..31 splat radius in caustic-map texels (0: derive from the level)
+//   .y: bits 0..23 cell y, bits 24..28 level
+uvec2 pack_cell(uint level, uint x, uint y, uint radius) {
+    return uvec2((x & 0xFFFFFFu) | (min(radius, 255u) << 24), (y & 0xFFFFFFu) | (level << 24));
+}
+uint cell_level(uvec2 c) { return c.y >> 24; }
+uvec2 cell_xy(uvec2 c) { return uvec2(c.x & 0xFFFFFFu, c.y & 0xFFFFFFu); }
+uint cell_radius(uvec2 c) { return c.x >> 24; }
+
+#endif

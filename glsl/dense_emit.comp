@@ -1,0 +1,50 @@
+#version 460
+// Dense photon emission: every cell of the 64*2^L grid whose center sees a refractor (and lies inside the cone)
+// is emitted, one band of rows at a time. The draw count that follows is written by stats (mode 2), so dense
+// and adaptive feed the same indirect splat.
+#include "common/photon_bindings.glsl"
+#include "common/photon_push.glsl"
+#include "common/coverage.glsl"
+#include "common/view.glsl"
+
+layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
+
+shared uint s_cand;
+shared uint s_emitted;
+shared uint s_dropped;
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) {
+        s_cand = 0u;
+        s_emitted = 0u;
+        s_dropped = 0u;
+    }
+    barrier();
+    uint level = pc.level;
+    uint n = LEVEL0_RES << level;
+    uvec2 xy = uvec2(gl_GlobalInvocationID.x, pc.row0 + gl_GlobalInvocationID.y);
+    if (xy.x < n && gl_GlobalInvocationID.y < pc.rows && xy.y < n) {
+        atomicAdd(s_cand, 1u);
+        View v = u_frame.photon_view;
+        float side = v.window.z / float(n);
+        vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
+        if (leaf_covered(level, xy) && view_in_cone(v, center)) {
+            uint base = atomicAdd(state.used, 1u);
+            if (base < state.capacity) {
+                uint i = atomicAdd(state.emit_count, 1u);
+                photons[state.capacity - 1u - i] = pack_cell(level, xy.x, xy.y, 0u);
+                atomicAdd(s_emitted, 1u);
+            } else {
+                atomicAdd(state.overflow_dropped, 1u);
+            }
+        } else {
+            atomicAdd(s_dropped, 1u);
+        }
+    }
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        if (s_cand > 0u) atomicAdd(state.levels[level].candidates, s_cand);
+        if (s_emitted > 0u) atomicAdd(state.levels[level].emitted, s_emitted);
+        if (s_dropped > 0u) atomicAdd(state.levels[level].dropped, s_dropped);
+    }
+}

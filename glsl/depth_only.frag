@@ -1,0 +1,3 @@
+#version 460
+// Shadow map: depth only.
+void main() {}

@@ -1,0 +1,26 @@
+#version 460
+layout(push_constant) uniform Push {
+    mat4 view_proj;
+    vec4 origin;
+    vec4 forward;
+} pc;
+
+layout(location = 0) in vec3 v_world;
+layout(location = 1) in vec3 v_normal;
+#ifdef WITH_AUX
+layout(location = 2) flat in float v_param;
+#endif
+
+layout(location = 0) out vec4 o_geo;  // normal.xyz (interpolated, as the reference sees it), distance
+#ifdef WITH_AUX
+layout(location = 1) out float o_aux;  // index of refraction
+#endif
+
+void main() {
+    vec3 d = v_world - pc.origin.xyz;
+    float dist = pc.origin.w > 0.5 ? dot(d, pc.forward.xyz) : length(d);
+    o_geo = vec4(normalize(v_normal), max(dist, 1e-6));
+#ifdef WITH_AUX
+    o_aux = v_param;
+#endif
+}

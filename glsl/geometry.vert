@@ -1,0 +1,32 @@
+#version 460
+// Rasterize scene triangles into a view's g-buffer (light-view refractor front/back, receivers from the light,
+// shadow depth, eye-view refractor front/back). The distance written is along the view ray (see view.glsl).
+layout(location = 0) in vec4 a_position;  // xyz
+layout(location = 1) in vec4 a_normal;    // xyz
+layout(location = 2) in vec4 a_material;  // x: index of refraction (dielectric) or albedo r; w: kind
+
+layout(push_constant) uniform Push {
+    mat4 view_proj;
+    vec4 origin;   // xyz; w: 0 perspective, 1 orthographic
+    vec4 forward;  // xyz
+} pc;
+
+// Variants: WITH_AUX passes the material parameter (index of refraction); DEPTH_ONLY passes nothing.
+#ifndef DEPTH_ONLY
+layout(location = 0) out vec3 v_world;
+layout(location = 1) out vec3 v_normal;
+#endif
+#ifdef WITH_AUX
+layout(location = 2) flat out float v_param;
+#endif
+
+void main() {
+#ifndef DEPTH_ONLY
+    v_world = a_position.xyz;
+    v_normal = a_normal.xyz;
+#endif
+#ifdef WITH_AUX
+    v_param = a_material.x;
+#endif
+    gl_Position = pc.view_proj * vec4(a_position.xyz, 1.0);
+}

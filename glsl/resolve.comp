@@ -1,0 +1,33 @@
+#version 460
+// Caustic irradiance: each caustic-map texel holds flux (W); divide by the receiver area the texel covers,
+// A = Omega * d^2 / |cos| (spot) or side^2 / |cos| (directional), to get W/m^2.
+#include "common/types.glsl"
+#include "common/view.glsl"
+
+layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
+layout(set = 0, binding = 1) uniform sampler2D t_flux;
+layout(set = 0, binding = 2) uniform sampler2D t_recv;
+layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D o_irradiance;
+
+layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
+
+void main() {
+    View v = u_frame.receiver_view;
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = ivec2(v.extent.xy);
+    if (p.x >= size.x || p.y >= size.y) return;
+    vec4 r = texelFetch(t_recv, p, 0);
+    vec3 e = vec3(0.0);
+    if (r.w > 0.0) {
+        vec2 uv = (vec2(p) + 0.5) * v.extent.zw;
+        vec2 xy = view_xy_of_uv(v, uv);
+        vec3 ro, rd;
+        view_ray_xy(v, xy, ro, rd);
+        float cos_t = max(abs(dot(normalize(r.xyz), rd)), 0.02);
+        float side = v.window.z * v.extent.z;
+        float area = view_cell_measure(v, xy, side) / cos_t;
+        if (!view_is_ortho(v)) area *= r.w * r.w;
+        e = texelFetch(t_flux, p, 0).rgb / area;
+    }
+    imageStore(o_irradiance, p, vec4(e, 0.0));
+}

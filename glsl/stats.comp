@@ -1,0 +1,81 @@
+#version 460
+// Stats (Piao's post-traversal statistics shader), one invocation after each traversal level: count the level's
+// candidates, move the read window onto the children just appended, and write the next level's
+// dispatch-indirect arguments. After the last level (mode 1) it commits the batch: on success the batch's counts
+// join the frame's and the draw-indirect command is set to the emitted photons; after an overflow the batch's
+// tile is split into four tiles pushed on the tile stack, and nothing is drawn.
+#include "common/photon_bindings.glsl"
+#include "common/photon_push.glsl"
+
+layout(local_size_x = 1) in;
+
+uvec4 groups_for(uint n) {
+    uint per = pc.wg_side * pc.wg_side;
+    uint g = (n + per - 1u) / per;
+    uint gx = min(g, 65535u);
+    return uvec4(gx, g == 0u ? 0u : (g + gx - 1u) / gx, 1u, 0u);
+}
+
+void commit() {
+    bool split = state.aborted != 0u && state.batching != 0u;
+    if (state.start_level >= MAX_LEVELS) {
+        draw_cmd = uvec4(0u, 1u, state.capacity, 0u);
+        return;
+    }
+    if (split) {
+        ivec4 t = state.tile;
+        state.batches_aborted += 1u;
+        if (t.x >= 0) {
+            // The tile's own cell was refined (its subtree overflowed): count it once, here.
+            uint l = uint(t.x);
+            state.levels[l].candidates += 1u;
+            state.levels[l].refined += 1u;
+        }
+        if (t.x < int(MAX_LEVELS) - 1 && state.stack_size + 4u <= TILE_STACK) {
+            for (int k = 3; k >= 0; k--) {
+                state.stack[state.stack_size] = ivec4(t.x + 1, 2 * t.y + (k & 1), 2 * t.z + (k >> 1), 0);
+                state.stack_size += 1u;
+            }
+        } else {
+            state.overflow_dropped += 1u;
+        }
+        draw_cmd = uvec4(0u, 1u, state.capacity, 0u);
+        return;
+    }
+    for (uint l = 0u; l < MAX_LEVELS; l++) {
+        LevelCounters b = state.batch_levels[l];
+        state.levels[l].candidates += b.candidates;
+        state.levels[l].refined += b.refined;
+        state.levels[l].emitted += b.emitted;
+        state.levels[l].dropped += b.dropped;
+    }
+    uint n = min(state.emit_count, state.capacity);
+    state.batches_committed += 1u;
+    state.photons_total += n;
+    draw_cmd = uvec4(n, 1u, state.capacity - n, 0u);
+}
+
+void main() {
+    uint l = pc.level;
+    if (pc.mode == 2u) {
+        // Dense: the band's photons are all emitted; draw them.
+        uint n = min(state.emit_count, state.capacity);
+        state.photons_total += n;
+        state.peak_used = max(state.peak_used, n);
+        state.batches_committed += 1u;
+        draw_cmd = uvec4(n, 1u, state.capacity - n, 0u);
+        return;
+    }
+    if (state.start_level < MAX_LEVELS && l >= state.start_level) {
+        state.batch_levels[l].candidates += state.read_count;
+        state.peak_used = max(state.peak_used, min(state.used, state.capacity));
+        state.read_offset += state.read_count;
+        state.read_count = state.write_count;
+        state.write_count = 0u;
+        if (l + 1u < MAX_LEVELS) {
+            bool stop = state.aborted != 0u && state.batching != 0u;
+            dispatch_cmd[l + 1u] = stop ? uvec4(0u, 0u, 1u, 0u) : groups_for(state.read_count);
+        }
+    }
+    if (pc.mode == 1u) commit();
+}

@@ -1,0 +1,436 @@
+//! The `render` and `profile` commands (the CLI edge: arguments in, files and stats out).
+
+use crate::error::{AppError, AppResult};
+use crate::image_io::{self, RgbImage};
+use crate::profiler;
+use crate::renderer::{Aov, AovData, FrameReport, Renderer};
+use crate::scene::{Camera, Projection, Scene};
+use crate::settings::{parse_size, Driven, Method, Metric, Settings};
+use crate::shaders::consts::*;
+use crate::vk::{self, Context, ContextDesc};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The default scene shipped in assets/scenes/.
+pub fn default_scene() -> PathBuf {
+    let here = PathBuf::from("assets/scenes/sphere.toml");
+    if here.is_file() {
+        return here;
+    }
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml")
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// Scene file (TOML). Default: assets/scenes/sphere.toml.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Camera name (default: the scene's first camera).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Output size WxH.
+    #[arg(long, default_value = "512x512")]
+    pub size: String,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct MethodArgs {
+    /// Photon source: dense grid, or adaptive traversal.
+    #[arg(long, value_enum, default_value_t = Method::Adaptive)]
+    pub method: Method,
+    /// Adaptive stopping metric.
+    #[arg(long, value_enum, default_value_t = Metric::MaxLevel)]
+    pub metric: Metric,
+    /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive).
+    #[arg(long, default_value_t = 5)]
+    pub level: u32,
+    /// Who writes the traversal's dispatch arguments: the GPU (indirect) or the host (readback per level).
+    #[arg(long, value_enum, default_value_t = Driven::Gpu)]
+    pub driven: Driven,
+    /// Photon buffer size in MiB (batches are split to fit).
+    #[arg(long, default_value_t = 64.0)]
+    pub photon_budget: f64,
+    /// Side of the light-view refractor g-buffers (power of two).
+    #[arg(long, default_value_t = 1024)]
+    pub gbuffer_res: u32,
+    /// Side of the caustic map (and of the shadow map).
+    #[arg(long, default_value_t = 1024)]
+    pub caustic_res: u32,
+    /// Max-error metric: convergence bound in caustic-map texels.
+    #[arg(long, default_value_t = 1.0)]
+    pub error_bound: f32,
+    /// Max-error metric: first level checked for convergence.
+    #[arg(long, default_value_t = 3)]
+    pub check_level: u32,
+    /// Traversal work-group side (1, 2, 4, 8 or 16).
+    #[arg(long, default_value_t = TRAVERSE_WG)]
+    pub traverse_wg: u32,
+    /// Batch slots recorded per frame for GPU-driven batching (0: automatic, adapted between frames).
+    #[arg(long, default_value_t = 0)]
+    pub batch_slots: u32,
+    /// Testing: do not split batches on overflow (overflowing work is dropped and counted).
+    #[arg(long, hide = true)]
+    pub no_batching: bool,
+    /// Testing: dump up to N splatted photons into the stats JSON.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub debug_photons: u32,
+}
+
+impl MethodArgs {
+    pub fn settings(&self) -> AppResult<Settings> {
+        let s = Settings {
+            method: self.method,
+            metric: self.metric,
+            level: self.level,
+            driven: self.driven,
+            photon_budget_mib: self.photon_budget,
+            gbuffer_res: self.gbuffer_res,
+            caustic_res: self.caustic_res,
+            error_bound: self.error_bound,
+            check_level: self.check_level,
+            traverse_wg: self.traverse_wg,
+            batching: !self.no_batching,
+            batch_slots: self.batch_slots,
+            debug_photons: self.debug_photons,
+            ..Settings::default()
+        };
+        s.validate()?;
+        if s.method == Method::Dense && s.level > 12 {
+            return Err(AppError::BadInput(format!(
+                "--level {}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper levels",
+                s.level
+            )));
+        }
+        Ok(s)
+    }
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    /// Output: beauty (PNG), caustics or direct (EXR, W/m²).
+    #[arg(long, default_value = "beauty")]
+    pub aov: String,
+    /// Output file (.png for beauty, .exr for caustics and direct).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Write stats JSON here.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Frames to render (stats cover all of them; the image is the last).
+    #[arg(long, default_value_t = 1)]
+    pub frames: u32,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct ProfileArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    /// Frames to time.
+    #[arg(long, default_value_t = 20)]
+    pub frames: u32,
+    /// Untimed frames first (the first submit JIT-compiles shaders on lavapipe).
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a Chrome trace (Perfetto, chrome://tracing).
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
+}
+
+/// A loaded scene with its camera, and a device.
+pub struct Session {
+    pub scene_path: PathBuf,
+    pub camera: Camera,
+    pub width: u32,
+    pub height: u32,
+    pub renderer: Renderer,
+    pub validation: bool,
+}
+
+impl Session {
+    pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
+        let (width, height) = parse_size(&args.size)?;
+        let path = args.scene.clone().unwrap_or_else(default_scene);
+        let scene = Scene::load(&path)?;
+        let camera = scene.camera(args.camera.as_deref()).map_err(AppError::BadInput)?.clone();
+        let desc = ContextDesc::from_env();
+        let ctx = Context::headless(&desc)?;
+        let renderer = Renderer::new(ctx.device, scene, settings)?;
+        Ok(Session { scene_path: path, camera, width, height, renderer, validation: desc.validation })
+    }
+
+    pub fn device(&self) -> &Arc<vk::Device> {
+        &self.renderer.device
+    }
+
+    /// Render one frame; with GPU-driven batching, re-render with more slots until no tile is left pending.
+    pub fn frame(&mut self, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
+        let view = self.renderer.camera_view(&self.camera, self.width, self.height);
+        loop {
+            let (report, img) = self.renderer.render(&view, aov)?;
+            let Some(st) = report.state.as_ref() else {
+                return Ok((report, img));
+            };
+            let needed = st.slots_used + st.stack_size;
+            if report.unfinished_tiles == 0 || report.batch_slots >= MAX_BATCHES {
+                // Next frame: as many slots as this one used, plus a margin.
+                if report.batch_slots > 1 {
+                    self.renderer.slots_hint = (st.slots_used + st.slots_used / 4 + 1).min(MAX_BATCHES);
+                }
+                if report.unfinished_tiles > 0 {
+                    eprintln!(
+                        "warning: {} tiles were not traversed: the photon budget needs more than {MAX_BATCHES} batches (raise --photon-budget)",
+                        report.unfinished_tiles
+                    );
+                }
+                return Ok((report, img));
+            }
+            let slots = (needed.max(report.batch_slots) * 2).min(MAX_BATCHES);
+            eprintln!(
+                "batching: {} tiles pending after {} batch slots; rendering again with {slots}",
+                report.unfinished_tiles, report.batch_slots
+            );
+            self.renderer.slots_hint = slots;
+        }
+    }
+
+    pub fn pixel_area(&self) -> Option<f64> {
+        match self.camera.projection {
+            Projection::Orthographic { half_height } => {
+                let hh = half_height as f64;
+                let hw = hh * self.width as f64 / self.height as f64;
+                Some((2.0 * hw / self.width as f64) * (2.0 * hh / self.height as f64))
+            }
+            Projection::Perspective { .. } => None,
+        }
+    }
+}
+
+fn check_output(aov: Aov, out: &Path) -> AppResult<()> {
+    let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
+    let want = if aov == Aov::Beauty { "png" } else { "exr" };
+    if ext != want {
+        return Err(AppError::BadInput(format!(
+            "--out {}: the {} AOV is written as .{want}",
+            out.display(),
+            match aov {
+                Aov::Beauty => "beauty",
+                Aov::Caustics => "caustics",
+                Aov::Direct => "direct",
+            }
+        )));
+    }
+    Ok(())
+}
+
+pub fn to_rgb(data: &AovData) -> Option<RgbImage> {
+    match data {
+        AovData::Float { width, height, rgba } => {
+            Some(RgbImage { width: *width, height: *height, data: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() })
+        }
+        AovData::Rgba8 { .. } => None,
+    }
+}
+
+fn level_rows(report: &FrameReport, max_level: u32) -> Vec<Value> {
+    let Some(st) = report.state.as_ref() else {
+        return Vec::new();
+    };
+    (0..=max_level.min(MAX_LEVELS - 1))
+        .map(|l| {
+            let c = st.levels[l as usize];
+            json!({"level": l, "grid": LEVEL0_RES << l, "candidates": c.candidates, "refined": c.refined, "emitted": c.emitted, "dropped": c.dropped})
+        })
+        .collect()
+}
+
+/// The stats JSON of DESIGN.md, over `frames` (the per-frame counts are the last frame's).
+pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Value {
+    let r = &session.renderer;
+    let s = &r.settings;
+    let last = frames.last().cloned().unwrap_or_default();
+    let st = last.state;
+    let info = &session.device().info;
+    let photons = st.map(|x| x.photons_total).unwrap_or(0);
+    let summaries = profiler::stage_summaries(frames);
+    let stage = |name: &str| summaries.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
+    let mut v = json!({
+        "device": {"name": info.name, "driver": info.driver, "kind": crate::vk::context::kind_name(info.kind)},
+        "validation": {"enabled": session.validation, "messages": vk::validation_message_count()},
+        "scene": session.scene_path.display().to_string(),
+        "camera": session.camera.name,
+        "size": [session.width, session.height],
+        "method": s.method,
+        "metric": if s.method == Method::Adaptive { json!(s.metric) } else { Value::Null },
+        "level": s.level,
+        "equivalent_resolution": LEVEL0_RES << s.level,
+        "driven": if s.method == Method::Adaptive { json!(s.driven) } else { Value::Null },
+        "settings": s,
+        "caustic_passes": last.caustics,
+        "photons_splatted": photons,
+        "host_readbacks_per_frame": last.host_readbacks,
+        "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
+        "photon_buffer_capacity_bytes": 8 * s.photon_capacity() as u64,
+        "levels": level_rows(&last, s.level),
+        "batches": st.map(|x| x.batches_committed).unwrap_or(0),
+        "batch_slots": last.batch_slots,
+        "overflow_events": st.map(|x| x.batches_aborted + (x.overflow_dropped > 0) as u32).unwrap_or(0),
+        "overflow_dropped_entries": st.map(|x| x.overflow_dropped).unwrap_or(0),
+        "unfinished_tiles": last.unfinished_tiles,
+        "gpu_ms": profiler::summaries_json(&summaries),
+        "gpu_total_ms": stage("gpu_total"),
+        "frame_ms": stage("frame_wall"),
+        "cpu_record_ms": stage("cpu_record"),
+        "frames": frames.len(),
+    });
+    if let (Value::Object(m), Value::Object(e)) = (&mut v, extra) {
+        m.extend(e);
+    }
+    v
+}
+
+pub fn run_render(args: &RenderArgs) -> AppResult<()> {
+    let aov: Aov = args.aov.parse()?;
+    check_output(aov, &args.out)?;
+    if let Some(p) = &args.stats {
+        check_parent(p)?;
+    }
+    if args.frames == 0 {
+        return Err(AppError::BadInput("--frames must be at least 1".into()));
+    }
+    let settings = args.method.settings()?;
+    let mut session = Session::open(&args.scene, settings)?;
+    let mut reports = Vec::new();
+    let mut image = None;
+    for i in 0..args.frames {
+        let (report, img) = session.frame(Some(aov))?;
+        if args.frames > 1 {
+            eprintln!("frame {}/{}: {:.1} ms GPU, {:.1} ms wall", i + 1, args.frames, report.gpu_ms, report.frame_ms);
+        }
+        reports.push(report);
+        image = img;
+    }
+    let image = image.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
+    let mut extra = serde_json::Map::new();
+    extra.insert("aov".into(), json!(args.aov));
+    match &image {
+        AovData::Rgba8 { width, height, rgba } => image_io::write_png(&args.out, *width, *height, rgba)?,
+        AovData::Float { .. } => {
+            let rgb = to_rgb(&image).expect("float image");
+            if let Some(area) = session.pixel_area() {
+                let flux: f64 = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
+                extra.insert("aov_flux_w".into(), json!(flux));
+            }
+            image_io::write_exr(&args.out, &rgb)?;
+        }
+    }
+    if let Some(n) = reports.last().map(|r| r.debug_rows.len()).filter(|&n| n > 0) {
+        let last = reports.last().expect("a frame");
+        extra.insert("debug_photons".into(), debug_photons_json(&last.debug_rows, n));
+        extra.insert("photon_guard_intact".into(), json!(last.guard_intact));
+    }
+    let stats = stats_json(&session, &reports, Value::Object(extra));
+    if let Some(p) = &args.stats {
+        image_io::write_text(p, &serde_json::to_string_pretty(&stats).unwrap_or_default())?;
+    }
+    let last = reports.last().expect("a frame");
+    eprintln!(
+        "{}: {} photons, GPU {:.2} ms, frame {:.1} ms on {}",
+        args.out.display(),
+        last.state.map(|s| s.photons_total).unwrap_or(0),
+        last.gpu_ms,
+        last.frame_ms,
+        session.device().info.name
+    );
+    validation_verdict(&session)
+}
+
+fn check_parent(p: &Path) -> AppResult<()> {
+    match p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(d) if !d.is_dir() => Err(AppError::BadInput(format!("{}: output directory does not exist", p.display()))),
+        _ => Ok(()),
+    }
+}
+
+/// Any validation message fails the command (after its outputs are written).
+pub fn validation_verdict(session: &Session) -> AppResult<()> {
+    let n = vk::validation_message_count();
+    if session.validation && n > 0 {
+        return Err(AppError::Failed(format!("{n} Vulkan validation messages (see above)")));
+    }
+    Ok(())
+}
+
+fn debug_photons_json(rows: &[[u32; 4]], n: usize) -> Value {
+    let f = f32::from_bits;
+    let list: Vec<Value> = rows
+        .chunks_exact(3)
+        .take(n / 3)
+        .map(|r| {
+            json!({
+                "x": r[0][0], "y": r[0][1], "level": r[0][2] & 0xFF, "status": (r[0][2] >> 8) & 0xFF, "radius": r[0][2] >> 16,
+                "flux_r": f(r[0][3]), "uv": [f(r[1][0]), f(r[1][1])], "map_px": [f(r[1][2]), f(r[1][3])],
+                "hit": [f(r[2][0]), f(r[2][1]), f(r[2][2])],
+            })
+        })
+        .collect();
+    Value::Array(list)
+}
+
+pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
+    if args.frames == 0 {
+        return Err(AppError::BadInput("--frames must be at least 1".into()));
+    }
+    if let Some(p) = &args.trace {
+        check_parent(p)?;
+    }
+    let settings = args.method.settings()?;
+    let mut session = Session::open(&args.scene, settings)?;
+    for _ in 0..args.warmup {
+        session.frame(None)?;
+    }
+    let mut reports = Vec::new();
+    for i in 0..args.frames {
+        let (r, _) = session.frame(None)?;
+        if !args.json && (i + 1) % 10 == 0 {
+            eprintln!("profiled {}/{} frames", i + 1, args.frames);
+        }
+        reports.push(r);
+    }
+    let summaries = profiler::stage_summaries(&reports);
+    if args.json {
+        let stats = stats_json(&session, &reports, json!({}));
+        println!("{}", serde_json::to_string_pretty(&stats).unwrap_or_default());
+    } else {
+        let s = &session.renderer.settings;
+        let last = reports.last().expect("frames");
+        println!(
+            "{} | {} | {:?} {} level {} ({}²) {} | {} photons, {} batches, {} host readbacks/frame",
+            session.device().info.name,
+            session.scene_path.display(),
+            s.method,
+            if s.method == Method::Adaptive { format!("{:?}", s.metric) } else { String::new() },
+            s.level,
+            LEVEL0_RES << s.level,
+            if s.method == Method::Adaptive { format!("{:?}-driven", s.driven) } else { String::new() },
+            last.state.map(|x| x.photons_total).unwrap_or(0),
+            last.state.map(|x| x.batches_committed).unwrap_or(0),
+            last.host_readbacks
+        );
+        print!("{}", profiler::table(&summaries, reports.len()));
+    }
+    if let Some(p) = &args.trace {
+        image_io::write_text(p, &serde_json::to_string(&profiler::chrome_trace(&reports)).unwrap_or_default())?;
+        eprintln!("wrote {}", p.display());
+    }
+    validation_verdict(&session)
+}

@@ -1,0 +1,698 @@
+//! One frame, in its fixed pass order, with the barriers that join the passes (DESIGN.md "Pipeline"):
+//!
+//! 1. light-view g-buffers: refractor front and back (photon view), receivers and shadow depth (receiver view)
+//! 2. coverage pyramid
+//! 3. photons: dense emission, or adaptive init → traverse × levels → stats, in batches; each batch splatted
+//!    into the caustic flux map with vkCmdDrawIndirect
+//! 4. resolve: flux → caustic irradiance
+//! 5. eye: receivers (radiance, caustics, direct), refractor front and back
+//! 6. composite: deferred refraction and tone mapping
+//!
+//! With no refractor in the light, steps 2-4 are not recorded at all. GPU-driven traversal records every level
+//! with vkCmdDispatchIndirect from arguments that the stats shader wrote; the CPU-driven baseline submits after
+//! each level, reads the count back, and records the next dispatch directly.
+
+use crate::error::AppResult;
+use crate::gpu_types::{FrameData, TraversalState};
+use crate::passes::composite::CompositeInputs;
+use crate::passes::coverage::CoverageInputs;
+use crate::passes::eye::EyeInputs;
+use crate::passes::geometry::GeometryTarget;
+use crate::passes::photons::{init_mode, stats_mode, PhotonBindings};
+use crate::passes::Passes;
+use crate::renderer::{Aov, AovData, FrameReport, Renderer, Views};
+use crate::scene::view::CameraView;
+use crate::scene_gpu::SceneBuffers;
+use crate::settings::{Driven, Method, Settings};
+use crate::shaders::consts::*;
+use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
+use crate::vk::{Access, Barriers, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
+use ash::vk;
+use std::time::Instant;
+
+const TRAVERSE_LABELS: [&str; MAX_LEVELS as usize] = [
+    "traverse_L0",
+    "traverse_L1",
+    "traverse_L2",
+    "traverse_L3",
+    "traverse_L4",
+    "traverse_L5",
+    "traverse_L6",
+    "traverse_L7",
+    "traverse_L8",
+    "traverse_L9",
+    "traverse_L10",
+    "traverse_L11",
+    "traverse_L12",
+    "traverse_L13",
+    "traverse_L14",
+    "traverse_L15",
+    "traverse_L16",
+];
+
+/// Stage label of the CPU-driven traversal's host round trips (GPU idle while the host reads and records).
+pub const HOST_ROUNDTRIP: &str = "host_roundtrip";
+
+/// Extra commands appended to the frame's last command buffer (the viewer's blit to the swapchain).
+pub type Finish<'a> = &'a mut dyn FnMut(&Device, vk::CommandBuffer, &Targets);
+
+/// Everything a frame reads, borrowed for its recording.
+struct Ctx<'a> {
+    d: &'a Device,
+    p: &'a Passes,
+    sb: &'a SceneBuffers,
+    nearest: &'a Sampler,
+    linear: &'a Sampler,
+    t: &'a Targets,
+    s: &'a Settings,
+    data: &'a FrameData,
+}
+
+/// The mutable side of a frame: the command buffer being recorded (the CPU-driven path submits mid-frame), the
+/// timestamps and the report.
+struct Rec<'a> {
+    recorder: &'a mut Recorder,
+    ts: &'a mut Timestamps,
+    cmd: vk::CommandBuffer,
+    report: FrameReport,
+    record_time: f64,
+    mark: Instant,
+}
+
+impl Rec<'_> {
+    /// Submit what is recorded, wait for it, and start a new command buffer (CPU-driven traversal only).
+    fn roundtrip(&mut self) -> VkResult<()> {
+        self.ts.mark(self.cmd, HOST_ROUNDTRIP);
+        self.record_time += self.mark.elapsed().as_secs_f64();
+        self.recorder.submit_and_wait()?;
+        self.report.host_readbacks += 1;
+        self.mark = Instant::now();
+        self.cmd = self.recorder.begin()?;
+        Ok(())
+    }
+}
+
+impl Renderer {
+    /// Render one frame headless and read back `aov`.
+    pub fn render(&mut self, camera: &CameraView, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
+        self.render_frame(camera, aov, None, &SubmitSync::default())
+    }
+
+    /// Record and submit a frame; `finish` appends commands to its last command buffer and `sync` gives that
+    /// submission its semaphores. Returns after the GPU has finished.
+    pub fn render_frame(
+        &mut self,
+        camera: &CameraView,
+        aov: Option<Aov>,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+    ) -> AppResult<(FrameReport, Option<AovData>)> {
+        let start = Instant::now();
+        self.ensure_targets(camera.width, camera.height)?;
+        let views = Views::new(&self.scene, &self.settings, camera)?;
+        let (data, slots) = {
+            let t = self.targets.as_ref().expect("targets");
+            (self.frame_data(&views, t), self.batch_slots(t.photon.capacity))
+        };
+        let Renderer {
+            device, passes, scene_buffers, nearest, linear, recorder, timestamps, targets, settings, ..
+        } = self;
+        let targets = targets.as_mut().expect("targets");
+        targets.ubo.write(0, std::slice::from_ref(&data))?;
+        let ctx =
+            Ctx { d: device, p: passes, sb: scene_buffers, nearest, linear, t: targets, s: settings, data: &data };
+        let cmd = recorder.begin()?;
+        let mut rec = Rec {
+            recorder,
+            ts: timestamps,
+            cmd,
+            report: FrameReport::default(),
+            record_time: 0.0,
+            mark: Instant::now(),
+        };
+        rec.report.caustics = views.photon.is_some();
+        rec.ts.reset(rec.cmd);
+        ctx.light_gbuffers(&mut rec);
+        if rec.report.caustics {
+            ctx.coverage(&mut rec);
+            ctx.photons(&mut rec, slots)?;
+            ctx.resolve(&mut rec);
+        } else {
+            ctx.clear_irradiance(&mut rec);
+        }
+        ctx.eye(&mut rec);
+        ctx.composite(&mut rec);
+        rec.ts.mark(rec.cmd, "readback");
+        let aov_image = ctx.readback(&mut rec, aov);
+        if let Some(f) = finish {
+            f(ctx.d, rec.cmd, ctx.t);
+        }
+        rec.ts.mark(rec.cmd, "");
+        rec.record_time += rec.mark.elapsed().as_secs_f64();
+        rec.recorder.submit_with(sync)?;
+        rec.recorder.wait()?;
+        let mut report = rec.report;
+        report.record_ms = rec.record_time * 1e3;
+        report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        report.segments = rec.ts.resolve()?;
+        report.stages = crate::vk::query::sum_by_label(&report.segments);
+        report.gpu_ms = report.stages.iter().filter(|(l, _)| *l != HOST_ROUNDTRIP).map(|(_, ms)| ms).sum();
+        ctx.read_results(&mut report, aov_image).map(|img| (report, img))
+    }
+}
+
+impl Ctx<'_> {
+    fn barrier(&self, cmd: vk::CommandBuffer, f: impl FnOnce(&mut Barriers)) {
+        let mut b = Barriers::new();
+        f(&mut b);
+        b.flush(self.d, cmd);
+    }
+
+    fn bindings(&self) -> PhotonBindings<'_> {
+        let t = self.t;
+        PhotonBindings {
+            ubo: &t.ubo,
+            state: &t.photon.state,
+            photons: &t.photon.photons,
+            indirect: &t.photon.indirect,
+            coverage: &t.photon.coverage,
+            front: &t.light.front,
+            front_aux: &t.light.front_aux,
+            back: &t.light.back,
+            recv: &t.receiver.geo,
+            debug: &t.photon.debug,
+            sampler: self.nearest,
+        }
+    }
+
+    /// Step 1: light-view g-buffers.
+    fn light_gbuffers(&self, rec: &mut Rec) {
+        let (t, cmd, g) = (self.t, rec.cmd, &self.p.geometry);
+        rec.ts.mark(cmd, "light_gbuffer");
+        let start = [Access::FrameStart];
+        self.barrier(cmd, |b| {
+            for img in [&t.light.front, &t.light.front_aux, &t.light.back, &t.receiver.geo] {
+                b.image(img, &start, &[Access::ColorAttachment]);
+            }
+            for img in [&t.light.depth, &t.receiver.depth, &t.receiver.shadow] {
+                b.image(img, &start, &[Access::DepthAttachment]);
+            }
+        });
+        let photon_view = &self.data.photon_view;
+        let receiver_view = &self.data.receiver_view;
+        if rec.report.caustics {
+            let front = GeometryTarget {
+                colors: &[&t.light.front, &t.light.front_aux],
+                depth: &t.light.depth,
+                view: photon_view,
+                ranges: &[self.sb.refractors],
+            };
+            g.record(cmd, &g.front, self.sb, &front);
+            // The depth buffer is reused (cleared) by the back-face pass.
+            self.barrier(cmd, |b| {
+                b.image(&t.light.depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
+            });
+            let back = GeometryTarget {
+                colors: &[&t.light.back],
+                depth: &t.light.depth,
+                view: photon_view,
+                ranges: &[self.sb.refractors],
+            };
+            g.record(cmd, &g.back, self.sb, &back);
+        }
+        let recv = GeometryTarget {
+            colors: &[&t.receiver.geo],
+            depth: &t.receiver.depth,
+            view: receiver_view,
+            ranges: &[self.sb.receivers],
+        };
+        g.record(cmd, &g.surfaces, self.sb, &recv);
+        let shadow =
+            GeometryTarget { colors: &[], depth: &t.receiver.shadow, view: receiver_view, ranges: &[self.sb.all] };
+        g.record(cmd, &g.depth, self.sb, &shadow);
+        let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
+        self.barrier(cmd, |b| {
+            if rec.report.caustics {
+                for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
+                    b.image(img, &[Access::ColorAttachment], &sampled);
+                }
+            }
+            b.image(&t.receiver.geo, &[Access::ColorAttachment], &sampled);
+            b.image(&t.receiver.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled]);
+        });
+    }
+
+    /// Step 2: the coverage pyramid.
+    fn coverage(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        rec.ts.mark(cmd, "coverage");
+        self.barrier(cmd, |b| {
+            b.buffer(&t.photon.coverage, &[Access::FrameStart], &[Access::ComputeWrite]);
+        });
+        let mips = self.s.gbuffer_level() + 1;
+        let inputs = CoverageInputs {
+            ubo: &t.ubo,
+            coverage: &t.photon.coverage,
+            front: &t.light.front,
+            sampler: self.nearest,
+            mips,
+        };
+        self.p.coverage.record(cmd, &inputs);
+        self.barrier(cmd, |b| {
+            b.buffer(&t.photon.coverage, &[Access::ComputeWrite], &[Access::ComputeRead, Access::VertexRead]);
+        });
+    }
+
+    /// Step 3: photons, in batches, each splatted into the caustic flux map.
+    fn photons(&self, rec: &mut Rec, slots: u32) -> VkResult<()> {
+        let (t, d) = (self.t, self.d);
+        let cmd = rec.cmd;
+        rec.ts.mark(cmd, "photon_init");
+        let debug = self.s.debug_photons > 0;
+        self.barrier(cmd, |b| {
+            for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect, &t.photon.debug] {
+                b.buffer(buf, &[Access::FrameStart], &[Access::TransferDst]);
+            }
+            b.image(&t.receiver.flux, &[Access::FrameStart], &[Access::ColorAttachment]);
+        });
+        unsafe {
+            d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
+            // Header (count, capacity) and rows: disjoint ranges, so the two transfers need no barrier between them.
+            d.cmd_update_buffer(cmd, t.photon.debug.raw, 0, bytemuck::bytes_of(&[0u32, self.s.debug_photons, 0, 0]));
+            d.cmd_fill_buffer(cmd, t.photon.debug.raw, 16, vk::WHOLE_SIZE, 0);
+            if debug {
+                // Canary after the capacity: a shader writing past its photon budget would overwrite it.
+                let cap = 8 * t.photon.capacity as u64;
+                d.cmd_fill_buffer(cmd, t.photon.photons.raw, cap, 8 * PHOTON_GUARD as u64, CANARY);
+            }
+        }
+        let all = [Access::ComputeWrite, Access::IndirectRead];
+        self.barrier(cmd, |b| {
+            for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect] {
+                b.buffer(buf, &[Access::TransferDst], &all);
+            }
+            b.buffer(&t.photon.debug, &[Access::TransferDst], &[Access::VertexWrite]);
+        });
+        match self.s.method {
+            Method::Dense => self.dense(rec),
+            Method::Adaptive => match self.s.driven {
+                Driven::Gpu => {
+                    self.adaptive_gpu(rec, slots);
+                    Ok(())
+                }
+                Driven::Cpu => self.adaptive_cpu(rec),
+            },
+        }?;
+        let cmd = rec.cmd;
+        self.barrier(cmd, |b| {
+            b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+            b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
+            b.buffer(&t.photon.debug, &[Access::VertexWrite], &[Access::TransferSrc]);
+            b.buffer(&t.photon.photons, &[Access::ComputeWrite, Access::VertexRead], &[Access::TransferSrc]);
+        });
+        Ok(())
+    }
+
+    /// Barriers between one batch's splat and the next batch's compute passes.
+    fn after_splat(&self, cmd: vk::CommandBuffer) {
+        let t = self.t;
+        self.barrier(cmd, |b| {
+            b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ColorAttachment]);
+            b.buffer(&t.photon.photons, &[Access::VertexRead], &[Access::ComputeWrite]);
+            b.buffer(&t.photon.state, &[Access::VertexRead], &[Access::ComputeWrite]);
+            b.buffer(&t.photon.indirect, &[Access::IndirectRead], &[Access::ComputeWrite, Access::IndirectRead]);
+        });
+    }
+
+    /// Compute results → the splat (vertex shader reads, draw-indirect arguments).
+    fn before_splat(&self, cmd: vk::CommandBuffer) {
+        let t = self.t;
+        self.barrier(cmd, |b| {
+            b.buffer(&t.photon.photons, &[Access::ComputeWrite], &[Access::VertexRead]);
+            b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::VertexRead]);
+            b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &[Access::IndirectRead]);
+        });
+    }
+
+    /// Compute → compute on the traversal buffers (and the indirect arguments just written).
+    fn compute_to_compute(&self, cmd: vk::CommandBuffer) {
+        let t = self.t;
+        let next = [Access::ComputeWrite, Access::IndirectRead];
+        self.barrier(cmd, |b| {
+            b.buffer(&t.photon.state, &[Access::ComputeWrite], &next);
+            b.buffer(&t.photon.photons, &[Access::ComputeWrite], &next);
+            b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &next);
+        });
+    }
+
+    fn dense(&self, rec: &mut Rec) -> VkResult<()> {
+        let b = self.bindings();
+        let ph = &self.p.photons;
+        let n = LEVEL0_RES << self.s.level;
+        // Bands of rows sized so that even a fully covered band fits the photon buffer.
+        let rows = (self.t.photon.capacity / n).clamp(1, n).min(65535 * TILE_WG);
+        let bands = n.div_ceil(rows);
+        rec.report.batch_slots = bands;
+        for band in 0..bands {
+            let cmd = rec.cmd;
+            let row0 = band * rows;
+            rec.ts.mark(cmd, "photon_init");
+            ph.init(cmd, &b, init_mode::DENSE, self.s.traverse_wg);
+            self.compute_to_compute(cmd);
+            rec.ts.mark(cmd, "dense_emit");
+            ph.dense_emit(cmd, &b, self.s.level, row0, rows.min(n - row0));
+            self.compute_to_compute(cmd);
+            rec.ts.mark(cmd, "stats");
+            ph.stats(cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
+            self.before_splat(cmd);
+            rec.ts.mark(cmd, "splat");
+            ph.splat(cmd, &b, &self.t.receiver.flux, band == 0, self.s.debug_photons > 0);
+            if band + 1 < bands {
+                self.after_splat(cmd);
+            }
+        }
+        Ok(())
+    }
+
+    /// GPU-driven adaptive traversal: a fixed command sequence per batch slot, every dispatch and draw indirect.
+    fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) {
+        let b = self.bindings();
+        let ph = &self.p.photons;
+        let wg = self.s.traverse_wg;
+        let cmd = rec.cmd;
+        ph.init(cmd, &b, init_mode::FRAME, wg);
+        self.compute_to_compute(cmd);
+        rec.report.batch_slots = slots;
+        for slot in 0..slots {
+            rec.ts.mark(cmd, "photon_init");
+            ph.init(cmd, &b, init_mode::BATCH, wg);
+            self.compute_to_compute(cmd);
+            for level in 0..=self.s.level {
+                rec.ts.mark(cmd, TRAVERSE_LABELS[level as usize]);
+                ph.traverse_indirect(cmd, &b, level, wg);
+                self.compute_to_compute(cmd);
+                rec.ts.mark(cmd, "stats");
+                let mode = if level == self.s.level { stats_mode::COMMIT } else { stats_mode::LEVEL };
+                ph.stats(cmd, &b, level, mode, wg);
+                self.compute_to_compute(cmd);
+            }
+            self.before_splat(cmd);
+            rec.ts.mark(cmd, "splat");
+            ph.splat(cmd, &b, &self.t.receiver.flux, slot == 0, self.s.debug_photons > 0);
+            if slot + 1 < slots {
+                self.after_splat(cmd);
+            }
+        }
+    }
+
+    /// Copy the traversal state to the readback buffer (and make it visible to the host after the submit).
+    fn copy_state(&self, cmd: vk::CommandBuffer) {
+        let t = self.t;
+        self.barrier(cmd, |b| {
+            b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
+            b.buffer(&t.readback, &[Access::FrameStart], &[Access::TransferDst]);
+        });
+        let size = std::mem::size_of::<TraversalState>() as u64;
+        unsafe {
+            self.d.cmd_copy_buffer(
+                cmd,
+                t.photon.state.raw,
+                t.readback.raw,
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
+            )
+        };
+        self.barrier(cmd, |b| {
+            b.buffer(&t.readback, &[Access::TransferDst], &[Access::HostRead]);
+            b.buffer(&t.photon.state, &[Access::TransferSrc], &[Access::ComputeWrite]);
+        });
+    }
+
+    fn read_state(&self) -> VkResult<TraversalState> {
+        Ok(self.t.readback.read::<TraversalState>(0, 1)?[0])
+    }
+
+    /// The CPU-driven baseline: the host reads the state back after init and after each level, and records the
+    /// next traversal dispatch with host-computed work groups.
+    fn adaptive_cpu(&self, rec: &mut Rec) -> VkResult<()> {
+        let b = self.bindings();
+        let ph = &self.p.photons;
+        let wg = self.s.traverse_wg;
+        ph.init(rec.cmd, &b, init_mode::FRAME, wg);
+        self.compute_to_compute(rec.cmd);
+        let mut first = true;
+        let mut batches = 0;
+        loop {
+            rec.ts.mark(rec.cmd, "photon_init");
+            ph.init(rec.cmd, &b, init_mode::BATCH, wg);
+            self.copy_state(rec.cmd);
+            rec.roundtrip()?;
+            let mut st = self.read_state()?;
+            if st.start_level >= MAX_LEVELS {
+                break;
+            }
+            batches += 1;
+            for level in st.start_level..=self.s.level {
+                let cmd = rec.cmd;
+                self.compute_to_compute(cmd);
+                rec.ts.mark(cmd, TRAVERSE_LABELS[level as usize]);
+                if st.aborted == 0 {
+                    ph.traverse_direct(cmd, &b, level, wg, st.read_count);
+                }
+                self.compute_to_compute(cmd);
+                rec.ts.mark(cmd, "stats");
+                let last = level == self.s.level;
+                ph.stats(cmd, &b, level, if last { stats_mode::COMMIT } else { stats_mode::LEVEL }, wg);
+                if !last {
+                    self.copy_state(cmd);
+                    rec.roundtrip()?;
+                    st = self.read_state()?;
+                }
+            }
+            let cmd = rec.cmd;
+            self.before_splat(cmd);
+            rec.ts.mark(cmd, "splat");
+            ph.splat(cmd, &b, &self.t.receiver.flux, first, self.s.debug_photons > 0);
+            self.after_splat(cmd);
+            first = false;
+        }
+        rec.report.batch_slots = batches;
+        if first {
+            // No batch at all: the flux map still needs clearing.
+            let cmd = rec.cmd;
+            crate::passes::begin_rendering(
+                self.d,
+                cmd,
+                self.t.receiver.flux.extent,
+                &[&self.t.receiver.flux],
+                true,
+                None,
+            );
+            unsafe { self.d.cmd_end_rendering(cmd) };
+        }
+        // The last barrier left the buffers ready for compute; restore what `photons` expects.
+        let t = self.t;
+        self.barrier(rec.cmd, |b| {
+            b.buffer(&t.photon.state, &[Access::ComputeWrite, Access::TransferSrc], &[Access::ComputeWrite]);
+        });
+        Ok(())
+    }
+
+    /// Step 4: caustic flux → irradiance.
+    fn resolve(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        rec.ts.mark(cmd, "resolve");
+        self.barrier(cmd, |b| {
+            b.image(&t.receiver.irradiance, &[Access::FrameStart], &[Access::ComputeWrite]);
+        });
+        self.p.resolve.record(cmd, &t.ubo, &t.receiver.flux, &t.receiver.geo, &t.receiver.irradiance, self.nearest);
+        self.barrier(cmd, |b| {
+            b.image(&t.receiver.irradiance, &[Access::ComputeWrite], &[Access::FragmentSampled]);
+        });
+    }
+
+    /// No refractor: the irradiance map is zero (no caustic pass is recorded).
+    fn clear_irradiance(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        let img = &t.receiver.irradiance;
+        self.barrier(cmd, |b| {
+            b.image(img, &[Access::FrameStart], &[Access::TransferDst]);
+        });
+        unsafe {
+            self.d.cmd_clear_color_image(
+                cmd,
+                img.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue { float32: [0.0; 4] },
+                &[img.range()],
+            )
+        };
+        self.barrier(cmd, |b| {
+            b.image(img, &[Access::TransferDst], &[Access::FragmentSampled]);
+        });
+    }
+
+    /// Step 5: the eye view.
+    fn eye(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        rec.ts.mark(cmd, "eye");
+        let e = &t.eye;
+        self.barrier(cmd, |b| {
+            for img in [&e.radiance, &e.caustics, &e.direct, &e.front, &e.front_aux, &e.back] {
+                b.image(img, &[Access::FrameStart], &[Access::ColorAttachment]);
+            }
+            for img in [&e.depth, &e.refr_depth] {
+                b.image(img, &[Access::FrameStart], &[Access::DepthAttachment]);
+            }
+        });
+        let inputs = EyeInputs {
+            ubo: &t.ubo,
+            shadow: &t.receiver.shadow,
+            irradiance: &t.receiver.irradiance,
+            recv: &t.receiver.geo,
+            nearest: self.nearest,
+            linear: self.linear,
+        };
+        self.p.eye.record(cmd, self.sb, &inputs, [&e.radiance, &e.caustics, &e.direct], &e.depth);
+        let g = &self.p.geometry;
+        let cam = &self.data.camera;
+        let ranges = [self.sb.refractors];
+        g.record(
+            cmd,
+            &g.front,
+            self.sb,
+            &GeometryTarget { colors: &[&e.front, &e.front_aux], depth: &e.refr_depth, view: cam, ranges: &ranges },
+        );
+        self.barrier(cmd, |b| {
+            b.image(&e.refr_depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
+        });
+        g.record(
+            cmd,
+            &g.back,
+            self.sb,
+            &GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &ranges },
+        );
+    }
+
+    /// Step 6: deferred refraction and tone mapping.
+    fn composite(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        let e = &t.eye;
+        rec.ts.mark(cmd, "composite");
+        self.barrier(cmd, |b| {
+            for img in [&e.radiance, &e.front, &e.front_aux, &e.back] {
+                b.image(img, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+            }
+            b.image(&e.beauty, &[Access::FrameStart], &[Access::ComputeWrite]);
+        });
+        self.p.composite.record(
+            cmd,
+            &CompositeInputs {
+                ubo: &t.ubo,
+                radiance: &e.radiance,
+                front: &e.front,
+                front_aux: &e.front_aux,
+                back: &e.back,
+                beauty: &e.beauty,
+                nearest: self.nearest,
+                linear: self.linear,
+            },
+        );
+        self.barrier(cmd, |b| {
+            b.image(&e.beauty, &[Access::ComputeWrite], &[Access::TransferSrc]);
+        });
+    }
+
+    /// Copy the requested AOV, the traversal state, the debug dump and the guard to the readback buffer.
+    fn readback(&self, rec: &mut Rec, aov: Option<Aov>) -> Option<Aov> {
+        let (t, cmd, d) = (self.t, rec.cmd, self.d);
+        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
+        let image: Option<&Image> = aov.map(|a| match a {
+            Aov::Beauty => &t.eye.beauty,
+            Aov::Caustics => &t.eye.caustics,
+            Aov::Direct => &t.eye.direct,
+        });
+        self.barrier(cmd, |b| {
+            b.buffer(&t.readback, &[Access::FrameStart], &[Access::TransferDst]);
+            if let Some(img) = image {
+                if !std::ptr::eq(img, &t.eye.beauty) {
+                    b.image(img, &[Access::ColorAttachment], &[Access::TransferSrc]);
+                }
+            }
+        });
+        unsafe {
+            if let Some(img) = image {
+                let region = vk::BufferImageCopy::default()
+                    .buffer_offset(layout.aov)
+                    .image_subresource(vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    })
+                    .image_extent(vk::Extent3D { width: t.width, height: t.height, depth: 1 });
+                d.cmd_copy_image_to_buffer(
+                    cmd,
+                    img.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    t.readback.raw,
+                    &[region],
+                );
+            }
+            if rec.report.caustics {
+                let state = std::mem::size_of::<TraversalState>() as u64;
+                let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state, size: state }];
+                d.cmd_copy_buffer(cmd, t.photon.state.raw, t.readback.raw, &copies);
+                if self.s.debug_photons > 0 {
+                    let debug = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
+                    d.cmd_copy_buffer(
+                        cmd,
+                        t.photon.debug.raw,
+                        t.readback.raw,
+                        &[vk::BufferCopy { src_offset: 0, dst_offset: layout.debug, size: debug }],
+                    );
+                    let guard = vk::BufferCopy {
+                        src_offset: 8 * t.photon.capacity as u64,
+                        dst_offset: layout.guard,
+                        size: 8 * PHOTON_GUARD as u64,
+                    };
+                    d.cmd_copy_buffer(cmd, t.photon.photons.raw, t.readback.raw, &[guard]);
+                }
+            }
+        }
+        self.barrier(cmd, |b| {
+            b.buffer(&t.readback, &[Access::TransferDst], &[Access::HostRead]);
+        });
+        aov
+    }
+
+    fn read_results(&self, report: &mut FrameReport, aov: Option<Aov>) -> AppResult<Option<AovData>> {
+        let t = self.t;
+        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
+        if report.caustics {
+            let st = t.readback.read::<TraversalState>(layout.state, 1)?[0];
+            report.unfinished_tiles = if self.s.method == Method::Adaptive { st.stack_size } else { 0 };
+            report.state = Some(st);
+            if self.s.debug_photons > 0 {
+                let header = t.readback.read::<[u32; 4]>(layout.debug, 1)?[0];
+                let n = header[0].min(self.s.debug_photons) as usize;
+                report.debug_rows = t.readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
+                let guard = t.readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
+                report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
+            }
+        }
+        let n = (t.width * t.height) as usize;
+        Ok(match aov {
+            None => None,
+            Some(Aov::Beauty) => Some(AovData::Rgba8 {
+                width: t.width,
+                height: t.height,
+                rgba: t.readback.read::<u8>(layout.aov, 4 * n)?,
+            }),
+            Some(_) => Some(AovData::Float {
+                width: t.width,
+                height: t.height,
+                rgba: t.readback.read::<[f32; 4]>(layout.aov, n)?,
+            }),
+        })
+    }
+}

@@ -1,0 +1,199 @@
+//! `#[repr(C)]` mirrors of the structs in glsl/common/types.glsl, with compile-time size and offset asserts.
+
+use crate::scene::view::{CameraView, LightView};
+use crate::scene::{LightKind, Projection};
+use crate::shaders::consts::*;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use std::mem::{offset_of, size_of};
+
+/// `View` in types.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuView {
+    pub view_proj: [f32; 16],
+    /// xyz; w: 0 perspective, 1 orthographic.
+    pub origin: [f32; 4],
+    /// xyz; w: cosine of the spot cone (-1: no cone).
+    pub right: [f32; 4],
+    /// xyz; w: near.
+    pub down: [f32; 4],
+    /// xyz; w: far.
+    pub forward: [f32; 4],
+    /// Image-plane window: x0, y0, width, height.
+    pub window: [f32; 4],
+    /// Texels: width, height, 1/width, 1/height.
+    pub extent: [f32; 4],
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+fn extent(w: u32, h: u32) -> [f32; 4] {
+    [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32]
+}
+
+impl GpuView {
+    pub fn from_light(v: &LightView, resolution: u32) -> Self {
+        GpuView {
+            view_proj: v.view_proj().to_cols_array(),
+            origin: v4(v.origin, if v.kind == LightKind::Directional { 1.0 } else { 0.0 }),
+            right: v4(v.right, v.cos_cone),
+            down: v4(v.down, v.near),
+            forward: v4(v.forward, v.far),
+            window: [v.window.x0, v.window.y0, v.window.w, v.window.w],
+            extent: extent(resolution, resolution),
+        }
+    }
+
+    pub fn from_camera(c: &CameraView) -> Self {
+        let h = c.half_extents();
+        let ortho = matches!(c.projection, Projection::Orthographic { .. });
+        GpuView {
+            view_proj: c.view_proj().to_cols_array(),
+            origin: v4(c.position, if ortho { 1.0 } else { 0.0 }),
+            right: v4(c.right, -1.0),
+            down: v4(-c.up, c.near),
+            forward: v4(c.forward, c.far),
+            window: [-h.x, -h.y, 2.0 * h.x, 2.0 * h.y],
+            extent: extent(c.width, c.height),
+        }
+    }
+
+    pub fn view_proj(&self) -> Mat4 {
+        Mat4::from_cols_array(&self.view_proj)
+    }
+}
+
+/// `FrameData` in types.glsl (a uniform buffer, std140).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct FrameData {
+    pub photon_view: GpuView,
+    pub receiver_view: GpuView,
+    pub camera: GpuView,
+    /// rgb: I·color (W/sr; W/m² for directional lights); w: intensity.
+    pub light_power: [f32; 4],
+    /// xyz: scene bounds; w: refractor bounding diameter (m).
+    pub scene_min: [f32; 4],
+    /// xyz; w: exposure (1 / reference radiance).
+    pub scene_max: [f32; 4],
+    /// x: refractor g-buffer resolution R; y: log2(R/64); z: caustic map resolution M; w: pyramid mips.
+    pub grid: [u32; 4],
+    /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photon capacity (entries).
+    pub traversal: [u32; 4],
+    /// x: max-error bound (caustic-map texels); y: shadow bias (texels).
+    pub params: [f32; 4],
+    /// Start of each coverage mip in the coverage buffer.
+    pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
+}
+
+/// `LevelCounters` in types.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq, serde::Serialize)]
+pub struct LevelCounters {
+    pub candidates: u32,
+    pub refined: u32,
+    pub emitted: u32,
+    pub dropped: u32,
+}
+
+/// `TraversalState` in types.glsl (a storage buffer, std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct TraversalState {
+    pub read_offset: u32,
+    pub read_count: u32,
+    pub write_count: u32,
+    pub emit_count: u32,
+    pub used: u32,
+    pub capacity: u32,
+    pub start_level: u32,
+    pub aborted: u32,
+    pub batching: u32,
+    pub stack_size: u32,
+    pub batches_committed: u32,
+    pub batches_aborted: u32,
+    pub overflow_dropped: u32,
+    pub peak_used: u32,
+    pub photons_total: u32,
+    pub slots_used: u32,
+    pub tile: [i32; 4],
+    pub batch_levels: [LevelCounters; MAX_LEVELS as usize],
+    pub levels: [LevelCounters; MAX_LEVELS as usize],
+    pub stack: [[i32; 4]; TILE_STACK as usize],
+}
+
+/// Push constants of the photon passes (`PhotonPush` in photon_push.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PhotonPush {
+    pub level: u32,
+    pub mode: u32,
+    pub wg_side: u32,
+    pub row0: u32,
+    pub debug: u32,
+    pub rows: u32,
+    pub pad: [u32; 2],
+}
+
+/// Push constants of geometry.vert/.frag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GeometryPush {
+    pub view_proj: [f32; 16],
+    pub origin: [f32; 4],
+    pub forward: [f32; 4],
+}
+
+impl GeometryPush {
+    pub fn from_view(v: &GpuView) -> Self {
+        GeometryPush { view_proj: v.view_proj, origin: v.origin, forward: v.forward }
+    }
+}
+
+/// Push constants of coverage.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CoveragePush {
+    pub mip: u32,
+    pub src_offset: u32,
+    pub dst_offset: u32,
+    pub dst_res: u32,
+}
+
+/// One vertex: position, normal, material (dielectric: x = IOR; diffuse: rgb = albedo; w = 1 for dielectrics).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 4],
+    pub normal: [f32; 4],
+    pub material: [f32; 4],
+}
+
+const _: () = {
+    assert!(size_of::<GpuView>() == 160);
+    assert!(size_of::<FrameData>() == 624);
+    assert!(offset_of!(FrameData, light_power) == 480);
+    assert!(offset_of!(FrameData, grid) == 528);
+    assert!(offset_of!(FrameData, pyramid) == 576);
+    assert!(size_of::<LevelCounters>() == 16);
+    assert!(offset_of!(TraversalState, tile) == 64);
+    assert!(offset_of!(TraversalState, batch_levels) == 80);
+    assert!(offset_of!(TraversalState, levels) == 80 + 16 * MAX_LEVELS as usize);
+    assert!(size_of::<TraversalState>() == 80 + 32 * MAX_LEVELS as usize + 16 * TILE_STACK as usize);
+    assert!(size_of::<PhotonPush>() == 32);
+    assert!(size_of::<GeometryPush>() == 96);
+    assert!(size_of::<CoveragePush>() == 16);
+    assert!(size_of::<Vertex>() == 48);
+};
+
+/// Photon cell encoding (`pack_cell` in types.glsl).
+pub fn pack_cell(level: u32, x: u32, y: u32, radius: u32) -> [u32; 2] {
+    [(x & 0xFF_FFFF) | (radius.min(255) << 24), (y & 0xFF_FFFF) | (level << 24)]
+}
+
+pub fn unpack_cell(c: [u32; 2]) -> (u32, u32, u32, u32) {
+    (c[1] >> 24, c[0] & 0xFF_FFFF, c[1] & 0xFF_FFFF, c[0] >> 24)
+}

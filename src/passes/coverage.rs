@@ -1,0 +1,70 @@
+//! The coverage pyramid: mip 0 from the refractor front buffer, then max/min reductions down to the 64² level.
+
+use super::groups_2d;
+use crate::gpu_types::CoveragePush;
+use crate::shaders;
+use crate::vk::{Access, Barriers, Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct CoverageInputs<'a> {
+    pub ubo: &'a Buffer,
+    pub coverage: &'a Buffer,
+    pub front: &'a Image,
+    pub sampler: &'a Sampler,
+    pub mips: u32,
+}
+
+pub struct CoveragePass {
+    device: Arc<Device>,
+    pipeline: Pipeline,
+}
+
+/// Offsets of each mip in the coverage buffer, and the total length (entries).
+pub fn pyramid_layout(gbuffer_res: u32, mips: u32) -> (Vec<u32>, u32) {
+    let mut offsets = Vec::new();
+    let mut total = 0u32;
+    for m in 0..mips {
+        offsets.push(total);
+        let r = gbuffer_res >> m;
+        total += r * r;
+    }
+    (offsets, total)
+}
+
+impl CoveragePass {
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        let pipeline = Pipeline::compute(
+            device,
+            "coverage",
+            shaders::COVERAGE_COMP.words(),
+            &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled],
+            std::mem::size_of::<CoveragePush>() as u32,
+        )?;
+        Ok(CoveragePass { device: device.clone(), pipeline })
+    }
+
+    /// Build all mips of the pyramid over `front`; the coverage buffer ends in ComputeWrite.
+    pub fn record(&self, cmd: vk::CommandBuffer, i: &CoverageInputs) {
+        let (gbuffer_res, mips, coverage) = (i.front.extent.width, i.mips, i.coverage);
+        let (offsets, _) = pyramid_layout(gbuffer_res, mips);
+        self.pipeline.bind(cmd, &[Bind::Uniform(i.ubo), Bind::Storage(coverage), Bind::Sampled(i.front, i.sampler)]);
+        for m in 0..mips {
+            if m > 0 {
+                Barriers::new()
+                    .buffer(coverage, &[Access::ComputeWrite], &[Access::ComputeWrite])
+                    .flush(&self.device, cmd);
+            }
+            let res = gbuffer_res >> m;
+            let push = CoveragePush {
+                mip: m,
+                src_offset: if m > 0 { offsets[m as usize - 1] } else { 0 },
+                dst_offset: offsets[m as usize],
+                dst_res: res,
+            };
+            self.pipeline.push(cmd, &push);
+            let (gx, gy) = groups_2d(res, res);
+            unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
+        }
+    }
+}

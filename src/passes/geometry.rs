@@ -1,0 +1,116 @@
+//! Rasterize triangles into view-space g-buffers: refractor front and back surfaces (from the light and from
+//! the eye), receivers from the light, and the shadow map.
+
+use super::{begin_rendering, AUX_FORMAT, DEPTH_FORMAT, GEO_FORMAT};
+use crate::gpu_types::{GeometryPush, GpuView, Vertex};
+use crate::scene_gpu::{DrawRange, SceneBuffers};
+use crate::shaders;
+use crate::vk::{Blend, ColorTarget, Device, GraphicsDesc, Image, Pipeline, VkResult};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct GeometryPass {
+    device: Arc<Device>,
+    /// Nearest front faces: normal + distance, and the index of refraction.
+    pub front: Pipeline,
+    /// Nearest back faces: normal + distance.
+    pub back: Pipeline,
+    /// Both faces (receivers): normal + distance.
+    pub surfaces: Pipeline,
+    /// Depth only (shadow map).
+    pub depth: Pipeline,
+}
+
+/// What to draw and where.
+pub struct GeometryTarget<'a> {
+    pub colors: &'a [&'a Image],
+    pub depth: &'a Image,
+    pub view: &'a GpuView,
+    pub ranges: &'a [DrawRange],
+}
+
+impl GeometryPass {
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        // Each variant declares only the attributes its vertex shader reads: position, normal, material.
+        let all = [
+            (vk::Format::R32G32B32A32_SFLOAT, 0),
+            (vk::Format::R32G32B32A32_SFLOAT, 16),
+            (vk::Format::R32G32B32A32_SFLOAT, 32),
+        ];
+        let geo = ColorTarget { format: GEO_FORMAT, blend: Blend::None };
+        let aux = ColorTarget { format: AUX_FORMAT, blend: Blend::None };
+        let make = |name: &str, vert: &[u32], frag: &[u32], cull: vk::CullModeFlags, colors: &[ColorTarget]| {
+            let attrs = match colors.len() {
+                0 => &all[..1],
+                1 => &all[..2],
+                _ => &all[..],
+            };
+            Pipeline::graphics(
+                device,
+                name,
+                &GraphicsDesc {
+                    vertex: vert,
+                    fragment: frag,
+                    binds: &[],
+                    push_size: std::mem::size_of::<GeometryPush>() as u32,
+                    vertex_attributes: attrs,
+                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    cull,
+                    depth: Some((DEPTH_FORMAT, vk::CompareOp::LESS, true)),
+                    colors,
+                },
+            )
+        };
+        let geo2 = ColorTarget { format: GEO_FORMAT, blend: Blend::None };
+        let geo3 = ColorTarget { format: GEO_FORMAT, blend: Blend::None };
+        Ok(GeometryPass {
+            device: device.clone(),
+            front: make(
+                "geometry front",
+                shaders::GEOMETRY_VERT_AUX.words(),
+                shaders::GEOMETRY_FRAG_AUX.words(),
+                vk::CullModeFlags::BACK,
+                &[geo, aux],
+            )?,
+            back: make(
+                "geometry back",
+                shaders::GEOMETRY_VERT.words(),
+                shaders::GEOMETRY_FRAG.words(),
+                vk::CullModeFlags::FRONT,
+                &[geo2],
+            )?,
+            surfaces: make(
+                "geometry surfaces",
+                shaders::GEOMETRY_VERT.words(),
+                shaders::GEOMETRY_FRAG.words(),
+                vk::CullModeFlags::NONE,
+                &[geo3],
+            )?,
+            depth: make(
+                "shadow depth",
+                shaders::GEOMETRY_VERT_DEPTH.words(),
+                shaders::DEPTH_ONLY_FRAG.words(),
+                vk::CullModeFlags::NONE,
+                &[],
+            )?,
+        })
+    }
+
+    pub fn record(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, scene: &SceneBuffers, t: &GeometryTarget) {
+        let d = &self.device;
+        begin_rendering(d, cmd, t.depth.extent, t.colors, true, Some(t.depth));
+        pipeline.bind(cmd, &[]);
+        pipeline.push(cmd, &GeometryPush::from_view(t.view));
+        unsafe {
+            d.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
+            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
+            for r in t.ranges {
+                if r.index_count > 0 {
+                    d.cmd_draw_indexed(cmd, r.index_count, 1, r.first_index, 0, 0);
+                }
+            }
+            d.cmd_end_rendering(cmd);
+        }
+    }
+}

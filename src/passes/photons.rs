@@ -1,0 +1,172 @@
+//! The photon passes: init, traverse (one pipeline per work-group size), stats, dense emission and the splat.
+//! They share one binding layout (glsl/common/photon_bindings.glsl).
+
+use super::{begin_rendering, HDR_FORMAT};
+use crate::gpu_types::PhotonPush;
+use crate::shaders::{self, consts::*};
+use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
+use ash::vk;
+use std::sync::Arc;
+
+const LAYOUT: [BindKind; 10] = [
+    BindKind::Uniform, // frame
+    BindKind::Storage, // traversal state
+    BindKind::Storage, // photon buffer
+    BindKind::Storage, // indirect commands
+    BindKind::Storage, // coverage pyramid
+    BindKind::Sampled, // refractor front
+    BindKind::Sampled, // refractor front IOR
+    BindKind::Sampled, // refractor back
+    BindKind::Sampled, // receivers from the light
+    BindKind::Storage, // debug photon dump
+];
+
+/// Byte offset of the draw command in the indirect buffer (after one dispatch command per level).
+pub const DRAW_OFFSET: u64 = 16 * MAX_LEVELS as u64;
+pub const INDIRECT_BYTES: u64 = DRAW_OFFSET + 16;
+
+pub struct PhotonBindings<'a> {
+    pub ubo: &'a Buffer,
+    pub state: &'a Buffer,
+    pub photons: &'a Buffer,
+    pub indirect: &'a Buffer,
+    pub coverage: &'a Buffer,
+    pub front: &'a Image,
+    pub front_aux: &'a Image,
+    pub back: &'a Image,
+    pub recv: &'a Image,
+    pub debug: &'a Buffer,
+    pub sampler: &'a Sampler,
+}
+
+impl PhotonBindings<'_> {
+    fn binds(&self) -> [Bind<'_>; 10] {
+        [
+            Bind::Uniform(self.ubo),
+            Bind::Storage(self.state),
+            Bind::Storage(self.photons),
+            Bind::Storage(self.indirect),
+            Bind::Storage(self.coverage),
+            Bind::Sampled(self.front, self.sampler),
+            Bind::Sampled(self.front_aux, self.sampler),
+            Bind::Sampled(self.back, self.sampler),
+            Bind::Sampled(self.recv, self.sampler),
+            Bind::Storage(self.debug),
+        ]
+    }
+}
+
+pub mod init_mode {
+    pub const FRAME: u32 = 0;
+    pub const BATCH: u32 = 1;
+    pub const DENSE: u32 = 2;
+}
+
+pub mod stats_mode {
+    pub const LEVEL: u32 = 0;
+    pub const COMMIT: u32 = 1;
+    pub const DENSE: u32 = 2;
+}
+
+pub struct PhotonPasses {
+    device: Arc<Device>,
+    init: Pipeline,
+    traverse: Vec<(u32, Pipeline)>,
+    stats: Pipeline,
+    dense_emit: Pipeline,
+    splat: Pipeline,
+}
+
+impl PhotonPasses {
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        let push = std::mem::size_of::<PhotonPush>() as u32;
+        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &LAYOUT, push);
+        let traverse = vec![
+            (1, compute("traverse 1x1", shaders::TRAVERSE_COMP_WG1.words())?),
+            (2, compute("traverse 2x2", shaders::TRAVERSE_COMP_WG2.words())?),
+            (4, compute("traverse 4x4", shaders::TRAVERSE_COMP_WG4.words())?),
+            (8, compute("traverse 8x8", shaders::TRAVERSE_COMP_WG8.words())?),
+            (16, compute("traverse 16x16", shaders::TRAVERSE_COMP_WG16.words())?),
+        ];
+        let splat = Pipeline::graphics(
+            device,
+            "splat",
+            &GraphicsDesc {
+                vertex: shaders::SPLAT_VERT.words(),
+                fragment: shaders::SPLAT_FRAG.words(),
+                binds: &LAYOUT,
+                push_size: push,
+                vertex_attributes: &[],
+                vertex_stride: 0,
+                topology: vk::PrimitiveTopology::POINT_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: None,
+                colors: &[ColorTarget { format: HDR_FORMAT, blend: Blend::Additive }],
+            },
+        )?;
+        Ok(PhotonPasses {
+            device: device.clone(),
+            init: compute("init", shaders::INIT_COMP.words())?,
+            traverse,
+            stats: compute("stats", shaders::STATS_COMP.words())?,
+            dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
+            splat,
+        })
+    }
+
+    fn traverse_pipeline(&self, wg: u32) -> &Pipeline {
+        self.traverse.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&self.traverse[3].1)
+    }
+
+    pub fn init(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, wg: u32) {
+        self.init.bind(cmd, &b.binds());
+        self.init.push(cmd, &PhotonPush { mode, wg_side: wg, ..Default::default() });
+        unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
+    }
+
+    /// One traversal level, launched with vkCmdDispatchIndirect from the GPU-written arguments.
+    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32) {
+        let p = self.traverse_pipeline(wg);
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
+        unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
+    }
+
+    /// One traversal level with host-computed work groups (the CPU-driven baseline).
+    pub fn traverse_direct(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32, count: u32) {
+        let p = self.traverse_pipeline(wg);
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
+        let groups = count.div_ceil(wg * wg);
+        if groups == 0 {
+            return;
+        }
+        let gx = groups.min(65535);
+        unsafe { self.device.cmd_dispatch(cmd, gx, groups.div_ceil(gx), 1) };
+    }
+
+    pub fn stats(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, mode: u32, wg: u32) {
+        self.stats.bind(cmd, &b.binds());
+        self.stats.push(cmd, &PhotonPush { level, mode, wg_side: wg, ..Default::default() });
+        unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
+    }
+
+    /// Emit every covered cell of rows [row0, row0 + rows) of the level's grid.
+    pub fn dense_emit(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, row0: u32, rows: u32) {
+        self.dense_emit.bind(cmd, &b.binds());
+        self.dense_emit.push(cmd, &PhotonPush { level, row0, rows, ..Default::default() });
+        let n = LEVEL0_RES << level;
+        unsafe { self.device.cmd_dispatch(cmd, n.div_ceil(TILE_WG), rows.div_ceil(TILE_WG), 1) };
+    }
+
+    /// Splat the emitted photons into the caustic flux map with vkCmdDrawIndirect.
+    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool, debug: bool) {
+        begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
+        self.splat.bind(cmd, &b.binds());
+        self.splat.push(cmd, &PhotonPush { debug: debug as u32, ..Default::default() });
+        unsafe {
+            self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16);
+            self.device.cmd_end_rendering(cmd);
+        }
+    }
+}

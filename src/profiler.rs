@@ -1,0 +1,95 @@
+//! Per-stage GPU timings over frames: summary statistics, a printed table, JSON, and a Chrome trace (opens in
+//! Perfetto or chrome://tracing).
+
+use crate::renderer::FrameReport;
+use serde_json::{json, Value};
+
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Summary {
+    pub mean: f64,
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Summary {
+    pub fn of(values: &[f64]) -> Summary {
+        if values.is_empty() {
+            return Summary::default();
+        }
+        let mut v = values.to_vec();
+        v.sort_by(|a, b| a.total_cmp(b));
+        let n = v.len();
+        let median = if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) };
+        Summary { mean: v.iter().sum::<f64>() / n as f64, median, min: v[0], max: v[n - 1] }
+    }
+}
+
+/// Per-stage summaries over frames, in first-seen stage order; frames without a stage count as 0 ms for it.
+pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
+    let mut labels: Vec<&str> = Vec::new();
+    for f in frames {
+        for (l, _) in &f.stages {
+            if !labels.contains(l) {
+                labels.push(l);
+            }
+        }
+    }
+    let mut out: Vec<(String, Summary)> = labels
+        .iter()
+        .map(|l| {
+            let v: Vec<f64> = frames
+                .iter()
+                .map(|f| f.stages.iter().find(|(x, _)| x == l).map(|(_, ms)| *ms).unwrap_or(0.0))
+                .collect();
+            (l.to_string(), Summary::of(&v))
+        })
+        .collect();
+    let totals: Vec<f64> = frames.iter().map(|f| f.gpu_ms).collect();
+    out.push(("gpu_total".into(), Summary::of(&totals)));
+    let wall: Vec<f64> = frames.iter().map(|f| f.frame_ms).collect();
+    out.push(("frame_wall".into(), Summary::of(&wall)));
+    let rec: Vec<f64> = frames.iter().map(|f| f.record_ms).collect();
+    out.push(("cpu_record".into(), Summary::of(&rec)));
+    out
+}
+
+pub fn summaries_json(s: &[(String, Summary)]) -> Value {
+    let mut m = serde_json::Map::new();
+    for (l, v) in s {
+        m.insert(l.clone(), json!({"mean": v.mean, "median": v.median, "min": v.min, "max": v.max}));
+    }
+    Value::Object(m)
+}
+
+pub fn table(s: &[(String, Summary)], frames: usize) -> String {
+    let mut out = format!(
+        "{:<18} {:>10} {:>10} {:>10} {:>10}   ({} frames, ms)\n",
+        "stage", "mean", "median", "min", "max", frames
+    );
+    for (l, v) in s {
+        if l == "gpu_total" {
+            out.push_str(&format!("{}\n", "-".repeat(62)));
+        }
+        out.push_str(&format!("{:<18} {:>10.3} {:>10.3} {:>10.3} {:>10.3}\n", l, v.mean, v.median, v.min, v.max));
+    }
+    out
+}
+
+/// Chrome trace: one complete event per timed GPU interval; frames laid end to end on the wall clock.
+pub fn chrome_trace(frames: &[FrameReport]) -> Value {
+    let mut events = Vec::new();
+    let mut t0 = 0.0;
+    for (i, f) in frames.iter().enumerate() {
+        events.push(json!({"name": format!("frame {i}"), "ph": "X", "pid": 1, "tid": 0, "ts": t0 * 1e3, "dur": f.frame_ms * 1e3, "cat": "frame"}));
+        for (label, start, dur) in &f.segments {
+            events.push(json!({"name": label, "ph": "X", "pid": 1, "tid": 1, "ts": (t0 + start) * 1e3, "dur": dur * 1e3, "cat": "gpu"}));
+        }
+        t0 += f.frame_ms.max(f.segments.last().map(|s| s.1 + s.2).unwrap_or(0.0));
+    }
+    json!({
+        "traceEvents": events,
+        "displayTimeUnit": "ms",
+        "metadata": {"tid 0": "frames (wall clock)", "tid 1": "GPU stages (timestamp queries)"}
+    })
+}

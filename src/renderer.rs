@@ -1,0 +1,261 @@
+//! The renderer: pipelines, the scene on the GPU, the views of the current frame, and its targets. One call of
+//! [`Renderer::render`] records and submits a whole frame (src/frame.rs) and reports what happened.
+
+use crate::error::{AppError, AppResult};
+use crate::gpu_types::{FrameData, GpuView, TraversalState};
+use crate::passes::Passes;
+use crate::scene::view::{CameraView, LightView, Window};
+use crate::scene::{Camera, LightKind, Material, Scene};
+use crate::scene_gpu::SceneBuffers;
+use crate::settings::{Method, Metric, Settings};
+use crate::shaders::consts::*;
+use crate::targets::Targets;
+use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
+use ash::vk;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// The light views of a frame and the eye camera.
+#[derive(Clone, Copy, Debug)]
+pub struct Views {
+    /// Fitted to the refractors; None when there is nothing to refract (no dielectric, or none in the cone).
+    pub photon: Option<LightView>,
+    /// Over the receivers: caustic map, receiver g-buffer and shadow map.
+    pub receiver: LightView,
+    pub camera: CameraView,
+}
+
+impl Views {
+    pub fn new(scene: &Scene, settings: &Settings, camera: &CameraView) -> AppResult<Views> {
+        let light = &scene.lights[0];
+        let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
+        let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied());
+        let recv = || scene.receivers().flat_map(|o| o.mesh.positions.iter().copied());
+        if light.kind == LightKind::Spot {
+            if let Some(o) = scene.refractors().find(|o| {
+                o.mesh
+                    .positions
+                    .iter()
+                    .any(|p| (*p - light.position).dot((light.target - light.position).normalize()) <= 1e-4)
+            }) {
+                return Err(AppError::BadInput(format!(
+                    "{}: object `{}` reaches behind the spot light's plane; a spot light must see every refractor in front of it",
+                    scene.path.display(),
+                    o.name
+                )));
+            }
+        }
+        let photon = if scene.has_refractors() {
+            LightView::fit(light, refr(), refr(), settings.gbuffer_res, 1.0)
+        } else {
+            None
+        };
+        let receiver = LightView::fit(light, recv(), all(), settings.caustic_res, 1.0)
+            .or_else(|| LightView::fit(light, all(), all(), settings.caustic_res, 1.0))
+            .unwrap_or_else(|| {
+                let mut v = LightView::fit(light, std::iter::once(light.target), all(), settings.caustic_res, 1.0)
+                    .expect("the light's target lies on its axis");
+                v.window = Window { x0: -1.0, y0: -1.0, w: 2.0 };
+                v
+            });
+        Ok(Views { photon, receiver, camera: *camera })
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Aov {
+    Beauty,
+    Caustics,
+    Direct,
+}
+
+impl std::str::FromStr for Aov {
+    type Err = AppError;
+    fn from_str(s: &str) -> AppResult<Aov> {
+        match s {
+            "beauty" => Ok(Aov::Beauty),
+            "caustics" => Ok(Aov::Caustics),
+            "direct" => Ok(Aov::Direct),
+            _ => Err(AppError::BadInput(format!("--aov `{s}`: expected beauty, caustics or direct"))),
+        }
+    }
+}
+
+/// What one frame did, read back after it completed.
+#[derive(Clone, Debug, Default)]
+pub struct FrameReport {
+    /// GPU milliseconds per stage, in order (intervals with the same label summed).
+    pub stages: Vec<(&'static str, f64)>,
+    /// Every timed interval: (label, start ms from the frame's first timestamp, duration ms).
+    pub segments: Vec<(&'static str, f64, f64)>,
+    /// Sum of the stages (excluding host round trips of the CPU-driven traversal).
+    pub gpu_ms: f64,
+    /// Wall-clock time from the start of recording until the results were available.
+    pub frame_ms: f64,
+    /// CPU time spent recording commands.
+    pub record_ms: f64,
+    /// Whether the caustic passes were recorded (the scene has a refractor inside the light).
+    pub caustics: bool,
+    pub state: Option<TraversalState>,
+    pub host_readbacks: u32,
+    /// Batch slots recorded (GPU-driven adaptive) or bands (dense).
+    pub batch_slots: u32,
+    /// Tiles still pending when the frame ended (GPU-driven batching ran out of slots).
+    pub unfinished_tiles: u32,
+    /// Debug photon dump: 3 rows per photon (see photon_bindings.glsl).
+    pub debug_rows: Vec<[u32; 4]>,
+    /// Debug runs: whether the photon buffer's guard region kept its canary.
+    pub guard_intact: Option<bool>,
+}
+
+/// A float or 8-bit image read back from the GPU.
+pub enum AovData {
+    Float { width: u32, height: u32, rgba: Vec<[f32; 4]> },
+    Rgba8 { width: u32, height: u32, rgba: Vec<u8> },
+}
+
+pub struct Renderer {
+    pub device: Arc<Device>,
+    pub passes: Passes,
+    pub scene: Scene,
+    pub scene_buffers: SceneBuffers,
+    pub nearest: Sampler,
+    pub linear: Sampler,
+    pub recorder: Recorder,
+    pub timestamps: Timestamps,
+    pub targets: Option<Targets>,
+    targets_key: Option<(u32, u32, u32, u32, u64, u32)>,
+    pub settings: Settings,
+    /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
+    pub slots_hint: u32,
+}
+
+impl Renderer {
+    pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
+        settings.validate()?;
+        if scene.lights.len() != 1 {
+            return Err(AppError::BadInput(format!(
+                "{}: the scene has {} lights; this renderer handles exactly one [[light]]",
+                scene.path.display(),
+                scene.lights.len()
+            )));
+        }
+        let mut recorder = Recorder::new(&device)?;
+        let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
+        Ok(Renderer {
+            passes: Passes::new(&device)?,
+            nearest: Sampler::new(&device, vk::Filter::NEAREST)?,
+            linear: Sampler::new(&device, vk::Filter::LINEAR)?,
+            timestamps: Timestamps::new(&device, 16384)?,
+            recorder,
+            scene_buffers,
+            scene,
+            targets: None,
+            targets_key: None,
+            settings,
+            slots_hint: 0,
+            device,
+        })
+    }
+
+    pub fn camera_view(&self, camera: &Camera, width: u32, height: u32) -> CameraView {
+        CameraView::new(camera, width, height, self.scene.bounds())
+    }
+
+    pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
+        settings.validate()?;
+        if settings.method != self.settings.method
+            || settings.level != self.settings.level
+            || settings.metric != self.settings.metric
+        {
+            self.slots_hint = 0;
+        }
+        self.settings = settings;
+        Ok(())
+    }
+
+    pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
+        let s = &self.settings;
+        let key = (s.gbuffer_res, s.caustic_res, width, height, s.photon_budget_mib.to_bits(), s.debug_photons);
+        if self.targets_key != Some(key) {
+            self.targets = None;
+            self.device.wait_idle()?;
+            self.targets = Some(Targets::new(&self.device, s, width, height)?);
+            self.targets_key = Some(key);
+        }
+        Ok(())
+    }
+
+    /// The frame's uniforms.
+    pub fn frame_data(&self, views: &Views, targets: &Targets) -> FrameData {
+        let s = &self.settings;
+        let light = &self.scene.lights[0];
+        let (lo, hi) = self.scene.bounds();
+        let (rlo, rhi) = self
+            .scene
+            .refractors()
+            .map(|o| o.mesh.bounds())
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(a, b), (c, d)| (a.min(c), b.max(d)));
+        let diameter = if self.scene.has_refractors() { (rhi - rlo).length() } else { 0.0 };
+        let power = light.color * light.intensity;
+        // Exposure: the diffuse radiance of the brightest albedo under the light at its target maps to ~0.6.
+        let e_ref = match light.kind {
+            LightKind::Spot => light.intensity / (light.target - light.position).length_squared(),
+            LightKind::Directional => light.intensity,
+        } * light.color.max_element().max(1e-6);
+        let albedo = self
+            .scene
+            .receivers()
+            .map(|o| match o.material {
+                Material::Diffuse { albedo } => albedo.max_element(),
+                _ => 0.0,
+            })
+            .fold(0.0f32, f32::max)
+            .max(0.05);
+        let l_ref = (albedo / std::f32::consts::PI * e_ref).max(1e-12);
+        let mut pyramid = [[0u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize];
+        for (m, off) in targets.photon.pyramid_offsets.iter().enumerate() {
+            pyramid[m / 4][m % 4] = *off;
+        }
+        let photon_view = views.photon.unwrap_or(views.receiver);
+        FrameData {
+            photon_view: GpuView::from_light(&photon_view, s.gbuffer_res),
+            receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
+            camera: GpuView::from_camera(&views.camera),
+            light_power: [power.x, power.y, power.z, light.intensity],
+            scene_min: [lo.x, lo.y, lo.z, diameter],
+            scene_max: [hi.x, hi.y, hi.z, 0.6 / l_ref],
+            grid: [s.gbuffer_res, s.gbuffer_level(), s.caustic_res, s.gbuffer_level() + 1],
+            traversal: [
+                s.level,
+                (if s.metric == Metric::MaxError { 1 } else { 0 }) | ((s.batching as u32) << 8),
+                s.check_level,
+                targets.photon.capacity,
+            ],
+            params: [s.error_bound, s.shadow_bias, 0.0, 0.0],
+            pyramid,
+        }
+    }
+
+    /// Batch slots to record for GPU-driven adaptive traversal: one when the worst case (every cell of the photon
+    /// window covered) fits the photon buffer, else an estimate refined from frame to frame.
+    pub fn batch_slots(&self, capacity: u32) -> u32 {
+        let s = &self.settings;
+        if s.batch_slots > 0 {
+            return s.batch_slots;
+        }
+        if s.method != Method::Adaptive {
+            return 1;
+        }
+        let cells0 = (LEVEL0_RES * LEVEL0_RES) as f64;
+        let l = s.level as i32;
+        let worst = cells0 * ((4f64.powi(l + 1) - 1.0) / 3.0 + 4f64.powi(l));
+        if worst <= capacity as f64 {
+            return 1;
+        }
+        if self.slots_hint > 0 {
+            return self.slots_hint;
+        }
+        ((worst / capacity as f64).ceil() as u32).clamp(2, 64)
+    }
+}

@@ -1,0 +1,148 @@
+//! Renderer settings: the method, its parameters, and the resolutions of the maps.
+
+use crate::error::{AppError, AppResult};
+use crate::shaders::consts::*;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// One photon per covered cell of the 64·2^level grid.
+    Dense,
+    /// Adaptive traversal of the photon quadtree (Wyman & Nichols 2009), GPU-driven as in Piao 2015.
+    Adaptive,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// Refine every covered cell down to the maximal level.
+    MaxLevel,
+    /// Stop refining a cell once its children land within the error bound in the caustic map.
+    MaxError,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Driven {
+    /// Every indirect command is written by the GPU; no host readback inside a frame.
+    Gpu,
+    /// The host reads each level's count back and records the next dispatch directly (the baseline).
+    Cpu,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Settings {
+    pub method: Method,
+    pub metric: Metric,
+    /// Photon grid level: 64·2^level cells per side (dense), or the maximal traversal level (adaptive).
+    pub level: u32,
+    pub driven: Driven,
+    /// Photon buffer size in MiB.
+    pub photon_budget_mib: f64,
+    /// Side of the light-view refractor g-buffers (power of two, >= 64).
+    pub gbuffer_res: u32,
+    /// Side of the caustic map, the receiver g-buffer and the shadow map.
+    pub caustic_res: u32,
+    /// Max-error bound, in caustic-map texels.
+    pub error_bound: f32,
+    /// First level at which max-error checks convergence (Wyman: the 512² level, 3).
+    pub check_level: u32,
+    /// Traversal work-group side (1, 2, 4, 8, 16).
+    pub traverse_wg: u32,
+    /// Split batches on overflow (off only for tests: overflowing work is then dropped and counted).
+    pub batching: bool,
+    /// Batch slots recorded per frame for GPU-driven batching (0: automatic).
+    pub batch_slots: u32,
+    /// Shadow-map bias, in shadow-map texels.
+    pub shadow_bias: f32,
+    /// Dump up to this many splatted photons for tests (0: off).
+    pub debug_photons: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            method: Method::Adaptive,
+            metric: Metric::MaxLevel,
+            level: 5,
+            driven: Driven::Gpu,
+            photon_budget_mib: 64.0,
+            gbuffer_res: 1024,
+            caustic_res: 1024,
+            error_bound: 1.0,
+            check_level: 3,
+            traverse_wg: TRAVERSE_WG,
+            batching: true,
+            batch_slots: 0,
+            shadow_bias: 1.5,
+            debug_photons: 0,
+        }
+    }
+}
+
+pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
+
+impl Settings {
+    pub fn validate(&self) -> AppResult<()> {
+        let bad = |m: String| Err(AppError::BadInput(m));
+        if self.level >= MAX_LEVELS {
+            return bad(format!("--level {}: must be at most {}", self.level, MAX_LEVELS - 1));
+        }
+        if !self.gbuffer_res.is_power_of_two() || self.gbuffer_res < LEVEL0_RES || self.gbuffer_res > 8192 {
+            return bad(format!("--gbuffer-res {}: must be a power of two in 64..=8192", self.gbuffer_res));
+        }
+        if self.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros() >= MAX_PYRAMID_MIPS {
+            return bad(format!("--gbuffer-res {}: too many pyramid levels", self.gbuffer_res));
+        }
+        if self.caustic_res < 16 || self.caustic_res > 8192 {
+            return bad(format!("--caustic-res {}: must lie in 16..=8192", self.caustic_res));
+        }
+        if !(self.photon_budget_mib.is_finite() && self.photon_budget_mib > 0.0) {
+            return bad(format!("--photon-budget {}: must be > 0 MiB", self.photon_budget_mib));
+        }
+        if self.photon_budget_mib > 128.0 {
+            return bad(format!(
+                "--photon-budget {}: at most 128 MiB (one storage-buffer binding; lavapipe's limit)",
+                self.photon_budget_mib
+            ));
+        }
+        if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
+            return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
+        }
+        if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
+            return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));
+        }
+        if self.batch_slots > MAX_BATCHES {
+            return bad(format!("--batch-slots {}: at most {MAX_BATCHES}", self.batch_slots));
+        }
+        Ok(())
+    }
+
+    /// Photon-buffer entries (8 bytes each).
+    pub fn photon_capacity(&self) -> u32 {
+        ((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32
+    }
+
+    /// log2(gbuffer_res / 64).
+    pub fn gbuffer_level(&self) -> u32 {
+        self.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros()
+    }
+
+    /// Light-grid resolution of `level`.
+    pub fn grid_res(level: u32) -> u64 {
+        (LEVEL0_RES as u64) << level
+    }
+}
+
+/// Parse `WxH`.
+pub fn parse_size(s: &str) -> AppResult<(u32, u32)> {
+    let bad =
+        || AppError::BadInput(format!("--size `{s}`: expected WxH with 1 <= W, H <= 16384 (for example 512x512)"));
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}

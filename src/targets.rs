@@ -1,0 +1,181 @@
+//! The images and buffers a frame renders into, sized for the settings and the output.
+
+use crate::gpu_types::{FrameData, TraversalState};
+use crate::passes::{
+    coverage::pyramid_layout, photons::INDIRECT_BYTES, AUX_FORMAT, BEAUTY_FORMAT, DEPTH_FORMAT, GEO_FORMAT, HDR_FORMAT,
+};
+use crate::settings::Settings;
+use crate::vk::{Buffer, Device, Image, VkResult};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Guard entries after the photon buffer's capacity, filled with a canary in debug runs to prove that no shader
+/// writes past the capacity it was given.
+pub const PHOTON_GUARD: u32 = 1024;
+pub const CANARY: u32 = 0xDEAD_BEEF;
+/// Rows of the debug photon dump per photon (see photon_bindings.glsl).
+pub const DEBUG_ROWS: u64 = 3;
+
+pub struct LightTargets {
+    pub front: Image,
+    pub front_aux: Image,
+    pub back: Image,
+    pub depth: Image,
+}
+
+pub struct ReceiverTargets {
+    pub geo: Image,
+    pub depth: Image,
+    pub shadow: Image,
+    pub flux: Image,
+    pub irradiance: Image,
+}
+
+pub struct EyeTargets {
+    pub radiance: Image,
+    pub caustics: Image,
+    pub direct: Image,
+    pub depth: Image,
+    pub front: Image,
+    pub front_aux: Image,
+    pub back: Image,
+    pub refr_depth: Image,
+    pub beauty: Image,
+}
+
+pub struct PhotonBuffers {
+    pub state: Buffer,
+    pub photons: Buffer,
+    pub indirect: Buffer,
+    pub coverage: Buffer,
+    pub debug: Buffer,
+    pub capacity: u32,
+    pub pyramid_offsets: Vec<u32>,
+}
+
+pub struct Targets {
+    pub ubo: Buffer,
+    pub light: LightTargets,
+    pub receiver: ReceiverTargets,
+    pub eye: EyeTargets,
+    pub photon: PhotonBuffers,
+    /// Host-visible: the traversal state, the debug dump, the guard, and one AOV image.
+    pub readback: Buffer,
+    pub width: u32,
+    pub height: u32,
+}
+
+fn ext(w: u32, h: u32) -> vk::Extent2D {
+    vk::Extent2D { width: w, height: h }
+}
+
+impl Targets {
+    pub fn new(device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
+        let r = ext(s.gbuffer_res, s.gbuffer_res);
+        let m = ext(s.caustic_res, s.caustic_res);
+        let e = ext(width, height);
+        let color = U::COLOR_ATTACHMENT | U::SAMPLED;
+        let light = LightTargets {
+            front: img("light front", GEO_FORMAT, r, color)?,
+            front_aux: img("light front ior", AUX_FORMAT, r, color)?,
+            back: img("light back", GEO_FORMAT, r, color)?,
+            depth: img("light depth", DEPTH_FORMAT, r, U::DEPTH_STENCIL_ATTACHMENT)?,
+        };
+        let receiver = ReceiverTargets {
+            geo: img("receivers from light", GEO_FORMAT, m, color)?,
+            depth: img("receivers depth", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT)?,
+            shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
+            flux: img("caustic flux map", HDR_FORMAT, m, color | U::TRANSFER_SRC)?,
+            irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
+        };
+        let eye = EyeTargets {
+            radiance: img("eye radiance", HDR_FORMAT, e, color | U::TRANSFER_SRC)?,
+            caustics: img("eye caustics", HDR_FORMAT, e, color | U::TRANSFER_SRC)?,
+            direct: img("eye direct", HDR_FORMAT, e, color | U::TRANSFER_SRC)?,
+            depth: img("eye depth", DEPTH_FORMAT, e, U::DEPTH_STENCIL_ATTACHMENT)?,
+            front: img("eye refractor front", GEO_FORMAT, e, color)?,
+            front_aux: img("eye refractor ior", AUX_FORMAT, e, color)?,
+            back: img("eye refractor back", GEO_FORMAT, e, color)?,
+            refr_depth: img("eye refractor depth", DEPTH_FORMAT, e, U::DEPTH_STENCIL_ATTACHMENT)?,
+            beauty: img("beauty", BEAUTY_FORMAT, e, U::STORAGE | U::TRANSFER_SRC)?,
+        };
+        use vk::BufferUsageFlags as B;
+        let gpu = MemoryLocation::GpuOnly;
+        let capacity = s.photon_capacity();
+        let mips = s.gbuffer_level() + 1;
+        let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_res, mips);
+        let debug_bytes = 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
+        let photon = PhotonBuffers {
+            state: Buffer::new(
+                device,
+                "traversal state",
+                std::mem::size_of::<TraversalState>() as u64,
+                B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
+                gpu,
+            )?,
+            photons: Buffer::new(
+                device,
+                "photon buffer",
+                8 * (capacity as u64 + PHOTON_GUARD as u64),
+                B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
+                gpu,
+            )?,
+            indirect: Buffer::new(
+                device,
+                "indirect commands",
+                INDIRECT_BYTES,
+                B::STORAGE_BUFFER | B::INDIRECT_BUFFER | B::TRANSFER_DST,
+                gpu,
+            )?,
+            coverage: Buffer::new(device, "coverage pyramid", 4 * pyramid_len as u64, B::STORAGE_BUFFER, gpu)?,
+            debug: Buffer::new(
+                device,
+                "debug photons",
+                debug_bytes,
+                B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
+                gpu,
+            )?,
+            capacity,
+            pyramid_offsets,
+        };
+        let aov_bytes = 16 * width as u64 * height as u64;
+        let readback_bytes = Self::readback_layout(s, aov_bytes).total;
+        Ok(Targets {
+            ubo: Buffer::new(
+                device,
+                "frame uniforms",
+                std::mem::size_of::<FrameData>() as u64,
+                B::UNIFORM_BUFFER,
+                MemoryLocation::CpuToGpu,
+            )?,
+            light,
+            receiver,
+            eye,
+            photon,
+            readback: Buffer::new(device, "readback", readback_bytes, B::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
+            width,
+            height,
+        })
+    }
+
+    /// Where each thing lies in the readback buffer.
+    pub fn readback_layout(s: &Settings, aov_bytes: u64) -> ReadbackLayout {
+        let state = 0u64;
+        let debug = std::mem::size_of::<TraversalState>() as u64;
+        let guard = debug + 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
+        let aov = guard + 8 * PHOTON_GUARD as u64;
+        ReadbackLayout { state, debug, guard, aov, total: aov + aov_bytes }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct ReadbackLayout {
+    pub state: u64,
+    pub debug: u64,
+    pub guard: u64,
+    pub aov: u64,
+    pub total: u64,
+}
