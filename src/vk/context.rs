@@ -90,7 +90,15 @@ impl Instance {
             // Chained so that instance creation and destruction are covered too.
             info = info.push_next(&mut messenger);
         }
-        let raw = unsafe { entry.create_instance(&info, None) }.check("vkCreateInstance")?;
+        let raw = match unsafe { entry.create_instance(&info, None) } {
+            Ok(raw) => raw,
+            Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => {
+                return Err(VkError::NoDevice(
+                    "the Vulkan loader found no driver (vkCreateInstance: ERROR_INCOMPATIBLE_DRIVER)".into(),
+                ))
+            }
+            Err(e) => return Err(VkError::Call { call: "vkCreateInstance", result: e }),
+        };
         let debug = if debug_utils {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &raw);
             match unsafe { loader.create_debug_utils_messenger(&messenger_info(), None) } {

@@ -1,0 +1,85 @@
+//! Shared helpers for the integration tests: run the `caustics` binary with validation on (synchronization
+//! validation included) and read what it wrote.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub const SPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/sphere.toml");
+pub const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/bunny.toml");
+
+pub fn scene(name: &str) -> String {
+    format!("{}/assets/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh directory for one test's outputs.
+pub fn out_dir(test: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(test);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create test dir");
+    dir
+}
+
+/// Run `caustics` with the Khronos validation layer and synchronization validation enabled.
+pub fn caustics(args: &[&str]) -> Output {
+    caustics_env(args, &[])
+}
+
+pub fn caustics_env(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustics"));
+    cmd.args(args).env("CAUSTICS_VALIDATION", "1").env("RUST_LOG", "warn");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("run caustics")
+}
+
+/// Run and require success; returns stderr.
+pub fn ok(args: &[&str]) -> String {
+    let out = caustics(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "caustics {args:?} failed ({:?}):\n{stderr}", out.status.code());
+    stderr
+}
+
+pub fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).expect("stats JSON")
+}
+
+/// The checks every GPU test makes on its stats: validation was on and said nothing.
+pub fn assert_validation_clean(stats: &serde_json::Value) {
+    assert_eq!(stats["validation"]["enabled"], true, "validation layer must be on in tests");
+    assert_eq!(stats["validation"]["messages"], 0, "validation messages");
+}
+
+/// Render `scene` with extra args, returning the stats (validation checked) and the output path.
+pub fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, PathBuf) {
+    let out = dir.join(format!(
+        "{name}.{}",
+        if extra.windows(2).any(|w| w[0] == "--aov" && w[1] != "beauty") { "exr" } else { "png" }
+    ));
+    let stats = dir.join(format!("{name}.json"));
+    let mut args = vec!["render", "--scene", scene, "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    ok(&args);
+    let s = read_json(&stats);
+    assert_validation_clean(&s);
+    (s, out)
+}
+
+/// Channel 0 of an EXR as a row-major plane.
+pub fn read_plane(path: &Path) -> (usize, usize, Vec<f64>) {
+    let img = caustics::image_io::read_exr(path).expect("read EXR");
+    (img.width as usize, img.height as usize, img.data.iter().map(|p| p[0] as f64).collect())
+}
+
+/// No file or partial file named after `out` exists in its directory.
+pub fn assert_no_output(out: &Path) {
+    assert!(!out.exists(), "{} must not exist", out.display());
+    let dir = out.parent().unwrap();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let n = e.file_name().to_string_lossy().into_owned();
+        assert!(!n.contains(".partial"), "partial file left behind: {n}");
+    }
+}
