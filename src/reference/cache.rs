@@ -1,0 +1,105 @@
+//! An on-disk cache of reference images for the bench and the tests.
+//!
+//! Entries live in `$CAUSTICS_CACHE_DIR`, else `$CARGO_TARGET_DIR/reference-cache`, else the crate's
+//! `target/reference-cache`. The key hashes everything the image depends on: the scene file's bytes, the bytes of
+//! every mesh file it names, the camera, AOV, paths, photon count, size and seed, plus a version number of the
+//! tracer itself. The thread count is not part of it (the image does not depend on it).
+
+use super::{trace, RefParams};
+use crate::error::{AppError, AppResult};
+use crate::image_io::{self, RgbImage};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// Bump when a change to the tracer changes its images.
+const TRACER_VERSION: u32 = 1;
+
+/// 64-bit FNV-1a, stable across Rust versions and platforms (std's hashers are not).
+struct Fnv(u64);
+
+impl Fnv {
+    fn new(basis: u64) -> Self {
+        Fnv(basis)
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 ^= x as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    /// Length-prefixed, so that consecutive fields cannot run into each other.
+    fn field(&mut self, b: &[u8]) {
+        self.bytes(&(b.len() as u64).to_le_bytes());
+        self.bytes(b);
+    }
+}
+
+pub fn cache_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("CAUSTICS_CACHE_DIR") {
+        return PathBuf::from(d);
+    }
+    if let Some(d) = std::env::var_os("CARGO_TARGET_DIR") {
+        return PathBuf::from(d).join("reference-cache");
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("target").join("reference-cache")
+}
+
+/// Mesh files named by the scene (`path = ...` of its objects), resolved like the scene loader does.
+fn mesh_files(scene_path: &Path, text: &str) -> Vec<PathBuf> {
+    let dir = scene_path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let Ok(table) = text.parse::<toml::Table>() else {
+        return Vec::new();
+    };
+    let Some(objects) = table.get("object").and_then(|o| o.as_array()) else {
+        return Vec::new();
+    };
+    objects.iter().filter_map(|o| o.get("path").and_then(|p| p.as_str()).map(|p| dir.join(p))).collect()
+}
+
+/// The cache key (32 hex digits) of a reference run.
+pub fn cache_key(scene_path: &Path, p: &RefParams) -> AppResult<String> {
+    let read = |path: &Path| {
+        std::fs::read(path).map_err(|e| AppError::BadInput(format!("{}: cannot read: {e}", path.display())))
+    };
+    let text = read(scene_path)?;
+    let mut parts: Vec<Vec<u8>> = vec![TRACER_VERSION.to_le_bytes().to_vec(), text.clone()];
+    for mesh in mesh_files(scene_path, &String::from_utf8_lossy(&text)) {
+        parts.push(read(&mesh)?);
+    }
+    let params = format!(
+        "camera={:?} aov={} paths={} photons={} size={}x{} seed={}",
+        p.camera, p.aov, p.paths, p.photons, p.width, p.height, p.seed
+    );
+    parts.push(params.into_bytes());
+    let mut key = String::new();
+    for basis in [0xcbf2_9ce4_8422_2325u64, 0x84222325cbf29ce4] {
+        let mut h = Fnv::new(basis);
+        for part in &parts {
+            h.field(part);
+        }
+        key.push_str(&format!("{:016x}", h.0));
+    }
+    Ok(key)
+}
+
+/// The reference image for `scene_path` and `p`, from the cache when present, else traced and stored (with its
+/// stats JSON beside it). A cache entry that cannot be read is traced again.
+pub fn cached(scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
+    let key = cache_key(scene_path, p)?;
+    let dir = cache_dir();
+    let exr = dir.join(format!("{key}.exr"));
+    if exr.is_file() {
+        if let Ok(img) = image_io::read_exr(&exr) {
+            if img.width == p.width && img.height == p.height {
+                return Ok(img);
+            }
+        }
+    }
+    let scene = Scene::load(scene_path)?;
+    let out = trace(&scene, p)?;
+    std::fs::create_dir_all(&dir).map_err(|e| AppError::Io(format!("{}: cannot create: {e}", dir.display())))?;
+    let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;
+    image_io::write_text(&dir.join(format!("{key}.json")), &json)?;
+    image_io::write_exr(&exr, &out.image)?;
+    Ok(out.image)
+}

@@ -1,0 +1,351 @@
+//! One photon's path: emission, specular interactions at dielectrics (Russian roulette on the Fresnel
+//! reflectance), the first diffuse hit, and its binning into the camera image.
+
+use super::geometry::{Filter, Geometry, Hit};
+use super::optics::{fresnel, reflect, refract};
+use super::sampling::{Emission, Rng, Strata};
+use super::{Aov, Paths, BOUNCE_CAP};
+use crate::scene::{CameraView, Material, Scene};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Per-light emission set-up.
+#[derive(Clone, Debug)]
+pub(crate) struct LightSetup {
+    pub emission: Option<Emission>,
+    pub strata: Strata,
+    /// Photons drawn for this light.
+    pub photons: u64,
+    /// Flux of each photon, W, before the light color: I·Ω/N (spot) or E·A/N (directional).
+    pub phi: f64,
+    pub color: [f64; 3],
+}
+
+/// Counts and flux sums (W, before light color) of one chunk of photons, or of the whole run. Every traced
+/// photon ends in exactly one of: deposited (caustics or direct), escaped, cut by the bounce cap, filtered out
+/// by `--paths`, or lost to a numerical dead end, so the flux account closes.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct Tally {
+    /// Photons whose direction fell inside the light (these carry flux).
+    pub photons_traced: u64,
+    /// Photons drawn from the sampled sub-cone but outside the spot cone: they carry nothing.
+    pub photons_outside_cone: u64,
+    pub photons_caustics: u64,
+    pub photons_direct: u64,
+    pub photons_in_image: u64,
+    pub photons_escaped: u64,
+    pub photons_cut: u64,
+    pub photons_filtered: u64,
+    pub photons_lost: u64,
+    pub flux_emitted: f64,
+    pub flux_caustics: f64,
+    pub flux_direct: f64,
+    /// Flux of the selected AOV's photons binned into the image (visible to the camera, inside the frame).
+    pub flux_in_image: f64,
+    /// Σ E · pixel area over the image: `flux_in_image` weighted by |n · forward| of each receiver.
+    pub image_flux: f64,
+    pub flux_escaped: f64,
+    pub flux_cut: f64,
+    pub flux_filtered: f64,
+    pub flux_lost: f64,
+    pub refractions: u64,
+    pub reflections: u64,
+    pub total_internal_reflections: u64,
+    /// Interactions where the interpolated normal gave a direction on the wrong side of the geometric surface
+    /// (or faced away from the ray), so the geometric normal was used instead.
+    pub shading_normal_fallbacks: u64,
+    pub max_specular_depth: u32,
+}
+
+impl Tally {
+    pub fn add(&mut self, o: &Tally) {
+        self.photons_traced += o.photons_traced;
+        self.photons_outside_cone += o.photons_outside_cone;
+        self.photons_caustics += o.photons_caustics;
+        self.photons_direct += o.photons_direct;
+        self.photons_in_image += o.photons_in_image;
+        self.photons_escaped += o.photons_escaped;
+        self.photons_cut += o.photons_cut;
+        self.photons_filtered += o.photons_filtered;
+        self.photons_lost += o.photons_lost;
+        self.flux_emitted += o.flux_emitted;
+        self.flux_caustics += o.flux_caustics;
+        self.flux_direct += o.flux_direct;
+        self.flux_in_image += o.flux_in_image;
+        self.image_flux += o.image_flux;
+        self.flux_escaped += o.flux_escaped;
+        self.flux_cut += o.flux_cut;
+        self.flux_filtered += o.flux_filtered;
+        self.flux_lost += o.flux_lost;
+        self.refractions += o.refractions;
+        self.reflections += o.reflections;
+        self.total_internal_reflections += o.total_internal_reflections;
+        self.shading_normal_fallbacks += o.shading_normal_fallbacks;
+        self.max_specular_depth = self.max_specular_depth.max(o.max_specular_depth);
+    }
+
+    /// Emitted flux minus every destination, relative to the emitted flux (0 when nothing was emitted).
+    pub fn account_residual(&self) -> f64 {
+        let out = self.flux_caustics
+            + self.flux_direct
+            + self.flux_escaped
+            + self.flux_cut
+            + self.flux_filtered
+            + self.flux_lost;
+        if self.flux_emitted > 0.0 {
+            (self.flux_emitted - out).abs() / self.flux_emitted
+        } else {
+            out.abs()
+        }
+    }
+}
+
+/// One photon's contribution to one pixel: irradiance E (W/m², before light color).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Deposit {
+    pub pixel: u32,
+    pub light: u32,
+    pub e: f64,
+}
+
+#[derive(Default)]
+pub(crate) struct ChunkOut {
+    pub tally: Tally,
+    pub deposits: Vec<Deposit>,
+    /// (distance from the radial center, flux) of each deposited photon of the selected AOV.
+    pub radial: Vec<(f64, f64)>,
+}
+
+/// Bins receiver hits into an orthographic camera's pixels.
+pub(crate) struct Binner {
+    pub view: CameraView,
+    pub position: DVec3,
+    pub forward: DVec3,
+    pub near: f64,
+    /// World area of one pixel on a plane facing the camera: (2·half_w/W)(2·half_h/H).
+    pub pixel_area: f64,
+}
+
+impl Binner {
+    pub fn new(view: CameraView) -> Self {
+        let h = view.half_extents().as_dvec2();
+        Binner {
+            view,
+            position: view.position.as_dvec3(),
+            forward: view.forward.as_dvec3(),
+            near: view.near as f64,
+            pixel_area: (2.0 * h.x / view.width as f64) * (2.0 * h.y / view.height as f64),
+        }
+    }
+
+    /// The pixel and |n · forward| of a receiver hit seen by the camera: the photon must arrive on the side the
+    /// camera sees, land inside the frame, and not be hidden by another receiver (refractors hide nothing).
+    fn bin(&self, geo: &Geometry, hit: &Hit, d: DVec3) -> Option<(u32, f64)> {
+        let cos_cam = hit.ng.dot(self.forward);
+        if cos_cam.abs() < 1e-9 || (hit.ng.dot(d) < 0.0) != (cos_cam < 0.0) {
+            return None;
+        }
+        let px = self.view.project(hit.pos.as_vec3())?;
+        let (w, h) = (self.view.width, self.view.height);
+        if !(px.x >= 0.0 && px.y >= 0.0 && px.x < w as f32 && px.y < h as f32) {
+            return None;
+        }
+        let (ix, iy) = ((px.x as u32).min(w - 1), (px.y as u32).min(h - 1));
+        let depth = (hit.pos - self.position).dot(self.forward);
+        let tmax = depth - self.near;
+        if tmax <= 0.0 {
+            return None;
+        }
+        let toward_cam = if cos_cam < 0.0 { hit.ng } else { -hit.ng };
+        let o = hit.pos + toward_cam * offset_scale(hit.pos);
+        if geo.intersect(o, -self.forward, tmax, Some(hit.prim), Filter::ReceiversOnly).is_some() {
+            return None;
+        }
+        Some((iy * w + ix, cos_cam.abs()))
+    }
+}
+
+/// Ray-origin offset along the geometric normal. Hit points are computed in f64 from f32 vertices, so they lie
+/// within ~1e-16 relative of their plane; 1e-9 relative clears that by far and is far below any feature size.
+fn offset_scale(p: DVec3) -> f64 {
+    1e-9 * (1.0 + p.abs().max_element())
+}
+
+pub(crate) struct Tracer<'a> {
+    pub geo: &'a Geometry,
+    pub lights: Vec<LightSetup>,
+    pub binner: Binner,
+    pub aov: Aov,
+    pub paths: Paths,
+    pub seed: u64,
+    pub radial_center: Option<DVec3>,
+    /// IOR of each scene object (0 for receivers).
+    pub ior: Vec<f64>,
+}
+
+enum Interaction {
+    Reflected { dir: DVec3, tir: bool },
+    Refracted { dir: DVec3 },
+}
+
+/// Reflect or refract at a dielectric interface, chosen by Russian roulette with probability F (`xi` uniform in
+/// [0, 1)). Inside/outside comes from the geometric normal; the interpolated normal gives F and the directions,
+/// unless it faces away from the ray or sends the photon to the wrong side of the surface, in which case the
+/// geometric normal is used (the `bool` tells).
+fn interact(d: DVec3, hit: &Hit, ior: f64, xi: f64) -> Option<(Interaction, bool)> {
+    let entering = d.dot(hit.ng) < 0.0;
+    let eta = if entering { 1.0 / ior } else { ior };
+    let ng_f = if entering { hit.ng } else { -hit.ng };
+    let ns = if hit.ns.dot(hit.ng) > 0.0 { hit.ns } else { hit.ng };
+    let ns_f = if entering { ns } else { -ns };
+    for (k, n) in [ns_f, ng_f].into_iter().enumerate() {
+        let cos_i = -d.dot(n);
+        if cos_i <= 0.0 {
+            continue;
+        }
+        let f = fresnel(cos_i, eta);
+        match f.cos_t {
+            Some(cos_t) if xi >= f.reflectance => {
+                let t = refract(d, n, eta, cos_i, cos_t).normalize();
+                if t.dot(ng_f) < 0.0 {
+                    return Some((Interaction::Refracted { dir: t }, k == 1));
+                }
+            }
+            _ => {
+                let r = reflect(d, n).normalize();
+                if r.dot(ng_f) > 0.0 {
+                    return Some((Interaction::Reflected { dir: r, tir: f.cos_t.is_none() }, k == 1));
+                }
+            }
+        }
+    }
+    None
+}
+
+impl Tracer<'_> {
+    pub fn new<'a>(
+        scene: &Scene,
+        geo: &'a Geometry,
+        lights: Vec<LightSetup>,
+        binner: Binner,
+        p: &super::RefParams,
+    ) -> Tracer<'a> {
+        let ior = scene
+            .objects
+            .iter()
+            .map(|o| match o.material {
+                Material::Dielectric { ior } => ior as f64,
+                Material::Diffuse { .. } => 0.0,
+            })
+            .collect();
+        Tracer {
+            geo,
+            lights,
+            binner,
+            aov: p.aov,
+            paths: p.paths,
+            seed: p.seed,
+            radial_center: p.radial_center.map(|c| c.as_dvec3()),
+            ior,
+        }
+    }
+
+    /// Trace photons [start, end) of light `li`.
+    pub fn chunk(&self, li: usize, start: u64, end: u64) -> ChunkOut {
+        let mut out = ChunkOut::default();
+        for i in start..end {
+            self.photon(li, i, &mut out);
+        }
+        out
+    }
+
+    fn photon(&self, li: usize, i: u64, out: &mut ChunkOut) {
+        let light = &self.lights[li];
+        let Some(emission) = light.emission else {
+            return;
+        };
+        let mut rng = Rng::new(self.seed, li as u64, i);
+        let (a, b) = light.strata.point(i, rng.next_f64(), rng.next_f64());
+        let t = &mut out.tally;
+        let Some((mut o, mut d)) = emission.ray(a, b) else {
+            t.photons_outside_cone += 1;
+            return;
+        };
+        let phi = light.phi;
+        t.photons_traced += 1;
+        t.flux_emitted += phi;
+        let (mut refr, mut refl) = (0u32, 0u32);
+        let mut skip = None;
+        loop {
+            let Some(hit) = self.geo.intersect(o, d, f64::INFINITY, skip, Filter::All) else {
+                t.photons_escaped += 1;
+                t.flux_escaped += phi;
+                return;
+            };
+            if hit.receiver {
+                self.deposit(li, &hit, d, refr, refl, phi, out);
+                return;
+            }
+            if refr + refl >= BOUNCE_CAP {
+                t.photons_cut += 1;
+                t.flux_cut += phi;
+                return;
+            }
+            let Some((event, fallback)) = interact(d, &hit, self.ior[hit.object as usize], rng.next_f64()) else {
+                t.photons_lost += 1;
+                t.flux_lost += phi;
+                return;
+            };
+            t.shading_normal_fallbacks += fallback as u64;
+            let toward_incident = if d.dot(hit.ng) < 0.0 { hit.ng } else { -hit.ng };
+            let eps = offset_scale(hit.pos);
+            match event {
+                Interaction::Reflected { dir, tir } => {
+                    refl += 1;
+                    t.reflections += 1;
+                    t.total_internal_reflections += tir as u64;
+                    o = hit.pos + toward_incident * eps;
+                    d = dir;
+                }
+                Interaction::Refracted { dir } => {
+                    refr += 1;
+                    t.refractions += 1;
+                    o = hit.pos - toward_incident * eps;
+                    d = dir;
+                }
+            }
+            t.max_specular_depth = t.max_specular_depth.max(refr + refl);
+            skip = Some(hit.prim);
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn deposit(&self, li: usize, hit: &Hit, d: DVec3, refr: u32, refl: u32, phi: f64, out: &mut ChunkOut) {
+        let t = &mut out.tally;
+        let caustic = refr + refl > 0;
+        if caustic && self.paths == Paths::TwoRefractions && !(refr == 2 && refl == 0) {
+            t.photons_filtered += 1;
+            t.flux_filtered += phi;
+            return;
+        }
+        if caustic {
+            t.photons_caustics += 1;
+            t.flux_caustics += phi;
+        } else {
+            t.photons_direct += 1;
+            t.flux_direct += phi;
+        }
+        if caustic != (self.aov == Aov::Caustics) {
+            return;
+        }
+        if let Some(c) = self.radial_center {
+            out.radial.push(((hit.pos - c).length(), phi));
+        }
+        if let Some((pixel, cos)) = self.binner.bin(self.geo, hit, d) {
+            t.photons_in_image += 1;
+            t.flux_in_image += phi;
+            t.image_flux += phi * cos;
+            out.deposits.push(Deposit { pixel, light: li as u32, e: phi * cos / self.binner.pixel_area });
+        }
+    }
+}
