@@ -1,14 +1,263 @@
-//! The error metric used everywhere (`caustics compare`, bench, tests). Placeholder: being written.
+//! The error metric used everywhere (`caustics compare`, the bench, the tests), DESIGN.md "Ground truth and
+//! error":
+//!
+//! 1. Both images are reduced to one plane of irradiance, the **mean of the R, G and B channels** (all current
+//!    lights are white, where this equals any single channel; for colored light the mean weighs the channels
+//!    equally).
+//! 2. Both planes are box-filtered to the comparison resolution `res` × `res·H/W` (rounded, at least 1):
+//!    area-weighted, so a source pixel that straddles two target pixels is split between them by overlap area.
+//!    Sizes need not be multiples of one another, and the filter preserves Σ E · pixel area exactly.
+//! 3. On the filtered planes (E under test, E_ref the reference): rel-L1 = Σ|E − E_ref| / Σ E_ref,
+//!    flux ratio = Σ E / Σ E_ref, and the peak offset: the distance in meters between the two argmax pixels'
+//!    centers, given the physical width `extent_m` of the image (2.0 m for the canonical `top` camera; square
+//!    pixels assumed).
 
 use crate::error::{AppError, AppResult};
+use crate::image_io::{self, RgbImage};
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-#[derive(clap::Args, Debug, Clone)]
-pub struct CompareArgs {
-    pub a: PathBuf,
-    pub b: PathBuf,
+/// Comparison results at one resolution.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Comparison width in pixels (height follows the reference's aspect).
+    pub res: u32,
+    /// Σ|E − E_ref| / Σ E_ref (0 when both are empty, infinite when only the reference is).
+    pub rel_l1: f64,
+    /// Σ E / Σ E_ref (1 when both are empty, infinite when only the reference is).
+    pub flux_ratio: f64,
+    /// Distance between the argmax pixels of the filtered images, meters.
+    pub peak_offset_m: f64,
+    /// Σ E and Σ E_ref over the filtered planes.
+    pub sum: f64,
+    pub sum_ref: f64,
 }
 
-pub fn run_compare(_args: &CompareArgs) -> AppResult<()> {
-    Err(AppError::Failed("compare: not implemented yet".into()))
+/// One plane per image: the mean of the three channels, in f64.
+pub fn luminance_plane(img: &RgbImage) -> Vec<f64> {
+    img.data.iter().map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0).collect()
+}
+
+/// For each target cell j of `dst` cells, the (source index, weight) pairs: the overlap of source pixel i, mapped
+/// onto [0, dst), with [j, j + 1), in target-pixel units. The weights of one target cell sum to 1.
+fn overlap_weights(src: usize, dst: usize) -> Vec<Vec<(usize, f64)>> {
+    let scale = dst as f64 / src as f64;
+    let mut cells = vec![Vec::new(); dst];
+    for i in 0..src {
+        let (a, b) = (i as f64 * scale, (i + 1) as f64 * scale);
+        let mut j = a.floor() as usize;
+        while j < dst && (j as f64) < b {
+            let w = b.min(j as f64 + 1.0) - a.max(j as f64);
+            if w > 0.0 {
+                cells[j].push((i, w));
+            }
+            j += 1;
+        }
+    }
+    cells
+}
+
+/// Area-weighted box filter of a `w`×`h` plane to `ow`×`oh`: each output is the mean of E over its footprint.
+pub fn box_filter(plane: &[f64], w: usize, h: usize, ow: usize, oh: usize) -> Vec<f64> {
+    assert_eq!(plane.len(), w * h, "plane size");
+    let wx = overlap_weights(w, ow);
+    let wy = overlap_weights(h, oh);
+    // Rows first (w → ow), then columns (h → oh).
+    let mut tmp = vec![0.0; ow * h];
+    for y in 0..h {
+        let row = &plane[y * w..(y + 1) * w];
+        for (j, cell) in wx.iter().enumerate() {
+            tmp[y * ow + j] = cell.iter().map(|&(i, wt)| row[i] * wt).sum();
+        }
+    }
+    let mut out = vec![0.0; ow * oh];
+    for (j, cell) in wy.iter().enumerate() {
+        for x in 0..ow {
+            out[j * ow + x] = cell.iter().map(|&(i, wt)| tmp[i * ow + x] * wt).sum();
+        }
+    }
+    out
+}
+
+fn argmax(v: &[f64]) -> usize {
+    let mut best = 0;
+    for (i, &x) in v.iter().enumerate() {
+        if x > v[best] || (v[best].is_nan() && !x.is_nan()) {
+            best = i;
+        }
+    }
+    best
+}
+
+/// The comparison size for `res` columns: (res, round(res · h / w)), both at least 1.
+pub fn comparison_size(res: u32, width: u32, height: u32) -> (usize, usize) {
+    let ow = res.max(1) as usize;
+    let oh = ((res as f64 * height as f64 / width.max(1) as f64).round() as usize).max(1);
+    (ow, oh)
+}
+
+/// Compare `a` (under test) against `reference` at comparison width `res`, for an image `extent_m` meters wide.
+pub fn compare(a: &RgbImage, reference: &RgbImage, res: u32, extent_m: f32) -> Metrics {
+    let (ow, oh) = comparison_size(res, reference.width, reference.height);
+    let fa = box_filter(&luminance_plane(a), a.width as usize, a.height as usize, ow, oh);
+    let fb = box_filter(&luminance_plane(reference), reference.width as usize, reference.height as usize, ow, oh);
+    let sum: f64 = fa.iter().sum();
+    let sum_ref: f64 = fb.iter().sum();
+    let l1: f64 = fa.iter().zip(&fb).map(|(x, y)| (x - y).abs()).sum();
+    // Against an empty reference: equal (also empty) is a perfect match, anything else infinitely wrong.
+    let ratio = |num: f64, if_zero: f64| {
+        if sum_ref != 0.0 {
+            num / sum_ref
+        } else if num == 0.0 {
+            if_zero
+        } else {
+            f64::INFINITY
+        }
+    };
+    let (pa, pb) = (argmax(&fa), argmax(&fb));
+    let pixel_m = extent_m as f64 / ow as f64;
+    let (dx, dy) = ((pa % ow) as f64 - (pb % ow) as f64, (pa / ow) as f64 - (pb / ow) as f64);
+    Metrics {
+        res: ow as u32,
+        rel_l1: ratio(l1, 0.0),
+        flux_ratio: ratio(sum, 1.0),
+        peak_offset_m: (dx * dx + dy * dy).sqrt() * pixel_m,
+        sum,
+        sum_ref,
+    }
+}
+
+/// `caustics compare A.exr B.exr`: A is the image under test, B the reference.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CompareArgs {
+    /// Image under test (EXR).
+    pub a: PathBuf,
+    /// Reference image (EXR).
+    pub b: PathBuf,
+    /// Comparison resolution for the peak offset and the thresholds (rel-L1 is always printed at 64² and 256²).
+    #[arg(long, default_value_t = 64)]
+    pub res: u32,
+    /// Physical width of the images in meters (2.0 for the canonical `top` camera).
+    #[arg(long, default_value_t = 2.0)]
+    pub extent: f32,
+    /// Fail (exit 1) when rel-L1 at --res is above this.
+    #[arg(long)]
+    pub max_rel_l1: Option<f64>,
+    /// Fail (exit 1) when the flux ratio is below this.
+    #[arg(long)]
+    pub min_flux_ratio: Option<f64>,
+    /// Fail (exit 1) when the flux ratio is above this.
+    #[arg(long)]
+    pub max_flux_ratio: Option<f64>,
+    /// Print the result as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What `caustics compare --json` prints.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CompareReport {
+    pub a: String,
+    pub b: String,
+    pub rel_l1_64: f64,
+    pub rel_l1_256: f64,
+    /// The metrics at `--res`, on which the thresholds act.
+    pub at_res: Metrics,
+    pub extent_m: f32,
+    pub failures: Vec<String>,
+}
+
+pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
+    if args.res == 0 {
+        return Err(AppError::BadInput("--res: must be at least 1".into()));
+    }
+    if !(args.extent.is_finite() && args.extent > 0.0) {
+        return Err(AppError::BadInput(format!("--extent: must be a positive width in meters, got {}", args.extent)));
+    }
+    let a = image_io::read_exr(&args.a)?;
+    let b = image_io::read_exr(&args.b)?;
+    let (ra, rb) = (a.width as f64 / a.height as f64, b.width as f64 / b.height as f64);
+    if ((ra - rb) / rb).abs() > 1e-3 {
+        return Err(AppError::BadInput(format!(
+            "{} is {}x{} but {} is {}x{}: the aspect ratios differ",
+            args.a.display(),
+            a.width,
+            a.height,
+            args.b.display(),
+            b.width,
+            b.height
+        )));
+    }
+    let m64 = compare(&a, &b, 64, args.extent);
+    let m256 = compare(&a, &b, 256, args.extent);
+    let m = compare(&a, &b, args.res, args.extent);
+    let mut failures = Vec::new();
+    // A NaN fails every threshold.
+    let above = |v: f64, max: f64| v.is_nan() || v > max;
+    let below = |v: f64, min: f64| v.is_nan() || v < min;
+    if let Some(x) = args.max_rel_l1 {
+        if above(m.rel_l1, x) {
+            failures.push(format!("rel-L1 at {}² is {:.6}, above --max-rel-l1 {x}", m.res, m.rel_l1));
+        }
+    }
+    if let Some(x) = args.min_flux_ratio {
+        if below(m.flux_ratio, x) {
+            failures.push(format!("flux ratio {:.6} is below --min-flux-ratio {x}", m.flux_ratio));
+        }
+    }
+    if let Some(x) = args.max_flux_ratio {
+        if above(m.flux_ratio, x) {
+            failures.push(format!("flux ratio {:.6} is above --max-flux-ratio {x}", m.flux_ratio));
+        }
+    }
+    if args.json {
+        let report = CompareReport {
+            a: args.a.display().to_string(),
+            b: args.b.display().to_string(),
+            rel_l1_64: m64.rel_l1,
+            rel_l1_256: m256.rel_l1,
+            at_res: m,
+            extent_m: args.extent,
+            failures: failures.clone(),
+        };
+        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| AppError::Failed(e.to_string()))?);
+    } else {
+        println!("rel-L1 (64²):  {:.6}", m64.rel_l1);
+        println!("rel-L1 (256²): {:.6}", m256.rel_l1);
+        if ![64, 256].contains(&m.res) {
+            println!("rel-L1 ({}²): {:.6}", m.res, m.rel_l1);
+        }
+        println!("flux ratio:    {:.6}", m.flux_ratio);
+        println!("peak offset:   {:.4} m (at {}²)", m.peak_offset_m, m.res);
+    }
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(AppError::Failed(format!("{} vs {}: {}", args.a.display(), args.b.display(), failures.join("; "))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_partition_each_source_pixel() {
+        for (src, dst) in [(10, 3), (3, 10), (512, 64), (100, 64), (7, 7)] {
+            let cells = overlap_weights(src, dst);
+            let mut per_src = vec![0.0; src];
+            for cell in &cells {
+                for &(i, w) in cell {
+                    per_src[i] += w;
+                }
+            }
+            let scale = dst as f64 / src as f64;
+            for s in per_src {
+                assert!((s - scale).abs() < 1e-12, "{src}->{dst}");
+            }
+            for cell in &cells {
+                assert!((cell.iter().map(|c| c.1).sum::<f64>() - 1.0).abs() < 1e-12, "{src}->{dst}");
+            }
+        }
+    }
 }
