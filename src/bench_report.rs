@@ -1,0 +1,258 @@
+//! The reporting half of `caustics bench`: one [`BenchRow`] per (scene, method, metric, level, driven) run, a
+//! Markdown table, and a log-log SVG plot of error against GPU time.
+//!
+//! Row shape (the JSON the bench writes, one object per row):
+//! - `scene`, `method` (`dense`, `adaptive`, ...), `metric` (`max-level`, `max-error`, or null for dense),
+//!   `level` (the `--level`), `equivalent_res` (64·2^level: the light-space grid side the level stands for),
+//!   `driven` (`gpu` or `cpu`), `photons` (photons splatted);
+//! - `gpu_ms_median` (summed GPU stages of one frame) and `frame_ms_median` (wall time of one frame), over frames;
+//! - the metric against the reference (crate::metrics): `rel_l1_64`, `rel_l1_256`, `flux_ratio`, and
+//!   `peak_offset_m` (added to the brief's shape, because DESIGN.md reports all three; defaults to 0 when absent);
+//! - `extra`: anything else (per-stage times, overflow counts), free-form JSON, defaults to null.
+
+use crate::error::{AppError, AppResult};
+use crate::image_io;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchRow {
+    pub scene: String,
+    pub method: String,
+    #[serde(default)]
+    pub metric: Option<String>,
+    pub level: u32,
+    pub equivalent_res: u32,
+    pub driven: String,
+    pub photons: u64,
+    pub gpu_ms_median: f64,
+    pub frame_ms_median: f64,
+    pub rel_l1_64: f64,
+    pub rel_l1_256: f64,
+    pub flux_ratio: f64,
+    #[serde(default)]
+    pub peak_offset_m: f64,
+    #[serde(default)]
+    pub extra: serde_json::Value,
+}
+
+impl BenchRow {
+    /// The plot series this row belongs to: "scene · method · metric".
+    pub fn series(&self) -> String {
+        match &self.metric {
+            Some(m) => format!("{} · {} · {}", self.scene, self.method, m),
+            None => format!("{} · {}", self.scene, self.method),
+        }
+    }
+}
+
+fn cell(s: &str) -> String {
+    s.replace('|', "\\|")
+}
+
+/// A GitHub-flavoured Markdown table of the rows, in their order.
+pub fn markdown_table(rows: &[BenchRow]) -> String {
+    let mut s = String::from(
+        "| scene | method | metric | level | eq. res | driven | photons | GPU ms | frame ms | rel-L1 64² | rel-L1 256² | flux ratio | peak offset (m) |\n\
+         |---|---|---|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            cell(&r.scene),
+            cell(&r.method),
+            cell(r.metric.as_deref().unwrap_or("–")),
+            r.level,
+            r.equivalent_res,
+            cell(&r.driven),
+            r.photons,
+            r.gpu_ms_median,
+            r.frame_ms_median,
+            r.rel_l1_64,
+            r.rel_l1_256,
+            r.flux_ratio,
+            r.peak_offset_m,
+        ));
+    }
+    s
+}
+
+/// The rows grouped into plot series (in order of first appearance), each as (GPU ms, rel-L1 64²) points sorted
+/// by time. Points that a log axis cannot show (non-finite or ≤ 0) are left out.
+pub fn plot_series(rows: &[BenchRow]) -> Vec<(String, Vec<(f64, f64)>)> {
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for r in rows {
+        let (x, y) = (r.gpu_ms_median, r.rel_l1_64);
+        if !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0) {
+            continue;
+        }
+        let name = r.series();
+        match series.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, pts)) => pts.push((x, y)),
+            None => series.push((name, vec![(x, y)])),
+        }
+    }
+    for (_, pts) in &mut series {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    series
+}
+
+fn log_range(values: impl Iterator<Item = f64>, default: (f64, f64)) -> std::ops::Range<f64> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        (lo, hi) = default;
+    }
+    // At least a factor 2 wide, padded by a quarter of a decade-ish on each side.
+    if hi < lo * 2.0 {
+        let m = (lo * hi).sqrt();
+        (lo, hi) = (m / 1.5, m * 1.5);
+    }
+    lo / 1.25..hi * 1.25
+}
+
+/// A log-log SVG plot of rel-L1 at 64² (y) against median GPU ms (x), one line per (scene, method, metric).
+pub fn svg_plot(rows: &[BenchRow], path: &Path) -> AppResult<()> {
+    let svg =
+        svg_string(rows).map_err(|e| AppError::Failed(format!("{}: cannot draw the plot: {e}", path.display())))?;
+    image_io::write_text(path, &svg)
+}
+
+/// The SVG text of [`svg_plot`].
+pub fn svg_string(rows: &[BenchRow]) -> Result<String, Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    let series = plot_series(rows);
+    let xr = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.0)), (0.1, 100.0));
+    let yr = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.1)), (1e-3, 1.0));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (960, 640)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let caption = if series.is_empty() { "rel-L1 vs GPU time (no plottable rows)" } else { "rel-L1 vs GPU time" };
+        let mut chart = ChartBuilder::on(&root)
+            .caption(caption, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d(xr.log_scale(), yr.log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("GPU ms per frame (median)")
+            .y_desc("rel-L1 at 64² vs reference")
+            .x_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| format!("{v:.4}"))
+            .draw()?;
+        for (i, (name, pts)) in series.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))?
+                .label(name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+        }
+        if !series.is_empty() {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(scene: &str, method: &str, metric: Option<&str>, level: u32, gpu: f64, err: f64) -> BenchRow {
+        BenchRow {
+            scene: scene.into(),
+            method: method.into(),
+            metric: metric.map(Into::into),
+            level,
+            equivalent_res: 64 << level,
+            driven: "gpu".into(),
+            photons: 4096 << (2 * level),
+            gpu_ms_median: gpu,
+            frame_ms_median: gpu * 1.5,
+            rel_l1_64: err,
+            rel_l1_256: err * 2.0,
+            flux_ratio: 0.99,
+            peak_offset_m: 0.01,
+            extra: serde_json::json!({ "note": "made up" }),
+        }
+    }
+
+    fn rows() -> Vec<BenchRow> {
+        vec![
+            row("sphere", "dense", None, 3, 40.0, 0.05),
+            row("sphere", "dense", None, 1, 5.0, 0.2),
+            row("sphere", "adaptive", Some("max-error"), 3, 12.0, 0.06),
+            row("sphere", "adaptive", Some("max-error"), 5, 30.0, 0.02),
+            row("bunny", "adaptive", Some("max-level"), 4, 25.0, 0.08),
+            row("bunny", "adaptive", Some("max-level"), 2, f64::NAN, 0.1),
+        ]
+    }
+
+    #[test]
+    fn table_has_a_line_per_row() {
+        let t = markdown_table(&rows());
+        let lines: Vec<&str> = t.lines().collect();
+        assert_eq!(lines.len(), 2 + 6);
+        assert!(lines[0].starts_with("| scene | method | metric | level |"));
+        assert_eq!(
+            lines[2],
+            "| sphere | dense | – | 3 | 512 | gpu | 262144 | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
+        );
+        assert!(lines[4].contains("| adaptive | max-error | 3 |"));
+        let cols = lines[0].matches('|').count();
+        assert!(lines.iter().all(|l| l.matches('|').count() == cols), "{t}");
+    }
+
+    #[test]
+    fn rows_round_trip_through_json() {
+        let r = rows();
+        let json = serde_json::to_string(&r[..5]).unwrap();
+        let back: Vec<BenchRow> = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, r[..5].to_vec());
+        // Optional fields may be absent.
+        let minimal = r#"{"scene":"s","method":"dense","level":0,"equivalent_res":64,"driven":"gpu","photons":1,
+            "gpu_ms_median":1.0,"frame_ms_median":2.0,"rel_l1_64":0.1,"rel_l1_256":0.2,"flux_ratio":1.0}"#;
+        let m: BenchRow = serde_json::from_str(minimal).unwrap();
+        assert_eq!((m.metric, m.peak_offset_m, m.extra), (None, 0.0, serde_json::Value::Null));
+    }
+
+    #[test]
+    fn series_group_and_sort_and_skip_unplottable_points() {
+        let s = plot_series(&rows());
+        let names: Vec<&str> = s.iter().map(|x| x.0.as_str()).collect();
+        assert_eq!(names, ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level"]);
+        assert_eq!(s[0].1, vec![(5.0, 0.2), (40.0, 0.05)]);
+        assert_eq!(s[2].1.len(), 1, "the NaN row is left out");
+    }
+
+    #[test]
+    fn svg_plot_writes_a_log_log_chart() {
+        let dir = std::env::temp_dir().join(format!("caustics-bench-report-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("plot.svg");
+        svg_plot(&rows(), &path).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        for label in ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level", "GPU ms"]
+        {
+            assert!(svg.contains(label), "missing {label}");
+        }
+        // No rows at all still gives a valid (empty) chart.
+        svg_plot(&[], &path).unwrap();
+        assert!(std::fs::read_to_string(&path).unwrap().contains("no plottable rows"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
