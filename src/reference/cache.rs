@@ -12,7 +12,7 @@ use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// Bump when a change to the tracer changes its images.
-const TRACER_VERSION: u32 = 1;
+const TRACER_VERSION: u32 = 2;
 
 /// 64-bit FNV-1a, stable across Rust versions and platforms (std's hashers are not).
 struct Fnv(u64);
@@ -82,11 +82,15 @@ pub fn cache_key(scene_path: &Path, p: &RefParams) -> AppResult<String> {
     Ok(key)
 }
 
-/// The reference image for `scene_path` and `p`, from the cache when present, else traced and stored (with its
-/// stats JSON beside it). A cache entry that cannot be read is traced again.
+/// The reference image for `scene_path` and `p`, from the cache in [`cache_dir`] when present, else traced and
+/// stored (with its stats JSON beside it). A cache entry that cannot be read is traced again.
 pub fn cached(scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
+    cached_in(&cache_dir(), scene_path, p)
+}
+
+/// [`cached`] with an explicit cache directory (created if missing).
+pub fn cached_in(dir: &Path, scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
     let key = cache_key(scene_path, p)?;
-    let dir = cache_dir();
     let exr = dir.join(format!("{key}.exr"));
     if exr.is_file() {
         if let Ok(img) = image_io::read_exr(&exr) {
@@ -97,7 +101,7 @@ pub fn cached(scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
     }
     let scene = Scene::load(scene_path)?;
     let out = trace(&scene, p)?;
-    std::fs::create_dir_all(&dir).map_err(|e| AppError::Io(format!("{}: cannot create: {e}", dir.display())))?;
+    std::fs::create_dir_all(dir).map_err(|e| AppError::Io(format!("{}: cannot create: {e}", dir.display())))?;
     let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;
     image_io::write_text(&dir.join(format!("{key}.json")), &json)?;
     image_io::write_exr(&exr, &out.image)?;

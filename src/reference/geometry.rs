@@ -8,7 +8,7 @@
 //! no area, so dropping them opens no gap.
 
 use crate::scene::Scene;
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
@@ -144,7 +144,10 @@ impl Geometry {
             return None;
         }
         let sr = ShearedRay::new(o, d);
-        let ray = Ray::new(o.as_vec3a(), d.as_vec3a(), 0.0, if tmax.is_finite() { tmax as f32 } else { f32::INFINITY });
+        // obvhs picks the child order from `dir < 0` but inverts −0.0 to −1/ε, so a −0.0 component (the top
+        // camera's (−0, 1, −0), for one) makes every node test fail. Adding +0 turns −0.0 into +0.0.
+        let dir = d.as_vec3a() + Vec3A::ZERO;
+        let ray = Ray::new(o.as_vec3a(), dir, 0.0, if tmax.is_finite() { tmax as f32 } else { f32::INFINITY });
         let mut best: Option<(f64, u32, [f64; 3])> = None;
         let mut best_t = tmax;
         let mut rh = RayHit::none();
@@ -198,6 +201,24 @@ mod tests {
                 (0.0..=1.0).contains(&x)
             };
             assert!(hit || !inside, "ray {i} slipped through the shared edge");
+        }
+    }
+
+    #[test]
+    fn negative_zero_directions_hit() {
+        // A unit square at y = 0.3 and rays straight up whose x and z components are −0.0 or +0.0.
+        let mut mesh = crate::scene::mesh::plane(1.0, 1.0);
+        mesh = mesh.transformed(glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.3, 0.0)));
+        let obj = crate::scene::Object {
+            name: "p".into(),
+            material: crate::scene::Material::Diffuse { albedo: glam::Vec3::ONE },
+            mesh,
+        };
+        let scene = Scene { path: "t".into(), lights: vec![], cameras: vec![], objects: vec![obj] };
+        let g = Geometry::new(&scene);
+        for d in [DVec3::new(-0.0, 1.0, -0.0), DVec3::new(0.0, 1.0, -0.0), DVec3::Y, -DVec3::NEG_Y] {
+            let h = g.intersect(DVec3::new(0.1, 0.0, 0.2), d, 1.0, None, Filter::All);
+            assert!(h.is_some_and(|h| (h.pos.y - 0.3).abs() < 1e-6), "{d:?}");
         }
     }
 

@@ -38,7 +38,7 @@ pub mod optics;
 pub mod sampling;
 mod tracer;
 
-pub use cache::{cache_dir, cache_key, cached};
+pub use cache::{cache_dir, cache_key, cached, cached_in};
 pub use tracer::Tally;
 
 use crate::error::{AppError, AppResult};
