@@ -294,3 +294,95 @@ fn cli_writes_the_image_and_stats_and_rejects_bad_flags() {
     assert!(stats["photons_per_s"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn receivers_hide_receivers_but_refractors_do_not() {
+    // No refractor: a 1 W/m² directional light at 45° (direction (1, −1, 0)/√2) over the floor and a 0.5 m square
+    // diffuse shelf at y = 0.3 above its center. Both receive E·cos 45° = 0.7071 W/m². The shelf's shadow on the
+    // floor is shifted by 0.3 m along +x (x ∈ [0.05, 0.55]); the top camera cannot see the floor under the shelf
+    // (x ∈ [−0.25, 0.25]). Lit floor: 4 − 0.25 m² (shadow); of it, 0.25 − 0.1 = 0.15 m² is hidden under the shelf.
+    // So the image holds (4 − 0.25 − 0.15 + 0.25)·0.7071 = 2.722361 W, and 0.15·0.7071 = 0.106066 W is deposited but
+    // hidden. Stratified, no roulette: only the edges of the shadow and of the hidden square are noisy.
+    let text = r#"
+[[light]]
+kind = "directional"
+position = [-1.0, 1.0, 0.0]
+target = [0.0, 0.0, 0.0]
+intensity = 1.0
+
+[[camera]]
+name = "top"
+kind = "orthographic"
+position = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+half_height = 1.0
+
+[[object]]
+name = "floor"
+shape = "plane"
+size = [2.0, 2.0]
+material = { kind = "diffuse", albedo = 0.8 }
+
+[[object]]
+name = "shelf"
+shape = "plane"
+size = [0.5, 0.5]
+translate = [0.0, 0.3, 0.0]
+material = { kind = "diffuse", albedo = 0.8 }
+"#;
+    let scene = Scene::parse(text, Path::new("shelf.toml")).unwrap();
+    let out = trace(&scene, &params(40_000, 1, Aov::Direct, Paths::All, 64)).unwrap();
+    check_account("shelf", &out);
+    let c = std::f64::consts::FRAC_1_SQRT_2;
+    let a = &out.stats.energy_account;
+    let in_image = image_flux(&out.image);
+    println!("shelf: image {in_image:.6} W, hidden {:.6} W", a.deposited_direct - a.aov_in_image);
+    assert!(rel(in_image, 3.85 * c) < 0.003, "visible direct flux {in_image} vs {}", 3.85 * c);
+    assert!(rel(a.deposited_direct - a.aov_in_image, 0.15 * c) < 0.02, "hidden flux");
+    assert!(rel(a.deposited_direct, 4.0 * c) < 0.002, "all receivers get E·cos 45° over 4 m²");
+}
+
+#[test]
+fn cache_traces_once_and_keys_on_the_scene_contents() {
+    let dir = std::env::temp_dir().join(format!("caustics-reference-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // A copy of the vertex-above scene (small mesh) and its OBJ, so the test can edit both.
+    let scenes = dir.join("scenes");
+    let meshes = dir.join("meshes");
+    std::fs::create_dir_all(&scenes).unwrap();
+    std::fs::create_dir_all(&meshes).unwrap();
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/meshes/icosahedron_vertex_up.obj");
+    std::fs::copy(&mesh, meshes.join("icosahedron_vertex_up.obj")).unwrap();
+    let scene = scenes.join("v.toml");
+    std::fs::copy(scene_path("vertex_above.toml"), &scene).unwrap();
+    let cache = dir.join("cache");
+    let p = params(5_000, 1, Aov::Caustics, Paths::All, 32);
+
+    let key = caustics::reference::cache_key(&scene, &p).unwrap();
+    let first = caustics::reference::cached_in(&cache, &scene, &p).unwrap();
+    let exr = cache.join(format!("{key}.exr"));
+    assert!(exr.is_file() && cache.join(format!("{key}.json")).is_file());
+    // A second call reads the entry: make it recognizable and check that it comes back.
+    let mut marked = first.clone();
+    marked.data[0] = [123.0; 3];
+    caustics::image_io::write_exr(&exr, &marked).unwrap();
+    assert_eq!(caustics::reference::cached_in(&cache, &scene, &p).unwrap().data[0], [123.0; 3]);
+    // The key follows the parameters, the scene text and the mesh file's contents.
+    assert_ne!(key, caustics::reference::cache_key(&scene, &RefParams { seed: 2, ..p.clone() }).unwrap());
+    assert_ne!(
+        key,
+        caustics::reference::cache_key(&scene, &RefParams { paths: Paths::TwoRefractions, ..p.clone() }).unwrap()
+    );
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, text.replace("ior = 1.5", "ior = 1.6")).unwrap();
+    let key2 = caustics::reference::cache_key(&scene, &p).unwrap();
+    assert_ne!(key, key2);
+    let obj = std::fs::read_to_string(meshes.join("icosahedron_vertex_up.obj")).unwrap();
+    std::fs::write(meshes.join("icosahedron_vertex_up.obj"), obj + "# edited\n").unwrap();
+    assert_ne!(key2, caustics::reference::cache_key(&scene, &p).unwrap());
+    // Traced again after the change: not the marked image.
+    assert_ne!(caustics::reference::cached_in(&cache, &scene, &p).unwrap().data[0], [123.0; 3]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
