@@ -98,6 +98,50 @@ pub fn plot_series(rows: &[BenchRow]) -> Vec<(String, Vec<(f64, f64)>)> {
     series
 }
 
+/// Tableau-10: distinguishable on white, cycled when there are more series.
+const COLORS: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+];
+
+/// An axis label with three significant digits and no trailing zeros.
+fn short(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// Axis key points 1, 2, 5 × 10^k inside `r`, so a log axis is labelled within a decade too.
+fn key_points(r: &std::ops::Range<f64>) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut k = r.start.log10().floor() as i32;
+    while 10f64.powi(k) <= r.end {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * 10f64.powi(k);
+            if r.contains(&v) {
+                out.push(v);
+            }
+        }
+        k += 1;
+    }
+    out
+}
+
 fn log_range(values: impl Iterator<Item = f64>, default: (f64, f64)) -> std::ops::Range<f64> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values {
@@ -138,16 +182,20 @@ pub fn svg_string(rows: &[BenchRow]) -> Result<String, Box<dyn std::error::Error
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(72)
-            .build_cartesian_2d(xr.log_scale(), yr.log_scale())?;
+            .build_cartesian_2d(
+                xr.clone().log_scale().with_key_points(key_points(&xr)),
+                yr.clone().log_scale().with_key_points(key_points(&yr)),
+            )?;
         chart
             .configure_mesh()
             .x_desc("GPU ms per frame (median)")
             .y_desc("rel-L1 at 64² vs reference")
-            .x_label_formatter(&|v| format!("{v:.3}"))
-            .y_label_formatter(&|v| format!("{v:.4}"))
+            .x_label_formatter(&|v| short(*v))
+            .y_label_formatter(&|v| short(*v))
             .draw()?;
         for (i, (name, pts)) in series.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
+            let (r, g, b) = COLORS[i % COLORS.len()];
+            let color = RGBColor(r, g, b).to_rgba();
             chart
                 .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))?
                 .label(name.as_str())
@@ -236,6 +284,21 @@ mod tests {
         assert_eq!(names, ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level"]);
         assert_eq!(s[0].1, vec![(5.0, 0.2), (40.0, 0.05)]);
         assert_eq!(s[2].1.len(), 1, "the NaN row is left out");
+    }
+
+    #[test]
+    fn key_points_are_one_two_five() {
+        assert_eq!(key_points(&(0.015..0.25)), vec![0.02, 0.05, 0.1, 0.2]);
+        assert_eq!(key_points(&(3.0..60.0)), vec![5.0, 10.0, 20.0, 50.0]);
+    }
+
+    #[test]
+    fn axis_labels_are_short() {
+        assert_eq!(short(10.0), "10");
+        assert_eq!(short(0.05), "0.05");
+        assert_eq!(short(0.12345), "0.123");
+        assert_eq!(short(1234.6), "1235");
+        assert_eq!(short(2.5), "2.5");
     }
 
     #[test]
