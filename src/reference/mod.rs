@@ -557,11 +557,6 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
     Ok(RefOutput { image, stats, radial: reduced.radial })
 }
 
-/// The scene used when `--scene` is not given.
-pub fn default_scene() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml")
-}
-
 /// `caustics reference` arguments.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ReferenceArgs {
@@ -655,7 +650,7 @@ pub fn run(args: &ReferenceArgs) -> AppResult<()> {
     if let Some(s) = &args.stats {
         check_output(s, "--stats", "json")?;
     }
-    let scene_path = args.scene.clone().unwrap_or_else(default_scene);
+    let scene_path = args.scene.clone().unwrap_or_else(crate::commands::default_scene);
     let scene = Scene::load(&scene_path)?;
     let out = trace(&scene, &params)?;
     image_io::write_exr(&args.out, &out.image)?;
