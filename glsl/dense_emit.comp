@@ -35,6 +35,7 @@ void main() {
                 photons[state.capacity - 1u - i] = pack_cell(level, xy.x, xy.y, 0u);
                 atomicAdd(s_emitted, 1u);
             } else {
+                atomicAdd(state.used, 0u - 1u);
                 atomicAdd(state.overflow_dropped, 1u);
             }
         } else {

@@ -31,7 +31,7 @@ void main() {
     }
     v_flux = h.flux;
     v_splat = vec3(h.map_px, float(r));
-    if (pc.debug != 0u) {
+    if (pc.debug != 0u && level >= pc.debug_min_level) {
         uint i = atomicAdd(debug_header.x, 1u);
         if (i < debug_header.y) {
             vec2 uv = cell_center_uv(level, xy);

@@ -26,6 +26,9 @@ bool reserve(uint k) {
     if (state.batching != 0u) {
         atomicExchange(state.aborted, 1u);
     } else {
+        // Give the entries back so that smaller requests (single photons) can still fit; meanwhile a concurrent
+        // request may fail spuriously, which only drops (and counts) more work.
+        atomicAdd(state.used, 0u - k);
         atomicAdd(state.overflow_dropped, k);
     }
     return false;
@@ -38,18 +41,31 @@ void emit(uvec2 cell) {
     atomicAdd(s_emitted, 1u);
 }
 
-// Max-error metric: do the four children converge in the caustic map? Returns the splat radius (texels) or 0.
-uint converged_radius(uint level, uvec2 xy) {
+const uint CHILDREN_REFINE = 0xFFFFFFFFu;
+const uint CHILDREN_DROP = 0xFFFFFFFEu;
+
+// Max-error metric: trace the cell's four children. Returns the splat radius (texels) of the converged cluster,
+// CHILDREN_DROP when all four fail the same way (all escape the receivers, all meet total internal reflection, ...:
+// the cluster carries nothing to a receiver, so refining it would only multiply photons that get discarded), or
+// CHILDREN_REFINE.
+uint children_verdict(uint level, uvec2 xy) {
     vec2 p[4];
+    uint status[4];
+    bool all_ok = true;
     for (uint k = 0u; k < 4u; k++) {
         Hit h = trace_cell(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1));
-        if (h.status != HIT_OK) return 0u;
+        status[k] = h.status;
+        all_ok = all_ok && h.status == HIT_OK;
         p[k] = h.map_px;
+    }
+    if (!all_ok) {
+        bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
+        return same ? CHILDREN_DROP : CHILDREN_REFINE;
     }
     float spread = 0.0;
     for (uint a = 0u; a < 4u; a++)
         for (uint b = a + 1u; b < 4u; b++) spread = max(spread, distance(p[a], p[b]));
-    if (spread > u_frame.params.x) return 0u;
+    if (spread > u_frame.params.x) return CHILDREN_REFINE;
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
@@ -77,8 +93,12 @@ void process(uint level, uvec2 cell) {
     if (max_error && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
         // Only fully covered cells inside the cone may converge: then the cluster's flux I*Omega(cell) equals the
         // sum over the leaves that max-level traversal would have emitted.
-        uint r = converged_radius(level, xy);
-        if (r > 0u) {
+        uint r = children_verdict(level, xy);
+        if (r == CHILDREN_DROP) {
+            atomicAdd(s_dropped, 1u);
+            return;
+        }
+        if (r != CHILDREN_REFINE) {
             emit(pack_cell(level, xy.x, xy.y, r));
             return;
         }

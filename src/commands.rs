@@ -75,6 +75,9 @@ pub struct MethodArgs {
     /// Testing: dump up to N splatted photons into the stats JSON.
     #[arg(long, hide = true, default_value_t = 0)]
     pub debug_photons: u32,
+    /// Testing: dump only photons of this level or deeper.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub debug_min_level: u32,
 }
 
 impl MethodArgs {
@@ -93,6 +96,7 @@ impl MethodArgs {
             batching: !self.no_batching,
             batch_slots: self.batch_slots,
             debug_photons: self.debug_photons,
+            debug_min_level: self.debug_min_level,
             ..Settings::default()
         };
         s.validate()?;
@@ -291,6 +295,10 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "frame_ms": stage("frame_wall"),
         "cpu_record_ms": stage("cpu_record"),
         "frames": frames.len(),
+        "photon_view": last.photon_view.map(|v| json!({
+            "origin": v.origin.to_array(), "right": v.right.to_array(), "down": v.down.to_array(),
+            "forward": v.forward.to_array(), "window": [v.window.x0, v.window.y0, v.window.w],
+        })),
     });
     if let (Value::Object(m), Value::Object(e)) = (&mut v, extra) {
         m.extend(e);
@@ -333,9 +341,8 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
             image_io::write_exr(&args.out, &rgb)?;
         }
     }
-    if let Some(n) = reports.last().map(|r| r.debug_rows.len()).filter(|&n| n > 0) {
-        let last = reports.last().expect("a frame");
-        extra.insert("debug_photons".into(), debug_photons_json(&last.debug_rows, n));
+    if let Some(last) = reports.last().filter(|r| r.guard_intact.is_some()) {
+        extra.insert("debug_photons".into(), debug_photons_json(&last.debug_rows, last.debug_rows.len()));
         extra.insert("photon_guard_intact".into(), json!(last.guard_intact));
     }
     let stats = stats_json(&session, &reports, Value::Object(extra));
@@ -378,7 +385,8 @@ fn debug_photons_json(rows: &[[u32; 4]], n: usize) -> Value {
         .map(|r| {
             json!({
                 "x": r[0][0], "y": r[0][1], "level": r[0][2] & 0xFF, "status": (r[0][2] >> 8) & 0xFF, "radius": r[0][2] >> 16,
-                "flux_r": f(r[0][3]), "uv": [f(r[1][0]), f(r[1][1])], "map_px": [f(r[1][2]), f(r[1][3])],
+                "flux_r": f(r[0][3]), "uv": [f(r[1][0]), f(r[1][1])], "uv_bits": [r[1][0], r[1][1]],
+                "map_px": [f(r[1][2]), f(r[1][3])],
                 "hit": [f(r[2][0]), f(r[2][1]), f(r[2][2])],
             })
         })

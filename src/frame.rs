@@ -131,6 +131,7 @@ impl Renderer {
             mark: Instant::now(),
         };
         rec.report.caustics = views.photon.is_some();
+        rec.report.photon_view = views.photon;
         rec.ts.reset(rec.cmd);
         ctx.light_gbuffers(&mut rec);
         if rec.report.caustics {
@@ -166,6 +167,11 @@ impl Ctx<'_> {
         let mut b = Barriers::new();
         f(&mut b);
         b.flush(self.d, cmd);
+    }
+
+    /// The splat's debug dump: off, or from which level.
+    fn debug(&self) -> Option<u32> {
+        (self.s.debug_photons > 0).then_some(self.s.debug_min_level)
     }
 
     fn bindings(&self) -> PhotonBindings<'_> {
@@ -366,7 +372,7 @@ impl Ctx<'_> {
             ph.stats(cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
             self.before_splat(cmd);
             rec.ts.mark(cmd, "splat");
-            ph.splat(cmd, &b, &self.t.receiver.flux, band == 0, self.s.debug_photons > 0);
+            ph.splat(cmd, &b, &self.t.receiver.flux, band == 0, self.debug());
             if band + 1 < bands {
                 self.after_splat(cmd);
             }
@@ -398,7 +404,7 @@ impl Ctx<'_> {
             }
             self.before_splat(cmd);
             rec.ts.mark(cmd, "splat");
-            ph.splat(cmd, &b, &self.t.receiver.flux, slot == 0, self.s.debug_photons > 0);
+            ph.splat(cmd, &b, &self.t.receiver.flux, slot == 0, self.debug());
             if slot + 1 < slots {
                 self.after_splat(cmd);
             }
@@ -471,7 +477,7 @@ impl Ctx<'_> {
             let cmd = rec.cmd;
             self.before_splat(cmd);
             rec.ts.mark(cmd, "splat");
-            ph.splat(cmd, &b, &self.t.receiver.flux, first, self.s.debug_photons > 0);
+            ph.splat(cmd, &b, &self.t.receiver.flux, first, self.debug());
             self.after_splat(cmd);
             first = false;
         }

@@ -135,7 +135,8 @@ pub struct PhotonPush {
     pub row0: u32,
     pub debug: u32,
     pub rows: u32,
-    pub pad: [u32; 2],
+    pub debug_min_level: u32,
+    pub pad: u32,
 }
 
 /// Push constants of geometry.vert/.frag.

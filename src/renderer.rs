@@ -96,6 +96,8 @@ pub struct FrameReport {
     pub record_ms: f64,
     /// Whether the caustic passes were recorded (the scene has a refractor inside the light).
     pub caustics: bool,
+    /// The light view of the photon grid (None without caustic passes).
+    pub photon_view: Option<LightView>,
     pub state: Option<TraversalState>,
     pub host_readbacks: u32,
     /// Batch slots recorded (GPU-driven adaptive) or bands (dense).
@@ -128,6 +130,13 @@ pub struct Renderer {
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // Nothing the GPU may still use is destroyed before it is done (an error can leave a submit in flight).
+        let _ = self.device.wait_idle();
+    }
 }
 
 impl Renderer {

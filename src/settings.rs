@@ -55,8 +55,10 @@ pub struct Settings {
     pub batch_slots: u32,
     /// Shadow-map bias, in shadow-map texels.
     pub shadow_bias: f32,
-    /// Dump up to this many splatted photons for tests (0: off).
+    /// Dump up to this many splatted photons for tests (0: off)...
     pub debug_photons: u32,
+    /// ...of this level or deeper.
+    pub debug_min_level: u32,
 }
 
 impl Default for Settings {
@@ -76,9 +78,13 @@ impl Default for Settings {
             batch_slots: 0,
             shadow_bias: 1.5,
             debug_photons: 0,
+            debug_min_level: 0,
         }
     }
 }
+
+/// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
+pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
 
 pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
 
@@ -112,15 +118,20 @@ impl Settings {
         if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
             return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));
         }
+        if self.debug_photons > MAX_DEBUG_PHOTONS {
+            return bad(format!("--debug-photons {}: at most {MAX_DEBUG_PHOTONS}", self.debug_photons));
+        }
         if self.batch_slots > MAX_BATCHES {
             return bad(format!("--batch-slots {}: at most {MAX_BATCHES}", self.batch_slots));
         }
         Ok(())
     }
 
-    /// Photon-buffer entries (8 bytes each).
+    /// Photon-buffer entries (8 bytes each). The buffer also holds a guard after them, and the whole binding must
+    /// stay within 128 MiB (lavapipe's maxStorageBufferRange), so a 128 MiB budget loses the guard's 8 KiB.
     pub fn photon_capacity(&self) -> u32 {
-        ((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32
+        let max = (128 * 1024 * 1024 / 8) - crate::targets::PHOTON_GUARD;
+        (((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
     }
 
     /// log2(gbuffer_res / 64).

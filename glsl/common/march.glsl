@@ -65,7 +65,7 @@ float back_gap(View v, sampler2D back, vec3 p, out vec3 n) {
 
 // The exit point on the back surface along p1 + t*dir (p1 on the front surface), by a bracketed secant search:
 // bracket the first sign change of back_gap with steps extrapolated from its slope (each at most 3x the last,
-// so a thin part is not jumped over carelessly), then Illinois regula falsi to a residual of 1e-5 diameters
+// so a thin part is not jumped over carelessly), then Illinois regula falsi to a residual of 1e-5 times the thickness
 // (bisection while an end lies outside the silhouette). At most 20 + 12 samples; typically 4-6. The exit normal is the back
 // normal there.
 bool find_exit(View v, sampler2D back, float diameter, vec3 p1, vec3 dir, out vec3 p2, out vec3 n2) {
@@ -94,8 +94,9 @@ bool find_exit(View v, sampler2D back, float diameter, vec3 p1, vec3 dir, out ve
         if (a > 2.0 * diameter) return false;
     }
     if (c < 0.0) return false;
-    // Illinois: regula falsi that halves a stale end's value, so the bracket shrinks from both sides.
-    float tol = 1e-5 * diameter;
+    // Illinois: regula falsi that halves a stale end's value, so the bracket shrinks from both sides. The
+    // tolerance follows the local thickness, so thin refractors in large scenes are resolved as finely.
+    float tol = 1e-5 * max(f0, diameter / 1024.0);
     float t = -1.0;
     int side = 0;
     for (int i = 0; i < 12 && t < 0.0; i++) {

@@ -8,7 +8,7 @@ layout(push_constant) uniform PhotonPush {
     uint row0;       // dense emit: first row of this band
     uint debug;      // splat: 1 = dump photons into the debug buffer
     uint rows;       // dense emit: rows in this band
-    uint pad1;
+    uint debug_min_level;  // splat: dump only photons at this level or deeper
     uint pad2;
 } pc;
 #endif

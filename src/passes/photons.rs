@@ -160,10 +160,13 @@ impl PhotonPasses {
     }
 
     /// Splat the emitted photons into the caustic flux map with vkCmdDrawIndirect.
-    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool, debug: bool) {
+    /// `debug`: dump splatted photons of level `debug.1` or deeper into the debug buffer.
+    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool, debug: Option<u32>) {
         begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
         self.splat.bind(cmd, &b.binds());
-        self.splat.push(cmd, &PhotonPush { debug: debug as u32, ..Default::default() });
+        let push =
+            PhotonPush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0), ..Default::default() };
+        self.splat.push(cmd, &push);
         unsafe {
             self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16);
             self.device.cmd_end_rendering(cmd);

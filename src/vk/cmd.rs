@@ -6,6 +6,10 @@ use super::error::{Check, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
+/// How long one submission may run before it is reported as hung. Lavapipe at deep traversal levels can take
+/// minutes for a frame, so this is generous.
+pub const FENCE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(600);
+
 /// Semaphores for a submission.
 #[derive(Default, Clone)]
 pub struct SubmitSync {
@@ -95,11 +99,20 @@ impl Recorder {
         Ok(())
     }
 
-    /// Wait for the last submit. A device loss is reported, never waited on forever.
+    /// Wait for the last submit. A device loss is reported; a submit that runs past `FENCE_TIMEOUT` is reported
+    /// as an error rather than waited on forever.
     pub fn wait(&mut self) -> VkResult<()> {
         if self.pending {
-            unsafe { self.device.wait_for_fences(&[self.fence], true, 60_000_000_000) }.check("vkWaitForFences")?;
-            self.pending = false;
+            match unsafe { self.device.wait_for_fences(&[self.fence], true, FENCE_TIMEOUT.as_nanos() as u64) } {
+                Ok(()) => self.pending = false,
+                Err(vk::Result::TIMEOUT) => {
+                    return Err(super::VkError::Unsupported(format!(
+                    "the GPU did not finish a submission within {} s (hung device, or a workload far too large for it)",
+                    FENCE_TIMEOUT.as_secs()
+                )))
+                }
+                Err(e) => return Err(e).check("vkWaitForFences"),
+            }
         }
         Ok(())
     }
@@ -114,7 +127,7 @@ impl Drop for Recorder {
     fn drop(&mut self) {
         unsafe {
             if self.pending {
-                let _ = self.device.wait_for_fences(&[self.fence], true, 10_000_000_000);
+                let _ = self.device.wait_for_fences(&[self.fence], true, FENCE_TIMEOUT.as_nanos() as u64);
             }
             self.device.destroy_fence(self.fence, None);
             self.device.destroy_command_pool(self.pool, None);
