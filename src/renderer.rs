@@ -167,6 +167,24 @@ impl Renderer {
         })
     }
 
+    /// Replace the scene (after moving the light, changing an IOR, ...): re-uploads its triangles when they
+    /// changed. Lights and cameras are read every frame, so changing only them is free.
+    pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
+        if scene.lights.len() != 1 {
+            return Err(AppError::BadInput("this renderer handles exactly one [[light]]".into()));
+        }
+        let same_geometry = scene.objects.len() == self.scene.objects.len()
+            && scene.objects.iter().zip(&self.scene.objects).all(|(a, b)| {
+                a.material == b.material && a.mesh.positions == b.mesh.positions && a.mesh.indices == b.mesh.indices
+            });
+        if !same_geometry {
+            self.device.wait_idle()?;
+            self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &scene)?;
+        }
+        self.scene = scene;
+        Ok(())
+    }
+
     pub fn camera_view(&self, camera: &Camera, width: u32, height: u32) -> CameraView {
         CameraView::new(camera, width, height, self.scene.bounds())
     }
