@@ -32,7 +32,24 @@ fn run(cli: Cli) -> AppResult<()> {
     }
 }
 
+/// Rust ignores SIGPIPE, so printing into a closed pipe (`caustics profile | head`) would panic. Restore the
+/// default action: the process ends quietly, like any Unix filter.
+#[cfg(unix)]
+fn restore_sigpipe() {
+    extern "C" {
+        fn signal(signum: i32, handler: usize) -> usize;
+    }
+    const SIGPIPE: i32 = 13;
+    const SIG_DFL: usize = 0;
+    // SAFETY: setting a signal disposition to its default at startup, before any thread exists.
+    unsafe {
+        signal(SIGPIPE, SIG_DFL);
+    }
+}
+
 fn main() {
+    #[cfg(unix)]
+    restore_sigpipe();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).format_timestamp(None).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
