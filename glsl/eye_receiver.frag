@@ -65,17 +65,29 @@ void main() {
             e_direct = u_frame.light_power.rgb * cos_s / d2 * lit_fraction(lv, p, n);
         }
     }
-    // Caustics, from the light-space map.
+    // Caustics, from the light-space map: the average of the irradiance over the pixel's footprint on the map
+    // (up to 8x8 bilinear taps spread along the screen-space derivatives), so that a caustic sharper than a pixel
+    // keeps its flux: Σ E · pixel area stays the flux that landed under the pixel.
     vec3 e_caustic = vec3(0.0);
     {
         vec2 uv = view_uv(lv, p);
+        vec2 dx = dFdx(uv), dy = dFdy(uv);
         if (uv_inside_strict(uv)) {
             ivec2 size = textureSize(t_recv, 0);
             vec4 r = texelFetch(t_recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1), 0);
             float d = view_dist(lv, p);
             float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
             if (r.w > 0.0 && abs(r.w - d) < 4.0 * texel + 1e-3 * d) {
-                e_caustic = texture(t_irradiance, uv).rgb;
+                vec2 fx = dx * vec2(size), fy = dy * vec2(size);
+                int nx = int(clamp(ceil(length(fx)), 1.0, 8.0));
+                int ny = int(clamp(ceil(length(fy)), 1.0, 8.0));
+                for (int j = 0; j < ny; j++) {
+                    for (int i = 0; i < nx; i++) {
+                        vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
+                        e_caustic += textureLod(t_irradiance, uv + o.x * dx + o.y * dy, 0.0).rgb;
+                    }
+                }
+                e_caustic /= float(nx * ny);
             }
         }
     }

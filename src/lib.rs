@@ -1,4 +1,5 @@
 //! caustics: real-time refractive caustics with adaptive caustic maps on Vulkan.
+pub mod bench;
 pub mod bench_report;
 pub mod commands;
 pub mod error;

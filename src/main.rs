@@ -19,6 +19,8 @@ enum Command {
     Profile(caustics::commands::ProfileArgs),
     /// Exact CPU photon tracer: ground truth for orthographic cameras.
     Reference(caustics::reference::ReferenceArgs),
+    /// Speed against error: sweep methods and levels, time them, score them against the CPU reference.
+    Bench(caustics::bench::BenchArgs),
     /// Compare two EXR images with the project's error metric.
     Compare(caustics::metrics::CompareArgs),
 }
@@ -28,6 +30,7 @@ fn run(cli: Cli) -> AppResult<()> {
         Command::Render(a) => caustics::commands::run_render(&a),
         Command::Profile(a) => caustics::commands::run_profile(&a),
         Command::Reference(a) => caustics::reference::run(&a),
+        Command::Bench(a) => caustics::bench::run_bench(&a),
         Command::Compare(a) => caustics::metrics::run_compare(&a),
     }
 }

@@ -1,0 +1,340 @@
+//! `caustics bench`: speed against error. For each scene it sweeps the methods (dense, adaptive max-level,
+//! adaptive max-error) over levels, optionally the driven mode and the traversal work-group size, times K
+//! frames of each point (median GPU ms from timestamp queries, median wall ms), and scores the last frame's
+//! caustics AOV against CPU references (src/reference, cached on disk) with the project's metric.
+
+use crate::bench_report::{self, BenchRow};
+use crate::commands::{to_rgb, SceneArgs, Session};
+use crate::error::{AppError, AppResult};
+use crate::image_io::{self, RgbImage};
+use crate::metrics;
+use crate::profiler::Summary;
+use crate::reference::{self, Paths, RefParams};
+use crate::renderer::{Aov, FrameReport};
+use crate::settings::{Driven, Method, Metric, Settings, TRAVERSE_WG_SWEEP};
+use crate::shaders::consts::*;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Scene files (repeat the flag for several; default: the sphere scene).
+    #[arg(long = "scene")]
+    pub scenes: Vec<PathBuf>,
+    /// Orthographic camera the AOV and the reference are binned into.
+    #[arg(long, default_value = "top")]
+    pub camera: String,
+    /// AOV size (the finest comparison resolution is 256²).
+    #[arg(long, default_value = "256x256")]
+    pub size: String,
+    /// Methods: dense, max-level, max-error (comma-separated).
+    #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Levels (comma-separated or a range like 2-6): 64·2^level cells per side.
+    #[arg(long, default_value = "2-5")]
+    pub levels: String,
+    /// Driven modes for adaptive: gpu, cpu (comma-separated).
+    #[arg(long, default_value = "gpu", value_delimiter = ',')]
+    pub driven: Vec<String>,
+    /// Traversal work-group sides for adaptive (comma-separated, from 1, 2, 4, 8, 16).
+    #[arg(long, default_value = "8", value_delimiter = ',')]
+    pub traverse_wg: Vec<u32>,
+    /// Timed frames per point (after one untimed warm-up frame).
+    #[arg(long, default_value_t = 3)]
+    pub frames: u32,
+    /// Skip the remaining levels of a method once one frame takes longer than this (seconds).
+    #[arg(long, default_value_t = 20.0)]
+    pub max_frame_s: f64,
+    /// Reference photons per light.
+    #[arg(long, default_value_t = 32_000_000)]
+    pub reference_photons: u64,
+    /// Which reference the main error columns use: `two-refractions` (what a two-interface method models: its
+    /// approximation error) or `all` (every path: ground truth). The other one goes into `extra`.
+    #[arg(long, default_value = "two-refractions")]
+    pub paths: String,
+    /// Skip the references (timings and photon counts only).
+    #[arg(long)]
+    pub no_reference: bool,
+    /// Caustic map and refractor g-buffer resolutions.
+    #[arg(long, default_value_t = 1024)]
+    pub caustic_res: u32,
+    #[arg(long, default_value_t = 1024)]
+    pub gbuffer_res: u32,
+    /// Max-error bound (caustic-map texels).
+    #[arg(long, default_value_t = 1.0)]
+    pub error_bound: f32,
+    /// Photon budget (MiB).
+    #[arg(long, default_value_t = 64.0)]
+    pub photon_budget: f64,
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+fn parse_levels(s: &str) -> AppResult<Vec<u32>> {
+    let bad = || AppError::BadInput(format!("--levels `{s}`: expected a list like 2,3,4 or a range like 2-6"));
+    let mut out = Vec::new();
+    for part in s.split(',') {
+        if let Some((a, b)) = part.split_once('-') {
+            let (a, b): (u32, u32) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
+            if a > b {
+                return Err(bad());
+            }
+            out.extend(a..=b);
+        } else {
+            out.push(part.trim().parse().map_err(|_| bad())?);
+        }
+    }
+    if out.is_empty() || out.iter().any(|&l| l >= MAX_LEVELS) {
+        return Err(bad());
+    }
+    Ok(out)
+}
+
+/// One configuration to time.
+#[derive(Clone, Debug)]
+struct Point {
+    method: Method,
+    metric: Metric,
+    driven: Driven,
+    wg: u32,
+}
+
+impl Point {
+    fn key(&self) -> String {
+        match self.method {
+            Method::Dense => "dense".into(),
+            Method::Adaptive => format!(
+                "{} {}-driven wg{}",
+                match self.metric {
+                    Metric::MaxLevel => "max-level",
+                    Metric::MaxError => "max-error",
+                },
+                if self.driven == Driven::Gpu { "gpu" } else { "cpu" },
+                self.wg
+            ),
+        }
+    }
+}
+
+fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
+    let mut out = Vec::new();
+    let driven: Vec<Driven> = args
+        .driven
+        .iter()
+        .map(|d| match d.as_str() {
+            "gpu" => Ok(Driven::Gpu),
+            "cpu" => Ok(Driven::Cpu),
+            _ => Err(AppError::BadInput(format!("--driven `{d}`: expected gpu or cpu"))),
+        })
+        .collect::<AppResult<_>>()?;
+    for wg in &args.traverse_wg {
+        if !TRAVERSE_WG_SWEEP.contains(wg) {
+            return Err(AppError::BadInput(format!("--traverse-wg {wg}: must be one of 1, 2, 4, 8, 16")));
+        }
+    }
+    for m in &args.methods {
+        let metric = match m.as_str() {
+            "dense" => {
+                out.push(Point {
+                    method: Method::Dense,
+                    metric: Metric::MaxLevel,
+                    driven: Driven::Gpu,
+                    wg: TRAVERSE_WG,
+                });
+                continue;
+            }
+            "max-level" => Metric::MaxLevel,
+            "max-error" => Metric::MaxError,
+            _ => return Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level or max-error"))),
+        };
+        for d in &driven {
+            for wg in &args.traverse_wg {
+                out.push(Point { method: Method::Adaptive, metric, driven: *d, wg: *wg });
+            }
+        }
+    }
+    Ok(out)
+}
+
+struct References {
+    main: Option<RgbImage>,
+    other: Option<RgbImage>,
+}
+
+fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32) -> AppResult<References> {
+    if args.no_reference {
+        return Ok(References { main: None, other: None });
+    }
+    let (main, other) = match args.paths.as_str() {
+        "two-refractions" => (Paths::TwoRefractions, Paths::All),
+        "all" => (Paths::All, Paths::TwoRefractions),
+        p => return Err(AppError::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
+    };
+    let make = |paths| {
+        let p = RefParams {
+            camera: Some(args.camera.clone()),
+            paths,
+            photons: args.reference_photons,
+            width,
+            height,
+            progress: true,
+            ..RefParams::default()
+        };
+        let t = Instant::now();
+        let img = reference::cached(scene, &p)?;
+        eprintln!("reference {:?} for {}: ready in {:.1} s", paths, scene.display(), t.elapsed().as_secs_f64());
+        Ok::<_, AppError>(img)
+    };
+    Ok(References { main: Some(make(main)?), other: Some(make(other)?) })
+}
+
+fn median_of(frames: &[FrameReport], f: impl Fn(&FrameReport) -> f64) -> f64 {
+    Summary::of(&frames.iter().map(f).collect::<Vec<_>>()).median
+}
+
+fn stage_median(frames: &[FrameReport], prefix: &str) -> f64 {
+    median_of(frames, |f| f.stages.iter().filter(|(l, _)| l.starts_with(prefix)).map(|(_, ms)| ms).sum())
+}
+
+pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
+    let levels = parse_levels(&args.levels)?;
+    let pts = points(args)?;
+    for p in [&args.json, &args.markdown, &args.plot].into_iter().flatten() {
+        if let Some(d) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if !d.is_dir() {
+                return Err(AppError::BadInput(format!("{}: output directory does not exist", p.display())));
+            }
+        }
+    }
+    let scenes = if args.scenes.is_empty() { vec![crate::commands::default_scene()] } else { args.scenes.clone() };
+    let mut rows: Vec<BenchRow> = Vec::new();
+    let mut device = String::new();
+    for scene_path in &scenes {
+        let scene_args =
+            SceneArgs { scene: Some(scene_path.clone()), camera: Some(args.camera.clone()), size: args.size.clone() };
+        let base = Settings {
+            caustic_res: args.caustic_res,
+            gbuffer_res: args.gbuffer_res,
+            error_bound: args.error_bound,
+            photon_budget_mib: args.photon_budget,
+            ..Settings::default()
+        };
+        let mut session = Session::open(&scene_args, base.clone())?;
+        device = format!("{} ({})", session.device().info.name, session.device().info.driver);
+        let refs = references(args, scene_path, session.width, session.height)?;
+        let name = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        for p in &pts {
+            for &level in &levels {
+                if p.method == Method::Dense && level > 12 {
+                    continue;
+                }
+                let s = Settings {
+                    method: p.method,
+                    metric: p.metric,
+                    level,
+                    driven: p.driven,
+                    traverse_wg: p.wg,
+                    ..base.clone()
+                };
+                session.renderer.set_settings(s)?;
+                let t = Instant::now();
+                session.frame(None)?; // warm-up: lavapipe compiles shaders on first use
+                let warm = t.elapsed().as_secs_f64();
+                let mut frames = Vec::new();
+                let mut image = None;
+                for i in 0..args.frames {
+                    let last = i + 1 == args.frames;
+                    let (r, img) = session.frame(if last { Some(Aov::Caustics) } else { None })?;
+                    frames.push(r);
+                    if last {
+                        image = img.as_ref().and_then(to_rgb);
+                    }
+                }
+                let image = image.ok_or_else(|| AppError::Failed("no caustics image was read back".into()))?;
+                let last = frames.last().expect("frames").clone();
+                let st = last.state.unwrap_or(bytemuck::Zeroable::zeroed());
+                let score = |r: &Option<RgbImage>, res| r.as_ref().map(|r| metrics::compare(&image, r, res, 2.0));
+                let (m64, m256) = (score(&refs.main, 64), score(&refs.main, 256));
+                let (o64, o256) = (score(&refs.other, 64), score(&refs.other, 256));
+                let nan = f64::NAN;
+                let row = BenchRow {
+                    scene: name.clone(),
+                    method: format!("{:?}", p.method).to_lowercase(),
+                    metric: (p.method == Method::Adaptive).then(|| {
+                        if p.metric == Metric::MaxLevel {
+                            "max-level".to_string()
+                        } else {
+                            "max-error".to_string()
+                        }
+                    }),
+                    level,
+                    equivalent_res: LEVEL0_RES << level,
+                    driven: if p.driven == Driven::Gpu { "gpu".into() } else { "cpu".into() },
+                    photons: st.photons_total as u64,
+                    gpu_ms_median: median_of(&frames, |f| f.gpu_ms),
+                    frame_ms_median: median_of(&frames, |f| f.frame_ms),
+                    rel_l1_64: m64.map(|m| m.rel_l1).unwrap_or(nan),
+                    rel_l1_256: m256.map(|m| m.rel_l1).unwrap_or(nan),
+                    flux_ratio: m64.map(|m| m.flux_ratio).unwrap_or(nan),
+                    peak_offset_m: m256.map(|m| m.peak_offset_m).unwrap_or(nan),
+                    extra: json!({
+                        "reference_paths": args.paths,
+                        "other_reference": {
+                            "rel_l1_64": o64.map(|m| m.rel_l1), "rel_l1_256": o256.map(|m| m.rel_l1),
+                            "flux_ratio": o64.map(|m| m.flux_ratio),
+                        },
+                        "traverse_wg": p.wg,
+                        "traverse_ms": stage_median(&frames, "traverse"),
+                        "splat_ms": stage_median(&frames, "splat"),
+                        "stats_ms": stage_median(&frames, "stats"),
+                        "host_roundtrip_ms": stage_median(&frames, crate::frame::HOST_ROUNDTRIP),
+                        "host_readbacks_per_frame": last.host_readbacks,
+                        "batches": st.batches_committed,
+                        "overflow_events": st.batches_aborted,
+                        "photon_buffer_bytes": 8 * st.peak_used as u64,
+                        "warmup_s": warm,
+                    }),
+                };
+                eprintln!(
+                    "{name} {:<28} L{level:<2} {:>10} photons  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {:.4}  256² {:.4}  flux {:.4}",
+                    p.key(),
+                    row.photons,
+                    row.gpu_ms_median,
+                    row.frame_ms_median,
+                    row.rel_l1_64,
+                    row.rel_l1_256,
+                    row.flux_ratio
+                );
+                let slow = row.frame_ms_median > args.max_frame_s * 1e3;
+                rows.push(row);
+                if slow {
+                    eprintln!(
+                        "{name} {}: frames take over {} s; skipping its deeper levels",
+                        p.key(),
+                        args.max_frame_s
+                    );
+                    break;
+                }
+            }
+        }
+        crate::commands::validation_verdict(&session)?;
+    }
+    let doc = json!({"device": device, "args": format!("{args:?}"), "rows": rows});
+    if let Some(p) = &args.json {
+        image_io::write_text(p, &serde_json::to_string_pretty(&doc).unwrap_or_default())?;
+    }
+    let table = bench_report::markdown_table(&rows);
+    if let Some(p) = &args.markdown {
+        image_io::write_text(p, &format!("Device: {device}\n\n{table}"))?;
+    }
+    if let Some(p) = &args.plot {
+        bench_report::svg_plot(&rows, p)?;
+    }
+    println!("{table}");
+    Ok(())
+}
