@@ -1,12 +1,28 @@
 #version 460
-// Coverage pyramid (DESIGN.md step 1): mip 0 marks the refractor front buffer's covered texels; each coarser mip
+// Coverage pyramid (DESIGN.md step 1): mip 0 marks the refractor front buffer's covered texels (those whose
+// surface is in the light: a receiver between the light and the glass shadows it); each coarser mip
 // takes the max (bit 0, "any covered": a conservative test for traversal) and the min (bit 1, "all covered":
 // max-error clusters must be fully covered) of its 2x2 children.
 #include "common/types.glsl"
+#include "common/march.glsl"
 
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 layout(std430, set = 0, binding = 1) buffer CoverageBuf { uint coverage[]; };
 layout(set = 0, binding = 2) uniform sampler2D t_front;
+layout(set = 0, binding = 3) uniform sampler2D t_recv;  // receivers from the light
+
+// Is the refractor surface at this texel in the light, or does a receiver stand between them?
+bool lit(ivec2 p, vec4 front) {
+    View v = u_frame.photon_view;
+    View rv = u_frame.receiver_view;
+    vec2 uv = (vec2(p) + 0.5) / vec2(textureSize(t_front, 0));
+    vec3 ro, rd;
+    view_ray(v, uv, ro, rd);
+    vec3 p1 = ro + rd * front.w;
+    vec2 ruv = view_uv(rv, p1);
+    float d;
+    return !(uv_inside(ruv) && dist_sample(t_recv, ruv, d) && d < view_dist(rv, p1) * (1.0 - 1e-3));
+}
 
 layout(push_constant) uniform Push {
     uint mip;        // mip to build
@@ -22,7 +38,8 @@ void main() {
     if (p.x >= pc.dst_res || p.y >= pc.dst_res) return;
     uint bits;
     if (pc.mip == 0u) {
-        bits = texelFetch(t_front, ivec2(p), 0).w > 0.0 ? 3u : 0u;
+        vec4 front = texelFetch(t_front, ivec2(p), 0);
+        bits = front.w > 0.0 && lit(ivec2(p), front) ? 3u : 0u;
     } else {
         uint src_res = pc.dst_res * 2u;
         uint any = 0u, all = 2u;

@@ -260,6 +260,7 @@ impl Ctx<'_> {
             ubo: &t.ubo,
             coverage: &t.photon.coverage,
             front: &t.light.front,
+            recv: &t.receiver.geo,
             sampler: self.nearest,
             mips,
         };

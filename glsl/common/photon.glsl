@@ -12,7 +12,7 @@
 const uint HIT_OK = 0u;
 const uint HIT_OUTSIDE_CONE = 1u;
 const uint HIT_MISS = 2u;        // the cell's center does not see a refractor
-const uint HIT_BLOCKED = 3u;     // a receiver lies between the light and the refractor
+const uint HIT_BLOCKED = 3u;     // (unused: blocked texels are uncovered in the coverage pyramid)
 const uint HIT_NO_EXIT = 4u;     // no back surface found along the refracted ray
 const uint HIT_TIR = 5u;         // total internal reflection
 const uint HIT_ESCAPED = 6u;     // left the caustic map without meeting a receiver
@@ -39,13 +39,7 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     vec3 ro, rd;
     view_ray_xy(v, xy, ro, rd);
     vec3 p1 = ro + rd * front.w;
-    // A receiver between the light and the refractor shadows it.
-    float rdist;
-    vec2 ruv = view_uv(rv, p1);
-    if (uv_inside(ruv) && dist_sample(t_recv, ruv, rdist) && rdist < view_dist(rv, p1) * (1.0 - 1e-3)) {
-        h.status = HIT_BLOCKED;
-        return h;
-    }
+    // (A receiver between the light and the refractor shadows it: coverage.comp leaves such texels uncovered.)
     ivec2 aux_size = textureSize(t_front_aux, 0);
     float ior = texelFetch(t_front_aux, clamp(ivec2(uv * vec2(aux_size)), ivec2(0), aux_size - 1), 0).x;
     vec3 n1 = dot(front.xyz, rd) > 0.0 ? -front.xyz : front.xyz;

@@ -11,6 +11,7 @@ pub struct CoverageInputs<'a> {
     pub ubo: &'a Buffer,
     pub coverage: &'a Buffer,
     pub front: &'a Image,
+    pub recv: &'a Image,
     pub sampler: &'a Sampler,
     pub mips: u32,
 }
@@ -38,7 +39,7 @@ impl CoveragePass {
             device,
             "coverage",
             shaders::COVERAGE_COMP.words(),
-            &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled],
+            &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled, BindKind::Sampled],
             std::mem::size_of::<CoveragePush>() as u32,
         )?;
         Ok(CoveragePass { device: device.clone(), pipeline })
@@ -48,7 +49,13 @@ impl CoveragePass {
     pub fn record(&self, cmd: vk::CommandBuffer, i: &CoverageInputs) {
         let (gbuffer_res, mips, coverage) = (i.front.extent.width, i.mips, i.coverage);
         let (offsets, _) = pyramid_layout(gbuffer_res, mips);
-        self.pipeline.bind(cmd, &[Bind::Uniform(i.ubo), Bind::Storage(coverage), Bind::Sampled(i.front, i.sampler)]);
+        let binds = [
+            Bind::Uniform(i.ubo),
+            Bind::Storage(coverage),
+            Bind::Sampled(i.front, i.sampler),
+            Bind::Sampled(i.recv, i.sampler),
+        ];
+        self.pipeline.bind(cmd, &binds);
         for m in 0..mips {
             if m > 0 {
                 Barriers::new()
