@@ -34,7 +34,7 @@ void main() {
                 state.stack_size = 1u;
             }
             for (uint l = 0u; l < MAX_LEVELS; l++) dispatch_cmd[l] = uvec4(0u, 0u, 1u, 0u);
-            draw_cmd = uvec4(0u, 1u, state.capacity, 0u);
+            set_emitted(0u, state.capacity);
         }
         return;
     }
@@ -47,7 +47,7 @@ void main() {
             state.batch_levels[l] = LevelCounters(0u, 0u, 0u, 0u);
             dispatch_cmd[l] = uvec4(0u, 0u, 1u, 0u);
         }
-        draw_cmd = uvec4(0u, 1u, state.capacity, 0u);
+        set_emitted(0u, state.capacity);
         if (state.stack_size == 0u) {
             s_tile = ivec4(0, 0, 0, -1);
             s_count = 0u;

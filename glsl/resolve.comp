@@ -1,5 +1,5 @@
 #version 460
-// Caustic irradiance: each caustic-map texel holds flux (W); divide by the receiver area the texel covers,
+// Caustic irradiance: each caustic-map texel holds flux (W, for a white light); divide by the receiver area the texel covers,
 // A = Omega * d^2 / |cos| (spot) or side^2 / |cos| (directional), to get W/m^2.
 #include "common/types.glsl"
 #include "common/view.glsl"
@@ -27,7 +27,9 @@ void main() {
         float side = v.window.z * v.extent.z;
         float area = view_cell_measure(v, xy, side) / cos_t;
         if (!view_is_ortho(v)) area *= r.w * r.w;
-        e = texelFetch(t_flux, p, 0).rgb / area;
+        // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
+        vec3 tint = u_frame.light_power.w > 0.0 ? u_frame.light_power.rgb / u_frame.light_power.w : vec3(0.0);
+        e = texelFetch(t_flux, p, 0).r * tint / area;
     }
     imageStore(o_irradiance, p, vec4(e, 0.0));
 }

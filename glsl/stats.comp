@@ -19,7 +19,7 @@ uvec4 groups_for(uint n) {
 void commit() {
     bool split = state.aborted != 0u && state.batching != 0u;
     if (state.start_level >= MAX_LEVELS) {
-        draw_cmd = uvec4(0u, 1u, state.capacity, 0u);
+        set_emitted(0u, state.capacity);
         return;
     }
     if (split) {
@@ -39,7 +39,7 @@ void commit() {
         } else {
             state.overflow_dropped += 1u;
         }
-        draw_cmd = uvec4(0u, 1u, state.capacity, 0u);
+        set_emitted(0u, state.capacity);
         return;
     }
     for (uint l = 0u; l < MAX_LEVELS; l++) {
@@ -52,7 +52,7 @@ void commit() {
     uint n = min(state.emit_count, state.capacity);
     state.batches_committed += 1u;
     state.photons_total += n;
-    draw_cmd = uvec4(n, 1u, state.capacity - n, 0u);
+    set_emitted(n, state.capacity);
 }
 
 void main() {
@@ -63,7 +63,7 @@ void main() {
         state.photons_total += n;
         state.peak_used = max(state.peak_used, n);
         state.batches_committed += 1u;
-        draw_cmd = uvec4(n, 1u, state.capacity - n, 0u);
+        set_emitted(n, state.capacity);
         return;
     }
     if (state.start_level < MAX_LEVELS && l >= state.start_level) {

@@ -187,6 +187,7 @@ impl Ctx<'_> {
             back: &t.light.back,
             recv: &t.receiver.geo,
             debug: &t.photon.debug,
+            splats: &t.photon.splats,
             sampler: self.nearest,
         }
     }
@@ -298,7 +299,8 @@ impl Ctx<'_> {
             for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect] {
                 b.buffer(buf, &[Access::TransferDst], &all);
             }
-            b.buffer(&t.photon.debug, &[Access::TransferDst], &[Access::VertexWrite]);
+            b.buffer(&t.photon.debug, &[Access::TransferDst], &[Access::ComputeWrite]);
+            b.buffer(&t.photon.splats, &[Access::FrameStart], &[Access::ComputeWrite]);
         });
         match self.s.method {
             Method::Dense => self.dense(rec),
@@ -314,7 +316,7 @@ impl Ctx<'_> {
         self.barrier(cmd, |b| {
             b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
-            b.buffer(&t.photon.debug, &[Access::VertexWrite], &[Access::TransferSrc]);
+            b.buffer(&t.photon.debug, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.photons, &[Access::ComputeWrite, Access::VertexRead], &[Access::TransferSrc]);
         });
         Ok(())
@@ -325,20 +327,30 @@ impl Ctx<'_> {
         let t = self.t;
         self.barrier(cmd, |b| {
             b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ColorAttachment]);
-            b.buffer(&t.photon.photons, &[Access::VertexRead], &[Access::ComputeWrite]);
-            b.buffer(&t.photon.state, &[Access::VertexRead], &[Access::ComputeWrite]);
-            b.buffer(&t.photon.indirect, &[Access::IndirectRead], &[Access::ComputeWrite, Access::IndirectRead]);
+            // The trace read the photons and the indirect arguments, the splat read the records and the draw.
+            b.buffer(&t.photon.photons, &[Access::ComputeRead], &[Access::ComputeWrite]);
+            b.buffer(&t.photon.splats, &[Access::VertexRead], &[Access::ComputeWrite]);
+            b.buffer(
+                &t.photon.indirect,
+                &[Access::ComputeRead, Access::IndirectRead],
+                &[Access::ComputeWrite, Access::IndirectRead],
+            );
         });
     }
 
-    /// Compute results → the splat (vertex shader reads, draw-indirect arguments).
-    fn before_splat(&self, cmd: vk::CommandBuffer) {
+    /// The batch's emitted photons: trace them (compute, dispatched indirectly), then splat them (draw indirect).
+    fn trace_and_splat(&self, rec: &mut Rec, clear: bool) {
         let t = self.t;
+        let (cmd, b, ph) = (rec.cmd, self.bindings(), &self.p.photons);
+        self.compute_to_compute(cmd);
+        rec.ts.mark(cmd, "photon_trace");
+        ph.trace(cmd, &b, self.debug());
         self.barrier(cmd, |b| {
-            b.buffer(&t.photon.photons, &[Access::ComputeWrite], &[Access::VertexRead]);
-            b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::VertexRead]);
+            b.buffer(&t.photon.splats, &[Access::ComputeWrite], &[Access::VertexRead]);
             b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &[Access::IndirectRead]);
         });
+        rec.ts.mark(cmd, "splat");
+        ph.splat(cmd, &b, &t.receiver.flux, clear);
     }
 
     /// Compute → compute on the traversal buffers (and the indirect arguments just written).
@@ -371,9 +383,7 @@ impl Ctx<'_> {
             self.compute_to_compute(cmd);
             rec.ts.mark(cmd, "stats");
             ph.stats(cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
-            self.before_splat(cmd);
-            rec.ts.mark(cmd, "splat");
-            ph.splat(cmd, &b, &self.t.receiver.flux, band == 0, self.debug());
+            self.trace_and_splat(rec, band == 0);
             if band + 1 < bands {
                 self.after_splat(cmd);
             }
@@ -403,9 +413,7 @@ impl Ctx<'_> {
                 ph.stats(cmd, &b, level, mode, wg);
                 self.compute_to_compute(cmd);
             }
-            self.before_splat(cmd);
-            rec.ts.mark(cmd, "splat");
-            ph.splat(cmd, &b, &self.t.receiver.flux, slot == 0, self.debug());
+            self.trace_and_splat(rec, slot == 0);
             if slot + 1 < slots {
                 self.after_splat(cmd);
             }
@@ -475,11 +483,8 @@ impl Ctx<'_> {
                     st = self.read_state()?;
                 }
             }
-            let cmd = rec.cmd;
-            self.before_splat(cmd);
-            rec.ts.mark(cmd, "splat");
-            ph.splat(cmd, &b, &self.t.receiver.flux, first, self.debug());
-            self.after_splat(cmd);
+            self.trace_and_splat(rec, first);
+            self.after_splat(rec.cmd);
             first = false;
         }
         rec.report.batch_slots = batches;

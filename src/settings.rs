@@ -83,6 +83,9 @@ impl Default for Settings {
     }
 }
 
+/// Largest photon budget: 8 Mi entries of 8 bytes (their splat records take 128 MiB).
+pub const MAX_BUDGET_MIB: f64 = 64.0;
+
 /// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
 pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
 
@@ -106,9 +109,10 @@ impl Settings {
         if !(self.photon_budget_mib.is_finite() && self.photon_budget_mib > 0.0) {
             return bad(format!("--photon-budget {}: must be > 0 MiB", self.photon_budget_mib));
         }
-        if self.photon_budget_mib > 128.0 {
+        if self.photon_budget_mib > MAX_BUDGET_MIB {
             return bad(format!(
-                "--photon-budget {}: at most 128 MiB (one storage-buffer binding; lavapipe's limit)",
+                "--photon-budget {}: at most {MAX_BUDGET_MIB} MiB (the splat records, 16 bytes per 8-byte photon entry, \
+                 must fit one 128 MiB storage-buffer binding: lavapipe's limit)",
                 self.photon_budget_mib
             ));
         }
@@ -127,10 +131,10 @@ impl Settings {
         Ok(())
     }
 
-    /// Photon-buffer entries (8 bytes each). The buffer also holds a guard after them, and the whole binding must
-    /// stay within 128 MiB (lavapipe's maxStorageBufferRange), so a 128 MiB budget loses the guard's 8 KiB.
+    /// Photon-buffer entries (8 bytes each). Each has a 16-byte splat record, and that buffer must stay within one
+    /// 128 MiB binding (lavapipe's maxStorageBufferRange): at most 8 Mi entries.
     pub fn photon_capacity(&self) -> u32 {
-        let max = (128 * 1024 * 1024 / 8) - crate::targets::PHOTON_GUARD;
+        let max = 128 * 1024 * 1024 / 16;
         (((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
     }
 

@@ -50,6 +50,8 @@ pub struct PhotonBuffers {
     pub indirect: Buffer,
     pub coverage: Buffer,
     pub debug: Buffer,
+    /// One splat record (16 bytes) per photon-buffer entry.
+    pub splats: Buffer,
     pub capacity: u32,
     pub pyramid_offsets: Vec<u32>,
 }
@@ -88,7 +90,7 @@ impl Targets {
             geo: img("receivers from light", GEO_FORMAT, m, color)?,
             depth: img("receivers depth", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT)?,
             shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
-            flux: img("caustic flux map", HDR_FORMAT, m, color | U::TRANSFER_SRC)?,
+            flux: img("caustic flux map", crate::passes::flux_format(device), m, color | U::TRANSFER_SRC)?,
             irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
         };
         let eye = EyeTargets {
@@ -138,6 +140,7 @@ impl Targets {
                 B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
                 gpu,
             )?,
+            splats: Buffer::new(device, "splat records", 16 * capacity as u64, B::STORAGE_BUFFER, gpu)?,
             capacity,
             pyramid_offsets,
         };

@@ -99,7 +99,7 @@ fn no_dielectric_records_no_caustic_pass() {
     assert_eq!(s["caustic_passes"], false);
     assert_eq!(s["photons_splatted"], 0);
     let stages: Vec<&String> = s["gpu_ms"].as_object().unwrap().keys().collect();
-    for caustic_stage in ["coverage", "photon_init", "splat", "resolve", "dense_emit", "stats"] {
+    for caustic_stage in ["coverage", "photon_init", "photon_trace", "splat", "resolve", "dense_emit", "stats"] {
         assert!(!stages.iter().any(|k| k.as_str() == caustic_stage), "{caustic_stage} recorded: {stages:?}");
     }
     assert!(stages.iter().any(|k| k.as_str() == "eye"), "{stages:?}");

@@ -19,7 +19,7 @@ const uint HIT_ESCAPED = 6u;     // left the caustic map without meeting a recei
 
 struct Hit {
     vec2 map_px;   // landing point in caustic-map texels
-    vec3 flux;     // W per channel
+    float flux;    // W (for a white light; the light's color multiplies it in the resolve)
     vec3 pos;      // landing point, world space
     uint status;
 };
@@ -27,7 +27,7 @@ struct Hit {
 Hit trace_photon(vec2 uv, float side, bool covered) {
     Hit h;
     h.status = HIT_OK;
-    h.flux = vec3(0.0);
+    h.flux = 0.0;
     h.map_px = vec2(-1e9);
     h.pos = vec3(0.0);
     View v = u_frame.photon_view;
@@ -61,7 +61,7 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     }
     h.pos = p3;
     h.map_px = view_uv(rv, p3) * rv.extent.xy;
-    h.flux = u_frame.light_power.rgb * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
+    h.flux = u_frame.light_power.w * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
     return h;
 }
 

@@ -27,12 +27,24 @@ pub struct Passes {
     pub composite: composite::CompositePass,
 }
 
+/// The caustic flux map holds one channel (the light's color is applied in the resolve): R32F where the device
+/// can blend it, else RGBA32F.
+pub fn flux_format(device: &Device) -> ash::vk::Format {
+    let f = ash::vk::Format::R32_SFLOAT;
+    let props = unsafe { device.instance.raw.get_physical_device_format_properties(device.physical, f) };
+    if props.optimal_tiling_features.contains(ash::vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND) {
+        f
+    } else {
+        HDR_FORMAT
+    }
+}
+
 impl Passes {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         Ok(Passes {
             geometry: geometry::GeometryPass::new(device)?,
             coverage: coverage::CoveragePass::new(device)?,
-            photons: photons::PhotonPasses::new(device)?,
+            photons: photons::PhotonPasses::new(device, flux_format(device))?,
             resolve: resolve::ResolvePass::new(device)?,
             eye: eye::EyePass::new(device)?,
             composite: composite::CompositePass::new(device)?,

@@ -1,14 +1,14 @@
 //! The photon passes: init, traverse (one pipeline per work-group size), stats, dense emission and the splat.
 //! They share one binding layout (glsl/common/photon_bindings.glsl).
 
-use super::{begin_rendering, HDR_FORMAT};
+use super::begin_rendering;
 use crate::gpu_types::PhotonPush;
 use crate::shaders::{self, consts::*};
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
-const LAYOUT: [BindKind; 10] = [
+const LAYOUT: [BindKind; 11] = [
     BindKind::Uniform, // frame
     BindKind::Storage, // traversal state
     BindKind::Storage, // photon buffer
@@ -19,10 +19,13 @@ const LAYOUT: [BindKind; 10] = [
     BindKind::Sampled, // refractor back
     BindKind::Sampled, // receivers from the light
     BindKind::Storage, // debug photon dump
+    BindKind::Storage, // splat records
 ];
 
-/// Byte offset of the draw command in the indirect buffer (after one dispatch command per level).
-pub const DRAW_OFFSET: u64 = 16 * MAX_LEVELS as u64;
+/// Byte offsets in the indirect buffer: one dispatch command per traversal level, the photon trace's
+/// dispatch, then the splat's draw command.
+pub const TRACE_OFFSET: u64 = 16 * MAX_LEVELS as u64;
+pub const DRAW_OFFSET: u64 = TRACE_OFFSET + 16;
 pub const INDIRECT_BYTES: u64 = DRAW_OFFSET + 16;
 
 pub struct PhotonBindings<'a> {
@@ -36,11 +39,12 @@ pub struct PhotonBindings<'a> {
     pub back: &'a Image,
     pub recv: &'a Image,
     pub debug: &'a Buffer,
+    pub splats: &'a Buffer,
     pub sampler: &'a Sampler,
 }
 
 impl PhotonBindings<'_> {
-    fn binds(&self) -> [Bind<'_>; 10] {
+    fn binds(&self) -> [Bind<'_>; 11] {
         [
             Bind::Uniform(self.ubo),
             Bind::Storage(self.state),
@@ -52,6 +56,7 @@ impl PhotonBindings<'_> {
             Bind::Sampled(self.back, self.sampler),
             Bind::Sampled(self.recv, self.sampler),
             Bind::Storage(self.debug),
+            Bind::Storage(self.splats),
         ]
     }
 }
@@ -74,11 +79,13 @@ pub struct PhotonPasses {
     traverse: Vec<(u32, Pipeline)>,
     stats: Pipeline,
     dense_emit: Pipeline,
+    trace: Pipeline,
     splat: Pipeline,
 }
 
 impl PhotonPasses {
-    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+    /// `flux_format`: the caustic flux map's format (R32F where it can be blended).
+    pub fn new(device: &Arc<Device>, flux_format: vk::Format) -> VkResult<Self> {
         let push = std::mem::size_of::<PhotonPush>() as u32;
         let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &LAYOUT, push);
         let traverse = vec![
@@ -101,7 +108,7 @@ impl PhotonPasses {
                 topology: vk::PrimitiveTopology::POINT_LIST,
                 cull: vk::CullModeFlags::NONE,
                 depth: None,
-                colors: &[ColorTarget { format: HDR_FORMAT, blend: Blend::Additive }],
+                colors: &[ColorTarget { format: flux_format, blend: Blend::Additive }],
             },
         )?;
         Ok(PhotonPasses {
@@ -110,6 +117,7 @@ impl PhotonPasses {
             traverse,
             stats: compute("stats", shaders::STATS_COMP.words())?,
             dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
+            trace: compute("photon trace", shaders::TRACE_COMP.words())?,
             splat,
         })
     }
@@ -159,14 +167,21 @@ impl PhotonPasses {
         unsafe { self.device.cmd_dispatch(cmd, n.div_ceil(TILE_WG), rows.div_ceil(TILE_WG), 1) };
     }
 
-    /// Splat the emitted photons into the caustic flux map with vkCmdDrawIndirect.
-    /// `debug`: dump splatted photons of level `debug.1` or deeper into the debug buffer.
-    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool, debug: Option<u32>) {
-        begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
-        self.splat.bind(cmd, &b.binds());
+    /// Trace the emitted photons into splat records, dispatched indirectly. `debug`: dump the traced photons of
+    /// level `debug` or deeper into the debug buffer.
+    pub fn trace(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, debug: Option<u32>) {
+        self.trace.bind(cmd, &b.binds());
         let push =
             PhotonPush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0), ..Default::default() };
-        self.splat.push(cmd, &push);
+        self.trace.push(cmd, &push);
+        unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, TRACE_OFFSET) };
+    }
+
+    /// Splat the traced photons into the caustic flux map with vkCmdDrawIndirect.
+    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool) {
+        begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
+        self.splat.bind(cmd, &b.binds());
+        self.splat.push(cmd, &PhotonPush::default());
         unsafe {
             self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16);
             self.device.cmd_end_rendering(cmd);

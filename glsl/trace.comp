@@ -1,0 +1,40 @@
+#version 460
+// Photon trace (DESIGN.md step 5, first half): each emitted photon is refracted through the front surface
+// (Fresnel), to the back surface, out again, and to the receivers; its landing point, flux and splat radius go
+// into a splat record. Dispatched indirectly over the batch's emitted photons, with arguments the stats shader
+// wrote. Tracing in compute rather than in the splat's vertex shader keeps the heavy arithmetic on every shader
+// core (GPUs such as the H100 run graphics stages on a few units only); the splat then only rasterizes.
+#include "common/photon_bindings.glsl"
+#include "common/photon_push.glsl"
+#include "common/coverage.glsl"
+#include "common/photon.glsl"
+
+layout(local_size_x = LINEAR_WG) in;
+
+void main() {
+    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + gl_LocalInvocationIndex;
+    if (i >= draw_cmd.x) return;
+    uint j = draw_cmd.z + i;
+    uvec2 cell = photons[j];
+    uint level = cell_level(cell);
+    uvec2 xy = cell_xy(cell);
+    Hit h = trace_cell(level, xy);
+    // The footprint follows the cell: its size on the caustic map for max-level and dense photons (so that
+    // neighbours' tents overlap and interpolate), the children's spread for max-error clusters.
+    uint r = cell_radius(cell);
+    if (r == 0u) {
+        float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
+        r = uint(clamp(round(cell_side(level) / texel), 1.0, float(MAX_SPLAT_RADIUS)));
+    }
+    bool ok = h.status == HIT_OK;
+    splats[j] = vec4(h.map_px, ok ? h.flux : 0.0, ok ? float(r) : 0.0);
+    if (pc.debug != 0u && level >= pc.debug_min_level) {
+        uint k = atomicAdd(debug_header.x, 1u);
+        if (k < debug_header.y) {
+            vec2 uv = cell_center_uv(level, xy);
+            debug_rows[3u * k] = uvec4(xy, level | (h.status << 8) | (r << 16), floatBitsToUint(h.flux));
+            debug_rows[3u * k + 1u] = floatBitsToUint(vec4(uv, h.map_px));
+            debug_rows[3u * k + 2u] = uvec4(floatBitsToUint(h.pos), 0u);
+        }
+    }
+}
