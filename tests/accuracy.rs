@@ -120,6 +120,7 @@ fn hard_cases_are_finite_bounded_and_close_to_reference() {
         Hard { scene: "vertex_above.toml", ratio: 1.0025, why: "a vertex straight under the light" },
         Hard { scene: "thin.toml", ratio: 1.0001, why: "a 1 cm lens: front and back almost coincide" },
         Hard { scene: "slab.toml", ratio: 0.9999, why: "no silhouette inside the cone" },
+        Hard { scene: "directional.toml", ratio: 0.9998, why: "directional light: an orthographic light frustum" },
     ];
     let dir = out_dir("acc_hard");
     for c in &cases {
