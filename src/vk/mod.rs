@@ -9,6 +9,7 @@ pub mod error;
 pub mod image;
 pub mod pipeline;
 pub mod query;
+pub mod swapchain;
 pub mod sync;
 
 pub use buffer::Buffer;
