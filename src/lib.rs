@@ -16,4 +16,5 @@ pub mod scene_gpu;
 pub mod settings;
 pub mod shaders;
 pub mod targets;
+pub mod viewer;
 pub mod vk;

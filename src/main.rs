@@ -23,6 +23,8 @@ enum Command {
     Bench(caustics::bench::BenchArgs),
     /// Compare two EXR images with the project's error metric.
     Compare(caustics::metrics::CompareArgs),
+    /// Windowed viewer: orbit the camera, move the light, switch methods; live per-stage GPU timings.
+    View(caustics::viewer::ViewArgs),
 }
 
 fn run(cli: Cli) -> AppResult<()> {
@@ -32,6 +34,7 @@ fn run(cli: Cli) -> AppResult<()> {
         Command::Reference(a) => caustics::reference::run(&a),
         Command::Bench(a) => caustics::bench::run_bench(&a),
         Command::Compare(a) => caustics::metrics::run_compare(&a),
+        Command::View(a) => caustics::viewer::run(&a),
     }
 }
 

@@ -1,0 +1,958 @@
+//! `caustics view`: the windowed viewer. A winit window, an ash-window surface and a swapchain; every frame is the
+//! headless renderer's frame (src/frame.rs), whose beauty image is copied into the acquired swapchain image just
+//! before the frame's last submit (present.rs).
+//!
+//! One frame is in flight: `Renderer::render_frame` waits for its fence, which also makes the single acquire
+//! semaphore and the screenshot buffer safe to reuse. Robustness: a resized window, an out-of-date or suboptimal
+//! swapchain are recreated (the old swapchain passed as `old_swapchain`); a zero-extent (minimized) window is not
+//! rendered and the loop waits for events; a device loss, or any other Vulkan failure, ends the viewer with an error
+//! (exit code 1).
+
+mod controls;
+mod orbit;
+mod present;
+
+pub use controls::{help_markdown, help_text, Action, CONTROLS};
+pub use present::{Capture, CaptureSource};
+
+use crate::commands::{default_scene, MethodArgs};
+use crate::error::{AppError, AppResult};
+use crate::image_io;
+use crate::profiler;
+use crate::renderer::{FrameReport, Renderer, Views};
+use crate::scene::{Camera, Light, Material, Projection, Scene};
+use crate::settings::{parse_size, Method, Metric, Settings};
+use crate::shaders::consts::*;
+use crate::targets::Targets;
+use crate::vk::swapchain::{self, Acquired, LiveCounts, Presented, Surface, Swapchain, SwapchainDesc};
+use crate::vk::{ContextDesc, Device, Instance, SubmitSync, VkError};
+use ash::vk;
+use glam::{Quat, Vec3};
+use orbit::Orbit;
+use present::Presenter;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use serde_json::{json, Value};
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::window::{Window, WindowId};
+
+/// Frames kept for the live profiler (P, T and the stats).
+pub const PROFILE_FRAMES: usize = 120;
+/// Light animation: one turn around the vertical axis in this many seconds.
+const ANIMATION_PERIOD_S: f32 = 20.0;
+/// A light straight above its target is tilted by this much when animated, so that its orbit moves it.
+const ANIMATION_TILT_DEG: f32 = 25.0;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// Scene file (TOML). Default: assets/scenes/sphere.toml.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Camera name (default: the scene's first perspective camera, else its first camera).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Window size WxH in pixels.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    #[command(flatten)]
+    pub method: MethodArgs,
+    /// Present without waiting for vertical blank: MAILBOX, else IMMEDIATE where available (default: FIFO).
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Slowly orbit the light around the vertical axis through its target (Space pauses).
+    #[arg(long)]
+    pub animate: bool,
+    /// Present this many frames, then exit (0: run until the window is closed).
+    #[arg(long, default_value_t = 0)]
+    pub frames: u32,
+    /// Save the last presented frame here (PNG) at exit.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Write stats JSON here at exit (frames, swapchain recreations, resizes, per-stage GPU ms, ...).
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Testing: resize the window programmatically K times while running (sizes include 1x1; the last is the
+    /// initial size), with one simulated minimize halfway; --frames is extended until the cycle is done.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub resize_cycle: u32,
+    /// Testing: prefer an sRGB swapchain format (exercises the intermediate-image path).
+    #[arg(long, hide = true)]
+    pub srgb_surface: bool,
+    /// Testing: fail with a device loss when frame N is about to be rendered (checks the error path and exit).
+    #[arg(long, hide = true)]
+    pub inject_device_loss: Option<u32>,
+}
+
+fn check_parent(p: &Path) -> AppResult<()> {
+    match p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(d) if !d.is_dir() => Err(AppError::BadInput(format!("{}: output directory does not exist", p.display()))),
+        _ => Ok(()),
+    }
+}
+
+fn pick_camera(scene: &Scene, name: Option<&str>) -> AppResult<Camera> {
+    if name.is_none() {
+        if let Some(c) = scene.cameras.iter().find(|c| matches!(c.projection, Projection::Perspective { .. })) {
+            return Ok(c.clone());
+        }
+    }
+    Ok(scene.camera(name).map_err(AppError::BadInput)?.clone())
+}
+
+pub fn run(args: &ViewArgs) -> AppResult<()> {
+    let (width, height) = parse_size(&args.size)?;
+    let settings = args.method.settings()?;
+    if let Some(p) = &args.screenshot {
+        if !p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            return Err(AppError::BadInput(format!("--screenshot {}: screenshots are written as .png", p.display())));
+        }
+        check_parent(p)?;
+    }
+    if let Some(p) = &args.stats {
+        check_parent(p)?;
+    }
+    let scene_path = args.scene.clone().unwrap_or_else(default_scene);
+    let scene = Scene::load(&scene_path)?;
+    let camera = pick_camera(&scene, args.camera.as_deref())?;
+    let event_loop = EventLoop::new().map_err(|e| {
+        AppError::Failed(format!(
+            "cannot open a window: {e}. `caustics view` needs a display (DISPLAY or WAYLAND_DISPLAY); \
+             without one, run it under `xvfb-run -a`, or use `caustics render`"
+        ))
+    })?;
+    let mut app = App {
+        args,
+        size: (width, height),
+        pending: Some((scene, camera, settings)),
+        scene_path,
+        viewer: None,
+        outcome: None,
+        error: None,
+    };
+    let run = event_loop.run_app(&mut app);
+    app.finish(run)
+}
+
+/// What the viewer measured, taken before teardown, plus what teardown left alive.
+struct Outcome {
+    stats: Value,
+    capture: Option<Capture>,
+    presented: u64,
+    after_teardown: LiveCounts,
+    validation: bool,
+}
+
+struct App<'a> {
+    args: &'a ViewArgs,
+    size: (u32, u32),
+    pending: Option<(Scene, Camera, Settings)>,
+    scene_path: PathBuf,
+    viewer: Option<Viewer>,
+    outcome: Option<Outcome>,
+    error: Option<AppError>,
+}
+
+impl App<'_> {
+    fn fail(&mut self, el: &ActiveEventLoop, e: AppError) {
+        if self.error.is_none() {
+            self.error = Some(e);
+        }
+        el.exit();
+    }
+
+    /// Tear down while the event loop still exists: every GPU object, then the surface, then the window.
+    fn teardown(&mut self) {
+        if let Some(v) = self.viewer.take() {
+            let stats = v.stats();
+            let capture = v.capture.clone();
+            let presented = v.counters.presented;
+            let validation = v.validation;
+            drop(v);
+            self.outcome =
+                Some(Outcome { stats, capture, presented, after_teardown: swapchain::live_counts(), validation });
+        }
+    }
+
+    fn finish(mut self, run: Result<(), winit::error::EventLoopError>) -> AppResult<()> {
+        self.teardown();
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        run.map_err(|e| AppError::Failed(format!("window event loop: {e}")))?;
+        let out = self.outcome.take().ok_or_else(|| AppError::Failed("the viewer window was never created".into()))?;
+        if let Some(p) = &self.args.screenshot {
+            let c =
+                out.capture.as_ref().ok_or_else(|| AppError::Failed("no frame was presented: no screenshot".into()))?;
+            image_io::write_png(p, c.width, c.height, &c.rgba)?;
+            eprintln!("wrote {} ({}x{}, the last presented frame: #{})", p.display(), c.width, c.height, out.presented);
+        }
+        let messages = crate::vk::validation_message_count();
+        if let Some(p) = &self.args.stats {
+            let mut stats = out.stats;
+            stats["validation"] = json!({"enabled": out.validation, "messages": messages});
+            stats["swapchain"]["live_after_teardown"] = json!(out.after_teardown);
+            stats["screenshot"] = match (&self.args.screenshot, &out.capture) {
+                (Some(path), Some(c)) => {
+                    json!({"path": path.display().to_string(), "size": [c.width, c.height], "source": c.source})
+                }
+                _ => Value::Null,
+            };
+            stats["scene"] = json!(self.scene_path.display().to_string());
+            image_io::write_text(p, &serde_json::to_string_pretty(&stats).unwrap_or_default())?;
+        }
+        if out.validation && messages > 0 {
+            return Err(AppError::Failed(format!("{messages} Vulkan validation messages (see above)")));
+        }
+        Ok(())
+    }
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        let Some((scene, camera, settings)) = self.pending.take() else {
+            return;
+        };
+        match Viewer::new(el, self.args, scene, camera, settings, self.size) {
+            Ok(v) => self.viewer = Some(v),
+            Err(e) => self.fail(el, e),
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(v) = self.viewer.as_mut() else {
+            return;
+        };
+        let result = v.window_event(event);
+        let quit = v.quit;
+        match result {
+            Err(e) => self.fail(el, e),
+            Ok(()) if quit => el.exit(),
+            Ok(()) => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, el: &ActiveEventLoop) {
+        let Some(v) = self.viewer.as_mut() else {
+            return;
+        };
+        if v.quit {
+            el.exit();
+        } else if v.minimized() {
+            // Nothing to draw into: wait for events, looking again now and then (X11 reports no event when an
+            // iconified window is restored by some window managers).
+            v.counters.minimized_frames_skipped += 1;
+            v.resize_tick();
+            el.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(50)));
+        } else {
+            v.window.request_redraw();
+            el.set_control_flow(ControlFlow::Wait);
+        }
+    }
+
+    fn exiting(&mut self, _el: &ActiveEventLoop) {
+        self.teardown();
+    }
+}
+
+#[derive(Default, Debug, Clone, serde::Serialize)]
+struct Counters {
+    presented: u64,
+    /// Swapchains created after the first one.
+    swapchain_recreations: u64,
+    resizes_seen: u64,
+    minimized_frames_skipped: u64,
+    acquire_out_of_date: u64,
+    present_out_of_date: u64,
+    suboptimal: u64,
+    /// Frames whose GPU-driven batching ran out of slots (the next frame records more).
+    incomplete_frames: u64,
+    resize_requests: u64,
+    simulated_minimizes: u64,
+    max_images_per_swapchain: u64,
+}
+
+/// Mouse and key input gathered between frames, applied when the next frame starts.
+#[derive(Default)]
+struct Input {
+    left: bool,
+    right: bool,
+    cursor: Option<(f64, f64)>,
+    orbit: (f32, f32),
+    zoom: f32,
+    /// Light drag in pixels (x right, y down).
+    light_drag: (f32, f32),
+    /// Light key steps: right, up, away.
+    light_keys: Vec3,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Step {
+    Size(u32, u32),
+    Minimize,
+}
+
+/// The hidden `--resize-cycle` test: programmatic resizes, one at a time, each held until a frame has been
+/// presented at the new size (or 60 frames went by). Every other resize is requested between the acquire and the
+/// present of a frame, so that the window changes size under a frame in flight.
+struct ResizeCycle {
+    steps: Vec<Step>,
+    next: usize,
+    current: Option<(Step, u64)>,
+    /// A resize to request right after the next acquire.
+    mid_frame: Option<(u32, u32)>,
+}
+
+impl ResizeCycle {
+    fn new(k: u32, initial: (u32, u32)) -> Self {
+        const PATTERN: [(u32, u32); 10] =
+            [(1, 1), (320, 240), (1, 1), (57, 31), (1, 200), (200, 1), (640, 480), (1, 1), (97, 61), (333, 77)];
+        // Every step changes the size (so that each one is seen), and the last one restores the initial size.
+        let mut steps = Vec::new();
+        let mut prev = initial;
+        for &size in PATTERN.iter().cycle() {
+            if steps.len() + 1 >= k as usize {
+                break;
+            }
+            if size != prev {
+                steps.push(Step::Size(size.0, size.1));
+                prev = size;
+            }
+        }
+        if k > 0 && prev != initial {
+            steps.push(Step::Size(initial.0, initial.1));
+        }
+        if k >= 4 {
+            steps.insert(steps.len() / 2, Step::Minimize);
+        }
+        ResizeCycle { steps, next: 0, current: None, mid_frame: None }
+    }
+
+    fn finished(&self) -> bool {
+        self.next >= self.steps.len() && self.current.is_none()
+    }
+}
+
+struct Viewer {
+    // Declaration order is drop order: every GPU object before the surface, the surface before the window.
+    renderer: Renderer,
+    presenter: Presenter,
+    swapchain: Option<Swapchain>,
+    surface: Arc<Surface>,
+    window: Window,
+
+    validation: bool,
+    frames: u32,
+    vsync: bool,
+    prefer_srgb: bool,
+    inject_device_loss: Option<u32>,
+    capture_every_frame: bool,
+    scene_name: String,
+    camera_name: String,
+    initial_light: Light,
+    orbit: Orbit,
+    input: Input,
+    animate: bool,
+    last_frame_start: Option<Instant>,
+    /// The swapchain must be recreated before the next frame.
+    dirty: bool,
+    last_size: PhysicalSize<u32>,
+    counters: Counters,
+    ring: VecDeque<FrameReport>,
+    intervals: VecDeque<f64>,
+    last_present: Option<Instant>,
+    title_since: Instant,
+    title_frames: u32,
+    title_gpu_ms: f64,
+    screenshot_request: bool,
+    capture: Option<Capture>,
+    resize: Option<ResizeCycle>,
+    simulated_minimize_until: Option<Instant>,
+    quit: bool,
+}
+
+impl Viewer {
+    fn new(
+        el: &ActiveEventLoop,
+        args: &ViewArgs,
+        scene: Scene,
+        camera: Camera,
+        settings: Settings,
+        (width, height): (u32, u32),
+    ) -> AppResult<Self> {
+        let scene_name = scene.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let attrs = Window::default_attributes()
+            .with_title(format!("caustics — {scene_name}"))
+            .with_inner_size(PhysicalSize::new(width, height));
+        let window = el.create_window(attrs).map_err(|e| AppError::Failed(format!("cannot create a window: {e}")))?;
+        let handle_err = |e: raw_window_handle::HandleError| AppError::Failed(format!("window handle: {e}"));
+        let display = window.display_handle().map_err(handle_err)?.as_raw();
+        let window_handle = window.window_handle().map_err(handle_err)?.as_raw();
+        let mut desc = ContextDesc::from_env();
+        desc.instance_extensions = swapchain::required_instance_extensions(display)?;
+        desc.swapchain = true;
+        let instance = Instance::new(&desc)?;
+        // SAFETY: the surface is dropped before the window (Viewer's field order).
+        let surface = unsafe { Surface::new(&instance, display, window_handle)? };
+        let present_filter = |physical: vk::PhysicalDevice, family: u32| surface.supports(physical, family);
+        let device = Device::new(instance, &desc, Some(&present_filter))?;
+        let initial_light = scene
+            .lights
+            .first()
+            .cloned()
+            .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
+        let renderer = Renderer::new(device.clone(), scene, settings)?;
+        let presenter = Presenter::new(&device);
+        eprintln!(
+            "caustics view: {} on {} ({}){}",
+            scene_name,
+            device.info.name,
+            if desc.validation { "validation on" } else { "validation off" },
+            if args.frames == 0 { "; press H for the controls" } else { "" }
+        );
+        let mut viewer = Viewer {
+            renderer,
+            presenter,
+            swapchain: None,
+            surface,
+            last_size: window.inner_size(),
+            window,
+            validation: desc.validation,
+            frames: args.frames,
+            vsync: !args.no_vsync,
+            prefer_srgb: args.srgb_surface,
+            inject_device_loss: args.inject_device_loss,
+            capture_every_frame: args.screenshot.is_some() && args.frames == 0,
+            scene_name,
+            camera_name: camera.name.clone(),
+            initial_light,
+            orbit: Orbit::new(&camera),
+            input: Input::default(),
+            animate: false,
+            last_frame_start: None,
+            dirty: false,
+            counters: Counters::default(),
+            ring: VecDeque::with_capacity(PROFILE_FRAMES),
+            intervals: VecDeque::with_capacity(PROFILE_FRAMES),
+            last_present: None,
+            title_since: Instant::now(),
+            title_frames: 0,
+            title_gpu_ms: 0.0,
+            screenshot_request: false,
+            capture: None,
+            resize: (args.resize_cycle > 0).then(|| ResizeCycle::new(args.resize_cycle, (width, height))),
+            simulated_minimize_until: None,
+            quit: false,
+        };
+        if args.animate {
+            viewer.toggle_animation();
+        }
+        Ok(viewer)
+    }
+
+    fn device(&self) -> &Arc<Device> {
+        &self.renderer.device
+    }
+
+    /// Zero extent, minimized, or (testing) a simulated minimize.
+    fn minimized(&mut self) -> bool {
+        if let Some(until) = self.simulated_minimize_until {
+            if Instant::now() < until {
+                return true;
+            }
+            // A real restore reports a resize; the simulated one asks for the same recreation.
+            self.simulated_minimize_until = None;
+            self.dirty = true;
+        }
+        let size = self.window.inner_size();
+        size.width == 0 || size.height == 0 || self.window.is_minimized() == Some(true)
+    }
+
+    fn window_event(&mut self, event: WindowEvent) -> AppResult<()> {
+        match event {
+            WindowEvent::CloseRequested | WindowEvent::Destroyed => self.quit = true,
+            WindowEvent::Resized(size) => {
+                if size != self.last_size {
+                    self.counters.resizes_seen += 1;
+                    self.last_size = size;
+                }
+                self.dirty = true;
+            }
+            WindowEvent::RedrawRequested => self.redraw()?,
+            WindowEvent::KeyboardInput { event, is_synthetic: false, .. } if event.state == ElementState::Pressed => {
+                if let Some(action) = controls::action_for(&event.logical_key) {
+                    if !event.repeat || action.repeats() {
+                        self.act(action)?;
+                    }
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let down = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => self.input.left = down,
+                    MouseButton::Right => self.input.right = down,
+                    _ => {}
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some((x, y)) = self.input.cursor {
+                    let (dx, dy) = ((position.x - x) as f32, (position.y - y) as f32);
+                    if self.input.left {
+                        self.input.orbit.0 += dx;
+                        self.input.orbit.1 += dy;
+                    }
+                    if self.input.right {
+                        self.input.light_drag.0 += dx;
+                        self.input.light_drag.1 += dy;
+                    }
+                }
+                self.input.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::CursorLeft { .. } => self.input.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } => {
+                self.input.zoom += match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn act(&mut self, action: Action) -> AppResult<()> {
+        use Action::*;
+        let s = self.renderer.settings.clone();
+        match action {
+            Orbit | Zoom | DragLight => {}
+            LightLeft => self.input.light_keys.x -= 1.0,
+            LightRight => self.input.light_keys.x += 1.0,
+            LightDown => self.input.light_keys.y -= 1.0,
+            LightUp => self.input.light_keys.y += 1.0,
+            LightNear => self.input.light_keys.z -= 1.0,
+            LightAway => self.input.light_keys.z += 1.0,
+            IorDown => self.change_ior(-0.05)?,
+            IorUp => self.change_ior(0.05)?,
+            LevelDown => self.change_settings(Settings { level: s.level.saturating_sub(1), ..s })?,
+            LevelUp => self.change_settings(Settings { level: s.level + 1, ..s })?,
+            ResolutionDown => self.change_settings(Settings { caustic_res: (s.caustic_res / 2).max(64), ..s })?,
+            ResolutionUp => self.change_settings(Settings { caustic_res: (s.caustic_res * 2).min(4096), ..s })?,
+            Dense => self.change_settings(Settings { method: Method::Dense, level: s.level.min(12), ..s })?,
+            AdaptiveMaxLevel => {
+                self.change_settings(Settings { method: Method::Adaptive, metric: Metric::MaxLevel, ..s })?
+            }
+            AdaptiveMaxError => {
+                self.change_settings(Settings { method: Method::Adaptive, metric: Metric::MaxError, ..s })?
+            }
+            Animate => self.toggle_animation(),
+            Screenshot => self.screenshot_request = true,
+            Profile => {
+                let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
+                println!("{} | {}", self.describe(), self.device().info.name);
+                print!("{}", profiler::table(&profiler::stage_summaries(&frames), frames.len()));
+            }
+            Trace => {
+                let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
+                let path = free_name("caustics-trace", "json");
+                image_io::write_text(
+                    &path,
+                    &serde_json::to_string(&profiler::chrome_trace(&frames)).unwrap_or_default(),
+                )?;
+                eprintln!("wrote {} ({} frames; open in Perfetto or chrome://tracing)", path.display(), frames.len());
+            }
+            Reset => {
+                self.orbit.reset();
+                self.renderer.scene.lights[0] = self.initial_light.clone();
+                eprintln!("camera and light reset");
+            }
+            Help => print!("{}", help_text()),
+            Quit => self.quit = true,
+        }
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        let s = &self.renderer.settings;
+        let method = match (s.method, s.metric) {
+            (Method::Dense, _) => "dense",
+            (Method::Adaptive, Metric::MaxLevel) => "adaptive max-level",
+            (Method::Adaptive, Metric::MaxError) => "adaptive max-error",
+        };
+        let ior = self.ior();
+        format!(
+            "{method}, level {} ({}²), caustic map {}²{}",
+            s.level,
+            LEVEL0_RES << s.level,
+            s.caustic_res,
+            ior.map(|i| format!(", IOR {i:.2}")).unwrap_or_default()
+        )
+    }
+
+    /// The first dielectric's index of refraction (all of them change together).
+    fn ior(&self) -> Option<f32> {
+        self.renderer.scene.refractors().find_map(|o| match o.material {
+            Material::Dielectric { ior } => Some(ior),
+            _ => None,
+        })
+    }
+
+    fn change_settings(&mut self, settings: Settings) -> AppResult<()> {
+        match self.renderer.set_settings(settings) {
+            Ok(()) => eprintln!("{}", self.describe()),
+            Err(AppError::BadInput(m)) => eprintln!("not changed: {m}"),
+            Err(e) => return Err(e),
+        }
+        Ok(())
+    }
+
+    fn change_ior(&mut self, delta: f32) -> AppResult<()> {
+        let mut scene = self.renderer.scene.clone();
+        let mut changed = false;
+        for o in scene.objects.iter_mut() {
+            if let Material::Dielectric { ior } = &mut o.material {
+                *ior = (*ior + delta).clamp(1.0, 3.0);
+                changed = true;
+            }
+        }
+        if !changed {
+            eprintln!("the scene has no dielectric");
+            return Ok(());
+        }
+        self.renderer.set_scene(scene)?;
+        eprintln!("{}", self.describe());
+        Ok(())
+    }
+
+    fn toggle_animation(&mut self) {
+        self.animate = !self.animate;
+        if !self.animate {
+            eprintln!("light animation paused");
+            return;
+        }
+        let light = self.renderer.scene.lights[0].clone();
+        let d = light.position - light.target;
+        if Vec3::new(d.x, 0.0, d.z).length() < 1e-3 * d.length().max(1e-6) {
+            // Straight above (or below) its target, the light would turn in place: lean it first.
+            let tilt = Quat::from_rotation_z(-ANIMATION_TILT_DEG.to_radians());
+            let moved = Light { position: light.target + tilt * d, ..light };
+            if self.set_light(moved) {
+                eprintln!("light tilted {ANIMATION_TILT_DEG}° off the vertical so that its orbit moves it");
+            }
+        }
+        eprintln!("light animation on: one turn in {ANIMATION_PERIOD_S} s around the vertical axis through its target");
+    }
+
+    /// Move the light if every refractor stays in front of it (else the frame could not be rendered).
+    fn set_light(&mut self, light: Light) -> bool {
+        let old = std::mem::replace(&mut self.renderer.scene.lights[0], light);
+        let view = self.renderer.camera_view(&self.orbit.camera(), 16, 16);
+        match Views::new(&self.renderer.scene, &self.renderer.settings, &view) {
+            Ok(_) => true,
+            Err(e) => {
+                self.renderer.scene.lights[0] = old;
+                eprintln!("light not moved: {e}");
+                false
+            }
+        }
+    }
+
+    /// Apply the input gathered since the last frame and advance the light's animation.
+    fn apply_input(&mut self, dt: f32, extent: vk::Extent2D) {
+        let input = std::mem::take(&mut self.input);
+        self.input = Input { left: input.left, right: input.right, cursor: input.cursor, ..Input::default() };
+        self.orbit.rotate(input.orbit.0 * 0.005, input.orbit.1 * 0.005);
+        if input.zoom != 0.0 {
+            self.orbit.zoom(input.zoom);
+        }
+        let (lo, hi) = self.renderer.scene.bounds();
+        let size = (hi - lo).length().max(1e-3);
+        let view = self.renderer.camera_view(&self.orbit.camera(), extent.width.max(1), extent.height.max(1));
+        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize_or_zero();
+        let right = flat(view.right);
+        let away = if flat(view.forward) != Vec3::ZERO { flat(view.forward) } else { flat(view.up) };
+        let per_pixel = size / extent.height.max(1) as f32;
+        let step = 0.04 * size;
+        let offset = right * (input.light_keys.x * step + input.light_drag.0 * per_pixel)
+            + away * (input.light_keys.z * step - input.light_drag.1 * per_pixel)
+            + Vec3::Y * input.light_keys.y * step;
+        let mut light = self.renderer.scene.lights[0].clone();
+        light.position += offset;
+        if self.animate {
+            let turn = Quat::from_rotation_y(dt * std::f32::consts::TAU / ANIMATION_PERIOD_S);
+            light.position = light.target + turn * (light.position - light.target);
+        }
+        if light.position != self.renderer.scene.lights[0].position && !self.set_light(light) && self.animate {
+            self.animate = false;
+            eprintln!("light animation paused");
+        }
+    }
+
+    /// Render and present one frame.
+    fn redraw(&mut self) -> AppResult<()> {
+        if self.quit || self.minimized() {
+            return Ok(());
+        }
+        if self.inject_device_loss.is_some_and(|n| self.counters.presented >= n as u64) {
+            return Err(VkError::DeviceLost("vkQueueSubmit2 (injected by --inject-device-loss)").into());
+        }
+        let size = self.window.inner_size();
+        let window_extent = vk::Extent2D { width: size.width, height: size.height };
+        if let Some(sc) = self.swapchain.as_mut() {
+            if self.dirty {
+                if !sc.recreate(window_extent)? {
+                    self.counters.minimized_frames_skipped += 1;
+                    return Ok(());
+                }
+                self.counters.swapchain_recreations += 1;
+                self.dirty = false;
+            }
+        } else {
+            let desc = SwapchainDesc { extent: window_extent, vsync: self.vsync, prefer_srgb: self.prefer_srgb };
+            let Some(sc) = Swapchain::new(self.device(), &self.surface, desc)? else {
+                self.counters.minimized_frames_skipped += 1;
+                return Ok(());
+            };
+            eprintln!(
+                "swapchain: {:?} {:?}, {} images, {}x{}",
+                sc.format.format,
+                sc.present_mode,
+                sc.images.len(),
+                sc.extent.width,
+                sc.extent.height
+            );
+            self.swapchain = Some(sc);
+            self.dirty = false;
+        }
+        let start = Instant::now();
+        let dt = self.last_frame_start.map(|t| (start - t).as_secs_f32().min(0.1)).unwrap_or(0.0);
+        self.last_frame_start = Some(start);
+        let extent = self.swapchain.as_ref().expect("swapchain").extent;
+        // Everything that may fail for reasons other than a broken device happens before the acquire: once an image
+        // is acquired, its semaphore must be waited on by a submit.
+        self.apply_input(dt, extent);
+        let capture = self.screenshot_request
+            || self.capture_every_frame
+            || (self.frames > 0 && self.counters.presented + 1 >= self.frames as u64);
+        let Viewer { renderer, presenter, swapchain, orbit, counters, .. } = self;
+        let sc = swapchain.as_ref().expect("swapchain");
+        counters.max_images_per_swapchain = counters.max_images_per_swapchain.max(sc.images.len() as u64);
+        presenter.prepare(sc, capture)?;
+        let index = match sc.acquire()? {
+            Acquired::OutOfDate => {
+                counters.acquire_out_of_date += 1;
+                self.dirty = true;
+                return Ok(());
+            }
+            Acquired::Image { index, suboptimal } => {
+                if suboptimal {
+                    counters.suboptimal += 1;
+                    self.dirty = true;
+                }
+                index
+            }
+        };
+        if let Some((w, h)) = self.resize.as_mut().and_then(|r| r.mid_frame.take()) {
+            counters.resize_requests += 1;
+            // The answer (Some only where resizes apply at once) is handled by the Resized event or the present.
+            let _ = self.window.request_inner_size(PhysicalSize::new(w, h));
+        }
+        let view = renderer.camera_view(&orbit.camera(), extent.width, extent.height);
+        let sync = SubmitSync {
+            // The first access to the swapchain image is the copy into it (present.rs).
+            wait: vec![(sc.acquire_semaphore, vk::PipelineStageFlags2::ALL_TRANSFER)],
+            signal: vec![sc.render_done[index as usize]],
+        };
+        let mut finish =
+            |_: &Device, cmd: vk::CommandBuffer, t: &Targets| presenter.record(cmd, &t.eye.beauty, sc, index, capture);
+        let (report, _) = renderer.render_frame(&view, None, Some(&mut finish), &sync)?;
+        if adapt_batch_slots(renderer, &report) {
+            counters.incomplete_frames += 1;
+        }
+        let presented = match sc.present(index)? {
+            Presented::Optimal => true,
+            Presented::Suboptimal => {
+                counters.suboptimal += 1;
+                self.dirty = true;
+                true
+            }
+            Presented::OutOfDate => {
+                counters.present_out_of_date += 1;
+                self.dirty = true;
+                false
+            }
+        };
+        if !presented {
+            return Ok(());
+        }
+        counters.presented += 1;
+        let now = Instant::now();
+        if let Some(t) = self.last_present.replace(now) {
+            push_bounded(&mut self.intervals, (now - t).as_secs_f64() * 1e3);
+        }
+        if capture {
+            self.capture = self.presenter.read_capture()?;
+            if std::mem::take(&mut self.screenshot_request) {
+                if let Some(c) = &self.capture {
+                    let path = free_name("caustics-screenshot", "png");
+                    image_io::write_png(&path, c.width, c.height, &c.rgba)?;
+                    eprintln!("wrote {} ({}x{})", path.display(), c.width, c.height);
+                }
+            }
+        }
+        self.update_title(&report);
+        push_bounded(&mut self.ring, report);
+        self.resize_tick();
+        let cycle_done = self.resize.as_ref().map_or(true, |r| r.finished());
+        if self.frames > 0 && self.counters.presented >= self.frames as u64 && cycle_done {
+            self.quit = true;
+        }
+        Ok(())
+    }
+
+    fn update_title(&mut self, report: &FrameReport) {
+        self.title_frames += 1;
+        self.title_gpu_ms += report.gpu_ms;
+        let elapsed = self.title_since.elapsed().as_secs_f64();
+        if elapsed < 0.5 {
+            return;
+        }
+        let fps = self.title_frames as f64 / elapsed;
+        let gpu = self.title_gpu_ms / self.title_frames as f64;
+        self.window.set_title(&format!(
+            "caustics — {} — {} — {fps:.1} fps — GPU {gpu:.1} ms",
+            self.scene_name,
+            self.describe()
+        ));
+        self.title_since = Instant::now();
+        self.title_frames = 0;
+        self.title_gpu_ms = 0.0;
+    }
+
+    /// Testing (`--resize-cycle`): issue the next programmatic resize once the current one has been presented.
+    fn resize_tick(&mut self) {
+        let presented = self.counters.presented;
+        let extent = self.swapchain.as_ref().map(|s| (s.extent.width, s.extent.height));
+        let minimizing = self.simulated_minimize_until.is_some();
+        let Some(rc) = self.resize.as_mut() else {
+            return;
+        };
+        let done = match rc.current {
+            None => true,
+            Some((Step::Size(w, h), at)) => (extent == Some((w, h)) && presented > at) || presented >= at + 60,
+            Some((Step::Minimize, at)) => !minimizing && presented > at,
+        };
+        if !done {
+            return;
+        }
+        rc.current = None;
+        let Some(&step) = rc.steps.get(rc.next) else {
+            return;
+        };
+        rc.next += 1;
+        rc.current = Some((step, presented));
+        match step {
+            Step::Size(w, h) if rc.next % 2 == 0 => rc.mid_frame = Some((w, h)),
+            Step::Size(w, h) => self.request_size(w, h),
+            Step::Minimize => {
+                self.counters.simulated_minimizes += 1;
+                self.simulated_minimize_until = Some(Instant::now() + Duration::from_millis(200));
+            }
+        }
+    }
+
+    fn request_size(&mut self, w: u32, h: u32) {
+        self.counters.resize_requests += 1;
+        if let Some(size) = self.window.request_inner_size(PhysicalSize::new(w, h)) {
+            // Applied at once (no Resized event on some platforms).
+            if size != self.last_size {
+                self.counters.resizes_seen += 1;
+                self.last_size = size;
+            }
+            self.dirty = true;
+        }
+    }
+
+    /// The stats JSON (before teardown).
+    fn stats(&self) -> Value {
+        let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
+        let summaries = profiler::stage_summaries(&frames);
+        let stage = |name: &str| summaries.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
+        let intervals: Vec<f64> = self.intervals.iter().copied().collect();
+        let interval = profiler::Summary::of(&intervals);
+        let info = &self.device().info;
+        let s = &self.renderer.settings;
+        let last = frames.last();
+        let st = last.and_then(|r| r.state);
+        let light = &self.renderer.scene.lights[0];
+        json!({
+            "device": {"name": info.name, "driver": info.driver, "kind": crate::vk::context::kind_name(info.kind)},
+            "camera": self.camera_name,
+            "camera_position": self.orbit.camera().position.to_array(),
+            "light": {"position": light.position.to_array(), "target": light.target.to_array()},
+            "ior": self.ior(),
+            "method": s.method,
+            "metric": if s.method == Method::Adaptive { json!(s.metric) } else { Value::Null },
+            "level": s.level,
+            "equivalent_resolution": LEVEL0_RES << s.level,
+            "settings": s,
+            "frames_presented": self.counters.presented,
+            "counters": self.counters,
+            "swapchain_recreations": self.counters.swapchain_recreations,
+            "resizes_seen": self.counters.resizes_seen,
+            "minimized_frames_skipped": self.counters.minimized_frames_skipped,
+            "swapchain": {
+                "format": self.swapchain.as_ref().map(|s| format!("{:?}", s.format.format)),
+                "present_mode": self.swapchain.as_ref().map(|s| format!("{:?}", s.present_mode)),
+                "extent": self.swapchain.as_ref().map(|s| [s.extent.width, s.extent.height]),
+                "image_count": self.swapchain.as_ref().map(|s| s.images.len()),
+                "transfer_src": self.swapchain.as_ref().map(|s| s.usage.contains(vk::ImageUsageFlags::TRANSFER_SRC)),
+                "live_at_exit": swapchain::live_counts(),
+                "max_images_per_swapchain": self.counters.max_images_per_swapchain,
+            },
+            "photons_splatted": st.map(|x| x.photons_total).unwrap_or(0),
+            "host_readbacks_per_frame": last.map(|r| r.host_readbacks).unwrap_or(0),
+            "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
+            "profiled_frames": frames.len(),
+            "gpu_ms": profiler::summaries_json(&summaries),
+            "gpu_total_ms": stage("gpu_total"),
+            "frame_ms": stage("frame_wall"),
+            "present_interval_ms": interval,
+            "fps": if interval.median > 0.0 { 1e3 / interval.median } else { 0.0 },
+        })
+    }
+}
+
+fn push_bounded<T>(q: &mut VecDeque<T>, v: T) {
+    if q.len() == PROFILE_FRAMES {
+        q.pop_front();
+    }
+    q.push_back(v);
+}
+
+/// `prefix-001.ext`, `prefix-002.ext`, ...: the first name not taken in the current directory.
+fn free_name(prefix: &str, ext: &str) -> PathBuf {
+    (1..).map(|i| PathBuf::from(format!("{prefix}-{i:03}.{ext}"))).find(|p| !p.exists()).expect("a free file name")
+}
+
+/// After a frame, set the batch slots that GPU-driven batching records next time: `commands::Session::frame`'s
+/// policy, without its re-render (an acquired swapchain image is presented once). Returns true when the frame
+/// left tiles untraversed; its caustic is then incomplete for that one frame.
+pub fn adapt_batch_slots(renderer: &mut Renderer, report: &FrameReport) -> bool {
+    let Some(st) = report.state.as_ref() else {
+        return false;
+    };
+    if report.unfinished_tiles == 0 || report.batch_slots >= MAX_BATCHES {
+        if report.batch_slots > 1 {
+            renderer.slots_hint = (st.slots_used + st.slots_used / 4 + 1).min(MAX_BATCHES);
+        }
+        return report.unfinished_tiles > 0;
+    }
+    let needed = st.slots_used + st.stack_size;
+    renderer.slots_hint = (needed.max(report.batch_slots) * 2).min(MAX_BATCHES);
+    true
+}
