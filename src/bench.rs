@@ -67,6 +67,9 @@ pub struct BenchArgs {
     /// Photon budget (MiB).
     #[arg(long, default_value_t = 64.0)]
     pub photon_budget: f64,
+    /// Do not run anything: re-render the Markdown and the plot from a JSON file a previous run wrote.
+    #[arg(long)]
+    pub from_json: Option<PathBuf>,
     #[arg(long)]
     pub json: Option<PathBuf>,
     #[arg(long)]
@@ -201,9 +204,17 @@ fn stage_median(frames: &[FrameReport], prefix: &str) -> f64 {
     median_of(frames, |f| f.stages.iter().filter(|(l, _)| l.starts_with(prefix)).map(|(_, ms)| ms).sum())
 }
 
+fn write_reports(args: &BenchArgs, device: &str, rows: &[BenchRow]) -> AppResult<()> {
+    if let Some(p) = &args.markdown {
+        image_io::write_text(p, &format!("Device: {device}\n\n{}", bench_report::markdown_report(rows)))?;
+    }
+    if let Some(p) = &args.plot {
+        bench_report::svg_plot(rows, p)?;
+    }
+    Ok(())
+}
+
 pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
-    let levels = parse_levels(&args.levels)?;
-    let pts = points(args)?;
     for p in [&args.json, &args.markdown, &args.plot].into_iter().flatten() {
         if let Some(d) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
             if !d.is_dir() {
@@ -211,6 +222,20 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             }
         }
     }
+    if let Some(src) = &args.from_json {
+        let text = std::fs::read_to_string(src)
+            .map_err(|e| AppError::BadInput(format!("{}: cannot read: {e}", src.display())))?;
+        let doc: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| AppError::BadInput(format!("{}: not a bench JSON: {e}", src.display())))?;
+        let rows: Vec<BenchRow> = serde_json::from_value(doc["rows"].clone())
+            .map_err(|e| AppError::BadInput(format!("{}: rows: {e}", src.display())))?;
+        let device = doc["device"].as_str().unwrap_or("").to_string();
+        write_reports(args, &device, &rows)?;
+        println!("{}", bench_report::markdown_report(&rows));
+        return Ok(());
+    }
+    let levels = parse_levels(&args.levels)?;
+    let pts = points(args)?;
     let scenes = if args.scenes.is_empty() { vec![crate::commands::default_scene()] } else { args.scenes.clone() };
     let mut rows: Vec<BenchRow> = Vec::new();
     let mut device = String::new();
@@ -331,13 +356,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
     if let Some(p) = &args.json {
         image_io::write_text(p, &serde_json::to_string_pretty(&doc).unwrap_or_default())?;
     }
-    let table = bench_report::markdown_table(&rows);
-    if let Some(p) = &args.markdown {
-        image_io::write_text(p, &format!("Device: {device}\n\n{table}"))?;
-    }
-    if let Some(p) = &args.plot {
-        bench_report::svg_plot(&rows, p)?;
-    }
-    println!("{table}");
+    write_reports(args, &device, &rows)?;
+    println!("{}", bench_report::markdown_table(&rows));
     Ok(())
 }

@@ -27,13 +27,21 @@ pub struct BenchRow {
     pub photons: u64,
     pub gpu_ms_median: f64,
     pub frame_ms_median: f64,
+    // JSON has no NaN: serde_json writes it as null (no reference was used), and these read null back as NaN.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub rel_l1_64: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub rel_l1_256: f64,
+    #[serde(deserialize_with = "f64_or_nan")]
     pub flux_ratio: f64,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "f64_or_nan")]
     pub peak_offset_m: f64,
     #[serde(default)]
     pub extra: serde_json::Value,
+}
+
+fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl BenchRow {
@@ -318,4 +326,154 @@ mod tests {
         assert!(std::fs::read_to_string(&path).unwrap().contains("no plottable rows"));
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+fn extra_f64(r: &BenchRow, key: &str) -> f64 {
+    r.extra.get(key).and_then(|v| v.as_f64()).unwrap_or(f64::NAN)
+}
+
+fn series_key(r: &BenchRow) -> String {
+    match &r.metric {
+        Some(m) => format!("{} {}", r.method, m),
+        None => r.method.clone(),
+    }
+}
+
+/// Wyman & Nichols' Table 1 layout: photons splatted by each method at each equivalent grid, per scene, beside
+/// the full grid (what a caustic map that emits every texel of its photon buffer would splat). Only the rows of
+/// GPU-driven, default work-group runs are used (photon counts do not depend on either).
+pub fn photon_table(rows: &[BenchRow]) -> String {
+    let mut out = String::new();
+    let mut scenes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+    }
+    for scene in scenes {
+        let rs: Vec<&BenchRow> = rows.iter().filter(|r| r.scene == scene && r.driven == "gpu").collect();
+        let mut methods: Vec<String> = Vec::new();
+        let mut levels: Vec<u32> = Vec::new();
+        for r in &rs {
+            let k = series_key(r);
+            if !methods.contains(&k) {
+                methods.push(k);
+            }
+            if !levels.contains(&r.level) {
+                levels.push(r.level);
+            }
+        }
+        levels.sort_unstable();
+        out.push_str(&format!("\n**{scene}**: photons splatted\n\n| grid | full grid |"));
+        for m in &methods {
+            out.push_str(&format!(" {m} |"));
+        }
+        out.push_str("\n|--:|--:|");
+        out.push_str(&"--:|".repeat(methods.len()));
+        out.push('\n');
+        for l in levels {
+            let res = 64u64 << l;
+            out.push_str(&format!("| {res}² | {} |", res * res));
+            for m in &methods {
+                match rs.iter().find(|r| r.level == l && &series_key(r) == m) {
+                    Some(r) => out.push_str(&format!(" {} |", r.photons)),
+                    None => out.push_str(" – |"),
+                }
+            }
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// GPU-driven against CPU-driven, per scene, method and level: frame wall time, and the traversal phase alone
+/// (traverse + stats + the CPU-driven host round trips, from `extra`).
+pub fn driven_table(rows: &[BenchRow]) -> String {
+    let mut out = String::from(
+        "| scene | method | level | photons | frame ms, GPU-driven | frame ms, CPU-driven | speedup | traversal ms, GPU-driven | traversal ms, CPU-driven | speedup | host readbacks (CPU-driven) |\n\
+         |---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+    );
+    let phase = |r: &BenchRow| {
+        extra_f64(r, "traverse_ms") + extra_f64(r, "stats_ms") + extra_f64(r, "host_roundtrip_ms").max(0.0)
+    };
+    for g in rows.iter().filter(|r| r.driven == "gpu") {
+        let Some(c) = rows
+            .iter()
+            .find(|c| c.driven == "cpu" && c.scene == g.scene && c.level == g.level && series_key(c) == series_key(g))
+        else {
+            continue;
+        };
+        out.push_str(&format!(
+            "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2}x | {:.2} | {:.2} | {:.2}x | {} |\n",
+            cell(&g.scene),
+            cell(&series_key(g)),
+            g.level,
+            g.photons,
+            g.frame_ms_median,
+            c.frame_ms_median,
+            c.frame_ms_median / g.frame_ms_median,
+            phase(g),
+            phase(c),
+            phase(c) / phase(g),
+            c.extra.get("host_readbacks_per_frame").and_then(|v| v.as_u64()).unwrap_or(0),
+        ));
+    }
+    out
+}
+
+/// The traversal work-group sweep: per scene and level, GPU frame ms and traversal ms for each work-group side.
+pub fn wg_table(rows: &[BenchRow]) -> String {
+    let mut wgs: Vec<u64> = rows.iter().filter_map(|r| r.extra.get("traverse_wg").and_then(|v| v.as_u64())).collect();
+    wgs.sort_unstable();
+    wgs.dedup();
+    let mut out = String::from("| scene | method | level | photons |");
+    for w in &wgs {
+        out.push_str(&format!(" {w}x{w}: GPU ms (traverse ms) |"));
+    }
+    out.push_str("\n|---|---|--:|--:|");
+    out.push_str(&"--:|".repeat(wgs.len()));
+    out.push('\n');
+    let mut seen: Vec<(String, String, u32)> = Vec::new();
+    for r in rows {
+        let key = (r.scene.clone(), series_key(r), r.level);
+        if seen.contains(&key) {
+            continue;
+        }
+        seen.push(key.clone());
+        out.push_str(&format!("| {} | {} | {} | {} |", cell(&key.0), cell(&key.1), key.2, r.photons));
+        for w in &wgs {
+            match rows.iter().find(|x| {
+                x.scene == key.0
+                    && series_key(x) == key.1
+                    && x.level == key.2
+                    && x.extra.get("traverse_wg").and_then(|v| v.as_u64()) == Some(*w)
+            }) {
+                Some(x) => out.push_str(&format!(" {:.2} ({:.2}) |", x.gpu_ms_median, extra_f64(x, "traverse_ms"))),
+                None => out.push_str(" – |"),
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Everything that applies to these rows: the full table, then the pivots.
+pub fn markdown_report(rows: &[BenchRow]) -> String {
+    let mut out = markdown_table(rows);
+    let methods: std::collections::BTreeSet<String> = rows.iter().map(series_key).collect();
+    if methods.len() > 1 {
+        out.push_str("\n### Photons splatted (the layout of Wyman & Nichols' Table 1)\n");
+        out.push_str(&photon_table(rows));
+    }
+    if rows.iter().any(|r| r.driven == "cpu") && rows.iter().any(|r| r.driven == "gpu") {
+        out.push_str("\n### GPU-driven against CPU-driven\n\n");
+        out.push_str(&driven_table(rows));
+    }
+    let wgs: std::collections::BTreeSet<u64> =
+        rows.iter().filter_map(|r| r.extra.get("traverse_wg").and_then(|v| v.as_u64())).collect();
+    if wgs.len() > 1 {
+        out.push_str("\n### Traversal work-group size\n\n");
+        out.push_str(&wg_table(rows));
+    }
+    out
 }
