@@ -43,6 +43,9 @@ pub struct BenchArgs {
     /// Timed frames per point (after one untimed warm-up frame).
     #[arg(long, default_value_t = 3)]
     pub frames: u32,
+    /// Seconds of untimed rendering before the first point of each scene (clock ramp-up, shader compilation).
+    #[arg(long, default_value_t = 2.0)]
+    pub warmup_s: f64,
     /// Skip the remaining levels of a method once one frame takes longer than this (seconds).
     #[arg(long, default_value_t = 20.0)]
     pub max_frame_s: f64,
@@ -252,6 +255,12 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
         let mut session = Session::open(&scene_args, base.clone())?;
         device = format!("{} ({})", session.device().info.name, session.device().info.driver);
         let refs = references(args, scene_path, session.width, session.height)?;
+        // GPUs ramp their clocks up under load, and lavapipe compiles shaders on first use: render for a while
+        // before the first timed point, or it comes out several times slower than the later ones.
+        let warm = Instant::now();
+        while warm.elapsed().as_secs_f64() < args.warmup_s {
+            session.frame(None)?;
+        }
         let name = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         for p in &pts {
             for &level in &levels {
