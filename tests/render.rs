@@ -117,7 +117,8 @@ fn no_dielectric_records_no_caustic_pass() {
 #[test]
 fn directional_light_direct_flux() {
     let dir = out_dir("directional_direct");
-    let (s, _) = render(&dir, "d", &scene("directional.toml"), &["--camera", "top", "--aov", "direct", "--size", "256x256"]);
+    let (s, _) =
+        render(&dir, "d", &scene("directional.toml"), &["--camera", "top", "--aov", "direct", "--size", "256x256"]);
     let expected = 4.0 - std::f64::consts::PI * 0.09;
     let flux = s["aov_flux_w"].as_f64().unwrap();
     // Measured 3.71779 W (+0.013%): the shadow of the tessellated sphere, sampled at 256² pixels.
