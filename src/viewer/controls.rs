@@ -142,7 +142,12 @@ pub fn help_text() -> String {
 pub fn help_markdown() -> String {
     let mut out = String::from("| Input | Action |\n|---|---|\n");
     for c in CONTROLS {
-        out.push_str(&format!("| {} | {} |\n", c.input, c.help));
+        let input = if c.keys.is_empty() {
+            c.input.to_string()
+        } else {
+            c.input.split(' ').map(|k| format!("`{k}`")).collect::<Vec<_>>().join(" ")
+        };
+        out.push_str(&format!("| {input} | {} |\n", c.help));
     }
     out
 }

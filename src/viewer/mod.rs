@@ -44,8 +44,11 @@ use winit::window::{Window, WindowId};
 
 /// Frames kept for the live profiler (P, T and the stats).
 pub const PROFILE_FRAMES: usize = 120;
-/// Light animation: one turn around the vertical axis in this many seconds.
+/// Light animation: one turn around the vertical axis in this many seconds...
 const ANIMATION_PERIOD_S: f32 = 20.0;
+/// ...counting at most this much per frame, so that slow frames (lavapipe) turn it in small steps and a pause
+/// (a minimized window) does not make it jump.
+const ANIMATION_MAX_STEP_S: f32 = 0.25;
 /// A light straight above its target is tilted by this much when animated, so that its orbit moves it.
 const ANIMATION_TILT_DEG: f32 = 25.0;
 
@@ -87,6 +90,9 @@ pub struct ViewArgs {
     /// Testing: fail with a device loss when frame N is about to be rendered (checks the error path and exit).
     #[arg(long, hide = true)]
     pub inject_device_loss: Option<u32>,
+    /// Print the controls as a Markdown table (for the README) and exit.
+    #[arg(long, hide = true)]
+    pub print_controls: bool,
 }
 
 fn check_parent(p: &Path) -> AppResult<()> {
@@ -106,6 +112,10 @@ fn pick_camera(scene: &Scene, name: Option<&str>) -> AppResult<Camera> {
 }
 
 pub fn run(args: &ViewArgs) -> AppResult<()> {
+    if args.print_controls {
+        print!("{}", help_markdown());
+        return Ok(());
+    }
     let (width, height) = parse_size(&args.size)?;
     let settings = args.method.settings()?;
     if let Some(p) = &args.screenshot {
@@ -615,7 +625,7 @@ impl Viewer {
         let mut changed = false;
         for o in scene.objects.iter_mut() {
             if let Material::Dielectric { ior } = &mut o.material {
-                *ior = (*ior + delta).clamp(1.0, 3.0);
+                *ior = (*ior + delta).clamp(1.0, 4.0);
                 changed = true;
             }
         }
@@ -729,7 +739,7 @@ impl Viewer {
             self.dirty = false;
         }
         let start = Instant::now();
-        let dt = self.last_frame_start.map(|t| (start - t).as_secs_f32().min(0.1)).unwrap_or(0.0);
+        let dt = self.last_frame_start.map(|t| (start - t).as_secs_f32().min(ANIMATION_MAX_STEP_S)).unwrap_or(0.0);
         self.last_frame_start = Some(start);
         let extent = self.swapchain.as_ref().expect("swapchain").extent;
         // Everything that may fail for reasons other than a broken device happens before the acquire: once an image
