@@ -12,9 +12,12 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 shared uint s_cand;
 shared uint s_emitted;
 shared uint s_dropped;
+shared uint s_base;
+shared bool s_reserved;
 
 void main() {
-    if (gl_LocalInvocationIndex == 0u) {
+    uint lid = gl_LocalInvocationIndex;
+    if (lid == 0u) {
         s_cand = 0u;
         s_emitted = 0u;
         s_dropped = 0u;
@@ -23,29 +26,42 @@ void main() {
     uint level = pc.level;
     uint n = LEVEL0_RES << level;
     uvec2 xy = uvec2(gl_GlobalInvocationID.x, pc.row0 + gl_GlobalInvocationID.y);
+    bool emit = false;
+    uint slot = 0u;
     if (xy.x < n && gl_GlobalInvocationID.y < pc.rows && xy.y < n) {
         atomicAdd(s_cand, 1u);
         View v = u_frame.photon_view;
         float side = v.window.z / float(n);
         vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
-        if (leaf_covered(level, xy) && view_in_cone(v, center)) {
-            uint base = atomicAdd(state.used, 1u);
-            if (base < state.capacity) {
-                uint i = atomicAdd(state.emit_count, 1u);
-                photons[state.capacity - 1u - i] = pack_cell(level, xy.x, xy.y, 0u);
-                atomicAdd(s_emitted, 1u);
-            } else {
-                atomicAdd(state.used, 0u - 1u);
-                atomicAdd(state.overflow_dropped, 1u);
-            }
+        emit = leaf_covered(level, xy) && view_in_cone(v, center);
+        if (emit) {
+            slot = atomicAdd(s_emitted, 1u);
         } else {
             atomicAdd(s_dropped, 1u);
         }
     }
     barrier();
-    if (gl_LocalInvocationIndex == 0u) {
+    if (lid == 0u) {
+        // One reservation per work group.
+        s_reserved = false;
+        if (s_emitted > 0u) {
+            uint base = atomicAdd(state.used, s_emitted);
+            if (base + s_emitted <= state.capacity) {
+                s_reserved = true;
+                s_base = atomicAdd(state.emit_count, s_emitted);
+            } else {
+                atomicAdd(state.used, 0u - s_emitted);
+                atomicAdd(state.overflow_dropped, s_emitted);
+            }
+        }
+    }
+    barrier();
+    if (emit && s_reserved) {
+        photons[state.capacity - 1u - (s_base + slot)] = pack_cell(level, xy.x, xy.y, 0u);
+    }
+    if (lid == 0u) {
         if (s_cand > 0u) atomicAdd(state.levels[level].candidates, s_cand);
-        if (s_emitted > 0u) atomicAdd(state.levels[level].emitted, s_emitted);
+        if (s_reserved) atomicAdd(state.levels[level].emitted, s_emitted);
         if (s_dropped > 0u) atomicAdd(state.levels[level].dropped, s_dropped);
     }
 }

@@ -1,7 +1,8 @@
 #version 460
 // Traverse one level of the photon quadtree (Wyman & Nichols sec. 3.2, Piao's traversal shader). Each invocation
 // takes one candidate cell: a cell that covers no refractor (or lies outside the spot cone) is dropped; a final
-// cell is emitted as a photon; otherwise its four children are appended to the photon buffer with atomicAdd.
+// cell is emitted as a photon; otherwise its four children are appended to the photon buffer with atomicAdd
+// (one reservation per work group, so a group of 64 cells costs a few global atomics, not 64).
 // A cell is final at the maximal level, or, under the max-error metric, when its 2x2 children land within the
 // error bound of one another in the caustic map: then one photon carries the whole cell's flux.
 #include "common/photon_bindings.glsl"
@@ -14,32 +15,16 @@
 #endif
 layout(local_size_x = TRAVERSE_WG_SIDE, local_size_y = TRAVERSE_WG_SIDE) in;
 
-shared uint s_refined;
-shared uint s_emitted;
+shared uint s_emit_n;      // photons this work group emits
+shared uint s_child_n;     // cells this work group refines (4 entries each)
 shared uint s_dropped;
+shared uint s_emit_base;
+shared uint s_child_base;
+shared bool s_reserved;
 
-// Reserve k entries of the photon buffer. On overflow the batch is aborted (and later split), or, with batching
-// off, the entries are dropped and counted. Either way nothing is written past the buffer.
-bool reserve(uint k) {
-    uint base = atomicAdd(state.used, k);
-    if (base + k <= state.capacity) return true;
-    if (state.batching != 0u) {
-        atomicExchange(state.aborted, 1u);
-    } else {
-        // Give the entries back so that smaller requests (single photons) can still fit; meanwhile a concurrent
-        // request may fail spuriously, which only drops (and counts) more work.
-        atomicAdd(state.used, 0u - k);
-        atomicAdd(state.overflow_dropped, k);
-    }
-    return false;
-}
-
-void emit(uvec2 cell) {
-    if (!reserve(1u)) return;
-    uint i = atomicAdd(state.emit_count, 1u);
-    photons[state.capacity - 1u - i] = cell;
-    atomicAdd(s_emitted, 1u);
-}
+const uint ACT_DROP = 0u;
+const uint ACT_EMIT = 1u;
+const uint ACT_REFINE = 2u;
 
 const uint CHILDREN_REFINE = 0xFFFFFFFFu;
 const uint CHILDREN_DROP = 0xFFFFFFFEu;
@@ -69,69 +54,92 @@ uint children_verdict(uint level, uvec2 xy) {
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
-void process(uint level, uvec2 cell) {
+// Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined.
+uint decide(uint level, uvec2 cell, out uvec2 out_cell) {
+    out_cell = cell;
     uvec2 xy = cell_xy(cell);
     View v = u_frame.photon_view;
     float side = cell_side(level);
     vec2 lo = v.window.xy + vec2(xy) * side;
     vec2 hi = lo + side;
-    if (!cell_any_covered(level, xy) || !view_rect_touches_cone(v, lo, hi)) {
-        atomicAdd(s_dropped, 1u);
-        return;
-    }
-    uint max_level = u_frame.traversal.x;
-    if (level >= max_level) {
+    if (!cell_any_covered(level, xy) || !view_rect_touches_cone(v, lo, hi)) return ACT_DROP;
+    if (level >= u_frame.traversal.x) {
         // The same test as the dense method, so that max-level traversal emits exactly dense's photons.
-        if (leaf_covered(level, xy) && view_in_cone(v, 0.5 * (lo + hi))) {
-            emit(cell);
-        } else {
-            atomicAdd(s_dropped, 1u);
-        }
-        return;
+        return leaf_covered(level, xy) && view_in_cone(v, 0.5 * (lo + hi)) ? ACT_EMIT : ACT_DROP;
     }
     bool max_error = (u_frame.traversal.y & 0xFFu) == 1u;
     if (max_error && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
         // Only fully covered cells inside the cone may converge: then the cluster's flux I*Omega(cell) equals the
         // sum over the leaves that max-level traversal would have emitted.
         uint r = children_verdict(level, xy);
-        if (r == CHILDREN_DROP) {
-            atomicAdd(s_dropped, 1u);
-            return;
-        }
+        if (r == CHILDREN_DROP) return ACT_DROP;
         if (r != CHILDREN_REFINE) {
-            emit(pack_cell(level, xy.x, xy.y, r));
-            return;
+            out_cell = pack_cell(level, xy.x, xy.y, r);
+            return ACT_EMIT;
         }
     }
-    if (!reserve(4u)) return;
-    uint i = atomicAdd(state.write_count, 4u);
-    uint base = state.read_offset + state.read_count + i;
-    for (uint k = 0u; k < 4u; k++) {
-        photons[base + k] = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), 0u);
-    }
-    atomicAdd(s_refined, 1u);
+    return ACT_REFINE;
 }
 
 void main() {
-    if (gl_LocalInvocationIndex == 0u) {
-        s_refined = 0u;
-        s_emitted = 0u;
+    uint lid = gl_LocalInvocationIndex;
+    if (lid == 0u) {
+        s_emit_n = 0u;
+        s_child_n = 0u;
         s_dropped = 0u;
     }
     barrier();
     uint per_group = TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE;
     uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    uint i = group * per_group + gl_LocalInvocationIndex;
+    uint i = group * per_group + lid;
+    uint level = pc.level;
+    uint action = ACT_DROP;
+    uvec2 out_cell = uvec2(0u);
+    uint slot = 0u;
     if (state.aborted == 0u && i < state.read_count) {
         uvec2 cell = photons[state.read_offset + i];
-        process(cell_level(cell), cell);
+        action = decide(cell_level(cell), cell, out_cell);
+        if (action == ACT_EMIT) slot = atomicAdd(s_emit_n, 1u);
+        if (action == ACT_REFINE) slot = atomicAdd(s_child_n, 1u);
+        if (action == ACT_DROP) atomicAdd(s_dropped, 1u);
     }
     barrier();
-    if (gl_LocalInvocationIndex == 0u) {
+    if (lid == 0u) {
+        // One reservation per work group for all its photons and children. On overflow the batch is aborted (and
+        // later split) or, with batching off, the group's entries are dropped and counted; either way nothing is
+        // written past the buffer.
+        uint entries = s_emit_n + 4u * s_child_n;
+        s_reserved = false;
+        if (entries > 0u) {
+            uint base = atomicAdd(state.used, entries);
+            if (base + entries <= state.capacity) {
+                s_reserved = true;
+                s_emit_base = atomicAdd(state.emit_count, s_emit_n);
+                s_child_base = atomicAdd(state.write_count, 4u * s_child_n);
+            } else if (state.batching != 0u) {
+                atomicExchange(state.aborted, 1u);
+            } else {
+                atomicAdd(state.used, 0u - entries);
+                atomicAdd(state.overflow_dropped, entries);
+            }
+        }
+    }
+    barrier();
+    if (s_reserved) {
+        if (action == ACT_EMIT) {
+            photons[state.capacity - 1u - (s_emit_base + slot)] = out_cell;
+        } else if (action == ACT_REFINE) {
+            uvec2 xy = cell_xy(out_cell);
+            uint base = state.read_offset + state.read_count + s_child_base + 4u * slot;
+            for (uint k = 0u; k < 4u; k++) {
+                photons[base + k] = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), 0u);
+            }
+        }
+    }
+    if (lid == 0u) {
         // One atomic per work group instead of one per invocation.
-        uint l = pc.level;
-        if (s_refined > 0u) atomicAdd(state.batch_levels[l].refined, s_refined);
-        if (s_emitted > 0u) atomicAdd(state.batch_levels[l].emitted, s_emitted);
-        if (s_dropped > 0u) atomicAdd(state.batch_levels[l].dropped, s_dropped);
+        if (s_reserved && s_child_n > 0u) atomicAdd(state.batch_levels[level].refined, s_child_n);
+        if (s_reserved && s_emit_n > 0u) atomicAdd(state.batch_levels[level].emitted, s_emit_n);
+        if (s_dropped > 0u) atomicAdd(state.batch_levels[level].dropped, s_dropped);
     }
 }

@@ -223,111 +223,6 @@ pub fn svg_string(rows: &[BenchRow]) -> Result<String, Box<dyn std::error::Error
     Ok(svg)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn row(scene: &str, method: &str, metric: Option<&str>, level: u32, gpu: f64, err: f64) -> BenchRow {
-        BenchRow {
-            scene: scene.into(),
-            method: method.into(),
-            metric: metric.map(Into::into),
-            level,
-            equivalent_res: 64 << level,
-            driven: "gpu".into(),
-            photons: 4096 << (2 * level),
-            gpu_ms_median: gpu,
-            frame_ms_median: gpu * 1.5,
-            rel_l1_64: err,
-            rel_l1_256: err * 2.0,
-            flux_ratio: 0.99,
-            peak_offset_m: 0.01,
-            extra: serde_json::json!({ "note": "made up" }),
-        }
-    }
-
-    fn rows() -> Vec<BenchRow> {
-        vec![
-            row("sphere", "dense", None, 3, 40.0, 0.05),
-            row("sphere", "dense", None, 1, 5.0, 0.2),
-            row("sphere", "adaptive", Some("max-error"), 3, 12.0, 0.06),
-            row("sphere", "adaptive", Some("max-error"), 5, 30.0, 0.02),
-            row("bunny", "adaptive", Some("max-level"), 4, 25.0, 0.08),
-            row("bunny", "adaptive", Some("max-level"), 2, f64::NAN, 0.1),
-        ]
-    }
-
-    #[test]
-    fn table_has_a_line_per_row() {
-        let t = markdown_table(&rows());
-        let lines: Vec<&str> = t.lines().collect();
-        assert_eq!(lines.len(), 2 + 6);
-        assert!(lines[0].starts_with("| scene | method | metric | level |"));
-        assert_eq!(
-            lines[2],
-            "| sphere | dense | – | 3 | 512 | gpu | 262144 | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
-        );
-        assert!(lines[4].contains("| adaptive | max-error | 3 |"));
-        let cols = lines[0].matches('|').count();
-        assert!(lines.iter().all(|l| l.matches('|').count() == cols), "{t}");
-    }
-
-    #[test]
-    fn rows_round_trip_through_json() {
-        let r = rows();
-        let json = serde_json::to_string(&r[..5]).unwrap();
-        let back: Vec<BenchRow> = serde_json::from_str(&json).unwrap();
-        assert_eq!(back, r[..5].to_vec());
-        // Optional fields may be absent.
-        let minimal = r#"{"scene":"s","method":"dense","level":0,"equivalent_res":64,"driven":"gpu","photons":1,
-            "gpu_ms_median":1.0,"frame_ms_median":2.0,"rel_l1_64":0.1,"rel_l1_256":0.2,"flux_ratio":1.0}"#;
-        let m: BenchRow = serde_json::from_str(minimal).unwrap();
-        assert_eq!((m.metric, m.peak_offset_m, m.extra), (None, 0.0, serde_json::Value::Null));
-    }
-
-    #[test]
-    fn series_group_and_sort_and_skip_unplottable_points() {
-        let s = plot_series(&rows());
-        let names: Vec<&str> = s.iter().map(|x| x.0.as_str()).collect();
-        assert_eq!(names, ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level"]);
-        assert_eq!(s[0].1, vec![(5.0, 0.2), (40.0, 0.05)]);
-        assert_eq!(s[2].1.len(), 1, "the NaN row is left out");
-    }
-
-    #[test]
-    fn key_points_are_one_two_five() {
-        assert_eq!(key_points(&(0.015..0.25)), vec![0.02, 0.05, 0.1, 0.2]);
-        assert_eq!(key_points(&(3.0..60.0)), vec![5.0, 10.0, 20.0, 50.0]);
-    }
-
-    #[test]
-    fn axis_labels_are_short() {
-        assert_eq!(short(10.0), "10");
-        assert_eq!(short(0.05), "0.05");
-        assert_eq!(short(0.12345), "0.123");
-        assert_eq!(short(1234.6), "1235");
-        assert_eq!(short(2.5), "2.5");
-    }
-
-    #[test]
-    fn svg_plot_writes_a_log_log_chart() {
-        let dir = std::env::temp_dir().join(format!("caustics-bench-report-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("plot.svg");
-        svg_plot(&rows(), &path).unwrap();
-        let svg = std::fs::read_to_string(&path).unwrap();
-        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        for label in ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level", "GPU ms"]
-        {
-            assert!(svg.contains(label), "missing {label}");
-        }
-        // No rows at all still gives a valid (empty) chart.
-        svg_plot(&[], &path).unwrap();
-        assert!(std::fs::read_to_string(&path).unwrap().contains("no plottable rows"));
-        let _ = std::fs::remove_dir_all(&dir);
-    }
-}
-
 fn extra_f64(r: &BenchRow, key: &str) -> f64 {
     r.extra.get(key).and_then(|v| v.as_f64()).unwrap_or(f64::NAN)
 }
@@ -476,4 +371,109 @@ pub fn markdown_report(rows: &[BenchRow]) -> String {
         out.push_str(&wg_table(rows));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(scene: &str, method: &str, metric: Option<&str>, level: u32, gpu: f64, err: f64) -> BenchRow {
+        BenchRow {
+            scene: scene.into(),
+            method: method.into(),
+            metric: metric.map(Into::into),
+            level,
+            equivalent_res: 64 << level,
+            driven: "gpu".into(),
+            photons: 4096 << (2 * level),
+            gpu_ms_median: gpu,
+            frame_ms_median: gpu * 1.5,
+            rel_l1_64: err,
+            rel_l1_256: err * 2.0,
+            flux_ratio: 0.99,
+            peak_offset_m: 0.01,
+            extra: serde_json::json!({ "note": "made up" }),
+        }
+    }
+
+    fn rows() -> Vec<BenchRow> {
+        vec![
+            row("sphere", "dense", None, 3, 40.0, 0.05),
+            row("sphere", "dense", None, 1, 5.0, 0.2),
+            row("sphere", "adaptive", Some("max-error"), 3, 12.0, 0.06),
+            row("sphere", "adaptive", Some("max-error"), 5, 30.0, 0.02),
+            row("bunny", "adaptive", Some("max-level"), 4, 25.0, 0.08),
+            row("bunny", "adaptive", Some("max-level"), 2, f64::NAN, 0.1),
+        ]
+    }
+
+    #[test]
+    fn table_has_a_line_per_row() {
+        let t = markdown_table(&rows());
+        let lines: Vec<&str> = t.lines().collect();
+        assert_eq!(lines.len(), 2 + 6);
+        assert!(lines[0].starts_with("| scene | method | metric | level |"));
+        assert_eq!(
+            lines[2],
+            "| sphere | dense | – | 3 | 512 | gpu | 262144 | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
+        );
+        assert!(lines[4].contains("| adaptive | max-error | 3 |"));
+        let cols = lines[0].matches('|').count();
+        assert!(lines.iter().all(|l| l.matches('|').count() == cols), "{t}");
+    }
+
+    #[test]
+    fn rows_round_trip_through_json() {
+        let r = rows();
+        let json = serde_json::to_string(&r[..5]).unwrap();
+        let back: Vec<BenchRow> = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, r[..5].to_vec());
+        // Optional fields may be absent.
+        let minimal = r#"{"scene":"s","method":"dense","level":0,"equivalent_res":64,"driven":"gpu","photons":1,
+            "gpu_ms_median":1.0,"frame_ms_median":2.0,"rel_l1_64":0.1,"rel_l1_256":0.2,"flux_ratio":1.0}"#;
+        let m: BenchRow = serde_json::from_str(minimal).unwrap();
+        assert_eq!((m.metric, m.peak_offset_m, m.extra), (None, 0.0, serde_json::Value::Null));
+    }
+
+    #[test]
+    fn series_group_and_sort_and_skip_unplottable_points() {
+        let s = plot_series(&rows());
+        let names: Vec<&str> = s.iter().map(|x| x.0.as_str()).collect();
+        assert_eq!(names, ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level"]);
+        assert_eq!(s[0].1, vec![(5.0, 0.2), (40.0, 0.05)]);
+        assert_eq!(s[2].1.len(), 1, "the NaN row is left out");
+    }
+
+    #[test]
+    fn key_points_are_one_two_five() {
+        assert_eq!(key_points(&(0.015..0.25)), vec![0.02, 0.05, 0.1, 0.2]);
+        assert_eq!(key_points(&(3.0..60.0)), vec![5.0, 10.0, 20.0, 50.0]);
+    }
+
+    #[test]
+    fn axis_labels_are_short() {
+        assert_eq!(short(10.0), "10");
+        assert_eq!(short(0.05), "0.05");
+        assert_eq!(short(0.12345), "0.123");
+        assert_eq!(short(1234.6), "1235");
+        assert_eq!(short(2.5), "2.5");
+    }
+
+    #[test]
+    fn svg_plot_writes_a_log_log_chart() {
+        let dir = std::env::temp_dir().join(format!("caustics-bench-report-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("plot.svg");
+        svg_plot(&rows(), &path).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        for label in ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level", "GPU ms"]
+        {
+            assert!(svg.contains(label), "missing {label}");
+        }
+        // No rows at all still gives a valid (empty) chart.
+        svg_plot(&[], &path).unwrap();
+        assert!(std::fs::read_to_string(&path).unwrap().contains("no plottable rows"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
