@@ -12,7 +12,7 @@ fn sphere_caustic_flux_matches_two_refraction_figure() {
         render(&dir, "c", SPHERE, &["--camera", "top", "--aov", "caustics", "--method", "dense", "--level", "3"]);
     let flux = s["aov_flux_w"].as_f64().unwrap();
     // DESIGN.md: light refracted exactly twice puts 0.105980 W on the floor; a two-interface method can reach only
-    // that part. Measured: 0.105941 W (-0.04%). The 1% band covers silhouette sampling at this grid and is
+    // that part. Measured: 0.105989 W (+0.01%). The 1% band covers silhouette sampling at this grid and is
     // tight enough that losing a Fresnel factor (~4%) or the solid-angle weighting fails it.
     let rel = (flux - 0.105980) / 0.105980;
     assert!(rel.abs() < 0.01, "caustic flux {flux} W ({:+.2}%)", 100.0 * rel);

@@ -12,7 +12,6 @@
 const uint HIT_OK = 0u;
 const uint HIT_OUTSIDE_CONE = 1u;
 const uint HIT_MISS = 2u;        // the cell's center does not see a refractor
-const uint HIT_BLOCKED = 3u;     // (unused: blocked texels are uncovered in the coverage pyramid)
 const uint HIT_NO_EXIT = 4u;     // no back surface found along the refracted ray
 const uint HIT_TIR = 5u;         // total internal reflection
 const uint HIT_ESCAPED = 6u;     // left the caustic map without meeting a receiver
