@@ -156,6 +156,9 @@ impl Renderer {
         report.record_ms = rec.record_time * 1e3;
         report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         report.segments = rec.ts.resolve()?;
+        if rec.ts.overflowed() {
+            log::warn!("more stages than timestamp queries: the per-stage GPU times of this frame are truncated");
+        }
         report.stages = crate::vk::query::sum_by_label(&report.segments);
         report.gpu_ms = report.stages.iter().filter(|(l, _)| *l != HOST_ROUNDTRIP).map(|(_, ms)| ms).sum();
         ctx.read_results(&mut report, aov_image).map(|img| (report, img))

@@ -194,7 +194,3 @@ const _: () = {
 pub fn pack_cell(level: u32, x: u32, y: u32, radius: u32) -> [u32; 2] {
     [(x & 0xFF_FFFF) | (radius.min(255) << 24), (y & 0xFF_FFFF) | (level << 24)]
 }
-
-pub fn unpack_cell(c: [u32; 2]) -> (u32, u32, u32, u32) {
-    (c[1] >> 24, c[0] & 0xFF_FFFF, c[1] & 0xFF_FFFF, c[0] >> 24)
-}

@@ -142,11 +142,6 @@ impl Settings {
     pub fn gbuffer_level(&self) -> u32 {
         self.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros()
     }
-
-    /// Light-grid resolution of `level`.
-    pub fn grid_res(level: u32) -> u64 {
-        (LEVEL0_RES as u64) << level
-    }
 }
 
 /// Parse `WxH`.

@@ -176,15 +176,6 @@ impl LightView {
         };
         Some(view)
     }
-
-    /// Solid angle (spot, sr) or area (directional, m²) of a texel-sized square cell of side `d` (in image-plane
-    /// units) centered at image point `xy`: the DESIGN.md midpoint formula Δ²/(1+x²+y²)^{3/2}.
-    pub fn cell_measure(&self, xy: Vec2, d: f32) -> f32 {
-        match self.kind {
-            LightKind::Spot => d * d / (1.0 + xy.length_squared()).powf(1.5),
-            LightKind::Directional => d * d,
-        }
-    }
 }
 
 /// The eye camera for a given output size.
@@ -219,14 +210,6 @@ impl CameraView {
         };
         view.fit_depth(bounds);
         view
-    }
-
-    /// Orbit helpers and fitting need to rebuild after moving.
-    pub fn look_at(&mut self, position: Vec3, target: Vec3, up_hint: Vec3) {
-        self.position = position;
-        self.forward = (target - position).normalize();
-        self.right = self.forward.cross(up_hint).normalize();
-        self.up = self.right.cross(self.forward);
     }
 
     pub fn fit_depth(&mut self, (lo, hi): (Vec3, Vec3)) {

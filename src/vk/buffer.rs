@@ -63,10 +63,6 @@ impl Buffer {
         Ok(b)
     }
 
-    pub fn is_mapped(&self) -> bool {
-        self.allocation.as_ref().and_then(|a| a.mapped_ptr()).is_some()
-    }
-
     /// Write into a host-visible buffer at a byte offset.
     pub fn write<T: bytemuck::Pod>(&mut self, offset: u64, data: &[T]) -> VkResult<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);

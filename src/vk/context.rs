@@ -139,12 +139,6 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
 }
 
-impl DeviceInfo {
-    pub fn is_cpu(&self) -> bool {
-        self.kind == vk::PhysicalDeviceType::CPU
-    }
-}
-
 /// The logical device, its one queue, and the allocator. Derefs to `ash::Device`.
 pub struct Device {
     pub instance: Arc<Instance>,
@@ -334,10 +328,6 @@ impl Device {
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
         }))
-    }
-
-    pub fn raw(&self) -> &ash::Device {
-        &self.raw
     }
 
     pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {

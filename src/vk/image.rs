@@ -111,23 +111,6 @@ impl Image {
             layer_count: 1,
         }
     }
-
-    pub fn bytes_per_texel(&self) -> u32 {
-        format_size(self.format)
-    }
-}
-
-pub fn format_size(format: vk::Format) -> u32 {
-    match format {
-        vk::Format::R32G32B32A32_SFLOAT => 16,
-        vk::Format::R16G16B16A16_SFLOAT => 8,
-        vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
-        vk::Format::R8G8B8A8_UNORM
-        | vk::Format::R8G8B8A8_SRGB
-        | vk::Format::B8G8R8A8_UNORM
-        | vk::Format::B8G8R8A8_SRGB => 4,
-        _ => 16,
-    }
 }
 
 impl Drop for Image {

@@ -12,8 +12,6 @@ type Layout = vk::ImageLayout;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
-    /// Previous contents are irrelevant, and nothing earlier on the queue needs waiting for.
-    Nothing,
     /// First use in a frame: contents are discarded, but whatever earlier frames did with the resource on this
     /// queue must be finished (an execution and memory dependency on all prior commands).
     FrameStart,
@@ -47,7 +45,6 @@ impl Access {
     pub fn info(self) -> (Stage, Acc, Layout) {
         use Access::*;
         match self {
-            Nothing => (Stage::NONE, Acc::NONE, Layout::UNDEFINED),
             FrameStart => (Stage::ALL_COMMANDS, Acc::MEMORY_WRITE | Acc::MEMORY_READ, Layout::UNDEFINED),
             ComputeRead => (Stage::COMPUTE_SHADER, Acc::SHADER_STORAGE_READ, Layout::GENERAL),
             ComputeWrite => {
