@@ -3,7 +3,7 @@
 use crate::error::{AppError, AppResult};
 use crate::image_io::{self, RgbImage};
 use crate::profiler;
-use crate::renderer::{Aov, AovData, FrameReport, Renderer};
+use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
 use crate::settings::{parse_size, Driven, Method, Metric, Settings};
 use crate::shaders::consts::*;
@@ -181,29 +181,20 @@ impl Session {
         let view = self.renderer.camera_view(&self.camera, self.width, self.height);
         loop {
             let (report, img) = self.renderer.render(&view, aov)?;
-            let Some(st) = report.state.as_ref() else {
-                return Ok((report, img));
-            };
-            let needed = st.slots_used + st.stack_size;
-            if report.unfinished_tiles == 0 || report.batch_slots >= MAX_BATCHES {
-                // Next frame: as many slots as this one used, plus a margin.
-                if report.batch_slots > 1 {
-                    self.renderer.slots_hint = (st.slots_used + st.slots_used / 4 + 1).min(MAX_BATCHES);
-                }
-                if report.unfinished_tiles > 0 {
+            match self.renderer.adapt_batch_slots(&report) {
+                SlotVerdict::Complete => return Ok((report, img)),
+                SlotVerdict::OutOfSlots => {
                     eprintln!(
                         "warning: {} tiles were not traversed: the photon budget needs more than {MAX_BATCHES} batches (raise --photon-budget)",
                         report.unfinished_tiles
                     );
+                    return Ok((report, img));
                 }
-                return Ok((report, img));
+                SlotVerdict::Incomplete => eprintln!(
+                    "batching: {} tiles pending after {} batch slots; rendering again with {}",
+                    report.unfinished_tiles, report.batch_slots, self.renderer.slots_hint
+                ),
             }
-            let slots = (needed.max(report.batch_slots) * 2).min(MAX_BATCHES);
-            eprintln!(
-                "batching: {} tiles pending after {} batch slots; rendering again with {slots}",
-                report.unfinished_tiles, report.batch_slots
-            );
-            self.renderer.slots_hint = slots;
         }
     }
 

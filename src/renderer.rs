@@ -110,6 +110,16 @@ pub struct FrameReport {
     pub guard_intact: Option<bool>,
 }
 
+/// Whether a frame traversed every tile (see [`Renderer::adapt_batch_slots`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SlotVerdict {
+    Complete,
+    /// Tiles were left over; the next frame records more slots.
+    Incomplete,
+    /// Tiles were left over with the most slots a frame records (`MAX_BATCHES`): raise the photon budget.
+    OutOfSlots,
+}
+
 /// A float or 8-bit image read back from the GPU.
 pub enum AovData {
     Float { width: u32, height: u32, rgba: Vec<[f32; 4]> },
@@ -262,6 +272,23 @@ impl Renderer {
             params: [s.error_bound, s.shadow_bias, 0.0, 0.0],
             pyramid,
         }
+    }
+
+    /// After a frame, set the batch slots GPU-driven batching records next time: as many as this frame used plus
+    /// a margin when it finished every tile; twice what it needed when tiles were left over (the frame's caustic
+    /// is then incomplete: render it again, as `commands::Session::frame` does, or accept it for one frame, as
+    /// the viewer does, since an acquired swapchain image is presented once).
+    pub fn adapt_batch_slots(&mut self, report: &FrameReport) -> SlotVerdict {
+        let Some(st) = report.state.as_ref() else { return SlotVerdict::Complete };
+        if report.unfinished_tiles == 0 || report.batch_slots >= MAX_BATCHES {
+            if report.batch_slots > 1 {
+                self.slots_hint = (st.slots_used + st.slots_used / 4 + 1).min(MAX_BATCHES);
+            }
+            return if report.unfinished_tiles == 0 { SlotVerdict::Complete } else { SlotVerdict::OutOfSlots };
+        }
+        let needed = st.slots_used + st.stack_size;
+        self.slots_hint = (needed.max(report.batch_slots) * 2).min(MAX_BATCHES);
+        SlotVerdict::Incomplete
     }
 
     /// Batch slots to record for GPU-driven adaptive traversal: one when the worst case (every cell of the photon

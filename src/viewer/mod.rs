@@ -19,7 +19,7 @@ use crate::commands::{default_scene, MethodArgs};
 use crate::error::{AppError, AppResult};
 use crate::image_io;
 use crate::profiler;
-use crate::renderer::{FrameReport, Renderer, Views};
+use crate::renderer::{FrameReport, Renderer, SlotVerdict, Views};
 use crate::scene::{Camera, Light, Material, Projection, Scene};
 use crate::settings::{parse_size, Method, Metric, Settings};
 use crate::shaders::consts::*;
@@ -780,7 +780,8 @@ impl Viewer {
         let mut finish =
             |_: &Device, cmd: vk::CommandBuffer, t: &Targets| presenter.record(cmd, &t.eye.beauty, sc, index, capture);
         let (report, _) = renderer.render_frame(&view, None, Some(&mut finish), &sync)?;
-        if adapt_batch_slots(renderer, &report) {
+        // The shared slot policy; an incomplete frame is still presented (its image can be presented once).
+        if renderer.adapt_batch_slots(&report) != SlotVerdict::Complete {
             counters.incomplete_frames += 1;
         }
         let presented = match sc.present(index)? {
@@ -947,22 +948,4 @@ fn push_bounded<T>(q: &mut VecDeque<T>, v: T) {
 /// `prefix-001.ext`, `prefix-002.ext`, ...: the first name not taken in the current directory.
 fn free_name(prefix: &str, ext: &str) -> PathBuf {
     (1..).map(|i| PathBuf::from(format!("{prefix}-{i:03}.{ext}"))).find(|p| !p.exists()).expect("a free file name")
-}
-
-/// After a frame, set the batch slots that GPU-driven batching records next time: `commands::Session::frame`'s
-/// policy, without its re-render (an acquired swapchain image is presented once). Returns true when the frame
-/// left tiles untraversed; its caustic is then incomplete for that one frame.
-pub fn adapt_batch_slots(renderer: &mut Renderer, report: &FrameReport) -> bool {
-    let Some(st) = report.state.as_ref() else {
-        return false;
-    };
-    if report.unfinished_tiles == 0 || report.batch_slots >= MAX_BATCHES {
-        if report.batch_slots > 1 {
-            renderer.slots_hint = (st.slots_used + st.slots_used / 4 + 1).min(MAX_BATCHES);
-        }
-        return report.unfinished_tiles > 0;
-    }
-    let needed = st.slots_used + st.stack_size;
-    renderer.slots_hint = (needed.max(report.batch_slots) * 2).min(MAX_BATCHES);
-    true
 }
