@@ -136,7 +136,7 @@ pub struct Renderer {
     pub recorder: Recorder,
     pub timestamps: Timestamps,
     pub targets: Option<Targets>,
-    targets_key: Option<(u32, u32, u32, u32, u64, u32)>,
+    targets_key: Option<(u32, u32, u64, u32)>,
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
@@ -211,14 +211,24 @@ impl Renderer {
         Ok(())
     }
 
+    /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
+    /// only touches the eye-sized targets, not the light maps or the photon buffer.
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
         let s = &self.settings;
-        let key = (s.gbuffer_res, s.caustic_res, width, height, s.photon_budget_mib.to_bits(), s.debug_photons);
-        if self.targets_key != Some(key) {
-            self.targets = None;
-            self.device.wait_idle()?;
-            self.targets = Some(Targets::new(&self.device, s, width, height)?);
-            self.targets_key = Some(key);
+        let key = (s.gbuffer_res, s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons);
+        match self.targets.as_mut() {
+            Some(t) if self.targets_key == Some(key) => {
+                if (t.width, t.height) != (width, height) {
+                    self.device.wait_idle()?;
+                    t.resize(&self.device, s, width, height)?;
+                }
+            }
+            _ => {
+                self.targets = None;
+                self.device.wait_idle()?;
+                self.targets = Some(Targets::new(&self.device, s, width, height)?);
+                self.targets_key = Some(key);
+            }
         }
         Ok(())
     }

@@ -44,6 +44,25 @@ pub struct EyeTargets {
     pub beauty: Image,
 }
 
+impl EyeTargets {
+    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let img = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
+        let color = U::COLOR_ATTACHMENT | U::SAMPLED;
+        Ok(EyeTargets {
+            radiance: img("eye radiance", HDR_FORMAT, color | U::TRANSFER_SRC)?,
+            caustics: img("eye caustics", HDR_FORMAT, color | U::TRANSFER_SRC)?,
+            direct: img("eye direct", HDR_FORMAT, color | U::TRANSFER_SRC)?,
+            depth: img("eye depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
+            front: img("eye refractor front", GEO_FORMAT, color)?,
+            front_aux: img("eye refractor ior", AUX_FORMAT, color)?,
+            back: img("eye refractor back", GEO_FORMAT, color)?,
+            refr_depth: img("eye refractor depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
+            beauty: img("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+        })
+    }
+}
+
 pub struct PhotonBuffers {
     pub state: Buffer,
     pub photons: Buffer,
@@ -78,7 +97,6 @@ impl Targets {
         let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
         let r = ext(s.gbuffer_res, s.gbuffer_res);
         let m = ext(s.caustic_res, s.caustic_res);
-        let e = ext(width, height);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
         let light = LightTargets {
             front: img("light front", GEO_FORMAT, r, color)?,
@@ -93,17 +111,7 @@ impl Targets {
             flux: img("caustic flux map", crate::passes::flux_format(device), m, color | U::TRANSFER_SRC)?,
             irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
         };
-        let eye = EyeTargets {
-            radiance: img("eye radiance", HDR_FORMAT, e, color | U::TRANSFER_SRC)?,
-            caustics: img("eye caustics", HDR_FORMAT, e, color | U::TRANSFER_SRC)?,
-            direct: img("eye direct", HDR_FORMAT, e, color | U::TRANSFER_SRC)?,
-            depth: img("eye depth", DEPTH_FORMAT, e, U::DEPTH_STENCIL_ATTACHMENT)?,
-            front: img("eye refractor front", GEO_FORMAT, e, color)?,
-            front_aux: img("eye refractor ior", AUX_FORMAT, e, color)?,
-            back: img("eye refractor back", GEO_FORMAT, e, color)?,
-            refr_depth: img("eye refractor depth", DEPTH_FORMAT, e, U::DEPTH_STENCIL_ATTACHMENT)?,
-            beauty: img("beauty", BEAUTY_FORMAT, e, U::STORAGE | U::TRANSFER_SRC)?,
-        };
+        let eye = EyeTargets::new(device, width, height)?;
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
@@ -144,8 +152,7 @@ impl Targets {
             capacity,
             pyramid_offsets,
         };
-        let aov_bytes = 16 * width as u64 * height as u64;
-        let readback_bytes = Self::readback_layout(s, aov_bytes).total;
+
         Ok(Targets {
             ubo: Buffer::new(
                 device,
@@ -158,10 +165,24 @@ impl Targets {
             receiver,
             eye,
             photon,
-            readback: Buffer::new(device, "readback", readback_bytes, B::TRANSFER_DST, MemoryLocation::GpuToCpu)?,
+            readback: Self::readback_buffer(device, s, width, height)?,
             width,
             height,
         })
+    }
+
+    fn readback_buffer(device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<Buffer> {
+        let bytes = Self::readback_layout(s, 16 * width as u64 * height as u64).total;
+        Buffer::new(device, "readback", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
+    }
+
+    /// A new output size: only the eye-sized targets and the readback buffer change.
+    pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<()> {
+        self.eye = EyeTargets::new(device, width, height)?;
+        self.readback = Self::readback_buffer(device, s, width, height)?;
+        self.width = width;
+        self.height = height;
+        Ok(())
     }
 
     /// Where each thing lies in the readback buffer.
