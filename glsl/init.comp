@@ -10,13 +10,6 @@ layout(local_size_x = 256) in;
 shared uint s_count;
 shared ivec4 s_tile;
 
-uvec4 groups_for(uint n) {
-    uint per = pc.wg_side * pc.wg_side;
-    uint g = (n + per - 1u) / per;
-    uint gx = min(g, 65535u);
-    return uvec4(gx, g == 0u ? 0u : (g + gx - 1u) / gx, 1u, 0u);
-}
-
 void main() {
     uint tid = gl_LocalInvocationIndex;
     if (pc.mode == 0u || pc.mode == 2u) {
@@ -69,7 +62,7 @@ void main() {
                 state.aborted = 1u;
                 count = 0u;
             } else {
-                dispatch_cmd[start] = groups_for(count);
+                dispatch_cmd[start] = dispatch_groups(count, pc.wg_side * pc.wg_side);
             }
             s_tile = t;
             s_count = count;

@@ -9,13 +9,6 @@
 
 layout(local_size_x = 1) in;
 
-uvec4 groups_for(uint n) {
-    uint per = pc.wg_side * pc.wg_side;
-    uint g = (n + per - 1u) / per;
-    uint gx = min(g, 65535u);
-    return uvec4(gx, g == 0u ? 0u : (g + gx - 1u) / gx, 1u, 0u);
-}
-
 void commit() {
     bool split = state.aborted != 0u && state.batching != 0u;
     if (state.start_level >= MAX_LEVELS) {
@@ -74,7 +67,7 @@ void main() {
         state.write_count = 0u;
         if (l + 1u < MAX_LEVELS) {
             bool stop = state.aborted != 0u && state.batching != 0u;
-            dispatch_cmd[l + 1u] = stop ? uvec4(0u, 0u, 1u, 0u) : groups_for(state.read_count);
+            dispatch_cmd[l + 1u] = stop ? uvec4(0u, 0u, 1u, 0u) : dispatch_groups(state.read_count, pc.wg_side * pc.wg_side);
         }
     }
     if (pc.mode == 1u) commit();

@@ -219,11 +219,7 @@ fn write_reports(args: &BenchArgs, device: &str, rows: &[BenchRow]) -> AppResult
 
 pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
     for p in [&args.json, &args.markdown, &args.plot].into_iter().flatten() {
-        if let Some(d) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if !d.is_dir() {
-                return Err(AppError::BadInput(format!("{}: output directory does not exist", p.display())));
-            }
-        }
+        image_io::check_output_dir(p)?;
     }
     if let Some(src) = &args.from_json {
         let text = std::fs::read_to_string(src)

@@ -162,7 +162,7 @@ pub struct Session {
 
 impl Session {
     pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
-        let (width, height) = parse_size(&args.size)?;
+        let (width, height) = parse_size(&args.size, "--size")?;
         let path = args.scene.clone().unwrap_or_else(default_scene);
         let scene = Scene::load(&path)?;
         let camera = scene.camera(args.camera.as_deref()).map_err(AppError::BadInput)?.clone();
@@ -301,7 +301,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     let aov: Aov = args.aov.parse()?;
     check_output(aov, &args.out)?;
     if let Some(p) = &args.stats {
-        check_parent(p)?;
+        image_io::check_output_dir(p)?;
     }
     if args.frames == 0 {
         return Err(AppError::BadInput("--frames must be at least 1".into()));
@@ -352,13 +352,6 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     validation_verdict(&session)
 }
 
-fn check_parent(p: &Path) -> AppResult<()> {
-    match p.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(d) if !d.is_dir() => Err(AppError::BadInput(format!("{}: output directory does not exist", p.display()))),
-        _ => Ok(()),
-    }
-}
-
 /// Any validation message fails the command (after its outputs are written).
 pub fn validation_verdict(session: &Session) -> AppResult<()> {
     let n = vk::validation_message_count();
@@ -390,7 +383,7 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
         return Err(AppError::BadInput("--frames must be at least 1".into()));
     }
     if let Some(p) = &args.trace {
-        check_parent(p)?;
+        image_io::check_output_dir(p)?;
     }
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;

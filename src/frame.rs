@@ -270,7 +270,7 @@ impl Ctx<'_> {
         };
         self.p.coverage.record(cmd, &inputs);
         self.barrier(cmd, |b| {
-            b.buffer(&t.photon.coverage, &[Access::ComputeWrite], &[Access::ComputeRead, Access::VertexRead]);
+            b.buffer(&t.photon.coverage, &[Access::ComputeWrite], &[Access::ComputeRead]);
         });
     }
 
@@ -320,7 +320,7 @@ impl Ctx<'_> {
             b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.debug, &[Access::ComputeWrite], &[Access::TransferSrc]);
-            b.buffer(&t.photon.photons, &[Access::ComputeWrite, Access::VertexRead], &[Access::TransferSrc]);
+            b.buffer(&t.photon.photons, &[Access::ComputeWrite], &[Access::TransferSrc]);
         });
         Ok(())
     }

@@ -33,13 +33,20 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.partial-{}", std::process::id()))
 }
 
+/// Bad input unless the directory `path` would be written into exists (checked before any work starts, so
+/// that a long render does not fail at its end).
+pub fn check_output_dir(path: &Path) -> AppResult<()> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => {
+            Err(AppError::BadInput(format!("{}: output directory does not exist", path.display())))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Write through a temporary file and rename it into place.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> AppResult<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            return Err(AppError::BadInput(format!("{}: output directory does not exist", path.display())));
-        }
-    }
+    check_output_dir(path)?;
     let tmp = temp_path(path);
     match write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
         Ok(()) => Ok(()),

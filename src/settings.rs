@@ -144,11 +144,11 @@ impl Settings {
     }
 }
 
-/// Parse `WxH`.
-pub fn parse_size(s: &str) -> AppResult<(u32, u32)> {
+/// Parse `WxH`; `flag` names the option in the message.
+pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
     let bad =
-        || AppError::BadInput(format!("--size `{s}`: expected WxH with 1 <= W, H <= 16384 (for example 512x512)"));
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+        || AppError::BadInput(format!("{flag} `{s}`: expected WxH with 1 <= W, H <= 16384 (for example 512x512)"));
+    let (w, h) = s.trim().split_once(['x', 'X']).ok_or_else(bad)?;
     let w: u32 = w.trim().parse().map_err(|_| bad())?;
     let h: u32 = h.trim().parse().map_err(|_| bad())?;
     if w == 0 || h == 0 || w > 16384 || h > 16384 {

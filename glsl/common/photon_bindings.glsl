@@ -23,11 +23,17 @@ layout(std430, set = 0, binding = 9) buffer DebugBuf { uvec4 debug_header; uvec4
 // light's color), splat radius (texels; 0: the photon did not land).
 layout(std430, set = 0, binding = 10) buffer SplatBuf { vec4 splats[]; };
 
+// Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
+// groups (lavapipe's limit).
+uvec4 dispatch_groups(uint n, uint per_group) {
+    uint g = (n + per_group - 1u) / per_group;
+    uint gx = min(g, 65535u);
+    return uvec4(gx, g == 0u ? 0u : (g + gx - 1u) / gx, 1u, 0u);
+}
+
 // The emitted photons are [capacity - n, capacity): set the trace dispatch and the splat draw for them.
 void set_emitted(uint n, uint capacity) {
-    uint g = (n + LINEAR_WG - 1u) / LINEAR_WG;
-    uint gx = min(g, 65535u);
-    trace_cmd = uvec4(gx, g == 0u ? 0u : (g + gx - 1u) / gx, 1u, 0u);
+    trace_cmd = dispatch_groups(n, LINEAR_WG);
     draw_cmd = uvec4(n, 1u, capacity - n, 0u);
 }
 

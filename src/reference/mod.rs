@@ -44,6 +44,7 @@ pub use tracer::Tally;
 use crate::error::{AppError, AppResult};
 use crate::image_io::{self, RgbImage};
 use crate::scene::{CameraView, LightKind, LightView, Projection, Scene};
+use crate::settings::parse_size;
 use geometry::Geometry;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -280,19 +281,6 @@ pub struct RefOutput {
     pub stats: RefStats,
     /// Present when [`RefParams::radial_center`] was set.
     pub radial: Option<RadialProfile>,
-}
-
-/// Parse `WxH` (`flag` names the option in the message).
-pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
-    let bad =
-        || AppError::BadInput(format!("{flag}: expected WxH with 1..=16384 pixels per side (e.g. 512x512), got `{s}`"));
-    let (w, h) = s.trim().split_once(['x', 'X']).ok_or_else(bad)?;
-    let w: u32 = w.trim().parse().map_err(|_| bad())?;
-    let h: u32 = h.trim().parse().map_err(|_| bad())?;
-    if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
-        return Err(bad());
-    }
-    Ok((w, h))
 }
 
 fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> AppResult<&'a crate::scene::Camera> {
@@ -635,12 +623,7 @@ fn check_output(path: &Path, flag: &str, ext: &str) -> AppResult<()> {
     if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case(ext)) != Some(true) {
         return Err(AppError::BadInput(format!("{flag}: {} must end in .{ext}", path.display())));
     }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            return Err(AppError::BadInput(format!("{flag}: {}: output directory does not exist", path.display())));
-        }
-    }
-    Ok(())
+    image_io::check_output_dir(path).map_err(|e| AppError::BadInput(format!("{flag}: {e}")))
 }
 
 /// `caustics reference`.

@@ -33,7 +33,7 @@ use present::Presenter;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use serde_json::{json, Value};
 use std::collections::VecDeque;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use winit::application::ApplicationHandler;
@@ -95,13 +95,6 @@ pub struct ViewArgs {
     pub print_controls: bool,
 }
 
-fn check_parent(p: &Path) -> AppResult<()> {
-    match p.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(d) if !d.is_dir() => Err(AppError::BadInput(format!("{}: output directory does not exist", p.display()))),
-        _ => Ok(()),
-    }
-}
-
 fn pick_camera(scene: &Scene, name: Option<&str>) -> AppResult<Camera> {
     if name.is_none() {
         if let Some(c) = scene.cameras.iter().find(|c| matches!(c.projection, Projection::Perspective { .. })) {
@@ -116,16 +109,16 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
         print!("{}", help_markdown());
         return Ok(());
     }
-    let (width, height) = parse_size(&args.size)?;
+    let (width, height) = parse_size(&args.size, "--size")?;
     let settings = args.method.settings()?;
     if let Some(p) = &args.screenshot {
         if !p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png")) {
             return Err(AppError::BadInput(format!("--screenshot {}: screenshots are written as .png", p.display())));
         }
-        check_parent(p)?;
+        image_io::check_output_dir(p)?;
     }
     if let Some(p) = &args.stats {
-        check_parent(p)?;
+        image_io::check_output_dir(p)?;
     }
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
     let scene = Scene::load(&scene_path)?;
