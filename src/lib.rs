@@ -1,6 +1,7 @@
 //! caustics: real-time refractive caustics with adaptive caustic maps on Vulkan.
 pub mod bench;
 pub mod bench_report;
+pub mod bvh;
 pub mod commands;
 pub mod error;
 pub mod frame;

@@ -1,0 +1,448 @@
+//! The scene's triangles as a two-level BVH for exact photon transport on the GPU (glsl/common/bvh.glsl).
+//!
+//! Each scene object is one instance: a bottom-level BVH over its triangles (built on the host with obvhs' PLOC
+//! builder, then flattened) and an affine transform from world space into the BVH's space. Moving a rigid object
+//! only rewrites its transform; the BVH is rebuilt only when the triangles change. The few instances of a scene are
+//! tested linearly against their world-space bounds, so there is no top-level tree to rebuild.
+//!
+//! Node layout ("pair", after Aila and Laine 2009): an inner node holds both children's boxes, so one node fetch
+//! tests two boxes and the traversal descends into the nearer child. A child is either another inner node or a
+//! leaf of up to [`MAX_LEAF_TRIS`] consecutive triangles. The alternative layout, one box per node as obvhs keeps
+//! it, was measured against this one (see docs/results.md): `--bvh-layout single` selects it.
+//!
+//! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
+//! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
+
+use crate::scene::{Material, Scene};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec3A};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use std::mem::size_of;
+use std::time::Instant;
+
+/// Leaves hold at most this many triangles (obvhs collapses small subtrees into leaves up to this size).
+pub const MAX_LEAF_TRIS: u32 = 4;
+
+/// A child slot that holds nothing (a BVH whose root is a leaf has one).
+const EMPTY: u32 = u32::MAX;
+
+/// "pair" layout: `lo[k].w` is the child's index bits (inner node, or first triangle), `hi[k].w` its triangle count
+/// bits (0: inner node). Mirrors `BvhNode` in glsl/common/bvh.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PairNode {
+    pub lo0: [f32; 4],
+    pub hi0: [f32; 4],
+    pub lo1: [f32; 4],
+    pub hi1: [f32; 4],
+}
+
+/// "single" layout: one box per node; `lo.w` is the first child (inner: children at `first`, `first + 1`) or the
+/// first triangle, `hi.w` the triangle count (0: inner).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SingleNode {
+    pub lo: [f32; 4],
+    pub hi: [f32; 4],
+}
+
+/// One instance (`BvhInstance` in bvh.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuInstance {
+    /// Rows of the 3x4 affine transform world → BVH space.
+    pub object_from_world: [[f32; 4]; 3],
+    /// Rows of the 3x4 affine transform BVH space → world.
+    pub world_from_object: [[f32; 4]; 3],
+    /// World-space bounds; `lo.w`: root node index bits.
+    pub lo: [f32; 4],
+    /// `hi.w`: unused.
+    pub hi: [f32; 4],
+    /// x: IOR (dielectric) or albedo (receiver); y: 1 for a dielectric, 0 for a diffuse receiver; z, w: unused.
+    pub material: [f32; 4],
+    pub pad: [f32; 4],
+}
+
+/// Three vertices (`w` unused) of one triangle, in its instance's BVH space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuTriangle {
+    pub p: [[f32; 4]; 3],
+}
+
+const _: () = {
+    assert!(size_of::<PairNode>() == 64);
+    assert!(size_of::<SingleNode>() == 32);
+    assert!(size_of::<GpuInstance>() == 160);
+    assert!(size_of::<GpuTriangle>() == 48);
+};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BvhLayout {
+    /// Both children's boxes in the parent (64-byte nodes).
+    Pair,
+    /// One box per node (32-byte nodes).
+    Single,
+}
+
+/// The host side of the scene BVH: everything the GPU buffers hold, plus build statistics.
+#[derive(Clone, Debug, Default)]
+pub struct SceneBvh {
+    pub pair_nodes: Vec<PairNode>,
+    pub single_nodes: Vec<SingleNode>,
+    pub instances: Vec<GpuInstance>,
+    pub triangles: Vec<GpuTriangle>,
+    /// Per-vertex normals of each triangle (same order as `triangles`).
+    pub normals: Vec<GpuTriangle>,
+    /// Root node of each instance in each layout (pair, single).
+    roots: Vec<(u32, u32)>,
+    /// Each instance's bounds in its BVH space.
+    local_bounds: Vec<(Vec3, Vec3)>,
+    pub build_ms: f64,
+}
+
+fn row(m: &Mat4, r: usize) -> [f32; 4] {
+    m.row(r).to_array()
+}
+
+impl SceneBvh {
+    /// Build one BVH per object. Objects hold world-space triangles, so each instance starts with the identity
+    /// transform; [`SceneBvh::set_transform`] moves one without a rebuild.
+    pub fn build(scene: &Scene) -> SceneBvh {
+        let start = Instant::now();
+        let mut bvh = SceneBvh::default();
+        for obj in &scene.objects {
+            let m = &obj.mesh;
+            let mut tris = Vec::new();
+            let mut nrms = Vec::new();
+            for t in m.indices.chunks_exact(3) {
+                let p = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+                let ng = (p[1] - p[0]).cross(p[2] - p[0]);
+                if !(ng.length() > 0.0 && ng.is_finite()) {
+                    continue;
+                }
+                let n = [0, 1, 2].map(|k| m.normals.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO));
+                tris.push(p);
+                nrms.push(n);
+            }
+            if tris.is_empty() {
+                continue;
+            }
+            let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
+            let (lo, hi) = tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+            let material = match obj.material {
+                Material::Dielectric { ior } => [ior, 1.0, 0.0, 0.0],
+                Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
+            };
+            bvh.instances.push(GpuInstance {
+                object_from_world: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
+                world_from_object: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
+                lo: [lo.x, lo.y, lo.z, f32::from_bits(pair_root)],
+                hi: [hi.x, hi.y, hi.z, 0.0],
+                material,
+                pad: [0.0; 4],
+            });
+            bvh.roots.push((pair_root, single_root));
+            bvh.local_bounds.push((lo, hi));
+        }
+        bvh.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        bvh
+    }
+
+    /// The instances with their root set for `layout`.
+    pub fn instances_for(&self, layout: BvhLayout) -> Vec<GpuInstance> {
+        self.instances
+            .iter()
+            .zip(&self.roots)
+            .map(|(inst, &(pair, single))| {
+                let mut i = *inst;
+                i.lo[3] = f32::from_bits(if layout == BvhLayout::Pair { pair } else { single });
+                i
+            })
+            .collect()
+    }
+
+    /// Move instance `i` rigidly: `world_from_object` maps its BVH space (the scene's world space at build time)
+    /// to world. Its world bounds become the transformed corners of its BVH-space box.
+    pub fn set_transform(&mut self, i: usize, world_from_object: Mat4) {
+        let (llo, lhi) = self.local_bounds[i];
+        let (wlo, whi) = (0..8)
+            .map(|k| Vec3::new([llo.x, lhi.x][k & 1], [llo.y, lhi.y][(k >> 1) & 1], [llo.z, lhi.z][k >> 2]))
+            .map(|c| world_from_object.transform_point3(c))
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)));
+        let inst = &mut self.instances[i];
+        let inv = world_from_object.inverse();
+        inst.world_from_object = [row(&world_from_object, 0), row(&world_from_object, 1), row(&world_from_object, 2)];
+        inst.object_from_world = [row(&inv, 0), row(&inv, 1), row(&inv, 2)];
+        inst.lo = [wlo.x, wlo.y, wlo.z, inst.lo[3]];
+        inst.hi = [whi.x, whi.y, whi.z, 0.0];
+    }
+
+    /// Build one bottom-level BVH, append its nodes (both layouts) and its triangles; return the roots.
+    fn add_blas(&mut self, tris: &[[Vec3; 3]], nrms: &[[Vec3; 3]]) -> (u32, u32) {
+        let boxes: Vec<Triangle> = tris
+            .iter()
+            .map(|t| Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) })
+            .collect();
+        let params = BvhBuildParams { max_prims_per_leaf: MAX_LEAF_TRIS, ..BvhBuildParams::medium_build() };
+        let b2 = obvhs::bvh2::builder::build_bvh2_from_tris(&boxes, params, &mut std::time::Duration::default());
+        // No spatial splits: the primitive list is a permutation, so leaves index the reordered triangles directly.
+        let tri_base = self.triangles.len() as u32;
+        for &i in &b2.primitive_indices {
+            let (t, n) = (&tris[i as usize], &nrms[i as usize]);
+            self.triangles.push(GpuTriangle { p: t.map(|p| p.extend(0.0).to_array()) });
+            self.normals.push(GpuTriangle { p: n.map(|p| p.extend(0.0).to_array()) });
+        }
+        let nodes = &b2.nodes;
+        let aabb = |k: usize| {
+            let a = &nodes[k].aabb;
+            (Vec3::from(a.min), Vec3::from(a.max))
+        };
+        let b4 = |v: Vec3, w: u32| [v.x, v.y, v.z, f32::from_bits(w)];
+
+        // Single layout: copy obvhs' nodes (children already adjacent), in the same order.
+        let single_base = self.single_nodes.len() as u32;
+        for (k, n) in nodes.iter().enumerate() {
+            let (lo, hi) = aabb(k);
+            let (first, count) = if n.prim_count == 0 {
+                (single_base + n.first_index, 0)
+            } else {
+                (tri_base + n.first_index, n.prim_count)
+            };
+            self.single_nodes.push(SingleNode { lo: b4(lo, first), hi: b4(hi, count) });
+        }
+
+        // Pair layout: inner nodes only, depth first (the nearer-first traversal then walks mostly forward).
+        let pair_base = self.pair_nodes.len() as u32;
+        let child = |k: usize| -> ([f32; 4], [f32; 4], Option<usize>) {
+            let n = &nodes[k];
+            let (lo, hi) = aabb(k);
+            if n.prim_count == 0 {
+                (b4(lo, 0), b4(hi, 0), Some(k))
+            } else {
+                (b4(lo, tri_base + n.first_index), b4(hi, n.prim_count), None)
+            }
+        };
+        if nodes[0].prim_count > 0 {
+            // The root is a leaf: one node with that leaf and an empty slot whose box nothing enters.
+            let (lo0, hi0, _) = child(0);
+            let empty_lo = [f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::from_bits(EMPTY)];
+            let empty_hi = [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, f32::from_bits(0)];
+            self.pair_nodes.push(PairNode { lo0, hi0, lo1: empty_lo, hi1: empty_hi });
+            return (pair_base, single_base);
+        }
+        let mut stack = vec![(0usize, None::<(usize, usize)>)];
+        while let Some((k, parent)) = stack.pop() {
+            let me = self.pair_nodes.len();
+            if let Some((p, slot)) = parent {
+                let node = &mut self.pair_nodes[p];
+                let w = f32::from_bits(me as u32);
+                if slot == 0 {
+                    node.lo0[3] = w;
+                } else {
+                    node.lo1[3] = w;
+                }
+            }
+            let f = nodes[k].first_index as usize;
+            let (lo0, hi0, in0) = child(f);
+            let (lo1, hi1, in1) = child(f + 1);
+            self.pair_nodes.push(PairNode { lo0, hi0, lo1, hi1 });
+            if let Some(c) = in1 {
+                stack.push((c, Some((me, 1))));
+            }
+            if let Some(c) = in0 {
+                stack.push((c, Some((me, 0))));
+            }
+        }
+        (pair_base, single_base)
+    }
+
+    pub fn node_bytes(&self, layout: BvhLayout) -> usize {
+        match layout {
+            BvhLayout::Pair => self.pair_nodes.len() * size_of::<PairNode>(),
+            BvhLayout::Single => self.single_nodes.len() * size_of::<SingleNode>(),
+        }
+    }
+
+    /// The GPU's closest-hit query in f32, on the host (tests check the flattened layouts against brute force):
+    /// (t, instance, triangle) of the nearest hit with 0 < t < `tmax`.
+    pub fn intersect(&self, layout: BvhLayout, o: Vec3, d: Vec3, tmax: f32) -> Option<(f32, u32, u32)> {
+        let mut best: Option<(f32, u32, u32)> = None;
+        let mut t_best = tmax;
+        for (ii, inst) in self.instances_for(layout).iter().enumerate() {
+            let (lo, hi) = (Vec3::from_slice(&inst.lo[..3]), Vec3::from_slice(&inst.hi[..3]));
+            if slab(lo, hi, o, d.recip(), t_best).is_none() {
+                continue;
+            }
+            let m = |r: [f32; 4], v: Vec3, w: f32| r[0] * v.x + r[1] * v.y + r[2] * v.z + r[3] * w;
+            let of = &inst.object_from_world;
+            let lo_ = Vec3::new(m(of[0], o, 1.0), m(of[1], o, 1.0), m(of[2], o, 1.0));
+            let ld = Vec3::new(m(of[0], d, 0.0), m(of[1], d, 0.0), m(of[2], d, 0.0));
+            let root = inst.lo[3].to_bits();
+            let mut visit = |first: u32, count: u32, t_best: &mut f32| {
+                for tri in first..first + count {
+                    let p = self.triangles[tri as usize].p.map(|v| Vec3::from_slice(&v[..3]));
+                    if let Some(t) = watertight(lo_, ld, &p) {
+                        if t < *t_best {
+                            *t_best = t;
+                            best = Some((t, ii as u32, tri));
+                        }
+                    }
+                }
+            };
+            let inv = ld.recip();
+            let mut stack = vec![root];
+            match layout {
+                BvhLayout::Pair => {
+                    while let Some(n) = stack.pop() {
+                        let node = &self.pair_nodes[n as usize];
+                        for (lo, hi) in [(node.lo0, node.hi0), (node.lo1, node.hi1)] {
+                            let (idx, count) = (lo[3].to_bits(), hi[3].to_bits());
+                            if idx == EMPTY && count == 0 {
+                                continue;
+                            }
+                            let (l, h) = (Vec3::from_slice(&lo[..3]), Vec3::from_slice(&hi[..3]));
+                            if slab(l, h, lo_, inv, t_best).is_none() {
+                                continue;
+                            }
+                            if count > 0 {
+                                visit(idx, count, &mut t_best);
+                            } else {
+                                stack.push(idx);
+                            }
+                        }
+                    }
+                }
+                BvhLayout::Single => {
+                    while let Some(n) = stack.pop() {
+                        let node = &self.single_nodes[n as usize];
+                        let (l, h) = (Vec3::from_slice(&node.lo[..3]), Vec3::from_slice(&node.hi[..3]));
+                        if slab(l, h, lo_, inv, t_best).is_none() {
+                            continue;
+                        }
+                        let (idx, count) = (node.lo[3].to_bits(), node.hi[3].to_bits());
+                        if count > 0 {
+                            visit(idx, count, &mut t_best);
+                        } else {
+                            stack.push(idx);
+                            stack.push(idx + 1);
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Ray/box slab test: the entry distance if the ray meets the box before `tmax`.
+fn slab(lo: Vec3, hi: Vec3, o: Vec3, inv_d: Vec3, tmax: f32) -> Option<f32> {
+    let t0 = (lo - o) * inv_d;
+    let t1 = (hi - o) * inv_d;
+    let near = t0.min(t1).max_element().max(0.0);
+    let far = t0.max(t1).min_element().min(tmax);
+    (near <= far).then_some(near)
+}
+
+/// The watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013) in f32, as bvh.glsl computes it.
+pub fn watertight(o: Vec3, d: Vec3, p: &[Vec3; 3]) -> Option<f32> {
+    let a = d.abs();
+    let kz = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let s = Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    let (a, b, c) = (p[0] - o, p[1] - o, p[2] - o);
+    let (ax, ay) = (a[kx] - s.x * a[kz], a[ky] - s.y * a[kz]);
+    let (bx, by) = (b[kx] - s.x * b[kz], b[ky] - s.y * b[kz]);
+    let (cx, cy) = (c[kx] - s.x * c[kz], c[ky] - s.y * c[kz]);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let t = (u * a[kz] + v * b[kz] + w * c[kz]) * s.z / det;
+    (t > 0.0 && t.is_finite()).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn brute(bvh: &SceneBvh, o: Vec3, d: Vec3) -> Option<(f32, u32)> {
+        let mut best: Option<(f32, u32)> = None;
+        for (i, t) in bvh.triangles.iter().enumerate() {
+            let p = t.p.map(|v| Vec3::from_slice(&v[..3]));
+            if let Some(t) = watertight(o, d, &p) {
+                if best.is_none_or(|(b, _)| t < b) {
+                    best = Some((t, i as u32));
+                }
+            }
+        }
+        best
+    }
+
+    /// Both flattened layouts find exactly the brute-force closest hit for rays through the bunny scene.
+    #[test]
+    fn layouts_match_brute_force() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/bunny.toml");
+        let scene = Scene::load(&path).expect("scene");
+        let bvh = SceneBvh::build(&scene);
+        assert_eq!(bvh.instances.len(), scene.objects.len());
+        let mut hits = 0;
+        let mut state = 12345u32;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        for _ in 0..3000 {
+            let o = Vec3::new(0.0, 2.0, 0.0) + 0.05 * Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+            let target = Vec3::new(0.6 * (rnd() - 0.5), 0.25 + 0.5 * rnd(), 0.6 * (rnd() - 0.5));
+            let d = (target - o).normalize();
+            let want = brute(&bvh, o, d);
+            for layout in [BvhLayout::Pair, BvhLayout::Single] {
+                let got = bvh.intersect(layout, o, d, f32::INFINITY);
+                assert_eq!(got.map(|(t, _, tri)| (t, tri)), want, "{layout:?} ray {o} {d}");
+            }
+            hits += want.is_some() as u32;
+        }
+        assert!(hits > 1000, "{hits} hits");
+    }
+
+    /// A moved instance is hit where it moved to, without a rebuild.
+    #[test]
+    fn moved_instance_is_hit() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml");
+        let scene = Scene::load(&path).expect("scene");
+        let mut bvh = SceneBvh::build(&scene);
+        let glass = scene.objects.iter().position(|o| o.is_refractor()).unwrap();
+        let down = Vec3::NEG_Y;
+        let before = bvh.intersect(BvhLayout::Pair, Vec3::new(0.0, 2.0, 0.0), down, f32::INFINITY).unwrap();
+        assert!((before.0 - 1.2).abs() < 1e-3, "top of the sphere at y = 0.8: t {}", before.0);
+        bvh.set_transform(glass, Mat4::from_translation(Vec3::new(0.5, 0.0, 0.0)));
+        let nodes = bvh.pair_nodes.len();
+        let miss = bvh.intersect(BvhLayout::Pair, Vec3::new(0.0, 2.0, 0.0), down, f32::INFINITY).unwrap();
+        assert_ne!(miss.1 as usize, glass, "the sphere moved away from x = 0");
+        let moved = bvh.intersect(BvhLayout::Pair, Vec3::new(0.5, 2.0, 0.0), down, f32::INFINITY).unwrap();
+        assert_eq!(moved.1 as usize, glass);
+        assert!((moved.0 - 1.2).abs() < 1e-3);
+        assert_eq!(bvh.pair_nodes.len(), nodes);
+    }
+}
