@@ -25,6 +25,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("traverse.comp", "wg4", &[("TRAVERSE_WG_SIDE", "4")]),
     ("traverse.comp", "wg8", &[("TRAVERSE_WG_SIDE", "8")]),
     ("traverse.comp", "wg16", &[("TRAVERSE_WG_SIDE", "16")]),
+    ("wave.comp", "single", &[("BVH_LAYOUT_SINGLE", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),

@@ -40,6 +40,17 @@ void main() {
     if (pc.mip == 0u) {
         vec4 front = texelFetch(t_front, ivec2(p), 0);
         bits = front.w > 0.0 && lit(ivec2(p), front) ? 3u : 0u;
+        if (bits == 0u && u_frame.transport.x != 0u) {
+            // Exact transport traces each cell's own ray, so a cell whose texel center misses the glass may still
+            // hit it: dilate "any" by one texel so that silhouette cells are emitted (the ray decides; a miss
+            // becomes direct light in the energy account).
+            ivec2 size = textureSize(t_front, 0);
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    ivec2 q = clamp(ivec2(p) + ivec2(dx, dy), ivec2(0), size - 1);
+                    if (texelFetch(t_front, q, 0).w > 0.0) bits = 1u;
+                }
+        }
     } else {
         uint src_res = pc.dst_res * 2u;
         uint any = 0u, all = 2u;

@@ -19,13 +19,7 @@ void main() {
     uint level = cell_level(cell);
     uvec2 xy = cell_xy(cell);
     Hit h = trace_cell(level, xy);
-    // The footprint follows the cell: its size on the caustic map for max-level and dense photons (so that
-    // neighbours' tents overlap and interpolate), the children's spread for max-error clusters.
-    uint r = cell_radius(cell);
-    if (r == 0u) {
-        float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
-        r = uint(clamp(round(cell_side(level) / texel), 1.0, float(MAX_SPLAT_RADIUS)));
-    }
+    uint r = cell_splat_radius(cell);
     bool ok = h.status == HIT_OK;
     splats[j] = vec4(h.map_px, ok ? h.flux : 0.0, ok ? float(r) : 0.0);
     if (pc.debug != 0u && level >= pc.debug_min_level) {

@@ -8,7 +8,7 @@
 //! Node layout ("pair", after Aila and Laine 2009): an inner node holds both children's boxes, so one node fetch
 //! tests two boxes and the traversal descends into the nearer child. A child is either another inner node or a
 //! leaf of up to [`MAX_LEAF_TRIS`] consecutive triangles. The alternative layout, one box per node as obvhs keeps
-//! it, was measured against this one (see docs/results.md): `--bvh-layout single` selects it.
+//! it, was measured against this one (see docs/results.md): `--bvh-layout single` selects it. Both are uploaded.
 //!
 //! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
@@ -55,9 +55,9 @@ pub struct GpuInstance {
     pub object_from_world: [[f32; 4]; 3],
     /// Rows of the 3x4 affine transform BVH space → world.
     pub world_from_object: [[f32; 4]; 3],
-    /// World-space bounds; `lo.w`: root node index bits.
+    /// World-space bounds; `lo.w`: root node index bits in the pair layout.
     pub lo: [f32; 4],
-    /// `hi.w`: unused.
+    /// `hi.w`: root node index bits in the single layout.
     pub hi: [f32; 4],
     /// x: IOR (dielectric) or albedo (receiver); y: 1 for a dielectric, 0 for a diffuse receiver; z, w: unused.
     pub material: [f32; 4],
@@ -96,8 +96,6 @@ pub struct SceneBvh {
     pub triangles: Vec<GpuTriangle>,
     /// Per-vertex normals of each triangle (same order as `triangles`).
     pub normals: Vec<GpuTriangle>,
-    /// Root node of each instance in each layout (pair, single).
-    roots: Vec<(u32, u32)>,
     /// Each instance's bounds in its BVH space.
     local_bounds: Vec<(Vec3, Vec3)>,
     pub build_ms: f64,
@@ -140,28 +138,14 @@ impl SceneBvh {
                 object_from_world: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
                 world_from_object: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
                 lo: [lo.x, lo.y, lo.z, f32::from_bits(pair_root)],
-                hi: [hi.x, hi.y, hi.z, 0.0],
+                hi: [hi.x, hi.y, hi.z, f32::from_bits(single_root)],
                 material,
                 pad: [0.0; 4],
             });
-            bvh.roots.push((pair_root, single_root));
             bvh.local_bounds.push((lo, hi));
         }
         bvh.build_ms = start.elapsed().as_secs_f64() * 1e3;
         bvh
-    }
-
-    /// The instances with their root set for `layout`.
-    pub fn instances_for(&self, layout: BvhLayout) -> Vec<GpuInstance> {
-        self.instances
-            .iter()
-            .zip(&self.roots)
-            .map(|(inst, &(pair, single))| {
-                let mut i = *inst;
-                i.lo[3] = f32::from_bits(if layout == BvhLayout::Pair { pair } else { single });
-                i
-            })
-            .collect()
     }
 
     /// Move instance `i` rigidly: `world_from_object` maps its BVH space (the scene's world space at build time)
@@ -177,7 +161,7 @@ impl SceneBvh {
         inst.world_from_object = [row(&world_from_object, 0), row(&world_from_object, 1), row(&world_from_object, 2)];
         inst.object_from_world = [row(&inv, 0), row(&inv, 1), row(&inv, 2)];
         inst.lo = [wlo.x, wlo.y, wlo.z, inst.lo[3]];
-        inst.hi = [whi.x, whi.y, whi.z, 0.0];
+        inst.hi = [whi.x, whi.y, whi.z, inst.hi[3]];
     }
 
     /// Build one bottom-level BVH, append its nodes (both layouts) and its triangles; return the roots.
@@ -271,7 +255,7 @@ impl SceneBvh {
     pub fn intersect(&self, layout: BvhLayout, o: Vec3, d: Vec3, tmax: f32) -> Option<(f32, u32, u32)> {
         let mut best: Option<(f32, u32, u32)> = None;
         let mut t_best = tmax;
-        for (ii, inst) in self.instances_for(layout).iter().enumerate() {
+        for (ii, inst) in self.instances.iter().enumerate() {
             let (lo, hi) = (Vec3::from_slice(&inst.lo[..3]), Vec3::from_slice(&inst.hi[..3]));
             if slab(lo, hi, o, d.recip(), t_best).is_none() {
                 continue;
@@ -280,7 +264,7 @@ impl SceneBvh {
             let of = &inst.object_from_world;
             let lo_ = Vec3::new(m(of[0], o, 1.0), m(of[1], o, 1.0), m(of[2], o, 1.0));
             let ld = Vec3::new(m(of[0], d, 0.0), m(of[1], d, 0.0), m(of[2], d, 0.0));
-            let root = inst.lo[3].to_bits();
+            let root = if layout == BvhLayout::Pair { inst.lo[3] } else { inst.hi[3] }.to_bits();
             let mut visit = |first: u32, count: u32, t_best: &mut f32| {
                 for tri in first..first + count {
                     let p = self.triangles[tri as usize].p.map(|v| Vec3::from_slice(&v[..3]));

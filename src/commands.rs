@@ -5,7 +5,9 @@ use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
-use crate::settings::{parse_size, Driven, Method, Metric, Settings};
+use crate::bvh::BvhLayout;
+use crate::gpu_types::ACCOUNT_TERMS;
+use crate::settings::{parse_size, Driven, Method, Metric, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::vk::{self, Context, ContextDesc};
 use serde_json::{json, Value};
@@ -36,6 +38,16 @@ pub struct SceneArgs {
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct MethodArgs {
+    /// Light transport through the glass: exact (every path, traced through a BVH in waves) or the papers'
+    /// two-interface image-space model.
+    #[arg(long, value_enum, default_value_t = Settings::default().transport)]
+    pub transport: Transport,
+    /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
+    #[arg(long, default_value_t = Settings::default().flux_threshold)]
+    pub flux_threshold: f32,
+    /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).
+    #[arg(long, value_enum, default_value_t = BvhLayout::Pair)]
+    pub bvh_layout: BvhLayout,
     /// Photon source: dense grid, or adaptive traversal.
     #[arg(long, value_enum, default_value_t = Method::Adaptive)]
     pub method: Method,
@@ -83,6 +95,9 @@ pub struct MethodArgs {
 impl MethodArgs {
     pub fn settings(&self) -> AppResult<Settings> {
         let s = Settings {
+            transport: self.transport,
+            flux_threshold: self.flux_threshold,
+            bvh_layout: self.bvh_layout,
             method: self.method,
             metric: self.metric,
             level: self.level,
@@ -286,6 +301,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "frame_ms": stage("frame_wall"),
         "cpu_record_ms": stage("cpu_record"),
         "frames": frames.len(),
+        "transport": s.transport,
+        "exact_transport": transport_json(session, &last),
         "photon_view": last.photon_view.map(|v| json!({
             "origin": v.origin.to_array(), "right": v.right.to_array(), "down": v.down.to_array(),
             "forward": v.forward.to_array(), "window": [v.window.x0, v.window.y0, v.window.w],
@@ -293,6 +310,47 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
     });
     if let (Value::Object(m), Value::Object(e)) = (&mut v, extra) {
         m.extend(e);
+    }
+    v
+}
+
+/// Exact transport's stats: the BVH (with its host build time), the waves, and the energy account in W
+/// (emitted = caustics + direct + escaped + cut_threshold + cut_cap + lost + overflow, with the residual).
+fn transport_json(session: &Session, report: &FrameReport) -> Value {
+    let r = &session.renderer;
+    if r.settings.transport != Transport::Exact {
+        return Value::Null;
+    }
+    let bvh = &r.scene_buffers.bvh;
+    let mut v = json!({
+        "bvh": {
+            "layout": r.settings.bvh_layout,
+            "build_ms": bvh.build_ms,
+            "triangles": bvh.triangle_count,
+            "instances": bvh.instance_count,
+            "nodes": match r.settings.bvh_layout { BvhLayout::Pair => bvh.pair_node_count, BvhLayout::Single => bvh.single_node_count },
+        },
+        "flux_threshold": r.settings.flux_threshold,
+        "max_interactions": MAX_INTERACTIONS,
+        "ray_queue_capacity": r.settings.ray_queue_capacity(),
+    });
+    if let Some(ts) = report.transport {
+        let intensity = r.scene.lights[0].intensity as f64;
+        let acc = ts.account().map(|x| x * intensity);
+        let mut account = serde_json::Map::new();
+        for (name, w) in ACCOUNT_TERMS.iter().zip(acc) {
+            account.insert(format!("{name}_w"), json!(w));
+        }
+        let out: f64 = acc[1..].iter().sum();
+        account.insert("residual".into(), json!(if acc[0] > 0.0 { (acc[0] - out).abs() / acc[0] } else { out.abs() }));
+        if let Value::Object(m) = &mut v {
+            m.insert("energy".into(), Value::Object(account));
+            m.insert("rays_traced".into(), json!(ts.rays_traced));
+            m.insert("splat_records".into(), json!(ts.records_total));
+            m.insert("waves".into(), json!(ts.waves));
+            m.insert("max_depth".into(), json!(ts.max_depth));
+            m.insert("queue_overflows".into(), json!(ts.overflows));
+        }
     }
     v
 }

@@ -13,7 +13,7 @@
 //! each level, reads the count back, and records the next dispatch directly.
 
 use crate::error::AppResult;
-use crate::gpu_types::{FrameData, TraversalState};
+use crate::gpu_types::{FrameData, TransportState, TraversalState};
 use crate::passes::composite::CompositeInputs;
 use crate::passes::coverage::CoverageInputs;
 use crate::passes::eye::EyeInputs;
@@ -23,7 +23,7 @@ use crate::passes::Passes;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, Views};
 use crate::scene::view::CameraView;
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Driven, Method, Settings};
+use crate::settings::{Driven, Method, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::{Access, Barriers, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
@@ -192,6 +192,9 @@ impl Ctx<'_> {
             debug: &t.photon.debug,
             splats: &t.photon.splats,
             sampler: self.nearest,
+            transport: &t.photon.transport,
+            queues: [&t.photon.queues[0], &t.photon.queues[1]],
+            bvh: &self.sb.bvh,
         }
     }
 
@@ -281,13 +284,14 @@ impl Ctx<'_> {
         rec.ts.mark(cmd, "photon_init");
         let debug = self.s.debug_photons > 0;
         self.barrier(cmd, |b| {
-            for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect, &t.photon.debug] {
+            for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect, &t.photon.debug, &t.photon.transport] {
                 b.buffer(buf, &[Access::FrameStart], &[Access::TransferDst]);
             }
             b.image(&t.receiver.flux, &[Access::FrameStart], &[Access::ColorAttachment]);
         });
         unsafe {
             d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
+            d.cmd_fill_buffer(cmd, t.photon.transport.raw, 0, vk::WHOLE_SIZE, 0);
             // Header (count, capacity) and rows: disjoint ranges, so the two transfers need no barrier between them.
             d.cmd_update_buffer(cmd, t.photon.debug.raw, 0, bytemuck::bytes_of(&[0u32, self.s.debug_photons, 0, 0]));
             d.cmd_fill_buffer(cmd, t.photon.debug.raw, 16, vk::WHOLE_SIZE, 0);
@@ -303,7 +307,11 @@ impl Ctx<'_> {
                 b.buffer(buf, &[Access::TransferDst], &all);
             }
             b.buffer(&t.photon.debug, &[Access::TransferDst], &[Access::ComputeWrite]);
+            b.buffer(&t.photon.transport, &[Access::TransferDst], &[Access::ComputeWrite]);
             b.buffer(&t.photon.splats, &[Access::FrameStart], &[Access::ComputeWrite]);
+            for q in &t.photon.queues {
+                b.buffer(q, &[Access::FrameStart], &[Access::ComputeWrite]);
+            }
         });
         match self.s.method {
             Method::Dense => self.dense(rec),
@@ -321,6 +329,7 @@ impl Ctx<'_> {
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.debug, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.photons, &[Access::ComputeWrite], &[Access::TransferSrc]);
+            b.buffer(&t.photon.transport, &[Access::ComputeWrite], &[Access::TransferSrc]);
         });
         Ok(())
     }
@@ -342,12 +351,18 @@ impl Ctx<'_> {
     }
 
     /// The batch's emitted photons: trace them (compute, dispatched indirectly), then splat them (draw indirect).
-    fn trace_and_splat(&self, rec: &mut Rec, clear: bool) {
+    /// `commit`: adaptive traversal's last stats pass, which commits or splits the batch. Under two-interface
+    /// transport it ran already; under exact transport it runs after the waves, which may abort the batch.
+    fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) {
         let t = self.t;
         let (cmd, b, ph) = (rec.cmd, self.bindings(), &self.p.photons);
         self.compute_to_compute(cmd);
-        rec.ts.mark(cmd, "photon_trace");
-        ph.trace(cmd, &b, self.debug());
+        if self.s.transport == Transport::Exact {
+            self.exact_transport(rec, commit);
+        } else {
+            rec.ts.mark(cmd, "photon_trace");
+            ph.trace(cmd, &b, self.debug());
+        }
         self.barrier(cmd, |b| {
             b.buffer(&t.photon.splats, &[Access::ComputeWrite], &[Access::VertexRead]);
             b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &[Access::IndirectRead]);
@@ -364,7 +379,48 @@ impl Ctx<'_> {
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &next);
             b.buffer(&t.photon.photons, &[Access::ComputeWrite], &next);
             b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &next);
+            if self.s.transport == Transport::Exact {
+                b.buffer(&t.photon.transport, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+            }
         });
+    }
+
+    /// Exact transport of the batch's emitted photons, in waves (DESIGN.md step 5): every wave is one
+    /// vkCmdDispatchIndirect whose arguments the transport pass wrote from the previous wave's appends. The host
+    /// records MAX_INTERACTIONS + 1 waves; those after the queue empties dispatch zero work groups.
+    fn exact_transport(&self, rec: &mut Rec, commit: bool) {
+        use crate::passes::photons::transport_mode as tm;
+        let (t, cmd, b, ph) = (self.t, rec.cmd, self.bindings(), &self.p.photons);
+        let adaptive = self.s.method == Method::Adaptive;
+        let may_abort = adaptive && self.s.batching;
+        let step = |b: &mut Barriers| {
+            let next = [Access::ComputeWrite, Access::IndirectRead];
+            b.buffer(&t.photon.transport, &[Access::ComputeWrite], &next);
+            b.buffer(&t.photon.indirect, &[Access::ComputeWrite, Access::IndirectRead], &next);
+            b.buffer(&t.photon.state, &[Access::ComputeWrite], &next);
+            b.buffer(&t.photon.splats, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+            for q in &t.photon.queues {
+                b.buffer(q, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+            }
+        };
+        rec.ts.mark(cmd, "transport_primary");
+        ph.transport(cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort);
+        for wave in 0..=MAX_INTERACTIONS {
+            self.barrier(cmd, step);
+            if wave == 1 {
+                rec.ts.mark(cmd, "transport_bounces");
+            }
+            ph.wave(cmd, &b, wave, may_abort, self.s.bvh_layout);
+            self.barrier(cmd, step);
+            ph.transport(cmd, &b, tm::AFTER_WAVE, may_abort);
+        }
+        self.barrier(cmd, step);
+        rec.ts.mark(cmd, "stats");
+        if commit {
+            ph.stats(cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_wg);
+            self.barrier(cmd, step);
+        }
+        ph.transport(cmd, &b, tm::COMMIT, may_abort);
     }
 
     fn dense(&self, rec: &mut Rec) -> VkResult<()> {
@@ -386,7 +442,7 @@ impl Ctx<'_> {
             self.compute_to_compute(cmd);
             rec.ts.mark(cmd, "stats");
             ph.stats(cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
-            self.trace_and_splat(rec, band == 0);
+            self.trace_and_splat(rec, band == 0, false);
             if band + 1 < bands {
                 self.after_splat(cmd);
             }
@@ -400,6 +456,7 @@ impl Ctx<'_> {
         let ph = &self.p.photons;
         let wg = self.s.traverse_wg;
         let cmd = rec.cmd;
+        let exact = self.s.transport == Transport::Exact;
         ph.init(cmd, &b, init_mode::FRAME, wg);
         self.compute_to_compute(cmd);
         rec.report.batch_slots = slots;
@@ -412,11 +469,11 @@ impl Ctx<'_> {
                 ph.traverse_indirect(cmd, &b, level, wg);
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, "stats");
-                let mode = if level == self.s.level { stats_mode::COMMIT } else { stats_mode::LEVEL };
+                let mode = if level == self.s.level && !exact { stats_mode::COMMIT } else { stats_mode::LEVEL };
                 ph.stats(cmd, &b, level, mode, wg);
                 self.compute_to_compute(cmd);
             }
-            self.trace_and_splat(rec, slot == 0);
+            self.trace_and_splat(rec, slot == 0, exact);
             if slot + 1 < slots {
                 self.after_splat(cmd);
             }
@@ -479,14 +536,15 @@ impl Ctx<'_> {
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, "stats");
                 let last = level == self.s.level;
-                ph.stats(cmd, &b, level, if last { stats_mode::COMMIT } else { stats_mode::LEVEL }, wg);
+                let commit = last && self.s.transport == Transport::TwoInterface;
+                ph.stats(cmd, &b, level, if commit { stats_mode::COMMIT } else { stats_mode::LEVEL }, wg);
                 if !last {
                     self.copy_state(cmd);
                     rec.roundtrip()?;
                     st = self.read_state()?;
                 }
             }
-            self.trace_and_splat(rec, first);
+            self.trace_and_splat(rec, first, self.s.transport == Transport::Exact);
             self.after_splat(rec.cmd);
             first = false;
         }
@@ -657,6 +715,9 @@ impl Ctx<'_> {
                 let state = std::mem::size_of::<TraversalState>() as u64;
                 let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state, size: state }];
                 d.cmd_copy_buffer(cmd, t.photon.state.raw, t.readback.raw, &copies);
+                let size = std::mem::size_of::<TransportState>() as u64;
+                let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.transport, size }];
+                d.cmd_copy_buffer(cmd, t.photon.transport.raw, t.readback.raw, &copies);
                 if self.s.debug_photons > 0 {
                     let debug = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
                     d.cmd_copy_buffer(
@@ -687,6 +748,9 @@ impl Ctx<'_> {
             let st = t.readback.read::<TraversalState>(layout.state, 1)?[0];
             report.unfinished_tiles = if self.s.method == Method::Adaptive { st.stack_size } else { 0 };
             report.state = Some(st);
+            if self.s.transport == Transport::Exact {
+                report.transport = Some(t.readback.read::<TransportState>(layout.transport, 1)?[0]);
+            }
             if self.s.debug_photons > 0 {
                 let header = t.readback.read::<[u32; 4]>(layout.debug, 1)?[0];
                 let n = header[0].min(self.s.debug_photons) as usize;

@@ -83,8 +83,10 @@ pub struct FrameData {
     pub grid: [u32; 4],
     /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photon capacity (entries).
     pub traversal: [u32; 4],
-    /// x: max-error bound (caustic-map texels); y: shadow bias (texels).
+    /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold.
     pub params: [f32; 4],
+    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch.
+    pub transport: [u32; 4],
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
 }
@@ -123,6 +125,37 @@ pub struct TraversalState {
     pub batch_levels: [LevelCounters; MAX_LEVELS as usize],
     pub levels: [LevelCounters; MAX_LEVELS as usize],
     pub stack: [[i32; 4]; TILE_STACK as usize],
+}
+
+/// Energy-account terms of exact transport (`ACC_*` in types.glsl), in order.
+pub const ACCOUNT_TERMS: [&str; 8] =
+    ["emitted", "caustics", "direct", "escaped", "cut_threshold", "cut_cap", "lost", "overflow"];
+
+/// `TransportState` in types.glsl (a storage buffer, std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TransportState {
+    pub in_count: u32,
+    pub out_count: u32,
+    pub out_reserved: u32,
+    pub records: u32,
+    pub records_reserved: u32,
+    pub queue_capacity: u32,
+    pub record_capacity: u32,
+    pub overflows: u32,
+    pub rays_traced: u32,
+    pub records_total: u32,
+    pub waves: u32,
+    pub max_depth: u32,
+    pub batch_account: [[u32; 2]; 8],
+    pub account: [[u32; 2]; 8],
+}
+
+impl TransportState {
+    /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
+    pub fn account(&self) -> [f64; 8] {
+        self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
+    }
 }
 
 /// Push constants of the photon passes (`PhotonPush` in photon_push.glsl).
@@ -175,10 +208,13 @@ pub struct Vertex {
 
 const _: () = {
     assert!(size_of::<GpuView>() == 160);
-    assert!(size_of::<FrameData>() == 624);
+    assert!(size_of::<FrameData>() == 640);
+    assert!(size_of::<TransportState>() == 48 + 128);
+    assert!(offset_of!(TransportState, batch_account) == 48);
     assert!(offset_of!(FrameData, light_power) == 480);
     assert!(offset_of!(FrameData, grid) == 528);
-    assert!(offset_of!(FrameData, pyramid) == 576);
+    assert!(offset_of!(FrameData, transport) == 576);
+    assert!(offset_of!(FrameData, pyramid) == 592);
     assert!(size_of::<LevelCounters>() == 16);
     assert!(offset_of!(TraversalState, tile) == 64);
     assert!(offset_of!(TraversalState, batch_levels) == 80);

@@ -7,7 +7,7 @@ use crate::passes::Passes;
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{Camera, LightKind, Material, Scene};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Method, Metric, Settings};
+use crate::settings::{Method, Metric, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
@@ -99,6 +99,8 @@ pub struct FrameReport {
     /// The light view of the photon grid (None without caustic passes).
     pub photon_view: Option<LightView>,
     pub state: Option<TraversalState>,
+    /// Exact transport's wave counts and energy account.
+    pub transport: Option<crate::gpu_types::TransportState>,
     pub host_readbacks: u32,
     /// Batch slots recorded (GPU-driven adaptive) or bands (dense).
     pub batch_slots: u32,
@@ -136,7 +138,7 @@ pub struct Renderer {
     pub recorder: Recorder,
     pub timestamps: Timestamps,
     pub targets: Option<Targets>,
-    targets_key: Option<(u32, u32, u64, u32)>,
+    targets_key: Option<(u32, u32, u64, u32, u32)>,
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
@@ -215,7 +217,7 @@ impl Renderer {
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
         let s = &self.settings;
-        let key = (s.gbuffer_res, s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons);
+        let key = (s.gbuffer_res, s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
                 if (t.width, t.height) != (width, height) {
@@ -279,7 +281,13 @@ impl Renderer {
                 s.check_level,
                 targets.photon.capacity,
             ],
-            params: [s.error_bound, s.shadow_bias, 0.0, 0.0],
+            params: [s.error_bound, s.shadow_bias, s.flux_threshold, 0.0],
+            transport: [
+                (s.transport == Transport::Exact) as u32,
+                s.ray_queue_capacity(),
+                targets.photon.capacity,
+                0,
+            ],
             pyramid,
         }
     }

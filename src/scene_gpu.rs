@@ -1,5 +1,7 @@
-//! The scene's triangles on the GPU: one vertex buffer and one index buffer, receivers first, then refractors.
+//! The scene's triangles on the GPU: one vertex buffer and one index buffer, receivers first, then refractors,
+//! for rasterization; and the scene BVH (src/bvh.rs) for exact transport.
 
+use crate::bvh::{GpuInstance, SceneBvh};
 use crate::gpu_types::Vertex;
 use crate::scene::{Material, Scene};
 use crate::vk::{cmd::upload_buffer, Buffer, Device, Recorder, VkResult};
@@ -18,6 +20,58 @@ pub struct SceneBuffers {
     pub receivers: DrawRange,
     pub refractors: DrawRange,
     pub all: DrawRange,
+    pub bvh: BvhBuffers,
+}
+
+/// The scene BVH in storage buffers: both node layouts, triangles, their vertex normals, and the instances.
+pub struct BvhBuffers {
+    pub pair_nodes: Buffer,
+    pub single_nodes: Buffer,
+    pub triangles: Buffer,
+    pub normals: Buffer,
+    pub instances: Buffer,
+    /// Host build time of this BVH (ms), node counts and triangle count.
+    pub build_ms: f64,
+    pub pair_node_count: usize,
+    pub single_node_count: usize,
+    pub triangle_count: usize,
+    pub instance_count: usize,
+}
+
+impl BvhBuffers {
+    pub fn new(device: &Arc<Device>, recorder: &mut Recorder, scene: &Scene) -> VkResult<Self> {
+        let bvh = SceneBvh::build(scene);
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        // Empty lists still need a buffer to bind: one zeroed element (an instance whose bounds nothing enters).
+        fn nonempty<T: bytemuck::Pod + Default>(v: &[T]) -> Vec<T> {
+            if v.is_empty() {
+                vec![T::default()]
+            } else {
+                v.to_vec()
+            }
+        }
+        let instances = if bvh.instances.is_empty() {
+            vec![GpuInstance {
+                lo: [f32::INFINITY, f32::INFINITY, f32::INFINITY, 0.0],
+                hi: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, 0.0],
+                ..GpuInstance::default()
+            }]
+        } else {
+            bvh.instances.clone()
+        };
+        Ok(BvhBuffers {
+            pair_nodes: upload_buffer(device, recorder, "bvh pair nodes", &nonempty(&bvh.pair_nodes), storage)?,
+            single_nodes: upload_buffer(device, recorder, "bvh single nodes", &nonempty(&bvh.single_nodes), storage)?,
+            triangles: upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?,
+            normals: upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?,
+            instances: upload_buffer(device, recorder, "bvh instances", &instances, storage)?,
+            build_ms: bvh.build_ms,
+            pair_node_count: bvh.pair_nodes.len(),
+            single_node_count: bvh.single_nodes.len(),
+            triangle_count: bvh.triangles.len(),
+            instance_count: bvh.instances.len(),
+        })
+    }
 }
 
 impl SceneBuffers {
@@ -45,6 +99,7 @@ impl SceneBuffers {
         let vertices =
             upload_buffer(device, recorder, "scene vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         let indices = upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER)?;
-        Ok(SceneBuffers { vertices, indices, receivers, refractors, all })
+        let bvh = BvhBuffers::new(device, recorder, scene)?;
+        Ok(SceneBuffers { vertices, indices, receivers, refractors, all, bvh })
     }
 }

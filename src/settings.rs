@@ -30,8 +30,23 @@ pub enum Driven {
     Cpu,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Transport {
+    /// Every glass path: rays through a BVH of the scene's triangles, in waves, with a deterministic Fresnel split.
+    Exact,
+    /// The papers' image-space model: refraction through one front and one back surface of the light-view
+    /// g-buffers (exact for light refracted exactly twice).
+    TwoInterface,
+}
+
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Settings {
+    pub transport: Transport,
+    /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
+    pub flux_threshold: f32,
+    /// Exact transport: the BVH node layout the waves traverse.
+    pub bvh_layout: crate::bvh::BvhLayout,
     pub method: Method,
     pub metric: Metric,
     /// Photon grid level: 64·2^level cells per side (dense), or the maximal traversal level (adaptive).
@@ -64,6 +79,9 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Settings {
+            transport: Transport::TwoInterface,
+            flux_threshold: 1e-3,
+            bvh_layout: crate::bvh::BvhLayout::Pair,
             method: Method::Adaptive,
             metric: Metric::MaxLevel,
             level: 5,
@@ -119,6 +137,9 @@ impl Settings {
         if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
             return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
         }
+        if !(self.flux_threshold.is_finite() && (0.0..1.0).contains(&self.flux_threshold)) {
+            return bad(format!("--flux-threshold {}: must lie in [0, 1)", self.flux_threshold));
+        }
         if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
             return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));
         }
@@ -136,6 +157,15 @@ impl Settings {
     pub fn photon_capacity(&self) -> u32 {
         let max = 128 * 1024 * 1024 / 16;
         (((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
+    }
+
+    /// Exact transport: rays per queue (32 bytes each, two queues; one binding holds at most 128 MiB) and splat
+    /// records per batch (one per photon-buffer entry, as for the two-interface trace). Two-interface: none.
+    pub fn ray_queue_capacity(&self) -> u32 {
+        match self.transport {
+            Transport::Exact => (self.photon_capacity() / 2).clamp(8, 128 * 1024 * 1024 / 32),
+            Transport::TwoInterface => 0,
+        }
     }
 
     /// log2(gbuffer_res / 64).

@@ -1,6 +1,6 @@
 //! The images and buffers a frame renders into, sized for the settings and the output.
 
-use crate::gpu_types::{FrameData, TraversalState};
+use crate::gpu_types::{FrameData, TransportState, TraversalState};
 use crate::passes::{
     coverage::pyramid_layout, photons::INDIRECT_BYTES, AUX_FORMAT, BEAUTY_FORMAT, DEPTH_FORMAT, GEO_FORMAT, HDR_FORMAT,
 };
@@ -71,6 +71,9 @@ pub struct PhotonBuffers {
     pub debug: Buffer,
     /// One splat record (16 bytes) per photon-buffer entry.
     pub splats: Buffer,
+    /// Exact transport: the wave state and energy account, and two ray queues (32 bytes a ray).
+    pub transport: Buffer,
+    pub queues: [Buffer; 2],
     pub capacity: u32,
     pub pyramid_offsets: Vec<u32>,
 }
@@ -149,6 +152,17 @@ impl Targets {
                 gpu,
             )?,
             splats: Buffer::new(device, "splat records", 16 * capacity as u64, B::STORAGE_BUFFER, gpu)?,
+            transport: Buffer::new(
+                device,
+                "transport state",
+                std::mem::size_of::<TransportState>() as u64,
+                B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
+                gpu,
+            )?,
+            queues: [
+                Buffer::new(device, "ray queue 0", 32 * s.ray_queue_capacity().max(1) as u64, B::STORAGE_BUFFER, gpu)?,
+                Buffer::new(device, "ray queue 1", 32 * s.ray_queue_capacity().max(1) as u64, B::STORAGE_BUFFER, gpu)?,
+            ],
             capacity,
             pyramid_offsets,
         };
@@ -188,16 +202,18 @@ impl Targets {
     /// Where each thing lies in the readback buffer.
     pub fn readback_layout(s: &Settings, aov_bytes: u64) -> ReadbackLayout {
         let state = 0u64;
-        let debug = std::mem::size_of::<TraversalState>() as u64;
+        let transport = std::mem::size_of::<TraversalState>() as u64;
+        let debug = transport + std::mem::size_of::<TransportState>() as u64;
         let guard = debug + 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
         let aov = guard + 8 * PHOTON_GUARD as u64;
-        ReadbackLayout { state, debug, guard, aov, total: aov + aov_bytes }
+        ReadbackLayout { state, transport, debug, guard, aov, total: aov + aov_bytes }
     }
 }
 
 #[derive(Clone, Copy, Debug)]
 pub struct ReadbackLayout {
     pub state: u64,
+    pub transport: u64,
     pub debug: u64,
     pub guard: u64,
     pub aov: u64,

@@ -69,6 +69,23 @@ float cell_side(uint level) { return u_frame.photon_view.window.z / float(LEVEL0
 // Exact: (x + 0.5) needs at most 23 bits at level 16 and the divisor is a power of two.
 vec2 cell_center_uv(uint level, uvec2 xy) { return (vec2(xy) + 0.5) / float(LEVEL0_RES << level); }
 
+// The splat footprint follows the cell: its size on the caustic map for max-level and dense photons (so that
+// neighbours' tents overlap and interpolate), the children's spread for max-error clusters.
+uint cell_splat_radius(uvec2 cell) {
+    uint r = cell_radius(cell);
+    if (r == 0u) {
+        float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
+        r = uint(clamp(round(cell_side(cell_level(cell)) / texel), 1.0, float(MAX_SPLAT_RADIUS)));
+    }
+    return r;
+}
+
+// A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
+float cell_measure(uint level, uvec2 xy) {
+    View v = u_frame.photon_view;
+    return view_cell_measure(v, view_xy_of_uv(v, cell_center_uv(level, xy)), cell_side(level));
+}
+
 Hit trace_cell(uint level, uvec2 xy) {
     return trace_photon(cell_center_uv(level, xy), cell_side(level), leaf_covered(level, xy));
 }

@@ -9,7 +9,13 @@ layout(std430, set = 0, binding = 1) buffer StateBuf { TraversalState state; };
 layout(std430, set = 0, binding = 2) buffer PhotonBuf { uvec2 photons[]; };
 // Indirect commands: dispatch[level] (x, y, z, pad) for each traversal level, the photon trace's dispatch, then
 // the splat's draw command (vertexCount, instanceCount, firstVertex, firstInstance).
-layout(std430, set = 0, binding = 3) buffer IndirectBuf { uvec4 dispatch_cmd[MAX_LEVELS]; uvec4 trace_cmd; uvec4 draw_cmd; };
+// Exact transport adds the current wave's dispatch.
+layout(std430, set = 0, binding = 3) buffer IndirectBuf {
+    uvec4 dispatch_cmd[MAX_LEVELS];
+    uvec4 trace_cmd;
+    uvec4 draw_cmd;
+    uvec4 wave_cmd;
+};
 layout(std430, set = 0, binding = 4) readonly buffer CoverageBuf { uint coverage[]; };
 layout(set = 0, binding = 5) uniform sampler2D t_front;      // refractor front: normal.xyz, distance (0: none)
 layout(set = 0, binding = 6) uniform sampler2D t_front_aux;  // refractor front: index of refraction
@@ -22,6 +28,31 @@ layout(std430, set = 0, binding = 9) buffer DebugBuf { uvec4 debug_header; uvec4
 // Splat records, one per emitted photon (same index): landing point (caustic-map texels), flux (W, before the
 // light's color), splat radius (texels; 0: the photon did not land).
 layout(std430, set = 0, binding = 10) buffer SplatBuf { vec4 splats[]; };
+
+// Exact transport (src/bvh.rs, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.
+// A ray is two vec4: origin and throughput (relative to its photon's flux); direction and bits(photon index |
+// interactions << 24). The photon index points into the photon buffer, whose cell gives the flux and footprint.
+layout(std430, set = 0, binding = 11) buffer TransportBuf { TransportState tstate; };
+layout(std430, set = 0, binding = 12) buffer RayQueue0 { vec4 queue0[]; };
+layout(std430, set = 0, binding = 13) buffer RayQueue1 { vec4 queue1[]; };
+struct BvhInstance {
+    vec4 object_from_world[3];
+    vec4 world_from_object[3];
+    vec4 lo;        // world bounds; w: root node bits (pair layout)
+    vec4 hi;        // w: root node bits (single layout)
+    vec4 material;  // x: IOR (dielectric) or albedo; y: 1 dielectric, 0 diffuse receiver
+    vec4 pad;
+};
+// Two node layouts (src/bvh.rs): "pair" holds both children's boxes (loK.w: child node or first triangle, hiK.w:
+// triangle count, 0 for an inner child); "single" one box per node (lo.w: first child or triangle, hi.w: count).
+struct BvhNode { vec4 lo0; vec4 hi0; vec4 lo1; vec4 hi1; };
+struct BvhNodeSingle { vec4 lo; vec4 hi; };
+layout(std430, set = 0, binding = 14) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = 18) readonly buffer BvhNodesSingle { BvhNodeSingle bvh_nodes_single[]; };
+layout(std430, set = 0, binding = 15) readonly buffer BvhTris { vec4 bvh_tris[]; };          // 3 per triangle
+layout(std430, set = 0, binding = 16) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; }; // 3 per triangle
+layout(std430, set = 0, binding = 17) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+uint bvh_instance_count() { return uint(bvh_instances.length()); }
 
 // Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
 // groups (lavapipe's limit).

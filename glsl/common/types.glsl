@@ -24,7 +24,9 @@ struct FrameData {
     uvec4 grid;          // x: refractor g-buffer res R; y: log2(R/64); z: caustic map res M; w: pyramid mips
     uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error), bit 8 batching;
                          // z: first level checked for convergence; w: photon-buffer capacity (entries)
-    vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z,w: unused
+    vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's
+                         // flux threshold (relative to the photon's flux); w: unused
+    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records; w: unused
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
 };
 
@@ -60,6 +62,38 @@ struct TraversalState {
     LevelCounters batch_levels[MAX_LEVELS];  // this batch's counts, committed into `levels` on success
     LevelCounters levels[MAX_LEVELS];
     ivec4 stack[TILE_STACK];
+};
+
+// Exact transport (DESIGN.md step 5, `--transport exact`): the state of the waves of one batch and the energy
+// account. Wave k traces ray queue k & 1 (wave 0: the batch's emitted photons) and appends the children to queue
+// (k + 1) & 1 with atomicAdd; the transport shader turns out_count into the next wave's dispatch arguments.
+// Account terms are flux / light intensity (sr for spot lights, m^2 for directional ones) in 64-bit fixed point
+// (ACCOUNT_SCALE units per 1), added as (lo, hi) word pairs with a carry, so the sums are exact and repeatable.
+const uint ACC_EMITTED = 0u;    // photons that entered the transport
+const uint ACC_CAUSTIC = 1u;    // reached a receiver after one or more specular interactions
+const uint ACC_DIRECT = 2u;     // reached a receiver with none (direct light, counted by the direct AOV)
+const uint ACC_ESCAPED = 3u;    // left the scene
+const uint ACC_THRESHOLD = 4u;  // children below the flux threshold
+const uint ACC_CAP = 5u;        // met a dielectric after the interaction cap
+const uint ACC_LOST = 6u;       // numerical dead ends (no valid direction on either normal)
+const uint ACC_OVERFLOW = 7u;   // did not fit a queue (only without batching: with it the batch is split instead)
+const uint ACC_TERMS = 8u;
+
+struct TransportState {
+    uint in_count;         // rays of the wave being traced (wave 0: the emitted photons)
+    uint out_count;        // rays appended for the next wave (atomic, successful reservations only)
+    uint out_reserved;     // capacity check for out_count (atomic; failed reservations roll back)
+    uint records;          // splat records appended this batch (atomic)
+    uint records_reserved;
+    uint queue_capacity;   // rays per queue
+    uint record_capacity;  // splat records per batch
+    uint overflows;        // reservations that did not fit (frame)
+    uint rays_traced;      // frame total
+    uint records_total;    // splat records drawn (frame)
+    uint waves;            // waves that traced at least one ray (frame)
+    uint max_depth;        // most specular interactions of a deposited path (frame)
+    uvec2 batch_account[ACC_TERMS];
+    uvec2 account[ACC_TERMS];
 };
 
 // Photon encoding: a quadtree cell (level, x, y) with exact integer addressing.

@@ -1,14 +1,16 @@
-//! The photon passes: init, traverse (one pipeline per work-group size), stats, dense emission and the splat.
-//! They share one binding layout (glsl/common/photon_bindings.glsl).
+//! The photon passes: init, traverse (one pipeline per work-group size), stats, dense emission, the two-interface
+//! trace or the exact transport's waves, and the splat. They share one binding layout
+//! (glsl/common/photon_bindings.glsl).
 
 use super::begin_rendering;
+use crate::bvh::BvhLayout;
 use crate::gpu_types::PhotonPush;
 use crate::shaders::{self, consts::*};
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
-const LAYOUT: [BindKind; 11] = [
+const LAYOUT: [BindKind; 19] = [
     BindKind::Uniform, // frame
     BindKind::Storage, // traversal state
     BindKind::Storage, // photon buffer
@@ -20,13 +22,23 @@ const LAYOUT: [BindKind; 11] = [
     BindKind::Sampled, // receivers from the light
     BindKind::Storage, // debug photon dump
     BindKind::Storage, // splat records
+    BindKind::Storage, // transport state
+    BindKind::Storage, // ray queue 0
+    BindKind::Storage, // ray queue 1
+    BindKind::Storage, // BVH nodes (pair layout)
+    BindKind::Storage, // BVH triangles
+    BindKind::Storage, // BVH vertex normals
+    BindKind::Storage, // BVH instances
+    BindKind::Storage, // BVH nodes (single layout)
 ];
 
 /// Byte offsets in the indirect buffer: one dispatch command per traversal level, the photon trace's
 /// dispatch, then the splat's draw command.
 pub const TRACE_OFFSET: u64 = 16 * MAX_LEVELS as u64;
 pub const DRAW_OFFSET: u64 = TRACE_OFFSET + 16;
-pub const INDIRECT_BYTES: u64 = DRAW_OFFSET + 16;
+/// Exact transport: the current wave's dispatch.
+pub const WAVE_OFFSET: u64 = DRAW_OFFSET + 16;
+pub const INDIRECT_BYTES: u64 = WAVE_OFFSET + 16;
 
 pub struct PhotonBindings<'a> {
     pub ubo: &'a Buffer,
@@ -41,10 +53,13 @@ pub struct PhotonBindings<'a> {
     pub debug: &'a Buffer,
     pub splats: &'a Buffer,
     pub sampler: &'a Sampler,
+    pub transport: &'a Buffer,
+    pub queues: [&'a Buffer; 2],
+    pub bvh: &'a crate::scene_gpu::BvhBuffers,
 }
 
 impl PhotonBindings<'_> {
-    fn binds(&self) -> [Bind<'_>; 11] {
+    fn binds(&self) -> [Bind<'_>; 19] {
         [
             Bind::Uniform(self.ubo),
             Bind::Storage(self.state),
@@ -57,6 +72,14 @@ impl PhotonBindings<'_> {
             Bind::Sampled(self.recv, self.sampler),
             Bind::Storage(self.debug),
             Bind::Storage(self.splats),
+            Bind::Storage(self.transport),
+            Bind::Storage(self.queues[0]),
+            Bind::Storage(self.queues[1]),
+            Bind::Storage(&self.bvh.pair_nodes),
+            Bind::Storage(&self.bvh.triangles),
+            Bind::Storage(&self.bvh.normals),
+            Bind::Storage(&self.bvh.instances),
+            Bind::Storage(&self.bvh.single_nodes),
         ]
     }
 }
@@ -73,6 +96,14 @@ pub mod stats_mode {
     pub const DENSE: u32 = 2;
 }
 
+/// Modes of transport.comp.
+pub mod transport_mode {
+    pub const BEGIN_DENSE: u32 = 0;
+    pub const BEGIN_ADAPTIVE: u32 = 1;
+    pub const AFTER_WAVE: u32 = 2;
+    pub const COMMIT: u32 = 3;
+}
+
 pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
@@ -80,6 +111,9 @@ pub struct PhotonPasses {
     stats: Pipeline,
     dense_emit: Pipeline,
     trace: Pipeline,
+    wave_pair: Pipeline,
+    wave_single: Pipeline,
+    transport: Pipeline,
     splat: Pipeline,
 }
 
@@ -118,6 +152,9 @@ impl PhotonPasses {
             stats: compute("stats", shaders::STATS_COMP.words())?,
             dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
             trace: compute("photon trace", shaders::TRACE_COMP.words())?,
+            wave_pair: compute("transport wave", shaders::WAVE_COMP.words())?,
+            wave_single: compute("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words())?,
+            transport: compute("transport state", shaders::TRANSPORT_COMP.words())?,
             splat,
         })
     }
@@ -175,6 +212,21 @@ impl PhotonPasses {
             PhotonPush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0), ..Default::default() };
         self.trace.push(cmd, &push);
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, TRACE_OFFSET) };
+    }
+
+    /// Exact transport's bookkeeping (`transport_mode`); `may_abort`: the batch is split on overflow.
+    pub fn transport(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, may_abort: bool) {
+        self.transport.bind(cmd, &b.binds());
+        self.transport.push(cmd, &PhotonPush { mode, rows: may_abort as u32, ..Default::default() });
+        unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
+    }
+
+    /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
+    pub fn wave(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, wave: u32, may_abort: bool, layout: BvhLayout) {
+        let p = if layout == BvhLayout::Pair { &self.wave_pair } else { &self.wave_single };
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush { level: wave, mode: may_abort as u32, ..Default::default() });
+        unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
     }
 
     /// Splat the traced photons into the caustic flux map with vkCmdDrawIndirect.

@@ -1,0 +1,177 @@
+// Closest-hit queries against the scene's two-level BVH (src/bvh.rs builds it): the instances are tested
+// linearly against their world bounds, the ray is moved into each instance's BVH space, and its bottom-level tree
+// is walked with a short stack. Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013), as the
+// CPU reference does (there in f64): a ray cannot slip between two triangles that share an edge.
+// Needs photon_bindings (bindings 14-18). BVH_LAYOUT_SINGLE selects the one-box-per-node layout.
+#ifndef BVH_GLSL
+#define BVH_GLSL
+
+const uint BVH_EMPTY = 0xFFFFFFFFu;
+const uint BVH_STACK = 64u;
+
+struct SceneHit {
+    float t;
+    uint inst;
+    uint tri;
+    vec3 bary;  // weights of p0, p1, p2
+};
+
+vec3 bvh_xform(vec4 r0, vec4 r1, vec4 r2, vec3 v, float w) {
+    vec4 h = vec4(v, w);
+    return vec3(dot(r0, h), dot(r1, h), dot(r2, h));
+}
+
+// Entry distance of the ray into [lo, hi], or +inf when it misses or enters beyond tmax.
+float bvh_slab(vec3 lo, vec3 hi, vec3 o, vec3 inv_d, float tmax) {
+    vec3 t0 = (lo - o) * inv_d, t1 = (hi - o) * inv_d;
+    vec3 tn = min(t0, t1), tf = max(t0, t1);
+    float near = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float far = min(min(tf.x, tf.y), min(tf.z, tmax));
+    return near <= far ? near : 1.0 / 0.0;
+}
+
+// The watertight test's per-ray shear (dimension order k, shear s).
+struct Shear {
+    uvec3 k;
+    vec3 s;
+};
+
+Shear bvh_shear(vec3 d) {
+    vec3 a = abs(d);
+    uint kz = (a.x >= a.y && a.x >= a.z) ? 0u : (a.y >= a.z ? 1u : 2u);
+    uint kx = (kz + 1u) % 3u, ky = (kx + 1u) % 3u;
+    if (d[kz] < 0.0) { uint t = kx; kx = ky; ky = t; }
+    Shear sh;
+    sh.k = uvec3(kx, ky, kz);
+    sh.s = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    return sh;
+}
+
+// Watertight ray/triangle test: t and the barycentric weights of the hit, if 0 < t < tmax.
+bool bvh_triangle(Shear sh, vec3 o, uint tri, float tmax, out float t, out vec3 bary) {
+    vec3 a = bvh_tris[3u * tri].xyz - o, b = bvh_tris[3u * tri + 1u].xyz - o, c = bvh_tris[3u * tri + 2u].xyz - o;
+    uint kx = sh.k.x, ky = sh.k.y, kz = sh.k.z;
+    float ax = a[kx] - sh.s.x * a[kz], ay = a[ky] - sh.s.y * a[kz];
+    float bx = b[kx] - sh.s.x * b[kz], by = b[ky] - sh.s.y * b[kz];
+    float cx = c[kx] - sh.s.x * c[kz], cy = c[ky] - sh.s.y * c[kz];
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
+    float det = u + v + w;
+    if (det == 0.0) return false;
+    t = (u * a[kz] + v * b[kz] + w * c[kz]) * sh.s.z / det;
+    bary = vec3(u, v, w) / det;
+    return t > 0.0 && t < tmax;
+}
+
+void bvh_leaf(Shear sh, vec3 o, uint first, uint count, uint inst, inout SceneHit hit, inout bool found) {
+    for (uint k = first; k < first + count; k++) {
+        float t;
+        vec3 bary;
+        if (bvh_triangle(sh, o, k, hit.t, t, bary)) {
+            hit.t = t;
+            hit.inst = inst;
+            hit.tri = k;
+            hit.bary = bary;
+            found = true;
+        }
+    }
+}
+
+// Closest hit along ro + t*rd (0 < t < tmax) over every instance.
+bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
+    hit.t = tmax;
+    hit.inst = 0u;
+    hit.tri = 0u;
+    hit.bary = vec3(0.0);
+    bool found = false;
+    vec3 inv_wd = 1.0 / rd;
+    uint stack[BVH_STACK];
+    for (uint ii = 0u; ii < bvh_instance_count(); ii++) {
+        BvhInstance I = bvh_instances[ii];
+        if (isinf(bvh_slab(I.lo.xyz, I.hi.xyz, ro, inv_wd, hit.t))) continue;
+        vec3 o = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], ro, 1.0);
+        vec3 d = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], rd, 0.0);
+        vec3 inv = 1.0 / d;
+        Shear sh = bvh_shear(d);
+        uint sp = 0u;
+#ifdef BVH_LAYOUT_SINGLE
+        stack[sp++] = floatBitsToUint(I.hi.w);
+        while (sp > 0u) {
+            BvhNodeSingle n = bvh_nodes_single[stack[--sp]];
+            if (isinf(bvh_slab(n.lo.xyz, n.hi.xyz, o, inv, hit.t))) continue;
+            uint first = floatBitsToUint(n.lo.w), count = floatBitsToUint(n.hi.w);
+            if (count > 0u) {
+                bvh_leaf(sh, o, first, count, ii, hit, found);
+            } else if (sp + 2u <= BVH_STACK) {
+                // Nearer child on top, so it is visited first and shrinks hit.t for the other.
+                BvhNodeSingle c0 = bvh_nodes_single[first], c1 = bvh_nodes_single[first + 1u];
+                float t0 = bvh_slab(c0.lo.xyz, c0.hi.xyz, o, inv, hit.t);
+                float t1 = bvh_slab(c1.lo.xyz, c1.hi.xyz, o, inv, hit.t);
+                if (t0 <= t1) {
+                    if (!isinf(t1)) stack[sp++] = first + 1u;
+                    if (!isinf(t0)) stack[sp++] = first;
+                } else {
+                    if (!isinf(t0)) stack[sp++] = first;
+                    stack[sp++] = first + 1u;
+                }
+            }
+        }
+#else
+        uint node = floatBitsToUint(I.lo.w);
+        while (true) {
+            BvhNode n = bvh_nodes[node];
+            float t0 = bvh_slab(n.lo0.xyz, n.hi0.xyz, o, inv, hit.t);
+            float t1 = bvh_slab(n.lo1.xyz, n.hi1.xyz, o, inv, hit.t);
+            uint i0 = floatBitsToUint(n.lo0.w), c0 = floatBitsToUint(n.hi0.w);
+            uint i1 = floatBitsToUint(n.lo1.w), c1 = floatBitsToUint(n.hi1.w);
+            if (i1 == BVH_EMPTY) t1 = 1.0 / 0.0;
+            // Leaves are tested right away; inner children are visited nearer first.
+            if (!isinf(t0) && c0 > 0u) { bvh_leaf(sh, o, i0, c0, ii, hit, found); t0 = 1.0 / 0.0; }
+            if (!isinf(t1) && c1 > 0u) { bvh_leaf(sh, o, i1, c1, ii, hit, found); t1 = 1.0 / 0.0; }
+            // hit.t may have shrunk: a child entered beyond it is skipped.
+            if (t0 > hit.t) t0 = 1.0 / 0.0;
+            if (t1 > hit.t) t1 = 1.0 / 0.0;
+            bool go0 = !isinf(t0), go1 = !isinf(t1);
+            if (go0 && go1) {
+                uint near = t0 <= t1 ? i0 : i1, far = t0 <= t1 ? i1 : i0;
+                if (sp < BVH_STACK) stack[sp++] = far;
+                node = near;
+            } else if (go0) {
+                node = i0;
+            } else if (go1) {
+                node = i1;
+            } else {
+                if (sp == 0u) break;
+                node = stack[--sp];
+            }
+        }
+#endif
+    }
+    return found;
+}
+
+// World-space geometric normal (unit; counter-clockwise winding faces it) and interpolated shading normal (unit,
+// falling back to the geometric one where the interpolation degenerates), as src/reference/geometry.rs computes.
+void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
+    BvhInstance I = bvh_instances[hit.inst];
+    vec3 p0 = bvh_tris[3u * hit.tri].xyz, p1 = bvh_tris[3u * hit.tri + 1u].xyz, p2 = bvh_tris[3u * hit.tri + 2u].xyz;
+    vec3 n = bvh_normal_rows[3u * hit.tri].xyz * hit.bary.x + bvh_normal_rows[3u * hit.tri + 1u].xyz * hit.bary.y
+        + bvh_normal_rows[3u * hit.tri + 2u].xyz * hit.bary.z;
+    // Normals transform with the inverse transpose: the transpose of object_from_world's 3x3 part.
+    mat3 m = transpose(mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz));
+    ng = normalize(m * cross(p1 - p0, p2 - p0));
+    float len = length(n);
+    ns = len > 0.0 && !isnan(len) && !isinf(len) ? normalize(m * n) : ng;
+}
+
+// World-space hit point from the barycentric weights (more precise than ro + t*rd far from the origin).
+vec3 bvh_hit_point(SceneHit hit) {
+    BvhInstance I = bvh_instances[hit.inst];
+    vec3 p = bvh_tris[3u * hit.tri].xyz * hit.bary.x + bvh_tris[3u * hit.tri + 1u].xyz * hit.bary.y
+        + bvh_tris[3u * hit.tri + 2u].xyz * hit.bary.z;
+    return bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2], p, 1.0);
+}
+
+#endif

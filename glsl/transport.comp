@@ -1,0 +1,54 @@
+#version 460
+// The exact transport's bookkeeping (one invocation; DESIGN.md step 5): mode 0/1 begins a batch's waves (1 for
+// adaptive: nothing when the batch has no tile or aborted), mode 2 follows each wave (the appended children become
+// the next wave, with its dispatch-indirect arguments), mode 3 commits the batch (its energy account joins the
+// frame's and the splat draws its records) unless it aborted, in which case traversal's commit splits its tile.
+// Push: mode; rows = 1 when the batch may abort (adaptive traversal with batching).
+#include "common/photon_bindings.glsl"
+#include "common/photon_push.glsl"
+
+layout(local_size_x = 1) in;
+
+const uint BEGIN_DENSE = 0u;
+const uint BEGIN_ADAPTIVE = 1u;
+const uint AFTER_WAVE = 2u;
+const uint COMMIT = 3u;
+
+void main() {
+    bool aborted = state.aborted != 0u && state.batching != 0u;
+    if (pc.mode == BEGIN_DENSE || pc.mode == BEGIN_ADAPTIVE) {
+        bool none = pc.mode == BEGIN_ADAPTIVE && (state.start_level >= MAX_LEVELS || aborted);
+        tstate.in_count = none ? 0u : min(state.emit_count, state.capacity);
+        tstate.out_count = 0u;
+        tstate.out_reserved = 0u;
+        tstate.records = 0u;
+        tstate.records_reserved = 0u;
+        tstate.queue_capacity = u_frame.transport.y;
+        tstate.record_capacity = u_frame.transport.z;
+        for (uint k = 0u; k < ACC_TERMS; k++) tstate.batch_account[k] = uvec2(0u);
+        wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
+        if (tstate.in_count > 0u) tstate.waves += 1u;
+        draw_cmd = uvec4(0u, 1u, 0u, 0u);
+    } else if (pc.mode == AFTER_WAVE) {
+        tstate.in_count = aborted && pc.rows != 0u ? 0u : tstate.out_count;
+        tstate.out_count = 0u;
+        tstate.out_reserved = 0u;
+        wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
+        if (tstate.in_count > 0u) tstate.waves += 1u;
+    } else {
+        tstate.in_count = 0u;
+        wave_cmd = uvec4(0u, 0u, 1u, 0u);
+        if (aborted && pc.rows != 0u) {
+            draw_cmd = uvec4(0u, 1u, 0u, 0u);
+            return;
+        }
+        for (uint k = 0u; k < ACC_TERMS; k++) {
+            uvec2 a = tstate.account[k], b = tstate.batch_account[k];
+            uint lo = a.x + b.x;
+            tstate.account[k] = uvec2(lo, a.y + b.y + (lo < a.x ? 1u : 0u));
+        }
+        uint n = min(tstate.records, tstate.record_capacity);
+        tstate.records_total += n;
+        draw_cmd = uvec4(n, 1u, 0u, 0u);
+    }
+}

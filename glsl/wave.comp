@@ -1,0 +1,206 @@
+#version 460
+// One wave of exact photon transport (DESIGN.md step 5, `--transport exact`), dispatched indirectly with the
+// arguments the transport shader wrote after the previous wave. Wave 0 turns each emitted photon into a ray from
+// the light through its cell's center; wave k > 0 traces ray queue k & 1. At a dielectric the Fresnel split
+// appends the reflected and refracted children (each above the flux threshold) to queue (k + 1) & 1; at a diffuse
+// receiver a path with one or more specular interactions becomes a splat record; a miss escapes. Every
+// invocation's flux goes to exactly one account term, summed per work group and added in fixed point.
+// Appends reserve once per work group. A reservation that does not fit aborts the batch (batching splits its
+// tile, as traversal overflow does) or, without batching, is dropped and counted as overflow.
+#include "common/photon_bindings.glsl"
+#include "common/photon_push.glsl"
+#include "common/coverage.glsl"
+#include "common/photon.glsl"
+#include "common/transport.glsl"
+
+layout(local_size_x = LINEAR_WG) in;
+
+shared float s_acc[ACC_TERMS][LINEAR_WG];
+shared uint s_rays;
+shared uint s_recs;
+shared uint s_ray_base;
+shared uint s_rec_base;
+shared bool s_rays_ok;
+shared bool s_recs_ok;
+
+void store_ray(uint q, uint k, vec3 o, float w, vec3 d, uint meta) {
+    if (q == 0u) {
+        queue0[2u * k] = vec4(o, w);
+        queue0[2u * k + 1u] = vec4(d, uintBitsToFloat(meta));
+    } else {
+        queue1[2u * k] = vec4(o, w);
+        queue1[2u * k + 1u] = vec4(d, uintBitsToFloat(meta));
+    }
+}
+
+// Add a non-negative value to a (lo, hi) fixed-point pair of the batch account.
+void account_add(uint term, float v) {
+    if (!(v > 0.0)) return;
+    float x = v * exp2(float(ACCOUNT_SHIFT));
+    uint hi = uint(x * exp2(-32.0));
+    uint lo = uint(x - float(hi) * exp2(32.0));
+    uint old = atomicAdd(tstate.batch_account[term].x, lo);
+    uint carry = old + lo < old ? 1u : 0u;
+    if (hi + carry != 0u) atomicAdd(tstate.batch_account[term].y, hi + carry);
+}
+
+void main() {
+    uint lid = gl_LocalInvocationIndex;
+    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
+    uint wave = pc.level;
+    bool can_abort = pc.mode != 0u;
+    if (lid == 0u) {
+        s_rays = 0u;
+        s_recs = 0u;
+    }
+    float acc[ACC_TERMS];
+    for (uint k = 0u; k < ACC_TERMS; k++) acc[k] = 0.0;
+    barrier();
+
+    // What this invocation produces: up to two child rays and one splat record.
+    uint n_child = 0u;
+    vec3 c_o[2], c_d[2];
+    float c_w[2];
+    bool rec = false;
+    float rec_flux = 0.0;
+    vec4 record = vec4(0.0);
+    uint meta = 0u;
+    float phi = 0.0;  // the photon's flux / intensity
+    uint ray_slot = 0u, rec_slot = 0u;
+    bool live = i < tstate.in_count && !(can_abort && state.aborted != 0u);
+    if (live) {
+        vec3 ro, rd;
+        float w;
+        uint depth;
+        uint pidx;
+        if (wave == 0u) {
+            pidx = state.capacity - tstate.in_count + i;
+            uvec2 cell = photons[pidx];
+            cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
+            w = 1.0;
+            depth = 0u;
+            phi = cell_measure(cell_level(cell), cell_xy(cell));
+            acc[ACC_EMITTED] = phi;
+        } else {
+            vec4 a = (wave & 1u) == 0u ? queue0[2u * i] : queue1[2u * i];
+            vec4 b = (wave & 1u) == 0u ? queue0[2u * i + 1u] : queue1[2u * i + 1u];
+            ro = a.xyz;
+            w = a.w;
+            rd = b.xyz;
+            uint m = floatBitsToUint(b.w);
+            pidx = m & 0xFFFFFFu;
+            depth = m >> 24;
+            uvec2 cell = photons[pidx];
+            phi = cell_measure(cell_level(cell), cell_xy(cell));
+        }
+        float flux = phi * w;
+        SceneHit hit;
+        if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) {
+            acc[ACC_ESCAPED] += flux;
+        } else {
+            vec3 p = bvh_hit_point(hit);
+            if (!inst_is_dielectric(hit.inst)) {
+                if (depth == 0u) {
+                    acc[ACC_DIRECT] += flux;
+                } else {
+                    View rv = u_frame.receiver_view;
+                    uint r = cell_splat_radius(photons[pidx]);
+                    record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, float(r));
+                    rec = true;
+                    rec_flux = flux;
+                    rec_slot = atomicAdd(s_recs, 1u);
+                    atomicMax(tstate.max_depth, depth);
+                }
+            } else if (depth >= MAX_INTERACTIONS) {
+                acc[ACC_CAP] += flux;
+            } else {
+                vec3 ng, ns;
+                bvh_normals(hit, ng, ns);
+                Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst));
+                if (!s.ok) {
+                    acc[ACC_LOST] += flux;
+                } else {
+                    float wr = w * s.F, wt = w * (1.0 - s.F);
+                    float cut = u_frame.params.z;
+                    if (wr > 0.0) {
+                        if (wr >= cut) {
+                            c_o[n_child] = s.p_refl;
+                            c_d[n_child] = normalize(s.refl);
+                            c_w[n_child] = wr;
+                            n_child++;
+                        } else {
+                            acc[ACC_THRESHOLD] += phi * wr;
+                        }
+                    }
+                    if (wt > 0.0) {
+                        if (wt >= cut) {
+                            c_o[n_child] = s.p_refr;
+                            c_d[n_child] = normalize(s.refr);
+                            c_w[n_child] = wt;
+                            n_child++;
+                        } else {
+                            acc[ACC_THRESHOLD] += phi * wt;
+                        }
+                    }
+                    meta = pidx | ((depth + 1u) << 24);
+                    if (n_child > 0u) ray_slot = atomicAdd(s_rays, n_child);
+                }
+            }
+        }
+    }
+    barrier();
+    if (lid == 0u) {
+        s_rays_ok = false;
+        s_recs_ok = false;
+        if (s_rays > 0u) {
+            uint base = atomicAdd(tstate.out_reserved, s_rays);
+            if (base + s_rays <= tstate.queue_capacity) {
+                s_rays_ok = true;
+                s_ray_base = atomicAdd(tstate.out_count, s_rays);
+            } else {
+                atomicAdd(tstate.out_reserved, 0u - s_rays);
+                atomicAdd(tstate.overflows, 1u);
+                if (can_abort) atomicExchange(state.aborted, 1u);
+            }
+        }
+        if (s_recs > 0u) {
+            uint base = atomicAdd(tstate.records_reserved, s_recs);
+            if (base + s_recs <= tstate.record_capacity) {
+                s_recs_ok = true;
+                s_rec_base = atomicAdd(tstate.records, s_recs);
+            } else {
+                atomicAdd(tstate.records_reserved, 0u - s_recs);
+                atomicAdd(tstate.overflows, 1u);
+                if (can_abort) atomicExchange(state.aborted, 1u);
+            }
+        }
+    }
+    barrier();
+    uint q = (wave + 1u) & 1u;
+    for (uint c = 0u; c < n_child; c++) {
+        if (s_rays_ok) {
+            store_ray(q, s_ray_base + ray_slot + c, c_o[c], c_w[c], c_d[c], meta);
+        } else {
+            acc[ACC_OVERFLOW] += phi * c_w[c];
+        }
+    }
+    if (rec) {
+        if (s_recs_ok) {
+            splats[s_rec_base + rec_slot] = record;
+        } else {
+            acc[ACC_OVERFLOW] += rec_flux;
+        }
+        if (s_recs_ok) acc[ACC_CAUSTIC] += rec_flux;
+    }
+    // Work-group sums of the account, then one fixed-point add per term.
+    for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] = acc[k];
+    barrier();
+    for (uint stride = LINEAR_WG / 2u; stride > 0u; stride >>= 1) {
+        if (lid < stride) {
+            for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] += s_acc[k][lid + stride];
+        }
+        barrier();
+    }
+    if (lid < ACC_TERMS) account_add(lid, s_acc[lid][0]);
+    if (lid == 0u && i < tstate.in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, tstate.in_count - i));
+}
