@@ -9,6 +9,7 @@
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
 #include "common/photon.glsl"
+#include "common/transport.glsl"
 
 #ifndef TRAVERSE_WG_SIDE
 #define TRAVERSE_WG_SIDE TRAVERSE_WG
@@ -33,7 +34,30 @@ const uint CHILDREN_DROP = 0xFFFFFFFEu;
 // CHILDREN_DROP when all four fail the same way (all escape the receivers, all meet total internal reflection, ...:
 // the cluster carries nothing to a receiver, so refining it would only multiply photons that get discarded), or
 // CHILDREN_REFINE.
+// Under exact transport each child follows its dominant path (the larger Fresnel branch at every interface). The
+// cluster converges when all four land on a receiver after the same number of interactions and within the bound;
+// children whose paths split (a silhouette, a TIR boundary, a different number of interfaces) refine. When all
+// four end the same other way (escape, direct light, the cap), the cell is emitted rather than dropped: its
+// weaker branches may still reach a receiver, and its own waves trace them all.
+uint children_verdict_exact(uint level, uvec2 xy) {
+    vec2 p[4];
+    uint status[4], events[4];
+    for (uint k = 0u; k < 4u; k++) {
+        status[k] = trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p[k], events[k]);
+    }
+    bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
+    if (!same) return CHILDREN_REFINE;
+    if (status[0] != DOM_OK) return 0u;
+    if (events[0] != events[1] || events[1] != events[2] || events[2] != events[3]) return CHILDREN_REFINE;
+    float spread = 0.0;
+    for (uint a = 0u; a < 4u; a++)
+        for (uint b = a + 1u; b < 4u; b++) spread = max(spread, distance(p[a], p[b]));
+    if (spread > u_frame.params.x) return CHILDREN_REFINE;
+    return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
+}
+
 uint children_verdict(uint level, uvec2 xy) {
+    if (u_frame.transport.x != 0u) return children_verdict_exact(level, xy);
     vec2 p[4];
     uint status[4];
     bool all_ok = true;

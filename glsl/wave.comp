@@ -63,6 +63,7 @@ void main() {
     float c_w[2];
     bool rec = false;
     float rec_flux = 0.0;
+    bool one_event = false;
     vec4 record = vec4(0.0);
     uint meta = 0u;
     float phi = 0.0;  // the photon's flux / intensity
@@ -108,6 +109,7 @@ void main() {
                     record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, float(r));
                     rec = true;
                     rec_flux = flux;
+                    one_event = depth == 1u;
                     rec_slot = atomicAdd(s_recs, 1u);
                     atomicMax(tstate.max_depth, depth);
                 }
@@ -191,6 +193,7 @@ void main() {
             acc[ACC_OVERFLOW] += rec_flux;
         }
         if (s_recs_ok) acc[ACC_CAUSTIC] += rec_flux;
+        if (s_recs_ok && one_event) acc[ACC_ONE_EVENT] += rec_flux;
     }
     // Work-group sums of the account, then one fixed-point add per term.
     for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] = acc[k];

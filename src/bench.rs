@@ -1,5 +1,6 @@
-//! `caustics bench`: speed against error. For each scene it sweeps the methods (dense, adaptive max-level,
-//! adaptive max-error) over levels, optionally the driven mode and the traversal work-group size, times K
+//! `caustics bench`: speed against error. For each scene it sweeps the light transports (exact, two-interface)
+//! and the methods (dense, adaptive max-level, adaptive max-error) over levels, optionally the driven mode and
+//! the traversal work-group size, times K
 //! frames of each point (median GPU ms from timestamp queries, median wall ms), and scores the last frame's
 //! caustics AOV against CPU references (src/reference, cached on disk) with the project's metric.
 
@@ -11,7 +12,7 @@ use crate::metrics;
 use crate::profiler::Summary;
 use crate::reference::{self, Paths, RefParams};
 use crate::renderer::{Aov, FrameReport};
-use crate::settings::{Driven, Method, Metric, Settings, TRAVERSE_WG_SWEEP};
+use crate::settings::{Driven, Method, Metric, Settings, Transport, TRAVERSE_WG_SWEEP};
 use crate::shaders::consts::*;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -28,6 +29,10 @@ pub struct BenchArgs {
     /// AOV size (the finest comparison resolution is 256²).
     #[arg(long, default_value = "256x256")]
     pub size: String,
+    /// Light transports through the glass: exact, two-interface (comma-separated); each one sweeps every method
+    /// and level.
+    #[arg(long, value_enum, default_values = ["exact", "two-interface"], value_delimiter = ',')]
+    pub transports: Vec<Transport>,
     /// Methods: dense, max-level, max-error (comma-separated).
     #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
     pub methods: Vec<String>,
@@ -79,6 +84,34 @@ pub struct BenchArgs {
     pub markdown: Option<PathBuf>,
     #[arg(long)]
     pub plot: Option<PathBuf>,
+}
+
+/// The transport as `--transport` and the bench JSON name it.
+fn transport_name(t: Transport) -> &'static str {
+    match t {
+        Transport::Exact => "exact",
+        Transport::TwoInterface => "two-interface",
+    }
+}
+
+/// Exact transport's wave counts and energy account (in W: the account's units are the light's intensity) for a
+/// row's `extra`; null for two-interface.
+fn exact_extra(report: &FrameReport, intensity: f64) -> serde_json::Value {
+    let Some(ts) = report.transport else {
+        return serde_json::Value::Null;
+    };
+    let acc = ts.account().map(|x| x * intensity);
+    let mut energy = serde_json::Map::new();
+    for (name, w) in crate::gpu_types::ACCOUNT_TERMS.iter().zip(acc) {
+        energy.insert(format!("{name}_w"), json!(w));
+    }
+    json!({
+        "waves": ts.waves,
+        "max_depth": ts.max_depth,
+        "splat_records": ts.records_total,
+        "queue_overflows": ts.overflows,
+        "energy": energy,
+    })
 }
 
 fn parse_levels(s: &str) -> AppResult<Vec<u32>> {
@@ -204,7 +237,8 @@ fn median_of(frames: &[FrameReport], f: impl Fn(&FrameReport) -> f64) -> f64 {
 }
 
 fn stage_median(frames: &[FrameReport], prefix: &str) -> f64 {
-    median_of(frames, |f| f.stages.iter().filter(|(l, _)| l.starts_with(prefix)).map(|(_, ms)| ms).sum())
+    // `+ 0.0`: an empty sum is -0.0, and a stage a frame did not run reads better as 0.
+    median_of(frames, |f| f.stages.iter().filter(|(l, _)| l.starts_with(prefix)).map(|(_, ms)| ms).sum::<f64>() + 0.0)
 }
 
 fn write_reports(args: &BenchArgs, device: &str, rows: &[BenchRow]) -> AppResult<()> {
@@ -258,12 +292,15 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             session.frame(None)?;
         }
         let name = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        for p in &pts {
+        let intensity = session.renderer.scene.lights.first().map_or(0.0, |l| l.intensity as f64);
+        for (&transport, p) in args.transports.iter().flat_map(|t| pts.iter().map(move |p| (t, p))) {
+            let key = format!("{} {}", transport_name(transport), p.key());
             for &level in &levels {
                 if p.method == Method::Dense && level > 12 {
                     continue;
                 }
                 let s = Settings {
+                    transport,
                     method: p.method,
                     metric: p.metric,
                     level,
@@ -294,6 +331,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                 let nan = f64::NAN;
                 let row = BenchRow {
                     scene: name.clone(),
+                    transport: transport_name(transport).into(),
                     method: format!("{:?}", p.method).to_lowercase(),
                     metric: (p.method == Method::Adaptive).then(|| {
                         if p.metric == Metric::MaxLevel {
@@ -306,6 +344,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     equivalent_res: LEVEL0_RES << level,
                     driven: if p.driven == Driven::Gpu { "gpu".into() } else { "cpu".into() },
                     photons: st.photons_total as u64,
+                    rays_traced: last.transport.map(|t| t.rays_traced as u64),
                     gpu_ms_median: median_of(&frames, |f| f.gpu_ms),
                     frame_ms_median: median_of(&frames, |f| f.frame_ms),
                     rel_l1_64: m64.map(|m| m.rel_l1).unwrap_or(nan),
@@ -321,6 +360,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                         "traverse_wg": p.wg,
                         "traverse_ms": stage_median(&frames, "traverse"),
                         "photon_trace_ms": stage_median(&frames, "photon_trace"),
+                        "transport_ms": stage_median(&frames, "transport"),
                         "splat_ms": stage_median(&frames, "splat"),
                         "light_gbuffer_ms": stage_median(&frames, "light_gbuffer"),
                         "eye_ms": stage_median(&frames, "eye"),
@@ -331,12 +371,13 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                         "overflow_events": st.batches_aborted,
                         "photon_buffer_bytes": 8 * st.peak_used as u64,
                         "warmup_s": warm,
+                        "exact_transport": exact_extra(&last, intensity),
                     }),
                 };
                 eprintln!(
-                    "{name} {:<28} L{level:<2} {:>10} photons  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {:.4}  256² {:.4}  flux {:.4}",
-                    p.key(),
+                    "{name} {key:<42} L{level:<2} {:>10} photons {:>11} rays  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {:.4}  256² {:.4}  flux {:.4}",
                     row.photons,
+                    row.rays_traced.map_or_else(|| "–".to_string(), |n| n.to_string()),
                     row.gpu_ms_median,
                     row.frame_ms_median,
                     row.rel_l1_64,
@@ -346,11 +387,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                 let slow = row.frame_ms_median > args.max_frame_s * 1e3;
                 rows.push(row);
                 if slow {
-                    eprintln!(
-                        "{name} {}: frames take over {} s; skipping its deeper levels",
-                        p.key(),
-                        args.max_frame_s
-                    );
+                    eprintln!("{name} {key}: frames take over {} s; skipping its deeper levels", args.max_frame_s);
                     break;
                 }
             }

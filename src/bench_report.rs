@@ -1,10 +1,13 @@
-//! The reporting half of `caustics bench`: one [`BenchRow`] per (scene, method, metric, level, driven) run, a
-//! Markdown table, and a log-log SVG plot of error against GPU time.
+//! The reporting half of `caustics bench`: one [`BenchRow`] per (scene, transport, method, metric, level, driven)
+//! run, a Markdown table, and a log-log SVG plot of error against GPU time.
 //!
 //! Row shape (the JSON the bench writes, one object per row):
-//! - `scene`, `method` (`dense`, `adaptive`, ...), `metric` (`max-level`, `max-error`, or null for dense),
-//!   `level` (the `--level`), `equivalent_res` (64·2^level: the light-space grid side the level stands for),
-//!   `driven` (`gpu` or `cpu`), `photons` (photons splatted);
+//! - `scene`, `transport` (`exact` or `two-interface`; rows written before the field existed read back as
+//!   `two-interface`), `method` (`dense`, `adaptive`, ...), `metric` (`max-level`, `max-error`, or null for
+//!   dense), `level` (the `--level`), `equivalent_res` (64·2^level: the light-space grid side the level stands
+//!   for), `driven` (`gpu` or `cpu`), `photons` (photons emitted and traced from the light);
+//! - `rays_traced`: rays the exact transport traced through the BVH in the last frame (every wave, every Fresnel
+//!   branch), null for two-interface;
 //! - `gpu_ms_median` (summed GPU stages of one frame) and `frame_ms_median` (wall time of one frame), over frames;
 //! - the metric against the reference (crate::metrics): `rel_l1_64`, `rel_l1_256`, `flux_ratio`, and
 //!   `peak_offset_m` (added to the brief's shape, because DESIGN.md reports all three; defaults to 0 when absent);
@@ -18,6 +21,9 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BenchRow {
     pub scene: String,
+    /// `exact` or `two-interface` (the default, for JSON written before exact transport existed).
+    #[serde(default = "two_interface")]
+    pub transport: String,
     pub method: String,
     #[serde(default)]
     pub metric: Option<String>,
@@ -25,6 +31,9 @@ pub struct BenchRow {
     pub equivalent_res: u32,
     pub driven: String,
     pub photons: u64,
+    /// Rays traced through the BVH in the last frame (exact transport only).
+    #[serde(default)]
+    pub rays_traced: Option<u64>,
     pub gpu_ms_median: f64,
     pub frame_ms_median: f64,
     // JSON has no NaN: serde_json writes it as null (no reference was used), and these read null back as NaN.
@@ -40,17 +49,34 @@ pub struct BenchRow {
     pub extra: serde_json::Value,
 }
 
+fn two_interface() -> String {
+    "two-interface".into()
+}
+
 fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl BenchRow {
-    /// The plot series this row belongs to: "scene · method · metric".
-    pub fn series(&self) -> String {
-        match &self.metric {
-            Some(m) => format!("{} · {} · {}", self.scene, self.method, m),
-            None => format!("{} · {}", self.scene, self.method),
+    /// The method as `caustics bench --methods` names it: `dense`, `max-level`, `max-error` (adaptive is implied
+    /// by its metric); anything else as "method metric".
+    pub fn method_label(&self) -> String {
+        match (self.method.as_str(), &self.metric) {
+            ("adaptive", Some(m)) => m.clone(),
+            (method, Some(m)) => format!("{method} {m}"),
+            (method, None) => method.to_string(),
         }
+    }
+
+    /// The plot series this row belongs to: "scene · transport method", e.g. "sphere · exact dense".
+    pub fn series(&self) -> String {
+        format!("{} · {} {}", self.scene, self.transport, self.method_label())
+    }
+
+    /// The series without its transport ("scene · method"): the plot gives it one colour, and a line style per
+    /// transport.
+    fn series_group(&self) -> String {
+        format!("{} · {}", self.scene, self.method_label())
     }
 }
 
@@ -58,22 +84,28 @@ fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
+fn rays(r: &BenchRow) -> String {
+    r.rays_traced.map_or_else(|| "–".to_string(), |n| n.to_string())
+}
+
 /// A GitHub-flavoured Markdown table of the rows, in their order.
 pub fn markdown_table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| scene | method | metric | level | eq. res | driven | photons | GPU ms | frame ms | rel-L1 64² | rel-L1 256² | flux ratio | peak offset (m) |\n\
-         |---|---|---|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|\n",
+        "| scene | transport | method | metric | level | eq. res | driven | photons | rays traced | GPU ms | frame ms | rel-L1 64² | rel-L1 256² | flux ratio | peak offset (m) |\n\
+         |---|---|---|---|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
             cell(&r.scene),
+            cell(&r.transport),
             cell(&r.method),
             cell(r.metric.as_deref().unwrap_or("–")),
             r.level,
             r.equivalent_res,
             cell(&r.driven),
             r.photons,
+            rays(r),
             r.gpu_ms_median,
             r.frame_ms_median,
             r.rel_l1_64,
@@ -167,7 +199,8 @@ fn log_range(values: impl Iterator<Item = f64>, default: (f64, f64)) -> std::ops
     lo / 1.25..hi * 1.25
 }
 
-/// A log-log SVG plot of rel-L1 at 64² (y) against median GPU ms (x), one line per (scene, method, metric).
+/// A log-log SVG plot of rel-L1 at 64² (y) against median GPU ms (x), one line per (scene, transport, method,
+/// metric): one colour per (scene, method, metric), solid for exact transport, dashed for two-interface.
 pub fn svg_plot(rows: &[BenchRow], path: &Path) -> AppResult<()> {
     let svg =
         svg_string(rows).map_err(|e| AppError::Failed(format!("{}: cannot draw the plot: {e}", path.display())))?;
@@ -201,14 +234,32 @@ pub fn svg_string(rows: &[BenchRow]) -> Result<String, Box<dyn std::error::Error
             .x_label_formatter(&|v| short(*v))
             .y_label_formatter(&|v| short(*v))
             .draw()?;
-        for (i, (name, pts)) in series.iter().enumerate() {
+        let mut groups: Vec<String> = Vec::new();
+        for (name, pts) in &series {
+            let row = rows.iter().find(|r| r.series() == *name).expect("a series comes from a row");
+            let group = row.series_group();
+            let i = groups.iter().position(|g| *g == group).unwrap_or_else(|| {
+                groups.push(group);
+                groups.len() - 1
+            });
             let (r, g, b) = COLORS[i % COLORS.len()];
             let color = RGBColor(r, g, b).to_rgba();
-            chart
-                .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))?
-                .label(name.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+            let style = color.stroke_width(2);
+            if row.transport == "two-interface" {
+                chart
+                    .draw_series(DashedLineSeries::new(pts.iter().copied(), 8, 5, style))?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| {
+                        plotters::element::DashedPathElement::new(vec![(x, y), (x + 20, y)], 6, 3, style)
+                    });
+                chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.stroke_width(2))))?;
+            } else {
+                chart
+                    .draw_series(LineSeries::new(pts.iter().copied(), style))?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+                chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+            }
         }
         if !series.is_empty() {
             chart
@@ -227,17 +278,40 @@ fn extra_f64(r: &BenchRow, key: &str) -> f64 {
     r.extra.get(key).and_then(|v| v.as_f64()).unwrap_or(f64::NAN)
 }
 
-fn series_key(r: &BenchRow) -> String {
+/// The method and metric, "adaptive max-error" or "dense".
+fn method_key(r: &BenchRow) -> String {
     match &r.metric {
         Some(m) => format!("{} {}", r.method, m),
         None => r.method.clone(),
     }
 }
 
+/// What the pivots match rows on besides scene and level: the transport, and the method and metric.
+fn series_key(r: &BenchRow) -> (String, String) {
+    (r.transport.clone(), method_key(r))
+}
+
+/// Whether the rows hold more than one transport (then the pivots name it beside the method).
+fn several_transports(rows: &[BenchRow]) -> bool {
+    rows.iter().any(|r| r.transport != rows[0].transport)
+}
+
+/// A pivot's method label: "adaptive max-error", or "exact adaptive max-error" when the rows mix transports.
+fn shown_key(r: &BenchRow, with_transport: bool) -> String {
+    if with_transport {
+        format!("{} {}", r.transport, method_key(r))
+    } else {
+        method_key(r)
+    }
+}
+
 /// Wyman & Nichols' Table 1 layout: photons splatted by each method at each equivalent grid, per scene, beside
 /// the full grid (what a caustic map that emits every texel of its photon buffer would splat). Only the rows of
-/// GPU-driven, default work-group runs are used (photon counts do not depend on either).
+/// GPU-driven, default work-group runs are used (photon counts do not depend on either). Under exact transport a
+/// photon is a light-space cell whose paths are traced (its rays are in the full table); when the rows mix
+/// transports, each transport has its own columns.
 pub fn photon_table(rows: &[BenchRow]) -> String {
+    let with_t = several_transports(rows);
     let mut out = String::new();
     let mut scenes: Vec<&str> = Vec::new();
     for r in rows {
@@ -247,12 +321,12 @@ pub fn photon_table(rows: &[BenchRow]) -> String {
     }
     for scene in scenes {
         let rs: Vec<&BenchRow> = rows.iter().filter(|r| r.scene == scene && r.driven == "gpu").collect();
-        let mut methods: Vec<String> = Vec::new();
+        let mut methods: Vec<((String, String), String)> = Vec::new();
         let mut levels: Vec<u32> = Vec::new();
         for r in &rs {
             let k = series_key(r);
-            if !methods.contains(&k) {
-                methods.push(k);
+            if !methods.iter().any(|m| m.0 == k) {
+                methods.push((k, shown_key(r, with_t)));
             }
             if !levels.contains(&r.level) {
                 levels.push(r.level);
@@ -260,8 +334,8 @@ pub fn photon_table(rows: &[BenchRow]) -> String {
         }
         levels.sort_unstable();
         out.push_str(&format!("\n**{scene}**: photons splatted\n\n| grid | full grid |"));
-        for m in &methods {
-            out.push_str(&format!(" {m} |"));
+        for (_, label) in &methods {
+            out.push_str(&format!(" {} |", cell(label)));
         }
         out.push_str("\n|--:|--:|");
         out.push_str(&"--:|".repeat(methods.len()));
@@ -269,8 +343,8 @@ pub fn photon_table(rows: &[BenchRow]) -> String {
         for l in levels {
             let res = 64u64 << l;
             out.push_str(&format!("| {res}² | {} |", res * res));
-            for m in &methods {
-                match rs.iter().find(|r| r.level == l && &series_key(r) == m) {
+            for (k, _) in &methods {
+                match rs.iter().find(|r| r.level == l && series_key(r) == *k) {
                     Some(r) => out.push_str(&format!(" {} |", r.photons)),
                     None => out.push_str(" – |"),
                 }
@@ -281,9 +355,10 @@ pub fn photon_table(rows: &[BenchRow]) -> String {
     out
 }
 
-/// GPU-driven against CPU-driven, per scene, method and level: frame wall time, and the traversal phase alone
-/// (traverse + stats + the CPU-driven host round trips, from `extra`).
+/// GPU-driven against CPU-driven, per scene, transport, method and level: frame wall time, and the traversal
+/// phase alone (traverse + stats + the CPU-driven host round trips, from `extra`).
 pub fn driven_table(rows: &[BenchRow]) -> String {
+    let with_t = several_transports(rows);
     let mut out = String::from(
         "| scene | method | level | photons | frame ms, GPU-driven | frame ms, CPU-driven | speedup | traversal ms, GPU-driven | traversal ms, CPU-driven | speedup | host readbacks (CPU-driven) |\n\
          |---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
@@ -301,7 +376,7 @@ pub fn driven_table(rows: &[BenchRow]) -> String {
         out.push_str(&format!(
             "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2}x | {:.2} | {:.2} | {:.2}x | {} |\n",
             cell(&g.scene),
-            cell(&series_key(g)),
+            cell(&shown_key(g, with_t)),
             g.level,
             g.photons,
             g.frame_ms_median,
@@ -316,8 +391,10 @@ pub fn driven_table(rows: &[BenchRow]) -> String {
     out
 }
 
-/// The traversal work-group sweep: per scene and level, GPU frame ms and traversal ms for each work-group side.
+/// The traversal work-group sweep: per scene, transport, method and level, GPU frame ms and traversal ms for
+/// each work-group side.
 pub fn wg_table(rows: &[BenchRow]) -> String {
+    let with_t = several_transports(rows);
     let mut wgs: Vec<u64> = rows.iter().filter_map(|r| r.extra.get("traverse_wg").and_then(|v| v.as_u64())).collect();
     wgs.sort_unstable();
     wgs.dedup();
@@ -328,14 +405,14 @@ pub fn wg_table(rows: &[BenchRow]) -> String {
     out.push_str("\n|---|---|--:|--:|");
     out.push_str(&"--:|".repeat(wgs.len()));
     out.push('\n');
-    let mut seen: Vec<(String, String, u32)> = Vec::new();
+    let mut seen: Vec<(String, (String, String), u32)> = Vec::new();
     for r in rows {
         let key = (r.scene.clone(), series_key(r), r.level);
         if seen.contains(&key) {
             continue;
         }
         seen.push(key.clone());
-        out.push_str(&format!("| {} | {} | {} | {} |", cell(&key.0), cell(&key.1), key.2, r.photons));
+        out.push_str(&format!("| {} | {} | {} | {} |", cell(&key.0), cell(&shown_key(r, with_t)), key.2, r.photons));
         for w in &wgs {
             match rows.iter().find(|x| {
                 x.scene == key.0
@@ -352,10 +429,53 @@ pub fn wg_table(rows: &[BenchRow]) -> String {
     out
 }
 
+/// Exact transport against the two-interface model, per scene, method and level (same driven mode and
+/// work-group size): what exact costs (GPU ms, rays traced) and what it buys (error and flux against the
+/// reference the rows were scored with; with `--paths all`, ground truth).
+pub fn transport_table(rows: &[BenchRow]) -> String {
+    let mut out = String::from(
+        "| scene | method | level | photons | rays traced (exact) | GPU ms, two-interface | GPU ms, exact | exact / two-interface | rel-L1 64², two-interface | rel-L1 64², exact | flux ratio, two-interface | flux ratio, exact |\n\
+         |---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+    );
+    let wg = |r: &BenchRow| r.extra.get("traverse_wg").and_then(|v| v.as_u64());
+    for e in rows.iter().filter(|r| r.transport == "exact") {
+        let Some(t) = rows.iter().find(|t| {
+            t.transport == "two-interface"
+                && t.scene == e.scene
+                && t.level == e.level
+                && t.driven == e.driven
+                && method_key(t) == method_key(e)
+                && wg(t) == wg(e)
+        }) else {
+            continue;
+        };
+        out.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2}x | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            cell(&e.scene),
+            cell(&e.method_label()),
+            e.level,
+            e.photons,
+            rays(e),
+            t.gpu_ms_median,
+            e.gpu_ms_median,
+            e.gpu_ms_median / t.gpu_ms_median,
+            t.rel_l1_64,
+            e.rel_l1_64,
+            t.flux_ratio,
+            e.flux_ratio,
+        ));
+    }
+    out
+}
+
 /// Everything that applies to these rows: the full table, then the pivots.
 pub fn markdown_report(rows: &[BenchRow]) -> String {
     let mut out = markdown_table(rows);
-    let methods: std::collections::BTreeSet<String> = rows.iter().map(series_key).collect();
+    if rows.iter().any(|r| r.transport == "exact") && rows.iter().any(|r| r.transport == "two-interface") {
+        out.push_str("\n### Exact transport against two-interface\n\n");
+        out.push_str(&transport_table(rows));
+    }
+    let methods: std::collections::BTreeSet<(String, String)> = rows.iter().map(series_key).collect();
     if methods.len() > 1 {
         out.push_str("\n### Photons splatted (the layout of Wyman & Nichols' Table 1)\n");
         out.push_str(&photon_table(rows));
@@ -380,12 +500,14 @@ mod tests {
     fn row(scene: &str, method: &str, metric: Option<&str>, level: u32, gpu: f64, err: f64) -> BenchRow {
         BenchRow {
             scene: scene.into(),
+            transport: "two-interface".into(),
             method: method.into(),
             metric: metric.map(Into::into),
             level,
             equivalent_res: 64 << level,
             driven: "gpu".into(),
             photons: 4096 << (2 * level),
+            rays_traced: None,
             gpu_ms_median: gpu,
             frame_ms_median: gpu * 1.5,
             rel_l1_64: err,
@@ -394,6 +516,15 @@ mod tests {
             peak_offset_m: 0.01,
             extra: serde_json::json!({ "note": "made up" }),
         }
+    }
+
+    fn exact(mut r: BenchRow) -> BenchRow {
+        r.transport = "exact".into();
+        r.rays_traced = Some(3 * r.photons);
+        r.gpu_ms_median *= 4.0;
+        r.rel_l1_64 /= 2.0;
+        r.flux_ratio = 1.0;
+        r
     }
 
     fn rows() -> Vec<BenchRow> {
@@ -412,36 +543,67 @@ mod tests {
         let t = markdown_table(&rows());
         let lines: Vec<&str> = t.lines().collect();
         assert_eq!(lines.len(), 2 + 6);
-        assert!(lines[0].starts_with("| scene | method | metric | level |"));
+        assert!(lines[0].starts_with("| scene | transport | method | metric | level |"));
         assert_eq!(
             lines[2],
-            "| sphere | dense | – | 3 | 512 | gpu | 262144 | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
+            "| sphere | two-interface | dense | – | 3 | 512 | gpu | 262144 | – | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
         );
-        assert!(lines[4].contains("| adaptive | max-error | 3 |"));
+        assert!(lines[4].contains("| two-interface | adaptive | max-error | 3 |"));
         let cols = lines[0].matches('|').count();
         assert!(lines.iter().all(|l| l.matches('|').count() == cols), "{t}");
     }
 
     #[test]
     fn rows_round_trip_through_json() {
-        let r = rows();
+        let mut r = rows();
+        r[1] = exact(r[1].clone());
         let json = serde_json::to_string(&r[..5]).unwrap();
+        assert!(json.contains(r#""transport":"exact""#) && json.contains(r#""rays_traced":49152"#), "{json}");
+        assert!(json.contains(r#""rays_traced":null"#), "{json}");
         let back: Vec<BenchRow> = serde_json::from_str(&json).unwrap();
         assert_eq!(back, r[..5].to_vec());
-        // Optional fields may be absent.
+        // Optional fields may be absent (rows written before exact transport existed are two-interface).
         let minimal = r#"{"scene":"s","method":"dense","level":0,"equivalent_res":64,"driven":"gpu","photons":1,
             "gpu_ms_median":1.0,"frame_ms_median":2.0,"rel_l1_64":0.1,"rel_l1_256":0.2,"flux_ratio":1.0}"#;
         let m: BenchRow = serde_json::from_str(minimal).unwrap();
-        assert_eq!((m.metric, m.peak_offset_m, m.extra), (None, 0.0, serde_json::Value::Null));
+        assert_eq!(
+            (m.transport.as_str(), m.rays_traced, m.metric, m.peak_offset_m, m.extra),
+            ("two-interface", None, None, 0.0, serde_json::Value::Null)
+        );
     }
 
     #[test]
     fn series_group_and_sort_and_skip_unplottable_points() {
         let s = plot_series(&rows());
         let names: Vec<&str> = s.iter().map(|x| x.0.as_str()).collect();
-        assert_eq!(names, ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level"]);
+        assert_eq!(
+            names,
+            ["sphere · two-interface dense", "sphere · two-interface max-error", "bunny · two-interface max-level"]
+        );
         assert_eq!(s[0].1, vec![(5.0, 0.2), (40.0, 0.05)]);
         assert_eq!(s[2].1.len(), 1, "the NaN row is left out");
+    }
+
+    #[test]
+    fn transports_pair_up_in_their_pivot() {
+        let mut rs = rows();
+        rs.extend(rows().into_iter().map(exact));
+        let t = transport_table(&rs);
+        let lines: Vec<&str> = t.lines().collect();
+        // One line per exact row with a two-interface twin (all six).
+        assert_eq!(lines.len(), 2 + 6, "{t}");
+        assert_eq!(
+            lines[2],
+            "| sphere | dense | 3 | 262144 | 786432 | 40.00 | 160.00 | 4.00x | 0.0500 | 0.0250 | 0.9900 | 1.0000 |"
+        );
+        assert!(lines[4].starts_with("| sphere | max-error | 3 |"), "{t}");
+        let report = markdown_report(&rs);
+        assert!(report.contains("### Exact transport against two-interface"));
+        // The photon table names the transport beside the method when the rows mix them.
+        assert!(report.contains(" exact dense | ") && report.contains(" two-interface dense | "), "{report}");
+        // A single transport keeps the old labels and has no transport pivot.
+        let single = markdown_report(&rows());
+        assert!(!single.contains("Exact transport against") && !single.contains("two-interface dense"), "{single}");
     }
 
     #[test]
@@ -464,11 +626,18 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("caustics-bench-report-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("plot.svg");
-        svg_plot(&rows(), &path).unwrap();
+        let mut rs = rows();
+        rs.extend(rows().into_iter().map(exact));
+        svg_plot(&rs, &path).unwrap();
         let svg = std::fs::read_to_string(&path).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        for label in ["sphere · dense", "sphere · adaptive · max-error", "bunny · adaptive · max-level", "GPU ms"]
-        {
+        for label in [
+            "sphere · two-interface dense",
+            "sphere · exact dense",
+            "sphere · two-interface max-error",
+            "bunny · exact max-level",
+            "GPU ms",
+        ] {
             assert!(svg.contains(label), "missing {label}");
         }
         // No rows at all still gives a valid (empty) chart.

@@ -129,7 +129,8 @@ impl SceneBvh {
                 continue;
             }
             let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
-            let (lo, hi) = tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+            let (lo, hi) =
+                tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
             let material = match obj.material {
                 Material::Dielectric { ior } => [ior, 1.0, 0.0, 0.0],
                 Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],

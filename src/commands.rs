@@ -1,12 +1,12 @@
 //! The `render` and `profile` commands (the CLI edge: arguments in, files and stats out).
 
+use crate::bvh::BvhLayout;
 use crate::error::{AppError, AppResult};
+use crate::gpu_types::ACCOUNT_TERMS;
 use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
-use crate::bvh::BvhLayout;
-use crate::gpu_types::ACCOUNT_TERMS;
 use crate::settings::{parse_size, Driven, Method, Metric, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::vk::{self, Context, ContextDesc};
@@ -341,7 +341,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
         for (name, w) in ACCOUNT_TERMS.iter().zip(acc) {
             account.insert(format!("{name}_w"), json!(w));
         }
-        let out: f64 = acc[1..].iter().sum();
+        let out: f64 = acc[1..8].iter().sum();
         account.insert("residual".into(), json!(if acc[0] > 0.0 { (acc[0] - out).abs() / acc[0] } else { out.abs() }));
         if let Value::Object(m) = &mut v {
             m.insert("energy".into(), Value::Object(account));

@@ -342,6 +342,8 @@ impl Ctx<'_> {
             // The trace read the photons and the indirect arguments, the splat read the records and the draw.
             b.buffer(&t.photon.photons, &[Access::ComputeRead], &[Access::ComputeWrite]);
             b.buffer(&t.photon.splats, &[Access::VertexRead], &[Access::ComputeWrite]);
+            // Exact transport's commit read the traversal state; the next batch's init writes it.
+            b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::ComputeWrite]);
             b.buffer(
                 &t.photon.indirect,
                 &[Access::ComputeRead, Access::IndirectRead],
@@ -427,8 +429,13 @@ impl Ctx<'_> {
         let b = self.bindings();
         let ph = &self.p.photons;
         let n = LEVEL0_RES << self.s.level;
-        // Bands of rows sized so that even a fully covered band fits the photon buffer.
-        let rows = (self.t.photon.capacity / n).clamp(1, n).min(65535 * TILE_WG);
+        // Bands of rows sized so that even a fully covered band fits the photon buffer; under exact transport,
+        // half a ray queue, since wave 0 appends up to two children per photon.
+        let per_band = match self.s.transport {
+            Transport::Exact => self.t.photon.capacity.min(self.s.ray_queue_capacity() / 2),
+            Transport::TwoInterface => self.t.photon.capacity,
+        };
+        let rows = (per_band / n).clamp(1, n).min(65535 * TILE_WG);
         let bands = n.div_ceil(rows);
         rec.report.batch_slots = bands;
         for band in 0..bands {

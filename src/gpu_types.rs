@@ -128,8 +128,19 @@ pub struct TraversalState {
 }
 
 /// Energy-account terms of exact transport (`ACC_*` in types.glsl), in order.
-pub const ACCOUNT_TERMS: [&str; 8] =
-    ["emitted", "caustics", "direct", "escaped", "cut_threshold", "cut_cap", "lost", "overflow"];
+/// The last, `caustics_one_interaction`, is the part of `caustics` with exactly one interaction (for a closed
+/// mesh: a single external reflection); it is not a term of the partition.
+pub const ACCOUNT_TERMS: [&str; 9] = [
+    "emitted",
+    "caustics",
+    "direct",
+    "escaped",
+    "cut_threshold",
+    "cut_cap",
+    "lost",
+    "overflow",
+    "caustics_one_interaction",
+];
 
 /// `TransportState` in types.glsl (a storage buffer, std430).
 #[repr(C)]
@@ -147,13 +158,13 @@ pub struct TransportState {
     pub records_total: u32,
     pub waves: u32,
     pub max_depth: u32,
-    pub batch_account: [[u32; 2]; 8],
-    pub account: [[u32; 2]; 8],
+    pub batch_account: [[u32; 2]; 9],
+    pub account: [[u32; 2]; 9],
 }
 
 impl TransportState {
     /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
-    pub fn account(&self) -> [f64; 8] {
+    pub fn account(&self) -> [f64; 9] {
         self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
     }
 }
@@ -209,7 +220,7 @@ pub struct Vertex {
 const _: () = {
     assert!(size_of::<GpuView>() == 160);
     assert!(size_of::<FrameData>() == 640);
-    assert!(size_of::<TransportState>() == 48 + 128);
+    assert!(size_of::<TransportState>() == 48 + 144);
     assert!(offset_of!(TransportState, batch_account) == 48);
     assert!(offset_of!(FrameData, light_power) == 480);
     assert!(offset_of!(FrameData, grid) == 528);

@@ -217,7 +217,8 @@ impl Renderer {
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
         let s = &self.settings;
-        let key = (s.gbuffer_res, s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
+        let key =
+            (s.gbuffer_res, s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
                 if (t.width, t.height) != (width, height) {
@@ -282,12 +283,7 @@ impl Renderer {
                 targets.photon.capacity,
             ],
             params: [s.error_bound, s.shadow_bias, s.flux_threshold, 0.0],
-            transport: [
-                (s.transport == Transport::Exact) as u32,
-                s.ray_queue_capacity(),
-                targets.photon.capacity,
-                0,
-            ],
+            transport: [(s.transport == Transport::Exact) as u32, s.ray_queue_capacity(), targets.photon.capacity, 0],
             pyramid,
         }
     }

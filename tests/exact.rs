@@ -1,0 +1,175 @@
+//! Exact transport on the GPU (`--transport exact`: rays through the scene BVH in waves, every glass path)
+//! against the analytic sphere figures (DESIGN.md) and the CPU reference with every path (`--paths all`).
+//! Tolerances come from measurement on lavapipe with the same settings; each test states what it measured.
+
+mod common;
+use caustics::image_io::RgbImage;
+use caustics::metrics::{compare, Metrics};
+use caustics::reference::{self, Aov, Paths, RefParams};
+use common::*;
+use std::path::Path;
+
+const SIZE: u32 = 256;
+
+fn reference_all(scene: &str, photons: u64) -> RgbImage {
+    let p = RefParams {
+        camera: Some("top".into()),
+        aov: Aov::Caustics,
+        paths: Paths::All,
+        photons,
+        width: SIZE,
+        height: SIZE,
+        ..RefParams::default()
+    };
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
+    reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+}
+
+fn exact(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {
+    let mut args = vec!["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "256x256"];
+    args.extend_from_slice(extra);
+    let (s, out) = render(dir, name, scene, &args);
+    (s, caustics::image_io::read_exr(&out).unwrap())
+}
+
+fn energy(s: &serde_json::Value, term: &str) -> f64 {
+    s["exact_transport"]["energy"][format!("{term}_w")].as_f64().unwrap_or_else(|| panic!("energy term {term}"))
+}
+
+/// The account closes (emitted = every destination) to 1e-5, nothing overflowed, no host readback happened,
+/// and the AOV is finite.
+fn assert_sound(name: &str, s: &serde_json::Value, img: &RgbImage) {
+    let residual = s["exact_transport"]["energy"]["residual"].as_f64().unwrap();
+    assert!(residual < 1e-5, "{name}: energy account residual {residual}");
+    assert_eq!(energy(s, "overflow"), 0.0, "{name}: overflow");
+    assert_eq!(s["host_readbacks_per_frame"], 0, "{name}: host readbacks");
+    assert!(img.data.iter().flatten().all(|v| v.is_finite()), "{name}: non-finite caustics");
+}
+
+fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
+    compare(img, r, 64, 2.0)
+}
+
+/// Analytic sphere (DESIGN.md): every path puts 0.111370 W on the floor, a single external reflection 0.005078 W.
+/// Measured at dense level 3 (206,104 photons): caustics 0.111306 W (−0.06%), AOV 0.111328 W, one-interaction
+/// part 0.005043 W (−0.7%: the reflection comes mostly from the grazing rim, which level 3 samples coarsely).
+#[test]
+fn sphere_all_paths_flux_matches_analytic() {
+    let dir = out_dir("exact_sphere_flux");
+    let (s, img) = exact(&dir, "sphere", SPHERE, &["--method", "dense", "--level", "3"]);
+    assert_sound("sphere", &s, &img);
+    assert_eq!(s["photons_splatted"], 206104);
+    let caustics = energy(&s, "caustics");
+    let aov = s["aov_flux_w"].as_f64().unwrap();
+    eprintln!("sphere exact: caustics {caustics:.6} W, AOV {aov:.6} W, {}", s["exact_transport"]);
+    assert!((caustics / 0.111370 - 1.0).abs() < 0.005, "caustic flux {caustics} W");
+    assert!((aov / 0.111370 - 1.0).abs() < 0.005, "AOV flux {aov} W");
+    let one = energy(&s, "caustics_one_interaction");
+    assert!((one / 0.005078 - 1.0).abs() < 0.015, "single external reflection {one} W");
+    // Emitted = what the sphere intercepts (0.126946 W) plus the cells at its silhouette whose rays miss it.
+    let emitted = energy(&s, "emitted");
+    let direct = energy(&s, "direct");
+    assert!((emitted - direct - 0.126946).abs() < 0.001, "intercepted {} W", emitted - direct);
+}
+
+struct Case {
+    scene: &'static str,
+    /// Measured rel-L1 (64²) and flux ratio against the all-paths reference (4M photons) at dense level 3.
+    rel_l1: f64,
+    ratio: f64,
+}
+
+/// GPU exact transport against the CPU reference with every path, dense level 3 (lavapipe, a few seconds each).
+/// The two-interface method's all-paths errors on the same scenes (issue 9's table, level 4): sphere 4.9%, bunny
+/// 22.9%, tilted cube 55.2%, IOR 2.4 11.8%. The remaining error here is the sampling of a level-3 grid (it halves
+/// with each level: bunny 9.3% at level 2, 5.0% at level 3) plus the reference's own noise (about 0.2%).
+#[test]
+fn exact_matches_all_paths_reference() {
+    let cases = [
+        Case { scene: "sphere.toml", rel_l1: 0.0102, ratio: 0.9998 },
+        Case { scene: "bunny.toml", rel_l1: 0.0497, ratio: 1.0020 },
+        Case { scene: "tilted_cube.toml", rel_l1: 0.0091, ratio: 0.9998 },
+        Case { scene: "ior24.toml", rel_l1: 0.0234, ratio: 0.9988 },
+    ];
+    let dir = out_dir("exact_reference");
+    for c in &cases {
+        let path = scene(c.scene);
+        let (s, img) = exact(&dir, c.scene, &path, &["--method", "dense", "--level", "3"]);
+        assert_sound(c.scene, &s, &img);
+        let m = score(&img, &reference_all(&path, 4_000_000));
+        eprintln!("{}: {m:?} (measured rel-L1 {}, flux ratio {})", c.scene, c.rel_l1, c.ratio);
+        assert!(m.rel_l1 < c.rel_l1 * 1.15 + 0.002, "{}: rel-L1 {}", c.scene, m.rel_l1);
+        assert!((m.flux_ratio - c.ratio).abs() < 0.003, "{}: flux ratio {}", c.scene, m.flux_ratio);
+    }
+}
+
+/// Every hard case closes its energy account and stays finite; single surfaces (the open dome, the thin lens,
+/// the slab) work as surfaces. The open dome refracts once: the two-interface method deposits nothing there, the
+/// reference 0.105849 W (all paths). Measured here at dense level 2: see the eprintln.
+#[test]
+fn hard_cases_close_the_account() {
+    let dir = out_dir("exact_hard");
+    for name in [
+        "ior24.toml",
+        "oblique.toml",
+        "tilted_cube.toml",
+        "vertex_above.toml",
+        "thin.toml",
+        "slab.toml",
+        "directional.toml",
+        "open_mesh.toml",
+    ] {
+        let path = scene(name);
+        let (s, img) = exact(&dir, name, &path, &["--method", "dense", "--level", "2"]);
+        assert_sound(name, &s, &img);
+        let flux = s["aov_flux_w"].as_f64().unwrap();
+        eprintln!("{name}: AOV {flux:.6} W, {}", s["exact_transport"]["energy"]);
+        assert!(flux > 0.0, "{name}: no caustic");
+        if name == "open_mesh.toml" {
+            let m = score(&img, &reference_all(&path, 1_000_000));
+            eprintln!("open dome vs all paths: {m:?}");
+            assert!((m.flux_ratio - 1.0).abs() < 0.01, "open dome flux ratio {}", m.flux_ratio);
+        }
+    }
+}
+
+/// A tiny photon budget (batches split on overflow, ray queues of a few thousand rays that abort and split
+/// batches too) gives the same image and the same account as a large one.
+#[test]
+fn tiny_budget_gives_the_same_image() {
+    let dir = out_dir("exact_budget");
+    let args = ["--method", "adaptive", "--metric", "max-level", "--level", "2"];
+    let (big, big_img) = exact(&dir, "big", SPHERE, &args);
+    let mut small_args = args.to_vec();
+    small_args.extend_from_slice(&["--photon-budget", "0.05"]);
+    let (small, small_img) = exact(&dir, "small", SPHERE, &small_args);
+    assert_sound("small budget", &small, &small_img);
+    assert_eq!(big["photons_splatted"], small["photons_splatted"]);
+    assert!(small["batches"].as_u64().unwrap() >= 4, "batches {}", small["batches"]);
+    let m = compare(&small_img, &big_img, 256, 2.0);
+    assert!(m.rel_l1 <= 1e-4, "tiny budget rel-L1 {}", m.rel_l1);
+    let (a, b) = (energy(&big, "caustics"), energy(&small, "caustics"));
+    assert!((a / b - 1.0).abs() < 1e-5, "caustic flux {a} vs {b} W");
+}
+
+/// Max-error under exact transport follows each child's dominant path: at level 4 it needs fewer photons than
+/// max-level for about the same error against every path. Measured on the sphere: see the eprintln.
+#[test]
+fn max_error_follows_dominant_paths() {
+    let dir = out_dir("exact_max_error");
+    let common = ["--method", "adaptive", "--level", "4", "--check-level", "2"];
+    let mut ml = common.to_vec();
+    ml.extend_from_slice(&["--metric", "max-level"]);
+    let mut me = common.to_vec();
+    me.extend_from_slice(&["--metric", "max-error"]);
+    let (sl, il) = exact(&dir, "ml", SPHERE, &ml);
+    let (se, ie) = exact(&dir, "me", SPHERE, &me);
+    assert_sound("max-error", &se, &ie);
+    let r = reference_all(SPHERE, 4_000_000);
+    let (a, b) = (score(&il, &r), score(&ie, &r));
+    let (pa, pb) = (sl["photons_splatted"].as_u64().unwrap(), se["photons_splatted"].as_u64().unwrap());
+    eprintln!("max-level {pa} photons {a:?}\nmax-error {pb} photons {b:?}");
+    assert!((pb as f64) < 0.6 * pa as f64, "max-error {pb} photons vs max-level {pa}");
+    assert!(b.rel_l1 < a.rel_l1 + 0.01, "max-error rel-L1 {} vs max-level {}", b.rel_l1, a.rel_l1);
+    assert!((b.flux_ratio - 1.0).abs() < 0.005, "max-error flux ratio {}", b.flux_ratio);
+}
