@@ -79,7 +79,7 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Settings {
-            transport: Transport::TwoInterface,
+            transport: Transport::Exact,
             flux_threshold: 1e-3,
             bvh_layout: crate::bvh::BvhLayout::Pair,
             method: Method::Adaptive,

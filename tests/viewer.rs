@@ -73,6 +73,12 @@ fn spawn_view(dir: &Path, name: &str, display: Option<&str>, args: &[&str]) -> (
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustics"));
     cmd.arg("view")
         .args(args)
+        // The viewer tests check the two-interface frame (see common::pin_transport).
+        .args(if args.iter().any(|a| a.starts_with("--transport")) {
+            &[][..]
+        } else {
+            &["--transport", "two-interface"][..]
+        })
         .env("CAUSTICS_VALIDATION", "1")
         .env("RUST_LOG", "warn")
         .env_remove("WAYLAND_DISPLAY")

@@ -27,11 +27,23 @@ pub fn caustics(args: &[&str]) -> Output {
 
 pub fn caustics_env(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustics"));
-    cmd.args(args).env("CAUSTICS_VALIDATION", "1").env("RUST_LOG", "warn");
+    cmd.args(args).args(pin_transport(args)).env("CAUSTICS_VALIDATION", "1").env("RUST_LOG", "warn");
     for (k, v) in env {
         cmd.env(k, v);
     }
     cmd.output().expect("run caustics")
+}
+
+/// The default transport is exact (every glass path). The tests written for the papers' two-interface model
+/// assert its numbers, so a render, profile or view that names no transport is pinned to it; tests/exact.rs
+/// names exact explicitly.
+pub fn pin_transport(args: &[&str]) -> Vec<&'static str> {
+    let renders = matches!(args.first(), Some(&"render") | Some(&"profile") | Some(&"view"));
+    if renders && !args.iter().any(|a| a.starts_with("--transport")) {
+        vec!["--transport", "two-interface"]
+    } else {
+        vec![]
+    }
 }
 
 /// Run and require success; returns stderr.
