@@ -112,7 +112,7 @@ impl Renderer {
         let views = Views::new(&self.scene, &self.settings, camera)?;
         let (data, slots) = {
             let t = self.targets.as_ref().expect("targets");
-            (self.frame_data(&views, t), self.batch_slots(t.photon.capacity))
+            (self.frame_data(&views, t), self.batch_slots(self.settings.traversal_capacity(t.photon.capacity)))
         };
         let Renderer {
             device, passes, scene_buffers, nearest, linear, recorder, timestamps, targets, settings, ..
@@ -429,12 +429,9 @@ impl Ctx<'_> {
         let b = self.bindings();
         let ph = &self.p.photons;
         let n = LEVEL0_RES << self.s.level;
-        // Bands of rows sized so that even a fully covered band fits the photon buffer; under exact transport,
-        // half a ray queue, since wave 0 appends up to two children per photon.
-        let per_band = match self.s.transport {
-            Transport::Exact => self.t.photon.capacity.min(self.s.ray_queue_capacity() / 2),
-            Transport::TwoInterface => self.t.photon.capacity,
-        };
+        // Bands of rows sized so that even a fully covered band fits the photon buffer (and, under exact
+        // transport, half a ray queue).
+        let per_band = self.s.traversal_capacity(self.t.photon.capacity);
         let rows = (per_band / n).clamp(1, n).min(65535 * TILE_WG);
         let bands = n.div_ceil(rows);
         rec.report.batch_slots = bands;

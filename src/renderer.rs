@@ -280,7 +280,7 @@ impl Renderer {
                 s.level,
                 (if s.metric == Metric::MaxError { 1 } else { 0 }) | ((s.batching as u32) << 8),
                 s.check_level,
-                targets.photon.capacity,
+                s.traversal_capacity(targets.photon.capacity),
             ],
             params: [s.error_bound, s.shadow_bias, s.flux_threshold, 0.0],
             transport: [(s.transport == Transport::Exact) as u32, s.ray_queue_capacity(), targets.photon.capacity, 0],

@@ -168,6 +168,16 @@ impl Settings {
         }
     }
 
+    /// Photon-buffer entries one batch may use. Under exact transport wave 0 appends up to two children per
+    /// photon, so a batch emits at most half a ray queue: a larger one would traverse, then overflow its queue and
+    /// be split after all its work.
+    pub fn traversal_capacity(&self, capacity: u32) -> u32 {
+        match self.transport {
+            Transport::Exact => capacity.min(self.ray_queue_capacity() / 2).max(8),
+            Transport::TwoInterface => capacity,
+        }
+    }
+
     /// log2(gbuffer_res / 64).
     pub fn gbuffer_level(&self) -> u32 {
         self.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros()
