@@ -28,7 +28,7 @@ void main() {
         for (uint k = 0u; k < ACC_TERMS; k++) tstate.batch_account[k] = uvec2(0u);
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;
-        draw_cmd = uvec4(0u, 1u, 0u, 0u);
+        set_draw(0u, 0u);
     } else if (pc.mode == AFTER_WAVE) {
         tstate.in_count = aborted && pc.rows != 0u ? 0u : tstate.out_count;
         tstate.out_count = 0u;
@@ -39,7 +39,7 @@ void main() {
         tstate.in_count = 0u;
         wave_cmd = uvec4(0u, 0u, 1u, 0u);
         if (aborted && pc.rows != 0u) {
-            draw_cmd = uvec4(0u, 1u, 0u, 0u);
+            set_draw(0u, 0u);
             return;
         }
         for (uint k = 0u; k < ACC_TERMS; k++) {
@@ -49,6 +49,6 @@ void main() {
         }
         uint n = min(tstate.records, tstate.record_capacity);
         tstate.records_total += n;
-        draw_cmd = uvec4(n, 1u, 0u, 0u);
+        set_draw(n, 0u);
     }
 }

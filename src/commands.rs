@@ -7,7 +7,7 @@ use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
-use crate::settings::{parse_size, Driven, Method, Metric, Settings, Transport};
+use crate::settings::{parse_size, Driven, Method, Metric, Settings, Splat, Transport};
 use crate::shaders::consts::*;
 use crate::vk::{self, Context, ContextDesc};
 use serde_json::{json, Value};
@@ -42,6 +42,10 @@ pub struct MethodArgs {
     /// two-interface image-space model.
     #[arg(long, value_enum, default_value_t = Settings::default().transport)]
     pub transport: Transport,
+    /// How splat records reach the caustic flux map: points drawn indirectly (raster), a compute pass with
+    /// float atomics (compute), or the faster of the two for the device (auto).
+    #[arg(long, value_enum, default_value_t = Settings::default().splat)]
+    pub splat: Splat,
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
     #[arg(long, default_value_t = Settings::default().flux_threshold)]
     pub flux_threshold: f32,
@@ -96,6 +100,7 @@ impl MethodArgs {
     pub fn settings(&self) -> AppResult<Settings> {
         let s = Settings {
             transport: self.transport,
+            splat: self.splat,
             flux_threshold: self.flux_threshold,
             bvh_layout: self.bvh_layout,
             method: self.method,
@@ -302,6 +307,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "cpu_record_ms": stage("cpu_record"),
         "frames": frames.len(),
         "transport": s.transport,
+        "splat": s.splat.resolve(info),
         "exact_transport": transport_json(session, &last),
         "photon_view": last.photon_view.map(|v| json!({
             "origin": v.origin.to_array(), "right": v.right.to_array(), "down": v.down.to_array(),

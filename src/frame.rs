@@ -23,7 +23,7 @@ use crate::passes::Passes;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, Views};
 use crate::scene::view::CameraView;
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Driven, Method, Settings, Transport};
+use crate::settings::{Driven, Method, Settings, Splat, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::{Access, Barriers, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
@@ -66,6 +66,8 @@ struct Ctx<'a> {
     t: &'a Targets,
     s: &'a Settings,
     data: &'a FrameData,
+    /// The records are splatted by the compute pass into the flux texels (else drawn as points).
+    compute_splat: bool,
 }
 
 /// The mutable side of a frame: the command buffer being recorded (the CPU-driven path submits mid-frame), the
@@ -119,8 +121,19 @@ impl Renderer {
         } = self;
         let targets = targets.as_mut().expect("targets");
         targets.ubo.write(0, std::slice::from_ref(&data))?;
-        let ctx =
-            Ctx { d: device, p: passes, sb: scene_buffers, nearest, linear, t: targets, s: settings, data: &data };
+        let compute_splat = settings.splat.resolve(&device.info) == Splat::Compute
+            && targets.receiver.flux.format == vk::Format::R32_SFLOAT;
+        let ctx = Ctx {
+            d: device,
+            p: passes,
+            sb: scene_buffers,
+            nearest,
+            linear,
+            t: targets,
+            s: settings,
+            data: &data,
+            compute_splat,
+        };
         let cmd = recorder.begin()?;
         let mut rec = Rec {
             recorder,
@@ -131,6 +144,7 @@ impl Renderer {
             mark: Instant::now(),
         };
         rec.report.caustics = views.photon.is_some();
+        rec.report.compute_splat = compute_splat;
         rec.report.photon_view = views.photon;
         rec.ts.reset(rec.cmd);
         ctx.light_gbuffers(&mut rec);
@@ -195,6 +209,7 @@ impl Ctx<'_> {
             transport: &t.photon.transport,
             queues: [&t.photon.queues[0], &t.photon.queues[1]],
             bvh: &self.sb.bvh,
+            flux_texels: &t.receiver.flux_texels,
         }
     }
 
@@ -287,9 +302,16 @@ impl Ctx<'_> {
             for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect, &t.photon.debug, &t.photon.transport] {
                 b.buffer(buf, &[Access::FrameStart], &[Access::TransferDst]);
             }
-            b.image(&t.receiver.flux, &[Access::FrameStart], &[Access::ColorAttachment]);
+            if self.compute_splat {
+                b.buffer(&t.receiver.flux_texels, &[Access::FrameStart], &[Access::TransferDst]);
+            } else {
+                b.image(&t.receiver.flux, &[Access::FrameStart], &[Access::ColorAttachment]);
+            }
         });
         unsafe {
+            if self.compute_splat {
+                d.cmd_fill_buffer(cmd, t.receiver.flux_texels.raw, 0, vk::WHOLE_SIZE, 0);
+            }
             d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
             d.cmd_fill_buffer(cmd, t.photon.transport.raw, 0, vk::WHOLE_SIZE, 0);
             // Header (count, capacity) and rows: disjoint ranges, so the two transfers need no barrier between them.
@@ -309,6 +331,9 @@ impl Ctx<'_> {
             b.buffer(&t.photon.debug, &[Access::TransferDst], &[Access::ComputeWrite]);
             b.buffer(&t.photon.transport, &[Access::TransferDst], &[Access::ComputeWrite]);
             b.buffer(&t.photon.splats, &[Access::FrameStart], &[Access::ComputeWrite]);
+            if self.compute_splat {
+                b.buffer(&t.receiver.flux_texels, &[Access::TransferDst], &[Access::ComputeWrite]);
+            }
             for q in &t.photon.queues {
                 b.buffer(q, &[Access::FrameStart], &[Access::ComputeWrite]);
             }
@@ -324,8 +349,15 @@ impl Ctx<'_> {
             },
         }?;
         let cmd = rec.cmd;
+        if self.compute_splat {
+            self.copy_flux_texels(cmd);
+        }
         self.barrier(cmd, |b| {
-            b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+            if self.compute_splat {
+                b.image(&t.receiver.flux, &[Access::TransferDst], &[Access::ComputeSampled]);
+            } else {
+                b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+            }
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.debug, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.photons, &[Access::ComputeWrite], &[Access::TransferSrc]);
@@ -334,14 +366,46 @@ impl Ctx<'_> {
         Ok(())
     }
 
+    /// The compute splat's flux texels → the flux image the resolve samples.
+    fn copy_flux_texels(&self, cmd: vk::CommandBuffer) {
+        let t = self.t;
+        let img = &t.receiver.flux;
+        self.barrier(cmd, |b| {
+            b.buffer(&t.receiver.flux_texels, &[Access::ComputeWrite], &[Access::TransferSrc]);
+            b.image(img, &[Access::FrameStart], &[Access::TransferDst]);
+        });
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D { width: img.extent.width, height: img.extent.height, depth: 1 });
+        unsafe {
+            self.d.cmd_copy_buffer_to_image(
+                cmd,
+                t.receiver.flux_texels.raw,
+                img.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
     /// Barriers between one batch's splat and the next batch's compute passes.
     fn after_splat(&self, cmd: vk::CommandBuffer) {
         let t = self.t;
         self.barrier(cmd, |b| {
-            b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ColorAttachment]);
+            if self.compute_splat {
+                b.buffer(&t.receiver.flux_texels, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+                b.buffer(&t.photon.splats, &[Access::ComputeRead], &[Access::ComputeWrite]);
+            } else {
+                b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ColorAttachment]);
+                b.buffer(&t.photon.splats, &[Access::VertexRead], &[Access::ComputeWrite]);
+            }
             // The trace read the photons and the indirect arguments, the splat read the records and the draw.
             b.buffer(&t.photon.photons, &[Access::ComputeRead], &[Access::ComputeWrite]);
-            b.buffer(&t.photon.splats, &[Access::VertexRead], &[Access::ComputeWrite]);
             // Exact transport's commit read the traversal state; the next batch's init writes it.
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::ComputeWrite]);
             b.buffer(
@@ -365,12 +429,18 @@ impl Ctx<'_> {
             rec.ts.mark(cmd, "photon_trace");
             ph.trace(cmd, &b, self.debug());
         }
+        let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
         self.barrier(cmd, |b| {
-            b.buffer(&t.photon.splats, &[Access::ComputeWrite], &[Access::VertexRead]);
-            b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &[Access::IndirectRead]);
+            b.buffer(&t.photon.splats, &[Access::ComputeWrite], &[reader]);
+            // The compute splat reads its record range from the draw command as well as dispatching from it.
+            b.buffer(&t.photon.indirect, &[Access::ComputeWrite], &[Access::IndirectRead, Access::ComputeRead]);
         });
         rec.ts.mark(cmd, "splat");
-        ph.splat(cmd, &b, &t.receiver.flux, clear);
+        if self.compute_splat {
+            ph.splat_compute(cmd, &b);
+        } else {
+            ph.splat(cmd, &b, &t.receiver.flux, clear);
+        }
     }
 
     /// Compute → compute on the traversal buffers (and the indirect arguments just written).
@@ -553,8 +623,8 @@ impl Ctx<'_> {
             first = false;
         }
         rec.report.batch_slots = batches;
-        if first {
-            // No batch at all: the flux map still needs clearing.
+        if first && !self.compute_splat {
+            // No batch at all: the flux map still needs clearing (the compute splat's texels were cleared).
             let cmd = rec.cmd;
             crate::passes::begin_rendering(
                 self.d,

@@ -96,6 +96,8 @@ pub struct FrameReport {
     pub record_ms: f64,
     /// Whether the caustic passes were recorded (the scene has a refractor inside the light).
     pub caustics: bool,
+    /// Whether the records were splatted by the compute pass (else drawn as points).
+    pub compute_splat: bool,
     /// The light view of the photon grid (None without caustic passes).
     pub photon_view: Option<LightView>,
     pub state: Option<TraversalState>,

@@ -29,6 +29,8 @@ pub struct ReceiverTargets {
     pub depth: Image,
     pub shadow: Image,
     pub flux: Image,
+    /// The flux map as one float per texel, for the compute splat (copied into `flux` afterwards).
+    pub flux_texels: Buffer,
     pub irradiance: Image,
 }
 
@@ -111,7 +113,21 @@ impl Targets {
             geo: img("receivers from light", GEO_FORMAT, m, color)?,
             depth: img("receivers depth", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT)?,
             shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
-            flux: img("caustic flux map", crate::passes::flux_format(device), m, color | U::TRANSFER_SRC)?,
+            flux: img(
+                "caustic flux map",
+                crate::passes::flux_format(device),
+                m,
+                color | U::TRANSFER_SRC | U::TRANSFER_DST,
+            )?,
+            flux_texels: Buffer::new(
+                device,
+                "caustic flux texels",
+                4 * (s.caustic_res as u64).pow(2),
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?,
             irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
         };
         let eye = EyeTargets::new(device, width, height)?;

@@ -15,6 +15,7 @@ layout(std430, set = 0, binding = 3) buffer IndirectBuf {
     uvec4 trace_cmd;
     uvec4 draw_cmd;
     uvec4 wave_cmd;
+    uvec4 splat_cmd;  // the compute splat's dispatch over the draw's records
 };
 layout(std430, set = 0, binding = 4) readonly buffer CoverageBuf { uint coverage[]; };
 layout(set = 0, binding = 5) uniform sampler2D t_front;      // refractor front: normal.xyz, distance (0: none)
@@ -54,6 +55,10 @@ layout(std430, set = 0, binding = 16) readonly buffer BvhNormals { vec4 bvh_norm
 layout(std430, set = 0, binding = 17) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 uint bvh_instance_count() { return uint(bvh_instances.length()); }
 
+// The compute splat's target: the caustic flux map as one float per texel (row-major), added to atomically, then
+// copied into the flux image that the resolve reads.
+layout(std430, set = 0, binding = 19) buffer FluxBuf { float flux_texels[]; };
+
 // Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
 // groups (lavapipe's limit).
 uvec4 dispatch_groups(uint n, uint per_group) {
@@ -62,10 +67,16 @@ uvec4 dispatch_groups(uint n, uint per_group) {
     return uvec4(gx, g == 0u ? 0u : (g + gx - 1u) / gx, 1u, 0u);
 }
 
+// The splat's draw over records [first, first + n), and the compute splat's dispatch for the same records.
+void set_draw(uint n, uint first) {
+    draw_cmd = uvec4(n, 1u, first, 0u);
+    splat_cmd = dispatch_groups(n, LINEAR_WG);
+}
+
 // The emitted photons are [capacity - n, capacity): set the trace dispatch and the splat draw for them.
 void set_emitted(uint n, uint capacity) {
     trace_cmd = dispatch_groups(n, LINEAR_WG);
-    draw_cmd = uvec4(n, 1u, capacity - n, 0u);
+    set_draw(n, capacity - n);
 }
 
 #endif

@@ -10,7 +10,7 @@ use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc
 use ash::vk;
 use std::sync::Arc;
 
-const LAYOUT: [BindKind; 19] = [
+const LAYOUT: [BindKind; 20] = [
     BindKind::Uniform, // frame
     BindKind::Storage, // traversal state
     BindKind::Storage, // photon buffer
@@ -30,6 +30,7 @@ const LAYOUT: [BindKind; 19] = [
     BindKind::Storage, // BVH vertex normals
     BindKind::Storage, // BVH instances
     BindKind::Storage, // BVH nodes (single layout)
+    BindKind::Storage, // flux map as texels (compute splat)
 ];
 
 /// Byte offsets in the indirect buffer: one dispatch command per traversal level, the photon trace's
@@ -38,7 +39,9 @@ pub const TRACE_OFFSET: u64 = 16 * MAX_LEVELS as u64;
 pub const DRAW_OFFSET: u64 = TRACE_OFFSET + 16;
 /// Exact transport: the current wave's dispatch.
 pub const WAVE_OFFSET: u64 = DRAW_OFFSET + 16;
-pub const INDIRECT_BYTES: u64 = WAVE_OFFSET + 16;
+/// The compute splat's dispatch over the draw's records.
+pub const SPLAT_OFFSET: u64 = WAVE_OFFSET + 16;
+pub const INDIRECT_BYTES: u64 = SPLAT_OFFSET + 16;
 
 pub struct PhotonBindings<'a> {
     pub ubo: &'a Buffer,
@@ -56,10 +59,11 @@ pub struct PhotonBindings<'a> {
     pub transport: &'a Buffer,
     pub queues: [&'a Buffer; 2],
     pub bvh: &'a crate::scene_gpu::BvhBuffers,
+    pub flux_texels: &'a Buffer,
 }
 
 impl PhotonBindings<'_> {
-    fn binds(&self) -> [Bind<'_>; 19] {
+    fn binds(&self) -> [Bind<'_>; 20] {
         [
             Bind::Uniform(self.ubo),
             Bind::Storage(self.state),
@@ -80,6 +84,7 @@ impl PhotonBindings<'_> {
             Bind::Storage(&self.bvh.normals),
             Bind::Storage(&self.bvh.instances),
             Bind::Storage(&self.bvh.single_nodes),
+            Bind::Storage(self.flux_texels),
         ]
     }
 }
@@ -115,6 +120,8 @@ pub struct PhotonPasses {
     wave_single: Pipeline,
     transport: Pipeline,
     splat: Pipeline,
+    /// None when the device has no float atomics on buffers.
+    splat_compute: Option<Pipeline>,
 }
 
 impl PhotonPasses {
@@ -155,6 +162,11 @@ impl PhotonPasses {
             wave_pair: compute("transport wave", shaders::WAVE_COMP.words())?,
             wave_single: compute("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words())?,
             transport: compute("transport state", shaders::TRANSPORT_COMP.words())?,
+            splat_compute: if device.info.float_atomic_add {
+                Some(compute("compute splat", shaders::SPLAT_COMP.words())?)
+            } else {
+                None
+            },
             splat,
         })
     }
@@ -227,6 +239,15 @@ impl PhotonPasses {
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level: wave, mode: may_abort as u32, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
+    }
+
+    /// Splat the records into the flux texels with a compute pass dispatched indirectly (float atomics). Settings
+    /// resolve `--splat` to raster on a device without them, so the pipeline exists whenever this is called.
+    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings) {
+        let Some(p) = self.splat_compute.as_ref() else { return };
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush::default());
+        unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
     }
 
     /// Splat the traced photons into the caustic flux map with vkCmdDrawIndirect.

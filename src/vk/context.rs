@@ -137,6 +137,8 @@ pub struct DeviceInfo {
     /// Nanoseconds per timestamp tick.
     pub timestamp_period: f32,
     pub timestamp_valid_bits: u32,
+    /// VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd (the compute splat needs it).
+    pub float_atomic_add: bool,
 }
 
 /// The logical device, its one queue, and the allocator. Derefs to `ash::Device`.
@@ -228,6 +230,12 @@ impl Device {
                 log::info!("skipping {name}: no graphics+compute queue with timestamps");
                 continue;
             };
+            let float_atomic_add = has(ash::ext::shader_atomic_float::NAME) && {
+                let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+                let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut fa);
+                unsafe { raw.get_physical_device_features2(physical, &mut f2) };
+                fa.shader_buffer_float32_atomic_add != 0
+            };
             let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
             let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
             unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
@@ -246,6 +254,7 @@ impl Device {
                     limits: props.limits,
                     timestamp_period: props.limits.timestamp_period,
                     timestamp_valid_bits: families[family].timestamp_valid_bits,
+                    float_atomic_add,
                 },
                 queue_family: family as u32,
             });
@@ -288,8 +297,13 @@ impl Device {
             .fragment_stores_and_atomics(supported.fragment_stores_and_atomics != 0)
             .shader_int64(supported.shader_int64 != 0);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
+        let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true);
         let mut f2 = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut f13);
         let mut extensions = vec![ash::khr::push_descriptor::NAME.as_ptr()];
+        if c.info.float_atomic_add {
+            extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
+            f2 = f2.push_next(&mut fa);
+        }
         if desc.swapchain {
             extensions.push(ash::khr::swapchain::NAME.as_ptr());
         }
