@@ -236,17 +236,21 @@ impl Ctx<'_> {
                 ranges: &[self.sb.refractors],
             };
             g.record(cmd, &g.front, self.sb, &front);
-            // The depth buffer is reused (cleared) by the back-face pass.
-            self.barrier(cmd, |b| {
-                b.image(&t.light.depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
-            });
-            let back = GeometryTarget {
-                colors: &[&t.light.back],
-                depth: &t.light.depth,
-                view: photon_view,
-                ranges: &[self.sb.refractors],
-            };
-            g.record(cmd, &g.back, self.sb, &back);
+            // Exact transport reads only the front buffer (coverage); the back surface is the two-interface
+            // trace's.
+            if self.s.transport == Transport::TwoInterface {
+                // The depth buffer is reused (cleared) by the back-face pass.
+                self.barrier(cmd, |b| {
+                    b.image(&t.light.depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
+                });
+                let back = GeometryTarget {
+                    colors: &[&t.light.back],
+                    depth: &t.light.depth,
+                    view: photon_view,
+                    ranges: &[self.sb.refractors],
+                };
+                g.record(cmd, &g.back, self.sb, &back);
+            }
         }
         let recv = GeometryTarget {
             colors: &[&t.receiver.geo],

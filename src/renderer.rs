@@ -46,7 +46,7 @@ impl Views {
             }
         }
         let photon = if scene.has_refractors() {
-            LightView::fit(light, refr(), refr(), settings.gbuffer_res, 1.0)
+            LightView::fit(light, refr(), refr(), settings.gbuffer_side(), 1.0)
         } else {
             None
         };
@@ -220,7 +220,7 @@ impl Renderer {
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
         let s = &self.settings;
         let key =
-            (s.gbuffer_res, s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
+            (s.gbuffer_side(), s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
                 if (t.width, t.height) != (width, height) {
@@ -271,13 +271,13 @@ impl Renderer {
         }
         let photon_view = views.photon.unwrap_or(views.receiver);
         FrameData {
-            photon_view: GpuView::from_light(&photon_view, s.gbuffer_res),
+            photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
             receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
             camera: GpuView::from_camera(&views.camera),
             light_power: [power.x, power.y, power.z, light.intensity],
             scene_min: [lo.x, lo.y, lo.z, diameter],
             scene_max: [hi.x, hi.y, hi.z, 0.6 / l_ref],
-            grid: [s.gbuffer_res, s.gbuffer_level(), s.caustic_res, s.gbuffer_level() + 1],
+            grid: [s.gbuffer_side(), s.gbuffer_level(), s.caustic_res, s.gbuffer_level() + 1],
             traversal: [
                 s.level,
                 (if s.metric == Metric::MaxError { 1 } else { 0 }) | ((s.batching as u32) << 8),

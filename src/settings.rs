@@ -204,9 +204,20 @@ impl Settings {
         }
     }
 
-    /// log2(gbuffer_res / 64).
+    /// Side of the refractor g-buffers this frame uses. The two-interface trace reads surfaces from them, so it
+    /// uses `gbuffer_res` as given. Exact transport reads them only for coverage (which cells to emit; each cell's
+    /// own ray decides the rest), so they are fitted to the photon grid: a finer buffer than the grid adds nothing
+    /// but rasterization and pyramid work.
+    pub fn gbuffer_side(&self) -> u32 {
+        match self.transport {
+            Transport::Exact => self.gbuffer_res.min(LEVEL0_RES << self.level.min(12)).max(LEVEL0_RES),
+            Transport::TwoInterface => self.gbuffer_res,
+        }
+    }
+
+    /// log2(gbuffer_side / 64).
     pub fn gbuffer_level(&self) -> u32 {
-        self.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros()
+        self.gbuffer_side().trailing_zeros() - LEVEL0_RES.trailing_zeros()
     }
 }
 

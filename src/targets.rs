@@ -100,7 +100,7 @@ impl Targets {
     pub fn new(device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
         let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
-        let r = ext(s.gbuffer_res, s.gbuffer_res);
+        let r = ext(s.gbuffer_side(), s.gbuffer_side());
         let m = ext(s.caustic_res, s.caustic_res);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
         let light = LightTargets {
@@ -135,7 +135,7 @@ impl Targets {
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
         let mips = s.gbuffer_level() + 1;
-        let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_res, mips);
+        let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_side(), mips);
         let debug_bytes = 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
         let photon = PhotonBuffers {
             state: Buffer::new(
