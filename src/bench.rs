@@ -283,6 +283,8 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             ..Settings::default()
         };
         let mut session = Session::open(&scene_args, base.clone())?;
+        // Every timed frame runs every stage.
+        session.renderer.reuse = false;
         device = format!("{} ({})", session.device().info.name, session.device().info.driver);
         let refs = references(args, scene_path, session.width, session.height)?;
         // GPUs ramp their clocks up under load, and lavapipe compiles shaders on first use: render for a while

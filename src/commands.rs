@@ -148,6 +148,10 @@ pub struct RenderArgs {
     /// Frames to render (stats cover all of them; the image is the last).
     #[arg(long, default_value_t = 1)]
     pub frames: u32,
+    /// Recompute every stage of every frame (by default a frame whose light, geometry and settings did not change
+    /// reuses the last frame's caustic map and runs only the eye and composite passes).
+    #[arg(long)]
+    pub no_reuse: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -306,6 +310,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "frame_ms": stage("frame_wall"),
         "cpu_record_ms": stage("cpu_record"),
         "frames": frames.len(),
+        "caustics_reused": last.reused,
+        "reused_frames": frames.iter().filter(|f| f.reused).count(),
         "transport": s.transport,
         "splat": s.splat.resolve(info),
         "exact_transport": transport_json(session, &last),
@@ -372,6 +378,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     }
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
+    session.renderer.reuse = !args.no_reuse;
     let mut reports = Vec::new();
     let mut image = None;
     for i in 0..args.frames {
@@ -451,6 +458,8 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
     }
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
+    // The profiler times every stage: nothing is reused.
+    session.renderer.reuse = false;
     for _ in 0..args.warmup {
         session.frame(None)?;
     }

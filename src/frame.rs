@@ -112,6 +112,13 @@ impl Renderer {
         let start = Instant::now();
         self.ensure_targets(camera.width, camera.height)?;
         let views = Views::new(&self.scene, &self.settings, camera)?;
+        // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the light, the
+        // geometry and materials, and the settings, not on the camera or the output size. When none of those
+        // changed since the last completed frame, only the eye and composite passes are recorded.
+        let key = self.caustic_key();
+        let reused = self.reuse && self.last_caustic.as_ref().is_some_and(|(k, _, _)| *k == key);
+        let cached = if reused { self.last_caustic.clone() } else { None };
+        self.last_caustic = None;
         let (data, slots) = {
             let t = self.targets.as_ref().expect("targets");
             (self.frame_data(&views, t), self.batch_slots(self.settings.traversal_capacity(t.photon.capacity)))
@@ -146,14 +153,19 @@ impl Renderer {
         rec.report.caustics = views.photon.is_some();
         rec.report.compute_splat = compute_splat;
         rec.report.photon_view = views.photon;
+        rec.report.reused = reused;
         rec.ts.reset(rec.cmd);
-        ctx.light_gbuffers(&mut rec);
-        if rec.report.caustics {
-            ctx.coverage(&mut rec);
-            ctx.photons(&mut rec, slots)?;
-            ctx.resolve(&mut rec);
+        if reused {
+            ctx.reuse_caustics(&mut rec);
         } else {
-            ctx.clear_irradiance(&mut rec);
+            ctx.light_gbuffers(&mut rec);
+            if rec.report.caustics {
+                ctx.coverage(&mut rec);
+                ctx.photons(&mut rec, slots)?;
+                ctx.resolve(&mut rec);
+            } else {
+                ctx.clear_irradiance(&mut rec);
+            }
         }
         ctx.eye(&mut rec);
         ctx.composite(&mut rec);
@@ -175,7 +187,13 @@ impl Renderer {
         }
         report.stages = crate::vk::query::sum_by_label(&report.segments);
         report.gpu_ms = report.stages.iter().filter(|(l, _)| *l != HOST_ROUNDTRIP).map(|(_, ms)| ms).sum();
-        ctx.read_results(&mut report, aov_image).map(|img| (report, img))
+        if let Some((_, state, transport)) = cached {
+            report.state = state;
+            report.transport = transport;
+        }
+        let img = ctx.read_results(&mut report, aov_image)?;
+        self.last_caustic = Some((key, report.state, report.transport));
+        Ok((report, img))
     }
 }
 
@@ -271,6 +289,19 @@ impl Ctx<'_> {
             }
             b.image(&t.receiver.geo, &[Access::ColorAttachment], &sampled);
             b.image(&t.receiver.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled]);
+        });
+    }
+
+    /// A frame that reuses the caustic map, the receiver g-buffer and the shadow map of the last one: order this
+    /// frame's reads after the last frame's (the images keep their layouts).
+    fn reuse_caustics(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        rec.ts.mark(cmd, "reused");
+        let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
+        self.barrier(cmd, |b| {
+            b.image(&t.receiver.geo, &sampled, &sampled);
+            b.image(&t.receiver.shadow, &[Access::FragmentSampled], &[Access::FragmentSampled]);
+            b.image(&t.receiver.irradiance, &[Access::FragmentSampled], &[Access::FragmentSampled]);
         });
     }
 
@@ -789,7 +820,7 @@ impl Ctx<'_> {
                     &[region],
                 );
             }
-            if rec.report.caustics {
+            if rec.report.caustics && !rec.report.reused {
                 let state = std::mem::size_of::<TraversalState>() as u64;
                 let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state, size: state }];
                 d.cmd_copy_buffer(cmd, t.photon.state.raw, t.readback.raw, &copies);
@@ -822,7 +853,7 @@ impl Ctx<'_> {
     fn read_results(&self, report: &mut FrameReport, aov: Option<Aov>) -> AppResult<Option<AovData>> {
         let t = self.t;
         let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
-        if report.caustics {
+        if report.caustics && !report.reused {
             let st = t.readback.read::<TraversalState>(layout.state, 1)?[0];
             report.unfinished_tiles = if self.s.method == Method::Adaptive { st.stack_size } else { 0 };
             report.state = Some(st);

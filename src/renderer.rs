@@ -98,6 +98,9 @@ pub struct FrameReport {
     pub caustics: bool,
     /// Whether the records were splatted by the compute pass (else drawn as points).
     pub compute_splat: bool,
+    /// The light-view stages, the photons and the caustic map were reused from the last frame (nothing they
+    /// depend on changed); only the eye and composite passes ran.
+    pub reused: bool,
     /// The light view of the photon grid (None without caustic passes).
     pub photon_view: Option<LightView>,
     pub state: Option<TraversalState>,
@@ -144,6 +147,12 @@ pub struct Renderer {
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
+    /// Reuse the caustic stages when nothing they depend on changed (off for profiling, which times them).
+    pub reuse: bool,
+    /// Bumped whenever the scene's geometry or materials change.
+    scene_generation: u64,
+    /// The last completed frame's caustic inputs, with its traversal and transport state.
+    pub(crate) last_caustic: Option<(String, Option<TraversalState>, Option<crate::gpu_types::TransportState>)>,
 }
 
 impl Drop for Renderer {
@@ -177,6 +186,9 @@ impl Renderer {
             targets_key: None,
             settings,
             slots_hint: 0,
+            reuse: true,
+            scene_generation: 0,
+            last_caustic: None,
             device,
         })
     }
@@ -194,9 +206,16 @@ impl Renderer {
         if !same_geometry {
             self.device.wait_idle()?;
             self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &scene)?;
+            self.scene_generation += 1;
         }
         self.scene = scene;
         Ok(())
+    }
+
+    /// What the caustic stages depend on: the lights, the geometry and materials (by generation), the settings
+    /// and the light-side targets.
+    pub(crate) fn caustic_key(&self) -> String {
+        format!("{:?}|{}|{:?}|{:?}", self.scene.lights, self.scene_generation, self.settings, self.targets_key)
     }
 
     pub fn camera_view(&self, camera: &Camera, width: u32, height: u32) -> CameraView {

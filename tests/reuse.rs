@@ -1,0 +1,82 @@
+//! Reuse by dependency: a frame whose light, geometry, materials and settings did not change reuses the last
+//! frame's caustic map (only the eye and composite passes run); anything they depend on changing recomputes them.
+//! Runs the library in-process with validation (and synchronization validation) on.
+
+use caustics::commands::{to_rgb, SceneArgs, Session};
+use caustics::image_io::RgbImage;
+use caustics::metrics::compare;
+use caustics::renderer::{Aov, FrameReport};
+use caustics::scene::Material;
+use caustics::settings::{Method, Settings, Transport};
+
+const SPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/sphere.toml");
+
+fn open(reuse: bool) -> Session {
+    std::env::set_var("CAUSTICS_VALIDATION", "1");
+    let args = SceneArgs { scene: Some(SPHERE.into()), camera: Some("top".into()), size: "128x128".into() };
+    let settings = Settings { transport: Transport::Exact, method: Method::Dense, level: 1, ..Settings::default() };
+    let mut s = Session::open(&args, settings).expect("session");
+    s.renderer.reuse = reuse;
+    s
+}
+
+fn frame(s: &mut Session, camera: &str) -> (FrameReport, RgbImage) {
+    let cam = s.renderer.scene.camera(Some(camera)).unwrap().clone();
+    let view = s.renderer.camera_view(&cam, 128, 128);
+    let (report, img) = s.renderer.render(&view, Some(Aov::Caustics)).expect("frame");
+    (report, to_rgb(&img.unwrap()).unwrap())
+}
+
+fn same(a: &RgbImage, b: &RgbImage, what: &str, tol: f64) {
+    let m = compare(a, b, 128, 2.0);
+    assert!(m.rel_l1 <= tol && m.flux_ratio.is_finite(), "{what}: rel-L1 {} (tolerance {tol})", m.rel_l1);
+}
+
+#[test]
+fn camera_moves_reuse_and_changes_recompute() {
+    let mut s = open(true);
+    let (r0, top0) = frame(&mut s, "top");
+    assert!(!r0.reused);
+    // Camera only: the caustic stages are not recorded.
+    let (r1, main1) = frame(&mut s, "main");
+    assert!(r1.reused, "a camera change must reuse the caustic map");
+    assert!(!r1.stages.iter().any(|(l, _)| l.starts_with("transport") || *l == "light_gbuffer" || *l == "splat"));
+    let (r2, top2) = frame(&mut s, "top");
+    assert!(r2.reused);
+    assert_eq!(r2.state.map(|x| x.photons_total), r0.state.map(|x| x.photons_total), "cached state");
+    same(&top2, &top0, "top after a camera round trip", 1e-6);
+    // The reused main view equals a full recompute of it.
+    let mut fresh = open(false);
+    let (rf, main_fresh) = frame(&mut fresh, "main");
+    assert!(!rf.reused);
+    same(&main1, &main_fresh, "main view, reused against recomputed", 1e-5);
+
+    // The light moves: everything that depends on it runs again, and the image equals a fresh render.
+    let mut scene = s.renderer.scene.clone();
+    scene.lights[0].position.x += 0.1;
+    s.renderer.set_scene(scene.clone()).unwrap();
+    let (r3, moved) = frame(&mut s, "top");
+    assert!(!r3.reused, "a light change must recompute");
+    fresh.renderer.set_scene(scene.clone()).unwrap();
+    let (_, moved_fresh) = frame(&mut fresh, "top");
+    same(&moved, &moved_fresh, "moved light", 1e-5);
+    let m = compare(&moved, &top0, 128, 2.0);
+    assert!(m.rel_l1 > 0.01, "the caustic must move with the light (rel-L1 {})", m.rel_l1);
+
+    // IOR: the photon stages run again.
+    for o in scene.objects.iter_mut() {
+        if let Material::Dielectric { ior } = &mut o.material {
+            *ior = 1.6;
+        }
+    }
+    s.renderer.set_scene(scene).unwrap();
+    assert!(!frame(&mut s, "top").0.reused, "an IOR change must recompute");
+    assert!(frame(&mut s, "top").0.reused);
+
+    // Settings: a new level recomputes.
+    let mut settings = s.renderer.settings.clone();
+    settings.level = 2;
+    s.renderer.set_settings(settings).unwrap();
+    assert!(!frame(&mut s, "top").0.reused, "a settings change must recompute");
+    assert_eq!(caustics::vk::validation_message_count(), 0, "validation messages");
+}
