@@ -321,6 +321,8 @@ impl Renderer {
             }
             return if report.unfinished_tiles == 0 { SlotVerdict::Complete } else { SlotVerdict::OutOfSlots };
         }
+        // The caustic map is incomplete: the next frame must recompute it with more slots, not reuse it.
+        self.last_caustic = None;
         let needed = st.slots_used + st.stack_size;
         self.slots_hint = (needed.max(report.batch_slots) * 2).min(MAX_BATCHES);
         SlotVerdict::Incomplete

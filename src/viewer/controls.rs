@@ -23,6 +23,7 @@ pub enum Action {
     Dense,
     AdaptiveMaxLevel,
     AdaptiveMaxError,
+    Transport,
     Animate,
     Screenshot,
     Profile,
@@ -88,6 +89,11 @@ pub const CONTROLS: &[Control] = &[
         input: "1 2 3",
         help: "method: dense / adaptive max-level / adaptive max-error",
         keys: &[("1", Action::Dense), ("2", Action::AdaptiveMaxLevel), ("3", Action::AdaptiveMaxError)],
+    },
+    Control {
+        input: "X",
+        help: "transport: exact (every glass path) / two-interface (the papers' model, cheaper)",
+        keys: &[("x", Action::Transport)],
     },
     Control {
         input: "Space",

@@ -552,6 +552,13 @@ impl Viewer {
             AdaptiveMaxError => {
                 self.change_settings(Settings { method: Method::Adaptive, metric: Metric::MaxError, ..s })?
             }
+            Transport => {
+                let transport = match s.transport {
+                    crate::settings::Transport::Exact => crate::settings::Transport::TwoInterface,
+                    crate::settings::Transport::TwoInterface => crate::settings::Transport::Exact,
+                };
+                self.change_settings(Settings { transport, ..s })?
+            }
             Animate => self.toggle_animation(),
             Screenshot => self.screenshot_request = true,
             Profile => {
@@ -587,8 +594,12 @@ impl Viewer {
             (Method::Adaptive, Metric::MaxError) => "adaptive max-error",
         };
         let ior = self.ior();
+        let transport = match s.transport {
+            crate::settings::Transport::Exact => "exact",
+            crate::settings::Transport::TwoInterface => "two-interface",
+        };
         format!(
-            "{method}, level {} ({}²), caustic map {}²{}",
+            "{transport} {method}, level {} ({}²), caustic map {}²{}",
             s.level,
             LEVEL0_RES << s.level,
             s.caustic_res,
