@@ -100,6 +100,26 @@ impl Renderer {
         self.render_frame(camera, aov, None, &SubmitSync::default())
     }
 
+    /// Progressive refinement: render this frame at `level` when it is below the chosen one (the settings keep
+    /// the chosen level). Every such frame is a complete, flux-correct frame at its own level.
+    pub fn render_frame_at(
+        &mut self,
+        level: u32,
+        camera: &CameraView,
+        aov: Option<Aov>,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+    ) -> AppResult<(FrameReport, Option<AovData>)> {
+        let chosen = self.settings.level;
+        if level >= chosen {
+            return self.render_frame(camera, aov, finish, sync);
+        }
+        self.settings.level = level;
+        let out = self.render_frame(camera, aov, finish, sync);
+        self.settings.level = chosen;
+        out
+    }
+
     /// Record and submit a frame; `finish` appends commands to its last command buffer and `sync` gives that
     /// submission its semaphores. Returns after the GPU has finished.
     pub fn render_frame(
@@ -116,6 +136,7 @@ impl Renderer {
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last completed frame, only the eye and composite passes are recorded.
         let key = self.caustic_key();
+        let self_level = self.settings.level;
         let reused = self.reuse && self.last_caustic.as_ref().is_some_and(|(k, _, _)| *k == key);
         let cached = if reused { self.last_caustic.clone() } else { None };
         self.last_caustic = None;
@@ -154,6 +175,7 @@ impl Renderer {
         rec.report.compute_splat = compute_splat;
         rec.report.photon_view = views.photon;
         rec.report.reused = reused;
+        rec.report.level = self_level;
         rec.ts.reset(rec.cmd);
         if reused {
             ctx.reuse_caustics(&mut rec);

@@ -25,7 +25,8 @@ impl Summary {
     }
 }
 
-/// Per-stage summaries over frames, in first-seen stage order; frames without a stage count as 0 ms for it.
+/// Per-stage summaries over frames, in first-seen stage order, each over the frames that ran the stage (a frame
+/// that reused the caustic map has no caustic stages: it does not pull their medians to 0).
 pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
     let mut labels: Vec<&str> = Vec::new();
     for f in frames {
@@ -38,10 +39,8 @@ pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
     let mut out: Vec<(String, Summary)> = labels
         .iter()
         .map(|l| {
-            let v: Vec<f64> = frames
-                .iter()
-                .map(|f| f.stages.iter().find(|(x, _)| x == l).map(|(_, ms)| *ms).unwrap_or(0.0))
-                .collect();
+            let v: Vec<f64> =
+                frames.iter().filter_map(|f| f.stages.iter().find(|(x, _)| x == l).map(|(_, ms)| *ms)).collect();
             (l.to_string(), Summary::of(&v))
         })
         .collect();

@@ -101,6 +101,8 @@ pub struct FrameReport {
     /// The light-view stages, the photons and the caustic map were reused from the last frame (nothing they
     /// depend on changed); only the eye and composite passes ran.
     pub reused: bool,
+    /// The photon level this frame rendered (below the chosen one while the viewer refines progressively).
+    pub level: u32,
     /// The light view of the photon grid (None without caustic passes).
     pub photon_view: Option<LightView>,
     pub state: Option<TraversalState>,

@@ -177,7 +177,8 @@ mod tests {
         assert_eq!(action_for(&Key::Character(" ".into())), Some(Action::Animate));
         assert_eq!(action_for(&Key::Named(NamedKey::ArrowLeft)), Some(Action::LightLeft));
         assert_eq!(action_for(&Key::Named(NamedKey::Escape)), Some(Action::Quit));
-        assert_eq!(action_for(&Key::Character("x".into())), None);
+        assert_eq!(action_for(&Key::Character("x".into())), Some(Action::Transport));
+        assert_eq!(action_for(&Key::Character("z".into())), None);
         assert!(help_text().contains("screenshot"));
     }
 }

@@ -49,6 +49,9 @@ const ANIMATION_PERIOD_S: f32 = 20.0;
 /// ...counting at most this much per frame, so that slow frames (lavapipe) turn it in small steps and a pause
 /// (a minimized window) does not make it jump.
 const ANIMATION_MAX_STEP_S: f32 = 0.25;
+/// Frame time the interactive level aims at while the light or the glass moves (progressive refinement).
+const INTERACTIVE_MS: f64 = 100.0;
+
 /// A light straight above its target is tilted by this much when animated, so that its orbit moves it.
 const ANIMATION_TILT_DEG: f32 = 25.0;
 
@@ -71,6 +74,10 @@ pub struct ViewArgs {
     /// Slowly orbit the light around the vertical axis through its target (Space pauses).
     #[arg(long)]
     pub animate: bool,
+    /// Render every frame at the chosen level (by default, while the light or the glass changes the viewer renders
+    /// at an interactive level, then refines one level per frame up to the chosen one).
+    #[arg(long)]
+    pub no_progressive: bool,
     /// Present this many frames, then exit (0: run until the window is closed).
     #[arg(long, default_value_t = 0)]
     pub frames: u32,
@@ -361,6 +368,14 @@ struct Viewer {
     orbit: Orbit,
     input: Input,
     animate: bool,
+    /// Progressive refinement: on unless --no-progressive.
+    progressive: bool,
+    /// The light or the glass changed since the last frame.
+    interacting: bool,
+    /// The level rendered while interacting (adapted to keep those frames near INTERACTIVE_MS).
+    interactive_level: u32,
+    /// The level the last frame rendered.
+    shown_level: u32,
     last_frame_start: Option<Instant>,
     /// The swapchain must be recreated before the next frame.
     dirty: bool,
@@ -437,6 +452,10 @@ impl Viewer {
             orbit: Orbit::new(&camera),
             input: Input::default(),
             animate: false,
+            progressive: !args.no_progressive,
+            interacting: false,
+            interactive_level: 2,
+            shown_level: 0,
             last_frame_start: None,
             dirty: false,
             counters: Counters::default(),
@@ -638,6 +657,7 @@ impl Viewer {
             return Ok(());
         }
         self.renderer.set_scene(scene)?;
+        self.interacting = true;
         eprintln!("{}", self.describe());
         Ok(())
     }
@@ -700,9 +720,13 @@ impl Viewer {
             let turn = Quat::from_rotation_y(dt * std::f32::consts::TAU / ANIMATION_PERIOD_S);
             light.position = light.target + turn * (light.position - light.target);
         }
-        if light.position != self.renderer.scene.lights[0].position && !self.set_light(light) && self.animate {
-            self.animate = false;
-            eprintln!("light animation paused");
+        if light.position != self.renderer.scene.lights[0].position {
+            if self.set_light(light) {
+                self.interacting = true;
+            } else if self.animate {
+                self.animate = false;
+                eprintln!("light animation paused");
+            }
         }
     }
 
@@ -783,7 +807,26 @@ impl Viewer {
         };
         let mut finish =
             |_: &Device, cmd: vk::CommandBuffer, t: &Targets| presenter.record(cmd, &t.eye.beauty, sc, index, capture);
-        let (report, _) = renderer.render_frame(&view, None, Some(&mut finish), &sync)?;
+        // Progressive refinement: an interactive level while the light or the glass changes, then one level more
+        // per frame up to the chosen one (each frame complete and flux-correct at its level).
+        let chosen = renderer.settings.level;
+        let level = if !self.progressive {
+            chosen
+        } else if std::mem::take(&mut self.interacting) {
+            chosen.min(self.interactive_level)
+        } else {
+            chosen.min(self.shown_level.saturating_add(1)).max(chosen.min(self.interactive_level))
+        };
+        let (report, _) = renderer.render_frame_at(level, &view, None, Some(&mut finish), &sync)?;
+        if level < chosen && !report.reused {
+            // Keep interactive frames near INTERACTIVE_MS.
+            if report.gpu_ms > 2.0 * INTERACTIVE_MS && self.interactive_level > 0 && level == self.interactive_level {
+                self.interactive_level -= 1;
+            } else if report.gpu_ms < 0.5 * INTERACTIVE_MS && level == self.interactive_level {
+                self.interactive_level += 1;
+            }
+        }
+        self.shown_level = level;
         // The shared slot policy; an incomplete frame is still presented (its image can be presented once).
         if renderer.adapt_batch_slots(&report) != SlotVerdict::Complete {
             counters.incomplete_frames += 1;
@@ -838,8 +881,13 @@ impl Viewer {
         }
         let fps = self.title_frames as f64 / elapsed;
         let gpu = self.title_gpu_ms / self.title_frames as f64;
+        let refining = if report.level < self.renderer.settings.level {
+            format!(" — refining: level {}", report.level)
+        } else {
+            String::new()
+        };
         self.window.set_title(&format!(
-            "caustics — {} — {} — {fps:.1} fps — GPU {gpu:.1} ms",
+            "caustics — {} — {}{refining} — {fps:.1} fps — GPU {gpu:.1} ms",
             self.scene_name,
             self.describe()
         ));
