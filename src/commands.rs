@@ -239,7 +239,7 @@ impl Session {
                 "warning: level {} emits up to {} photons ({}²); a frame may take up to about {:.0} s on {}; \
                  a lower --level (or --method adaptive --metric max-error) is faster",
                 s.level,
-                (LEVEL0_RES as u64) << s.level,
+                ((LEVEL0_RES as u64) << s.level).pow(2),
                 (LEVEL0_RES as u64) << s.level,
                 est,
                 self.device().info.name
