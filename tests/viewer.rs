@@ -351,6 +351,9 @@ fn keys_and_mouse_drive_the_viewer() {
     xdo(&["mousedown", "1", "mousemove_relative", "60", "0", "mouseup", "1"]);
     xdo(&["click", "4"]);
     xdo(&["mousedown", "3", "mousemove_relative", "30", "0", "mouseup", "3"]);
+    // Input is applied when the next frame is rendered, and Q quits without rendering one: give the last inputs
+    // a frame first (a frame takes up to about a second on 2 loaded cores).
+    std::thread::sleep(Duration::from_secs(2));
     xdo(&["key", "q"]);
     let run = wait_view(child, &err_path, &args, Duration::from_secs(120));
     assert!(run.status.success(), "{}", run.stderr);
