@@ -1,5 +1,5 @@
 #version 460
-// Eye view of the receivers (DESIGN.md step 6): their direct light and caustic irradiance, the AOVs.
+// Eye view of the receivers (docs/design.md step 6): their direct light and caustic irradiance, the AOVs.
 #include "common/types.glsl"
 
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };

@@ -1,5 +1,5 @@
 #version 460
-// Compute splat (DESIGN.md step 5, `--splat compute`), dispatched indirectly over the records the draw would
+// Compute splat (docs/design.md step 5, `--splat compute`), dispatched indirectly over the records the draw would
 // draw: the same separable integer-radius tent as splat.frag, evaluated at the same texel centers, each tap added
 // to the flux map with a float atomic. The weights of a record sum to exactly 1 over the texel lattice, so flux is
 // conserved as by the point draw; only the order of the float additions differs. As with points, a record whose

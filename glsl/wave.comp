@@ -1,5 +1,5 @@
 #version 460
-// One wave of exact photon transport (DESIGN.md step 5, `--transport exact`), dispatched indirectly with the
+// One wave of exact photon transport (docs/design.md step 5, `--transport exact`), dispatched indirectly with the
 // arguments the transport shader wrote after the previous wave. Wave 0 turns each emitted photon into a ray from
 // the light through its cell's center; wave k > 0 traces ray queue k & 1. At a dielectric the Fresnel split
 // appends the reflected and refracted children (each above the flux threshold) to queue (k + 1) & 1; at a diffuse

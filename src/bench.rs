@@ -18,7 +18,7 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-#[derive(clap::Args, Debug, Clone)]
+#[derive(clap::Args, Debug, Clone, serde::Serialize)]
 pub struct BenchArgs {
     /// Scene files (repeat the flag for several; default: the sphere scene).
     #[arg(long = "scene")]
@@ -54,9 +54,10 @@ pub struct BenchArgs {
     /// Skip the remaining levels of a method once one frame takes longer than this (seconds).
     #[arg(long, default_value_t = 20.0)]
     pub max_frame_s: f64,
-    /// Reference photons per light.
-    #[arg(long, default_value_t = 32_000_000)]
-    pub reference_photons: u64,
+    /// Reference photons per light (default: sized to the sweep, 4 per cell of the finest level's grid, between
+    /// 1M and 32M: 1M for levels up to 3, 16.8M at level 5).
+    #[arg(long)]
+    pub reference_photons: Option<u64>,
     /// Which reference the main error columns use: `two-refractions` (what a two-interface method models: its
     /// approximation error) or `all` (every path: ground truth). The other one goes into `extra`.
     #[arg(long, default_value = "two-refractions")]
@@ -64,11 +65,21 @@ pub struct BenchArgs {
     /// Skip the references (timings and photon counts only).
     #[arg(long)]
     pub no_reference: bool,
-    /// Caustic map and refractor g-buffer resolutions.
+    /// Side of the caustic map (and of the shadow map).
     #[arg(long, default_value_t = 1024)]
     pub caustic_res: u32,
+    /// Side of the light-view refractor g-buffers (power of two).
     #[arg(long, default_value_t = 1024)]
     pub gbuffer_res: u32,
+    /// Max-error metric: first level checked for convergence (below it, max-error emits dense's cells).
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = crate::commands::level_arg)]
+    pub check_level: u32,
+    /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux.
+    #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
+    pub flux_threshold: f32,
+    /// Exact transport: BVH node layout (pair or single).
+    #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Pair)]
+    pub bvh_layout: crate::bvh::BvhLayout,
     /// Max-error bound (caustic-map texels).
     #[arg(long, default_value_t = 1.0)]
     pub error_bound: f32,
@@ -78,10 +89,13 @@ pub struct BenchArgs {
     /// Do not run anything: re-render the Markdown and the plot from a JSON file a previous run wrote.
     #[arg(long)]
     pub from_json: Option<PathBuf>,
+    /// Write every row (and the arguments) as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write the Markdown tables here.
     #[arg(long)]
     pub markdown: Option<PathBuf>,
+    /// Write the speed-against-error plot (SVG) here.
     #[arg(long)]
     pub plot: Option<PathBuf>,
 }
@@ -205,7 +219,17 @@ struct References {
     other: Option<RgbImage>,
 }
 
-fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32) -> AppResult<References> {
+/// Reference photons for a sweep up to `max_level`: `--reference-photons`, else 4 per cell of the finest grid,
+/// clamped to 1M..=32M (the reference's noise stays below the finest point's sampling error, and a sweep of small
+/// levels does not wait for a 32M-photon reference).
+pub fn reference_photons(explicit: Option<u64>, max_level: u32) -> u64 {
+    explicit.unwrap_or_else(|| {
+        let cells = ((LEVEL0_RES as u64) << max_level).pow(2);
+        (4 * cells).clamp(1_000_000, 32_000_000)
+    })
+}
+
+fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: u64) -> AppResult<References> {
     if args.no_reference {
         return Ok(References { main: None, other: None });
     }
@@ -218,13 +242,14 @@ fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32) -> AppRes
         let p = RefParams {
             camera: Some(args.camera.clone()),
             paths,
-            photons: args.reference_photons,
+            photons,
             width,
             height,
             progress: true,
             ..RefParams::default()
         };
         let t = Instant::now();
+        eprintln!("reference {:?} for {}: {photons} photons (cached once built)", paths, scene.display());
         let img = reference::cached(scene, &p)?;
         eprintln!("reference {:?} for {}: ready in {:.1} s", paths, scene.display(), t.elapsed().as_secs_f64());
         Ok::<_, AppError>(img)
@@ -280,13 +305,17 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             gbuffer_res: args.gbuffer_res,
             error_bound: args.error_bound,
             photon_budget_mib: args.photon_budget,
+            check_level: args.check_level,
+            flux_threshold: args.flux_threshold,
+            bvh_layout: args.bvh_layout,
             ..Settings::default()
         };
         let mut session = Session::open(&scene_args, base.clone())?;
         // Every timed frame runs every stage.
         session.renderer.reuse = false;
         device = format!("{} ({})", session.device().info.name, session.device().info.driver);
-        let refs = references(args, scene_path, session.width, session.height)?;
+        let photons = reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0));
+        let refs = references(args, scene_path, session.width, session.height, photons)?;
         // GPUs ramp their clocks up under load, and lavapipe compiles shaders on first use: render for a while
         // before the first timed point, or it comes out several times slower than the later ones.
         let warm = Instant::now();
@@ -347,8 +376,8 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     driven: if p.driven == Driven::Gpu { "gpu".into() } else { "cpu".into() },
                     photons: st.photons_total as u64,
                     rays_traced: last.transport.map(|t| t.rays_traced as u64),
-                    gpu_ms_median: median_of(&frames, |f| f.gpu_ms),
-                    frame_ms_median: median_of(&frames, |f| f.frame_ms),
+                    gpu_ms_median: median_of(&frames, |f| f.gpu_ms) + 0.0,
+                    frame_ms_median: median_of(&frames, |f| f.frame_ms) + 0.0,
                     rel_l1_64: m64.map(|m| m.rel_l1).unwrap_or(nan),
                     rel_l1_256: m256.map(|m| m.rel_l1).unwrap_or(nan),
                     flux_ratio: m64.map(|m| m.flux_ratio).unwrap_or(nan),
@@ -377,14 +406,14 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     }),
                 };
                 eprintln!(
-                    "{name} {key:<42} L{level:<2} {:>10} photons {:>11} rays  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {:.4}  256² {:.4}  flux {:.4}",
+                    "{name} {key:<42} L{level:<2} {:>10} photons {:>11} rays  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {}  256² {}  flux {}",
                     row.photons,
                     row.rays_traced.map_or_else(|| "–".to_string(), |n| n.to_string()),
                     row.gpu_ms_median,
                     row.frame_ms_median,
-                    row.rel_l1_64,
-                    row.rel_l1_256,
-                    row.flux_ratio
+                    bench_report::num(row.rel_l1_64, 4),
+                    bench_report::num(row.rel_l1_256, 4),
+                    bench_report::num(row.flux_ratio, 4)
                 );
                 let slow = row.frame_ms_median > args.max_frame_s * 1e3;
                 rows.push(row);
@@ -396,11 +425,25 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
         }
         crate::commands::validation_verdict(&session)?;
     }
-    let doc = json!({"device": device, "args": format!("{args:?}"), "rows": rows});
+    let doc = json!({"device": device, "args": args, "reference_photons": reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0)), "rows": rows});
     if let Some(p) = &args.json {
         image_io::write_text(p, &serde_json::to_string_pretty(&doc).unwrap_or_default())?;
     }
     write_reports(args, &device, &rows)?;
     println!("{}", bench_report::markdown_table(&rows));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reference_photons_follow_the_sweep() {
+        assert_eq!(reference_photons(None, 2), 1_000_000);
+        assert_eq!(reference_photons(None, 3), 1_048_576);
+        assert_eq!(reference_photons(None, 5), 16_777_216);
+        assert_eq!(reference_photons(None, 8), 32_000_000);
+        assert_eq!(reference_photons(Some(5), 8), 5);
+    }
 }

@@ -10,7 +10,7 @@
 //!   branch), null for two-interface;
 //! - `gpu_ms_median` (summed GPU stages of one frame) and `frame_ms_median` (wall time of one frame), over frames;
 //! - the metric against the reference (crate::metrics): `rel_l1_64`, `rel_l1_256`, `flux_ratio`, and
-//!   `peak_offset_m` (added to the brief's shape, because DESIGN.md reports all three; defaults to 0 when absent);
+//!   `peak_offset_m` (added to the brief's shape, because docs/design.md reports all three; defaults to 0 when absent);
 //! - `extra`: anything else (per-stage times, overflow counts), free-form JSON, defaults to null.
 
 use crate::error::{AppError, AppResult};
@@ -84,6 +84,24 @@ fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
+/// A number with `prec` decimals, "–" when missing (NaN: no reference, or a value that does not exist), and
+/// never "-0.0".
+pub fn num(v: f64, prec: usize) -> String {
+    if v.is_nan() {
+        "–".to_string()
+    } else {
+        format!("{:.prec$}", v + 0.0)
+    }
+}
+
+/// The row's traversal work-group side ("8x8"), "–" for dense (no traversal).
+pub fn wg_label(r: &BenchRow) -> String {
+    match (r.method.as_str(), r.extra.get("traverse_wg").and_then(|v| v.as_u64())) {
+        ("adaptive", Some(w)) => format!("{w}x{w}"),
+        _ => "–".to_string(),
+    }
+}
+
 fn rays(r: &BenchRow) -> String {
     r.rays_traced.map_or_else(|| "–".to_string(), |n| n.to_string())
 }
@@ -91,12 +109,12 @@ fn rays(r: &BenchRow) -> String {
 /// A GitHub-flavoured Markdown table of the rows, in their order.
 pub fn markdown_table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| scene | transport | method | metric | level | eq. res | driven | photons | rays traced | GPU ms | frame ms | rel-L1 64² | rel-L1 256² | flux ratio | peak offset (m) |\n\
-         |---|---|---|---|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|\n",
+        "| scene | transport | method | metric | level | eq. res | driven | wg | photons | rays traced | GPU ms | frame ms | rel-L1 64² | rel-L1 256² | flux ratio | peak offset (m) |\n\
+         |---|---|---|---|--:|--:|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             cell(&r.scene),
             cell(&r.transport),
             cell(&r.method),
@@ -104,14 +122,15 @@ pub fn markdown_table(rows: &[BenchRow]) -> String {
             r.level,
             r.equivalent_res,
             cell(&r.driven),
+            wg_label(r),
             r.photons,
             rays(r),
-            r.gpu_ms_median,
-            r.frame_ms_median,
-            r.rel_l1_64,
-            r.rel_l1_256,
-            r.flux_ratio,
-            r.peak_offset_m,
+            num(r.gpu_ms_median, 3),
+            num(r.frame_ms_median, 3),
+            num(r.rel_l1_64, 4),
+            num(r.rel_l1_256, 4),
+            num(r.flux_ratio, 4),
+            num(r.peak_offset_m, 4),
         ));
     }
     s
@@ -450,19 +469,19 @@ pub fn transport_table(rows: &[BenchRow]) -> String {
             continue;
         };
         out.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {:.2} | {:.2} | {:.2}x | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {}x | {} | {} | {} | {} |\n",
             cell(&e.scene),
             cell(&e.method_label()),
             e.level,
             e.photons,
             rays(e),
-            t.gpu_ms_median,
-            e.gpu_ms_median,
-            e.gpu_ms_median / t.gpu_ms_median,
-            t.rel_l1_64,
-            e.rel_l1_64,
-            t.flux_ratio,
-            e.flux_ratio,
+            num(t.gpu_ms_median, 2),
+            num(e.gpu_ms_median, 2),
+            num(e.gpu_ms_median / t.gpu_ms_median, 2),
+            num(t.rel_l1_64, 4),
+            num(e.rel_l1_64, 4),
+            num(t.flux_ratio, 4),
+            num(e.flux_ratio, 4),
         ));
     }
     out
@@ -546,7 +565,7 @@ mod tests {
         assert!(lines[0].starts_with("| scene | transport | method | metric | level |"));
         assert_eq!(
             lines[2],
-            "| sphere | two-interface | dense | – | 3 | 512 | gpu | 262144 | – | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
+            "| sphere | two-interface | dense | – | 3 | 512 | gpu | – | 262144 | – | 40.000 | 60.000 | 0.0500 | 0.1000 | 0.9900 | 0.0100 |"
         );
         assert!(lines[4].contains("| two-interface | adaptive | max-error | 3 |"));
         let cols = lines[0].matches('|').count();
@@ -582,6 +601,13 @@ mod tests {
         );
         assert_eq!(s[0].1, vec![(5.0, 0.2), (40.0, 0.05)]);
         assert_eq!(s[2].1.len(), 1, "the NaN row is left out");
+    }
+
+    #[test]
+    fn missing_values_are_dashes_and_zero_has_no_sign() {
+        assert_eq!(num(f64::NAN, 4), "–");
+        assert_eq!(num(-0.0, 1), "0.0");
+        assert_eq!(num(0.12345, 3), "0.123");
     }
 
     #[test]

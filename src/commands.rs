@@ -47,7 +47,7 @@ pub struct MethodArgs {
     #[arg(long, value_enum, default_value_t = Settings::default().splat)]
     pub splat: Splat,
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
-    #[arg(long, default_value_t = Settings::default().flux_threshold)]
+    #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
     /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).
     #[arg(long, value_enum, default_value_t = BvhLayout::Pair)]
@@ -55,17 +55,18 @@ pub struct MethodArgs {
     /// Photon source: dense grid, or adaptive traversal.
     #[arg(long, value_enum, default_value_t = Method::Adaptive)]
     pub method: Method,
-    /// Adaptive stopping metric.
-    #[arg(long, value_enum, default_value_t = Metric::MaxLevel)]
-    pub metric: Metric,
+    /// Adaptive stopping metric [default: max-level] (adaptive only; dense warns that it ignores it).
+    #[arg(long, value_enum)]
+    pub metric: Option<Metric>,
     /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, allow_negative_numbers = true, value_parser = level_arg)]
     pub level: u32,
-    /// Who writes the traversal's dispatch arguments: the GPU (indirect) or the host (readback per level).
-    #[arg(long, value_enum, default_value_t = Driven::Gpu)]
-    pub driven: Driven,
+    /// Who writes the traversal's dispatch arguments: the GPU (indirect) or the host (readback per level)
+    /// [default: gpu] (adaptive only; dense warns that it ignores it).
+    #[arg(long, value_enum)]
+    pub driven: Option<Driven>,
     /// Photon buffer size in MiB (batches are split to fit).
-    #[arg(long, default_value_t = 64.0)]
+    #[arg(long, default_value_t = 64.0, allow_negative_numbers = true)]
     pub photon_budget: f64,
     /// Side of the light-view refractor g-buffers (power of two).
     #[arg(long, default_value_t = 1024)]
@@ -74,10 +75,10 @@ pub struct MethodArgs {
     #[arg(long, default_value_t = 1024)]
     pub caustic_res: u32,
     /// Max-error metric: convergence bound in caustic-map texels.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub error_bound: f32,
     /// Max-error metric: first level checked for convergence.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = level_arg)]
     pub check_level: u32,
     /// Traversal work-group side (1, 2, 4, 8 or 16).
     #[arg(long, default_value_t = TRAVERSE_WG)]
@@ -96,6 +97,17 @@ pub struct MethodArgs {
     pub debug_min_level: u32,
 }
 
+/// A level flag (`--level`, `--check-level`): an integer in 0..MAX_LEVELS, with a range message for anything else
+/// (negative numbers included).
+pub fn level_arg(s: &str) -> Result<u32, String> {
+    let range = format!("must be an integer in 0..={}", MAX_LEVELS - 1);
+    match s.trim().parse::<i64>() {
+        Ok(v) if (0..MAX_LEVELS as i64).contains(&v) => Ok(v as u32),
+        Ok(v) => Err(format!("{v}: {range}")),
+        Err(_) => Err(format!("`{s}`: {range}")),
+    }
+}
+
 impl MethodArgs {
     pub fn settings(&self) -> AppResult<Settings> {
         let s = Settings {
@@ -104,9 +116,9 @@ impl MethodArgs {
             flux_threshold: self.flux_threshold,
             bvh_layout: self.bvh_layout,
             method: self.method,
-            metric: self.metric,
+            metric: self.metric.unwrap_or(Metric::MaxLevel),
             level: self.level,
-            driven: self.driven,
+            driven: self.driven.unwrap_or(Driven::Gpu),
             photon_budget_mib: self.photon_budget,
             gbuffer_res: self.gbuffer_res,
             caustic_res: self.caustic_res,
@@ -120,6 +132,13 @@ impl MethodArgs {
             ..Settings::default()
         };
         s.validate()?;
+        if s.method == Method::Dense {
+            for (flag, given) in [("--metric", self.metric.is_some()), ("--driven", self.driven.is_some())] {
+                if given {
+                    eprintln!("warning: {flag} applies to --method adaptive only; --method dense ignores it");
+                }
+            }
+        }
         if s.method == Method::Dense && s.level > 12 {
             return Err(AppError::BadInput(format!(
                 "--level {}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper levels",
@@ -182,7 +201,12 @@ pub struct Session {
     pub height: u32,
     pub renderer: Renderer,
     pub validation: bool,
+    /// When set (see [`Session::warn_if_slow`]), [`Session::frame`] prints the elapsed time every few seconds.
+    pub slow_frame_s: Option<f64>,
 }
+
+/// Frames estimated to take longer than this (seconds) get a warning and a progress line.
+pub const SLOW_FRAME_S: f64 = 5.0;
 
 impl Session {
     pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
@@ -193,18 +217,57 @@ impl Session {
         let desc = ContextDesc::from_env();
         let ctx = Context::headless(&desc)?;
         let renderer = Renderer::new(ctx.device, scene, settings)?;
-        Ok(Session { scene_path: path, camera, width, height, renderer, validation: desc.validation })
+        Ok(Session {
+            scene_path: path,
+            camera,
+            width,
+            height,
+            renderer,
+            validation: desc.validation,
+            slow_frame_s: None,
+        })
     }
 
     pub fn device(&self) -> &Arc<vk::Device> {
         &self.renderer.device
     }
 
+    /// A rough upper bound of one frame's time in seconds, from its photon count: every cell of the level's grid
+    /// (dense and adaptive max-level emit at most that many) times a per-photon cost measured on lavapipe
+    /// (docs/results.md: about 0.25 µs per photon for two-interface, 6 µs for exact transport, whose photons
+    /// become several rays each), 100× less on a GPU. `None` for max-error, whose count is not known ahead.
+    pub fn estimate_frame_s(&self) -> Option<f64> {
+        frame_estimate_s(&self.renderer.settings, self.device().info.kind == ash::vk::PhysicalDeviceType::CPU)
+    }
+
+    /// Warn when a frame is estimated to take longer than [`SLOW_FRAME_S`], and turn on progress lines.
+    pub fn warn_if_slow(&mut self) {
+        if let Some(est) = self.estimate_frame_s().filter(|&t| t > SLOW_FRAME_S) {
+            let s = &self.renderer.settings;
+            eprintln!(
+                "warning: level {} emits up to {} photons ({}²); a frame may take up to about {:.0} s on {}; \
+                 a lower --level (or --method adaptive --metric max-error) is faster",
+                s.level,
+                ((LEVEL0_RES as u64) << s.level).pow(2),
+                (LEVEL0_RES as u64) << s.level,
+                est,
+                self.device().info.name
+            );
+            self.slow_frame_s = Some(est);
+        }
+    }
+
     /// Render one frame; with GPU-driven batching, re-render with more slots until no tile is left pending.
     pub fn frame(&mut self, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
         let view = self.renderer.camera_view(&self.camera, self.width, self.height);
         loop {
-            let (report, img) = self.renderer.render(&view, aov)?;
+            let (report, img) = match self.slow_frame_s {
+                None => self.renderer.render(&view, aov)?,
+                Some(est) => {
+                    let renderer = &mut self.renderer;
+                    with_progress(est, || renderer.render(&view, aov))?
+                }
+            };
             match self.renderer.adapt_batch_slots(&report) {
                 SlotVerdict::Complete => return Ok((report, img)),
                 SlotVerdict::OutOfSlots => {
@@ -251,6 +314,37 @@ fn check_output(aov: Aov, out: &Path) -> AppResult<()> {
     Ok(())
 }
 
+/// See [`Session::estimate_frame_s`]; `cpu`: the device is a CPU driver (lavapipe).
+pub fn frame_estimate_s(s: &Settings, cpu: bool) -> Option<f64> {
+    if s.method == Method::Adaptive && s.metric == Metric::MaxError {
+        return None;
+    }
+    let cells = ((LEVEL0_RES as f64) * (1u64 << s.level) as f64).powi(2);
+    let per_photon_us = match s.transport {
+        Transport::Exact => 6.0,
+        Transport::TwoInterface => 0.25,
+    };
+    Some(cells * per_photon_us * 1e-6 / if cpu { 1.0 } else { 100.0 })
+}
+
+/// Run `work`, printing the elapsed time every 5 s against the estimate `est` seconds.
+fn with_progress<T>(est: f64, work: impl FnOnce() -> T) -> T {
+    let (done, wait) = std::sync::mpsc::channel::<()>();
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            let start = std::time::Instant::now();
+            while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
+                wait.recv_timeout(std::time::Duration::from_secs(5))
+            {
+                eprintln!("rendering: {:.0} s elapsed (estimated at most {est:.0} s)", start.elapsed().as_secs_f64());
+            }
+        });
+        let out = work();
+        let _ = done.send(());
+        out
+    })
+}
+
 pub fn to_rgb(data: &AovData) -> Option<RgbImage> {
     match data {
         AovData::Float { width, height, rgba } => {
@@ -272,7 +366,7 @@ fn level_rows(report: &FrameReport, max_level: u32) -> Vec<Value> {
         .collect()
 }
 
-/// The stats JSON of DESIGN.md, over `frames` (the per-frame counts are the last frame's).
+/// The stats JSON of docs/design.md, over `frames` (the per-frame counts are the last frame's).
 pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Value {
     let r = &session.renderer;
     let s = &r.settings;
@@ -305,7 +399,9 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "overflow_events": st.map(|x| x.batches_aborted + (x.overflow_dropped > 0) as u32).unwrap_or(0),
         "overflow_dropped_entries": st.map(|x| x.overflow_dropped).unwrap_or(0),
         "unfinished_tiles": last.unfinished_tiles,
-        "gpu_ms": profiler::summaries_json(&summaries),
+        "gpu_ms": profiler::gpu_json(&summaries),
+        "wall_ms": profiler::summary_json(&summaries, "frame_wall"),
+        "cpu_ms": profiler::summary_json(&summaries, "cpu_record"),
         "gpu_total_ms": stage("gpu_total"),
         "frame_ms": stage("frame_wall"),
         "cpu_record_ms": stage("cpu_record"),
@@ -379,6 +475,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
     session.renderer.reuse = !args.no_reuse;
+    session.warn_if_slow();
     let mut reports = Vec::new();
     let mut image = None;
     for i in 0..args.frames {
@@ -400,7 +497,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
                 let flux: f64 = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
                 extra.insert("aov_flux_w".into(), json!(flux));
             }
-            image_io::write_exr(&args.out, &rgb)?;
+            image_io::write_exr_meta(&args.out, &rgb, &exr_meta(&session, &args.aov))?;
         }
     }
     if let Some(last) = reports.last().filter(|r| r.guard_intact.is_some()) {
@@ -421,6 +518,30 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
         session.device().info.name
     );
     validation_verdict(&session)
+}
+
+/// The EXR header metadata of a rendered AOV (docs/design.md, "CLI contract").
+fn exr_meta(session: &Session, aov: &str) -> image_io::ExrMeta {
+    let s = &session.renderer.settings;
+    let mut m = image_io::ExrMeta::new();
+    m.insert("scene".into(), session.scene_path.display().to_string());
+    m.insert("scene_hash".into(), image_io::file_hash(&session.scene_path));
+    m.insert("camera".into(), session.camera.name.clone());
+    m.insert("camera_kind".into(), camera_kind(&session.camera).into());
+    m.insert("aov".into(), aov.into());
+    m.insert("units".into(), "W/m^2".into());
+    m.insert("transport".into(), json!(s.transport).as_str().unwrap_or_default().into());
+    m.insert("method".into(), json!(s.method).as_str().unwrap_or_default().into());
+    m.insert("level".into(), s.level.to_string());
+    m
+}
+
+/// "orthographic" or "perspective".
+pub fn camera_kind(c: &Camera) -> &'static str {
+    match c.projection {
+        Projection::Orthographic { .. } => "orthographic",
+        Projection::Perspective { .. } => "perspective",
+    }
 }
 
 /// Any validation message fails the command (after its outputs are written).
@@ -460,6 +581,7 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
     let mut session = Session::open(&args.scene, settings)?;
     // The profiler times every stage: nothing is reused.
     session.renderer.reuse = false;
+    session.warn_if_slow();
     for _ in 0..args.warmup {
         session.frame(None)?;
     }
@@ -498,4 +620,30 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
         eprintln!("wrote {}", p.display());
     }
     validation_verdict(&session)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slow_frames_are_foreseen() {
+        let at = |method, level, transport| Settings { method, level, transport, ..Settings::default() };
+        let dense8 = frame_estimate_s(&at(Method::Dense, 8, Transport::TwoInterface), true).unwrap();
+        assert!(dense8 > SLOW_FRAME_S, "dense level 8 on lavapipe: {dense8} s");
+        let dense2 = frame_estimate_s(&at(Method::Dense, 2, Transport::TwoInterface), true).unwrap();
+        assert!(dense2 < SLOW_FRAME_S, "{dense2}");
+        // The README's default render (exact, level 5) takes about 22 s on lavapipe.
+        let exact5 = frame_estimate_s(&at(Method::Dense, 5, Transport::Exact), true).unwrap();
+        assert!((10.0..60.0).contains(&exact5), "{exact5}");
+        assert!(frame_estimate_s(&at(Method::Dense, 5, Transport::Exact), false).unwrap() < SLOW_FRAME_S);
+    }
+
+    #[test]
+    fn level_arg_gives_the_range() {
+        assert_eq!(level_arg("3"), Ok(3));
+        for bad in ["-1", "99", "x"] {
+            assert!(level_arg(bad).unwrap_err().contains("must be an integer in 0..="), "{bad}");
+        }
+    }
 }

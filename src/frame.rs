@@ -1,4 +1,4 @@
-//! One frame, in its fixed pass order, with the barriers that join the passes (DESIGN.md "Pipeline"):
+//! One frame, in its fixed pass order, with the barriers that join the passes (docs/design.md "Pipeline"):
 //!
 //! 1. light-view g-buffers: refractor front and back (photon view), receivers and shadow depth (receiver view)
 //! 2. coverage pyramid
@@ -514,7 +514,7 @@ impl Ctx<'_> {
         });
     }
 
-    /// Exact transport of the batch's emitted photons, in waves (DESIGN.md step 5): every wave is one
+    /// Exact transport of the batch's emitted photons, in waves (docs/design.md step 5): every wave is one
     /// vkCmdDispatchIndirect whose arguments the transport pass wrote from the previous wave's appends. The host
     /// records MAX_INTERACTIONS + 1 waves; those after the queue empties dispatch zero work groups.
     fn exact_transport(&self, rec: &mut Rec, commit: bool) {

@@ -58,16 +58,44 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>
 }
 
 pub fn write_exr(path: &Path, img: &RgbImage) -> AppResult<()> {
+    write_exr_meta(path, img, &ExrMeta::new())
+}
+
+/// Metadata of an EXR this program wrote: `caustics.*` string attributes of its header (without the prefix):
+/// `scene_hash`, `camera`, `camera_kind`, `aov`, `units`, `transport`, `level`, ... (docs/design.md).
+pub type ExrMeta = std::collections::BTreeMap<String, String>;
+
+/// The prefix of the header attributes that hold [`ExrMeta`].
+pub const META_PREFIX: &str = "caustics.";
+
+/// Write an RGB float EXR with `meta` as `caustics.<key>` text attributes in its header.
+pub fn write_exr_meta(path: &Path, img: &RgbImage, meta: &ExrMeta) -> AppResult<()> {
+    use exr::meta::attribute::{AttributeValue, Text};
+    use exr::prelude::*;
     write_atomic(path, |tmp| {
-        exr::prelude::write_rgb_file(tmp, img.width as usize, img.height as usize, |x, y| {
-            let p = img.data[y * img.width as usize + x];
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let p: [f32; 3] = img.data[y * img.width as usize + x];
             (p[0], p[1], p[2])
-        })
-        .map_err(|e| e.to_string())
+        });
+        let mut image = Image::from_channels((img.width as usize, img.height as usize), channels);
+        for (k, v) in meta {
+            let (Some(key), Some(value)) = (Text::new_or_none(format!("{META_PREFIX}{k}")), Text::new_or_none(v))
+            else {
+                return Err(format!("EXR attribute {k} = {v}: not representable as EXR text"));
+            };
+            image.layer_data.attributes.other.insert(key, AttributeValue::Text(value));
+        }
+        image.write().to_file(tmp).map_err(|e| e.to_string())
     })
 }
 
 pub fn read_exr(path: &Path) -> AppResult<RgbImage> {
+    read_exr_meta(path).map(|(img, _)| img)
+}
+
+/// Read an EXR's first RGB(A) layer and its `caustics.*` header attributes (empty for other files).
+pub fn read_exr_meta(path: &Path) -> AppResult<(RgbImage, ExrMeta)> {
+    use exr::meta::attribute::AttributeValue;
     use exr::prelude::*;
     let image = read_first_rgba_layer_from_file(
         path,
@@ -78,7 +106,25 @@ pub fn read_exr(path: &Path) -> AppResult<RgbImage> {
         },
     )
     .map_err(|e| AppError::BadInput(format!("{}: cannot read EXR: {e}", path.display())))?;
-    Ok(image.layer_data.channel_data.pixels)
+    let mut meta = ExrMeta::new();
+    let layer = &image.layer_data.attributes.other;
+    for (k, v) in layer.iter().chain(image.attributes.other.iter()) {
+        if let (Some(key), AttributeValue::Text(t)) = (k.to_string().strip_prefix(META_PREFIX), v) {
+            meta.insert(key.to_string(), t.to_string());
+        }
+    }
+    Ok((image.layer_data.channel_data.pixels, meta))
+}
+
+/// FNV-1a (64 bit) of a file's bytes, as 16 hex digits: the scene hash of [`ExrMeta`].
+pub fn file_hash(path: &Path) -> String {
+    let bytes = std::fs::read(path).unwrap_or_default();
+    let mut h: u64 = 0xcbf29ce484222325;
+    for b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x100000001b3);
+    }
+    format!("{h:016x}")
 }
 
 /// Write 8-bit RGBA (already tone-mapped and sRGB-encoded).

@@ -1,4 +1,5 @@
 //! caustics: real-time refractive caustics with adaptive caustic maps on Vulkan.
+#![recursion_limit = "256"]
 pub mod bench;
 pub mod bench_report;
 pub mod bvh;

@@ -4,8 +4,26 @@
 use caustics::error::AppResult;
 use clap::{Parser, Subcommand};
 
+const ENVIRONMENT: &str = "\
+Environment:
+  CAUSTICS_DEVICE      Vulkan device: cpu (lavapipe), gpu, an index into the usable devices (digits only), or a
+                       device's name or a substring of exactly one device's name. Default: a GPU if there is
+                       one, else lavapipe.
+  CAUSTICS_VALIDATION  1: Khronos validation layers (with synchronization validation) on, and any validation
+                       message fails the command; 0: off. Default: on in debug builds, off in release builds.
+  CAUSTICS_CACHE_DIR   Where `bench` caches its CPU references. Default: $CARGO_TARGET_DIR/reference-cache, else
+                       target/reference-cache.
+
+Exit codes: 0 success, 2 bad input (an argument, a scene or an image; the message names it), 1 anything else.
+Docs: README.md, docs/design.md (units, metric, contracts), docs/scenes.md (every scene key).";
+
 #[derive(Parser, Debug)]
-#[command(name = "caustics", version, about = "Real-time refractive caustics: adaptive caustic maps on Vulkan")]
+#[command(
+    name = "caustics",
+    version,
+    about = "Real-time refractive caustics: adaptive caustic maps on Vulkan",
+    after_help = ENVIRONMENT
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -15,7 +33,7 @@ struct Cli {
 enum Command {
     /// Render a frame headless and write an AOV (beauty PNG, caustics or direct EXR in W/m²).
     Render(caustics::commands::RenderArgs),
-    /// Render frames and print per-stage GPU timings (timestamp queries).
+    /// Render frames and print per-stage GPU timings (timestamp queries); takes the method options of render.
     Profile(caustics::commands::ProfileArgs),
     /// Exact CPU photon tracer: ground truth for orthographic cameras.
     Reference(caustics::reference::ReferenceArgs),

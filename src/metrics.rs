@@ -1,4 +1,4 @@
-//! The error metric used everywhere (`caustics compare`, the bench, the tests), DESIGN.md "Ground truth and
+//! The error metric used everywhere (`caustics compare`, the bench, the tests), docs/design.md "Ground truth and
 //! error":
 //!
 //! 1. Both images are reduced to one plane of irradiance, the **mean of the R, G and B channels** (all current
@@ -8,9 +8,12 @@
 //!    area-weighted, so a source pixel that straddles two target pixels is split between them by overlap area.
 //!    Sizes need not be multiples of one another, and the filter preserves Σ E · pixel area exactly.
 //! 3. On the filtered planes (E under test, E_ref the reference): rel-L1 = Σ|E − E_ref| / Σ E_ref,
-//!    flux ratio = Σ E / Σ E_ref, and the peak offset: the distance in meters between the two argmax pixels'
-//!    centers, given the physical width `extent_m` of the image (2.0 m for the canonical `top` camera; square
-//!    pixels assumed).
+//!    flux ratio = Σ E / Σ E_ref, and the peak offset: the distance in meters between the two planes' peak
+//!    centroids (the E-weighted centroid of the pixels at or above half the plane's maximum), given the physical
+//!    width `extent_m` of the image (2.0 m for the canonical `top` camera; square pixels assumed).
+//! 4. `caustics compare` refuses (exit 2) a reference that is all zero or holds a non-finite value, an image
+//!    under test with a non-finite value, and a pair whose EXR metadata names different cameras, camera kinds or
+//!    AOVs; it warns about other metadata differences (the scene file's hash, the units, the paths).
 
 use crate::error::{AppError, AppResult};
 use crate::image_io::{self, RgbImage};
@@ -26,7 +29,8 @@ pub struct Metrics {
     pub rel_l1: f64,
     /// Σ E / Σ E_ref (1 when both are empty, infinite when only the reference is).
     pub flux_ratio: f64,
-    /// Distance between the argmax pixels of the filtered images, meters.
+    /// Distance between the peak centroids ([`peak_centroid`]) of the filtered images, meters (0 when both are
+    /// empty, NaN when only one is).
     pub peak_offset_m: f64,
     /// Σ E and Σ E_ref over the filtered planes.
     pub sum: f64,
@@ -79,14 +83,24 @@ pub fn box_filter(plane: &[f64], w: usize, h: usize, ow: usize, oh: usize) -> Ve
     out
 }
 
-fn argmax(v: &[f64]) -> usize {
-    let mut best = 0;
+/// The peak centroid of a `w`-wide plane, in pixels (x, y of pixel centers): the E-weighted centroid of the
+/// pixels at or above half the maximum. `None` when no pixel is positive. Unlike the argmax, it is exactly the
+/// same for identical planes and moves continuously as the caustic's core moves, instead of jumping between
+/// near-equal pixels.
+pub fn peak_centroid(v: &[f64], w: usize) -> Option<(f64, f64)> {
+    let max = v.iter().copied().filter(|x| x.is_finite()).fold(0.0f64, f64::max);
+    if max <= 0.0 {
+        return None;
+    }
+    let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
     for (i, &x) in v.iter().enumerate() {
-        if x > v[best] || (v[best].is_nan() && !x.is_nan()) {
-            best = i;
+        if x.is_finite() && x >= 0.5 * max {
+            sx += x * ((i % w) as f64 + 0.5);
+            sy += x * ((i / w) as f64 + 0.5);
+            sw += x;
         }
     }
-    best
+    Some((sx / sw, sy / sw))
 }
 
 /// The comparison size for `res` columns: (res, round(res · h / w)), both at least 1.
@@ -114,17 +128,13 @@ pub fn compare(a: &RgbImage, reference: &RgbImage, res: u32, extent_m: f32) -> M
             f64::INFINITY
         }
     };
-    let (pa, pb) = (argmax(&fa), argmax(&fb));
     let pixel_m = extent_m as f64 / ow as f64;
-    let (dx, dy) = ((pa % ow) as f64 - (pb % ow) as f64, (pa / ow) as f64 - (pb / ow) as f64);
-    Metrics {
-        res: ow as u32,
-        rel_l1: ratio(l1, 0.0),
-        flux_ratio: ratio(sum, 1.0),
-        peak_offset_m: (dx * dx + dy * dy).sqrt() * pixel_m,
-        sum,
-        sum_ref,
-    }
+    let peak_offset_m = match (peak_centroid(&fa, ow), peak_centroid(&fb, ow)) {
+        (Some((ax, ay)), Some((bx, by))) => ((ax - bx).powi(2) + (ay - by).powi(2)).sqrt() * pixel_m,
+        (None, None) => 0.0,
+        _ => f64::NAN,
+    };
+    Metrics { res: ow as u32, rel_l1: ratio(l1, 0.0), flux_ratio: ratio(sum, 1.0), peak_offset_m, sum, sum_ref }
 }
 
 /// `caustics compare A.exr B.exr`: A is the image under test, B the reference.
@@ -167,6 +177,68 @@ pub struct CompareReport {
     pub failures: Vec<String>,
 }
 
+/// What makes a comparison meaningless is refused (bad input, exit 2): a reference that is all zero or not
+/// finite (every image would score perfectly, or every metric be NaN), a non-finite image under test, and a pair
+/// whose metadata names different cameras, camera kinds or AOVs. Other metadata differences are warned about.
+pub fn check_pair(
+    pa: &std::path::Path,
+    a: &RgbImage,
+    ma: &image_io::ExrMeta,
+    pb: &std::path::Path,
+    b: &RgbImage,
+    mb: &image_io::ExrMeta,
+) -> AppResult<()> {
+    let non_finite = |img: &RgbImage| img.data.iter().position(|p| !p.iter().all(|x| x.is_finite()));
+    for (path, img, what) in [(pb, b, "reference"), (pa, a, "image under test")] {
+        if let Some(i) = non_finite(img) {
+            let (x, y) = (i as u32 % img.width, i as u32 / img.width);
+            return Err(AppError::BadInput(format!(
+                "{}: the {what} holds a non-finite value (pixel {x}, {y}: {:?})",
+                path.display(),
+                img.data[i]
+            )));
+        }
+    }
+    if b.data.iter().all(|p| p.iter().all(|&x| x == 0.0)) {
+        return Err(AppError::BadInput(format!(
+            "{}: the reference is all zero: every error metric would be meaningless against it",
+            pb.display()
+        )));
+    }
+    for key in ["camera", "camera_kind", "aov"] {
+        if let (Some(x), Some(y)) = (ma.get(key), mb.get(key)) {
+            if x != y {
+                return Err(AppError::BadInput(format!(
+                    "{} has {key} `{x}` but {} has {key} `{y}`: the images do not show the same thing",
+                    pa.display(),
+                    pb.display()
+                )));
+            }
+        }
+    }
+    // A render against a CPU reference differs in transport, level and photons by design.
+    let reference_pair = ma.get("transport").map(String::as_str) == Some("reference")
+        || mb.get("transport").map(String::as_str) == Some("reference");
+    let expected = ["camera", "camera_kind", "aov", "transport", "level", "photons", "method", "paths", "seed"];
+    let keys: std::collections::BTreeSet<&String> = ma.keys().chain(mb.keys()).collect();
+    for key in keys {
+        // The scene's path may be spelled differently for the same file: its hash decides.
+        if key == "scene" || (reference_pair && expected.contains(&key.as_str())) {
+            continue;
+        }
+        if let (Some(x), Some(y)) = (ma.get(key), mb.get(key)) {
+            if x != y {
+                eprintln!("warning: {} has {key} `{x}` but {} has `{y}`", pa.display(), pb.display());
+            }
+        }
+    }
+    if ma.is_empty() != mb.is_empty() {
+        let none = if ma.is_empty() { pa } else { pb };
+        eprintln!("warning: {} has no caustics metadata: its camera and AOV cannot be checked", none.display());
+    }
+    Ok(())
+}
+
 pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     if args.res == 0 {
         return Err(AppError::BadInput("--res: must be at least 1".into()));
@@ -174,8 +246,9 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     if !(args.extent.is_finite() && args.extent > 0.0) {
         return Err(AppError::BadInput(format!("--extent: must be a positive width in meters, got {}", args.extent)));
     }
-    let a = image_io::read_exr(&args.a)?;
-    let b = image_io::read_exr(&args.b)?;
+    let (a, meta_a) = image_io::read_exr_meta(&args.a)?;
+    let (b, meta_b) = image_io::read_exr_meta(&args.b)?;
+    check_pair(&args.a, &a, &meta_a, &args.b, &b, &meta_b)?;
     let (ra, rb) = (a.width as f64 / a.height as f64, b.width as f64 / b.height as f64);
     if ((ra - rb) / rb).abs() > 1e-3 {
         return Err(AppError::BadInput(format!(

@@ -53,6 +53,22 @@ pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
     out
 }
 
+/// The host-side entries of [`stage_summaries`]: wall-clock time of a frame and host command recording. They are
+/// not GPU time, so the stats keep them out of `gpu_ms` (as `wall_ms` and `cpu_ms`).
+pub const HOST_STAGES: [&str; 2] = ["frame_wall", "cpu_record"];
+
+/// `gpu_ms`: the GPU stages (timestamp queries) and their sum `gpu_total`, without the host entries.
+pub fn gpu_json(s: &[(String, Summary)]) -> Value {
+    let gpu: Vec<(String, Summary)> = s.iter().filter(|(l, _)| !HOST_STAGES.contains(&l.as_str())).cloned().collect();
+    summaries_json(&gpu)
+}
+
+/// One entry's summary as JSON (zeros when absent).
+pub fn summary_json(s: &[(String, Summary)], name: &str) -> Value {
+    let v = s.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
+    json!({"mean": v.mean, "median": v.median, "min": v.min, "max": v.max})
+}
+
 pub fn summaries_json(s: &[(String, Summary)]) -> Value {
     let mut m = serde_json::Map::new();
     for (l, v) in s {

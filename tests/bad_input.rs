@@ -152,3 +152,9 @@ fn no_vulkan_device_exits_1_with_hint() {
     assert_no_output(&out);
     assert!(!Path::new(&out).exists());
 }
+
+#[test]
+fn unknown_light_kind_is_reported_before_missing_fields() {
+    let text = SCENE.replace("kind = \"spot\"", "kind = \"area\"").replace("intensity = 1.0\n", "");
+    expect_bad("light_kind_first", &text, &[], &["{scene}:2: light[0].kind", "unknown light kind `area`"]);
+}

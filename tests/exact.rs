@@ -1,5 +1,5 @@
 //! Exact transport on the GPU (`--transport exact`: rays through the scene BVH in waves, every glass path)
-//! against the analytic sphere figures (DESIGN.md) and the CPU reference with every path (`--paths all`).
+//! against the analytic sphere figures (docs/design.md) and the CPU reference with every path (`--paths all`).
 //! Tolerances come from measurement on lavapipe with the same settings; each test states what it measured.
 
 mod common;
@@ -50,7 +50,7 @@ fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
     compare(img, r, 64, 2.0)
 }
 
-/// Analytic sphere (DESIGN.md): every path puts 0.111370 W on the floor, a single external reflection 0.005078 W.
+/// Analytic sphere (docs/design.md): every path puts 0.111370 W on the floor, a single external reflection 0.005078 W.
 /// Measured at dense level 3 (206,336 photons; the refractor g-buffer is fitted to the 512² grid and its coverage
 /// dilated by a texel): caustics 0.111353 W (−0.015%), AOV 0.111374 W, one-interaction part 0.005087 W (+0.2%; the
 /// reflection comes mostly from the grazing rim). With a 1024² g-buffer: 206,104 photons, 0.111306 W, 0.005043 W.

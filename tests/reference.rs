@@ -1,4 +1,4 @@
-//! The CPU reference against the analytic figures of DESIGN.md ("Ground truth and error"), its energy account,
+//! The CPU reference against the analytic figures of docs/design.md ("Ground truth and error"), its energy account,
 //! determinism and convergence.
 //!
 //! Tolerances come from measurement: the spreads quoted below are the standard deviations over 6–8 seeds of
@@ -71,7 +71,7 @@ fn sphere_all(seed: u64, photons: u64) -> &'static RefOutput {
 
 #[test]
 fn all_paths_caustic_flux_matches_the_analytic_figure() {
-    // DESIGN.md: all paths through or off the glass put 0.111370 W on the floor.
+    // docs/design.md: all paths through or off the glass put 0.111370 W on the floor.
     // Measured (release, 8 seeds x 200k): sd 0.125% per run, mean bias -0.03% (the tessellated sphere); the two
     // runs averaged here have sd ~0.09%, so 0.5% is > 5 sd.
     let (a, b) = (sphere_all(1, 200_000), sphere_all(2, 200_000));
@@ -109,11 +109,11 @@ fn two_refraction_flux_and_radii_match_the_analytic_figures() {
     let radial = out.radial.as_ref().unwrap();
     let (r50, r90) = (radial.radius_containing(0.5).unwrap(), radial.radius_containing(0.9).unwrap());
     println!("two refractions: {flux:.6} W, r50 {r50:.6} m, r90 {r90:.6} m");
-    // DESIGN.md: 0.105980 W. Measured (6 seeds x 300k): sd 0.106%, bias -0.02%.
+    // docs/design.md: 0.105980 W. Measured (6 seeds x 300k): sd 0.106%, bias -0.02%.
     assert!(rel(flux, 0.105980) < 0.005, "two-refraction flux {flux} vs 0.105980");
     // The radial profile counts the same photons as the image.
     assert!(rel(radial.total_flux(), out.stats.energy_account.deposited_caustics) < 1e-9);
-    // DESIGN.md: half within r = 0.0188 m, 90% within 0.1373 m (both given to 3-4 digits). Measured (6 seeds x
+    // docs/design.md: half within r = 0.0188 m, 90% within 0.1373 m (both given to 3-4 digits). Measured (6 seeds x
     // 300k): r50 0.018796 m, sd 0.04%; r90 0.137366 m, sd 0.39% (the 90% radius lies in the sparse outer tail).
     // Tolerances: r50 1% (the figure's own rounding is ±0.27%), r90 2.5% (> 6 sd).
     assert!(rel(r50, 0.0188) < 0.01, "r50 {r50} vs 0.0188");
@@ -126,7 +126,7 @@ fn two_refraction_flux_and_radii_match_the_analytic_figures() {
 
 #[test]
 fn direct_flux_outside_the_shadow_matches_the_analytic_figure() {
-    // DESIGN.md: 0.678486 W of direct light on the floor outside the sphere's shadow (40° cone). No roulette is
+    // docs/design.md: 0.678486 W of direct light on the floor outside the sphere's shadow (40° cone). No roulette is
     // involved, so stratification works fully: measured (6 seeds x 100k) sd 0.028%, bias +0.01%. Tolerance 0.2%.
     let out = trace(sphere(), &params(100_000, 1, Aov::Direct, Paths::All, 64)).unwrap();
     check_account("direct", &out);
@@ -141,7 +141,7 @@ fn direct_flux_outside_the_shadow_matches_the_analytic_figure() {
 
 #[test]
 fn ior_2_4_matches_the_analytic_figures() {
-    // DESIGN.md, IOR 2.4: two refractions 0.071958 W, all paths 0.081566 W. One two-refractions run gives both
+    // docs/design.md, IOR 2.4: two refractions 0.071958 W, all paths 0.081566 W. One two-refractions run gives both
     // (all = deposited + filtered, see `all_paths_equal_two_refractions_plus_filtered`). Measured (6 seeds x
     // 300k): two refractions sd 0.143%, bias +0.09%; all paths sd 0.185%, bias +0.09%. At 600k photons here the
     // sd is ~0.1% and ~0.13%, so 0.5% is ~4 sd beyond the bias.

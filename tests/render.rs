@@ -1,4 +1,4 @@
-//! The dense pipeline end to end on the analytic sphere scene (DESIGN.md), in physical units.
+//! The dense pipeline end to end on the analytic sphere scene (docs/design.md), in physical units.
 
 mod common;
 use common::*;
@@ -11,7 +11,7 @@ fn sphere_caustic_flux_matches_two_refraction_figure() {
     let (s, _) =
         render(&dir, "c", SPHERE, &["--camera", "top", "--aov", "caustics", "--method", "dense", "--level", "3"]);
     let flux = s["aov_flux_w"].as_f64().unwrap();
-    // DESIGN.md: light refracted exactly twice puts 0.105980 W on the floor; a two-interface method can reach only
+    // docs/design.md: light refracted exactly twice puts 0.105980 W on the floor; a two-interface method can reach only
     // that part. Measured: 0.105989 W (+0.01%). The 1% band covers silhouette sampling at this grid and is
     // tight enough that losing a Fresnel factor (~4%) or the solid-angle weighting fails it.
     let rel = (flux - 0.105980) / 0.105980;
@@ -21,7 +21,7 @@ fn sphere_caustic_flux_matches_two_refraction_figure() {
     assert_eq!(s["host_readbacks_per_frame"], 0);
 }
 
-/// Direct irradiance on the floor, outside the sphere's shadow (DESIGN.md: 0.678486 W for the 40° cone).
+/// Direct irradiance on the floor, outside the sphere's shadow (docs/design.md: 0.678486 W for the 40° cone).
 #[test]
 fn sphere_direct_flux_matches_figure() {
     let dir = out_dir("sphere_direct_flux");

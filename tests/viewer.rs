@@ -191,7 +191,7 @@ fn presents_sphere_frames_and_saves_the_last_one() {
     // (r = 0.3 m) covers r < 15% of the height; its shadow on the floor reaches 2·tan(asin(0.3/1.5)) = 0.41 m,
     // 20.4%. So the annulus at 15-20% is shadowed floor: no direct light, no caustic. The disk r < 2% (0.04 m)
     // looks straight down through the sphere at the floor center, also in the shadow, where half the caustic
-    // flux lands within 0.019 m (DESIGN.md): it is bright only because of the caustic.
+    // flux lands within 0.019 m (docs/design.md): it is bright only because of the caustic.
     // Measured: disk 255 (saturated), annulus 9.6.
     let disk = ring_mean(w, h, &y, 0.0, 0.02);
     let annulus = ring_mean(w, h, &y, 0.15, 0.20);
@@ -300,6 +300,21 @@ fn no_display_and_bad_arguments() {
     assert_no_output(&shot);
 }
 
+/// The input test times its key presses: on a 2-core machine it does not share the CPU with the signal test.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The viewer's window once it has presented frames: its title shows the frame rate from then on (a key pressed
+/// before the first frame, on a loaded machine, finds nothing to profile yet).
+fn wait_for_frames(display: &str, start: Instant) -> String {
+    loop {
+        if let Some(w) = xdotool(display, &["search", "--name", "^caustics.*fps"]) {
+            break w.lines().next().unwrap().trim().to_string();
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "no viewer window with frames after 120 s");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
 /// xdotool on `display`; returns its stdout, or None when it fails.
 fn xdotool(display: &str, args: &[&str]) -> Option<String> {
     let out = Command::new("xdotool")
@@ -314,19 +329,14 @@ fn xdotool(display: &str, args: &[&str]) -> Option<String> {
 /// changes something, an orbit drag, a scroll and a light drag, then Q. The stats prove each one took effect.
 #[test]
 fn keys_and_mouse_drive_the_viewer() {
+    let _serial = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = out_dir("viewer_input");
     let x = Xvfb::start();
     let mut args = vec!["--scene", SPHERE, "--camera", "main", "--size", "480x360", "--stats", "input.json"];
     args.extend_from_slice(FAST);
     let (child, err_path) = spawn_view(&dir, "input", Some(&x.display), &args);
     let start = Instant::now();
-    let window = loop {
-        if let Some(w) = xdotool(&x.display, &["search", "--name", "^caustics"]) {
-            break w.lines().next().unwrap().trim().to_string();
-        }
-        assert!(start.elapsed() < Duration::from_secs(60), "no viewer window after 60 s");
-        std::thread::sleep(Duration::from_millis(100));
-    };
+    let window = wait_for_frames(&x.display, start);
     let xdo = |a: &[&str]| {
         xdotool(&x.display, a).unwrap_or_else(|| panic!("xdotool {a:?} failed"));
         std::thread::sleep(Duration::from_millis(250));
@@ -341,6 +351,9 @@ fn keys_and_mouse_drive_the_viewer() {
     xdo(&["mousedown", "1", "mousemove_relative", "60", "0", "mouseup", "1"]);
     xdo(&["click", "4"]);
     xdo(&["mousedown", "3", "mousemove_relative", "30", "0", "mouseup", "3"]);
+    // Input is applied when the next frame is rendered, and Q quits without rendering one: give the last inputs
+    // a frame first (a frame takes up to about a second on 2 loaded cores).
+    std::thread::sleep(Duration::from_secs(2));
     xdo(&["key", "q"]);
     let run = wait_view(child, &err_path, &args, Duration::from_secs(120));
     assert!(run.status.success(), "{}", run.stderr);
@@ -367,4 +380,28 @@ fn keys_and_mouse_drive_the_viewer() {
     let d = (cam[0].powi(2) + (cam[1] - 0.35).powi(2) + cam[2].powi(2)).sqrt();
     assert!((cam[0] - 1.6).abs() > 1e-3 || (cam[2] - 2.2).abs() > 1e-3, "camera not orbited: {cam:?}");
     assert!(d < d0 - 1e-3, "camera not zoomed in: distance {d} (was {d0})");
+}
+
+/// SIGTERM (and SIGINT) end the viewer like closing its window: `--screenshot` and `--stats` are still written.
+#[test]
+fn sigterm_still_writes_the_screenshot() {
+    let _serial = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = out_dir("viewer_sigterm");
+    let x = Xvfb::start();
+    let shot = dir.join("shot.png");
+    let stats = dir.join("stats.json");
+    let mut args = vec!["--scene", SPHERE, "--camera", "top", "--size", "160x120"];
+    args.extend(["--screenshot", shot.to_str().unwrap(), "--stats", stats.to_str().unwrap()]);
+    args.extend_from_slice(FAST);
+    let (child, err_path) = spawn_view(&dir, "sigterm", Some(&x.display), &args);
+    wait_for_frames(&x.display, Instant::now());
+    let pid = child.0.id().to_string();
+    let kill = Command::new("kill").args(["-TERM", &pid]).status().expect("kill");
+    assert!(kill.success());
+    let run = wait_view(child, &err_path, &args, Duration::from_secs(120));
+    assert!(run.status.success(), "{:?}:\n{}", run.status.code(), run.stderr);
+    assert!(run.stderr.contains("signal received"), "{}", run.stderr);
+    let (w, h, _, _) = luma(&shot);
+    assert_eq!((w, h), (160, 120));
+    assert_validation_clean(&read_json(&stats));
 }

@@ -1,4 +1,4 @@
-// Tracing one photon from the light through the refractor to the receivers (DESIGN.md step 5): front surface
+// Tracing one photon from the light through the refractor to the receivers (docs/design.md step 5): front surface
 // from the light-view front buffer, refraction with Fresnel transmittance, the exit point on the back surface by
 // a bracketed search, refraction out (total internal reflection drops the photon: a two-interface method cannot
 // follow it), and the receiver hit by a bracketed secant search. Used by the splat for every emitted photon and

@@ -44,7 +44,7 @@ vec3 view_dir_to(View v, vec3 p) {
 }
 
 // Solid angle (perspective) or area (orthographic) of a square image-plane cell of side d centered at xy:
-// DESIGN.md's midpoint formula d^2 / (1 + x^2 + y^2)^(3/2).
+// docs/design.md's midpoint formula d^2 / (1 + x^2 + y^2)^(3/2).
 float view_cell_measure(View v, vec2 xy, float d) {
     if (view_is_ortho(v)) return d * d;
     float q = 1.0 + dot(xy, xy);

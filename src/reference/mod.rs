@@ -1,6 +1,6 @@
 //! `caustics reference`: the exact CPU photon tracer, ground truth for the GPU renderer.
 //!
-//! What it computes, per camera pixel of a receiver surface (DESIGN.md, "Ground truth and error"):
+//! What it computes, per camera pixel of a receiver surface (docs/design.md, "Ground truth and error"):
 //! - Photons leave each light stratified: a jittered grid with exactly one photon per equal-area cell of the
 //!   cone's (cos θ, φ) parametrization, which is uniform in solid angle, so each photon carries Φ = I·Ω/N (before
 //!   the light color; image channel c carries Φ·color[c]). A directional light (intensity in W/m² across the beam)
@@ -286,8 +286,19 @@ pub struct RefOutput {
 fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> AppResult<&'a crate::scene::Camera> {
     let camera = scene.camera(name).map_err(AppError::BadInput)?;
     if let Projection::Perspective { .. } = camera.projection {
+        let ortho: Vec<&str> = scene
+            .cameras
+            .iter()
+            .filter(|c| matches!(c.projection, Projection::Orthographic { .. }))
+            .map(|c| c.name.as_str())
+            .collect();
+        let usable = if ortho.is_empty() {
+            "the scene has no orthographic camera: add one (docs/scenes.md)".to_string()
+        } else {
+            format!("use --camera {}", ortho.join(" or --camera "))
+        };
         return Err(AppError::BadInput(format!(
-            "{}: camera `{}` is perspective; the reference bins into orthographic cameras only (use --camera)",
+            "{}: camera `{}` is perspective; the reference bins into orthographic cameras only ({usable})",
             scene.path.display(),
             camera.name
         )));
@@ -636,7 +647,19 @@ pub fn run(args: &ReferenceArgs) -> AppResult<()> {
     let scene_path = args.scene.clone().unwrap_or_else(crate::commands::default_scene);
     let scene = Scene::load(&scene_path)?;
     let out = trace(&scene, &params)?;
-    image_io::write_exr(&args.out, &out.image)?;
+    let mut meta = image_io::ExrMeta::new();
+    meta.insert("scene".into(), scene_path.display().to_string());
+    meta.insert("scene_hash".into(), image_io::file_hash(&scene_path));
+    meta.insert("camera".into(), out.stats.camera.clone());
+    meta.insert("camera_kind".into(), "orthographic".into());
+    meta.insert("aov".into(), args.aov.clone());
+    meta.insert("units".into(), "W/m^2".into());
+    meta.insert("transport".into(), "reference".into());
+    meta.insert("paths".into(), args.paths.clone());
+    meta.insert("photons".into(), args.photons.to_string());
+    meta.insert("seed".into(), args.seed.to_string());
+    meta.insert("level".into(), "none".into());
+    image_io::write_exr_meta(&args.out, &out.image, &meta)?;
     if let Some(s) = &args.stats {
         let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;
         image_io::write_text(s, &json)?;

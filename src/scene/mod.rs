@@ -1,4 +1,4 @@
-//! Scenes: the TOML format of DESIGN.md, validated into world-space meshes, lights and cameras.
+//! Scenes: the TOML format of docs/design.md, validated into world-space meshes, lights and cameras.
 //!
 //! Errors name the file, the line and the field (`sphere.toml:23: object[1] "glass".material.ior: ...`), and are
 //! reported by the CLI with exit code 2.
@@ -219,16 +219,25 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
             ))
         }
     };
-    let position = *d.position.get_ref();
-    let target = *d.target.get_ref();
+    let required = |v: Option<S<[f32; 3]>>, name: &str| {
+        v.ok_or_else(|| cx.err(l.span(), f(name), format!("a light needs `{name}` (missing field `{name}`)")))
+    };
+    let position_s = required(d.position.clone(), "position")?;
+    let target_s = required(d.target.clone(), "target")?;
+    let intensity_s = d
+        .intensity
+        .clone()
+        .ok_or_else(|| cx.err(l.span(), f("intensity"), "a light needs `intensity` (missing field `intensity`)"))?;
+    let position = *position_s.get_ref();
+    let target = *target_s.get_ref();
     if !finite3(position) {
-        return Err(cx.err(d.position.span(), f("position"), "must be finite"));
+        return Err(cx.err(position_s.span(), f("position"), "must be finite"));
     }
     if !finite3(target) {
-        return Err(cx.err(d.target.span(), f("target"), "must be finite"));
+        return Err(cx.err(target_s.span(), f("target"), "must be finite"));
     }
     if (Vec3::from(target) - Vec3::from(position)).length() < 1e-6 {
-        return Err(cx.err(d.target.span(), f("target"), "must differ from the position"));
+        return Err(cx.err(target_s.span(), f("target"), "must differ from the position"));
     }
     let cone = match (kind, &d.cone_deg) {
         (LightKind::Spot, Some(c)) => {
@@ -248,9 +257,9 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
         }
         (LightKind::Directional, None) => 0.0,
     };
-    let intensity = *d.intensity.get_ref();
+    let intensity = *intensity_s.get_ref();
     if !(intensity.is_finite() && intensity >= 0.0) {
-        return Err(cx.err(d.intensity.span(), f("intensity"), format!("must be finite and >= 0 (got {intensity})")));
+        return Err(cx.err(intensity_s.span(), f("intensity"), format!("must be finite and >= 0 (got {intensity})")));
     }
     let color = match &d.color {
         Some(c) => {
@@ -558,6 +567,15 @@ material = { kind = "dielectric", ior = 1.5 }
     fn unknown_key_is_an_error() {
         let e = parse(&BASE.replace("radius = 0.3", "radius = 0.3\nradiuss = 1")).unwrap_err().to_string();
         assert!(e.contains("test.toml:27:") && e.contains("unknown field `radiuss`"), "{e}");
+    }
+
+    #[test]
+    fn unknown_light_kind_comes_before_missing_fields() {
+        let text = BASE.replace("kind = \"spot\"", "kind = \"area\"").replace("intensity = 1.0\n", "");
+        let e = parse(&text).unwrap_err().to_string();
+        assert!(e.contains("light[0].kind") && e.contains("unknown light kind `area`"), "{e}");
+        let e = parse(&BASE.replace("intensity = 1.0\n", "")).unwrap_err().to_string();
+        assert!(e.contains("light[0].intensity") && e.contains("missing field `intensity`"), "{e}");
     }
 
     #[test]

@@ -21,10 +21,11 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub struct LightDef {
     pub kind: S<String>,
-    pub position: S<[f32; 3]>,
-    pub target: S<[f32; 3]>,
+    // Optional here so that an unknown `kind` is reported before any missing field (checked after `kind`).
+    pub position: Option<S<[f32; 3]>>,
+    pub target: Option<S<[f32; 3]>>,
     pub cone_deg: Option<S<f32>>,
-    pub intensity: S<f32>,
+    pub intensity: Option<S<f32>>,
     pub color: Option<S<[f32; 3]>>,
 }
 

@@ -355,7 +355,7 @@ mod tests {
             up: Vec3::NEG_Z,
         };
         let v = CameraView::new(&cam, 256, 256, (Vec3::splat(-1.0), Vec3::splat(1.0)));
-        // Row 0 is z = -1 and columns run along +x (DESIGN.md's `top` camera).
+        // Row 0 is z = -1 and columns run along +x (docs/design.md's `top` camera).
         let px = v.project(Vec3::new(-1.0, 0.0, -1.0)).unwrap();
         assert!(px.length() < 1e-4, "{px}");
         let px = v.project(Vec3::new(1.0, 0.0, 1.0)).unwrap();

@@ -97,8 +97,8 @@ pub struct ViewArgs {
     /// Testing: fail with a device loss when frame N is about to be rendered (checks the error path and exit).
     #[arg(long, hide = true)]
     pub inject_device_loss: Option<u32>,
-    /// Print the controls as a Markdown table (for the README) and exit.
-    #[arg(long, hide = true)]
+    /// Print the controls (keys and mouse) as a Markdown table and exit.
+    #[arg(long)]
     pub print_controls: bool,
 }
 
@@ -145,8 +145,37 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
         outcome: None,
         error: None,
     };
+    stop_on_signals();
     let run = event_loop.run_app(&mut app);
     app.finish(run)
+}
+
+/// Set by SIGINT or SIGTERM: the viewer leaves its loop as if the window were closed, so that `--screenshot`
+/// and `--stats` are still written.
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+#[cfg(unix)]
+fn stop_on_signals() {
+    extern "C" fn on_signal(_: i32) {
+        STOP.store(true, std::sync::atomic::Ordering::SeqCst);
+    }
+    extern "C" {
+        fn signal(signum: i32, handler: extern "C" fn(i32)) -> usize;
+    }
+    const SIGINT: i32 = 2;
+    const SIGTERM: i32 = 15;
+    // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+    unsafe {
+        signal(SIGINT, on_signal);
+        signal(SIGTERM, on_signal);
+    }
+}
+
+#[cfg(not(unix))]
+fn stop_on_signals() {}
+
+fn stop_requested() -> bool {
+    STOP.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 /// What the viewer measured, taken before teardown, plus what teardown left alive.
@@ -251,7 +280,10 @@ impl ApplicationHandler for App<'_> {
         let Some(v) = self.viewer.as_mut() else {
             return;
         };
-        if v.quit {
+        if v.quit || stop_requested() {
+            if stop_requested() {
+                eprintln!("signal received: closing the viewer");
+            }
             el.exit();
         } else if v.minimized() {
             // Nothing to draw into: wait for events, looking again now and then (X11 reports no event when an
@@ -445,7 +477,8 @@ impl Viewer {
             vsync: !args.no_vsync,
             prefer_srgb: args.srgb_surface,
             inject_device_loss: args.inject_device_loss,
-            capture_every_frame: args.screenshot.is_some() && args.frames == 0,
+            // Every frame, so that a viewer stopped by a signal (or a closed window) still has its last frame.
+            capture_every_frame: args.screenshot.is_some(),
             scene_name,
             camera_name: camera.name.clone(),
             initial_light,
@@ -981,7 +1014,8 @@ impl Viewer {
             "host_readbacks_per_frame": last.map(|r| r.host_readbacks).unwrap_or(0),
             "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
             "profiled_frames": frames.len(),
-            "gpu_ms": profiler::summaries_json(&summaries),
+            "gpu_ms": profiler::gpu_json(&summaries),
+            "wall_ms": profiler::summary_json(&summaries, "frame_wall"),
             "gpu_total_ms": stage("gpu_total"),
             "frame_ms": stage("frame_wall"),
             "present_interval_ms": interval,

@@ -16,7 +16,8 @@ const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 pub struct ContextDesc {
     /// Enable the Khronos validation layer with synchronization validation.
     pub validation: bool,
-    /// Pick a device: "cpu"/"lavapipe"/"llvmpipe", "gpu", an index, or a substring of the device name.
+    /// Pick a device: "cpu"/"lavapipe"/"llvmpipe", "gpu", an index (digits only, never matched against names),
+    /// or a device's name or a substring of exactly one device's name (case-insensitive).
     pub device_hint: Option<String>,
     /// Extra instance extensions (window-system surfaces).
     pub instance_extensions: Vec<&'static CStr>,
@@ -271,21 +272,71 @@ impl Device {
         let Some(hint) = hint else {
             return Ok(candidates.remove(0));
         };
-        let h = hint.to_ascii_lowercase();
-        let pos = match h.as_str() {
-            "cpu" | "lavapipe" | "llvmpipe" => {
-                candidates.iter().position(|c| c.info.kind == vk::PhysicalDeviceType::CPU)
-            }
-            "gpu" => candidates.iter().position(|c| c.info.kind != vk::PhysicalDeviceType::CPU),
-            _ => match h.parse::<usize>() {
-                Ok(i) if i < candidates.len() => Some(i),
-                _ => candidates.iter().position(|c| c.info.name.to_ascii_lowercase().contains(&h)),
-            },
+        let listing = || {
+            candidates
+                .iter()
+                .enumerate()
+                .map(|(i, c)| format!("{i}: {} ({})", c.info.name, kind_name(c.info.kind)))
+                .collect::<Vec<_>>()
+                .join(", ")
         };
-        match pos {
-            Some(i) => Ok(candidates.remove(i)),
-            None => Err(VkError::NoDevice(format!("no device matches `{hint}` (available: {})", names()))),
-        }
+        let h = hint.trim().to_ascii_lowercase();
+        let is_cpu = |c: &Candidate| c.info.kind == vk::PhysicalDeviceType::CPU;
+        let pos = match h.as_str() {
+            "cpu" | "lavapipe" | "llvmpipe" => match candidates.iter().position(is_cpu) {
+                Some(i) => i,
+                None => {
+                    return Err(VkError::NoSuchDevice(format!(
+                        "CAUSTICS_DEVICE={hint}: there is no CPU (lavapipe) device. Run `tools/setup` to install \
+                         Mesa's lavapipe, or pick one of: {}",
+                        listing()
+                    )))
+                }
+            },
+            "gpu" => match candidates.iter().position(|c| !is_cpu(c)) {
+                Some(i) => i,
+                None => {
+                    return Err(VkError::NoSuchDevice(format!(
+                        "CAUSTICS_DEVICE={hint}: this machine has no Vulkan GPU, only {}. Unset CAUSTICS_DEVICE or set \
+                         CAUSTICS_DEVICE=cpu to use it; a GPU needs its vendor's Vulkan driver",
+                        names()
+                    )))
+                }
+            },
+            // An index selects by position only: digits are never matched against device names.
+            _ if h.chars().all(|c| c.is_ascii_digit()) => match h.parse::<usize>() {
+                Ok(i) if i < candidates.len() => i,
+                _ => {
+                    return Err(VkError::NoSuchDevice(format!(
+                        "CAUSTICS_DEVICE={hint}: no device has index {hint} (devices: {})",
+                        listing()
+                    )))
+                }
+            },
+            _ => {
+                let lower = |c: &Candidate| c.info.name.to_ascii_lowercase();
+                let matches: Vec<usize> = match candidates.iter().position(|c| lower(c) == h) {
+                    Some(i) => vec![i],
+                    None => (0..candidates.len()).filter(|&i| lower(&candidates[i]).contains(&h)).collect(),
+                };
+                match matches.as_slice() {
+                    [i] => *i,
+                    [] => {
+                        return Err(VkError::NoSuchDevice(format!(
+                            "CAUSTICS_DEVICE={hint}: no device name contains `{hint}` (devices: {})",
+                            listing()
+                        )))
+                    }
+                    _ => {
+                        return Err(VkError::NoSuchDevice(format!(
+                        "CAUSTICS_DEVICE={hint}: `{hint}` matches several devices ({}); use an index or a longer name",
+                        matches.iter().map(|&i| candidates[i].info.name.clone()).collect::<Vec<_>>().join(", ")
+                    )))
+                    }
+                }
+            }
+        };
+        Ok(candidates.remove(pos))
     }
 
     fn create(instance: Arc<Instance>, c: Candidate, desc: &ContextDesc) -> VkResult<Arc<Self>> {

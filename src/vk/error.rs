@@ -10,6 +10,9 @@ pub enum VkError {
     Call { call: &'static str, result: vk::Result },
     #[error("no usable Vulkan device: {0}. Run `tools/setup` to install Mesa's lavapipe (mesa-vulkan-drivers), or pick another device with CAUSTICS_DEVICE.")]
     NoDevice(String),
+    /// CAUSTICS_DEVICE names no usable device; the message says what there is.
+    #[error("{0}")]
+    NoSuchDevice(String),
     #[error("validation was requested but the Khronos validation layer is not installed. Run `tools/setup` (Debian package vulkan-validationlayers), or set CAUSTICS_VALIDATION=0.")]
     NoValidationLayer,
     #[error("GPU memory allocation failed ({what}): {source}")]

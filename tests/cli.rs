@@ -1,0 +1,204 @@
+//! The command line keeps its word: range messages for negative numbers, device selection by exact index or
+//! unique name, warnings for ignored options, camera errors that name the usable cameras, the stats layout, and
+//! the bench's JSON and tables.
+
+mod common;
+use common::*;
+
+fn stderr_of(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn negative_numbers_get_the_range_message() {
+    let dir = out_dir("cli_negative");
+    let out = dir.join("x.exr");
+    let out = out.to_str().unwrap();
+    for (flag, needle) in [
+        ("--level", "must be an integer in 0..="),
+        ("--check-level", "must be an integer in 0..="),
+        ("--photon-budget", "must be > 0 MiB"),
+        ("--error-bound", "must be > 0 texels"),
+        ("--flux-threshold", "must lie in [0, 1)"),
+    ] {
+        let o = caustics(&["render", "--aov", "caustics", "--out", out, flag, "-1"]);
+        let e = stderr_of(&o);
+        assert_eq!(o.status.code(), Some(2), "{flag} -1: {e}");
+        assert!(e.contains(needle) && !e.contains("unexpected argument"), "{flag} -1: {e}");
+    }
+}
+
+fn device_error(hint: &str) -> (Option<i32>, String) {
+    let dir = out_dir(&format!("cli_device_{hint}"));
+    let out = dir.join("x.exr");
+    let o = caustics_env(
+        &["render", "--aov", "caustics", "--size", "64x64", "--level", "1", "--out", out.to_str().unwrap()],
+        &[("CAUSTICS_DEVICE", hint)],
+    );
+    (o.status.code(), stderr_of(&o))
+}
+
+#[test]
+fn device_indices_are_never_matched_against_names() {
+    // lavapipe's name ("llvmpipe (LLVM 15.0.6, 256 bits)") holds the digits 1 and 5; an index must not match it.
+    for hint in ["5", "7", "15"] {
+        let (code, e) = device_error(hint);
+        assert_eq!(code, Some(1), "CAUSTICS_DEVICE={hint}: {e}");
+        assert!(e.contains(&format!("no device has index {hint}")) && e.contains("0: "), "{e}");
+    }
+    let (code, e) = device_error("no-such-device");
+    assert_eq!(code, Some(1), "{e}");
+    assert!(e.contains("no device name contains"), "{e}");
+}
+
+#[test]
+fn gpu_on_a_machine_without_one_gives_the_right_advice() {
+    let (code, e) = device_error("gpu");
+    if code == Some(0) {
+        return; // this machine has a GPU
+    }
+    assert_eq!(code, Some(1), "{e}");
+    assert!(e.contains("no Vulkan GPU") && e.contains("CAUSTICS_DEVICE=cpu"), "{e}");
+    assert!(!e.contains("install Mesa's lavapipe"), "lavapipe is installed: {e}");
+}
+
+#[test]
+fn dense_warns_about_adaptive_options_and_stats_keep_gpu_time_apart() {
+    let dir = out_dir("cli_dense_warn");
+    let (stats, _) = render(
+        &dir,
+        "dense",
+        SPHERE,
+        &["--camera", "top", "--size", "64x64", "--level", "1", "--aov", "caustics", "--method", "dense"]
+            .iter()
+            .chain(&["--metric", "max-error", "--driven", "cpu"])
+            .copied()
+            .collect::<Vec<_>>(),
+    );
+    let gpu = stats["gpu_ms"].as_object().unwrap();
+    assert!(gpu.contains_key("gpu_total"), "{gpu:?}");
+    for host in ["frame_wall", "cpu_record"] {
+        assert!(!gpu.contains_key(host), "gpu_ms holds the host entry {host}");
+    }
+    for key in ["wall_ms", "cpu_ms"] {
+        assert!(stats[key]["median"].as_f64().unwrap() >= 0.0, "{key}: {}", stats[key]);
+    }
+    // The warnings go to stderr: run again, capturing it.
+    let out = dir.join("again.exr");
+    let o = caustics(&[
+        "render",
+        "--camera",
+        "top",
+        "--size",
+        "64x64",
+        "--level",
+        "1",
+        "--aov",
+        "caustics",
+        "--method",
+        "dense",
+        "--metric",
+        "max-error",
+        "--driven",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr_of(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains("warning: --metric applies to --method adaptive only"), "{e}");
+    assert!(e.contains("warning: --driven applies to --method adaptive only"), "{e}");
+}
+
+#[test]
+fn reference_with_a_perspective_camera_names_the_usable_ones() {
+    let dir = out_dir("cli_ref_camera");
+    let out = dir.join("r.exr");
+    let o = caustics(&["reference", "--camera", "main", "--photons", "1000", "--out", out.to_str().unwrap()]);
+    let e = stderr_of(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("perspective") && e.contains("--camera top"), "{e}");
+}
+
+#[test]
+fn bench_json_args_are_structured_and_missing_values_print_as_dashes() {
+    let dir = out_dir("cli_bench");
+    let json = dir.join("b.json");
+    let md = dir.join("b.md");
+    let o = caustics(&[
+        "bench",
+        "--no-reference",
+        "--transports",
+        "two-interface",
+        "--methods",
+        "dense,max-level",
+        "--levels",
+        "1",
+        "--frames",
+        "1",
+        "--warmup-s",
+        "0",
+        "--size",
+        "64x64",
+        "--gbuffer-res",
+        "256",
+        "--caustic-res",
+        "256",
+        "--check-level",
+        "1",
+        "--traverse-wg",
+        "4,8",
+        "--json",
+        json.to_str().unwrap(),
+        "--markdown",
+        md.to_str().unwrap(),
+    ]);
+    let e = stderr_of(&o);
+    assert!(o.status.success(), "{e}");
+    let doc = read_json(&json);
+    assert!(doc["args"].is_object(), "args: {}", doc["args"]);
+    assert_eq!(doc["args"]["check_level"], 1);
+    assert_eq!(doc["args"]["levels"], "1");
+    let table = std::fs::read_to_string(&md).unwrap();
+    assert!(!table.contains("NaN") && !table.contains("-0.0"), "{table}");
+    assert!(table.contains("| wg |") && table.contains("| 4x4 |") && table.contains("| 8x8 |"), "{table}");
+    assert!(!e.contains("NaN"), "{e}");
+}
+
+#[test]
+fn render_and_reference_write_exr_metadata_and_compare_checks_it() {
+    let dir = out_dir("cli_exr_meta");
+    let common = ["--size", "64x64", "--level", "1", "--aov", "caustics"];
+    let (_, top) = render(&dir, "top", SPHERE, &[&["--camera", "top"][..], &common].concat());
+    let (_, main) = render(&dir, "main", SPHERE, &[&["--camera", "main"][..], &common].concat());
+    let reference = dir.join("ref.exr");
+    ok(&[
+        "reference",
+        "--camera",
+        "top",
+        "--size",
+        "64x64",
+        "--photons",
+        "20000",
+        "--out",
+        reference.to_str().unwrap(),
+    ]);
+    let (_, m) = caustics::image_io::read_exr_meta(&top).unwrap();
+    assert_eq!(m["camera"], "top");
+    assert_eq!(m["camera_kind"], "orthographic");
+    assert_eq!(m["aov"], "caustics");
+    assert_eq!(m["units"], "W/m^2");
+    assert_eq!(m["transport"], "two-interface");
+    assert_eq!(m["level"], "1");
+    assert_eq!(m["scene_hash"].len(), 16);
+    let (_, r) = caustics::image_io::read_exr_meta(&reference).unwrap();
+    assert_eq!((r["camera"].as_str(), r["transport"].as_str()), ("top", "reference"));
+    assert_eq!(r["scene_hash"], m["scene_hash"]);
+    let o = caustics(&["compare", top.to_str().unwrap(), reference.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr_of(&o));
+    assert!(!stderr_of(&o).contains("warning"), "{}", stderr_of(&o));
+    // A perspective render against the orthographic reference: refused.
+    let o = caustics(&["compare", main.to_str().unwrap(), reference.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr_of(&o));
+    assert!(stderr_of(&o).contains("camera `main`"), "{}", stderr_of(&o));
+}
