@@ -41,6 +41,7 @@ vec3 behind(View cam, vec3 o, vec3 dir) {
 vec3 shade_glass(View cam, vec3 ro, vec3 rd, vec4 front, float ior) {
     vec3 p1 = ro + rd * front.w;
     vec3 n1 = dot(front.xyz, rd) > 0.0 ? -front.xyz : front.xyz;
+    if (ior < 0.0) return environment(reflect(rd, n1));  // a mirror
     float F1 = fresnel_dielectric(-dot(rd, n1), 1.0, ior);
     vec3 reflected = environment(reflect(rd, n1));
     vec3 t1;

@@ -118,7 +118,7 @@ void main() {
             } else {
                 vec3 ng, ns;
                 bvh_normals(hit, ng, ns);
-                Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst));
+                Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
                 if (!s.ok) {
                     acc[ACC_LOST] += flux;
                 } else {

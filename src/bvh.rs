@@ -59,7 +59,7 @@ pub struct GpuInstance {
     pub lo: [f32; 4],
     /// `hi.w`: root node index bits in the single layout.
     pub hi: [f32; 4],
-    /// x: IOR (dielectric) or albedo (receiver); y: 1 for a dielectric, 0 for a diffuse receiver; z, w: unused.
+    /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z, w: unused.
     pub material: [f32; 4],
     pub pad: [f32; 4],
 }
@@ -133,6 +133,7 @@ impl SceneBvh {
                 tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
             let material = match obj.material {
                 Material::Dielectric { ior } => [ior, 1.0, 0.0, 0.0],
+                Material::Mirror => [0.0, 2.0, 0.0, 0.0],
                 Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
             };
             bvh.instances.push(GpuInstance {

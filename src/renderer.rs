@@ -164,9 +164,24 @@ impl Drop for Renderer {
     }
 }
 
+/// The two-interface model refracts through front and back glass surfaces; it has no mirrors.
+fn check_transport(scene: &Scene, settings: &Settings) -> AppResult<()> {
+    if settings.transport == Transport::TwoInterface {
+        if let Some(m) = scene.objects.iter().find(|o| o.is_mirror()) {
+            return Err(AppError::BadInput(format!(
+                "{}: object `{}` is a mirror: mirrors need --transport exact (the two-interface model only refracts)",
+                scene.path.display(),
+                m.name
+            )));
+        }
+    }
+    Ok(())
+}
+
 impl Renderer {
     pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
         settings.validate()?;
+        check_transport(&scene, &settings)?;
         if scene.lights.len() != 1 {
             return Err(AppError::BadInput(format!(
                 "{}: the scene has {} lights; this renderer handles exactly one [[light]]",
@@ -198,6 +213,7 @@ impl Renderer {
     /// Replace the scene (after moving the light, changing an IOR, ...): re-uploads its triangles when they
     /// changed. Lights and cameras are read every frame, so changing only them is free.
     pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
+        check_transport(&scene, &self.settings)?;
         if scene.lights.len() != 1 {
             return Err(AppError::BadInput("this renderer handles exactly one [[light]]".into()));
         }
@@ -226,6 +242,7 @@ impl Renderer {
 
     pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
         settings.validate()?;
+        check_transport(&self.scene, &settings)?;
         if settings.method != self.settings.method
             || settings.level != self.settings.level
             || settings.metric != self.settings.metric

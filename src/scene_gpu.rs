@@ -85,6 +85,8 @@ impl SceneBuffers {
                 let material = match o.material {
                     Material::Diffuse { albedo } => [albedo.x, albedo.y, albedo.z, 0.0],
                     Material::Dielectric { ior } => [ior, 0.0, 0.0, 1.0],
+                    // A negative IOR marks a mirror for the eye view's deferred shading (composite.comp).
+                    Material::Mirror => [-1.0, 0.0, 0.0, 1.0],
                 };
                 for (p, n) in o.mesh.positions.iter().zip(&o.mesh.normals) {
                     vertices.push(Vertex { position: [p.x, p.y, p.z, 1.0], normal: [n.x, n.y, n.z, 0.0], material });

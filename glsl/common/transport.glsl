@@ -33,7 +33,8 @@ struct Split {
     bool ok;        // false: no valid direction on either normal (a numerical dead end)
 };
 
-Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior) {
+// A mirror (`mirror`) reflects everything (F = 1), with the same normal choices.
+Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) {
     Split s;
     bool entering = dot(d, ng) < 0.0;
     float eta = entering ? 1.0 / ior : ior;
@@ -49,7 +50,7 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior) {
     s.refr = vec3(0.0);
     if (s.ok) {
         float n1 = entering ? 1.0 : ior, n2 = entering ? ior : 1.0;
-        s.F = fresnel_dielectric(cos_i, n1, n2);
+        s.F = mirror ? 1.0 : fresnel_dielectric(cos_i, n1, n2);
         vec3 t;
         if (s.F < 1.0 && refract_dir(d, n, eta, t)) {
             if (dot(t, ng_f) >= 0.0) {
@@ -67,7 +68,9 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior) {
     return s;
 }
 
+// Specular: a dielectric or a mirror (everything else is a diffuse receiver).
 bool inst_is_dielectric(uint inst) { return bvh_instances[inst].material.y > 0.5; }
+bool inst_is_mirror(uint inst) { return bvh_instances[inst].material.y > 1.5; }
 float inst_ior(uint inst) { return bvh_instances[inst].material.x; }
 
 // The photon ray of a cell: from the light through the cell's center.
@@ -100,7 +103,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events) {
         if (k == MAX_INTERACTIONS) break;
         vec3 ng, ns;
         bvh_normals(hit, ng, ns);
-        Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst));
+        Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
         if (!s.ok) break;
         bool refl = s.F >= 0.5;
         ro = refl ? s.p_refl : s.p_refr;

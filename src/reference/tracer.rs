@@ -193,6 +193,9 @@ enum Interaction {
 /// unless it faces away from the ray or sends the photon to the wrong side of the surface, in which case the
 /// geometric normal is used (the `bool` tells).
 fn interact(d: DVec3, hit: &Hit, ior: f64, xi: f64) -> Option<(Interaction, bool)> {
+    if ior == MIRROR {
+        return mirror(d, hit);
+    }
     let entering = d.dot(hit.ng) < 0.0;
     let eta = if entering { 1.0 / ior } else { ior };
     let ng_f = if entering { hit.ng } else { -hit.ng };
@@ -222,6 +225,27 @@ fn interact(d: DVec3, hit: &Hit, ior: f64, xi: f64) -> Option<(Interaction, bool
     None
 }
 
+/// The `ior` entry of a mirror object.
+const MIRROR: f64 = -1.0;
+
+/// A perfect mirror reflects everything, about the interpolated normal unless that sends the photon to the wrong
+/// side of the geometric surface (then about the geometric normal).
+fn mirror(d: DVec3, hit: &Hit) -> Option<(Interaction, bool)> {
+    let ng_f = if d.dot(hit.ng) < 0.0 { hit.ng } else { -hit.ng };
+    let ns = if hit.ns.dot(hit.ng) > 0.0 { hit.ns } else { hit.ng };
+    let ns_f = if ns.dot(ng_f) > 0.0 { ns } else { -ns };
+    for (k, n) in [ns_f, ng_f].into_iter().enumerate() {
+        if -d.dot(n) <= 0.0 {
+            continue;
+        }
+        let r = reflect(d, n).normalize();
+        if r.dot(ng_f) > 0.0 {
+            return Some((Interaction::Reflected { dir: r, tir: false }, k == 1));
+        }
+    }
+    None
+}
+
 impl Tracer<'_> {
     pub fn new<'a>(
         scene: &Scene,
@@ -235,6 +259,7 @@ impl Tracer<'_> {
             .iter()
             .map(|o| match o.material {
                 Material::Dielectric { ior } => ior as f64,
+                Material::Mirror => MIRROR,
                 Material::Diffuse { .. } => 0.0,
             })
             .collect();

@@ -64,8 +64,14 @@ pub struct Camera {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
-    Diffuse { albedo: Vec3 },
-    Dielectric { ior: f32 },
+    Diffuse {
+        albedo: Vec3,
+    },
+    Dielectric {
+        ior: f32,
+    },
+    /// A perfect specular reflector (reflects all light; exact transport only).
+    Mirror,
 }
 
 #[derive(Clone, Debug)]
@@ -76,8 +82,14 @@ pub struct Object {
 }
 
 impl Object {
+    /// A specular object: a dielectric or a mirror. Specular objects make caustics: the light-view frustum is
+    /// fitted to them and their cells are the photons; everything else is a diffuse receiver.
     pub fn is_refractor(&self) -> bool {
-        matches!(self.material, Material::Dielectric { .. })
+        matches!(self.material, Material::Dielectric { .. } | Material::Mirror)
+    }
+
+    pub fn is_mirror(&self) -> bool {
+        matches!(self.material, Material::Mirror)
     }
 }
 
@@ -495,11 +507,20 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             }
             Material::Dielectric { ior: v }
         }
+        "mirror" => {
+            if let Some(x) = &m.albedo {
+                return Err(cx.err(x.span(), mf("albedo"), "a mirror has no `albedo` (it reflects all light)"));
+            }
+            if let Some(x) = &m.ior {
+                return Err(cx.err(x.span(), mf("ior"), "a mirror has no `ior`"));
+            }
+            Material::Mirror
+        }
         other => {
             return Err(cx.err(
                 m.kind.span(),
                 mf("kind"),
-                format!("unknown material `{other}` (expected \"diffuse\" or \"dielectric\")"),
+                format!("unknown material `{other}` (expected \"diffuse\", \"dielectric\" or \"mirror\")"),
             ))
         }
     };
