@@ -400,6 +400,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "overflow_dropped_entries": st.map(|x| x.overflow_dropped).unwrap_or(0),
         "unfinished_tiles": last.unfinished_tiles,
         "gpu_ms": profiler::gpu_json(&summaries),
+        "photons_per_ms": profiler::throughput_json(&summaries, photons as u64),
         "wall_ms": profiler::summary_json(&summaries, "frame_wall"),
         "cpu_ms": profiler::summary_json(&summaries, "cpu_record"),
         "gpu_total_ms": stage("gpu_total"),
@@ -613,7 +614,8 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
             last.state.map(|x| x.batches_committed).unwrap_or(0),
             last.host_readbacks
         );
-        print!("{}", profiler::table(&summaries, reports.len()));
+        let photons = last.state.map(|x| x.photons_total as u64);
+        print!("{}", profiler::table(&summaries, reports.len(), photons));
     }
     if let Some(p) = &args.trace {
         image_io::write_text(p, &serde_json::to_string(&profiler::chrome_trace(&reports)).unwrap_or_default())?;

@@ -77,16 +77,42 @@ pub fn summaries_json(s: &[(String, Summary)]) -> Value {
     Value::Object(m)
 }
 
-pub fn table(s: &[(String, Summary)], frames: usize) -> String {
+/// Photons per millisecond of each GPU stage's median, and of the whole frame's (`gpu_total`): the throughput
+/// that scales with the photon count (stages with a fixed cost show large numbers).
+pub fn throughput_json(s: &[(String, Summary)], photons: u64) -> Value {
+    let mut m = serde_json::Map::new();
+    for (l, v) in s.iter().filter(|(l, _)| !HOST_STAGES.contains(&l.as_str())) {
+        if v.median > 0.0 {
+            m.insert(l.clone(), json!(photons as f64 / v.median));
+        }
+    }
+    Value::Object(m)
+}
+
+/// The per-stage table; with `photons`, a photons/ms column (photons over the stage's median).
+pub fn table(s: &[(String, Summary)], frames: usize, photons: Option<u64>) -> String {
     let mut out = format!(
-        "{:<18} {:>10} {:>10} {:>10} {:>10}   ({} frames, ms)\n",
-        "stage", "mean", "median", "min", "max", frames
+        "{:<18} {:>10} {:>10} {:>10} {:>10} {:>12}   ({} frames, ms)\n",
+        "stage",
+        "mean",
+        "median",
+        "min",
+        "max",
+        if photons.is_some() { "photons/ms" } else { "" },
+        frames
     );
     for (l, v) in s {
         if l == "gpu_total" {
-            out.push_str(&format!("{}\n", "-".repeat(62)));
+            out.push_str(&format!("{}\n", "-".repeat(75)));
         }
-        out.push_str(&format!("{:<18} {:>10.3} {:>10.3} {:>10.3} {:>10.3}\n", l, v.mean, v.median, v.min, v.max));
+        let rate = match photons {
+            Some(p) if v.median > 0.0 && !HOST_STAGES.contains(&l.as_str()) => format!("{:.0}", p as f64 / v.median),
+            _ => String::new(),
+        };
+        out.push_str(&format!(
+            "{:<18} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>12}\n",
+            l, v.mean, v.median, v.min, v.max, rate
+        ));
     }
     out
 }

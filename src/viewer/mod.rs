@@ -616,7 +616,8 @@ impl Viewer {
             Profile => {
                 let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
                 println!("{} | {}", self.describe(), self.device().info.name);
-                print!("{}", profiler::table(&profiler::stage_summaries(&frames), frames.len()));
+                let photons = frames.last().and_then(|f| f.state).map(|x| x.photons_total as u64);
+                print!("{}", profiler::table(&profiler::stage_summaries(&frames), frames.len(), photons));
             }
             Trace => {
                 let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
