@@ -100,6 +100,19 @@ void main() {
             acc[ACC_ESCAPED] += flux;
         } else {
             vec3 p = bvh_hit_point(hit);
+            float sigma = bvh_instances[hit.inst].material.z;
+            if (sigma > 0.0 && inst_is_dielectric(hit.inst)) {
+                // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation,
+                // exactly (no sampling).
+                vec3 ng0, ns0;
+                bvh_normals(hit, ng0, ns0);
+                if (dot(rd, ng0) > 0.0) {
+                    float keep = exp(-sigma * distance(p, ro));
+                    acc[ACC_ABSORBED] += flux * (1.0 - keep);
+                    w *= keep;
+                    flux = phi * w;
+                }
+            }
             if (!inst_is_dielectric(hit.inst)) {
                 if (depth == 0u) {
                     acc[ACC_DIRECT] += flux;

@@ -59,7 +59,8 @@ pub struct GpuInstance {
     pub lo: [f32; 4],
     /// `hi.w`: root node index bits in the single layout.
     pub hi: [f32; 4],
-    /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z, w: unused.
+    /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
+    /// coefficient inside a dielectric (1/m); w: unused.
     pub material: [f32; 4],
     pub pad: [f32; 4],
 }
@@ -132,7 +133,7 @@ impl SceneBvh {
             let (lo, hi) =
                 tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
             let material = match obj.material {
-                Material::Dielectric { ior } => [ior, 1.0, 0.0, 0.0],
+                Material::Dielectric { ior, absorption } => [ior, 1.0, absorption, 0.0],
                 Material::Mirror => [0.0, 2.0, 0.0, 0.0],
                 Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
             };

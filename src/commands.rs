@@ -450,7 +450,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
         for (name, w) in ACCOUNT_TERMS.iter().zip(acc) {
             account.insert(format!("{name}_w"), json!(w));
         }
-        let out: f64 = acc[1..8].iter().sum();
+        let out: f64 = acc[1..9].iter().sum();
         account.insert("residual".into(), json!(if acc[0] > 0.0 { (acc[0] - out).abs() / acc[0] } else { out.abs() }));
         if let Value::Object(m) = &mut v {
             m.insert("energy".into(), Value::Object(account));

@@ -130,7 +130,7 @@ pub struct TraversalState {
 /// Energy-account terms of exact transport (`ACC_*` in types.glsl), in order.
 /// The last, `caustics_one_interaction`, is the part of `caustics` with exactly one interaction (for a closed
 /// mesh: a single external reflection); it is not a term of the partition.
-pub const ACCOUNT_TERMS: [&str; 9] = [
+pub const ACCOUNT_TERMS: [&str; 10] = [
     "emitted",
     "caustics",
     "direct",
@@ -139,6 +139,7 @@ pub const ACCOUNT_TERMS: [&str; 9] = [
     "cut_cap",
     "lost",
     "overflow",
+    "absorbed",
     "caustics_one_interaction",
 ];
 
@@ -158,13 +159,13 @@ pub struct TransportState {
     pub records_total: u32,
     pub waves: u32,
     pub max_depth: u32,
-    pub batch_account: [[u32; 2]; 9],
-    pub account: [[u32; 2]; 9],
+    pub batch_account: [[u32; 2]; 10],
+    pub account: [[u32; 2]; 10],
 }
 
 impl TransportState {
     /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
-    pub fn account(&self) -> [f64; 9] {
+    pub fn account(&self) -> [f64; 10] {
         self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
     }
 }
@@ -220,7 +221,7 @@ pub struct Vertex {
 const _: () = {
     assert!(size_of::<GpuView>() == 160);
     assert!(size_of::<FrameData>() == 640);
-    assert!(size_of::<TransportState>() == 48 + 144);
+    assert!(size_of::<TransportState>() == 48 + 160);
     assert!(offset_of!(TransportState, batch_account) == 48);
     assert!(offset_of!(FrameData, light_power) == 480);
     assert!(offset_of!(FrameData, grid) == 528);

@@ -167,6 +167,17 @@ impl Drop for Renderer {
 /// The two-interface model refracts through front and back glass surfaces; it has no mirrors.
 fn check_transport(scene: &Scene, settings: &Settings) -> AppResult<()> {
     if settings.transport == Transport::TwoInterface {
+        if let Some(o) = scene
+            .objects
+            .iter()
+            .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption > 0.0))
+        {
+            return Err(AppError::BadInput(format!(
+                "{}: object `{}` absorbs: absorption needs --transport exact (the two-interface model has none)",
+                scene.path.display(),
+                o.name
+            )));
+        }
         if let Some(m) = scene.objects.iter().find(|o| o.is_mirror()) {
             return Err(AppError::BadInput(format!(
                 "{}: object `{}` is a mirror: mirrors need --transport exact (the two-interface model only refracts)",

@@ -84,7 +84,7 @@ impl SceneBuffers {
                 let base = vertices.len() as u32;
                 let material = match o.material {
                     Material::Diffuse { albedo } => [albedo.x, albedo.y, albedo.z, 0.0],
-                    Material::Dielectric { ior } => [ior, 0.0, 0.0, 1.0],
+                    Material::Dielectric { ior, .. } => [ior, 0.0, 0.0, 1.0],
                     // A negative IOR marks a mirror for the eye view's deferred shading (composite.comp).
                     Material::Mirror => [-1.0, 0.0, 0.0, 1.0],
                 };

@@ -65,7 +65,7 @@ fn camera_moves_reuse_and_changes_recompute() {
 
     // IOR: the photon stages run again.
     for o in scene.objects.iter_mut() {
-        if let Material::Dielectric { ior } = &mut o.material {
+        if let Material::Dielectric { ior, .. } = &mut o.material {
             *ior = 1.6;
         }
     }

@@ -77,8 +77,9 @@ const uint ACC_THRESHOLD = 4u;  // children below the flux threshold
 const uint ACC_CAP = 5u;        // met a dielectric after the interaction cap
 const uint ACC_LOST = 6u;       // numerical dead ends (no valid direction on either normal)
 const uint ACC_OVERFLOW = 7u;   // did not fit a queue (only without batching: with it the batch is split instead)
-const uint ACC_ONE_EVENT = 8u;  // the part of ACC_CAUSTIC with exactly one interaction (not in the partition)
-const uint ACC_TERMS = 9u;
+const uint ACC_ABSORBED = 8u;   // absorbed inside glass (Beer–Lambert)
+const uint ACC_ONE_EVENT = 9u;  // the part of ACC_CAUSTIC with exactly one interaction (not in the partition)
+const uint ACC_TERMS = 10u;
 
 struct TransportState {
     uint in_count;         // rays of the wave being traced (wave 0: the emitted photons)

@@ -172,7 +172,7 @@ pub struct LightInfo {
 }
 
 /// Where the emitted flux went (W, before light color). `emitted = deposited_caustics + deposited_direct +
-/// escaped + cut_by_bounce_cap + filtered_by_paths + lost`; `residual_rel` is the relative mismatch.
+/// escaped + cut_by_bounce_cap + filtered_by_paths + lost + absorbed`; `residual_rel` is the relative mismatch.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct EnergyAccount {
     pub emitted: f64,
@@ -182,6 +182,9 @@ pub struct EnergyAccount {
     pub cut_by_bounce_cap: f64,
     pub filtered_by_paths: f64,
     pub lost: f64,
+    /// Absorbed inside glass.
+    #[serde(default)]
+    pub absorbed: f64,
     pub residual_rel: f64,
     /// Flux of the selected AOV binned into the image, and Σ E · pixel area over the image.
     pub aov_in_image: f64,
@@ -522,6 +525,7 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
         cut_by_bounce_cap: t.flux_cut,
         filtered_by_paths: t.flux_filtered,
         lost: t.flux_lost,
+        absorbed: t.flux_absorbed,
         residual_rel: t.account_residual(),
         aov_in_image: t.flux_in_image,
         image_integral: t.image_flux,
@@ -671,8 +675,8 @@ pub fn run(args: &ReferenceArgs) -> AppResult<()> {
         st.scene, st.aov, st.paths, st.photons_per_light, st.wall_s, st.photons_per_s, st.threads
     );
     println!(
-        "flux W: emitted {:.6}, caustics {:.6}, direct {:.6}, escaped {:.6}, cut {:.6}, filtered {:.6}, lost {:.6} (residual {:.1e})",
-        a.emitted, a.deposited_caustics, a.deposited_direct, a.escaped, a.cut_by_bounce_cap, a.filtered_by_paths, a.lost, a.residual_rel
+        "flux W: emitted {:.6}, caustics {:.6}, direct {:.6}, escaped {:.6}, cut {:.6}, filtered {:.6}, lost {:.6}, absorbed {:.6} (residual {:.1e})",
+        a.emitted, a.deposited_caustics, a.deposited_direct, a.escaped, a.cut_by_bounce_cap, a.filtered_by_paths, a.lost, a.absorbed, a.residual_rel
     );
     println!("{} in image: {:.6} W (Σ E·pixel area = {:.6} W)", st.aov, a.aov_in_image, a.image_integral);
     if let Some(r) = &st.radial {

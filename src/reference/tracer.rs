@@ -37,6 +37,8 @@ pub struct Tally {
     pub photons_cut: u64,
     pub photons_filtered: u64,
     pub photons_lost: u64,
+    #[serde(default)]
+    pub photons_absorbed: u64,
     pub flux_emitted: f64,
     pub flux_caustics: f64,
     pub flux_direct: f64,
@@ -48,6 +50,9 @@ pub struct Tally {
     pub flux_cut: f64,
     pub flux_filtered: f64,
     pub flux_lost: f64,
+    /// Absorbed inside glass (Beer–Lambert).
+    #[serde(default)]
+    pub flux_absorbed: f64,
     pub refractions: u64,
     pub reflections: u64,
     pub total_internal_reflections: u64,
@@ -68,6 +73,7 @@ impl Tally {
         self.photons_cut += o.photons_cut;
         self.photons_filtered += o.photons_filtered;
         self.photons_lost += o.photons_lost;
+        self.photons_absorbed += o.photons_absorbed;
         self.flux_emitted += o.flux_emitted;
         self.flux_caustics += o.flux_caustics;
         self.flux_direct += o.flux_direct;
@@ -77,6 +83,7 @@ impl Tally {
         self.flux_cut += o.flux_cut;
         self.flux_filtered += o.flux_filtered;
         self.flux_lost += o.flux_lost;
+        self.flux_absorbed += o.flux_absorbed;
         self.refractions += o.refractions;
         self.reflections += o.reflections;
         self.total_internal_reflections += o.total_internal_reflections;
@@ -91,7 +98,8 @@ impl Tally {
             + self.flux_escaped
             + self.flux_cut
             + self.flux_filtered
-            + self.flux_lost;
+            + self.flux_lost
+            + self.flux_absorbed;
         if self.flux_emitted > 0.0 {
             (self.flux_emitted - out).abs() / self.flux_emitted
         } else {
@@ -181,6 +189,8 @@ pub(crate) struct Tracer<'a> {
     pub radial_center: Option<DVec3>,
     /// IOR of each scene object (0 for receivers).
     pub ior: Vec<f64>,
+    /// Absorption coefficient inside each dielectric, 1/m (0 elsewhere).
+    pub absorption: Vec<f64>,
 }
 
 enum Interaction {
@@ -258,9 +268,17 @@ impl Tracer<'_> {
             .objects
             .iter()
             .map(|o| match o.material {
-                Material::Dielectric { ior } => ior as f64,
+                Material::Dielectric { ior, .. } => ior as f64,
                 Material::Mirror => MIRROR,
                 Material::Diffuse { .. } => 0.0,
+            })
+            .collect();
+        let absorption = scene
+            .objects
+            .iter()
+            .map(|o| match o.material {
+                Material::Dielectric { absorption, .. } => absorption as f64,
+                _ => 0.0,
             })
             .collect();
         Tracer {
@@ -272,6 +290,7 @@ impl Tracer<'_> {
             seed: p.seed,
             radial_center: p.radial_center.map(|c| c.as_dvec3()),
             ior,
+            absorption,
         }
     }
 
@@ -310,6 +329,15 @@ impl Tracer<'_> {
             if hit.receiver {
                 self.deposit(li, &hit, d, refr, refl, phi, out);
                 return;
+            }
+            let sigma = self.absorption[hit.object as usize];
+            if sigma > 0.0 && d.dot(hit.ng) > 0.0 {
+                // The segment that ends here ran inside this glass: Beer–Lambert, by Russian roulette.
+                if rng.next_f64() >= (-sigma * (hit.pos - o).length()).exp() {
+                    t.photons_absorbed += 1;
+                    t.flux_absorbed += phi;
+                    return;
+                }
             }
             if refr + refl >= BOUNCE_CAP {
                 t.photons_cut += 1;

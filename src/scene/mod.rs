@@ -69,6 +69,8 @@ pub enum Material {
     },
     Dielectric {
         ior: f32,
+        /// Beer–Lambert absorption coefficient inside the glass, 1/m (gray: the same for every wavelength).
+        absorption: f32,
     },
     /// A perfect specular reflector (reflects all light; exact transport only).
     Mirror,
@@ -477,6 +479,9 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
     let mf = |field: &str| f(&format!("material.{field}"));
     let material = match m.kind.get_ref().as_str() {
         "diffuse" => {
+            if let Some(x) = &m.absorption {
+                return Err(cx.err(x.span(), mf("absorption"), "a diffuse material has no `absorption`"));
+            }
             if let Some(x) = &m.ior {
                 return Err(cx.err(x.span(), mf("ior"), "a diffuse material has no `ior`"));
             }
@@ -505,9 +510,26 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
                     format!("index of refraction must be finite and > 0 (got {v})"),
                 ));
             }
-            Material::Dielectric { ior: v }
+            let absorption = match &m.absorption {
+                Some(a) => {
+                    let x = *a.get_ref();
+                    if !(x.is_finite() && x >= 0.0) {
+                        return Err(cx.err(
+                            a.span(),
+                            mf("absorption"),
+                            format!("absorption coefficient must be finite and >= 0 (1/m; got {x})"),
+                        ));
+                    }
+                    x
+                }
+                None => 0.0,
+            };
+            Material::Dielectric { ior: v, absorption }
         }
         "mirror" => {
+            if let Some(x) = &m.absorption {
+                return Err(cx.err(x.span(), mf("absorption"), "a mirror has no `absorption`"));
+            }
             if let Some(x) = &m.albedo {
                 return Err(cx.err(x.span(), mf("albedo"), "a mirror has no `albedo` (it reflects all light)"));
             }

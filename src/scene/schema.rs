@@ -79,4 +79,5 @@ pub struct MaterialDef {
     pub kind: S<String>,
     pub albedo: Option<S<ScalarOr3>>,
     pub ior: Option<S<f32>>,
+    pub absorption: Option<S<f32>>,
 }

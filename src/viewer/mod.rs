@@ -663,7 +663,7 @@ impl Viewer {
     /// The first dielectric's index of refraction (all of them change together).
     fn ior(&self) -> Option<f32> {
         self.renderer.scene.refractors().find_map(|o| match o.material {
-            Material::Dielectric { ior } => Some(ior),
+            Material::Dielectric { ior, .. } => Some(ior),
             _ => None,
         })
     }
@@ -681,7 +681,7 @@ impl Viewer {
         let mut scene = self.renderer.scene.clone();
         let mut changed = false;
         for o in scene.objects.iter_mut() {
-            if let Material::Dielectric { ior } = &mut o.material {
+            if let Material::Dielectric { ior, .. } = &mut o.material {
                 *ior = (*ior + delta).clamp(1.0, 4.0);
                 changed = true;
             }
