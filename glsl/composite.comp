@@ -16,6 +16,7 @@ layout(set = 0, binding = 3) uniform sampler2D t_front_aux;     // refractor fro
 layout(set = 0, binding = 4) uniform sampler2D t_back;          // refractor back: normal, eye distance
 layout(set = 0, binding = 5) uniform sampler2D t_radiance_lin;  // the radiance buffer, linear filtering
 layout(set = 0, binding = 6, rgba8) uniform writeonly image2D o_beauty;
+layout(set = 0, binding = 7, rgba32f) uniform writeonly image2D o_hdr;  // linear radiance, before exposure
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
@@ -88,4 +89,5 @@ void main() {
         L = environment(rd);
     }
     imageStore(o_beauty, p, vec4(tonemap(L * u_frame.scene_max.w), 1.0));
+    imageStore(o_hdr, p, vec4(L, 1.0));
 }

@@ -46,6 +46,9 @@ pub struct MethodArgs {
     /// float atomics (compute), or the faster of the two for the device (auto).
     #[arg(long, value_enum, default_value_t = Settings::default().splat)]
     pub splat: Splat,
+    /// Beauty exposure in stops (EV), added to the automatic exposure before the ACES tone map.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
@@ -112,6 +115,7 @@ impl MethodArgs {
     pub fn settings(&self) -> AppResult<Settings> {
         let s = Settings {
             transport: self.transport,
+            exposure_ev: self.exposure,
             splat: self.splat,
             flux_threshold: self.flux_threshold,
             bvh_layout: self.bvh_layout,
@@ -300,12 +304,15 @@ impl Session {
 fn check_output(aov: Aov, out: &Path) -> AppResult<()> {
     let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     let want = if aov == Aov::Beauty { "png" } else { "exr" };
+    if aov == Aov::Beauty && ext == "exr" {
+        return Ok(());
+    }
     if ext != want {
         return Err(AppError::BadInput(format!(
             "--out {}: the {} AOV is written as .{want}",
             out.display(),
             match aov {
-                Aov::Beauty => "beauty",
+                Aov::Beauty | Aov::BeautyHdr => "beauty",
                 Aov::Caustics => "caustics",
                 Aov::Direct => "direct",
             }
@@ -467,6 +474,11 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
 pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     let aov: Aov = args.aov.parse()?;
     check_output(aov, &args.out)?;
+    // Beauty as EXR: the linear radiance before exposure and tone mapping.
+    let aov = match (aov, args.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase())) {
+        (Aov::Beauty, Some(e)) if e == "exr" => Aov::BeautyHdr,
+        (a, _) => a,
+    };
     if let Some(p) = &args.stats {
         image_io::check_output_dir(p)?;
     }
@@ -494,7 +506,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
         AovData::Rgba8 { width, height, rgba } => image_io::write_png(&args.out, *width, *height, rgba)?,
         AovData::Float { .. } => {
             let rgb = to_rgb(&image).expect("float image");
-            if let Some(area) = session.pixel_area() {
+            if let (Some(area), false) = (session.pixel_area(), aov == Aov::BeautyHdr) {
                 let flux: f64 = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
                 extra.insert("aov_flux_w".into(), json!(flux));
             }
@@ -530,7 +542,7 @@ fn exr_meta(session: &Session, aov: &str) -> image_io::ExrMeta {
     m.insert("camera".into(), session.camera.name.clone());
     m.insert("camera_kind".into(), camera_kind(&session.camera).into());
     m.insert("aov".into(), aov.into());
-    m.insert("units".into(), "W/m^2".into());
+    m.insert("units".into(), if aov == "beauty" { "W/(m^2 sr)" } else { "W/m^2" }.into());
     m.insert("transport".into(), json!(s.transport).as_str().unwrap_or_default().into());
     m.insert("method".into(), json!(s.method).as_str().unwrap_or_default().into());
     m.insert("level".into(), s.level.to_string());

@@ -787,6 +787,7 @@ impl Ctx<'_> {
                 b.image(img, &[Access::ColorAttachment], &[Access::ComputeSampled]);
             }
             b.image(&e.beauty, &[Access::FrameStart], &[Access::ComputeWrite]);
+            b.image(&e.hdr, &[Access::FrameStart], &[Access::ComputeWrite]);
         });
         self.p.composite.record(
             cmd,
@@ -797,12 +798,14 @@ impl Ctx<'_> {
                 front_aux: &e.front_aux,
                 back: &e.back,
                 beauty: &e.beauty,
+                hdr: &e.hdr,
                 nearest: self.nearest,
                 linear: self.linear,
             },
         );
         self.barrier(cmd, |b| {
             b.image(&e.beauty, &[Access::ComputeWrite], &[Access::TransferSrc]);
+            b.image(&e.hdr, &[Access::ComputeWrite], &[Access::TransferSrc]);
         });
     }
 
@@ -812,13 +815,15 @@ impl Ctx<'_> {
         let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
         let image: Option<&Image> = aov.map(|a| match a {
             Aov::Beauty => &t.eye.beauty,
+            Aov::BeautyHdr => &t.eye.hdr,
             Aov::Caustics => &t.eye.caustics,
             Aov::Direct => &t.eye.direct,
         });
         self.barrier(cmd, |b| {
             b.buffer(&t.readback, &[Access::FrameStart], &[Access::TransferDst]);
             if let Some(img) = image {
-                if !std::ptr::eq(img, &t.eye.beauty) {
+                // The composite's outputs are already transfer sources.
+                if !std::ptr::eq(img, &t.eye.beauty) && !std::ptr::eq(img, &t.eye.hdr) {
                     b.image(img, &[Access::ColorAttachment], &[Access::TransferSrc]);
                 }
             }

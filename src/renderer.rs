@@ -65,6 +65,8 @@ impl Views {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Aov {
     Beauty,
+    /// The beauty image before exposure and tone mapping: linear radiance, W/(m²·sr) (written as EXR).
+    BeautyHdr,
     Caustics,
     Direct,
 }
@@ -325,7 +327,7 @@ impl Renderer {
             camera: GpuView::from_camera(&views.camera),
             light_power: [power.x, power.y, power.z, light.intensity],
             scene_min: [lo.x, lo.y, lo.z, diameter],
-            scene_max: [hi.x, hi.y, hi.z, 0.6 / l_ref],
+            scene_max: [hi.x, hi.y, hi.z, 0.6 / l_ref * s.exposure_ev.exp2()],
             grid: [s.gbuffer_side(), s.gbuffer_level(), s.caustic_res, s.gbuffer_level() + 1],
             traversal: [
                 s.level,

@@ -66,6 +66,9 @@ impl Splat {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Settings {
     pub transport: Transport,
+    /// Beauty exposure in stops, on top of the automatic one (the brightest receiver's direct radiance at the
+    /// light's target maps to 0.6 before the tone map).
+    pub exposure_ev: f32,
     /// How splat records reach the caustic flux map.
     pub splat: Splat,
     /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
@@ -105,6 +108,7 @@ impl Default for Settings {
     fn default() -> Self {
         Settings {
             transport: Transport::Exact,
+            exposure_ev: 0.0,
             splat: Splat::Auto,
             flux_threshold: 1e-3,
             bvh_layout: crate::bvh::BvhLayout::Pair,
@@ -162,6 +166,9 @@ impl Settings {
         }
         if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
             return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
+        }
+        if !(self.exposure_ev.is_finite() && self.exposure_ev.abs() <= 32.0) {
+            return bad(format!("--exposure {}: must lie in [-32, 32] stops", self.exposure_ev));
         }
         if !(self.flux_threshold.is_finite() && (0.0..1.0).contains(&self.flux_threshold)) {
             return bad(format!("--flux-threshold {}: must lie in [0, 1)", self.flux_threshold));

@@ -44,6 +44,8 @@ pub struct EyeTargets {
     pub back: Image,
     pub refr_depth: Image,
     pub beauty: Image,
+    /// The beauty image's linear radiance (before exposure and tone mapping).
+    pub hdr: Image,
 }
 
 impl EyeTargets {
@@ -61,6 +63,7 @@ impl EyeTargets {
             back: img("eye refractor back", GEO_FORMAT, color)?,
             refr_depth: img("eye refractor depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
             beauty: img("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+            hdr: img("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
         })
     }
 }

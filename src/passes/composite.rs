@@ -18,6 +18,7 @@ pub struct CompositeInputs<'a> {
     pub front_aux: &'a Image,
     pub back: &'a Image,
     pub beauty: &'a Image,
+    pub hdr: &'a Image,
     pub nearest: &'a Sampler,
     pub linear: &'a Sampler,
 }
@@ -29,7 +30,7 @@ impl CompositePass {
             device,
             "composite",
             shaders::COMPOSITE_COMP.words(),
-            &[Uniform, Sampled, Sampled, Sampled, Sampled, Sampled, StorageImage],
+            &[Uniform, Sampled, Sampled, Sampled, Sampled, Sampled, StorageImage, StorageImage],
             0,
         )?;
         Ok(CompositePass { device: device.clone(), pipeline })
@@ -46,6 +47,7 @@ impl CompositePass {
                 Bind::Sampled(i.back, i.nearest),
                 Bind::Sampled(i.radiance, i.linear),
                 Bind::StorageImage(i.beauty),
+                Bind::StorageImage(i.hdr),
             ],
         );
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
