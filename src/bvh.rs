@@ -47,6 +47,11 @@ pub struct SingleNode {
     pub hi: [f32; 4],
 }
 
+/// "threaded" layout: one box per node in depth-first order, with an escape link, for a stackless traversal: a
+/// hit inner node continues at the next node (its first child), a missed node or a finished leaf at its escape.
+/// `lo.w`: escape index bits (`EMPTY`: done); `hi.w`: count << 29 | first triangle (count 0: inner node).
+pub type ThreadedNode = SingleNode;
+
 /// One instance (`BvhInstance` in bvh.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -62,6 +67,7 @@ pub struct GpuInstance {
     /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
     /// coefficient inside a dielectric (1/m); w: unused.
     pub material: [f32; 4],
+    /// x: root node index bits in the threaded layout; y, z, w: unused.
     pub pad: [f32; 4],
 }
 
@@ -86,6 +92,8 @@ pub enum BvhLayout {
     Pair,
     /// One box per node (32-byte nodes).
     Single,
+    /// One box per node in depth-first order with escape links: a stackless traversal (32-byte nodes).
+    Threaded,
 }
 
 /// The host side of the scene BVH: everything the GPU buffers hold, plus build statistics.
@@ -93,6 +101,7 @@ pub enum BvhLayout {
 pub struct SceneBvh {
     pub pair_nodes: Vec<PairNode>,
     pub single_nodes: Vec<SingleNode>,
+    pub threaded_nodes: Vec<ThreadedNode>,
     pub instances: Vec<GpuInstance>,
     pub triangles: Vec<GpuTriangle>,
     /// Per-vertex normals of each triangle (same order as `triangles`).
@@ -129,6 +138,7 @@ impl SceneBvh {
             if tris.is_empty() {
                 continue;
             }
+            let threaded_root = bvh.threaded_nodes.len() as u32;
             let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
             let (lo, hi) =
                 tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
@@ -143,7 +153,7 @@ impl SceneBvh {
                 lo: [lo.x, lo.y, lo.z, f32::from_bits(pair_root)],
                 hi: [hi.x, hi.y, hi.z, f32::from_bits(single_root)],
                 material,
-                pad: [0.0; 4],
+                pad: [f32::from_bits(threaded_root), 0.0, 0.0, 0.0],
             });
             bvh.local_bounds.push((lo, hi));
         }
@@ -201,6 +211,37 @@ impl SceneBvh {
             self.single_nodes.push(SingleNode { lo: b4(lo, first), hi: b4(hi, count) });
         }
 
+        // Threaded layout: depth-first order, escape = the node after the subtree.
+        let threaded_base = self.threaded_nodes.len() as u32;
+        let mut order = Vec::new();
+        let mut st = vec![0usize];
+        while let Some(k) = st.pop() {
+            order.push(k);
+            if nodes[k].prim_count == 0 {
+                st.push(nodes[k].first_index as usize + 1);
+                st.push(nodes[k].first_index as usize);
+            }
+        }
+        let mut pos = vec![0u32; nodes.len()];
+        for (i, &k) in order.iter().enumerate() {
+            pos[k] = i as u32;
+        }
+        let mut size = vec![1u32; nodes.len()];
+        for &k in order.iter().rev() {
+            if nodes[k].prim_count == 0 {
+                let f = nodes[k].first_index as usize;
+                size[k] = 1 + size[f] + size[f + 1];
+            }
+        }
+        for &k in &order {
+            let n = &nodes[k];
+            let (lo, hi) = aabb(k);
+            let next = pos[k] + size[k];
+            let escape = if next as usize >= order.len() { EMPTY } else { threaded_base + next };
+            let info = if n.prim_count == 0 { 0 } else { (n.prim_count << 29) | (tri_base + n.first_index) };
+            self.threaded_nodes.push(ThreadedNode { lo: b4(lo, escape), hi: b4(hi, info) });
+        }
+
         // Pair layout: inner nodes only, depth first (the nearer-first traversal then walks mostly forward).
         let pair_base = self.pair_nodes.len() as u32;
         let child = |k: usize| -> ([f32; 4], [f32; 4], Option<usize>) {
@@ -250,6 +291,7 @@ impl SceneBvh {
         match layout {
             BvhLayout::Pair => self.pair_nodes.len() * size_of::<PairNode>(),
             BvhLayout::Single => self.single_nodes.len() * size_of::<SingleNode>(),
+            BvhLayout::Threaded => self.threaded_nodes.len() * size_of::<ThreadedNode>(),
         }
     }
 
@@ -267,7 +309,12 @@ impl SceneBvh {
             let of = &inst.object_from_world;
             let lo_ = Vec3::new(m(of[0], o, 1.0), m(of[1], o, 1.0), m(of[2], o, 1.0));
             let ld = Vec3::new(m(of[0], d, 0.0), m(of[1], d, 0.0), m(of[2], d, 0.0));
-            let root = if layout == BvhLayout::Pair { inst.lo[3] } else { inst.hi[3] }.to_bits();
+            let root = match layout {
+                BvhLayout::Pair => inst.lo[3],
+                BvhLayout::Single => inst.hi[3],
+                BvhLayout::Threaded => inst.pad[0],
+            }
+            .to_bits();
             let mut visit = |first: u32, count: u32, t_best: &mut f32| {
                 for tri in first..first + count {
                     let p = self.triangles[tri as usize].p.map(|v| Vec3::from_slice(&v[..3]));
@@ -299,6 +346,25 @@ impl SceneBvh {
                             } else {
                                 stack.push(idx);
                             }
+                        }
+                    }
+                }
+                BvhLayout::Threaded => {
+                    let mut n = root;
+                    while n != EMPTY {
+                        let node = &self.threaded_nodes[n as usize];
+                        let (l, h) = (Vec3::from_slice(&node.lo[..3]), Vec3::from_slice(&node.hi[..3]));
+                        let escape = node.lo[3].to_bits();
+                        if slab(l, h, lo_, inv, t_best).is_some() {
+                            let info = node.hi[3].to_bits();
+                            if info >> 29 > 0 {
+                                visit(info & 0x1FFF_FFFF, info >> 29, &mut t_best);
+                                n = escape;
+                            } else {
+                                n += 1;
+                            }
+                        } else {
+                            n = escape;
                         }
                     }
                 }
@@ -404,7 +470,7 @@ mod tests {
             let target = Vec3::new(0.6 * (rnd() - 0.5), 0.25 + 0.5 * rnd(), 0.6 * (rnd() - 0.5));
             let d = (target - o).normalize();
             let want = brute(&bvh, o, d);
-            for layout in [BvhLayout::Pair, BvhLayout::Single] {
+            for layout in [BvhLayout::Pair, BvhLayout::Single, BvhLayout::Threaded] {
                 let got = bvh.intersect(layout, o, d, f32::INFINITY);
                 assert_eq!(got.map(|(t, _, tri)| (t, tri)), want, "{layout:?} ray {o} {d}");
             }

@@ -444,7 +444,11 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
             "build_ms": bvh.build_ms,
             "triangles": bvh.triangle_count,
             "instances": bvh.instance_count,
-            "nodes": match r.settings.bvh_layout { BvhLayout::Pair => bvh.pair_node_count, BvhLayout::Single => bvh.single_node_count },
+            "nodes": match r.settings.bvh_layout {
+                BvhLayout::Pair => bvh.pair_node_count,
+                BvhLayout::Single => bvh.single_node_count,
+                BvhLayout::Threaded => bvh.threaded_node_count,
+            },
         },
         "flux_threshold": r.settings.flux_threshold,
         "max_interactions": MAX_INTERACTIONS,

@@ -27,6 +27,7 @@ pub struct SceneBuffers {
 pub struct BvhBuffers {
     pub pair_nodes: Buffer,
     pub single_nodes: Buffer,
+    pub threaded_nodes: Buffer,
     pub triangles: Buffer,
     pub normals: Buffer,
     pub instances: Buffer,
@@ -34,6 +35,7 @@ pub struct BvhBuffers {
     pub build_ms: f64,
     pub pair_node_count: usize,
     pub single_node_count: usize,
+    pub threaded_node_count: usize,
     pub triangle_count: usize,
     pub instance_count: usize,
 }
@@ -62,6 +64,14 @@ impl BvhBuffers {
         Ok(BvhBuffers {
             pair_nodes: upload_buffer(device, recorder, "bvh pair nodes", &nonempty(&bvh.pair_nodes), storage)?,
             single_nodes: upload_buffer(device, recorder, "bvh single nodes", &nonempty(&bvh.single_nodes), storage)?,
+            threaded_nodes: upload_buffer(
+                device,
+                recorder,
+                "bvh threaded nodes",
+                &nonempty(&bvh.threaded_nodes),
+                storage,
+            )?,
+            threaded_node_count: bvh.threaded_nodes.len(),
             triangles: upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?,
             normals: upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?,
             instances: upload_buffer(device, recorder, "bvh instances", &instances, storage)?,

@@ -2,7 +2,8 @@
 // linearly against their world bounds, the ray is moved into each instance's BVH space, and its bottom-level tree
 // is walked with a short stack. Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013), as the
 // CPU reference does (there in f64): a ray cannot slip between two triangles that share an edge.
-// Needs photon_bindings (bindings 14-18). BVH_LAYOUT_SINGLE selects the one-box-per-node layout.
+// Needs photon_bindings (bindings 14-18, 20). BVH_LAYOUT_SINGLE selects the one-box-per-node layout,
+// BVH_LAYOUT_THREADED the stackless one with escape links; the default is the pair layout.
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
@@ -96,7 +97,27 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
         vec3 inv = 1.0 / d;
         Shear sh = bvh_shear(d);
         uint sp = 0u;
-#ifdef BVH_LAYOUT_SINGLE
+#if defined(BVH_LAYOUT_THREADED)
+        // Stackless: a hit inner node continues at its first child (the next node), a miss or a finished leaf at
+        // its escape link.
+        uint n = floatBitsToUint(I.pad.x);
+        while (n != BVH_EMPTY) {
+            BvhNodeSingle nd = bvh_nodes_threaded[n];
+            uint escape = floatBitsToUint(nd.lo.w);
+            if (!isinf(bvh_slab(nd.lo.xyz, nd.hi.xyz, o, inv, hit.t))) {
+                uint info = floatBitsToUint(nd.hi.w);
+                uint count = info >> 29;
+                if (count > 0u) {
+                    bvh_leaf(sh, o, info & 0x1FFFFFFFu, count, ii, hit, found);
+                    n = escape;
+                } else {
+                    n = n + 1u;
+                }
+            } else {
+                n = escape;
+            }
+        }
+#elif defined(BVH_LAYOUT_SINGLE)
         stack[sp++] = floatBitsToUint(I.hi.w);
         while (sp > 0u) {
             BvhNodeSingle n = bvh_nodes_single[stack[--sp]];

@@ -42,7 +42,7 @@ struct BvhInstance {
     vec4 lo;        // world bounds; w: root node bits (pair layout)
     vec4 hi;        // w: root node bits (single layout)
     vec4 material;  // x: IOR (dielectric) or albedo; y: 1 dielectric, 0 diffuse receiver
-    vec4 pad;
+    vec4 pad;       // x: root node bits (threaded layout)
 };
 // Two node layouts (src/bvh.rs): "pair" holds both children's boxes (loK.w: child node or first triangle, hiK.w:
 // triangle count, 0 for an inner child); "single" one box per node (lo.w: first child or triangle, hi.w: count).
@@ -58,6 +58,8 @@ uint bvh_instance_count() { return uint(bvh_instances.length()); }
 // The compute splat's target: the caustic flux map as one float per texel (row-major), added to atomically, then
 // copied into the flux image that the resolve reads.
 layout(std430, set = 0, binding = 19) buffer FluxBuf { float flux_texels[]; };
+// The threaded layout (src/bvh.rs): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
+layout(std430, set = 0, binding = 20) readonly buffer BvhNodesThreaded { BvhNodeSingle bvh_nodes_threaded[]; };
 
 // Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
 // groups (lavapipe's limit).

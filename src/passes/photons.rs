@@ -10,7 +10,7 @@ use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc
 use ash::vk;
 use std::sync::Arc;
 
-const LAYOUT: [BindKind; 20] = [
+const LAYOUT: [BindKind; 21] = [
     BindKind::Uniform, // frame
     BindKind::Storage, // traversal state
     BindKind::Storage, // photon buffer
@@ -31,6 +31,7 @@ const LAYOUT: [BindKind; 20] = [
     BindKind::Storage, // BVH instances
     BindKind::Storage, // BVH nodes (single layout)
     BindKind::Storage, // flux map as texels (compute splat)
+    BindKind::Storage, // BVH nodes (threaded layout)
 ];
 
 /// Byte offsets in the indirect buffer: one dispatch command per traversal level, the photon trace's
@@ -63,7 +64,7 @@ pub struct PhotonBindings<'a> {
 }
 
 impl PhotonBindings<'_> {
-    fn binds(&self) -> [Bind<'_>; 20] {
+    fn binds(&self) -> [Bind<'_>; 21] {
         [
             Bind::Uniform(self.ubo),
             Bind::Storage(self.state),
@@ -85,6 +86,7 @@ impl PhotonBindings<'_> {
             Bind::Storage(&self.bvh.instances),
             Bind::Storage(&self.bvh.single_nodes),
             Bind::Storage(self.flux_texels),
+            Bind::Storage(&self.bvh.threaded_nodes),
         ]
     }
 }
@@ -118,6 +120,7 @@ pub struct PhotonPasses {
     trace: Pipeline,
     wave_pair: Pipeline,
     wave_single: Pipeline,
+    wave_threaded: Pipeline,
     transport: Pipeline,
     splat: Pipeline,
     /// None when the device has no float atomics on buffers.
@@ -161,6 +164,7 @@ impl PhotonPasses {
             trace: compute("photon trace", shaders::TRACE_COMP.words())?,
             wave_pair: compute("transport wave", shaders::WAVE_COMP.words())?,
             wave_single: compute("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words())?,
+            wave_threaded: compute("transport wave (threaded BVH nodes)", shaders::WAVE_COMP_THREADED.words())?,
             transport: compute("transport state", shaders::TRANSPORT_COMP.words())?,
             splat_compute: if device.info.float_atomic_add {
                 Some(compute("compute splat", shaders::SPLAT_COMP.words())?)
@@ -235,7 +239,11 @@ impl PhotonPasses {
 
     /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
     pub fn wave(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, wave: u32, may_abort: bool, layout: BvhLayout) {
-        let p = if layout == BvhLayout::Pair { &self.wave_pair } else { &self.wave_single };
+        let p = match layout {
+            BvhLayout::Pair => &self.wave_pair,
+            BvhLayout::Single => &self.wave_single,
+            BvhLayout::Threaded => &self.wave_threaded,
+        };
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level: wave, mode: may_abort as u32, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
