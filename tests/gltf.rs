@@ -94,7 +94,7 @@ fn gltf_scene() -> (Value, Vec<u8>) {
     let doc = json!({
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
-                           "KHR_materials_volume", "EXT_made_up"],
+                           "KHR_materials_volume", "KHR_materials_dispersion", "EXT_made_up"],
         "scene": 0,
         "scenes": [{"nodes": [0, 1, 2, 3]}],
         "nodes": [
@@ -110,7 +110,8 @@ fn gltf_scene() -> (Value, Vec<u8>) {
             {"name": "glass", "extensions": {
                 "KHR_materials_transmission": {"transmissionFactor": 1.0},
                 "KHR_materials_ior": {"ior": 1.5},
-                "KHR_materials_volume": {"thicknessFactor": 0.4, "attenuationDistance": 1.0}}}
+                "KHR_materials_volume": {"thicknessFactor": 0.4, "attenuationDistance": 1.0},
+                "KHR_materials_dispersion": {"dispersion": 20.0}}}
         ],
         "cameras": [{"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.01, "zfar": 10.0}}],
         "extensions": {"KHR_lights_punctual": {"lights": [
@@ -244,12 +245,68 @@ fn gltf_renders_the_same_flux_as_toml() {
     a.extend_from_slice(&args);
     let stderr = ok(&a);
     assert!(stderr.contains("KHR_materials_volume") && stderr.contains("\"glass\""), "{stderr}");
+    assert!(stderr.contains("KHR_materials_dispersion"), "{stderr}");
     assert!(stderr.contains("EXT_made_up"), "{stderr}");
     let gs = read_json(&stats);
     assert_validation_clean(&gs);
     let (fg, ft) = (gs["aov_flux_w"].as_f64().unwrap(), ts["aov_flux_w"].as_f64().unwrap());
     assert!(ft > 0.01, "the TOML twin has a caustic: {ft}");
     assert!(((fg - ft) / ft).abs() < 1e-4, "glTF {fg} W vs TOML {ft} W");
+    // The default transport (exact: every path) agrees too.
+    let exact = ["--camera", "top", "--aov", "caustics", "--size", "64x64", "--level", "1", "--transport", "exact"];
+    let (ge, _) = render(&dir, "gltf_exact", g.to_str().unwrap(), &exact);
+    let (te, _) = render(&dir, "toml_exact", t.to_str().unwrap(), &exact);
+    let (fg, ft) = (ge["aov_flux_w"].as_f64().unwrap(), te["aov_flux_w"].as_f64().unwrap());
+    assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "exact: glTF {fg} W vs TOML {ft} W");
+}
+
+/// Out-of-range and wrong-typed values anywhere in the buffers, views, accessors, nodes and meshes: each load is
+/// an error or a scene, never a panic.
+#[test]
+fn mutated_gltf_never_panics() {
+    let dir = out_dir("gltf_mutated");
+    let (doc, bin) = gltf_scene();
+    let wild = [json!(-1), json!(0), json!(3), json!(4294967295u64), json!(1e300), json!("x"), json!(null), json!([])];
+    let mut targets: Vec<(String, Vec<String>)> = Vec::new();
+    for (list, keys) in [
+        ("accessors", &["bufferView", "byteOffset", "componentType", "count", "type", "min"][..]),
+        ("bufferViews", &["buffer", "byteOffset", "byteLength", "byteStride"][..]),
+        ("nodes", &["mesh", "camera", "children", "translation", "rotation", "scale", "matrix"][..]),
+        ("buffers", &["byteLength"][..]),
+    ] {
+        for i in 0..doc[list].as_array().unwrap().len() {
+            targets.push((format!("{list}/{i}"), keys.iter().map(|k| k.to_string()).collect()));
+        }
+    }
+    let mut loads = 0;
+    for (at, keys) in &targets {
+        for k in keys {
+            for w in &wild {
+                let mut d = doc.clone();
+                let mut v = &mut d;
+                for part in at.split('/') {
+                    v = match part.parse::<usize>() {
+                        Ok(i) => &mut v[i],
+                        Err(_) => &mut v[part],
+                    };
+                }
+                v[k.as_str()] = w.clone();
+                let p = write(&dir, "m.gltf", embedded(d, &bin));
+                let r = std::panic::catch_unwind(|| Scene::load(&p).map(|s| s.triangle_count()));
+                assert!(r.is_ok(), "{at}.{k} = {w}: panicked");
+                loads += 1;
+            }
+        }
+    }
+    // Truncations of the GLB at every 16th byte.
+    let g = glb(&doc, &bin);
+    for n in (0..g.len()).step_by(16) {
+        let p = write(&dir, "m.glb", &g[..n]);
+        let r = std::panic::catch_unwind(|| Scene::load(&p).map(|s| s.triangle_count()));
+        assert!(r.is_ok(), "GLB cut at {n}: panicked");
+        loads += 1;
+    }
+    assert!(loads > 300, "{loads}");
 }
 
 /// Load `text` through the CLI and expect exit code 2, every needle in stderr, and no panic.
