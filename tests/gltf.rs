@@ -228,6 +228,18 @@ fn gltf_and_glb_load_like_toml() {
     assert_eq!(s.objects[1].material, Material::Mirror);
     assert_eq!(s.lights[0].kind, LightKind::Directional);
     assert!((s.lights[0].intensity - 2.0).abs() < 1e-6);
+    // A perspective camera: yfov → fov; unnamed node and camera → `camera<k>`; an identity node looks down -z.
+    let mut p = doc.clone();
+    p["cameras"].as_array_mut().unwrap().push(json!({"type": "perspective",
+        "perspective": {"yfov": 0.7, "znear": 0.01, "aspectRatio": 1.5}}));
+    p["nodes"].as_array_mut().unwrap().push(json!({"camera": 1, "translation": [0.0, 0.5, 3.0]}));
+    p["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4]);
+    let s = Scene::load(&write(&dir, "persp.gltf", embedded(p, &bin))).unwrap();
+    let c = s.camera(Some("camera1")).unwrap();
+    assert_eq!(c.projection, Projection::Perspective { fov: 0.7 });
+    assert!(close(c.position, Vec3::new(0.0, 0.5, 3.0)) && close(c.up, Vec3::Y));
+    assert!(close((c.target - c.position).normalize(), Vec3::NEG_Z));
+    assert_eq!(s.camera(None).unwrap().name, "top");
 }
 
 #[test]
