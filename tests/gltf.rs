@@ -270,6 +270,17 @@ fn gltf_renders_the_same_flux_as_toml() {
     let (te, _) = render(&dir, "toml_exact", t.to_str().unwrap(), &exact);
     let (fg, ft) = (ge["aov_flux_w"].as_f64().unwrap(), te["aov_flux_w"].as_f64().unwrap());
     assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "exact: glTF {fg} W vs TOML {ft} W");
+    // A directional light (683 lux = 1 W/m²) on a node at the origin, inside the scene: the glTF light is at
+    // infinity, so its beam must still light the whole scene, like the TOML light 2 m up.
+    let (mut doc, bin) = gltf_scene();
+    doc["extensions"]["KHR_lights_punctual"]["lights"][0] = json!({"type": "directional", "intensity": 683.0});
+    doc["nodes"][3]["translation"] = json!([0.0, 0.0, 0.0]);
+    let g = write(&dir, "dir.gltf", embedded(doc, &bin));
+    let t = write(&dir, "dir.toml", TOML.replace("\"spot\"", "\"directional\"").replace("cone_deg = 40.0\n", ""));
+    let (gd, _) = render(&dir, "gltf_dir", g.to_str().unwrap(), &args);
+    let (td, _) = render(&dir, "toml_dir", t.to_str().unwrap(), &args);
+    let (fg, ft) = (gd["aov_flux_w"].as_f64().unwrap(), td["aov_flux_w"].as_f64().unwrap());
+    assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "directional: glTF {fg} W vs TOML {ft} W");
 }
 
 /// Out-of-range and wrong-typed values anywhere in the buffers, views, accessors, nodes and meshes: each load is

@@ -132,6 +132,15 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
     if out.objects.is_empty() {
         return Err(cx.err("meshes", "the scene has no triangle meshes"));
     }
+    // A glTF directional light is at infinity; ours starts its beam at `position`. Start it just outside the
+    // scene's bounding sphere, up-beam, so that it lights everything.
+    let (lo, hi) = out.bounds();
+    let (center, radius) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+    for l in out.lights.iter_mut().filter(|l| l.kind == LightKind::Directional) {
+        let dir = (l.target - l.position).normalize();
+        l.position = center - dir * (radius * 1.01 + 1e-3);
+        l.target = l.position + dir;
+    }
     Ok(out)
 }
 
