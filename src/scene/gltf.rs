@@ -312,6 +312,9 @@ fn visit(
                 continue;
             }
             let m = m.transformed(world);
+            if m.positions.iter().any(|v| !v.is_finite()) {
+                return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
+            }
             let material = match p.material().index() {
                 Some(i) => materials[i],
                 None => default_material,
