@@ -3,6 +3,7 @@
 //! Errors name the file, the line and the field (`sphere.toml:23: object[1] "glass".material.ior: ...`), and are
 //! reported by the CLI with exit code 2.
 
+pub mod gltf;
 pub mod mesh;
 mod schema;
 pub mod view;
@@ -22,6 +23,9 @@ pub enum SceneError {
     Syntax { file: String, line: usize, column: usize, message: String },
     #[error("{file}:{line}: {field}: {message}")]
     Field { file: String, line: usize, field: String, message: String },
+    /// A glTF file: `path` is the JSON path (`meshes[0].primitives[1].mode`).
+    #[error("{file}: {path}: {message}")]
+    Gltf { file: String, path: String, message: String },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -129,6 +133,9 @@ fn finite3(v: [f32; 3]) -> bool {
 
 impl Scene {
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        if gltf::is_gltf(path) {
+            return gltf::load(path);
+        }
         let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
             file: path.display().to_string(),
             message: format!("cannot read scene: {e}"),

@@ -1,0 +1,529 @@
+//! glTF 2.0 import (`.gltf` and `.glb`): meshes baked to world space with their node transforms, cameras, one
+//! KHR_lights_punctual spot or directional light, and the materials the renderer has (docs/scenes.md, "glTF").
+//!
+//! Every error is a [`SceneError::Gltf`] naming the file and the JSON path (`meshes[0].primitives[1].mode`);
+//! the CLI reports it with exit code 2. The file is validated before use and accessors are bounds-checked here,
+//! so a corrupt file is an error, never a panic.
+
+use super::{Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError};
+use glam::{Mat4, Vec3};
+use gltf::json::validation::{Error as VError, Validate};
+use std::path::Path;
+
+/// Luminous efficacy used to turn photometric glTF units into radiometric ones: candela → W/sr, lux → W/m².
+pub const LUMENS_PER_WATT: f32 = 683.0;
+
+/// Extensions whose data is read (or, for lights, read and refused where the renderer lacks the kind).
+const SUPPORTED: &[&str] = &["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior"];
+/// Extensions that are recognized, warned about and ignored: the renderer has no absorption or dispersion yet.
+const IGNORED: &[(&str, &str)] =
+    &[("KHR_materials_volume", "absorption (volume attenuation)"), ("KHR_materials_dispersion", "dispersion")];
+
+/// The deepest node hierarchy accepted (the traversal is recursive).
+const MAX_DEPTH: usize = 256;
+
+struct Cx {
+    file: String,
+}
+
+impl Cx {
+    fn err(&self, path: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::Gltf { file: self.file.clone(), path: path.into(), message: message.into() }
+    }
+    fn warn(&self, path: &str, message: &str) {
+        eprintln!("warning: {}: {path}: {message}", self.file);
+    }
+}
+
+pub fn is_gltf(path: &Path) -> bool {
+    matches!(
+        path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref(),
+        Some("gltf") | Some("glb")
+    )
+}
+
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path)
+        .map_err(|e| SceneError::Io { file: file.clone(), message: format!("cannot read scene: {e}") })?;
+    parse(&bytes, path)
+}
+
+/// Parse glTF JSON or GLB bytes; `path` locates the file for messages and external buffers.
+pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
+    let cx = Cx { file: path.display().to_string() };
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
+        gltf::Error::Deserialize(j) => SceneError::Syntax {
+            file: cx.file.clone(),
+            line: j.line(),
+            column: j.column(),
+            message: format!("not valid glTF JSON: {j}"),
+        },
+        gltf::Error::Binary(b) => cx.err("(GLB container)", format!("not a valid GLB file: {b}")),
+        other => cx.err("(file)", format!("not a valid glTF file: {other}")),
+    })?;
+    let root = document.as_json();
+
+    // Extensions first: a required extension we cannot honor makes everything else meaningless.
+    let known = |e: &str| SUPPORTED.contains(&e) || IGNORED.iter().any(|(n, _)| *n == e);
+    for (i, e) in root.extensions_required.iter().enumerate() {
+        if !known(e) {
+            return Err(cx.err(
+                format!("extensionsRequired[{i}]"),
+                format!(
+                    "the file requires extension `{e}`, which is not supported (supported: {})",
+                    SUPPORTED.join(", ")
+                ),
+            ));
+        }
+    }
+    for (i, e) in root.extensions_used.iter().enumerate() {
+        if !known(e) {
+            cx.warn(&format!("extensionsUsed[{i}]"), &format!("extension `{e}` is not supported and is ignored"));
+        }
+    }
+
+    // The crate's validation: indices in range, required fields present, enums valid. Required extensions were
+    // checked above (the crate does not know the ones we ignore).
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |p: &dyn Fn() -> gltf::json::Path, e: VError| {
+        let p = p().to_string();
+        if !(p.starts_with("extensionsRequired") && matches!(e, VError::Unsupported)) {
+            problems.push((p, e));
+        }
+    });
+    if let Some((p, e)) = problems.into_iter().next() {
+        return Err(cx.err(p, e.to_string().to_lowercase()));
+    }
+
+    let buffers = load_buffers(&cx, &document, blob, path)?;
+
+    // Materials, converted once (and warned about once).
+    let materials = document.materials().map(|m| material(&cx, &m)).collect::<Result<Vec<_>, _>>()?;
+    // The glTF default material: white, metallic 1, roughness 1 → diffuse white.
+    let default_material = Material::Diffuse { albedo: Vec3::ONE };
+
+    let scene = document.default_scene().or_else(|| document.scenes().next());
+    let roots: Vec<gltf::Node> = match &scene {
+        Some(s) => s.nodes().collect(),
+        None => {
+            // No scene: every node that is nobody's child is a root.
+            let mut child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    child[c.index()] = true;
+                }
+            }
+            document.nodes().filter(|n| !child[n.index()]).collect()
+        }
+    };
+
+    let mut out = Scene { path: path.to_path_buf(), lights: Vec::new(), cameras: Vec::new(), objects: Vec::new() };
+    let mut visiting = vec![false; document.nodes().len()];
+    for n in roots {
+        visit(&cx, &n, Mat4::IDENTITY, &buffers, &materials, default_material, &mut visiting, &mut out)?;
+    }
+    if out.lights.is_empty() {
+        return Err(cx.err(
+            "extensions.KHR_lights_punctual",
+            "the scene needs a light: a KHR_lights_punctual spot or directional light on a node",
+        ));
+    }
+    if out.objects.is_empty() {
+        return Err(cx.err("meshes", "the scene has no triangle meshes"));
+    }
+    // A glTF directional light is at infinity; ours starts its beam at `position`. Start it just outside the
+    // scene's bounding sphere, up-beam, so that it lights everything.
+    let (lo, hi) = out.bounds();
+    let (center, radius) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+    for l in out.lights.iter_mut().filter(|l| l.kind == LightKind::Directional) {
+        let dir = (l.target - l.position).normalize();
+        l.position = center - dir * (radius * 1.01 + 1e-3);
+        l.target = l.position + dir;
+    }
+    Ok(out)
+}
+
+fn load_buffers(
+    cx: &Cx,
+    document: &gltf::Document,
+    mut blob: Option<Vec<u8>>,
+    path: &Path,
+) -> Result<Vec<Vec<u8>>, SceneError> {
+    let mut out = Vec::new();
+    for b in document.buffers() {
+        let at = format!("buffers[{}]", b.index());
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => {
+                blob.take().ok_or_else(|| cx.err(&at, "has no `uri` and the file has no GLB binary chunk"))?
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (_, payload) = rest
+                        .split_once(";base64,")
+                        .ok_or_else(|| cx.err(format!("{at}.uri"), "a data URI must be base64 (`data:...;base64,`)"))?;
+                    base64_decode(payload)
+                        .ok_or_else(|| cx.err(format!("{at}.uri"), "the data URI is not valid base64"))?
+                } else {
+                    let full = path.parent().unwrap_or(Path::new("")).join(percent_decode(uri));
+                    std::fs::read(&full)
+                        .map_err(|e| cx.err(format!("{at}.uri"), format!("cannot read {}: {e}", full.display())))?
+                }
+            }
+        };
+        if data.len() < b.length() {
+            return Err(cx.err(
+                format!("{at}.byteLength"),
+                format!("says {} bytes but the data has {}", b.length(), data.len()),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            // Bytes, not `&s[..]`: a `%` before a multi-byte character must not split it.
+            if let Some(v) = std::str::from_utf8(&b[i + 1..i + 3]).ok().and_then(|h| u8::from_str_radix(h, 16).ok()) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn base64_decode(s: &str) -> Option<Vec<u8>> {
+    let val = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        } as u32)
+    };
+    let digits: Vec<u8> = s.bytes().filter(|c| !c.is_ascii_whitespace()).collect();
+    let digits = digits.strip_suffix(b"==").or_else(|| digits.strip_suffix(b"=")).unwrap_or(&digits);
+    if digits.len() % 4 == 1 {
+        return None;
+    }
+    let mut out = Vec::with_capacity(digits.len() * 3 / 4);
+    for chunk in digits.chunks(4) {
+        let mut acc = 0u32;
+        for (k, &c) in chunk.iter().enumerate() {
+            acc |= val(c)? << (18 - 6 * k);
+        }
+        let bytes = acc.to_be_bytes();
+        out.extend_from_slice(&bytes[1..chunk.len()]);
+    }
+    Some(out)
+}
+
+fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
+    let i = m.index().unwrap_or(0);
+    let at = format!("materials[{i}]");
+    let label = match m.name() {
+        Some(n) => format!("{at} \"{n}\""),
+        None => at.clone(),
+    };
+    if m.volume().is_some() {
+        cx.warn(&label, "KHR_materials_volume is ignored: the renderer has no absorption (volume attenuation) yet");
+    }
+    for (ext, what) in IGNORED.iter().filter(|(n, _)| *n != "KHR_materials_volume") {
+        if m.extensions().is_some_and(|x| x.contains_key(*ext)) {
+            cx.warn(&label, &format!("{ext} is ignored: the renderer has no {what} yet"));
+        }
+    }
+    let pbr = m.pbr_metallic_roughness();
+    if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+        let ior = m.ior().unwrap_or(1.5);
+        if !(ior.is_finite() && ior > 0.0) {
+            return Err(cx.err(
+                format!("{at}.extensions.KHR_materials_ior.ior"),
+                format!("index of refraction must be finite and > 0 (got {ior})"),
+            ));
+        }
+        return Ok(Material::Dielectric { ior });
+    }
+    if pbr.metallic_factor() == 1.0 && pbr.roughness_factor() == 0.0 {
+        return Ok(Material::Mirror);
+    }
+    let c = pbr.base_color_factor();
+    let albedo = Vec3::new(c[0], c[1], c[2]);
+    if !albedo.is_finite() {
+        return Err(cx.err(format!("{at}.pbrMetallicRoughness.baseColorFactor"), "must be finite"));
+    }
+    Ok(Material::Diffuse { albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE) })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn visit(
+    cx: &Cx,
+    node: &gltf::Node,
+    parent: Mat4,
+    buffers: &[Vec<u8>],
+    materials: &[Material],
+    default_material: Material,
+    visiting: &mut Vec<bool>,
+    out: &mut Scene,
+) -> Result<(), SceneError> {
+    let at = format!("nodes[{}]", node.index());
+    if visiting.iter().filter(|&&v| v).count() >= MAX_DEPTH {
+        return Err(cx.err(at, format!("the node hierarchy is deeper than {MAX_DEPTH} levels")));
+    }
+    if visiting[node.index()] {
+        return Err(cx.err(format!("{at}.children"), "the node hierarchy has a cycle"));
+    }
+    visiting[node.index()] = true;
+    let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+    if !world.is_finite() {
+        return Err(cx.err(at, "the node's transform is not finite"));
+    }
+    let origin = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+
+    if let Some(mesh) = node.mesh() {
+        let mesh_at = format!("meshes[{}]", mesh.index());
+        let base_name =
+            node.name().or(mesh.name()).map(str::to_string).unwrap_or_else(|| format!("mesh{}", mesh.index()));
+        let count = mesh.primitives().len();
+        for p in mesh.primitives() {
+            let p_at = format!("{mesh_at}.primitives[{}]", p.index());
+            let name = if count > 1 { format!("{base_name}#{}", p.index()) } else { base_name.clone() };
+            if p.mode() != gltf::mesh::Mode::Triangles {
+                return Err(cx.err(
+                    format!("{p_at}.mode"),
+                    format!("mesh \"{base_name}\": only triangles are supported (this primitive is {:?})", p.mode()),
+                ));
+            }
+            let m = primitive(cx, &p, &p_at, buffers)?;
+            if m.triangle_count() == 0 {
+                cx.warn(&p_at, &format!("mesh \"{base_name}\" has no triangles and is skipped"));
+                continue;
+            }
+            let m = m.transformed(world);
+            if m.positions.iter().any(|v| !v.is_finite()) {
+                return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
+            }
+            let material = match p.material().index() {
+                Some(i) => materials[i],
+                None => default_material,
+            };
+            out.objects.push(Object { name, material, mesh: m });
+        }
+    }
+
+    if let Some(cam) = node.camera() {
+        let cam_at = format!("cameras[{}]", cam.index());
+        let projection = match cam.projection() {
+            gltf::camera::Projection::Perspective(p) => {
+                let fov = p.yfov();
+                if !(fov > 0.0 && fov < std::f32::consts::PI) {
+                    return Err(cx.err(format!("{cam_at}.perspective.yfov"), format!("must lie in (0, π) (got {fov})")));
+                }
+                Projection::Perspective { fov }
+            }
+            gltf::camera::Projection::Orthographic(o) => {
+                let h = o.ymag();
+                if !(h.is_finite() && h > 0.0) {
+                    return Err(cx.err(format!("{cam_at}.orthographic.ymag"), format!("must be > 0 (got {h})")));
+                }
+                Projection::Orthographic { half_height: h }
+            }
+        };
+        let up = world.transform_vector3(Vec3::Y);
+        if forward == Vec3::ZERO || !up.is_finite() || forward.cross(up.normalize_or_zero()).length() < 1e-4 {
+            return Err(cx.err(at.clone(), "the camera node's transform is degenerate"));
+        }
+        let mut name = node
+            .name()
+            .or(cam.name())
+            .filter(|n| !n.is_empty())
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("camera{}", out.cameras.len()));
+        if out.cameras.iter().any(|c| c.name == name) {
+            let mut k = 2;
+            while out.cameras.iter().any(|c| c.name == format!("{name}-{k}")) {
+                k += 1;
+            }
+            cx.warn(&at, &format!("camera name `{name}` is taken; this camera is `{name}-{k}`"));
+            name = format!("{name}-{k}");
+        }
+        out.cameras.push(Camera { name, projection, position: origin, target: origin + forward, up: up.normalize() });
+    }
+
+    if let Some(light) = node.light() {
+        let l_at = format!("extensions.KHR_lights_punctual.lights[{}]", light.index());
+        let c = light.color();
+        let color = Vec3::new(c[0], c[1], c[2]);
+        if !color.is_finite() || color.min_element() < 0.0 {
+            return Err(cx.err(format!("{l_at}.color"), "components must be finite and >= 0"));
+        }
+        let raw = light.intensity();
+        if !(raw.is_finite() && raw >= 0.0) {
+            return Err(cx.err(format!("{l_at}.intensity"), format!("must be finite and >= 0 (got {raw})")));
+        }
+        let intensity = raw / LUMENS_PER_WATT;
+        if forward == Vec3::ZERO {
+            return Err(cx.err(at, "the light node's transform is degenerate"));
+        }
+        let (kind, cone) = match light.kind() {
+            gltf::khr_lights_punctual::Kind::Point => {
+                return Err(cx.err(
+                    format!("{l_at}.type"),
+                    "point lights are not supported yet (use a spot or a directional light)",
+                ))
+            }
+            gltf::khr_lights_punctual::Kind::Directional => (LightKind::Directional, 0.0),
+            gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, .. } => {
+                let deg = outer_cone_angle.to_degrees();
+                if !(deg > 0.0 && deg < 90.0) {
+                    return Err(cx.err(
+                        format!("{l_at}.spot.outerConeAngle"),
+                        format!("the cone half-angle must lie in (0, π/2) (got {outer_cone_angle})"),
+                    ));
+                }
+                (LightKind::Spot, outer_cone_angle)
+            }
+        };
+        out.lights.push(Light { kind, position: origin, target: origin + forward, cone, intensity, color });
+    }
+
+    for c in node.children() {
+        visit(cx, &c, world, buffers, materials, default_material, visiting, out)?;
+    }
+    visiting[node.index()] = false;
+    Ok(())
+}
+
+fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Result<Mesh, SceneError> {
+    let pos = p
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| cx.err(format!("{at}.attributes"), "a primitive needs a POSITION attribute"))?;
+    let positions = read_vec3(cx, &pos, &format!("{at}.attributes.POSITION"), buffers)?;
+    if positions.iter().any(|v| !v.is_finite()) {
+        return Err(cx.err(format!("{at}.attributes.POSITION"), "positions must be finite"));
+    }
+    let indices = match p.indices() {
+        Some(a) => read_indices(cx, &a, &format!("{at}.indices"), buffers)?,
+        None => (0..positions.len() as u32).collect(),
+    };
+    if indices.len() % 3 != 0 {
+        return Err(
+            cx.err(format!("{at}.indices"), format!("{} indices is not a whole number of triangles", indices.len()))
+        );
+    }
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+        return Err(
+            cx.err(format!("{at}.indices"), format!("index {bad} is out of range ({} vertices)", positions.len()))
+        );
+    }
+    let mut mesh = Mesh { positions, normals: Vec::new(), indices };
+    match p.get(&gltf::Semantic::Normals) {
+        Some(n) => {
+            let normals = read_vec3(cx, &n, &format!("{at}.attributes.NORMAL"), buffers)?;
+            if normals.len() != mesh.positions.len() || normals.iter().any(|v| !v.is_finite()) {
+                return Err(cx.err(format!("{at}.attributes.NORMAL"), "needs one finite normal per position"));
+            }
+            mesh.normals = normals.into_iter().map(|v| v.normalize_or_zero()).collect();
+        }
+        None => mesh.compute_normals(),
+    }
+    Ok(mesh)
+}
+
+/// The bytes of each element of a (non-sparse) accessor, bounds-checked.
+fn elements<'b>(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &'b [Vec<u8>]) -> Result<Vec<&'b [u8]>, SceneError> {
+    let acc_at = format!("accessors[{}]", a.index());
+    let ctx = |m: &str| cx.err(format!("{at} ({acc_at})"), m.to_string());
+    if a.sparse().is_some() {
+        return Err(ctx("sparse accessors are not supported"));
+    }
+    let view = a.view().ok_or_else(|| ctx("an accessor without a bufferView is not supported"))?;
+    let elem = a.size();
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(ctx("byteStride is smaller than the element"));
+    }
+    let buf = &buffers[view.buffer().index()];
+    let view_bytes = view
+        .offset()
+        .checked_add(view.length())
+        .and_then(|end| buf.get(view.offset()..end))
+        .ok_or_else(|| ctx("the bufferView lies outside its buffer"))?;
+    let n = a.count();
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let end = (n - 1).checked_mul(stride).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(a.offset()));
+    if !matches!(end, Some(e) if e <= view_bytes.len()) {
+        return Err(ctx("the accessor's data lies outside its bufferView"));
+    }
+    Ok((0..n).map(|i| &view_bytes[a.offset() + i * stride..a.offset() + i * stride + elem]).collect())
+}
+
+fn read_vec3(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<Vec3>, SceneError> {
+    use gltf::accessor::{DataType, Dimensions};
+    if a.dimensions() != Dimensions::Vec3 || a.data_type() != DataType::F32 || a.normalized() {
+        return Err(cx.err(
+            format!("{at} (accessors[{}])", a.index()),
+            format!(
+                "must be VEC3 of FLOAT (got {:?} of {:?}; quantized meshes are not supported)",
+                a.dimensions(),
+                a.data_type()
+            ),
+        ));
+    }
+    let f = |b: &[u8], k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
+    Ok(elements(cx, a, at, buffers)?.into_iter().map(|b| Vec3::new(f(b, 0), f(b, 1), f(b, 2))).collect())
+}
+
+fn read_indices(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<u32>, SceneError> {
+    use gltf::accessor::{DataType, Dimensions};
+    if a.dimensions() != Dimensions::Scalar {
+        return Err(cx.err(format!("{at} (accessors[{}])", a.index()), "indices must be SCALAR"));
+    }
+    let read: fn(&[u8]) -> u32 = match a.data_type() {
+        DataType::U8 => |b| b[0] as u32,
+        DataType::U16 => |b| u16::from_le_bytes([b[0], b[1]]) as u32,
+        DataType::U32 => |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        t => {
+            return Err(cx.err(
+                format!("{at} (accessors[{}])", a.index()),
+                format!("indices must be unsigned integers (got {t:?})"),
+            ))
+        }
+    };
+    Ok(elements(cx, a, at, buffers)?.into_iter().map(read).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_round_trips() {
+        assert_eq!(base64_decode("aGVsbG8=").unwrap(), b"hello");
+        assert_eq!(base64_decode("aGVsbG8h").unwrap(), b"hello!");
+        assert_eq!(base64_decode("aGVsbA==").unwrap(), b"hell");
+        assert!(base64_decode("a").is_none());
+        assert!(base64_decode("a*==").is_none());
+    }
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
+        assert_eq!(percent_decode("%aé%"), "%aé%");
+        assert_eq!(percent_decode("%C3%A9"), "é");
+    }
+}

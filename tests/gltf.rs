@@ -1,0 +1,386 @@
+//! glTF 2.0 import: a glTF file built here from the same meshes as a TOML scene loads into the same Scene and
+//! renders the same caustic flux; GLB carries the same data; bad files exit with code 2 and never panic.
+
+mod common;
+use caustics::scene::{mesh, LightKind, Material, Projection, Scene};
+use common::*;
+use glam::Vec3;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// The TOML twin of [`gltf_scene`]: the sphere scene's floor, light and `top` camera, with a 0.4 m glass cube.
+const TOML: &str = r#"[[light]]
+kind = "spot"
+position = [0.0, 2.0, 0.0]
+target = [0.0, 0.5, 0.0]
+cone_deg = 40.0
+intensity = 1.0
+
+[[camera]]
+name = "top"
+kind = "orthographic"
+position = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+half_height = 1.0
+
+[[object]]
+name = "floor"
+shape = "plane"
+size = [2.0, 2.0]
+material = { kind = "diffuse", albedo = 0.8 }
+
+[[object]]
+name = "glass"
+shape = "cube"
+size = 0.4
+translate = [0.0, 0.5, 0.0]
+material = { kind = "dielectric", ior = 1.5 }
+"#;
+
+fn b64(data: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            if k <= c.len() {
+                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+/// The glTF twin of [`TOML`] as JSON, and its binary buffer (not yet attached).
+fn gltf_scene() -> (Value, Vec<u8>) {
+    let mut bin = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut push = |bytes: Vec<u8>, acc: Value, bin: &mut Vec<u8>| -> usize {
+        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+        bin.extend_from_slice(&bytes);
+        let mut acc = acc;
+        acc["bufferView"] = json!(views.len() - 1);
+        accessors.push(acc);
+        accessors.len() - 1
+    };
+    let mut meshes = Vec::new();
+    for (name, m, material) in [("floor", mesh::plane(2.0, 2.0), 0), ("glass", mesh::cube(Vec3::splat(0.4)), 1)] {
+        let (lo, hi) = m.bounds();
+        let p = push(
+            bytemuck::cast_slice(&m.positions).to_vec(),
+            json!({"componentType": 5126, "count": m.positions.len(), "type": "VEC3",
+                   "min": lo.to_array(), "max": hi.to_array()}),
+            &mut bin,
+        );
+        let n = push(
+            bytemuck::cast_slice(&m.normals).to_vec(),
+            json!({"componentType": 5126, "count": m.normals.len(), "type": "VEC3"}),
+            &mut bin,
+        );
+        let i = push(
+            bytemuck::cast_slice(&m.indices).to_vec(),
+            json!({"componentType": 5125, "count": m.indices.len(), "type": "SCALAR"}),
+            &mut bin,
+        );
+        meshes.push(json!({"name": name, "primitives": [
+            {"attributes": {"POSITION": p, "NORMAL": n}, "indices": i, "material": material}]}));
+    }
+    // Rotation by -90° about x: the node's -Z (its view / beam axis) becomes world -y and its +Y becomes -z.
+    let down = [-std::f32::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2];
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
+                           "KHR_materials_volume", "KHR_materials_dispersion", "EXT_made_up"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2, 3]}],
+        "nodes": [
+            {"name": "floor", "mesh": 0},
+            {"name": "glass", "mesh": 1, "translation": [0.0, 0.5, 0.0]},
+            {"name": "top", "camera": 0, "translation": [0.0, 3.0, 0.0], "rotation": down},
+            {"name": "spot", "translation": [0.0, 2.0, 0.0], "rotation": down,
+             "extensions": {"KHR_lights_punctual": {"light": 0}}}
+        ],
+        "meshes": meshes,
+        "materials": [
+            {"name": "floor", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0}},
+            {"name": "glass", "extensions": {
+                "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_ior": {"ior": 1.5},
+                "KHR_materials_volume": {"thicknessFactor": 0.4, "attenuationDistance": 1.0},
+                "KHR_materials_dispersion": {"dispersion": 20.0}}}
+        ],
+        "cameras": [{"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.01, "zfar": 10.0}}],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "spot", "intensity": 683.0, "color": [1.0, 1.0, 1.0],
+             "spot": {"innerConeAngle": 0.0, "outerConeAngle": 40f32.to_radians()}}
+        ]}},
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    (doc, bin)
+}
+
+/// `doc` with its buffer embedded as a base64 data URI.
+fn embedded(mut doc: Value, bin: &[u8]) -> String {
+    doc["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", b64(bin)));
+    serde_json::to_string_pretty(&doc).unwrap()
+}
+
+/// `doc` and `bin` as a GLB container (JSON chunk, then BIN chunk; both padded to 4 bytes).
+fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(doc).unwrap();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let mut b = bin.to_vec();
+    while b.len() % 4 != 0 {
+        b.push(0);
+    }
+    let total = 12 + 8 + j.len() + 8 + b.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(b.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&b);
+    out
+}
+
+fn write(dir: &Path, name: &str, data: impl AsRef<[u8]>) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, data).unwrap();
+    p
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-5
+}
+
+/// The loaded glTF scene matches the TOML scene: objects, triangles, materials, light and camera.
+fn assert_same(g: &Scene, t: &Scene) {
+    assert_eq!(g.objects.len(), t.objects.len());
+    assert_eq!(g.triangle_count(), t.triangle_count());
+    for (a, b) in g.objects.iter().zip(&t.objects) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(a.material, b.material, "{}", a.name);
+        assert_eq!(a.mesh.triangle_count(), b.mesh.triangle_count(), "{}", a.name);
+        let ((alo, ahi), (blo, bhi)) = (a.mesh.bounds(), b.mesh.bounds());
+        assert!(close(alo, blo) && close(ahi, bhi), "{}: bounds {alo} {ahi} vs {blo} {bhi}", a.name);
+        for (p, q) in a.mesh.positions.iter().zip(&b.mesh.positions) {
+            assert!(close(*p, *q), "{}: {p} vs {q}", a.name);
+        }
+        for (p, q) in a.mesh.normals.iter().zip(&b.mesh.normals) {
+            assert!(close(*p, *q), "{}: normal {p} vs {q}", a.name);
+        }
+    }
+    assert_eq!(g.lights.len(), 1);
+    let (gl, tl) = (&g.lights[0], &t.lights[0]);
+    assert_eq!(gl.kind, LightKind::Spot);
+    assert!(close(gl.position, tl.position), "{} vs {}", gl.position, tl.position);
+    let dir = |l: &caustics::scene::Light| (l.target - l.position).normalize();
+    assert!(close(dir(gl), dir(tl)));
+    assert!((gl.intensity - tl.intensity).abs() < 1e-5, "{} vs {}", gl.intensity, tl.intensity);
+    assert!((gl.cone - tl.cone).abs() < 1e-5, "{} vs {}", gl.cone, tl.cone);
+    assert!(close(gl.color, tl.color));
+    let (gc, tc) = (g.camera(Some("top")).unwrap(), t.camera(Some("top")).unwrap());
+    assert_eq!(gc.projection, Projection::Orthographic { half_height: 1.0 });
+    assert_eq!(gc.projection, tc.projection);
+    assert!(close(gc.position, tc.position));
+    assert!(close((gc.target - gc.position).normalize(), (tc.target - tc.position).normalize()));
+    assert!(close(gc.up, tc.up), "{} vs {}", gc.up, tc.up);
+}
+
+#[test]
+fn gltf_and_glb_load_like_toml() {
+    let dir = out_dir("gltf_load");
+    let toml = Scene::load(&write(&dir, "twin.toml", TOML)).unwrap();
+    let (doc, bin) = gltf_scene();
+    let g = Scene::load(&write(&dir, "twin.gltf", embedded(doc.clone(), &bin))).unwrap();
+    assert_same(&g, &toml);
+    assert!(matches!(g.objects[1].material, Material::Dielectric { ior } if ior == 1.5));
+    // GLB: the same JSON with the buffer in the BIN chunk.
+    let b = Scene::load(&write(&dir, "twin.glb", glb(&doc, &bin))).unwrap();
+    assert_same(&b, &toml);
+    // An external .bin next to the file, and normals left out (computed: the cube's are flat per face).
+    let mut ext = doc.clone();
+    ext["buffers"][0]["uri"] = json!("twin.bin");
+    write(&dir, "twin.bin", &bin);
+    let e = Scene::load(&write(&dir, "ext.gltf", serde_json::to_string(&ext).unwrap())).unwrap();
+    assert_same(&e, &toml);
+    let mut no_normals = doc.clone();
+    no_normals["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("NORMAL");
+    let n = Scene::load(&write(&dir, "nn.gltf", embedded(no_normals, &bin))).unwrap();
+    assert!(n.objects[0].mesh.normals.iter().all(|v| close(*v, Vec3::Y)));
+    // Mirror and diffuse mappings; a directional light's lux → W/m².
+    let mut m = doc.clone();
+    m["materials"][1] = json!({"pbrMetallicRoughness": {"metallicFactor": 1.0, "roughnessFactor": 0.0}});
+    m["extensions"]["KHR_lights_punctual"]["lights"][0] = json!({"type": "directional", "intensity": 1366.0});
+    let s = Scene::load(&write(&dir, "mirror.gltf", embedded(m, &bin))).unwrap();
+    assert_eq!(s.objects[1].material, Material::Mirror);
+    assert_eq!(s.lights[0].kind, LightKind::Directional);
+    assert!((s.lights[0].intensity - 2.0).abs() < 1e-6);
+    // A perspective camera: yfov → fov; unnamed node and camera → `camera<k>`; an identity node looks down -z.
+    let mut p = doc.clone();
+    p["cameras"].as_array_mut().unwrap().push(json!({"type": "perspective",
+        "perspective": {"yfov": 0.7, "znear": 0.01, "aspectRatio": 1.5}}));
+    p["nodes"].as_array_mut().unwrap().push(json!({"camera": 1, "translation": [0.0, 0.5, 3.0]}));
+    p["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4]);
+    let s = Scene::load(&write(&dir, "persp.gltf", embedded(p, &bin))).unwrap();
+    let c = s.camera(Some("camera1")).unwrap();
+    assert_eq!(c.projection, Projection::Perspective { fov: 0.7 });
+    assert!(close(c.position, Vec3::new(0.0, 0.5, 3.0)) && close(c.up, Vec3::Y));
+    assert!(close((c.target - c.position).normalize(), Vec3::NEG_Z));
+    assert_eq!(s.camera(None).unwrap().name, "top");
+}
+
+#[test]
+fn gltf_renders_the_same_flux_as_toml() {
+    let dir = out_dir("gltf_render");
+    let (doc, bin) = gltf_scene();
+    let g = write(&dir, "twin.gltf", embedded(doc, &bin));
+    let t = write(&dir, "twin.toml", TOML);
+    let args = ["--camera", "top", "--aov", "caustics", "--size", "64x64", "--level", "1"];
+    let (ts, _) = render(&dir, "toml", t.to_str().unwrap(), &args);
+    // Through the CLI by hand, to see its warnings.
+    let (out, stats) = (dir.join("gltf.exr"), dir.join("gltf.json"));
+    let mut a = vec!["render", "--scene", g.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    a.extend_from_slice(&["--stats", stats.to_str().unwrap()]);
+    a.extend_from_slice(&args);
+    let stderr = ok(&a);
+    assert!(stderr.contains("KHR_materials_volume") && stderr.contains("\"glass\""), "{stderr}");
+    assert!(stderr.contains("KHR_materials_dispersion"), "{stderr}");
+    assert!(stderr.contains("EXT_made_up"), "{stderr}");
+    let gs = read_json(&stats);
+    assert_validation_clean(&gs);
+    let (fg, ft) = (gs["aov_flux_w"].as_f64().unwrap(), ts["aov_flux_w"].as_f64().unwrap());
+    assert!(ft > 0.01, "the TOML twin has a caustic: {ft}");
+    assert!(((fg - ft) / ft).abs() < 1e-4, "glTF {fg} W vs TOML {ft} W");
+    // The default transport (exact: every path) agrees too.
+    let exact = ["--camera", "top", "--aov", "caustics", "--size", "64x64", "--level", "1", "--transport", "exact"];
+    let (ge, _) = render(&dir, "gltf_exact", g.to_str().unwrap(), &exact);
+    let (te, _) = render(&dir, "toml_exact", t.to_str().unwrap(), &exact);
+    let (fg, ft) = (ge["aov_flux_w"].as_f64().unwrap(), te["aov_flux_w"].as_f64().unwrap());
+    assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "exact: glTF {fg} W vs TOML {ft} W");
+    // A directional light (683 lux = 1 W/m²) on a node at the origin, inside the scene: the glTF light is at
+    // infinity, so its beam must still light the whole scene, like the TOML light 2 m up.
+    let (mut doc, bin) = gltf_scene();
+    doc["extensions"]["KHR_lights_punctual"]["lights"][0] = json!({"type": "directional", "intensity": 683.0});
+    doc["nodes"][3]["translation"] = json!([0.0, 0.0, 0.0]);
+    let g = write(&dir, "dir.gltf", embedded(doc, &bin));
+    let t = write(&dir, "dir.toml", TOML.replace("\"spot\"", "\"directional\"").replace("cone_deg = 40.0\n", ""));
+    let (gd, _) = render(&dir, "gltf_dir", g.to_str().unwrap(), &args);
+    let (td, _) = render(&dir, "toml_dir", t.to_str().unwrap(), &args);
+    let (fg, ft) = (gd["aov_flux_w"].as_f64().unwrap(), td["aov_flux_w"].as_f64().unwrap());
+    assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "directional: glTF {fg} W vs TOML {ft} W");
+}
+
+/// Out-of-range and wrong-typed values anywhere in the buffers, views, accessors, nodes and meshes: each load is
+/// an error or a scene, never a panic.
+#[test]
+fn mutated_gltf_never_panics() {
+    let dir = out_dir("gltf_mutated");
+    let (doc, bin) = gltf_scene();
+    let wild = [json!(-1), json!(0), json!(3), json!(4294967295u64), json!(1e300), json!("x"), json!(null), json!([])];
+    let mut targets: Vec<(String, Vec<String>)> = Vec::new();
+    for (list, keys) in [
+        ("accessors", &["bufferView", "byteOffset", "componentType", "count", "type", "min"][..]),
+        ("bufferViews", &["buffer", "byteOffset", "byteLength", "byteStride"][..]),
+        ("nodes", &["mesh", "camera", "children", "translation", "rotation", "scale", "matrix"][..]),
+        ("buffers", &["byteLength"][..]),
+    ] {
+        for i in 0..doc[list].as_array().unwrap().len() {
+            targets.push((format!("{list}/{i}"), keys.iter().map(|k| k.to_string()).collect()));
+        }
+    }
+    let mut loads = 0;
+    for (at, keys) in &targets {
+        for k in keys {
+            for w in &wild {
+                let mut d = doc.clone();
+                let mut v = &mut d;
+                for part in at.split('/') {
+                    v = match part.parse::<usize>() {
+                        Ok(i) => &mut v[i],
+                        Err(_) => &mut v[part],
+                    };
+                }
+                v[k.as_str()] = w.clone();
+                let p = write(&dir, "m.gltf", embedded(d, &bin));
+                let r = std::panic::catch_unwind(|| Scene::load(&p).map(|s| s.triangle_count()));
+                assert!(r.is_ok(), "{at}.{k} = {w}: panicked");
+                loads += 1;
+            }
+        }
+    }
+    // Truncations of the GLB at every 16th byte.
+    let g = glb(&doc, &bin);
+    for n in (0..g.len()).step_by(16) {
+        let p = write(&dir, "m.glb", &g[..n]);
+        let r = std::panic::catch_unwind(|| Scene::load(&p).map(|s| s.triangle_count()));
+        assert!(r.is_ok(), "GLB cut at {n}: panicked");
+        loads += 1;
+    }
+    assert!(loads > 300, "{loads}");
+}
+
+/// Load `text` through the CLI and expect exit code 2, every needle in stderr, and no panic.
+fn expect_bad(dir: &Path, name: &str, data: impl AsRef<[u8]>, needles: &[&str]) {
+    let scene = write(dir, name, data);
+    let out = dir.join(format!("{name}.exr"));
+    let o =
+        caustics(&["render", "--scene", scene.to_str().unwrap(), "--aov", "caustics", "--out", out.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{name}: exit code; stderr:\n{stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "{name}: stderr lacks `{n}`:\n{stderr}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_no_output(&out);
+}
+
+#[test]
+fn bad_gltf_exits_2() {
+    let dir = out_dir("gltf_bad");
+    let (doc, bin) = gltf_scene();
+    let good = embedded(doc.clone(), &bin);
+
+    let mut d = doc.clone();
+    d["extensionsRequired"] = json!(["KHR_lights_punctual", "EXT_teleport"]);
+    expect_bad(&dir, "required.gltf", embedded(d, &bin), &["extensionsRequired[1]", "EXT_teleport"]);
+
+    let mut d = doc.clone();
+    d["extensions"]["KHR_lights_punctual"]["lights"][0] = json!({"type": "point", "intensity": 683.0});
+    expect_bad(&dir, "point.gltf", embedded(d, &bin), &["point lights are not supported yet"]);
+
+    let mut d = doc.clone();
+    d["meshes"][1]["primitives"][0]["mode"] = json!(1);
+    expect_bad(&dir, "lines.gltf", embedded(d, &bin), &["meshes[1].primitives[0].mode", "\"glass\"", "triangles"]);
+
+    // Corrupt: truncated JSON, a truncated GLB, an index out of range, a buffer too short for its accessors.
+    expect_bad(&dir, "truncated.gltf", &good[..good.len() / 2], &["truncated.gltf:"]);
+    expect_bad(&dir, "truncated.glb", &glb(&doc, &bin)[..200], &["truncated.glb", "GLB"]);
+    let mut d = doc.clone();
+    d["nodes"][1]["mesh"] = json!(7);
+    expect_bad(&dir, "index.gltf", embedded(d, &bin), &["nodes[1].mesh", "index out of bounds"]);
+    let mut d = doc.clone();
+    d["buffers"][0]["byteLength"] = json!(64);
+    expect_bad(&dir, "short.gltf", embedded(d, &bin[..64]), &["outside"]);
+    expect_bad(&dir, "garbage.glb", b"glTF\x02\0\0\0\xff\xff\xff\xff not really", &["garbage.glb"]);
+
+    // Two lights: the renderer handles exactly one.
+    let mut d = doc.clone();
+    let lights = d["extensions"]["KHR_lights_punctual"]["lights"].as_array_mut().unwrap();
+    lights.push(json!({"type": "directional", "intensity": 683.0}));
+    d["nodes"].as_array_mut().unwrap().push(json!({"extensions": {"KHR_lights_punctual": {"light": 1}}}));
+    d["nodes"][3]["children"] = json!([4]);
+    expect_bad(&dir, "two_lights.gltf", embedded(d, &bin), &["2 lights", "exactly one"]);
+}
