@@ -44,9 +44,19 @@ pub fn cache_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("target").join("reference-cache")
 }
 
-/// Mesh files named by the scene (`path = ...` of its objects), resolved like the scene loader does.
+/// Files the scene reads besides itself, resolved like the scene loader does: the mesh files of a TOML scene
+/// (`path = ...` of its objects), the external buffers of a glTF scene (`buffers[].uri` that are not data URIs).
 fn mesh_files(scene_path: &Path, text: &str) -> Vec<PathBuf> {
     let dir = scene_path.parent().map(Path::to_path_buf).unwrap_or_default();
+    if let Ok(doc) = serde_json::from_str::<serde_json::Value>(text) {
+        let buffers = doc.get("buffers").and_then(|b| b.as_array()).cloned().unwrap_or_default();
+        return buffers
+            .iter()
+            .filter_map(|b| b.get("uri").and_then(|u| u.as_str()))
+            .filter(|u| !u.starts_with("data:"))
+            .map(|u| dir.join(u))
+            .collect();
+    }
     let Ok(table) = text.parse::<toml::Table>() else {
         return Vec::new();
     };

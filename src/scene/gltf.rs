@@ -236,9 +236,6 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
         Some(n) => format!("{at} \"{n}\""),
         None => at.clone(),
     };
-    if m.volume().is_some() {
-        cx.warn(&label, "KHR_materials_volume is ignored: the renderer has no absorption (volume attenuation) yet");
-    }
     for (ext, what) in IGNORED.iter().filter(|(n, _)| *n != "KHR_materials_volume") {
         if m.extensions().is_some_and(|x| x.contains_key(*ext)) {
             cx.warn(&label, &format!("{ext} is ignored: the renderer has no {what} yet"));
@@ -253,7 +250,32 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
                 format!("index of refraction must be finite and > 0 (got {ior})"),
             ));
         }
-        return Ok(Material::Dielectric { ior });
+        // KHR_materials_volume: Beer–Lambert with attenuationColor reached at attenuationDistance. The caustic
+        // map has one channel, so a colored attenuation becomes gray: sigma = -ln(mean color) / distance.
+        let mut absorption = 0.0;
+        if let Some(v) = m.volume() {
+            let (d, c) = (v.attenuation_distance(), v.attenuation_color());
+            if d.is_nan() || d <= 0.0 {
+                return Err(cx.err(
+                    format!("{at}.extensions.KHR_materials_volume.attenuationDistance"),
+                    format!("attenuation distance must be > 0 (got {d})"),
+                ));
+            }
+            if c.iter().any(|x| !(x.is_finite() && *x > 0.0 && *x <= 1.0)) {
+                return Err(cx.err(
+                    format!("{at}.extensions.KHR_materials_volume.attenuationColor"),
+                    format!("attenuation color must lie in (0, 1] (got {c:?})"),
+                ));
+            }
+            let mean = (c[0] + c[1] + c[2]) / 3.0;
+            if d.is_finite() && mean < 1.0 {
+                absorption = -mean.ln() / d;
+            }
+            if c.iter().any(|x| (x - mean).abs() > 1e-6) {
+                cx.warn(&label, "KHR_materials_volume: a colored attenuation is applied as gray (its mean): the caustic map has one channel");
+            }
+        }
+        return Ok(Material::Dielectric { ior, absorption });
     }
     if pbr.metallic_factor() == 1.0 && pbr.roughness_factor() == 0.0 {
         return Ok(Material::Mirror);
