@@ -16,6 +16,7 @@ pub mod scene;
 pub mod scene_gpu;
 pub mod settings;
 pub mod shaders;
+pub mod soak;
 pub mod targets;
 pub mod viewer;
 pub mod vk;

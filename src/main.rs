@@ -25,6 +25,9 @@ enum Command {
     Compare(caustics::metrics::CompareArgs),
     /// Windowed viewer: orbit the camera, move the light, switch methods; live per-stage GPU timings.
     View(caustics::viewer::ViewArgs),
+    /// Soak: many frames through one renderer with a moving light and changing settings (tools/soak).
+    #[command(hide = true)]
+    Soak(caustics::soak::SoakArgs),
 }
 
 fn run(cli: Cli) -> AppResult<()> {
@@ -35,6 +38,7 @@ fn run(cli: Cli) -> AppResult<()> {
         Command::Bench(a) => caustics::bench::run_bench(&a),
         Command::Compare(a) => caustics::metrics::run_compare(&a),
         Command::View(a) => caustics::viewer::run(&a),
+        Command::Soak(a) => caustics::soak::run_soak(&a),
     }
 }
 
