@@ -18,5 +18,6 @@ pub mod settings;
 pub mod shaders;
 pub mod soak;
 pub mod targets;
+pub mod temporal;
 pub mod viewer;
 pub mod vk;
