@@ -17,6 +17,8 @@ pub mod scene;
 pub mod scene_gpu;
 pub mod settings;
 pub mod shaders;
+pub mod soak;
 pub mod targets;
+pub mod temporal;
 pub mod viewer;
 pub mod vk;

@@ -43,6 +43,11 @@ enum Command {
     Compare(caustics::metrics::CompareArgs),
     /// Windowed viewer: orbit the camera, move the light, switch methods; live per-stage GPU timings.
     View(caustics::viewer::ViewArgs),
+    /// Stability over time: error and flicker against the CPU reference along a light orbit.
+    Temporal(caustics::temporal::TemporalArgs),
+    /// Soak: many frames through one renderer with a moving light and changing settings (tools/soak).
+    #[command(hide = true)]
+    Soak(caustics::soak::SoakArgs),
 }
 
 fn run(cli: Cli) -> AppResult<()> {
@@ -53,6 +58,8 @@ fn run(cli: Cli) -> AppResult<()> {
         Command::Bench(a) => caustics::bench::run_bench(&a),
         Command::Compare(a) => caustics::metrics::run_compare(&a),
         Command::View(a) => caustics::viewer::run(&a),
+        Command::Soak(a) => caustics::soak::run_soak(&a),
+        Command::Temporal(a) => caustics::temporal::run_temporal(&a),
     }
 }
 

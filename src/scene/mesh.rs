@@ -163,10 +163,60 @@ pub fn icosphere(radius: f32, subdivisions: u32) -> Mesh {
     }
 }
 
+/// Largest vertex coordinate accepted (meters, in the OBJ file and in world space): squared distances and the
+/// light-view products of such coordinates stay finite in f32.
+pub const MAX_COORDINATE: f32 = 1e9;
+
+/// The first `v` line of OBJ text with a coordinate that is not finite or exceeds [`MAX_COORDINATE`], as
+/// `LINE: message` (tobj would accept `nan` and `inf` and lose the line).
+fn check_obj_vertices(text: &str) -> Result<(), String> {
+    let mut vertex = 0usize;
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        vertex += 1;
+        for w in words.take(3) {
+            match w.parse::<f32>() {
+                Ok(x) if !x.is_finite() => {
+                    return Err(format!("{}: vertex {vertex} has a non-finite coordinate `{w}`", i + 1))
+                }
+                Ok(x) if x.abs() > MAX_COORDINATE => {
+                    return Err(format!(
+                        "{}: vertex {vertex} has a coordinate beyond ±{MAX_COORDINATE:e} (`{w}`)",
+                        i + 1
+                    ))
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Load an OBJ (all models merged), triangulated, with its normals when it has them for every vertex.
+/// Errors start with the file's path, and its line (`PATH:LINE: message`) when they concern one line.
 pub fn load_obj(path: &std::path::Path) -> Result<Mesh, String> {
+    Ok(load_obj_report(path)?.0)
+}
+
+/// [`load_obj`], then [`sanitize`]: the mesh and what was repaired or found.
+pub fn load_obj_report(path: &std::path::Path) -> Result<(Mesh, MeshReport), String> {
+    let file = path.display();
+    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let text = String::from_utf8_lossy(&bytes);
+    check_obj_vertices(&text).map_err(|e| format!("{file}:{e}"))?;
+    load_obj_bytes(&bytes).map_err(|e| format!("{file}: {e}"))
+}
+
+/// Parse OBJ bytes (see [`load_obj_report`]; errors without the path, and no line check).
+fn load_obj_bytes(bytes: &[u8]) -> Result<(Mesh, MeshReport), String> {
     let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    // Materials are not used: every `mtllib` resolves to nothing, so no other file is ever opened.
+    let (models, _) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| e.to_string())?;
     let mut mesh = Mesh::default();
     let mut all_normals = true;
     for m in &models {
@@ -199,10 +249,207 @@ pub fn load_obj(path: &std::path::Path) -> Result<Mesh, String> {
     if mesh.positions.iter().any(|p| !p.is_finite()) {
         return Err("non-finite vertex position".into());
     }
-    if !all_normals || mesh.normals.iter().any(|n| *n == Vec3::ZERO || !n.is_finite()) {
+    let computed = !all_normals || mesh.normals.iter().any(|n| *n == Vec3::ZERO || !n.is_finite());
+    if computed {
         mesh.compute_normals();
     }
-    Ok(mesh)
+    let report = sanitize(&mut mesh, computed);
+    if mesh.indices.is_empty() {
+        return Err(format!("no triangles with a non-zero area ({} degenerate)", report.degenerate_removed));
+    }
+    Ok((mesh, report))
+}
+
+/// What [`sanitize`] found in a mesh and did about it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MeshReport {
+    /// Triangles removed for a zero area (two corners at the same position, or three collinear corners).
+    pub degenerate_removed: usize,
+    /// Triangles removed for repeating an earlier triangle's three corners (in either winding).
+    pub duplicate_removed: usize,
+    /// Edges of only one triangle: the mesh is open there.
+    pub boundary_edges: usize,
+    /// Edges shared by more than two triangles.
+    pub nonmanifold_edges: usize,
+    /// Triangles whose winding was reversed to agree with their neighbours across shared edges.
+    pub reoriented: usize,
+    /// Edges whose two triangles still disagree after re-orientation (a non-orientable surface).
+    pub inconsistent_edges: usize,
+    /// A closed mesh enclosing a negative volume: every winding was reversed (it was inside out).
+    pub inverted: bool,
+}
+
+impl MeshReport {
+    pub fn closed(&self) -> bool {
+        self.boundary_edges == 0 && self.nonmanifold_edges == 0
+    }
+
+    /// One line per finding, for warnings.
+    pub fn findings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.degenerate_removed > 0 {
+            out.push(format!("removed {} degenerate (zero-area) triangles", self.degenerate_removed));
+        }
+        if self.duplicate_removed > 0 {
+            out.push(format!("removed {} duplicated triangles", self.duplicate_removed));
+        }
+        if self.reoriented > 0 {
+            out.push(format!("reversed the winding of {} triangles to agree with their neighbours", self.reoriented));
+        }
+        if self.inverted {
+            out.push("the closed mesh was inside out (negative volume): reversed every winding".into());
+        }
+        if self.boundary_edges > 0 {
+            out.push(format!("open mesh: {} boundary edges (rendered as surfaces)", self.boundary_edges));
+        }
+        if self.nonmanifold_edges > 0 {
+            out.push(format!(
+                "non-manifold: {} edges shared by more than two triangles (rendered as surfaces)",
+                self.nonmanifold_edges
+            ));
+        }
+        if self.inconsistent_edges > 0 {
+            out.push(format!(
+                "non-orientable: {} edges between triangles of opposite winding",
+                self.inconsistent_edges
+            ));
+        }
+        out
+    }
+}
+
+/// Repair what has one right answer and measure the rest: drop zero-area and duplicated triangles, make the
+/// winding consistent across shared edges (breadth-first over edges of exactly two triangles), and turn a closed
+/// mesh of negative volume outward. Vertices are welded by exact position for the topology (OBJ files split
+/// vertices at normal and texture seams). `normals_from_winding`: the normals were computed from the winding,
+/// so they are recomputed after a change; normals from the file are kept, negated when the mesh is turned
+/// inside out.
+pub fn sanitize(mesh: &mut Mesh, normals_from_winding: bool) -> MeshReport {
+    use std::collections::HashMap;
+    let mut report = MeshReport::default();
+    let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+    let ids: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let key = (*p + Vec3::ZERO).to_array().map(f32::to_bits); // + 0: -0.0 and 0.0 weld
+            let n = weld.len() as u32;
+            *weld.entry(key).or_insert(n)
+        })
+        .collect();
+    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(mesh.indices.len() / 3);
+    let mut seen: HashMap<[u32; 3], ()> = HashMap::new();
+    for t in mesh.indices.chunks_exact(3) {
+        let w = [ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]];
+        let (a, b, c) = (mesh.positions[t[0] as usize], mesh.positions[t[1] as usize], mesh.positions[t[2] as usize]);
+        let area2 = (b - a).as_dvec3().cross((c - a).as_dvec3()).length();
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] || area2 == 0.0 || !area2.is_finite() {
+            report.degenerate_removed += 1;
+            continue;
+        }
+        let mut key = w;
+        key.sort_unstable();
+        if seen.insert(key, ()).is_some() {
+            report.duplicate_removed += 1;
+            continue;
+        }
+        tris.push([t[0], t[1], t[2]]);
+    }
+    let welded = |t: &[u32; 3]| t.map(|i| ids[i as usize]);
+    // Undirected edge -> the triangles using it.
+    let mut edges: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (f, t) in tris.iter().enumerate() {
+        let w = welded(t);
+        for k in 0..3 {
+            let (a, b) = (w[k], w[(k + 1) % 3]);
+            edges.entry((a.min(b), a.max(b))).or_default().push(f as u32);
+        }
+    }
+    report.boundary_edges = edges.values().filter(|v| v.len() == 1).count();
+    report.nonmanifold_edges = edges.values().filter(|v| v.len() > 2).count();
+    // Whether triangle t traverses a -> b (else b -> a).
+    let forward = |t: &[u32; 3], a: u32, b: u32| {
+        let w = welded(t);
+        (0..3).any(|k| w[k] == a && w[(k + 1) % 3] == b)
+    };
+    let mut flipped = vec![false; tris.len()];
+    let mut visited = vec![false; tris.len()];
+    for start in 0..tris.len() {
+        if visited[start] {
+            continue;
+        }
+        visited[start] = true;
+        let mut component = vec![start];
+        let mut queue = std::collections::VecDeque::from([start]);
+        while let Some(f) = queue.pop_front() {
+            let w = welded(&tris[f]);
+            for k in 0..3 {
+                let (a, b) = (w[k], w[(k + 1) % 3]);
+                let users = &edges[&(a.min(b), a.max(b))];
+                if users.len() != 2 {
+                    continue;
+                }
+                let g = if users[0] as usize == f { users[1] } else { users[0] } as usize;
+                if visited[g] {
+                    continue;
+                }
+                visited[g] = true;
+                // f (as oriented now) goes a -> b, or b -> a when flipped; g must go the other way.
+                let f_ab = !flipped[f];
+                let g_ab = forward(&tris[g], a, b);
+                flipped[g] = g_ab == f_ab;
+                component.push(g);
+                queue.push_back(g);
+            }
+        }
+        // The seed's winding is arbitrary: keep whichever orientation most of the component already has.
+        if 2 * component.iter().filter(|&&f| flipped[f]).count() > component.len() {
+            for &f in &component {
+                flipped[f] = !flipped[f];
+            }
+        }
+    }
+    for (t, &f) in tris.iter_mut().zip(&flipped) {
+        if f {
+            t.swap(1, 2);
+            report.reoriented += 1;
+        }
+    }
+    report.inconsistent_edges = edges
+        .iter()
+        .filter(|(_, users)| users.len() == 2)
+        .filter(|((a, b), users)| {
+            forward(&tris[users[0] as usize], *a, *b) == forward(&tris[users[1] as usize], *a, *b)
+        })
+        .count();
+    if report.closed() && report.inconsistent_edges == 0 {
+        let volume: f64 = tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+                a.dot(b.cross(c))
+            })
+            .sum();
+        if volume < 0.0 {
+            report.inverted = true;
+            for t in &mut tris {
+                t.swap(1, 2);
+            }
+            if !normals_from_winding {
+                for n in &mut mesh.normals {
+                    *n = -*n;
+                }
+            }
+        }
+    }
+    let changed = report.degenerate_removed + report.duplicate_removed + report.reoriented > 0 || report.inverted;
+    if changed {
+        mesh.indices = tris.into_iter().flatten().collect();
+        if normals_from_winding {
+            mesh.compute_normals();
+        }
+    }
+    report
 }
 
 #[cfg(test)]

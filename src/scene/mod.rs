@@ -127,9 +127,12 @@ impl Ctx<'_> {
     }
 }
 
+/// Finite, and within ±[`mesh::MAX_COORDINATE`] (differences and squared lengths of such points stay finite).
 fn finite3(v: [f32; 3]) -> bool {
-    v.iter().all(|x| x.is_finite())
+    v.iter().all(|x| x.is_finite() && x.abs() <= mesh::MAX_COORDINATE)
 }
+
+const FINITE: &str = "must be finite (within ±1e9)";
 
 impl Scene {
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
@@ -252,10 +255,10 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
     let position = *position_s.get_ref();
     let target = *target_s.get_ref();
     if !finite3(position) {
-        return Err(cx.err(position_s.span(), f("position"), "must be finite"));
+        return Err(cx.err(position_s.span(), f("position"), FINITE));
     }
     if !finite3(target) {
-        return Err(cx.err(target_s.span(), f("target"), "must be finite"));
+        return Err(cx.err(target_s.span(), f("target"), FINITE));
     }
     if (Vec3::from(target) - Vec3::from(position)).length() < 1e-6 {
         return Err(cx.err(target_s.span(), f("target"), "must differ from the position"));
@@ -304,7 +307,7 @@ fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {
     }
     let position = Vec3::from(*d.position.get_ref());
     let target = Vec3::from(*d.target.get_ref());
-    if !position.is_finite() || !target.is_finite() || (target - position).length() < 1e-6 {
+    if !finite3(position.to_array()) || !finite3(target.to_array()) || (target - position).length() < 1e-6 {
         return Err(cx.err(d.target.span(), f("target"), "position and target must be finite and distinct"));
     }
     let up = d.up.as_ref().map(|u| Vec3::from(*u.get_ref())).unwrap_or(Vec3::Y);
@@ -452,17 +455,26 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             if !full.is_file() {
                 return Err(cx.err(p.span(), f("path"), format!("mesh file not found: {}", full.display())));
             }
-            mesh::load_obj(&full).map_err(|e| cx.err(p.span(), f("path"), format!("{}: {e}", full.display())))?
+            let (mesh, report) = mesh::load_obj_report(&full).map_err(|e| cx.err(p.span(), f("path"), e))?;
+            let dielectric = d.material.get_ref().kind.get_ref() == "dielectric";
+            for finding in report.findings() {
+                // An open or non-manifold receiver is an ordinary surface; only glass needs a closed volume.
+                let topology = finding.starts_with("open") || finding.starts_with("non-");
+                if dielectric || !topology {
+                    eprintln!("warning: {}", cx.err(p.span(), f("path"), format!("{}: {finding}", full.display())));
+                }
+            }
+            mesh
         }
     };
     let mut transform = Mat4::IDENTITY;
     let translate = match &d.translate {
-        Some(t) if !finite3(*t.get_ref()) => return Err(cx.err(t.span(), f("translate"), "must be finite")),
+        Some(t) if !finite3(*t.get_ref()) => return Err(cx.err(t.span(), f("translate"), FINITE)),
         Some(t) => Vec3::from(*t.get_ref()),
         None => Vec3::ZERO,
     };
     let rotate = match &d.rotate_deg {
-        Some(r) if !finite3(*r.get_ref()) => return Err(cx.err(r.span(), f("rotate_deg"), "must be finite")),
+        Some(r) if !finite3(*r.get_ref()) => return Err(cx.err(r.span(), f("rotate_deg"), FINITE)),
         Some(r) => Vec3::from(*r.get_ref()),
         None => Vec3::ZERO,
     };
@@ -482,6 +494,22 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
         transform = Mat4::from_scale_rotation_translation(scale, q, translate);
     }
     let mesh = if transform == Mat4::IDENTITY { mesh } else { mesh.transformed(transform) };
+    if let Some(p) = mesh.positions.iter().find(|p| !finite3(p.to_array())) {
+        let (field, span) = match (&d.scale, &d.translate) {
+            (Some(s), _) => ("scale", s.span()),
+            (None, Some(t)) => ("translate", t.span()),
+            _ => match shape {
+                "sphere" => ("radius", d.radius.as_ref().map_or(o.span(), |r| r.span())),
+                "mesh" => ("path", d.path.as_ref().map_or(o.span(), |r| r.span())),
+                _ => ("size", d.size.as_ref().map_or(o.span(), |r| r.span())),
+            },
+        };
+        return Err(cx.err(
+            span,
+            f(field),
+            format!("a vertex lands at {p} in world space; coordinates must be finite (within ±1e9 m)"),
+        ));
+    }
     let m = d.material.get_ref();
     let mf = |field: &str| f(&format!("material.{field}"));
     let material = match m.kind.get_ref().as_str() {

@@ -142,6 +142,14 @@ pub struct DeviceInfo {
     pub float_atomic_add: bool,
 }
 
+/// What [`Device::allocation_report`] returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AllocationTotals {
+    pub allocations: usize,
+    pub allocated_bytes: u64,
+    pub capacity_bytes: u64,
+}
+
 /// The logical device, its one queue, and the allocator. Derefs to `ash::Device`.
 pub struct Device {
     pub instance: Arc<Instance>,
@@ -398,6 +406,16 @@ impl Device {
     pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
         // A poisoned lock only means another thread panicked mid-allocation; the allocator itself is still usable.
         self.allocator.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The allocator's live allocations: count, bytes, and the bytes of the memory blocks behind them.
+    pub fn allocation_report(&self) -> AllocationTotals {
+        let r = self.allocator().generate_report();
+        AllocationTotals {
+            allocations: r.allocations.len(),
+            allocated_bytes: r.total_allocated_bytes,
+            capacity_bytes: r.total_capacity_bytes,
+        }
     }
 
     pub fn wait_idle(&self) -> VkResult<()> {

@@ -1,0 +1,385 @@
+//! `caustics soak` (hidden; `tools/soak` runs it): one [`Renderer`](crate::renderer::Renderer) renders N frames
+//! headless while the light orbits and the settings change every frame (transport, method, metric, level, index
+//! of refraction, output size), and checks that
+//!
+//! - resident memory (`/proc/self/statm`, after `malloc_trim`) stays within `--rss-bound-mib` of its peak during
+//!   the warm-up (the first two full cycles of light positions and settings: the targets of every setting are
+//!   created and freed twice, and lavapipe's heap settles), and its growth after the warm-up is reported as a
+//!   least-squares slope and as the drift between the medians of the first and last quarter of the frames;
+//! - the GPU allocations (gpu-allocator's report) are the same at every visit of a setting after the warm-up
+//!   (the same count, and the same bytes within [`GPU_SLACK_BYTES`]: re-uploaded buffers land at other offsets,
+//!   with other alignment padding), and the memory blocks behind them never exceed the warm-up's peak;
+//! - no validation message is emitted (when validation is on);
+//! - every frame's caustic flux (Σ E · pixel area of the caustics AOV through the scene's orthographic camera)
+//!   is finite, positive and below the power the light sends into its cone; the first visit of a (light
+//!   position, setting) pair is its reference, and every later visit must land within `--flux-tolerance` of it;
+//!   under exact transport the energy account must close (residual below 1e-6).
+//!
+//! Frame i renders setting i mod S at light position ⌊i / S⌋ mod A, so all S settings see each light position
+//! in turn and the whole schedule repeats every S·A frames.
+
+use crate::commands::{to_rgb, SceneArgs, Session};
+use crate::error::{AppError, AppResult};
+use crate::image_io;
+use crate::renderer::Aov;
+use crate::scene::{LightKind, Material, Scene};
+use crate::settings::{Method, Metric, Settings, Transport};
+use crate::vk;
+use glam::{Quat, Vec3};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct SoakArgs {
+    /// Scene (default: the sphere scene); it needs an orthographic camera (`--camera`).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Orthographic camera whose caustics AOV gives each frame's flux.
+    #[arg(long, default_value = "top")]
+    pub camera: String,
+    /// Frames to render.
+    #[arg(long, default_value_t = 300)]
+    pub frames: u32,
+    /// Light positions on the orbit (the light turns 360°/A between blocks of settings).
+    #[arg(long, default_value_t = 6)]
+    pub angles: u32,
+    /// Highest photon level in the schedule (levels 0..=this; exact frames stay at 0 and 1).
+    #[arg(long, default_value_t = 1)]
+    pub max_level: u32,
+    /// Side of the caustic map and of the refractor g-buffers.
+    #[arg(long, default_value_t = 256)]
+    pub map_res: u32,
+    /// Allowed resident-memory growth after the warm-up, MiB.
+    #[arg(long, default_value_t = 32.0)]
+    pub rss_bound_mib: f64,
+    /// Relative tolerance of a frame's caustic flux against the first visit of its light position and setting.
+    #[arg(long, default_value_t = 1e-3)]
+    pub flux_tolerance: f64,
+    /// Write the figures (and memory samples) as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Allowed difference of a setting's GPU allocated bytes between visits (alignment padding).
+pub const GPU_SLACK_BYTES: u64 = 64 * 1024;
+
+/// One entry of the settings schedule.
+#[derive(Clone, Debug)]
+struct Step {
+    transport: Transport,
+    method: Method,
+    metric: Metric,
+    level: u32,
+    ior: f32,
+    size: (u32, u32),
+}
+
+impl Step {
+    fn name(&self) -> String {
+        let t = if self.transport == Transport::Exact { "exact" } else { "two-interface" };
+        let m = match (self.method, self.metric) {
+            (Method::Dense, _) => "dense",
+            (_, Metric::MaxLevel) => "max-level",
+            (_, Metric::MaxError) => "max-error",
+        };
+        format!("{t} {m} L{} ior {} {}x{}", self.level, self.ior, self.size.0, self.size.1)
+    }
+}
+
+/// The schedule: two-interface at every level and method, exact at levels 0 and 1, three indices of refraction
+/// and five output sizes (all at least as wide as tall, so the square floor stays in the frame).
+fn schedule(max_level: u32) -> Vec<Step> {
+    use Method::*;
+    use Metric::*;
+    use Transport::*;
+    let sizes = [(64, 64), (96, 64), (128, 128), (80, 80), (112, 64)];
+    let iors = [1.5, 1.33, 1.7];
+    let mut out = Vec::new();
+    let mut k = 0;
+    let mut push = |transport, method, metric, level| {
+        out.push(Step { transport, method, metric, level, ior: iors[k % 3], size: sizes[k % 5] });
+        k += 1;
+    };
+    for level in 0..=max_level {
+        push(TwoInterface, Dense, MaxLevel, level);
+        push(TwoInterface, Adaptive, MaxLevel, level);
+        push(TwoInterface, Adaptive, MaxError, level);
+    }
+    push(Exact, Dense, MaxLevel, 0);
+    push(Exact, Adaptive, MaxError, max_level.min(1));
+    out
+}
+
+/// Give free heap pages back to the OS (glibc's `malloc_trim`), so that resident memory measures what is
+/// allocated rather than how the allocator's arenas happen to be fragmented (lavapipe's device memory comes
+/// from the heap, and its worker threads free into several arenas).
+fn trim_heap() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn malloc_trim(pad: usize) -> i32;
+        }
+        // SAFETY: malloc_trim only returns unused memory to the OS; it is thread-safe.
+        unsafe {
+            malloc_trim(0);
+        }
+    }
+}
+
+/// Resident set size in bytes (Linux; 0 elsewhere).
+pub fn rss_bytes() -> u64 {
+    let page = 4096u64;
+    std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|s| s.split_whitespace().nth(1).and_then(|v| v.parse::<u64>().ok()))
+        .map_or(0, |pages| pages * page)
+}
+
+/// Least-squares slope of y over x.
+fn slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    if n < 2.0 {
+        return 0.0;
+    }
+    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + (x - mx) * (y - my), b + (x - mx).powi(2)));
+    if sxx > 0.0 {
+        sxy / sxx
+    } else {
+        0.0
+    }
+}
+
+fn with_ior(scene: &Scene, ior: f32) -> Scene {
+    let mut s = scene.clone();
+    for o in &mut s.objects {
+        if let Material::Dielectric { ior: i, .. } = &mut o.material {
+            *i = ior;
+        }
+    }
+    s
+}
+
+pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
+    if args.frames == 0 || args.angles == 0 {
+        return Err(AppError::BadInput("--frames and --angles must be at least 1".into()));
+    }
+    if args.max_level > 6 {
+        return Err(AppError::BadInput(format!("--max-level {}: at most 6", args.max_level)));
+    }
+    if let Some(p) = &args.json {
+        image_io::check_output_dir(p)?;
+    }
+    let steps = schedule(args.max_level);
+    let base = Settings { gbuffer_res: args.map_res, caustic_res: args.map_res, ..Settings::default() };
+    let scene_args = SceneArgs { scene: args.scene.clone(), camera: Some(args.camera.clone()), size: "64x64".into() };
+    let mut session = Session::open(&scene_args, base.clone())?;
+    if session.pixel_area().is_none() {
+        return Err(AppError::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
+    }
+    let scene0 = session.renderer.scene.clone();
+    let light0 = scene0.lights[0].clone();
+    // A light straight above its target is first tilted 25°, so that its orbit moves it (as the viewer does).
+    let mut d = light0.position - light0.target;
+    if d.normalize().dot(Vec3::Y).abs() > 0.99 {
+        d = Quat::from_rotation_z(-25f32.to_radians()) * d;
+    }
+    let cone_power = match light0.kind {
+        LightKind::Spot => light0.intensity as f64 * std::f64::consts::TAU * (1.0 - (light0.cone as f64).cos()),
+        LightKind::Directional => f64::INFINITY,
+    };
+    let s_count = steps.len();
+    let period = s_count * args.angles as usize;
+    let warmup = (2 * period).min(args.frames as usize);
+    let mut reference: Vec<Option<f64>> = vec![None; period];
+    let mut gpu_alloc: Vec<Option<(usize, u64)>> = vec![None; s_count];
+    let mut warm_capacity = 0u64;
+    let mut rss_base = 0u64;
+    let (mut rss_max, mut rss_min) = (0u64, u64::MAX);
+    let mut rss_points = Vec::new();
+    let mut samples = Vec::new();
+    let mut worst_flux_dev = 0.0f64;
+    let mut worst_residual = 0.0f64;
+    let mut failures: Vec<String> = Vec::new();
+    let mut ms_by_transport = [(0.0f64, 0u32); 2];
+    let mut ior_now = f32::NAN;
+    let start = Instant::now();
+    let rss_start = rss_bytes();
+    for i in 0..args.frames as usize {
+        let (si, ai) = (i % s_count, (i / s_count) % args.angles as usize);
+        let step = &steps[si];
+        let angle = std::f32::consts::TAU * ai as f32 / args.angles as f32;
+        let mut scene = if step.ior != ior_now { with_ior(&scene0, step.ior) } else { session.renderer.scene.clone() };
+        ior_now = step.ior;
+        scene.lights[0].position = light0.target + Quat::from_rotation_y(angle) * d;
+        session.renderer.set_scene(scene)?;
+        session.renderer.set_settings(Settings {
+            transport: step.transport,
+            method: step.method,
+            metric: step.metric,
+            level: step.level,
+            ..base.clone()
+        })?;
+        (session.width, session.height) = step.size;
+        let t = Instant::now();
+        let (report, img) = session.frame(Some(Aov::Caustics))?;
+        let wall = t.elapsed().as_secs_f64() * 1e3;
+        let slot = &mut ms_by_transport[(step.transport == Transport::Exact) as usize];
+        *slot = (slot.0 + wall, slot.1 + 1);
+        let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| AppError::Failed("no caustics AOV read back".into()))?;
+        let area = session.pixel_area().expect("orthographic");
+        let flux = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
+        let mut fail = |m: String| {
+            if failures.len() < 20 {
+                eprintln!("soak: frame {i} ({}, light {ai}): {m}", step.name());
+            }
+            failures.push(m);
+        };
+        if !(flux.is_finite() && flux > 0.0 && flux <= cone_power) {
+            fail(format!("caustic flux {flux} W outside (0, {cone_power}] W"));
+        }
+        let key = ai * s_count + si;
+        match reference[key] {
+            None => reference[key] = Some(flux),
+            Some(r) => {
+                let dev = (flux - r).abs() / r.abs().max(1e-12);
+                worst_flux_dev = worst_flux_dev.max(dev);
+                if dev > args.flux_tolerance {
+                    fail(format!("caustic flux {flux} W against {r} W at its first visit (rel. {dev:.2e})"));
+                }
+            }
+        }
+        if let Some(ts) = report.transport {
+            let acc = ts.account();
+            let out: f64 = acc[1..8].iter().sum();
+            let residual = if acc[0] > 0.0 { (acc[0] - out).abs() / acc[0] } else { out.abs() };
+            worst_residual = worst_residual.max(residual);
+            if residual > 1e-6 {
+                fail(format!("exact transport's energy account residual {residual:.2e}"));
+            }
+        }
+        let messages = vk::validation_message_count();
+        if session.validation && messages > 0 {
+            fail(format!("{messages} validation messages"));
+            break;
+        }
+        let gpu = session.device().allocation_report();
+        trim_heap();
+        let rss = rss_bytes();
+        if i < warmup {
+            rss_base = rss_base.max(rss);
+            warm_capacity = warm_capacity.max(gpu.capacity_bytes);
+        } else {
+            rss_max = rss_max.max(rss);
+            rss_min = rss_min.min(rss);
+            rss_points.push((i as f64, rss as f64));
+            if gpu.capacity_bytes > warm_capacity {
+                fail(format!("GPU memory blocks grew to {} bytes (warm-up peak {warm_capacity})", gpu.capacity_bytes));
+            }
+            match gpu_alloc[si] {
+                None => gpu_alloc[si] = Some((gpu.allocations, gpu.allocated_bytes)),
+                Some(a) if a.0 != gpu.allocations || a.1.abs_diff(gpu.allocated_bytes) > GPU_SLACK_BYTES => {
+                    fail(format!(
+                        "GPU allocations {} ({} bytes), {} ({} bytes) at this setting's first visit after warm-up",
+                        gpu.allocations, gpu.allocated_bytes, a.0, a.1
+                    ))
+                }
+                _ => {}
+            }
+            if rss > rss_base + (args.rss_bound_mib * 1048576.0) as u64 {
+                fail(format!(
+                    "resident memory {:.1} MiB, {:.1} MiB above the warm-up's peak {:.1} MiB",
+                    rss as f64 / 1048576.0,
+                    (rss - rss_base) as f64 / 1048576.0,
+                    rss_base as f64 / 1048576.0
+                ));
+            }
+        }
+        if i % 10 == 0 || i + 1 == args.frames as usize {
+            samples.push(json!({
+                "frame": i, "rss_bytes": rss, "gpu_allocations": gpu.allocations,
+                "gpu_allocated_bytes": gpu.allocated_bytes, "gpu_block_bytes": gpu.capacity_bytes,
+            }));
+        }
+        if (i + 1) % 100 == 0 {
+            eprintln!(
+                "soak: {}/{} frames, {:.0} s, RSS {:.1} MiB, GPU {} allocations {:.1} MiB, worst flux deviation {:.2e}",
+                i + 1,
+                args.frames,
+                start.elapsed().as_secs_f64(),
+                rss as f64 / 1048576.0,
+                gpu.allocations,
+                gpu.allocated_bytes as f64 / 1048576.0,
+                worst_flux_dev
+            );
+        }
+    }
+    let mib = |b: u64| b as f64 / 1048576.0;
+    let growth_per_1000 = slope(&rss_points) * 1000.0;
+    let quarter_median = |q: &[(f64, f64)]| {
+        let mut v: Vec<f64> = q.iter().map(|p| p.1).collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let qn = rss_points.len() / 4;
+    let drift = if qn > 0 {
+        quarter_median(&rss_points[rss_points.len() - qn..]) - quarter_median(&rss_points[..qn])
+    } else {
+        f64::NAN
+    };
+    let after = rss_points.len();
+    let summary = json!({
+        "device": session.device().info.name,
+        "validation": {"enabled": session.validation, "messages": vk::validation_message_count()},
+        "scene": session.scene_path.display().to_string(),
+        "frames": args.frames,
+        "period_frames": period,
+        "warmup_frames": warmup,
+        "schedule": steps.iter().map(Step::name).collect::<Vec<_>>(),
+        "light_positions": args.angles,
+        "wall_s": start.elapsed().as_secs_f64(),
+        "mean_frame_ms": {
+            "two_interface": ms_by_transport[0].0 / ms_by_transport[0].1.max(1) as f64,
+            "exact": ms_by_transport[1].0 / ms_by_transport[1].1.max(1) as f64,
+        },
+        "rss_mib": {
+            "start": mib(rss_start), "warmup_peak": mib(rss_base),
+            "min_after_warmup": if after > 0 { mib(rss_min) } else { f64::NAN },
+            "max_after_warmup": if after > 0 { mib(rss_max) } else { f64::NAN },
+            "final": mib(rss_bytes()), "bound_mib": args.rss_bound_mib,
+            "slope_mib_per_1000_frames": growth_per_1000 / 1048576.0,
+            "median_drift_mib": drift / 1048576.0,
+        },
+        "gpu": {
+            "warmup_block_peak_mib": mib(warm_capacity),
+            "allocations_per_setting": gpu_alloc.iter().map(|a| a.map(|(n, b)| json!({"count": n, "mib": mib(b)}))).collect::<Vec<_>>(),
+        },
+        "flux": {"tolerance": args.flux_tolerance, "worst_relative_deviation": worst_flux_dev, "cone_power_w": cone_power},
+        "exact_worst_residual": worst_residual,
+        "failures": failures.len(),
+        "first_failures": failures.iter().take(20).collect::<Vec<_>>(),
+        "samples": samples,
+    });
+    if let Some(p) = &args.json {
+        image_io::write_text(p, &serde_json::to_string_pretty(&summary).unwrap_or_default())?;
+    }
+    eprintln!(
+        "soak: {} frames in {:.0} s; RSS peak {:.1} MiB in the warm-up, {:.1}..{:.1} MiB after ({:+.2} MiB per 1000 frames); \
+         median drift {:+.1} MiB; worst flux deviation {:.2e}; exact residual {:.1e}; {} failures",
+        args.frames,
+        start.elapsed().as_secs_f64(),
+        mib(rss_base),
+        if after > 0 { mib(rss_min) } else { f64::NAN },
+        if after > 0 { mib(rss_max) } else { f64::NAN },
+        growth_per_1000 / 1048576.0,
+        drift / 1048576.0,
+        worst_flux_dev,
+        worst_residual,
+        failures.len()
+    );
+    if !failures.is_empty() {
+        return Err(AppError::Failed(format!("soak: {} failed checks (first: {})", failures.len(), failures[0])));
+    }
+    crate::commands::validation_verdict(&session)
+}

@@ -1,0 +1,246 @@
+//! `caustics temporal`: stability over time. The light steps along an orbit about the vertical axis through its
+//! target (tilted 25° first when it stands straight above it) for K frames; each frame's caustics AOV E_t is
+//! compared with the CPU reference R_t at the same light position (src/reference, cached on disk), for each
+//! method. Reported per method, on 64² box-filtered images:
+//!
+//! - error: mean over t of rel-L1(E_t, R_t) = Σ|E_t − R_t| / Σ R_t;
+//! - flicker: mean over t ≥ 1 of Σ|(E_t − E_{t−1}) − (R_t − R_{t−1})| / Σ R_t, the frame-to-frame change that
+//!   the reference does not make (a method whose error is the same every frame has no flicker, however large
+//!   its error);
+//! - the reference's own frame-to-frame change Σ|R_t − R_{t−1}| / Σ R_t, for scale.
+//!
+//! The references use one seed, so their Monte Carlo noise is the same pattern at every light position and
+//! mostly cancels in R_t − R_{t−1}; what remains sets the floor of the flicker column (compare the reference
+//! change at half the photons to see it).
+
+use crate::commands::{to_rgb, SceneArgs, Session};
+use crate::error::{AppError, AppResult};
+use crate::image_io::{self, RgbImage};
+use crate::metrics;
+use crate::reference::{self, Paths, RefParams};
+use crate::renderer::Aov;
+use crate::scene::{Projection, Scene};
+use crate::settings::{Method, Metric, Settings, Transport};
+use glam::{Quat, Vec3};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct TemporalArgs {
+    /// Scene (default: the sphere scene).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Orthographic camera the AOV and the references are binned into.
+    #[arg(long, default_value = "top")]
+    pub camera: String,
+    /// AOV and reference size (compared at 64²).
+    #[arg(long, default_value = "128x128")]
+    pub size: String,
+    /// Frames (light positions) K.
+    #[arg(long, default_value_t = 16)]
+    pub frames: u32,
+    /// Orbit step between frames, degrees.
+    #[arg(long, default_value_t = 1.0)]
+    pub step_deg: f32,
+    /// Light transport.
+    #[arg(long, value_enum, default_value_t = Transport::TwoInterface)]
+    pub transport: Transport,
+    /// Methods: dense, max-level, max-error (comma-separated).
+    #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Photon level (dense) or maximal traversal level (adaptive).
+    #[arg(long, default_value_t = 3)]
+    pub level: u32,
+    /// Reference paths: two-refractions (what the two-interface model computes) or all.
+    #[arg(long, default_value = "two-refractions")]
+    pub paths: String,
+    /// Reference photons per light position.
+    #[arg(long, default_value_t = 4_000_000)]
+    pub reference_photons: u64,
+    /// Caustic map and refractor g-buffer side.
+    #[arg(long, default_value_t = 1024)]
+    pub map_res: u32,
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
+}
+
+/// 64² luminance plane of an image.
+fn plane64(img: &RgbImage) -> Vec<f64> {
+    let (ow, oh) = metrics::comparison_size(64, img.width, img.height);
+    metrics::box_filter(&metrics::luminance_plane(img), img.width as usize, img.height as usize, ow, oh)
+}
+
+/// The scene with its light turned by `deg` about the vertical axis through its target.
+fn orbit(scene: &Scene, d: Vec3, deg: f32) -> Scene {
+    let mut s = scene.clone();
+    let l = &mut s.lights[0];
+    l.position = l.target + Quat::from_rotation_y(deg.to_radians()) * d;
+    s
+}
+
+/// The reference at one light position, cached next to the bench's references (the key adds the light's
+/// position to the scene file's).
+fn reference_at(scene_path: &std::path::Path, scene: &Scene, p: &RefParams) -> AppResult<RgbImage> {
+    let key = reference::cache::cache_key(scene_path, p)?;
+    let pos = scene.lights[0].position.to_array().map(f32::to_bits);
+    let dir = reference::cache::cache_dir();
+    let file = dir.join(format!("{key}-light-{:08x}{:08x}{:08x}.exr", pos[0], pos[1], pos[2]));
+    if let Ok(img) = image_io::read_exr(&file) {
+        if img.width == p.width && img.height == p.height {
+            return Ok(img);
+        }
+    }
+    let out = reference::trace(scene, p)?;
+    std::fs::create_dir_all(&dir).map_err(|e| AppError::Io(format!("{}: cannot create: {e}", dir.display())))?;
+    image_io::write_exr(&file, &out.image)?;
+    Ok(out.image)
+}
+
+pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
+    if args.frames < 2 {
+        return Err(AppError::BadInput("--frames: at least 2".into()));
+    }
+    for p in [&args.json, &args.markdown].into_iter().flatten() {
+        image_io::check_output_dir(p)?;
+    }
+    let paths = match args.paths.as_str() {
+        "two-refractions" => Paths::TwoRefractions,
+        "all" => Paths::All,
+        p => return Err(AppError::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
+    };
+    let methods: Vec<(String, Method, Metric)> = args
+        .methods
+        .iter()
+        .map(|m| match m.as_str() {
+            "dense" => Ok((m.clone(), Method::Dense, Metric::MaxLevel)),
+            "max-level" => Ok((m.clone(), Method::Adaptive, Metric::MaxLevel)),
+            "max-error" => Ok((m.clone(), Method::Adaptive, Metric::MaxError)),
+            _ => Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level or max-error"))),
+        })
+        .collect::<AppResult<_>>()?;
+    let base = Settings {
+        transport: args.transport,
+        level: args.level,
+        gbuffer_res: args.map_res,
+        caustic_res: args.map_res,
+        ..Settings::default()
+    };
+    let scene_args =
+        SceneArgs { scene: args.scene.clone(), camera: Some(args.camera.clone()), size: args.size.clone() };
+    let mut session = Session::open(&scene_args, base.clone())?;
+    let half_height = match session.camera.projection {
+        Projection::Orthographic { half_height } => half_height,
+        Projection::Perspective { .. } => {
+            return Err(AppError::BadInput(format!("--camera {}: must be orthographic", args.camera)))
+        }
+    };
+    let scene0 = session.renderer.scene.clone();
+    let light = &scene0.lights[0];
+    let mut d = light.position - light.target;
+    if d.normalize().dot(Vec3::Y).abs() > 0.99 {
+        d = Quat::from_rotation_z(-25f32.to_radians()) * d;
+    }
+    let params = RefParams {
+        camera: Some(args.camera.clone()),
+        paths,
+        photons: args.reference_photons,
+        width: session.width,
+        height: session.height,
+        ..RefParams::default()
+    };
+    let t = Instant::now();
+    let mut refs = Vec::new();
+    for k in 0..args.frames {
+        let scene = orbit(&scene0, d, k as f32 * args.step_deg);
+        refs.push(plane64(&reference_at(&session.scene_path, &scene, &params)?));
+    }
+    eprintln!("temporal: {} references ready in {:.1} s", refs.len(), t.elapsed().as_secs_f64());
+    let sum = |p: &[f64]| p.iter().sum::<f64>();
+    let l1 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f64>();
+    let ref_change: f64 =
+        (1..refs.len()).map(|t| l1(&refs[t], &refs[t - 1]) / sum(&refs[t])).sum::<f64>() / (refs.len() - 1) as f64;
+    let mut rows = Vec::new();
+    for (name, method, metric) in &methods {
+        session.renderer.set_settings(Settings { method: *method, metric: *metric, ..base.clone() })?;
+        let mut planes = Vec::new();
+        let mut ms = Vec::new();
+        for k in 0..args.frames {
+            session.renderer.set_scene(orbit(&scene0, d, k as f32 * args.step_deg))?;
+            if k == 0 {
+                session.frame(None)?; // warm-up: lavapipe compiles shaders on first use
+            }
+            let (report, img) = session.frame(Some(Aov::Caustics))?;
+            ms.push(report.gpu_ms);
+            let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| AppError::Failed("no caustics AOV".into()))?;
+            planes.push(plane64(&rgb));
+        }
+        let n = planes.len();
+        let error = (0..n).map(|t| l1(&planes[t], &refs[t]) / sum(&refs[t])).sum::<f64>() / n as f64;
+        let max_error = (0..n).map(|t| l1(&planes[t], &refs[t]) / sum(&refs[t])).fold(0.0, f64::max);
+        let flicker_t: Vec<f64> = (1..n)
+            .map(|t| {
+                let num: f64 = (0..refs[t].len())
+                    .map(|i| ((planes[t][i] - planes[t - 1][i]) - (refs[t][i] - refs[t - 1][i])).abs())
+                    .sum();
+                num / sum(&refs[t])
+            })
+            .collect();
+        let flicker = flicker_t.iter().sum::<f64>() / flicker_t.len() as f64;
+        let change = (1..n).map(|t| l1(&planes[t], &planes[t - 1]) / sum(&refs[t])).sum::<f64>() / (n - 1) as f64;
+        let gpu_ms = ms.iter().sum::<f64>() / ms.len() as f64;
+        eprintln!(
+            "temporal: {name} L{}: error {error:.4} (max {max_error:.4}), flicker {flicker:.4} (max {:.4}), change {change:.4}, reference change {ref_change:.4}, {gpu_ms:.1} GPU ms",
+            args.level,
+            flicker_t.iter().cloned().fold(0.0, f64::max)
+        );
+        rows.push(json!({
+            "method": name, "level": args.level, "mean_rel_l1": error, "max_rel_l1": max_error,
+            "flicker": flicker, "max_flicker": flicker_t.iter().cloned().fold(0.0, f64::max),
+            "frame_change": change, "gpu_ms_mean": gpu_ms,
+        }));
+    }
+    crate::commands::validation_verdict(&session)?;
+    let mut md = format!(
+        "{} on {}, {} transport, {} frames, light orbit step {}°, 64² against the {} reference ({} photons); \
+         the reference's own frame-to-frame change is {:.4}\n\n\
+         | method | level | GPU ms | mean rel-L1 | max rel-L1 | flicker | max flicker | frame change |\n|---|--:|--:|--:|--:|--:|--:|--:|\n",
+        session.scene_path.display(),
+        session.device().info.name,
+        if args.transport == Transport::Exact { "exact" } else { "two-interface" },
+        args.frames,
+        args.step_deg,
+        args.paths,
+        args.reference_photons,
+        ref_change
+    );
+    for r in &rows {
+        md += &format!(
+            "| {} | {} | {:.1} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            r["method"].as_str().unwrap_or(""),
+            r["level"],
+            r["gpu_ms_mean"].as_f64().unwrap_or(f64::NAN),
+            r["mean_rel_l1"].as_f64().unwrap_or(f64::NAN),
+            r["max_rel_l1"].as_f64().unwrap_or(f64::NAN),
+            r["flicker"].as_f64().unwrap_or(f64::NAN),
+            r["max_flicker"].as_f64().unwrap_or(f64::NAN),
+            r["frame_change"].as_f64().unwrap_or(f64::NAN),
+        );
+    }
+    print!("{md}");
+    if let Some(p) = &args.markdown {
+        image_io::write_text(p, &md)?;
+    }
+    if let Some(p) = &args.json {
+        let doc = json!({
+            "device": session.device().info.name, "scene": session.scene_path.display().to_string(),
+            "frames": args.frames, "step_deg": args.step_deg, "half_height": half_height,
+            "reference_photons": args.reference_photons, "paths": args.paths, "reference_change": ref_change,
+            "rows": rows,
+        });
+        image_io::write_text(p, &serde_json::to_string_pretty(&doc).unwrap_or_default())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,252 @@
+//! Mesh pathologies, each with a defined behaviour:
+//!
+//! | pathology | behaviour |
+//! |---|---|
+//! | NaN or infinite vertex coordinate, or beyond ±1e9 | error at load (exit 2): `scene.toml:LINE: object[i] "name".path: FILE.obj:LINE: vertex N ...` |
+//! | zero-area triangle (repeated corner, collinear corners) | removed, with a warning |
+//! | duplicated triangle (same corners, either winding) | removed, with a warning |
+//! | triangles whose winding disagrees with their neighbours | re-oriented (the majority wins), with a warning |
+//! | a closed mesh wound inside out (negative volume) | every winding reversed, with a warning |
+//! | an open mesh (boundary edges) | rendered as surfaces; a warning for glass |
+//! | a non-manifold edge (more than two triangles) | rendered as surfaces; a warning for glass |
+//! | no triangle left | error at load (exit 2) |
+//!
+//! The repairs give the same caustic as the clean mesh (checked through the binary, on both transports), and no
+//! pathology panics at render time.
+
+mod common;
+use caustics::scene::mesh::{self, MeshReport};
+use common::*;
+use std::path::{Path, PathBuf};
+
+/// A 0.4 m cube's 8 corners (OBJ indices 1..8).
+const CUBE_V: &str = "v -0.2 -0.2 -0.2\nv 0.2 -0.2 -0.2\nv 0.2 0.2 -0.2\nv -0.2 0.2 -0.2\n\
+                      v -0.2 -0.2 0.2\nv 0.2 -0.2 0.2\nv 0.2 0.2 0.2\nv -0.2 0.2 0.2\n";
+/// Its 12 triangles, counter-clockwise seen from outside.
+const CUBE_F: [[u32; 3]; 12] = [
+    [1, 4, 3],
+    [1, 3, 2],
+    [5, 6, 7],
+    [5, 7, 8],
+    [1, 2, 6],
+    [1, 6, 5],
+    [4, 8, 7],
+    [4, 7, 3],
+    [1, 5, 8],
+    [1, 8, 4],
+    [2, 3, 7],
+    [2, 7, 6],
+];
+
+fn faces(f: &[[u32; 3]]) -> String {
+    f.iter().map(|[a, b, c]| format!("f {a} {b} {c}\n")).collect()
+}
+
+fn cube_obj() -> String {
+    format!("{CUBE_V}{}", faces(&CUBE_F))
+}
+
+fn inverted() -> String {
+    format!("{CUBE_V}{}", faces(&CUBE_F.map(|[a, b, c]| [a, c, b])))
+}
+
+fn one_flipped() -> String {
+    let mut f = CUBE_F;
+    f[5] = [f[5][0], f[5][2], f[5][1]];
+    f[9] = [f[9][0], f[9][2], f[9][1]];
+    format!("{CUBE_V}{}", faces(&f))
+}
+
+fn with_degenerate_and_duplicates() -> String {
+    // Two extra collinear points (9, 10) on the cube's bottom edge, a repeated-corner face, a collinear face, the
+    // same face twice, and once more in the other winding.
+    format!("{CUBE_V}v 0.0 -0.2 -0.2\nv 0.1 -0.2 -0.2\n{}f 1 1 2\nf 1 9 10\nf 1 4 3\nf 3 4 1\n", faces(&CUBE_F))
+}
+
+fn open() -> String {
+    format!("{CUBE_V}{}", faces(&CUBE_F[2..]))
+}
+
+fn non_manifold() -> String {
+    // A fin on the edge 1-2: three triangles share it.
+    format!("{CUBE_V}v 0.0 -0.5 -0.4\n{}f 1 2 9\n", faces(&CUBE_F))
+}
+
+fn load(name: &str, text: &str) -> Result<(mesh::Mesh, MeshReport), String> {
+    let dir = out_dir(&format!("mesh_{name}"));
+    let p = dir.join(format!("{name}.obj"));
+    std::fs::write(&p, text).unwrap();
+    mesh::load_obj_report(&p)
+}
+
+fn volume(m: &mesh::Mesh) -> f64 {
+    m.indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize].as_dvec3());
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
+
+#[test]
+fn clean_cube_is_untouched() {
+    let (m, r) = load("clean", &cube_obj()).unwrap();
+    assert_eq!(r, MeshReport::default());
+    assert!(r.findings().is_empty());
+    assert_eq!(m.triangle_count(), 12);
+    assert!((volume(&m) - 0.064).abs() < 1e-6);
+}
+
+#[test]
+fn inside_out_cube_is_turned_outward() {
+    let (m, r) = load("inverted", &inverted()).unwrap();
+    assert!(r.inverted && r.closed() && r.reoriented == 0, "{r:?}");
+    assert!((volume(&m) - 0.064).abs() < 1e-6);
+    // The recomputed normals point outward.
+    for (p, n) in m.positions.iter().zip(&m.normals) {
+        assert!(p.dot(*n) > 0.0);
+    }
+}
+
+#[test]
+fn flipped_faces_follow_their_neighbours() {
+    let (m, r) = load("flipped", &one_flipped()).unwrap();
+    assert_eq!((r.reoriented, r.inverted, r.inconsistent_edges), (2, false, 0), "{r:?}");
+    assert!((volume(&m) - 0.064).abs() < 1e-6);
+}
+
+#[test]
+fn degenerate_and_duplicated_faces_are_removed() {
+    let (m, r) = load("degenerate", &with_degenerate_and_duplicates()).unwrap();
+    assert_eq!((r.degenerate_removed, r.duplicate_removed), (2, 2), "{r:?}");
+    assert!(r.closed(), "{r:?}");
+    assert_eq!(m.triangle_count(), 12);
+    assert!((volume(&m) - 0.064).abs() < 1e-6);
+}
+
+#[test]
+fn open_and_non_manifold_meshes_are_reported() {
+    let (m, r) = load("open", &open()).unwrap();
+    assert_eq!((r.boundary_edges, r.nonmanifold_edges), (4, 0), "{r:?}");
+    assert_eq!(m.triangle_count(), 10);
+    let (m, r) = load("nonmanifold", &non_manifold()).unwrap();
+    assert_eq!((r.boundary_edges, r.nonmanifold_edges), (2, 1), "{r:?}");
+    assert_eq!(m.triangle_count(), 13);
+    assert!(r.findings().iter().any(|f| f.contains("non-manifold")));
+}
+
+#[test]
+fn non_finite_and_huge_coordinates_name_the_line() {
+    for (i, bad) in ["nan", "NaN", "inf", "-inf", "1e39", "2e9"].iter().enumerate() {
+        let text = cube_obj().replace("v 0.2 -0.2 -0.2", &format!("v 0.2 {bad} -0.2"));
+        let e = load(&format!("nan{i}"), &text).unwrap_err();
+        assert!(e.contains(&format!("nan{i}.obj:2: vertex 2")), "{e}");
+    }
+}
+
+#[test]
+fn nothing_left_is_an_error() {
+    let e = load("empty", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n").unwrap_err();
+    assert!(e.contains("no triangles with a non-zero area (2 degenerate)"), "{e}");
+}
+
+#[test]
+fn shipped_meshes_are_clean_or_known_open() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/meshes");
+    for (name, open) in [("bunny.obj", false), ("icosahedron_vertex_up.obj", false), ("dome_open.obj", true)] {
+        let (_, r) = mesh::load_obj_report(&dir.join(name)).unwrap();
+        assert_eq!(r.boundary_edges > 0, open, "{name}: {r:?}");
+        assert_eq!(
+            (r.nonmanifold_edges, r.reoriented, r.inverted, r.inconsistent_edges),
+            (0, 0, false, 0),
+            "{name}: {r:?}"
+        );
+    }
+}
+
+// Through the binary: render each pathology over the floor and compare the caustic flux with the clean cube's.
+
+fn scene_with(dir: &Path, obj: &str) -> PathBuf {
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    let text = std::fs::read_to_string(scene("tilted_cube.toml"))
+        .unwrap()
+        .replace("shape = \"cube\"\nsize = 0.4", "shape = \"mesh\"\npath = \"m.obj\"");
+    assert!(text.contains("path = \"m.obj\""));
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// (exit code, stderr, caustic flux in W when it rendered).
+fn render_obj(test: &str, obj: &str, transport: &str) -> (Option<i32>, String, Option<f64>) {
+    let dir = out_dir(test);
+    let sc = scene_with(&dir, obj);
+    let (out, stats) = (dir.join("c.exr"), dir.join("s.json"));
+    let o = caustics(&[
+        "render",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--camera",
+        "top",
+        "--aov",
+        "caustics",
+        "--transport",
+        transport,
+        "--level",
+        "1",
+        "--size",
+        "64x64",
+        "--out",
+        out.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!err.contains("panicked"), "{err}");
+    let flux = o.status.success().then(|| {
+        let s = read_json(&stats);
+        assert_validation_clean(&s);
+        s["aov_flux_w"].as_f64().unwrap()
+    });
+    (o.status.code(), err, flux)
+}
+
+#[test]
+fn pathologies_through_the_binary() {
+    for transport in ["two-interface", "exact"] {
+        let (code, err, clean) = render_obj(&format!("bin_clean_{transport}"), &cube_obj(), transport);
+        assert_eq!(code, Some(0), "{err}");
+        assert!(!err.contains("warning: "), "{err}");
+        let clean = clean.unwrap();
+        assert!(clean > 1e-3, "clean cube caustic flux {clean}");
+        for (name, obj, needle) in [
+            ("inverted", inverted(), "inside out"),
+            ("flipped", one_flipped(), "reversed the winding of 2 triangles"),
+            ("degenerate", with_degenerate_and_duplicates(), "removed 2 degenerate"),
+        ] {
+            let (code, err, flux) = render_obj(&format!("bin_{name}_{transport}"), &obj, transport);
+            assert_eq!(code, Some(0), "{name}: {err}");
+            assert!(err.contains("object[1] \"glass\".path") && err.contains(needle), "{name}: {err}");
+            let flux = flux.unwrap();
+            assert!((flux / clean - 1.0).abs() < 1e-3, "{name} ({transport}): flux {flux} W against {clean} W");
+        }
+    }
+    // Open and non-manifold glass renders (as surfaces), with a warning.
+    for (name, obj, needle) in
+        [("open", open(), "open mesh: 4 boundary edges"), ("fin", non_manifold(), "non-manifold")]
+    {
+        for transport in ["two-interface", "exact"] {
+            let (code, err, flux) = render_obj(&format!("bin_{name}_{transport}"), &obj, transport);
+            assert_eq!(code, Some(0), "{name}: {err}");
+            assert!(err.contains(needle), "{name}: {err}");
+            assert!(flux.unwrap().is_finite());
+        }
+    }
+    // NaN: exit 2 naming the scene's line, the object, the OBJ file and its line.
+    let text = cube_obj().replace("v 0.2 0.2 0.2", "v 0.2 nan 0.2");
+    let (code, err, _) = render_obj("bin_nan", &text, "two-interface");
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("scene.toml:") && err.contains("object[1] \"glass\".path"), "{err}");
+    assert!(err.contains("m.obj:7: vertex 7 has a non-finite coordinate `nan`"), "{err}");
+}
