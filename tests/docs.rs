@@ -116,7 +116,7 @@ fn readme_synopsis() -> Vec<(String, Vec<String>)> {
 fn readme_synopsis_matches_clap() {
     let synopsis = readme_synopsis();
     let subs: Vec<&str> = synopsis.iter().map(|(s, _)| s.as_str()).collect();
-    assert_eq!(subs, ["render", "profile", "reference", "compare", "bench", "view"]);
+    assert_eq!(subs, ["render", "profile", "reference", "compare", "bench", "view", "temporal"]);
     for (sub, flags) in &synopsis {
         let o = common::caustics(&[sub, "--help"]);
         assert!(o.status.success(), "caustics {sub} --help");
