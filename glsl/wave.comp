@@ -16,6 +16,10 @@
 layout(local_size_x = LINEAR_WG) in;
 
 shared float s_acc[ACC_TERMS][LINEAR_WG];
+// Flux whose term depends on the reservation verdict: children to append, records (and their one-interaction part).
+shared float s_pend_child[LINEAR_WG];
+shared float s_pend_rec[LINEAR_WG];
+shared float s_pend_one[LINEAR_WG];
 shared uint s_rays;
 shared uint s_recs;
 shared uint s_ray_base;
@@ -163,6 +167,14 @@ void main() {
             }
         }
     }
+    // The account's shares, written before the reservation's barrier: the work group sums them after it, once the
+    // verdict says whether the children and records went out or overflowed (barriers are costly on CPU drivers).
+    for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] = acc[k];
+    float pend_child = 0.0;
+    for (uint c = 0u; c < n_child; c++) pend_child += phi * c_w[c];
+    s_pend_child[lid] = pend_child;
+    s_pend_rec[lid] = rec ? rec_flux : 0.0;
+    s_pend_one[lid] = rec && one_event ? rec_flux : 0.0;
     barrier();
     if (lid == 0u) {
         s_rays_ok = false;
@@ -192,31 +204,26 @@ void main() {
     }
     barrier();
     uint q = (wave + 1u) & 1u;
-    for (uint c = 0u; c < n_child; c++) {
-        if (s_rays_ok) {
-            store_ray(q, s_ray_base + ray_slot + c, c_o[c], c_w[c], c_d[c], meta);
-        } else {
-            acc[ACC_OVERFLOW] += phi * c_w[c];
-        }
+    if (s_rays_ok) {
+        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, c_o[c], c_w[c], c_d[c], meta);
     }
-    if (rec) {
-        if (s_recs_ok) {
-            splats[s_rec_base + rec_slot] = record;
-        } else {
-            acc[ACC_OVERFLOW] += rec_flux;
+    if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
+    // One invocation per term sums the work group's shares and adds them in fixed point.
+    if (lid < ACC_TERMS) {
+        float sum = 0.0;
+        for (uint k = 0u; k < LINEAR_WG; k++) sum += s_acc[lid][k];
+        float child = 0.0, recs = 0.0, one = 0.0;
+        if (lid == ACC_OVERFLOW || lid == ACC_CAUSTIC || lid == ACC_ONE_EVENT) {
+            for (uint k = 0u; k < LINEAR_WG; k++) {
+                child += s_pend_child[k];
+                recs += s_pend_rec[k];
+                one += s_pend_one[k];
+            }
         }
-        if (s_recs_ok) acc[ACC_CAUSTIC] += rec_flux;
-        if (s_recs_ok && one_event) acc[ACC_ONE_EVENT] += rec_flux;
+        if (lid == ACC_OVERFLOW) sum += (s_rays_ok ? 0.0 : child) + (s_recs_ok ? 0.0 : recs);
+        if (lid == ACC_CAUSTIC && s_recs_ok) sum += recs;
+        if (lid == ACC_ONE_EVENT && s_recs_ok) sum += one;
+        account_add(lid, sum);
     }
-    // Work-group sums of the account, then one fixed-point add per term.
-    for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] = acc[k];
-    barrier();
-    for (uint stride = LINEAR_WG / 2u; stride > 0u; stride >>= 1) {
-        if (lid < stride) {
-            for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] += s_acc[k][lid + stride];
-        }
-        barrier();
-    }
-    if (lid < ACC_TERMS) account_add(lid, s_acc[lid][0]);
     if (lid == 0u && i < tstate.in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, tstate.in_count - i));
 }
