@@ -222,8 +222,9 @@ fn srgb_surface_presents_the_same_bytes() {
     assert!(d <= 2, "sRGB-surface frame differs from the headless one by {d} levels");
 }
 
-/// 24 programmatic resizes (1x1 among them, half of them while a frame is in flight) and a simulated minimize:
-/// no validation message, every retired swapchain destroyed.
+/// 100 programmatic resizes (1x1 among them, half of them while a frame is in flight) and a simulated minimize:
+/// no validation message, every retired swapchain destroyed. Measured: 100 resizes, 101 swapchains, 152 frames
+/// presented in about 5 s.
 #[test]
 fn survives_resizes_and_minimize_without_leaks() {
     let dir = out_dir("viewer_resize");
@@ -236,7 +237,7 @@ fn survives_resizes_and_minimize_without_leaks() {
         "--frames",
         "10",
         "--resize-cycle",
-        "24",
+        "100",
         "--level",
         "2",
         "--gbuffer-res",
@@ -248,9 +249,9 @@ fn survives_resizes_and_minimize_without_leaks() {
     let c = &s["counters"];
     eprintln!("{}", serde_json::to_string(c).unwrap());
     let n = |v: &serde_json::Value| v.as_i64().unwrap();
-    assert!(n(&c["resize_requests"]) >= 20, "resize requests {}", c["resize_requests"]);
-    assert!(n(&s["resizes_seen"]) >= 20, "resizes seen {}", s["resizes_seen"]);
-    assert!(n(&s["swapchain_recreations"]) >= 20, "recreations {}", s["swapchain_recreations"]);
+    assert!(n(&c["resize_requests"]) >= 95, "resize requests {}", c["resize_requests"]);
+    assert!(n(&s["resizes_seen"]) >= 95, "resizes seen {}", s["resizes_seen"]);
+    assert!(n(&s["swapchain_recreations"]) >= 95, "recreations {}", s["swapchain_recreations"]);
     assert!(n(&s["minimized_frames_skipped"]) > 0, "the minimized window must not be rendered");
     assert!(n(&s["frames_presented"]) >= 10);
     let sc = &s["swapchain"];
