@@ -104,20 +104,20 @@ void main() {
             acc[ACC_ESCAPED] += flux;
         } else {
             vec3 p = bvh_hit_point(hit);
+            bool specular = inst_is_dielectric(hit.inst);
+            // The normals, once: the absorption test and the interface both need them.
+            vec3 ng = vec3(0.0), ns = vec3(0.0);
+            if (specular) bvh_normals(hit, ng, ns);
             float sigma = bvh_instances[hit.inst].material.z;
-            if (sigma > 0.0 && inst_is_dielectric(hit.inst)) {
+            if (specular && sigma > 0.0 && dot(rd, ng) > 0.0) {
                 // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation,
                 // exactly (no sampling).
-                vec3 ng0, ns0;
-                bvh_normals(hit, ng0, ns0);
-                if (dot(rd, ng0) > 0.0) {
-                    float keep = exp(-sigma * distance(p, ro));
-                    acc[ACC_ABSORBED] += flux * (1.0 - keep);
-                    w *= keep;
-                    flux = phi * w;
-                }
+                float keep = exp(-sigma * distance(p, ro));
+                acc[ACC_ABSORBED] += flux * (1.0 - keep);
+                w *= keep;
+                flux = phi * w;
             }
-            if (!inst_is_dielectric(hit.inst)) {
+            if (!specular) {
                 if (depth == 0u) {
                     acc[ACC_DIRECT] += flux;
                 } else {
@@ -133,8 +133,6 @@ void main() {
             } else if (depth >= MAX_INTERACTIONS) {
                 acc[ACC_CAP] += flux;
             } else {
-                vec3 ng, ns;
-                bvh_normals(hit, ng, ns);
                 Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
                 if (!s.ok) {
                     acc[ACC_LOST] += flux;

@@ -114,11 +114,7 @@ fn exact_extra(report: &FrameReport, intensity: f64) -> serde_json::Value {
     let Some(ts) = report.transport else {
         return serde_json::Value::Null;
     };
-    let acc = ts.account().map(|x| x * intensity);
-    let mut energy = serde_json::Map::new();
-    for (name, w) in crate::gpu_types::ACCOUNT_TERMS.iter().zip(acc) {
-        energy.insert(format!("{name}_w"), json!(w));
-    }
+    let energy = ts.energy_json(intensity);
     json!({
         "waves": ts.waves,
         "max_depth": ts.max_depth,

@@ -2,7 +2,6 @@
 
 use crate::bvh::BvhLayout;
 use crate::error::{AppError, AppResult};
-use crate::gpu_types::ACCOUNT_TERMS;
 use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
@@ -301,11 +300,13 @@ impl Session {
     }
 }
 
-fn check_output(aov: Aov, out: &Path) -> AppResult<()> {
+/// Check `--out`'s extension against the AOV, and return the AOV to read back: beauty written as `.exr` is the
+/// linear radiance (`Aov::BeautyHdr`).
+fn check_output(aov: Aov, out: &Path) -> AppResult<Aov> {
     let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     let want = if aov == Aov::Beauty { "png" } else { "exr" };
     if aov == Aov::Beauty && ext == "exr" {
-        return Ok(());
+        return Ok(Aov::BeautyHdr);
     }
     if ext != want {
         return Err(AppError::BadInput(format!(
@@ -318,7 +319,7 @@ fn check_output(aov: Aov, out: &Path) -> AppResult<()> {
             }
         )));
     }
-    Ok(())
+    Ok(aov)
 }
 
 /// See [`Session::estimate_frame_s`]; `cpu`: the device is a CPU driver (lavapipe).
@@ -455,14 +456,8 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
         "ray_queue_capacity": r.settings.ray_queue_capacity(),
     });
     if let Some(ts) = report.transport {
-        let intensity = r.scene.lights[0].intensity as f64;
-        let acc = ts.account().map(|x| x * intensity);
-        let mut account = serde_json::Map::new();
-        for (name, w) in ACCOUNT_TERMS.iter().zip(acc) {
-            account.insert(format!("{name}_w"), json!(w));
-        }
-        let out: f64 = acc[1..9].iter().sum();
-        account.insert("residual".into(), json!(if acc[0] > 0.0 { (acc[0] - out).abs() / acc[0] } else { out.abs() }));
+        let mut account = ts.energy_json(r.scene.lights[0].intensity as f64);
+        account.insert("residual".into(), json!(ts.residual()));
         if let Value::Object(m) = &mut v {
             m.insert("energy".into(), Value::Object(account));
             m.insert("rays_traced".into(), json!(ts.rays_traced));
@@ -476,13 +471,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
 }
 
 pub fn run_render(args: &RenderArgs) -> AppResult<()> {
-    let aov: Aov = args.aov.parse()?;
-    check_output(aov, &args.out)?;
-    // Beauty as EXR: the linear radiance before exposure and tone mapping.
-    let aov = match (aov, args.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase())) {
-        (Aov::Beauty, Some(e)) if e == "exr" => Aov::BeautyHdr,
-        (a, _) => a,
-    };
+    let aov = check_output(args.aov.parse()?, &args.out)?;
     if let Some(p) = &args.stats {
         image_io::check_output_dir(p)?;
     }

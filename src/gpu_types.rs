@@ -168,6 +168,23 @@ impl TransportState {
     pub fn account(&self) -> [f64; 10] {
         self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
     }
+
+    /// The account in W (`intensity`: the light's, W/sr or W/m²), one `<term>_w` key per term.
+    pub fn energy_json(&self, intensity: f64) -> serde_json::Map<String, serde_json::Value> {
+        ACCOUNT_TERMS.iter().zip(self.account()).map(|(n, x)| (format!("{n}_w"), (x * intensity).into())).collect()
+    }
+
+    /// |emitted − every destination| / emitted: how far the account is from closing (0 when nothing was emitted).
+    pub fn residual(&self) -> f64 {
+        let a = self.account();
+        // Terms 1..9 partition the emitted flux; the last (one-interaction) is a part of `caustics`.
+        let out: f64 = a[1..ACCOUNT_TERMS.len() - 1].iter().sum();
+        if a[0] > 0.0 {
+            (a[0] - out).abs() / a[0]
+        } else {
+            out.abs()
+        }
+    }
 }
 
 /// Push constants of the photon passes (`PhotonPush` in photon_push.glsl).
