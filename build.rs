@@ -27,6 +27,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("traverse.comp", "wg16", &[("TRAVERSE_WG_SIDE", "16")]),
     ("wave.comp", "single", &[("BVH_LAYOUT_SINGLE", "1")]),
     ("wave.comp", "threaded", &[("BVH_LAYOUT_THREADED", "1")]),
+    ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),

@@ -408,6 +408,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "overflow_dropped_entries": st.map(|x| x.overflow_dropped).unwrap_or(0),
         "unfinished_tiles": last.unfinished_tiles,
         "gpu_ms": profiler::gpu_json(&summaries),
+        "gpu_substages_ms": profiler::summaries_json(&profiler::substage_summaries(frames)),
         "photons_per_ms": profiler::throughput_json(&summaries, photons as u64),
         "wall_ms": profiler::summary_json(&summaries, "frame_wall"),
         "cpu_ms": profiler::summary_json(&summaries, "cpu_record"),
@@ -621,6 +622,9 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
         );
         let photons = last.state.map(|x| x.photons_total as u64);
         print!("{}", profiler::table(&summaries, reports.len(), photons));
+        for (l, v) in profiler::substage_summaries(&reports) {
+            println!("  {l:<28} median {:8.3} ms", v.median);
+        }
     }
     if let Some(p) = &args.trace {
         image_io::write_text(p, &serde_json::to_string(&profiler::chrome_trace(&reports)).unwrap_or_default())?;

@@ -68,6 +68,8 @@ struct Ctx<'a> {
     data: &'a FrameData,
     /// The records are splatted by the compute pass into the flux texels (else drawn as points).
     compute_splat: bool,
+    /// The compute splat gathers a work group's taps in shared memory first.
+    tiled_splat: bool,
 }
 
 /// The mutable side of a frame: the command buffer being recorded (the CPU-driven path submits mid-frame), the
@@ -149,8 +151,9 @@ impl Renderer {
         } = self;
         let targets = targets.as_mut().expect("targets");
         targets.ubo.write(0, std::slice::from_ref(&data))?;
-        let compute_splat = settings.splat.resolve(&device.info) == Splat::Compute
-            && targets.receiver.flux.format == vk::Format::R32_SFLOAT;
+        let splat = settings.splat.resolve(&device.info);
+        let compute_splat = splat.is_compute() && targets.receiver.flux.format == vk::Format::R32_SFLOAT;
+        let tiled_splat = splat == Splat::Tiled;
         let ctx = Ctx {
             d: device,
             p: passes,
@@ -161,6 +164,7 @@ impl Renderer {
             s: settings,
             data: &data,
             compute_splat,
+            tiled_splat,
         };
         let cmd = recorder.begin()?;
         let mut rec = Rec {
@@ -208,6 +212,7 @@ impl Renderer {
             log::warn!("more stages than timestamp queries: the per-stage GPU times of this frame are truncated");
         }
         report.stages = crate::vk::query::sum_by_label(&report.segments);
+        report.substages = crate::vk::query::sum_by_sublabel(&report.segments);
         report.gpu_ms = report.stages.iter().filter(|(l, _)| *l != HOST_ROUNDTRIP).map(|(_, ms)| ms).sum();
         if let Some((_, state, transport)) = cached {
             report.state = state;
@@ -256,7 +261,7 @@ impl Ctx<'_> {
     /// Step 1: light-view g-buffers.
     fn light_gbuffers(&self, rec: &mut Rec) {
         let (t, cmd, g) = (self.t, rec.cmd, &self.p.geometry);
-        rec.ts.mark(cmd, "light_gbuffer");
+        rec.ts.mark(cmd, "light_gbuffer.front");
         let start = [Access::FrameStart];
         self.barrier(cmd, |b| {
             for img in [&t.light.front, &t.light.front_aux, &t.light.back, &t.receiver.geo] {
@@ -279,6 +284,7 @@ impl Ctx<'_> {
             // Exact transport reads only the front buffer (coverage); the back surface is the two-interface
             // trace's.
             if self.s.transport == Transport::TwoInterface {
+                rec.ts.mark(cmd, "light_gbuffer.back");
                 // The depth buffer is reused (cleared) by the back-face pass.
                 self.barrier(cmd, |b| {
                     b.image(&t.light.depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
@@ -292,6 +298,7 @@ impl Ctx<'_> {
                 g.record(cmd, &g.back, self.sb, &back);
             }
         }
+        rec.ts.mark(cmd, "light_gbuffer.receivers");
         let recv = GeometryTarget {
             colors: &[&t.receiver.geo],
             depth: &t.receiver.depth,
@@ -299,6 +306,7 @@ impl Ctx<'_> {
             ranges: &[self.sb.receivers],
         };
         g.record(cmd, &g.surfaces, self.sb, &recv);
+        rec.ts.mark(cmd, "light_gbuffer.shadow");
         let shadow =
             GeometryTarget { colors: &[], depth: &t.receiver.shadow, view: receiver_view, ranges: &[self.sb.all] };
         g.record(cmd, &g.depth, self.sb, &shadow);
@@ -494,7 +502,7 @@ impl Ctx<'_> {
         });
         rec.ts.mark(cmd, "splat");
         if self.compute_splat {
-            ph.splat_compute(cmd, &b);
+            ph.splat_compute(cmd, &b, self.tiled_splat);
         } else {
             ph.splat(cmd, &b, &t.receiver.flux, clear);
         }

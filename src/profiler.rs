@@ -53,6 +53,26 @@ pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
     out
 }
 
+/// Per-sub-stage summaries (`light_gbuffer.front`, ...) over the frames that ran them, in first-seen order.
+pub fn substage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
+    let mut labels: Vec<&str> = Vec::new();
+    for f in frames {
+        for (l, _) in &f.substages {
+            if !labels.contains(l) {
+                labels.push(l);
+            }
+        }
+    }
+    labels
+        .iter()
+        .map(|l| {
+            let v: Vec<f64> =
+                frames.iter().filter_map(|f| f.substages.iter().find(|(x, _)| x == l).map(|(_, ms)| *ms)).collect();
+            (l.to_string(), Summary::of(&v))
+        })
+        .collect()
+}
+
 /// The host-side entries of [`stage_summaries`]: wall-clock time of a frame and host command recording. They are
 /// not GPU time, so the stats keep them out of `gpu_ms` (as `wall_ms` and `cpu_ms`).
 pub const HOST_STAGES: [&str; 2] = ["frame_wall", "cpu_record"];

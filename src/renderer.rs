@@ -88,6 +88,8 @@ impl std::str::FromStr for Aov {
 pub struct FrameReport {
     /// GPU milliseconds per stage, in order (intervals with the same label summed).
     pub stages: Vec<(&'static str, f64)>,
+    /// GPU milliseconds of the parts of a stage timed on their own (`light_gbuffer.front`, ...), in order.
+    pub substages: Vec<(&'static str, f64)>,
     /// Every timed interval: (label, start ms from the frame's first timestamp, duration ms).
     pub segments: Vec<(&'static str, f64, f64)>,
     /// Sum of the stages (excluding host round trips of the CPU-driven traversal).

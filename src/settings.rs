@@ -47,19 +47,31 @@ pub enum Splat {
     Raster,
     /// A compute pass dispatched indirectly, adding each tap with a float atomic.
     Compute,
-    /// Compute wherever the device has float atomics on buffers, else raster; see docs/results.md.
+    /// The compute splat with contention control: a work group gathers its taps in a shared-memory window first.
+    Tiled,
+    /// The fastest the device has, by the rule measured in docs/results.md: tiled on GPUs, compute on CPU devices.
     Auto,
 }
 
 impl Splat {
-    /// The splat a device runs. `auto` follows the measured rule: the compute splat was 6-8x faster than the
-    /// point draw on lavapipe (docs/results.md), and compute rasterization of points beats the hardware point
-    /// path on GPUs (Schütz et al. 2021), so compute wherever float atomics exist. Without them, raster.
+    /// The splat a device runs. `auto` follows the measured rule (docs/results.md, "Throughput"): on an H100 the
+    /// compute splats are 12-20x faster than the point draw and the tiled one is faster still where light
+    /// focuses; on lavapipe the compute splat is 6-8x faster than the point draw, and the tiled one's barriers
+    /// make it about 2x slower than the untiled one. Without float atomics: raster.
     pub fn resolve(self, info: &crate::vk::context::DeviceInfo) -> Splat {
-        match self {
-            Splat::Auto | Splat::Compute if info.float_atomic_add => Splat::Compute,
-            _ => Splat::Raster,
+        if !info.float_atomic_add {
+            return Splat::Raster;
         }
+        match self {
+            Splat::Auto if info.kind == ash::vk::PhysicalDeviceType::CPU => Splat::Compute,
+            Splat::Auto => Splat::Tiled,
+            s => s,
+        }
+    }
+
+    /// Whether the records reach the map through a compute pass (either compute splat).
+    pub fn is_compute(self) -> bool {
+        matches!(self, Splat::Compute | Splat::Tiled)
     }
 }
 

@@ -13,6 +13,8 @@ pub const LINEAR_WG: u32 = 64;
 pub const TILE_WG: u32 = 8;
 /// Largest splat radius in caustic-map texels (point size 2r must stay within lavapipe's 255).
 pub const MAX_SPLAT_RADIUS: u32 = 64;
+/// Side of the shared-memory window in which the tiled compute splat gathers a work group's taps.
+pub const SPLAT_TILE: u32 = 32;
 /// Mip levels kept in the coverage pyramid (covers refractor g-buffers up to 64·2^(MAX_PYRAMID_MIPS-1)).
 pub const MAX_PYRAMID_MIPS: u32 = 12;
 /// Largest number of photon batches recorded per frame.

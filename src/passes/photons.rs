@@ -125,6 +125,8 @@ pub struct PhotonPasses {
     splat: Pipeline,
     /// None when the device has no float atomics on buffers.
     splat_compute: Option<Pipeline>,
+    /// The same with a work group's taps gathered in shared memory first (SPLAT_TILED).
+    splat_compute_tiled: Option<Pipeline>,
 }
 
 impl PhotonPasses {
@@ -168,6 +170,11 @@ impl PhotonPasses {
             transport: compute("transport state", shaders::TRANSPORT_COMP.words())?,
             splat_compute: if device.info.float_atomic_add {
                 Some(compute("compute splat", shaders::SPLAT_COMP.words())?)
+            } else {
+                None
+            },
+            splat_compute_tiled: if device.info.float_atomic_add {
+                Some(compute("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())?)
             } else {
                 None
             },
@@ -251,8 +258,9 @@ impl PhotonPasses {
 
     /// Splat the records into the flux texels with a compute pass dispatched indirectly (float atomics). Settings
     /// resolve `--splat` to raster on a device without them, so the pipeline exists whenever this is called.
-    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings) {
-        let Some(p) = self.splat_compute.as_ref() else { return };
+    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool) {
+        let p = if tiled { &self.splat_compute_tiled } else { &self.splat_compute };
+        let Some(p) = p.as_ref() else { return };
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush::default());
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };

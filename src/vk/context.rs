@@ -138,7 +138,8 @@ pub struct DeviceInfo {
     /// Nanoseconds per timestamp tick.
     pub timestamp_period: f32,
     pub timestamp_valid_bits: u32,
-    /// VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd (the compute splat needs it).
+    /// VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd and shaderSharedFloat32AtomicAdd (the compute
+    /// splats need them).
     pub float_atomic_add: bool,
 }
 
@@ -243,7 +244,7 @@ impl Device {
                 let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
                 let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut fa);
                 unsafe { raw.get_physical_device_features2(physical, &mut f2) };
-                fa.shader_buffer_float32_atomic_add != 0
+                fa.shader_buffer_float32_atomic_add != 0 && fa.shader_shared_float32_atomic_add != 0
             };
             let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
             let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
@@ -356,7 +357,9 @@ impl Device {
             .fragment_stores_and_atomics(supported.fragment_stores_and_atomics != 0)
             .shader_int64(supported.shader_int64 != 0);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
-        let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true);
+        let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
+            .shader_buffer_float32_atomic_add(true)
+            .shader_shared_float32_atomic_add(true);
         let mut f2 = vk::PhysicalDeviceFeatures2::default().features(core).push_next(&mut f13);
         let mut extensions = vec![ash::khr::push_descriptor::NAME.as_ptr()];
         if c.info.float_atomic_add {

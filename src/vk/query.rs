@@ -78,13 +78,28 @@ impl Drop for Timestamps {
     }
 }
 
-/// Sum intervals by label, in first-seen order.
+/// Sum intervals by stage, in first-seen order: a `stage.part` label counts to `stage`.
 pub fn sum_by_label(segments: &[(&'static str, f64, f64)]) -> Vec<(&'static str, f64)> {
+    sum_by(segments, |l| l.split('.').next().unwrap_or(l))
+}
+
+/// The sub-stages: intervals labelled `stage.part` summed by their whole label (their stage's entry in
+/// [`sum_by_label`] holds their sum).
+pub fn sum_by_sublabel(segments: &[(&'static str, f64, f64)]) -> Vec<(&'static str, f64)> {
+    let subs: Vec<_> = segments.iter().filter(|(l, _, _)| l.contains('.')).copied().collect();
+    sum_by(&subs, |l| l)
+}
+
+fn sum_by(
+    segments: &[(&'static str, f64, f64)],
+    key: impl Fn(&'static str) -> &'static str,
+) -> Vec<(&'static str, f64)> {
     let mut out: Vec<(&'static str, f64)> = Vec::new();
     for (label, _, ms) in segments {
-        match out.iter_mut().find(|(l, _)| l == label) {
+        let k = key(label);
+        match out.iter_mut().find(|(l, _)| *l == k) {
             Some(e) => e.1 += ms,
-            None => out.push((label, *ms)),
+            None => out.push((k, *ms)),
         }
     }
     out
