@@ -7,7 +7,7 @@
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 layout(set = 0, binding = 1) uniform sampler2D t_flux;
 layout(set = 0, binding = 2) uniform sampler2D t_recv;
-layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D o_irradiance;
+layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
@@ -30,6 +30,15 @@ void main() {
         // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
         vec3 tint = u_frame.light_power.w > 0.0 ? u_frame.light_power.rgb / u_frame.light_power.w : vec3(0.0);
         e = texelFetch(t_flux, p, 0).r * tint / area;
+    }
+    // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
+    // and blue passes keep what the earlier ones wrote.
+    uint c = u_frame.transport.w;
+    if (c != 0u) {
+        vec4 prev = c == 1u ? vec4(0.0) : imageLoad(o_irradiance, p);
+        prev[c - 1u] = e[c - 1u];
+        imageStore(o_irradiance, p, prev);
+        return;
     }
     imageStore(o_irradiance, p, vec4(e, 0.0));
 }

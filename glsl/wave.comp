@@ -108,7 +108,7 @@ void main() {
             // The normals, once: the absorption test and the interface both need them.
             vec3 ng = vec3(0.0), ns = vec3(0.0);
             if (specular) bvh_normals(hit, ng, ns);
-            float sigma = bvh_instances[hit.inst].material.z;
+            float sigma = inst_sigma(hit.inst);
             if (specular && sigma > 0.0 && dot(rd, ng) > 0.0) {
                 // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation,
                 // exactly (no sampling).

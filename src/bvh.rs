@@ -69,6 +69,10 @@ pub struct GpuInstance {
     pub material: [f32; 4],
     /// x: root node index bits in the threaded layout; y, z, w: unused.
     pub pad: [f32; 4],
+    /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); w unused.
+    pub ior_rgb: [f32; 4],
+    /// Dielectric: absorption coefficient per channel (1/m); w unused.
+    pub sigma_rgb: [f32; 4],
 }
 
 /// Three vertices (`w` unused) of one triangle, in its instance's BVH space.
@@ -81,7 +85,7 @@ pub struct GpuTriangle {
 const _: () = {
     assert!(size_of::<PairNode>() == 64);
     assert!(size_of::<SingleNode>() == 32);
-    assert!(size_of::<GpuInstance>() == 160);
+    assert!(size_of::<GpuInstance>() == 192);
     assert!(size_of::<GpuTriangle>() == 48);
 };
 
@@ -142,8 +146,18 @@ impl SceneBvh {
             let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
             let (lo, hi) =
                 tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+            let (ior_rgb, sigma_rgb) = match obj.material {
+                Material::Dielectric { absorption, .. } => {
+                    let n = obj.material.ior_rgb();
+                    ([n[0], n[1], n[2], 0.0], [absorption.x, absorption.y, absorption.z, 0.0])
+                }
+                _ => ([0.0; 4], [0.0; 4]),
+            };
             let material = match obj.material {
-                Material::Dielectric { ior, absorption } => [ior, 1.0, absorption, 0.0],
+                // The gray pass: the d-line IOR and the channels' mean absorption.
+                Material::Dielectric { ior, absorption, .. } => {
+                    [ior, 1.0, (absorption.x + absorption.y + absorption.z) / 3.0, 0.0]
+                }
                 Material::Mirror => [0.0, 2.0, 0.0, 0.0],
                 Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
             };
@@ -154,6 +168,8 @@ impl SceneBvh {
                 hi: [hi.x, hi.y, hi.z, f32::from_bits(single_root)],
                 material,
                 pad: [f32::from_bits(threaded_root), 0.0, 0.0, 0.0],
+                ior_rgb,
+                sigma_rgb,
             });
             bvh.local_bounds.push((lo, hi));
         }

@@ -381,7 +381,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
     let last = frames.last().cloned().unwrap_or_default();
     let st = last.state;
     let info = &session.device().info;
-    let photons = st.map(|x| x.photons_total).unwrap_or(0);
+    // Every light's photons (each light emits its own).
+    let photons: u32 = last.lights.iter().filter_map(|l| l.state.map(|x| x.photons_total)).sum();
     let summaries = profiler::stage_summaries(frames);
     let stage = |name: &str| summaries.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
     let mut v = json!({
@@ -418,6 +419,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "frames": frames.len(),
         "caustics_reused": last.reused,
         "reused_frames": frames.iter().filter(|f| f.reused).count(),
+        "lights": light_rows(&session.renderer, &last),
         "transport": s.transport,
         "splat": s.splat.resolve(info),
         "exact_transport": transport_json(session, &last),
@@ -469,6 +471,38 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
         }
     }
     v
+}
+
+/// One row per pass (per light, or per light and color channel when some glass needs color): the light's kind
+/// and power, the channel, whether its caustic stages ran, its photons, the GPU ms of its light-side stages in the
+/// last frame and, under exact transport, its energy account.
+fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
+    let rows: Vec<Value> = last
+        .lights
+        .iter()
+        .map(|rep| {
+            let l = &r.scene.lights[rep.light];
+            let channel = ["gray", "red", "green", "blue"][rep.channel.min(3) as usize];
+            let mut row = json!({
+                "light": rep.light,
+                "channel": channel,
+                "kind": format!("{:?}", l.kind).to_lowercase(),
+                "intensity": l.intensity,
+                "color": l.color.to_array(),
+                "caustics": rep.caustics,
+                "photons": rep.state.map(|x| x.photons_total).unwrap_or(0),
+                "gpu_ms": rep.gpu_ms,
+            });
+            if let (Some(ts), Value::Object(m)) = (rep.transport, &mut row) {
+                let mut account = ts.energy_json(l.intensity as f64);
+                account.insert("residual".into(), json!(ts.residual()));
+                m.insert("energy".into(), Value::Object(account));
+                m.insert("rays_traced".into(), json!(ts.rays_traced));
+            }
+            row
+        })
+        .collect();
+    Value::Array(rows)
 }
 
 pub fn run_render(args: &RenderArgs) -> AppResult<()> {

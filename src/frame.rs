@@ -20,13 +20,13 @@ use crate::passes::eye::EyeInputs;
 use crate::passes::geometry::GeometryTarget;
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings};
 use crate::passes::Passes;
-use crate::renderer::{Aov, AovData, FrameReport, Renderer, Views};
+use crate::renderer::{Aov, AovData, FrameReport, LightReport, Renderer, Views};
 use crate::scene::view::CameraView;
 use crate::scene_gpu::SceneBuffers;
 use crate::settings::{Driven, Method, Settings, Splat, Transport};
 use crate::shaders::consts::*;
-use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
-use crate::vk::{Access, Barriers, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
+use crate::targets::{ReceiverTargets, Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
+use crate::vk::{Access, Barriers, Buffer, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
 use ash::vk;
 use std::time::Instant;
 
@@ -64,6 +64,13 @@ struct Ctx<'a> {
     nearest: &'a Sampler,
     linear: &'a Sampler,
     t: &'a Targets,
+    /// The current light's receiver maps and uniforms.
+    r: &'a ReceiverTargets,
+    ubo: &'a Buffer,
+    light: usize,
+    /// Index of this (light, color channel) pass, and its channel among the light's (0 for a gray frame).
+    pass: usize,
+    channel: usize,
     s: &'a Settings,
     data: &'a FrameData,
     /// The records are splatted by the compute pass into the flux texels (else drawn as points).
@@ -133,36 +140,52 @@ impl Renderer {
     ) -> AppResult<(FrameReport, Option<AovData>)> {
         let start = Instant::now();
         self.ensure_targets(camera.width, camera.height)?;
-        let views = Views::new(&self.scene, &self.settings, camera)?;
-        // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the light, the
+        let nl = self.scene.lights.len();
+        // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
+        let nc = self.scene.color_channels();
+        let views =
+            (0..nl).map(|i| Views::new(&self.scene, &self.settings, camera, i)).collect::<AppResult<Vec<_>>>()?;
+        // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last completed frame, only the eye and composite passes are recorded.
         let key = self.caustic_key();
         let self_level = self.settings.level;
-        let reused = self.reuse && self.last_caustic.as_ref().is_some_and(|(k, _, _)| *k == key);
+        let reused = self.reuse && self.last_caustic.as_ref().is_some_and(|(k, _)| *k == key);
         let cached = if reused { self.last_caustic.clone() } else { None };
         self.last_caustic = None;
         let (data, slots) = {
             let t = self.targets.as_ref().expect("targets");
-            (self.frame_data(&views, t), self.batch_slots(self.settings.traversal_capacity(t.photon.capacity)))
+            let channel = |c: usize| if nc == 1 { 0 } else { c as u32 + 1 };
+            let data: Vec<FrameData> =
+                (0..nl * nc).map(|p| self.frame_data(&views[p / nc], t, p / nc, channel(p % nc))).collect();
+            (data, self.batch_slots(self.settings.traversal_capacity(t.photon.capacity)))
         };
         let Renderer {
             device, passes, scene_buffers, nearest, linear, recorder, timestamps, targets, settings, ..
         } = self;
         let targets = targets.as_mut().expect("targets");
-        targets.ubo.write(0, std::slice::from_ref(&data))?;
+        for (ubo, d) in targets.ubos.iter_mut().zip(&data) {
+            ubo.write(0, std::slice::from_ref(d))?;
+        }
         let splat = settings.splat.resolve(&device.info);
-        let compute_splat = splat.is_compute() && targets.receiver.flux.format == vk::Format::R32_SFLOAT;
+        let compute_splat = splat.is_compute() && targets.receivers[0].flux.format == vk::Format::R32_SFLOAT;
         let tiled_splat = splat == Splat::Tiled;
-        let ctx = Ctx {
+        let targets = &*targets;
+        // Pass `p`: light p / nc, channel p % nc.
+        let ctx = |p: usize| Ctx {
             d: device,
             p: passes,
             sb: scene_buffers,
             nearest,
             linear,
             t: targets,
+            r: &targets.receivers[p / nc],
+            ubo: &targets.ubos[p],
+            light: p / nc,
+            pass: p,
+            channel: p % nc,
             s: settings,
-            data: &data,
+            data: &data[p],
             compute_splat,
             tiled_splat,
         };
@@ -175,31 +198,58 @@ impl Renderer {
             record_time: 0.0,
             mark: Instant::now(),
         };
-        rec.report.caustics = views.photon.is_some();
+        rec.report.caustics = views[0].photon.is_some();
         rec.report.compute_splat = compute_splat;
-        rec.report.photon_view = views.photon;
+        rec.report.photon_view = views[0].photon;
         rec.report.reused = reused;
         rec.report.level = self_level;
         rec.ts.reset(rec.cmd);
-        if reused {
-            ctx.reuse_caustics(&mut rec);
-        } else {
-            ctx.light_gbuffers(&mut rec);
-            if rec.report.caustics {
-                ctx.coverage(&mut rec);
-                ctx.photons(&mut rec, slots)?;
-                ctx.resolve(&mut rec);
+        // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
+        ctx(0).barrier(rec.cmd, |b| {
+            b.buffer(&targets.readback, &[Access::FrameStart], &[Access::TransferDst]);
+        });
+        for pass in 0..nl * nc {
+            let c = ctx(pass);
+            let first_segment = rec.ts.len();
+            let caustics = views[c.light].photon.is_some();
+            let first_channel = c.channel == 0;
+            if reused {
+                if first_channel {
+                    c.reuse_caustics(&mut rec);
+                }
             } else {
-                ctx.clear_irradiance(&mut rec);
+                c.light_gbuffers(&mut rec, caustics, first_channel);
+                if caustics {
+                    c.coverage(&mut rec);
+                    c.photons(&mut rec, slots)?;
+                    c.resolve(&mut rec);
+                    c.copy_light_state(&mut rec);
+                } else if first_channel {
+                    c.clear_irradiance(&mut rec);
+                }
             }
+            let channel = if nc == 1 { 0 } else { c.channel as u32 + 1 };
+            rec.report.lights.push(LightReport {
+                light: c.light,
+                channel,
+                caustics,
+                first_segment,
+                ..Default::default()
+            });
         }
-        ctx.eye(&mut rec);
-        ctx.composite(&mut rec);
+        rec.ts.mark(rec.cmd, "eye");
+        for light in 0..nl {
+            ctx(light * nc).eye_receivers(&mut rec);
+        }
+        let c0 = ctx(0);
+        c0.eye_refractors(&mut rec);
+        c0.composite(&mut rec);
         rec.ts.mark(rec.cmd, "readback");
-        let aov_image = ctx.readback(&mut rec, aov);
+        let aov_image = c0.readback(&mut rec, aov);
         if let Some(f) = finish {
-            f(ctx.d, rec.cmd, ctx.t);
+            f(c0.d, rec.cmd, c0.t);
         }
+        let last_segment = rec.ts.len();
         rec.ts.mark(rec.cmd, "");
         rec.record_time += rec.mark.elapsed().as_secs_f64();
         rec.recorder.submit_with(sync)?;
@@ -214,12 +264,30 @@ impl Renderer {
         report.stages = crate::vk::query::sum_by_label(&report.segments);
         report.substages = crate::vk::query::sum_by_sublabel(&report.segments);
         report.gpu_ms = report.stages.iter().filter(|(l, _)| *l != HOST_ROUNDTRIP).map(|(_, ms)| ms).sum();
-        if let Some((_, state, transport)) = cached {
-            report.state = state;
-            report.transport = transport;
+        // Each light's light-side stages: the timed intervals from its first mark to the next light's.
+        let ends: Vec<usize> =
+            report.lights.iter().skip(1).map(|l| l.first_segment).chain(std::iter::once(last_segment)).collect();
+        for (l, end) in report.lights.iter_mut().zip(ends) {
+            l.gpu_ms = report
+                .segments
+                .get(l.first_segment..end.min(report.segments.len()))
+                .unwrap_or(&[])
+                .iter()
+                .filter(|(label, _, _)| *label != HOST_ROUNDTRIP && *label != "eye")
+                .map(|(_, _, ms)| ms)
+                .sum();
         }
-        let img = ctx.read_results(&mut report, aov_image)?;
-        self.last_caustic = Some((key, report.state, report.transport));
+        if let Some((_, lights)) = cached {
+            for (l, c) in report.lights.iter_mut().zip(lights) {
+                l.state = c.state;
+                l.transport = c.transport;
+            }
+        }
+        c0.read_results(&mut report)?;
+        report.state = report.lights[0].state;
+        report.transport = report.lights[0].transport;
+        let img = c0.read_aov(aov_image)?;
+        self.last_caustic = Some((key, report.lights.clone()));
         Ok((report, img))
     }
 }
@@ -239,7 +307,7 @@ impl Ctx<'_> {
     fn bindings(&self) -> PhotonBindings<'_> {
         let t = self.t;
         PhotonBindings {
-            ubo: &t.ubo,
+            ubo: self.ubo,
             state: &t.photon.state,
             photons: &t.photon.photons,
             indirect: &t.photon.indirect,
@@ -247,33 +315,38 @@ impl Ctx<'_> {
             front: &t.light.front,
             front_aux: &t.light.front_aux,
             back: &t.light.back,
-            recv: &t.receiver.geo,
+            recv: &self.r.geo,
             debug: &t.photon.debug,
             splats: &t.photon.splats,
             sampler: self.nearest,
             transport: &t.photon.transport,
             queues: [&t.photon.queues[0], &t.photon.queues[1]],
             bvh: &self.sb.bvh,
-            flux_texels: &t.receiver.flux_texels,
+            flux_texels: &self.r.flux_texels,
         }
     }
 
     /// Step 1: light-view g-buffers.
-    fn light_gbuffers(&self, rec: &mut Rec) {
+    /// `receivers`: also the receiver g-buffer and the shadow map (a light's first color pass draws them).
+    fn light_gbuffers(&self, rec: &mut Rec, caustics: bool, receivers: bool) {
         let (t, cmd, g) = (self.t, rec.cmd, &self.p.geometry);
         rec.ts.mark(cmd, "light_gbuffer.front");
         let start = [Access::FrameStart];
         self.barrier(cmd, |b| {
-            for img in [&t.light.front, &t.light.front_aux, &t.light.back, &t.receiver.geo] {
+            for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
                 b.image(img, &start, &[Access::ColorAttachment]);
             }
-            for img in [&t.light.depth, &t.receiver.depth, &t.receiver.shadow] {
-                b.image(img, &start, &[Access::DepthAttachment]);
+            b.image(&t.light.depth, &start, &[Access::DepthAttachment]);
+            if receivers {
+                b.image(&self.r.geo, &start, &[Access::ColorAttachment]);
+                for img in [&self.r.depth, &self.r.shadow] {
+                    b.image(img, &start, &[Access::DepthAttachment]);
+                }
             }
         });
         let photon_view = &self.data.photon_view;
         let receiver_view = &self.data.receiver_view;
-        if rec.report.caustics {
+        if caustics {
             let front = GeometryTarget {
                 colors: &[&t.light.front, &t.light.front_aux],
                 depth: &t.light.depth,
@@ -298,40 +371,44 @@ impl Ctx<'_> {
                 g.record(cmd, &g.back, self.sb, &back);
             }
         }
-        rec.ts.mark(cmd, "light_gbuffer.receivers");
-        let recv = GeometryTarget {
-            colors: &[&t.receiver.geo],
-            depth: &t.receiver.depth,
-            view: receiver_view,
-            ranges: &[self.sb.receivers],
-        };
-        g.record(cmd, &g.surfaces, self.sb, &recv);
-        rec.ts.mark(cmd, "light_gbuffer.shadow");
-        let shadow =
-            GeometryTarget { colors: &[], depth: &t.receiver.shadow, view: receiver_view, ranges: &[self.sb.all] };
-        g.record(cmd, &g.depth, self.sb, &shadow);
+        if receivers {
+            rec.ts.mark(cmd, "light_gbuffer.receivers");
+            let recv = GeometryTarget {
+                colors: &[&self.r.geo],
+                depth: &self.r.depth,
+                view: receiver_view,
+                ranges: &[self.sb.receivers],
+            };
+            g.record(cmd, &g.surfaces, self.sb, &recv);
+            rec.ts.mark(cmd, "light_gbuffer.shadow");
+            let shadow =
+                GeometryTarget { colors: &[], depth: &self.r.shadow, view: receiver_view, ranges: &[self.sb.all] };
+            g.record(cmd, &g.depth, self.sb, &shadow);
+        }
         let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
         self.barrier(cmd, |b| {
-            if rec.report.caustics {
+            if caustics {
                 for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
                     b.image(img, &[Access::ColorAttachment], &sampled);
                 }
             }
-            b.image(&t.receiver.geo, &[Access::ColorAttachment], &sampled);
-            b.image(&t.receiver.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled]);
+            if receivers {
+                b.image(&self.r.geo, &[Access::ColorAttachment], &sampled);
+                b.image(&self.r.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled]);
+            }
         });
     }
 
     /// A frame that reuses the caustic map, the receiver g-buffer and the shadow map of the last one: order this
     /// frame's reads after the last frame's (the images keep their layouts).
     fn reuse_caustics(&self, rec: &mut Rec) {
-        let (t, cmd) = (self.t, rec.cmd);
+        let cmd = rec.cmd;
         rec.ts.mark(cmd, "reused");
         let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
         self.barrier(cmd, |b| {
-            b.image(&t.receiver.geo, &sampled, &sampled);
-            b.image(&t.receiver.shadow, &[Access::FragmentSampled], &[Access::FragmentSampled]);
-            b.image(&t.receiver.irradiance, &[Access::FragmentSampled], &[Access::FragmentSampled]);
+            b.image(&self.r.geo, &sampled, &sampled);
+            b.image(&self.r.shadow, &[Access::FragmentSampled], &[Access::FragmentSampled]);
+            b.image(&self.r.irradiance, &[Access::FragmentSampled], &[Access::FragmentSampled]);
         });
     }
 
@@ -344,10 +421,10 @@ impl Ctx<'_> {
         });
         let mips = self.s.gbuffer_level() + 1;
         let inputs = CoverageInputs {
-            ubo: &t.ubo,
+            ubo: self.ubo,
             coverage: &t.photon.coverage,
             front: &t.light.front,
-            recv: &t.receiver.geo,
+            recv: &self.r.geo,
             sampler: self.nearest,
             mips,
         };
@@ -368,14 +445,14 @@ impl Ctx<'_> {
                 b.buffer(buf, &[Access::FrameStart], &[Access::TransferDst]);
             }
             if self.compute_splat {
-                b.buffer(&t.receiver.flux_texels, &[Access::FrameStart], &[Access::TransferDst]);
+                b.buffer(&self.r.flux_texels, &[Access::FrameStart], &[Access::TransferDst]);
             } else {
-                b.image(&t.receiver.flux, &[Access::FrameStart], &[Access::ColorAttachment]);
+                b.image(&self.r.flux, &[Access::FrameStart], &[Access::ColorAttachment]);
             }
         });
         unsafe {
             if self.compute_splat {
-                d.cmd_fill_buffer(cmd, t.receiver.flux_texels.raw, 0, vk::WHOLE_SIZE, 0);
+                d.cmd_fill_buffer(cmd, self.r.flux_texels.raw, 0, vk::WHOLE_SIZE, 0);
             }
             d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
             d.cmd_fill_buffer(cmd, t.photon.transport.raw, 0, vk::WHOLE_SIZE, 0);
@@ -397,7 +474,7 @@ impl Ctx<'_> {
             b.buffer(&t.photon.transport, &[Access::TransferDst], &[Access::ComputeWrite]);
             b.buffer(&t.photon.splats, &[Access::FrameStart], &[Access::ComputeWrite]);
             if self.compute_splat {
-                b.buffer(&t.receiver.flux_texels, &[Access::TransferDst], &[Access::ComputeWrite]);
+                b.buffer(&self.r.flux_texels, &[Access::TransferDst], &[Access::ComputeWrite]);
             }
             for q in &t.photon.queues {
                 b.buffer(q, &[Access::FrameStart], &[Access::ComputeWrite]);
@@ -419,9 +496,9 @@ impl Ctx<'_> {
         }
         self.barrier(cmd, |b| {
             if self.compute_splat {
-                b.image(&t.receiver.flux, &[Access::TransferDst], &[Access::ComputeSampled]);
+                b.image(&self.r.flux, &[Access::TransferDst], &[Access::ComputeSampled]);
             } else {
-                b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+                b.image(&self.r.flux, &[Access::ColorAttachment], &[Access::ComputeSampled]);
             }
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.buffer(&t.photon.debug, &[Access::ComputeWrite], &[Access::TransferSrc]);
@@ -433,10 +510,9 @@ impl Ctx<'_> {
 
     /// The compute splat's flux texels → the flux image the resolve samples.
     fn copy_flux_texels(&self, cmd: vk::CommandBuffer) {
-        let t = self.t;
-        let img = &t.receiver.flux;
+        let img = &self.r.flux;
         self.barrier(cmd, |b| {
-            b.buffer(&t.receiver.flux_texels, &[Access::ComputeWrite], &[Access::TransferSrc]);
+            b.buffer(&self.r.flux_texels, &[Access::ComputeWrite], &[Access::TransferSrc]);
             b.image(img, &[Access::FrameStart], &[Access::TransferDst]);
         });
         let region = vk::BufferImageCopy::default()
@@ -450,7 +526,7 @@ impl Ctx<'_> {
         unsafe {
             self.d.cmd_copy_buffer_to_image(
                 cmd,
-                t.receiver.flux_texels.raw,
+                self.r.flux_texels.raw,
                 img.raw,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[region],
@@ -463,10 +539,10 @@ impl Ctx<'_> {
         let t = self.t;
         self.barrier(cmd, |b| {
             if self.compute_splat {
-                b.buffer(&t.receiver.flux_texels, &[Access::ComputeWrite], &[Access::ComputeWrite]);
+                b.buffer(&self.r.flux_texels, &[Access::ComputeWrite], &[Access::ComputeWrite]);
                 b.buffer(&t.photon.splats, &[Access::ComputeRead], &[Access::ComputeWrite]);
             } else {
-                b.image(&t.receiver.flux, &[Access::ColorAttachment], &[Access::ColorAttachment]);
+                b.image(&self.r.flux, &[Access::ColorAttachment], &[Access::ColorAttachment]);
                 b.buffer(&t.photon.splats, &[Access::VertexRead], &[Access::ComputeWrite]);
             }
             // The trace read the photons and the indirect arguments, the splat read the records and the draw.
@@ -504,7 +580,7 @@ impl Ctx<'_> {
         if self.compute_splat {
             ph.splat_compute(cmd, &b, self.tiled_splat);
         } else {
-            ph.splat(cmd, &b, &t.receiver.flux, clear);
+            ph.splat(cmd, &b, &self.r.flux, clear);
         }
     }
 
@@ -691,14 +767,7 @@ impl Ctx<'_> {
         if first && !self.compute_splat {
             // No batch at all: the flux map still needs clearing (the compute splat's texels were cleared).
             let cmd = rec.cmd;
-            crate::passes::begin_rendering(
-                self.d,
-                cmd,
-                self.t.receiver.flux.extent,
-                &[&self.t.receiver.flux],
-                true,
-                None,
-            );
+            crate::passes::begin_rendering(self.d, cmd, self.r.flux.extent, &[&self.r.flux], true, None);
             unsafe { self.d.cmd_end_rendering(cmd) };
         }
         // The last barrier left the buffers ready for compute; restore what `photons` expects.
@@ -711,21 +780,23 @@ impl Ctx<'_> {
 
     /// Step 4: caustic flux → irradiance.
     fn resolve(&self, rec: &mut Rec) {
-        let (t, cmd) = (self.t, rec.cmd);
+        let cmd = rec.cmd;
         rec.ts.mark(cmd, "resolve");
+        // A light's later color passes write their channel and keep the earlier ones.
+        let from = if self.channel == 0 { Access::FrameStart } else { Access::FragmentSampled };
         self.barrier(cmd, |b| {
-            b.image(&t.receiver.irradiance, &[Access::FrameStart], &[Access::ComputeWrite]);
+            b.image(&self.r.irradiance, &[from], &[Access::ComputeWrite]);
         });
-        self.p.resolve.record(cmd, &t.ubo, &t.receiver.flux, &t.receiver.geo, &t.receiver.irradiance, self.nearest);
+        self.p.resolve.record(cmd, self.ubo, &self.r.flux, &self.r.geo, &self.r.irradiance, self.nearest);
         self.barrier(cmd, |b| {
-            b.image(&t.receiver.irradiance, &[Access::ComputeWrite], &[Access::FragmentSampled]);
+            b.image(&self.r.irradiance, &[Access::ComputeWrite], &[Access::FragmentSampled]);
         });
     }
 
     /// No refractor: the irradiance map is zero (no caustic pass is recorded).
     fn clear_irradiance(&self, rec: &mut Rec) {
-        let (t, cmd) = (self.t, rec.cmd);
-        let img = &t.receiver.irradiance;
+        let cmd = rec.cmd;
+        let img = &self.r.irradiance;
         self.barrier(cmd, |b| {
             b.image(img, &[Access::FrameStart], &[Access::TransferDst]);
         });
@@ -743,28 +814,41 @@ impl Ctx<'_> {
         });
     }
 
-    /// Step 5: the eye view.
-    fn eye(&self, rec: &mut Rec) {
+    /// Step 5a: the eye view of the receivers under this light: radiance, caustics and direct. The first light
+    /// clears the targets; each further light adds to them (blending), so the AOVs are the sums over lights.
+    fn eye_receivers(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
-        rec.ts.mark(cmd, "eye");
         let e = &t.eye;
+        let first = self.light == 0;
         self.barrier(cmd, |b| {
-            for img in [&e.radiance, &e.caustics, &e.direct, &e.front, &e.front_aux, &e.back] {
-                b.image(img, &[Access::FrameStart], &[Access::ColorAttachment]);
+            for img in [&e.radiance, &e.caustics, &e.direct] {
+                let from = if first { Access::FrameStart } else { Access::ColorAttachment };
+                b.image(img, &[from], &[Access::ColorAttachment]);
             }
-            for img in [&e.depth, &e.refr_depth] {
-                b.image(img, &[Access::FrameStart], &[Access::DepthAttachment]);
-            }
+            let from = if first { Access::FrameStart } else { Access::DepthAttachment };
+            b.image(&e.depth, &[from], &[Access::DepthAttachment]);
         });
         let inputs = EyeInputs {
-            ubo: &t.ubo,
-            shadow: &t.receiver.shadow,
-            irradiance: &t.receiver.irradiance,
-            recv: &t.receiver.geo,
+            ubo: self.ubo,
+            shadow: &self.r.shadow,
+            irradiance: &self.r.irradiance,
+            recv: &self.r.geo,
             nearest: self.nearest,
             linear: self.linear,
         };
-        self.p.eye.record(cmd, self.sb, &inputs, [&e.radiance, &e.caustics, &e.direct], &e.depth);
+        self.p.eye.record(cmd, self.sb, &inputs, [&e.radiance, &e.caustics, &e.direct], &e.depth, !first);
+    }
+
+    /// Step 5b: the eye view of the refractors: front and back g-buffers for the composite.
+    fn eye_refractors(&self, rec: &mut Rec) {
+        let (t, cmd) = (self.t, rec.cmd);
+        let e = &t.eye;
+        self.barrier(cmd, |b| {
+            for img in [&e.front, &e.front_aux, &e.back] {
+                b.image(img, &[Access::FrameStart], &[Access::ColorAttachment]);
+            }
+            b.image(&e.refr_depth, &[Access::FrameStart], &[Access::DepthAttachment]);
+        });
         let g = &self.p.geometry;
         let cam = &self.data.camera;
         let ranges = [self.sb.refractors];
@@ -800,7 +884,7 @@ impl Ctx<'_> {
         self.p.composite.record(
             cmd,
             &CompositeInputs {
-                ubo: &t.ubo,
+                ubo: self.ubo,
                 radiance: &e.radiance,
                 front: &e.front,
                 front_aux: &e.front_aux,
@@ -828,7 +912,8 @@ impl Ctx<'_> {
             Aov::Direct => &t.eye.direct,
         });
         self.barrier(cmd, |b| {
-            b.buffer(&t.readback, &[Access::FrameStart], &[Access::TransferDst]);
+            // After the lights' state copies (copy_light_state): write-after-write on other ranges of the buffer.
+            b.buffer(&t.readback, &[Access::TransferDst], &[Access::TransferDst]);
             if let Some(img) = image {
                 // The composite's outputs are already transfer sources.
                 if !std::ptr::eq(img, &t.eye.beauty) && !std::ptr::eq(img, &t.eye.hdr) {
@@ -855,29 +940,6 @@ impl Ctx<'_> {
                     &[region],
                 );
             }
-            if rec.report.caustics && !rec.report.reused {
-                let state = std::mem::size_of::<TraversalState>() as u64;
-                let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state, size: state }];
-                d.cmd_copy_buffer(cmd, t.photon.state.raw, t.readback.raw, &copies);
-                let size = std::mem::size_of::<TransportState>() as u64;
-                let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.transport, size }];
-                d.cmd_copy_buffer(cmd, t.photon.transport.raw, t.readback.raw, &copies);
-                if self.s.debug_photons > 0 {
-                    let debug = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
-                    d.cmd_copy_buffer(
-                        cmd,
-                        t.photon.debug.raw,
-                        t.readback.raw,
-                        &[vk::BufferCopy { src_offset: 0, dst_offset: layout.debug, size: debug }],
-                    );
-                    let guard = vk::BufferCopy {
-                        src_offset: 8 * t.photon.capacity as u64,
-                        dst_offset: layout.guard,
-                        size: 8 * PHOTON_GUARD as u64,
-                    };
-                    d.cmd_copy_buffer(cmd, t.photon.photons.raw, t.readback.raw, &[guard]);
-                }
-            }
         }
         self.barrier(cmd, |b| {
             b.buffer(&t.readback, &[Access::TransferDst], &[Access::HostRead]);
@@ -885,24 +947,75 @@ impl Ctx<'_> {
         aov
     }
 
-    fn read_results(&self, report: &mut FrameReport, aov: Option<Aov>) -> AppResult<Option<AovData>> {
-        let t = self.t;
+    /// Copy this light's traversal and transport state (and, for the first light, the debug dump and the guard)
+    /// to its slot of the readback buffer, before the next light's photons reset them.
+    fn copy_light_state(&self, rec: &mut Rec) {
+        let (t, cmd, d) = (self.t, rec.cmd, self.d);
         let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
-        if report.caustics && !report.reused {
-            let st = t.readback.read::<TraversalState>(layout.state, 1)?[0];
-            report.unfinished_tiles = if self.s.method == Method::Adaptive { st.stack_size } else { 0 };
-            report.state = Some(st);
-            if self.s.transport == Transport::Exact {
-                report.transport = Some(t.readback.read::<TransportState>(layout.transport, 1)?[0]);
-            }
-            if self.s.debug_photons > 0 {
-                let header = t.readback.read::<[u32; 4]>(layout.debug, 1)?[0];
-                let n = header[0].min(self.s.debug_photons) as usize;
-                report.debug_rows = t.readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
-                let guard = t.readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
-                report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
+        let i = self.pass as u64;
+        let state = std::mem::size_of::<TraversalState>() as u64;
+        let transport = std::mem::size_of::<TransportState>() as u64;
+        unsafe {
+            let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state + i * state, size: state }];
+            d.cmd_copy_buffer(cmd, t.photon.state.raw, t.readback.raw, &copies);
+            let copies =
+                [vk::BufferCopy { src_offset: 0, dst_offset: layout.transport + i * transport, size: transport }];
+            d.cmd_copy_buffer(cmd, t.photon.transport.raw, t.readback.raw, &copies);
+            if self.s.debug_photons > 0 && self.pass == 0 {
+                let debug = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
+                d.cmd_copy_buffer(
+                    cmd,
+                    t.photon.debug.raw,
+                    t.readback.raw,
+                    &[vk::BufferCopy { src_offset: 0, dst_offset: layout.debug, size: debug }],
+                );
+                let guard = vk::BufferCopy {
+                    src_offset: 8 * t.photon.capacity as u64,
+                    dst_offset: layout.guard,
+                    size: 8 * PHOTON_GUARD as u64,
+                };
+                d.cmd_copy_buffer(cmd, t.photon.photons.raw, t.readback.raw, &[guard]);
             }
         }
+    }
+
+    /// Each light's state from the readback buffer (lights that ran their caustic stages this frame).
+    fn read_results(&self, report: &mut FrameReport) -> AppResult<()> {
+        let t = self.t;
+        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
+        if report.reused {
+            return Ok(());
+        }
+        for (i, l) in report.lights.iter_mut().enumerate() {
+            if !l.caustics {
+                continue;
+            }
+            let i = i as u64;
+            let st = t
+                .readback
+                .read::<TraversalState>(layout.state + i * std::mem::size_of::<TraversalState>() as u64, 1)?[0];
+            l.state = Some(st);
+            if self.s.transport == Transport::Exact {
+                let at = layout.transport + i * std::mem::size_of::<TransportState>() as u64;
+                l.transport = Some(t.readback.read::<TransportState>(at, 1)?[0]);
+            }
+        }
+        if let Some(st) = report.lights[0].state {
+            report.unfinished_tiles = if self.s.method == Method::Adaptive { st.stack_size } else { 0 };
+        }
+        if report.lights[0].caustics && self.s.debug_photons > 0 {
+            let header = t.readback.read::<[u32; 4]>(layout.debug, 1)?[0];
+            let n = header[0].min(self.s.debug_photons) as usize;
+            report.debug_rows = t.readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
+            let guard = t.readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
+            report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
+        }
+        Ok(())
+    }
+
+    fn read_aov(&self, aov: Option<Aov>) -> AppResult<Option<AovData>> {
+        let t = self.t;
+        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
         let n = (t.width * t.height) as usize;
         Ok(match aov {
             None => None,

@@ -5,7 +5,7 @@ use crate::error::{AppError, AppResult};
 use crate::gpu_types::{FrameData, GpuView, TraversalState};
 use crate::passes::Passes;
 use crate::scene::view::{CameraView, LightView, Window};
-use crate::scene::{Camera, LightKind, Material, Scene};
+use crate::scene::{Camera, LightKind, Material, Scene, MAX_LIGHTS};
 use crate::scene_gpu::SceneBuffers;
 use crate::settings::{Method, Metric, Settings, Transport};
 use crate::shaders::consts::*;
@@ -26,8 +26,9 @@ pub struct Views {
 }
 
 impl Views {
-    pub fn new(scene: &Scene, settings: &Settings, camera: &CameraView) -> AppResult<Views> {
-        let light = &scene.lights[0];
+    /// The views of light `index`.
+    pub fn new(scene: &Scene, settings: &Settings, camera: &CameraView, index: usize) -> AppResult<Views> {
+        let light = &scene.lights[index];
         let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
         let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied());
         let recv = || scene.receivers().flat_map(|o| o.mesh.positions.iter().copied());
@@ -83,6 +84,24 @@ impl std::str::FromStr for Aov {
     }
 }
 
+/// One pass of a frame: one light, in one color channel (or the only, gray one).
+#[derive(Clone, Debug, Default)]
+pub struct LightReport {
+    /// The light's index in the scene.
+    pub light: usize,
+    /// 0: the gray pass; 1, 2, 3: red, green, blue.
+    pub channel: u32,
+    /// Whether this light's caustic stages ran (a refractor lies in its light).
+    pub caustics: bool,
+    /// Its traversal state and exact transport's account (kept from the last frame when reused).
+    pub state: Option<TraversalState>,
+    pub transport: Option<crate::gpu_types::TransportState>,
+    /// GPU ms of its light-side stages (light view, coverage, photons, resolve); its eye pass is in `eye`.
+    pub gpu_ms: f64,
+    /// Index of its first timed interval in the frame's segments.
+    pub first_segment: usize,
+}
+
 /// What one frame did, read back after it completed.
 #[derive(Clone, Debug, Default)]
 pub struct FrameReport {
@@ -113,6 +132,9 @@ pub struct FrameReport {
     /// Exact transport's wave counts and energy account.
     pub transport: Option<crate::gpu_types::TransportState>,
     pub host_readbacks: u32,
+    /// Each pass (light-major; one per light, or three with color), in order (`state` and `transport` above are
+    /// the first pass's).
+    pub lights: Vec<LightReport>,
     /// Batch slots recorded (GPU-driven adaptive) or bands (dense).
     pub batch_slots: u32,
     /// Tiles still pending when the frame ended (GPU-driven batching ran out of slots).
@@ -149,7 +171,7 @@ pub struct Renderer {
     pub recorder: Recorder,
     pub timestamps: Timestamps,
     pub targets: Option<Targets>,
-    targets_key: Option<(u32, u32, u64, u32, u32)>,
+    targets_key: Option<(u32, u32, u64, u32, u32, usize)>,
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
@@ -158,7 +180,7 @@ pub struct Renderer {
     /// Bumped whenever the scene's geometry or materials change.
     scene_generation: u64,
     /// The last completed frame's caustic inputs, with its traversal and transport state.
-    pub(crate) last_caustic: Option<(String, Option<TraversalState>, Option<crate::gpu_types::TransportState>)>,
+    pub(crate) last_caustic: Option<(String, Vec<LightReport>)>,
 }
 
 impl Drop for Renderer {
@@ -174,7 +196,7 @@ fn check_transport(scene: &Scene, settings: &Settings) -> AppResult<()> {
         if let Some(o) = scene
             .objects
             .iter()
-            .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption > 0.0))
+            .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0))
         {
             return Err(AppError::BadInput(format!(
                 "{}: object `{}` absorbs: absorption needs --transport exact (the two-interface model has none)",
@@ -189,6 +211,27 @@ fn check_transport(scene: &Scene, settings: &Settings) -> AppResult<()> {
                 m.name
             )));
         }
+        if let Some(o) =
+            scene.objects.iter().find(|o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0))
+        {
+            return Err(AppError::BadInput(format!(
+                "{}: object `{}` disperses (`abbe`): dispersion needs --transport exact (the two-interface model has one IOR per texel)",
+                scene.path.display(),
+                o.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// 1..=MAX_LIGHTS lights (the scene parsers enforce it; scenes built in code are checked here).
+fn check_lights(scene: &Scene) -> AppResult<()> {
+    let n = scene.lights.len();
+    if n == 0 || n > MAX_LIGHTS {
+        return Err(AppError::BadInput(format!(
+            "{}: the scene has {n} lights; this renderer handles 1 to {MAX_LIGHTS}",
+            scene.path.display()
+        )));
     }
     Ok(())
 }
@@ -197,13 +240,7 @@ impl Renderer {
     pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
         settings.validate()?;
         check_transport(&scene, &settings)?;
-        if scene.lights.len() != 1 {
-            return Err(AppError::BadInput(format!(
-                "{}: the scene has {} lights; this renderer handles exactly one [[light]]",
-                scene.path.display(),
-                scene.lights.len()
-            )));
-        }
+        check_lights(&scene)?;
         let mut recorder = Recorder::new(&device)?;
         let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
         Ok(Renderer {
@@ -229,9 +266,7 @@ impl Renderer {
     /// changed. Lights and cameras are read every frame, so changing only them is free.
     pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
         check_transport(&scene, &self.settings)?;
-        if scene.lights.len() != 1 {
-            return Err(AppError::BadInput("this renderer handles exactly one [[light]]".into()));
-        }
+        check_lights(&scene)?;
         let same_geometry = scene.objects.len() == self.scene.objects.len()
             && scene.objects.iter().zip(&self.scene.objects).all(|(a, b)| {
                 a.material == b.material && a.mesh.positions == b.mesh.positions && a.mesh.indices == b.mesh.indices
@@ -272,8 +307,16 @@ impl Renderer {
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
         let s = &self.settings;
-        let key =
-            (s.gbuffer_side(), s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
+        let lights = self.scene.lights.len();
+        let passes = lights * self.scene.color_channels();
+        let key = (
+            s.gbuffer_side(),
+            s.caustic_res,
+            s.photon_budget_mib.to_bits(),
+            s.debug_photons,
+            s.ray_queue_capacity(),
+            passes,
+        );
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
                 if (t.width, t.height) != (width, height) {
@@ -284,17 +327,19 @@ impl Renderer {
             _ => {
                 self.targets = None;
                 self.device.wait_idle()?;
-                self.targets = Some(Targets::new(&self.device, s, width, height)?);
+                self.targets = Some(Targets::new(&self.device, s, width, height, lights, passes)?);
                 self.targets_key = Some(key);
             }
         }
         Ok(())
     }
 
-    /// The frame's uniforms.
-    pub fn frame_data(&self, views: &Views, targets: &Targets) -> FrameData {
+    /// The uniforms of one pass: light `index` (its views and power; the exposure follows the first light) and
+    /// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue).
+    pub fn frame_data(&self, views: &Views, targets: &Targets, index: usize, channel: u32) -> FrameData {
         let s = &self.settings;
-        let light = &self.scene.lights[0];
+        let light = &self.scene.lights[index];
+        let light0 = &self.scene.lights[0];
         let (lo, hi) = self.scene.bounds();
         let (rlo, rhi) = self
             .scene
@@ -304,10 +349,10 @@ impl Renderer {
         let diameter = if self.scene.has_refractors() { (rhi - rlo).length() } else { 0.0 };
         let power = light.color * light.intensity;
         // Exposure: the diffuse radiance of the brightest albedo under the light at its target maps to ~0.6.
-        let e_ref = match light.kind {
-            LightKind::Spot => light.intensity / (light.target - light.position).length_squared(),
-            LightKind::Directional => light.intensity,
-        } * light.color.max_element().max(1e-6);
+        let e_ref = match light0.kind {
+            LightKind::Spot => light0.intensity / (light0.target - light0.position).length_squared(),
+            LightKind::Directional => light0.intensity,
+        } * light0.color.max_element().max(1e-6);
         let albedo = self
             .scene
             .receivers()
@@ -338,7 +383,12 @@ impl Renderer {
                 s.traversal_capacity(targets.photon.capacity),
             ],
             params: [s.error_bound, s.shadow_bias, s.flux_threshold, 0.0],
-            transport: [(s.transport == Transport::Exact) as u32, s.ray_queue_capacity(), targets.photon.capacity, 0],
+            transport: [
+                (s.transport == Transport::Exact) as u32,
+                s.ray_queue_capacity(),
+                targets.photon.capacity,
+                channel,
+            ],
             pyramid,
         }
     }

@@ -4,6 +4,10 @@ use crate::gpu_types::{FrameData, TransportState, TraversalState};
 use crate::passes::{
     coverage::pyramid_layout, photons::INDIRECT_BYTES, AUX_FORMAT, BEAUTY_FORMAT, DEPTH_FORMAT, GEO_FORMAT, HDR_FORMAT,
 };
+use crate::scene::MAX_LIGHTS;
+
+/// Passes of a frame at most: a light's three color passes, for every light.
+pub const MAX_PASSES: usize = 3 * MAX_LIGHTS;
 use crate::settings::Settings;
 use crate::vk::{Buffer, Device, Image, VkResult};
 use ash::vk;
@@ -84,9 +88,11 @@ pub struct PhotonBuffers {
 }
 
 pub struct Targets {
-    pub ubo: Buffer,
+    /// The uniforms of each pass: light-major, one per light and color channel (its views, power and channel).
+    pub ubos: Vec<Buffer>,
     pub light: LightTargets,
-    pub receiver: ReceiverTargets,
+    /// Each light's receiver g-buffer, shadow map, flux and irradiance maps.
+    pub receivers: Vec<ReceiverTargets>,
     pub eye: EyeTargets,
     pub photon: PhotonBuffers,
     /// Host-visible: the traversal state, the debug dump, the guard, and one AOV image.
@@ -100,7 +106,16 @@ fn ext(w: u32, h: u32) -> vk::Extent2D {
 }
 
 impl Targets {
-    pub fn new(device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<Self> {
+    /// `lights`: how many lights get their own receiver maps (1..=MAX_LIGHTS); `passes`: uniforms, one per light
+    /// and color channel.
+    pub fn new(
+        device: &Arc<Device>,
+        s: &Settings,
+        width: u32,
+        height: u32,
+        lights: usize,
+        passes: usize,
+    ) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
         let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
         let r = ext(s.gbuffer_side(), s.gbuffer_side());
@@ -112,27 +127,30 @@ impl Targets {
             back: img("light back", GEO_FORMAT, r, color)?,
             depth: img("light depth", DEPTH_FORMAT, r, U::DEPTH_STENCIL_ATTACHMENT)?,
         };
-        let receiver = ReceiverTargets {
-            geo: img("receivers from light", GEO_FORMAT, m, color)?,
-            depth: img("receivers depth", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT)?,
-            shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
-            flux: img(
-                "caustic flux map",
-                crate::passes::flux_format(device),
-                m,
-                color | U::TRANSFER_SRC | U::TRANSFER_DST,
-            )?,
-            flux_texels: Buffer::new(
-                device,
-                "caustic flux texels",
-                4 * (s.caustic_res as u64).pow(2),
-                vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_SRC
-                    | vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuOnly,
-            )?,
-            irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
+        let receiver = || -> VkResult<ReceiverTargets> {
+            Ok(ReceiverTargets {
+                geo: img("receivers from light", GEO_FORMAT, m, color)?,
+                depth: img("receivers depth", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT)?,
+                shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
+                flux: img(
+                    "caustic flux map",
+                    crate::passes::flux_format(device),
+                    m,
+                    color | U::TRANSFER_SRC | U::TRANSFER_DST,
+                )?,
+                flux_texels: Buffer::new(
+                    device,
+                    "caustic flux texels",
+                    4 * (s.caustic_res as u64).pow(2),
+                    vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::TRANSFER_SRC
+                        | vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuOnly,
+                )?,
+                irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
+            })
         };
+        let receivers = (0..lights.max(1)).map(|_| receiver()).collect::<VkResult<Vec<_>>>()?;
         let eye = EyeTargets::new(device, width, height)?;
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
@@ -187,15 +205,19 @@ impl Targets {
         };
 
         Ok(Targets {
-            ubo: Buffer::new(
-                device,
-                "frame uniforms",
-                std::mem::size_of::<FrameData>() as u64,
-                B::UNIFORM_BUFFER,
-                MemoryLocation::CpuToGpu,
-            )?,
+            ubos: (0..passes.max(1))
+                .map(|_| {
+                    Buffer::new(
+                        device,
+                        "frame uniforms",
+                        std::mem::size_of::<FrameData>() as u64,
+                        B::UNIFORM_BUFFER,
+                        MemoryLocation::CpuToGpu,
+                    )
+                })
+                .collect::<VkResult<Vec<_>>>()?,
             light,
-            receiver,
+            receivers,
             eye,
             photon,
             readback: Self::readback_buffer(device, s, width, height)?,
@@ -221,8 +243,8 @@ impl Targets {
     /// Where each thing lies in the readback buffer.
     pub fn readback_layout(s: &Settings, aov_bytes: u64) -> ReadbackLayout {
         let state = 0u64;
-        let transport = std::mem::size_of::<TraversalState>() as u64;
-        let debug = transport + std::mem::size_of::<TransportState>() as u64;
+        let transport = MAX_PASSES as u64 * std::mem::size_of::<TraversalState>() as u64;
+        let debug = transport + MAX_PASSES as u64 * std::mem::size_of::<TransportState>() as u64;
         let guard = debug + 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
         let aov = guard + 8 * PHOTON_GUARD as u64;
         ReadbackLayout { state, transport, debug, guard, aov, total: aov + aov_bytes }
@@ -231,7 +253,9 @@ impl Targets {
 
 #[derive(Clone, Copy, Debug)]
 pub struct ReadbackLayout {
+    /// MAX_PASSES traversal states, one per light and color channel.
     pub state: u64,
+    /// MAX_PASSES transport states, one per light and color channel.
     pub transport: u64,
     pub debug: u64,
     pub guard: u64,

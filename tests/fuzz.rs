@@ -85,7 +85,9 @@ fn check_scene(scene: &Scene) {
     let settings = Settings { gbuffer_res: 64, caustic_res: 64, ..Settings::default() };
     for c in &scene.cameras {
         let view = CameraView::new(c, 64, 48, scene.bounds());
-        let _ = Views::new(scene, &settings, &view);
+        for i in 0..scene.lights.len() {
+            let _ = Views::new(scene, &settings, &view, i);
+        }
     }
 }
 

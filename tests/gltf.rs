@@ -111,7 +111,7 @@ fn gltf_scene() -> (Value, Vec<u8>) {
                 "KHR_materials_transmission": {"transmissionFactor": 1.0},
                 "KHR_materials_ior": {"ior": 1.5},
                 "KHR_materials_volume": {"thicknessFactor": 0.4, "attenuationDistance": 1.0},
-                "KHR_materials_dispersion": {"dispersion": 20.0}}}
+                "KHR_materials_dispersion": {"dispersion": 0.0}}}
         ],
         "cameras": [{"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.01, "zfar": 10.0}}],
         "extensions": {"KHR_lights_punctual": {"lights": [
@@ -206,17 +206,20 @@ fn gltf_and_glb_load_like_toml() {
     let (doc, bin) = gltf_scene();
     let g = Scene::load(&write(&dir, "twin.gltf", embedded(doc.clone(), &bin))).unwrap();
     assert_same(&g, &toml);
-    // The volume has no attenuation color (white): no absorption.
-    assert!(
-        matches!(g.objects[1].material, Material::Dielectric { ior, absorption } if ior == 1.5 && absorption == 0.0)
-    );
-    // KHR_materials_volume: attenuationColor reached at attenuationDistance, Beer–Lambert (gray: the mean).
+    // The volume has no attenuation color (white): no absorption; dispersion 0: none.
+    assert!(matches!(g.objects[1].material, Material::Dielectric { ior, absorption, abbe }
+        if ior == 1.5 && absorption == Vec3::ZERO && abbe == 0.0));
+    // KHR_materials_volume: attenuationColor reached at attenuationDistance, Beer–Lambert per channel.
     let mut tinted = doc.clone();
     tinted["materials"][1]["extensions"]["KHR_materials_volume"]["attenuationDistance"] = json!(0.5);
-    tinted["materials"][1]["extensions"]["KHR_materials_volume"]["attenuationColor"] = json!([0.5, 0.5, 0.5]);
+    tinted["materials"][1]["extensions"]["KHR_materials_volume"]["attenuationColor"] = json!([0.5, 0.25, 1.0]);
+    // KHR_materials_dispersion: dispersion = 20 / V_d.
+    tinted["materials"][1]["extensions"]["KHR_materials_dispersion"]["dispersion"] = json!(0.5);
     let t = Scene::load(&write(&dir, "tinted.gltf", embedded(tinted.clone(), &bin))).unwrap();
-    let Material::Dielectric { absorption, .. } = t.objects[1].material else { panic!("glass") };
-    assert!((absorption - 2.0 * std::f32::consts::LN_2).abs() < 1e-5, "absorption {absorption} /m");
+    let Material::Dielectric { absorption, abbe, .. } = t.objects[1].material else { panic!("glass") };
+    let ln2 = std::f32::consts::LN_2;
+    assert!(close(absorption, Vec3::new(2.0 * ln2, 4.0 * ln2, 0.0)), "absorption {absorption} /m");
+    assert_eq!(abbe, 40.0);
     let mut negative = tinted;
     negative["materials"][1]["extensions"]["KHR_materials_volume"]["attenuationDistance"] = json!(-1.0);
     let e = Scene::load(&write(&dir, "negative.gltf", embedded(negative, &bin))).unwrap_err().to_string();
@@ -270,7 +273,7 @@ fn gltf_renders_the_same_flux_as_toml() {
     a.extend_from_slice(&["--stats", stats.to_str().unwrap()]);
     a.extend_from_slice(&args);
     let stderr = ok(&a);
-    assert!(stderr.contains("KHR_materials_dispersion"), "{stderr}");
+    assert!(!stderr.contains("KHR_materials_dispersion"), "dispersion is supported now: {stderr}");
     assert!(stderr.contains("EXT_made_up"), "{stderr}");
     let gs = read_json(&stats);
     assert_validation_clean(&gs);
@@ -346,6 +349,24 @@ fn mutated_gltf_never_panics() {
 }
 
 /// Load `text` through the CLI and expect exit code 2, every needle in stderr, and no panic.
+/// A second KHR_lights_punctual light on a node becomes the scene's second light (in node order).
+#[test]
+fn gltf_two_lights_load() {
+    let dir = out_dir("gltf_two_lights");
+    let (mut d, bin) = gltf_scene();
+    let lights = d["extensions"]["KHR_lights_punctual"]["lights"].as_array_mut().unwrap();
+    lights.push(json!({"type": "directional", "intensity": 683.0, "color": [1.0, 0.5, 0.25]}));
+    let nodes = d["nodes"].as_array_mut().unwrap();
+    let n = nodes.len();
+    nodes.push(json!({"extensions": {"KHR_lights_punctual": {"light": 1}}}));
+    d["nodes"][3]["children"] = json!([n]);
+    let s = Scene::load(&write(&dir, "two.gltf", embedded(d, &bin))).unwrap();
+    assert_eq!(s.lights.len(), 2);
+    assert_eq!(s.lights[1].kind, LightKind::Directional);
+    assert!((s.lights[1].intensity - 1.0).abs() < 1e-6, "683 lux → 1 W/m²: {}", s.lights[1].intensity);
+    assert_eq!(s.lights[1].color, Vec3::new(1.0, 0.5, 0.25));
+}
+
 fn expect_bad(dir: &Path, name: &str, data: impl AsRef<[u8]>, needles: &[&str]) {
     let scene = write(dir, name, data);
     let out = dir.join(format!("{name}.exr"));
@@ -389,11 +410,15 @@ fn bad_gltf_exits_2() {
     expect_bad(&dir, "short.gltf", embedded(d, &bin[..64]), &["outside"]);
     expect_bad(&dir, "garbage.glb", b"glTF\x02\0\0\0\xff\xff\xff\xff not really", &["garbage.glb"]);
 
-    // Two lights: the renderer handles exactly one.
+    // Five lights on nodes: the renderer handles up to four.
     let mut d = doc.clone();
     let lights = d["extensions"]["KHR_lights_punctual"]["lights"].as_array_mut().unwrap();
     lights.push(json!({"type": "directional", "intensity": 683.0}));
-    d["nodes"].as_array_mut().unwrap().push(json!({"extensions": {"KHR_lights_punctual": {"light": 1}}}));
-    d["nodes"][3]["children"] = json!([4]);
-    expect_bad(&dir, "two_lights.gltf", embedded(d, &bin), &["2 lights", "exactly one"]);
+    let nodes = d["nodes"].as_array_mut().unwrap();
+    let first = nodes.len();
+    for _ in 0..4 {
+        nodes.push(json!({"extensions": {"KHR_lights_punctual": {"light": 1}}}));
+    }
+    d["nodes"][3]["children"] = json!((first..first + 4).collect::<Vec<_>>());
+    expect_bad(&dir, "five_lights.gltf", embedded(d, &bin), &["5 lights", "at most 4"]);
 }

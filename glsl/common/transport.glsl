@@ -71,7 +71,16 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) 
 // Specular: a dielectric or a mirror (everything else is a diffuse receiver).
 bool inst_is_dielectric(uint inst) { return bvh_instances[inst].material.y > 0.5; }
 bool inst_is_mirror(uint inst) { return bvh_instances[inst].material.y > 1.5; }
-float inst_ior(uint inst) { return bvh_instances[inst].material.x; }
+// The color channel this pass traces: 0 for one gray pass, 1..3 for red, green, blue (FrameData.transport.w).
+uint color_channel() { return u_frame.transport.w; }
+float inst_ior(uint inst) {
+    uint c = color_channel();
+    return c == 0u ? bvh_instances[inst].material.x : bvh_instances[inst].ior_rgb[c - 1u];
+}
+float inst_sigma(uint inst) {
+    uint c = color_channel();
+    return c == 0u ? bvh_instances[inst].material.z : bvh_instances[inst].sigma_rgb[c - 1u];
+}
 
 // The photon ray of a cell: from the light through the cell's center.
 void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {

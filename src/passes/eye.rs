@@ -1,6 +1,6 @@
 //! The eye view of the receivers: radiance, caustic and direct irradiance (the AOVs).
 
-use super::{begin_rendering, DEPTH_FORMAT, HDR_FORMAT};
+use super::{begin_rendering_with, DEPTH_FORMAT, HDR_FORMAT};
 use crate::gpu_types::Vertex;
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
@@ -11,6 +11,8 @@ use std::sync::Arc;
 pub struct EyePass {
     device: Arc<Device>,
     pipeline: Pipeline,
+    /// A further light: adds its radiance and irradiances to the targets (depth loaded and tested, not written).
+    add: Pipeline,
 }
 
 pub struct EyeInputs<'a> {
@@ -24,31 +26,36 @@ pub struct EyeInputs<'a> {
 
 impl EyePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        let hdr = || ColorTarget { format: HDR_FORMAT, blend: Blend::None };
-        let pipeline = Pipeline::graphics(
-            device,
-            "eye receivers",
-            &GraphicsDesc {
-                vertex: shaders::EYE_RECEIVER_VERT.words(),
-                fragment: shaders::EYE_RECEIVER_FRAG.words(),
-                binds: &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::Sampled],
-                push_size: 0,
-                vertex_attributes: &[
-                    (vk::Format::R32G32B32A32_SFLOAT, 0),
-                    (vk::Format::R32G32B32A32_SFLOAT, 16),
-                    (vk::Format::R32G32B32A32_SFLOAT, 32),
-                ],
-                vertex_stride: std::mem::size_of::<Vertex>() as u32,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: Some((DEPTH_FORMAT, vk::CompareOp::LESS, true)),
-                colors: &[hdr(), hdr(), hdr()],
-            },
-        )?;
-        Ok(EyePass { device: device.clone(), pipeline })
+        let make = |name: &str, blend: Blend, depth: (vk::CompareOp, bool)| {
+            let hdr = || ColorTarget { format: HDR_FORMAT, blend };
+            Pipeline::graphics(
+                device,
+                name,
+                &GraphicsDesc {
+                    vertex: shaders::EYE_RECEIVER_VERT.words(),
+                    fragment: shaders::EYE_RECEIVER_FRAG.words(),
+                    binds: &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::Sampled],
+                    push_size: 0,
+                    vertex_attributes: &[
+                        (vk::Format::R32G32B32A32_SFLOAT, 0),
+                        (vk::Format::R32G32B32A32_SFLOAT, 16),
+                        (vk::Format::R32G32B32A32_SFLOAT, 32),
+                    ],
+                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                    cull: vk::CullModeFlags::NONE,
+                    depth: Some((DEPTH_FORMAT, depth.0, depth.1)),
+                    colors: &[hdr(), hdr(), hdr()],
+                },
+            )
+        };
+        let pipeline = make("eye receivers", Blend::None, (vk::CompareOp::LESS, true))?;
+        let add = make("eye receivers (a further light)", Blend::AddRgb, (vk::CompareOp::LESS_OR_EQUAL, false))?;
+        Ok(EyePass { device: device.clone(), pipeline, add })
     }
 
-    /// Draw the receivers into radiance, caustics and direct (and depth).
+    /// Draw the receivers into radiance, caustics and direct (and depth); `add`: add to what an earlier light's
+    /// pass drew instead of clearing.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -56,10 +63,12 @@ impl EyePass {
         i: &EyeInputs,
         colors: [&Image; 3],
         depth: &Image,
+        add: bool,
     ) {
         let d = &self.device;
-        begin_rendering(d, cmd, depth.extent, &colors, true, Some(depth));
-        self.pipeline.bind(
+        begin_rendering_with(d, cmd, depth.extent, &colors, !add, Some(depth), !add);
+        let pipeline = if add { &self.add } else { &self.pipeline };
+        pipeline.bind(
             cmd,
             &[
                 Bind::Uniform(i.ubo),

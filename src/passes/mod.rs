@@ -62,6 +62,19 @@ pub fn begin_rendering(
     clear_colors: bool,
     depth: Option<&crate::vk::Image>,
 ) {
+    begin_rendering_with(device, cmd, extent, colors, clear_colors, depth, true)
+}
+
+/// [`begin_rendering`], choosing whether the depth attachment is cleared or loaded.
+pub fn begin_rendering_with(
+    device: &Device,
+    cmd: ash::vk::CommandBuffer,
+    extent: ash::vk::Extent2D,
+    colors: &[&crate::vk::Image],
+    clear_colors: bool,
+    depth: Option<&crate::vk::Image>,
+    clear_depth: bool,
+) {
     use ash::vk;
     let color_infos: Vec<_> = colors
         .iter()
@@ -78,7 +91,7 @@ pub fn begin_rendering(
         vk::RenderingAttachmentInfo::default()
             .image_view(d.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .load_op(if clear_depth { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } })
     });

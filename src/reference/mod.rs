@@ -461,8 +461,13 @@ fn run_chunks(
             for d in &out.deposits {
                 let c = tracer.lights[d.light as usize].color;
                 let px = &mut image[d.pixel as usize];
-                for k in 0..3 {
-                    px[k] += d.e * c[k];
+                if d.channel < 3 {
+                    let k = d.channel as usize;
+                    px[k] += 3.0 * d.e * c[k];
+                } else {
+                    for k in 0..3 {
+                        px[k] += d.e * c[k];
+                    }
                 }
             }
             if let Some(p) = profile.as_mut() {

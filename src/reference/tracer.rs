@@ -113,6 +113,8 @@ impl Tally {
 pub(crate) struct Deposit {
     pub pixel: u32,
     pub light: u32,
+    /// 0, 1, 2: the photon's color channel (it carries 3 times its flux there); 3: every channel.
+    pub channel: u8,
     pub e: f64,
 }
 
@@ -187,10 +189,13 @@ pub(crate) struct Tracer<'a> {
     pub paths: Paths,
     pub seed: u64,
     pub radial_center: Option<DVec3>,
-    /// IOR of each scene object (0 for receivers).
-    pub ior: Vec<f64>,
-    /// Absorption coefficient inside each dielectric, 1/m (0 elsewhere).
-    pub absorption: Vec<f64>,
+    /// IOR of each scene object per color channel (0 for receivers); the three are equal without dispersion.
+    pub ior: Vec<[f64; 3]>,
+    /// Absorption coefficient inside each dielectric per color channel, 1/m (0 elsewhere).
+    pub absorption: Vec<[f64; 3]>,
+    /// Some glass disperses or absorbs colors unequally: each photon carries one color channel, drawn at
+    /// random, and its caustic lands in that channel only, with 3 times its flux (docs/design.md "Color").
+    pub spectral: bool,
 }
 
 enum Interaction {
@@ -268,17 +273,17 @@ impl Tracer<'_> {
             .objects
             .iter()
             .map(|o| match o.material {
-                Material::Dielectric { ior, .. } => ior as f64,
-                Material::Mirror => MIRROR,
-                Material::Diffuse { .. } => 0.0,
+                Material::Dielectric { .. } => o.material.ior_rgb().map(|n| n as f64),
+                Material::Mirror => [MIRROR; 3],
+                Material::Diffuse { .. } => [0.0; 3],
             })
             .collect();
         let absorption = scene
             .objects
             .iter()
             .map(|o| match o.material {
-                Material::Dielectric { absorption, .. } => absorption as f64,
-                _ => 0.0,
+                Material::Dielectric { absorption, .. } => absorption.to_array().map(|x| x as f64),
+                _ => [0.0; 3],
             })
             .collect();
         Tracer {
@@ -291,6 +296,7 @@ impl Tracer<'_> {
             radial_center: p.radial_center.map(|c| c.as_dvec3()),
             ior,
             absorption,
+            spectral: scene.color_channels() == 3,
         }
     }
 
@@ -316,6 +322,9 @@ impl Tracer<'_> {
             return;
         };
         let phi = light.phi;
+        // The color channel this photon traces (3: all of them, for a scene without color).
+        let channel = if self.spectral { ((rng.next_f64() * 3.0) as usize).min(2) } else { 3 };
+        let c = if channel == 3 { 1 } else { channel };
         t.photons_traced += 1;
         t.flux_emitted += phi;
         let (mut refr, mut refl) = (0u32, 0u32);
@@ -327,10 +336,12 @@ impl Tracer<'_> {
                 return;
             };
             if hit.receiver {
-                self.deposit(li, &hit, d, refr, refl, phi, out);
+                // Light that met no glass is the same in every channel.
+                let ch = if refr + refl == 0 { 3 } else { channel };
+                self.deposit(li, &hit, d, refr, refl, phi, ch, out);
                 return;
             }
-            let sigma = self.absorption[hit.object as usize];
+            let sigma = self.absorption[hit.object as usize][c];
             if sigma > 0.0 && d.dot(hit.ng) > 0.0 {
                 // The segment that ends here ran inside this glass: Beer–Lambert, by Russian roulette.
                 if rng.next_f64() >= (-sigma * (hit.pos - o).length()).exp() {
@@ -344,7 +355,7 @@ impl Tracer<'_> {
                 t.flux_cut += phi;
                 return;
             }
-            let Some((event, fallback)) = interact(d, &hit, self.ior[hit.object as usize], rng.next_f64()) else {
+            let Some((event, fallback)) = interact(d, &hit, self.ior[hit.object as usize][c], rng.next_f64()) else {
                 t.photons_lost += 1;
                 t.flux_lost += phi;
                 return;
@@ -373,7 +384,17 @@ impl Tracer<'_> {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn deposit(&self, li: usize, hit: &Hit, d: DVec3, refr: u32, refl: u32, phi: f64, out: &mut ChunkOut) {
+    fn deposit(
+        &self,
+        li: usize,
+        hit: &Hit,
+        d: DVec3,
+        refr: u32,
+        refl: u32,
+        phi: f64,
+        channel: usize,
+        out: &mut ChunkOut,
+    ) {
         let t = &mut out.tally;
         let caustic = refr + refl > 0;
         if caustic && self.paths == Paths::TwoRefractions && !(refr == 2 && refl == 0) {
@@ -398,7 +419,12 @@ impl Tracer<'_> {
             t.photons_in_image += 1;
             t.flux_in_image += phi;
             t.image_flux += phi * cos;
-            out.deposits.push(Deposit { pixel, light: li as u32, e: phi * cos / self.binner.pixel_area });
+            out.deposits.push(Deposit {
+                pixel,
+                light: li as u32,
+                channel: channel as u8,
+                e: phi * cos / self.binner.pixel_area,
+            });
         }
     }
 }

@@ -5,7 +5,7 @@
 //! the CLI reports it with exit code 2. The file is validated before use and accessors are bounds-checked here,
 //! so a corrupt file is an error, never a panic.
 
-use super::{Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError};
+use super::{Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError, MAX_LIGHTS};
 use glam::{Mat4, Vec3};
 use gltf::json::validation::{Error as VError, Validate};
 use std::path::Path;
@@ -14,10 +14,13 @@ use std::path::Path;
 pub const LUMENS_PER_WATT: f32 = 683.0;
 
 /// Extensions whose data is read (or, for lights, read and refused where the renderer lacks the kind).
-const SUPPORTED: &[&str] = &["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior"];
-/// Extensions that are recognized, warned about and ignored: the renderer has no absorption or dispersion yet.
-const IGNORED: &[(&str, &str)] =
-    &[("KHR_materials_volume", "absorption (volume attenuation)"), ("KHR_materials_dispersion", "dispersion")];
+const SUPPORTED: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_volume",
+    "KHR_materials_dispersion",
+];
 
 /// The deepest node hierarchy accepted (the traversal is recursive).
 const MAX_DEPTH: usize = 256;
@@ -65,7 +68,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
     let root = document.as_json();
 
     // Extensions first: a required extension we cannot honor makes everything else meaningless.
-    let known = |e: &str| SUPPORTED.contains(&e) || IGNORED.iter().any(|(n, _)| *n == e);
+    let known = |e: &str| SUPPORTED.contains(&e);
     for (i, e) in root.extensions_required.iter().enumerate() {
         if !known(e) {
             return Err(cx.err(
@@ -127,6 +130,12 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
         return Err(cx.err(
             "extensions.KHR_lights_punctual",
             "the scene needs a light: a KHR_lights_punctual spot or directional light on a node",
+        ));
+    }
+    if out.lights.len() > MAX_LIGHTS {
+        return Err(cx.err(
+            "extensions.KHR_lights_punctual",
+            format!("the scene has {} lights on its nodes; at most {MAX_LIGHTS} are supported", out.lights.len()),
         ));
     }
     if out.objects.is_empty() {
@@ -236,11 +245,6 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
         Some(n) => format!("{at} \"{n}\""),
         None => at.clone(),
     };
-    for (ext, what) in IGNORED.iter().filter(|(n, _)| *n != "KHR_materials_volume") {
-        if m.extensions().is_some_and(|x| x.contains_key(*ext)) {
-            cx.warn(&label, &format!("{ext} is ignored: the renderer has no {what} yet"));
-        }
-    }
     let pbr = m.pbr_metallic_roughness();
     if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
         let ior = m.ior().unwrap_or(1.5);
@@ -250,9 +254,9 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
                 format!("index of refraction must be finite and > 0 (got {ior})"),
             ));
         }
-        // KHR_materials_volume: Beer–Lambert with attenuationColor reached at attenuationDistance. The caustic
-        // map has one channel, so a colored attenuation becomes gray: sigma = -ln(mean color) / distance.
-        let mut absorption = 0.0;
+        // KHR_materials_volume: Beer–Lambert with attenuationColor reached at attenuationDistance, per channel:
+        // sigma = -ln(color) / distance.
+        let mut absorption = Vec3::ZERO;
         if let Some(v) = m.volume() {
             let (d, c) = (v.attenuation_distance(), v.attenuation_color());
             if d.is_nan() || d <= 0.0 {
@@ -267,15 +271,26 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
                     format!("attenuation color must lie in (0, 1] (got {c:?})"),
                 ));
             }
-            let mean = (c[0] + c[1] + c[2]) / 3.0;
-            if d.is_finite() && mean < 1.0 {
-                absorption = -mean.ln() / d;
-            }
-            if c.iter().any(|x| (x - mean).abs() > 1e-6) {
-                cx.warn(&label, "KHR_materials_volume: a colored attenuation is applied as gray (its mean): the caustic map has one channel");
+            if d.is_finite() {
+                absorption = Vec3::new(-c[0].ln() / d, -c[1].ln() / d, -c[2].ln() / d).max(Vec3::ZERO);
             }
         }
-        return Ok(Material::Dielectric { ior, absorption });
+        // KHR_materials_dispersion: `dispersion` = 20 / V_d (the Abbe number); 0 for none.
+        let mut abbe = 0.0;
+        if let Some(v) = m.extension_value("KHR_materials_dispersion") {
+            let at = format!("{at}.extensions.KHR_materials_dispersion.dispersion");
+            let x = v.get("dispersion").and_then(|x| x.as_f64()).unwrap_or(0.0) as f32;
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(cx.err(at, format!("dispersion must be finite and >= 0 (got {x})")));
+            }
+            if x > 0.0 {
+                abbe = (20.0 / x).clamp(5.0, 200.0);
+                if (abbe - 20.0 / x).abs() > 1e-3 {
+                    cx.warn(&label, &format!("KHR_materials_dispersion {x}: Abbe number clamped to {abbe}"));
+                }
+            }
+        }
+        return Ok(Material::Dielectric { ior, absorption, abbe });
     }
     if pbr.metallic_factor() == 1.0 && pbr.roughness_factor() == 0.0 {
         return Ok(Material::Mirror);

@@ -28,6 +28,9 @@ pub enum SceneError {
     Gltf { file: String, path: String, message: String },
 }
 
+/// The most lights a scene may have: each gets its own light view, photons, caustic map and shadow map.
+pub const MAX_LIGHTS: usize = 4;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LightKind {
     Spot,
@@ -72,9 +75,12 @@ pub enum Material {
         albedo: Vec3,
     },
     Dielectric {
+        /// Index of refraction at the green channel's wavelength (587.6 nm, the Fraunhofer d line).
         ior: f32,
-        /// Beer–Lambert absorption coefficient inside the glass, 1/m (gray: the same for every wavelength).
-        absorption: f32,
+        /// Beer–Lambert absorption coefficients inside the glass, 1/m, per color channel (R, G, B).
+        absorption: Vec3,
+        /// Abbe number V_d (dispersion: a smaller number spreads the colors more); 0 for none.
+        abbe: f32,
     },
     /// A perfect specular reflector (reflects all light; exact transport only).
     Mirror,
@@ -85,6 +91,37 @@ pub struct Object {
     pub name: String,
     pub material: Material,
     pub mesh: Mesh,
+}
+
+/// Wavelengths (nm) that the red, green and blue channels trace when a scene needs color: the Fraunhofer C, d and
+/// F lines, the three that define the Abbe number.
+pub const CHANNEL_NM: [f32; 3] = [656.3, 587.6, 486.1];
+
+impl Material {
+    /// Index of refraction per color channel: n at the C, d and F lines from n_d and the Abbe number
+    /// V_d = (n_d − 1) / (n_F − n_C), with Cauchy's n(λ) = A + B/λ² through n_d. Without dispersion, n_d thrice.
+    pub fn ior_rgb(&self) -> [f32; 3] {
+        match *self {
+            Material::Dielectric { ior, abbe, .. } if abbe > 0.0 => {
+                let inv2 = |nm: f32| 1.0 / (nm * nm);
+                let b = (ior - 1.0) / (abbe * (inv2(CHANNEL_NM[2]) - inv2(CHANNEL_NM[0])));
+                let a = ior - b * inv2(CHANNEL_NM[1]);
+                CHANNEL_NM.map(|nm| a + b * inv2(nm))
+            }
+            Material::Dielectric { ior, .. } => [ior; 3],
+            _ => [0.0; 3],
+        }
+    }
+
+    /// Whether light through this material depends on the color channel (dispersion or colored absorption).
+    pub fn needs_color(&self) -> bool {
+        match *self {
+            Material::Dielectric { absorption, abbe, .. } => {
+                abbe > 0.0 || absorption.max_element() != absorption.min_element()
+            }
+            _ => false,
+        }
+    }
 }
 
 impl Object {
@@ -163,6 +200,14 @@ impl Scene {
         if lights.is_empty() {
             return Err(cx.err(0..0, "light", "the scene needs at least one [[light]]"));
         }
+        if lights.len() > MAX_LIGHTS {
+            let extra = &file.light[MAX_LIGHTS];
+            return Err(cx.err(
+                extra.span(),
+                format!("light[{MAX_LIGHTS}]"),
+                format!("the scene has {} lights; at most {MAX_LIGHTS} are supported", lights.len()),
+            ));
+        }
         let mut cameras = Vec::new();
         for (i, c) in file.camera.iter().enumerate() {
             let cam = camera(&cx, i, c)?;
@@ -213,6 +258,16 @@ impl Scene {
 
     pub fn has_refractors(&self) -> bool {
         self.refractors().next().is_some()
+    }
+
+    /// Color channels the photons are traced in: 3 (red, green, blue, each with its own IOR and absorption) when
+    /// some glass disperses or absorbs colors unequally, else 1 (the light's color tints one gray caustic).
+    pub fn color_channels(&self) -> usize {
+        if self.objects.iter().any(|o| o.material.needs_color()) {
+            3
+        } else {
+            1
+        }
     }
 
     pub fn bounds(&self) -> (Vec3, Vec3) {
@@ -520,6 +575,9 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             if let Some(x) = &m.ior {
                 return Err(cx.err(x.span(), mf("ior"), "a diffuse material has no `ior`"));
             }
+            if let Some(x) = &m.abbe {
+                return Err(cx.err(x.span(), mf("abbe"), "a diffuse material has no `abbe`"));
+            }
             let albedo = match &m.albedo {
                 Some(a) => {
                     let v = Vec3::from(a.get_ref().to_array());
@@ -547,19 +605,35 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             }
             let absorption = match &m.absorption {
                 Some(a) => {
-                    let x = *a.get_ref();
-                    if !(x.is_finite() && x >= 0.0) {
+                    let x = Vec3::from(a.get_ref().to_array());
+                    if !(x.is_finite() && x.min_element() >= 0.0) {
                         return Err(cx.err(
                             a.span(),
                             mf("absorption"),
-                            format!("absorption coefficient must be finite and >= 0 (1/m; got {x})"),
+                            format!("absorption coefficients must be finite and >= 0 (1/m; got {x})"),
+                        ));
+                    }
+                    x
+                }
+                None => Vec3::ZERO,
+            };
+            let abbe = match &m.abbe {
+                Some(a) => {
+                    let x = *a.get_ref();
+                    if !(x.is_finite() && (5.0..=200.0).contains(&x)) {
+                        return Err(cx.err(
+                            a.span(),
+                            mf("abbe"),
+                            format!(
+                                "Abbe number must lie in [5, 200] (crown glass ~60, flint ~30, diamond 55; got {x})"
+                            ),
                         ));
                     }
                     x
                 }
                 None => 0.0,
             };
-            Material::Dielectric { ior: v, absorption }
+            Material::Dielectric { ior: v, absorption, abbe }
         }
         "mirror" => {
             if let Some(x) = &m.absorption {
@@ -570,6 +644,9 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             }
             if let Some(x) = &m.ior {
                 return Err(cx.err(x.span(), mf("ior"), "a mirror has no `ior`"));
+            }
+            if let Some(x) = &m.abbe {
+                return Err(cx.err(x.span(), mf("abbe"), "a mirror has no `abbe`"));
             }
             Material::Mirror
         }

@@ -79,5 +79,6 @@ pub struct MaterialDef {
     pub kind: S<String>,
     pub albedo: Option<S<ScalarOr3>>,
     pub ior: Option<S<f32>>,
-    pub absorption: Option<S<f32>>,
+    pub absorption: Option<S<ScalarOr3>>,
+    pub abbe: Option<S<f32>>,
 }

@@ -719,7 +719,7 @@ impl Viewer {
     fn set_light(&mut self, light: Light) -> bool {
         let old = std::mem::replace(&mut self.renderer.scene.lights[0], light);
         let view = self.renderer.camera_view(&self.orbit.camera(), 16, 16);
-        match Views::new(&self.renderer.scene, &self.renderer.settings, &view) {
+        match Views::new(&self.renderer.scene, &self.renderer.settings, &view, 0) {
             Ok(_) => true,
             Err(e) => {
                 self.renderer.scene.lights[0] = old;

@@ -43,6 +43,9 @@ pub enum Blend {
     None,
     /// dst += src: flux accumulation in the caustic map.
     Additive,
+    /// dst.rgb += src.rgb, dst.a kept: a further light's radiance added to the eye targets (alpha holds the eye
+    /// distance, which every light's pass writes alike).
+    AddRgb,
 }
 
 pub struct ColorTarget {
@@ -246,6 +249,14 @@ impl Pipeline {
                         .dst_color_blend_factor(vk::BlendFactor::ONE)
                         .color_blend_op(vk::BlendOp::ADD)
                         .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD),
+                    Blend::AddRgb => b
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ZERO)
                         .dst_alpha_blend_factor(vk::BlendFactor::ONE)
                         .alpha_blend_op(vk::BlendOp::ADD),
                 }

@@ -67,6 +67,15 @@ impl Timestamps {
         Ok(out)
     }
 
+    /// Marks so far this frame: the index of the next mark's interval in [`Timestamps::resolve`]'s list.
+    pub fn len(&self) -> usize {
+        self.labels.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.labels.is_empty()
+    }
+
     pub fn overflowed(&self) -> bool {
         self.overflowed
     }

@@ -1,0 +1,159 @@
+//! Several lights (assets/scenes/two_lights.toml): each light has its own light view, photons, caustic map and
+//! shadow map, and the eye pass adds each light's radiance and irradiances. So the AOVs of the two-light scene are
+//! the sums of the AOVs of each light alone (linearity), the photons are the sums of each light's, a reused frame
+//! gives the same image, and the CPU reference of every path agrees.
+
+mod common;
+use caustics::image_io::{read_exr, RgbImage};
+use common::*;
+use std::path::{Path, PathBuf};
+
+const TWO: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/two_lights.toml");
+
+/// The two-light scene with only light `keep` (0 or 1), written next to the test's outputs.
+fn one_light(dir: &Path, keep: usize) -> PathBuf {
+    let text = std::fs::read_to_string(TWO).unwrap();
+    let mut parts: Vec<&str> = text.split("[[light]]").collect();
+    let (second, rest) = parts[2].split_once("# Orthographic").unwrap();
+    let head = parts.remove(0);
+    let light = if keep == 0 { parts[0] } else { second };
+    let path = dir.join(format!("light{keep}.toml"));
+    std::fs::write(&path, format!("{head}[[light]]{light}# Orthographic{rest}")).unwrap();
+    path
+}
+
+/// Σ|a − b| / Σ|b| over the RGB channels.
+fn rel_l1(a: &RgbImage, b: &RgbImage) -> f64 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let (mut num, mut den) = (0.0, 0.0);
+    for (p, q) in a.data.iter().zip(&b.data) {
+        for c in 0..3 {
+            num += (p[c] as f64 - q[c] as f64).abs();
+            den += (q[c] as f64).abs();
+        }
+    }
+    num / den.max(1e-30)
+}
+
+fn sum(a: &RgbImage, b: &RgbImage) -> RgbImage {
+    let mut out = a.clone();
+    for (p, q) in out.data.iter_mut().zip(&b.data) {
+        for c in 0..3 {
+            p[c] += q[c];
+        }
+    }
+    out
+}
+
+const ARGS: [&str; 8] = ["--camera", "top", "--size", "128x128", "--level", "2", "--transport", "exact"];
+
+/// Both lights at once against each light alone: caustics and direct AOVs, exact and two-interface transport.
+/// Measured on lavapipe: rel-L1 below 1e-6 (only the order of float additions differs); the test allows 1e-4.
+#[test]
+fn two_lights_add_up() {
+    let dir = out_dir("lights_linear");
+    let singles = [one_light(&dir, 0), one_light(&dir, 1)];
+    for transport in ["exact", "two-interface"] {
+        for aov in ["caustics", "direct"] {
+            let mut args = ARGS.to_vec();
+            args[7] = transport;
+            args.extend_from_slice(&["--aov", aov]);
+            let (both_stats, both) = render(&dir, &format!("both-{transport}-{aov}"), TWO, &args);
+            let mut parts = Vec::new();
+            let mut photons = 0;
+            for (i, scene) in singles.iter().enumerate() {
+                let (s, out) = render(&dir, &format!("l{i}-{transport}-{aov}"), scene.to_str().unwrap(), &args);
+                photons += s["photons_splatted"].as_u64().unwrap();
+                assert_eq!(s["lights"].as_array().unwrap().len(), 1);
+                assert_eq!(
+                    s["lights"][0]["photons"], both_stats["lights"][i]["photons"],
+                    "{transport}: light {i}'s photons alone and together"
+                );
+                parts.push(read_exr(&out).unwrap());
+            }
+            let lights = both_stats["lights"].as_array().unwrap();
+            assert_eq!(lights.len(), 2);
+            assert!(lights.iter().all(|l| l["caustics"] == true && l["photons"].as_u64().unwrap() > 0));
+            assert_eq!(both_stats["photons_splatted"].as_u64().unwrap(), photons, "photons: the sum over lights");
+            assert_eq!(both_stats["host_readbacks_per_frame"], 0);
+            if transport == "exact" {
+                for l in lights {
+                    let r = l["energy"]["residual"].as_f64().unwrap();
+                    assert!(r.abs() < 1e-6, "{transport}: energy account residual {r}");
+                }
+            }
+            let both = read_exr(&both).unwrap();
+            let e = rel_l1(&both, &sum(&parts[0], &parts[1]));
+            eprintln!("{transport} {aov}: rel-L1(both, light 0 + light 1) = {e:.2e}");
+            assert!(e <= 1e-4, "{transport} {aov}: rel-L1 {e}");
+            // Each light contributes (the two are not the same light twice).
+            let share = rel_l1(&parts[0], &sum(&parts[0], &parts[1]));
+            assert!(share > 0.1, "{transport} {aov}: light 1 adds {share}");
+        }
+    }
+}
+
+/// The second frame reuses both lights' caustic maps (nothing changed) and gives the same image.
+#[test]
+fn two_lights_reuse() {
+    let dir = out_dir("lights_reuse");
+    let mut args = ARGS.to_vec();
+    args.extend_from_slice(&["--aov", "caustics"]);
+    let (one, a) = render(&dir, "one", TWO, &args);
+    args.extend_from_slice(&["--frames", "2"]);
+    let (two, b) = render(&dir, "two", TWO, &args);
+    assert_eq!(one["caustics_reused"], false);
+    assert_eq!(two["caustics_reused"], true);
+    assert_eq!(two["photons_splatted"], one["photons_splatted"], "a reused frame reports the photons it reused");
+    let e = rel_l1(&read_exr(&b).unwrap(), &read_exr(&a).unwrap());
+    assert!(e <= 1e-6, "reused frame: rel-L1 {e}");
+}
+
+/// More lights than the renderer handles: a clear error naming the light, exit 2.
+#[test]
+fn five_lights_are_refused() {
+    let dir = out_dir("lights_five");
+    let text = std::fs::read_to_string(TWO).unwrap();
+    let (head, rest) = text.split_once("[[light]]").unwrap();
+    let (light, rest) = rest.split_once("[[light]]").unwrap();
+    let many = format!("{head}{}[[light]]{rest}", format!("[[light]]{light}").repeat(4));
+    let path = dir.join("five.toml");
+    std::fs::write(&path, many).unwrap();
+    let out = caustics(&["render", "--scene", path.to_str().unwrap(), "--out", dir.join("x.png").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("light[4]") && err.contains("at most 4"), "{err}");
+    assert_no_output(&dir.join("x.png"));
+}
+
+/// Two lights on the GPU (exact transport, dense level 3) against the CPU reference of every path (2M photons per
+/// light), rel-L1 at 64² on luminance and the flux ratio. Measured on lavapipe: rel-L1 0.0129, flux ratio 1.00045
+/// (the level's sampling error plus the reference's noise); the test allows 0.02 and 0.005.
+#[test]
+fn two_lights_match_reference() {
+    use caustics::metrics::compare;
+    use caustics::reference::{self, Aov, Paths, RefParams};
+    let dir = out_dir("lights_reference");
+    let (s, out) = render(
+        &dir,
+        "gpu",
+        TWO,
+        &["--camera", "top", "--size", "256x256", "--level", "3", "--transport", "exact", "--aov", "caustics"],
+    );
+    assert_eq!(s["lights"].as_array().unwrap().len(), 2);
+    let p = RefParams {
+        camera: Some("top".into()),
+        aov: Aov::Caustics,
+        paths: Paths::All,
+        photons: 2_000_000,
+        width: 256,
+        height: 256,
+        ..RefParams::default()
+    };
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
+    let r = reference::cached_in(&cache, Path::new(TWO), &p).expect("reference");
+    let m = compare(&read_exr(&out).unwrap(), &r, 64, 2.0);
+    eprintln!("two lights, exact level 3 vs reference: {m:?}");
+    assert!((m.flux_ratio - 1.0).abs() < 0.005, "flux ratio {}", m.flux_ratio);
+    assert!(m.rel_l1 < 0.02, "rel-L1 {}", m.rel_l1);
+}
