@@ -83,7 +83,8 @@ pub struct FrameData {
     pub grid: [u32; 4],
     /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photon capacity (entries).
     pub traversal: [u32; 4],
-    /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold.
+    /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold;
+    /// w: flux-error's target error.
     pub params: [f32; 4],
     /// x: 1 for exact transport; y: rays per queue; z: splat records per batch.
     pub transport: [u32; 4],
