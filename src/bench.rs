@@ -188,7 +188,9 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
         .collect::<AppResult<_>>()?;
     for e in &args.target_errors {
         if !(e.is_finite() && *e > 0.0 && *e <= 1.0) {
-            return Err(AppError::BadInput(format!("--target-errors {e}: each must lie in (0, 1] (relative L1 at 64²)")));
+            return Err(AppError::BadInput(format!(
+                "--target-errors {e}: each must lie in (0, 1] (relative L1 at 64²)"
+            )));
         }
     }
     for wg in &args.traverse_wg {

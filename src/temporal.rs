@@ -119,9 +119,9 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
             "max-level" => Ok((m.clone(), Method::Adaptive, Metric::MaxLevel)),
             "max-error" => Ok((m.clone(), Method::Adaptive, Metric::MaxError)),
             "flux-error" => Ok((m.clone(), Method::Adaptive, Metric::FluxError)),
-            _ => Err(AppError::BadInput(format!(
-                "--methods `{m}`: expected dense, max-level, max-error or flux-error"
-            ))),
+            _ => {
+                Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level, max-error or flux-error")))
+            }
         })
         .collect::<AppResult<_>>()?;
     let base = Settings {
