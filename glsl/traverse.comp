@@ -4,7 +4,10 @@
 // cell is emitted as a photon; otherwise its four children are appended to the photon buffer with atomicAdd
 // (one reservation per work group, so a group of 64 cells costs a few global atomics, not 64).
 // A cell is final at the maximal level, or, under the max-error metric, when its 2x2 children land within the
-// error bound of one another in the caustic map: then one photon carries the whole cell's flux.
+// error bound of one another in the caustic map: then one photon carries the whole cell's flux. Under the
+// flux-error metric (docs/design.md, "The flux-error metric") a cell is final when merging its children into one
+// photon changes the caustic map, box-filtered to 64², by at most --target-error times the cell's flux; when the
+// same traces predict that each child would be final, the four children are emitted at once (look-ahead).
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
@@ -26,6 +29,7 @@ shared bool s_reserved;
 const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
 const uint ACT_REFINE = 2u;
+const uint ACT_EMIT_CHILDREN = 3u;  // flux-error look-ahead: four photons, the cell's children
 
 const uint CHILDREN_REFINE = 0xFFFFFFFFu;
 const uint CHILDREN_DROP = 0xFFFFFFFEu;
@@ -42,8 +46,9 @@ const uint CHILDREN_DROP = 0xFFFFFFFEu;
 uint children_verdict_exact(uint level, uvec2 xy) {
     vec2 p[4];
     uint status[4], events[4];
+    float thr;
     for (uint k = 0u; k < 4u; k++) {
-        status[k] = trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p[k], events[k]);
+        status[k] = trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p[k], events[k], thr);
     }
     bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
     if (!same) return CHILDREN_REFINE;
@@ -78,6 +83,79 @@ uint children_verdict(uint level, uvec2 xy) {
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
+// Flux-error metric (docs/design.md, "The flux-error metric"). Each child k lands at p_k (caustic-map texels)
+// carrying the caustic flux phi_k (W: its dominant path's under exact transport, the two-interface trace's
+// otherwise; 0 when it does not reach a receiver after a specular interaction). Merging the four into one photon
+// of the cell moves each phi_k to the flux-weighted centroid c; after the 64² box filter of the error metric
+// that changes the map by at most E = sum_k 2 phi_k min(1, |p_k - c|_1 / w) in L1 (w: a 64² texel, in caustic-map
+// texels). Children that all land after specular interactions are compared by position alone (a different number
+// of interfaces does not matter if they land together). Children that end differently (a silhouette, TIR, an
+// escape) can make the merged photon deposit anything between nothing and the cell's flux times the largest
+// throughput, so then E = I Omega(cell) max_k T_k + sum_k phi_k. The cell is final when E <= tau I Omega(cell): summed over the final cells, the
+// merging error is at most tau times the flux that meets the refractor. `--target-error` sets tau.
+const uint FE_REFINE = 0u;
+const uint FE_FINAL = 1u;     // emit the cell as one photon
+const uint FE_CHILDREN = 2u;  // emit its four children (each predicted final)
+const uint FE_DROP = 3u;
+
+uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
+    radius = 0u;
+    bool exact = u_frame.transport.x != 0u;
+    float intensity = u_frame.light_power.w;
+    vec2 p[4];
+    float phi[4];
+    uint status[4], events[4];
+    float t_max = 0.0;
+    for (uint k = 0u; k < 4u; k++) {
+        uvec2 c = 2u * xy + uvec2(k & 1u, k >> 1);
+        if (exact) {
+            float thr;
+            status[k] = trace_dominant(level + 1u, c, p[k], events[k], thr);
+            phi[k] = status[k] == DOM_OK ? intensity * cell_measure(level + 1u, c) * thr : 0.0;
+            t_max = max(t_max, thr);
+        } else {
+            Hit h = trace_cell(level + 1u, c);
+            status[k] = h.status;
+            events[k] = 0u;
+            p[k] = h.map_px;
+            phi[k] = h.status == HIT_OK ? h.flux : 0.0;
+            float full = intensity * cell_measure(level + 1u, c);
+            t_max = max(t_max, full > 0.0 ? h.flux / full : 0.0);
+        }
+    }
+    bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
+    uint ok = exact ? DOM_OK : HIT_OK;
+    // All four end the same other way: as under max-error, two-interface drops the cell (it carries nothing to a
+    // receiver) and exact transport emits it (its weaker branches may still reach one; its waves trace them all).
+    if (same && status[0] != ok) return exact ? FE_FINAL : FE_DROP;
+    float cell_flux = intensity * cell_measure(level, xy);
+    float budget = u_frame.params.w * cell_flux;
+    float w = float(u_frame.grid.z) / 64.0;
+    float total = phi[0] + phi[1] + phi[2] + phi[3];
+    // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.
+    if (!same) return cell_flux * t_max + total <= budget ? FE_FINAL : FE_REFINE;
+    vec2 c = total > 0.0 ? (phi[0] * p[0] + phi[1] * p[1] + phi[2] * p[2] + phi[3] * p[3]) / total
+                         : 0.25 * (p[0] + p[1] + p[2] + p[3]);
+    float e = 0.0, spread = 0.0;
+    for (uint k = 0u; k < 4u; k++) {
+        vec2 d = abs(p[k] - c);
+        e += 2.0 * phi[k] * min(1.0, (d.x + d.y) / w);
+        for (uint b = k + 1u; b < 4u; b++) spread = max(spread, distance(p[k], p[b]));
+    }
+    if (e <= budget) {
+        radius = uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
+        return FE_FINAL;
+    }
+    // Look-ahead: where the map is locally linear, each child's own children spread half as far as the children
+    // do, with a quarter of the flux each, so a child's error is about e / 8 against a budget of budget / 4. The
+    // children are final too when e <= 2 budget: emit them now instead of tracing their sixteen children next.
+    if (level + 1u < u_frame.traversal.x && e <= 2.0 * budget) {
+        radius = uint(clamp(ceil(0.5 * spread), 1.0, float(MAX_SPLAT_RADIUS)));
+        return FE_CHILDREN;
+    }
+    return FE_REFINE;
+}
+
 // Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined.
 uint decide(uint level, uvec2 cell, out uvec2 out_cell) {
     out_cell = cell;
@@ -91,7 +169,22 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell) {
         // The same test as the dense method, so that max-level traversal emits exactly dense's photons.
         return leaf_covered(level, xy) && view_in_cone(v, 0.5 * (lo + hi)) ? ACT_EMIT : ACT_DROP;
     }
-    bool max_error = (u_frame.traversal.y & 0xFFu) == 1u;
+    uint metric = u_frame.traversal.y & 0xFFu;
+    if (metric == 2u && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
+        uint r;
+        uint verdict = flux_error_verdict(level, xy, r);
+        if (verdict == FE_DROP) return ACT_DROP;
+        if (verdict == FE_FINAL) {
+            out_cell = pack_cell(level, xy.x, xy.y, r);
+            return ACT_EMIT;
+        }
+        if (verdict == FE_CHILDREN) {
+            out_cell = pack_cell(level, xy.x, xy.y, r);
+            return ACT_EMIT_CHILDREN;
+        }
+        return ACT_REFINE;
+    }
+    bool max_error = metric == 1u;
     if (max_error && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
         // Only fully covered cells inside the cone may converge: then the cluster's flux I*Omega(cell) equals the
         // sum over the leaves that max-level traversal would have emitted.
@@ -124,6 +217,7 @@ void main() {
         uvec2 cell = photons[state.read_offset + i];
         action = decide(cell_level(cell), cell, out_cell);
         if (action == ACT_EMIT) slot = atomicAdd(s_emit_n, 1u);
+        if (action == ACT_EMIT_CHILDREN) slot = atomicAdd(s_emit_n, 4u);
         if (action == ACT_REFINE) slot = atomicAdd(s_child_n, 1u);
         if (action == ACT_DROP) atomicAdd(s_dropped, 1u);
     }
@@ -152,6 +246,13 @@ void main() {
     if (s_reserved) {
         if (action == ACT_EMIT) {
             photons[state.capacity - 1u - (s_emit_base + slot)] = out_cell;
+        } else if (action == ACT_EMIT_CHILDREN) {
+            uvec2 xy = cell_xy(out_cell);
+            uint r = cell_radius(out_cell);
+            for (uint k = 0u; k < 4u; k++) {
+                photons[state.capacity - 1u - (s_emit_base + slot + k)] =
+                    pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
+            }
         } else if (action == ACT_REFINE) {
             uvec2 xy = cell_xy(out_cell);
             uint base = state.read_offset + state.read_count + s_child_base + 4u * slot;

@@ -33,7 +33,7 @@ pub struct BenchArgs {
     /// and level.
     #[arg(long, value_enum, default_values = ["exact", "two-interface"], value_delimiter = ',')]
     pub transports: Vec<Transport>,
-    /// Methods: dense, max-level, max-error (comma-separated).
+    /// Methods: dense, max-level, max-error, flux-error (comma-separated).
     #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
     pub methods: Vec<String>,
     /// Levels (comma-separated or a range like 2-6): 64·2^level cells per side.
@@ -83,6 +83,10 @@ pub struct BenchArgs {
     /// Max-error bound (caustic-map texels).
     #[arg(long, default_value_t = 1.0)]
     pub error_bound: f32,
+    /// Flux-error metric: the target errors to sweep (comma-separated, each in (0, 1]); with more than one, the
+    /// rows' metric reads `flux-error@E`.
+    #[arg(long, default_value = "0.01", value_delimiter = ',', allow_negative_numbers = true)]
+    pub target_errors: Vec<f32>,
     /// Photon budget (MiB).
     #[arg(long, default_value_t = 64.0)]
     pub photon_budget: f64,
@@ -151,6 +155,10 @@ struct Point {
     metric: Metric,
     driven: Driven,
     wg: u32,
+    /// Flux-error's target error (the default for the other metrics).
+    target_error: f32,
+    /// The row's metric label: `flux-error@E` when several target errors are swept, else the metric's name.
+    label: String,
 }
 
 impl Point {
@@ -159,10 +167,7 @@ impl Point {
             Method::Dense => "dense".into(),
             Method::Adaptive => format!(
                 "{} {}-driven wg{}",
-                match self.metric {
-                    Metric::MaxLevel => "max-level",
-                    Metric::MaxError => "max-error",
-                },
+                self.label,
                 if self.driven == Driven::Gpu { "gpu" } else { "cpu" },
                 self.wg
             ),
@@ -181,6 +186,13 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
             _ => Err(AppError::BadInput(format!("--driven `{d}`: expected gpu or cpu"))),
         })
         .collect::<AppResult<_>>()?;
+    for e in &args.target_errors {
+        if !(e.is_finite() && *e > 0.0 && *e <= 1.0) {
+            return Err(AppError::BadInput(format!(
+                "--target-errors {e}: each must lie in (0, 1] (relative L1 at 64²)"
+            )));
+        }
+    }
     for wg in &args.traverse_wg {
         if !TRAVERSE_WG_SWEEP.contains(wg) {
             return Err(AppError::BadInput(format!("--traverse-wg {wg}: must be one of 1, 2, 4, 8, 16")));
@@ -194,16 +206,41 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
                     metric: Metric::MaxLevel,
                     driven: Driven::Gpu,
                     wg: TRAVERSE_WG,
+                    target_error: crate::settings::DEFAULT_TARGET_ERROR,
+                    label: "dense".into(),
                 });
                 continue;
             }
             "max-level" => Metric::MaxLevel,
             "max-error" => Metric::MaxError,
-            _ => return Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level or max-error"))),
+            "flux-error" => Metric::FluxError,
+            _ => {
+                return Err(AppError::BadInput(format!(
+                    "--methods `{m}`: expected dense, max-level, max-error or flux-error"
+                )))
+            }
         };
-        for d in &driven {
-            for wg in &args.traverse_wg {
-                out.push(Point { method: Method::Adaptive, metric, driven: *d, wg: *wg });
+        let targets: Vec<(f32, String)> = if metric == Metric::FluxError {
+            let many = args.target_errors.len() > 1;
+            args.target_errors
+                .iter()
+                .map(|&e| (e, if many { format!("flux-error@{e}") } else { metric.name().to_string() }))
+                .collect()
+        } else {
+            vec![(crate::settings::DEFAULT_TARGET_ERROR, metric.name().to_string())]
+        };
+        for (target_error, label) in &targets {
+            for d in &driven {
+                for wg in &args.traverse_wg {
+                    out.push(Point {
+                        method: Method::Adaptive,
+                        metric,
+                        driven: *d,
+                        wg: *wg,
+                        target_error: *target_error,
+                        label: label.clone(),
+                    });
+                }
             }
         }
     }
@@ -333,6 +370,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     level,
                     driven: p.driven,
                     traverse_wg: p.wg,
+                    target_error: p.target_error,
                     ..base.clone()
                 };
                 session.renderer.set_settings(s)?;
@@ -360,13 +398,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     scene: name.clone(),
                     transport: transport_name(transport).into(),
                     method: format!("{:?}", p.method).to_lowercase(),
-                    metric: (p.method == Method::Adaptive).then(|| {
-                        if p.metric == Metric::MaxLevel {
-                            "max-level".to_string()
-                        } else {
-                            "max-error".to_string()
-                        }
-                    }),
+                    metric: (p.method == Method::Adaptive).then(|| p.label.clone()),
                     level,
                     equivalent_res: LEVEL0_RES << level,
                     driven: if p.driven == Driven::Gpu { "gpu".into() } else { "cpu".into() },
@@ -385,6 +417,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                             "flux_ratio": o64.map(|m| m.flux_ratio),
                         },
                         "traverse_wg": p.wg,
+                        "target_error": (p.metric == Metric::FluxError).then_some(p.target_error),
                         "traverse_ms": stage_median(&frames, "traverse"),
                         "photon_trace_ms": stage_median(&frames, "photon_trace"),
                         "transport_ms": stage_median(&frames, "transport"),

@@ -79,7 +79,11 @@ pub struct MethodArgs {
     /// Max-error metric: convergence bound in caustic-map texels.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub error_bound: f32,
-    /// Max-error metric: first level checked for convergence.
+    /// Flux-error metric: the target error, relative L1 at 64² that merging cells may add (docs/design.md)
+    /// [default: 0.01] (--metric flux-error only; other metrics warn that they ignore it).
+    #[arg(long, allow_negative_numbers = true)]
+    pub target_error: Option<f32>,
+    /// Max-error and flux-error metrics: first level checked for convergence.
     #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = level_arg)]
     pub check_level: u32,
     /// Traversal work-group side (1, 2, 4, 8 or 16).
@@ -126,6 +130,7 @@ impl MethodArgs {
             gbuffer_res: self.gbuffer_res,
             caustic_res: self.caustic_res,
             error_bound: self.error_bound,
+            target_error: self.target_error.unwrap_or(crate::settings::DEFAULT_TARGET_ERROR),
             check_level: self.check_level,
             traverse_wg: self.traverse_wg,
             batching: !self.no_batching,
@@ -141,6 +146,9 @@ impl MethodArgs {
                     eprintln!("warning: {flag} applies to --method adaptive only; --method dense ignores it");
                 }
             }
+        }
+        if self.target_error.is_some() && (s.method == Method::Dense || s.metric != Metric::FluxError) {
+            eprintln!("warning: --target-error applies to --method adaptive --metric flux-error only; ignored");
         }
         if s.method == Method::Dense && s.level > 12 {
             return Err(AppError::BadInput(format!(
@@ -238,7 +246,8 @@ impl Session {
     /// A rough upper bound of one frame's time in seconds, from its photon count: every cell of the level's grid
     /// (dense and adaptive max-level emit at most that many) times a per-photon cost measured on lavapipe
     /// (docs/results.md: about 0.25 µs per photon for two-interface, 6 µs for exact transport, whose photons
-    /// become several rays each), 100× less on a GPU. `None` for max-error, whose count is not known ahead.
+    /// become several rays each), 100× less on a GPU. `None` for max-error and flux-error, whose counts are not
+    /// known ahead.
     pub fn estimate_frame_s(&self) -> Option<f64> {
         frame_estimate_s(&self.renderer.settings, self.device().info.kind == ash::vk::PhysicalDeviceType::CPU)
     }
@@ -324,7 +333,7 @@ fn check_output(aov: Aov, out: &Path) -> AppResult<Aov> {
 
 /// See [`Session::estimate_frame_s`]; `cpu`: the device is a CPU driver (lavapipe).
 pub fn frame_estimate_s(s: &Settings, cpu: bool) -> Option<f64> {
-    if s.method == Method::Adaptive && s.metric == Metric::MaxError {
+    if s.method == Method::Adaptive && s.metric != Metric::MaxLevel {
         return None;
     }
     let cells = ((LEVEL0_RES as f64) * (1u64 << s.level) as f64).powi(2);

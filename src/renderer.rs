@@ -7,7 +7,7 @@ use crate::passes::Passes;
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{Camera, LightKind, Material, Scene, MAX_LIGHTS};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Method, Metric, Settings, Transport};
+use crate::settings::{Method, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
@@ -378,11 +378,11 @@ impl Renderer {
             grid: [s.gbuffer_side(), s.gbuffer_level(), s.caustic_res, s.gbuffer_level() + 1],
             traversal: [
                 s.level,
-                (if s.metric == Metric::MaxError { 1 } else { 0 }) | ((s.batching as u32) << 8),
+                s.metric.code() | ((s.batching as u32) << 8),
                 s.check_level,
                 s.traversal_capacity(targets.photon.capacity),
             ],
-            params: [s.error_bound, s.shadow_bias, s.flux_threshold, 0.0],
+            params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.target_error],
             transport: [
                 (s.transport == Transport::Exact) as u32,
                 s.ray_queue_capacity(),

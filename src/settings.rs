@@ -19,6 +19,29 @@ pub enum Metric {
     MaxLevel,
     /// Stop refining a cell once its children land within the error bound in the caustic map.
     MaxError,
+    /// Stop refining a cell once merging its children changes the caustic map (box-filtered to 64²) by at most
+    /// the target error times the cell's flux (docs/design.md, "The flux-error metric").
+    FluxError,
+}
+
+impl Metric {
+    /// The name `--metric` and the bench use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::MaxLevel => "max-level",
+            Metric::MaxError => "max-error",
+            Metric::FluxError => "flux-error",
+        }
+    }
+
+    /// The code the traverse shader reads (FrameData.traversal.y, bits 0-7).
+    pub fn code(self) -> u32 {
+        match self {
+            Metric::MaxLevel => 0,
+            Metric::MaxError => 1,
+            Metric::FluxError => 2,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -100,7 +123,9 @@ pub struct Settings {
     pub caustic_res: u32,
     /// Max-error bound, in caustic-map texels.
     pub error_bound: f32,
-    /// First level at which max-error checks convergence (Wyman: the 512² level, 3).
+    /// Flux-error metric: the target error tau (relative L1 at 64² that merging may add, per unit of flux).
+    pub target_error: f32,
+    /// First level at which max-error and flux-error check convergence (Wyman: the 512² level, 3).
     pub check_level: u32,
     /// Traversal work-group side (1, 2, 4, 8, 16).
     pub traverse_wg: u32,
@@ -132,6 +157,7 @@ impl Default for Settings {
             gbuffer_res: 1024,
             caustic_res: 1024,
             error_bound: 1.0,
+            target_error: DEFAULT_TARGET_ERROR,
             check_level: 3,
             traverse_wg: TRAVERSE_WG,
             batching: true,
@@ -148,6 +174,9 @@ pub const MAX_BUDGET_MIB: f64 = 64.0;
 
 /// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
 pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
+
+/// Default `--target-error` of the flux-error metric.
+pub const DEFAULT_TARGET_ERROR: f32 = 0.01;
 
 pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
 
@@ -178,6 +207,9 @@ impl Settings {
         }
         if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
             return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
+        }
+        if !(self.target_error.is_finite() && self.target_error > 0.0 && self.target_error <= 1.0) {
+            return bad(format!("--target-error {}: must lie in (0, 1] (relative L1 at 64²)", self.target_error));
         }
         if !(self.exposure_ev.is_finite() && self.exposure_ev.abs() <= 32.0) {
             return bad(format!("--exposure {}: must lie in [-32, 32] stops", self.exposure_ev));

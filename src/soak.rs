@@ -82,6 +82,7 @@ impl Step {
             (Method::Dense, _) => "dense",
             (_, Metric::MaxLevel) => "max-level",
             (_, Metric::MaxError) => "max-error",
+            (_, Metric::FluxError) => "flux-error",
         };
         format!("{t} {m} L{} ior {} {}x{}", self.level, self.ior, self.size.0, self.size.1)
     }

@@ -46,7 +46,7 @@ pub struct TemporalArgs {
     /// Light transport.
     #[arg(long, value_enum, default_value_t = Transport::TwoInterface)]
     pub transport: Transport,
-    /// Methods: dense, max-level, max-error (comma-separated).
+    /// Methods: dense, max-level, max-error, flux-error (comma-separated).
     #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
     pub methods: Vec<String>,
     /// Photon level (dense) or maximal traversal level (adaptive).
@@ -118,7 +118,10 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
             "dense" => Ok((m.clone(), Method::Dense, Metric::MaxLevel)),
             "max-level" => Ok((m.clone(), Method::Adaptive, Metric::MaxLevel)),
             "max-error" => Ok((m.clone(), Method::Adaptive, Metric::MaxError)),
-            _ => Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level or max-error"))),
+            "flux-error" => Ok((m.clone(), Method::Adaptive, Metric::FluxError)),
+            _ => {
+                Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level, max-error or flux-error")))
+            }
         })
         .collect::<AppResult<_>>()?;
     let base = Settings {

@@ -94,12 +94,14 @@ const uint DOM_ESCAPED = 2u;
 const uint DOM_CUT = 3u;      // interaction cap or a dead end
 
 // Follow a cell's dominant path (the larger branch at every interface) to where it ends, for the max-error
-// metric: its status, the landing texel of the caustic map, and its interaction count.
-uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events) {
+// and flux-error metrics: its status, the landing texel of the caustic map, its interaction count, and its
+// throughput (the product of the branch fractions it kept: the share of the cell's flux that follows it).
+uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out float throughput) {
     vec3 ro, rd;
     cell_ray(level, xy, ro, rd);
     map_px = vec2(-1e9);
     events = 0u;
+    throughput = 1.0;
     for (uint k = 0u; k <= MAX_INTERACTIONS; k++) {
         SceneHit hit;
         if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) return DOM_ESCAPED;
@@ -115,6 +117,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events) {
         Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
         if (!s.ok) break;
         bool refl = s.F >= 0.5;
+        throughput *= refl ? s.F : 1.0 - s.F;
         ro = refl ? s.p_refl : s.p_refr;
         rd = normalize(refl ? s.refl : s.refr);
         events++;

@@ -22,10 +22,10 @@ struct FrameData {
     vec4 scene_min;      // xyz: scene bounds; w: refractor bounding diameter (m)
     vec4 scene_max;      // xyz; w: exposure (1 / reference radiance)
     uvec4 grid;          // x: refractor g-buffer res R; y: log2(R/64); z: caustic map res M; w: pyramid mips
-    uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error), bit 8 batching;
+    uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error, 2 flux-error), bit 8 batching;
                          // z: first level checked for convergence; w: photon-buffer capacity (entries)
     vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's
-                         // flux threshold (relative to the photon's flux); w: unused
+                         // flux threshold (relative to the photon's flux); w: flux-error's target error
     uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records; w: color
                          // channel of this pass (0: one gray pass; 1, 2, 3: red, green, blue)
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer

@@ -645,6 +645,7 @@ impl Viewer {
             (Method::Dense, _) => "dense",
             (Method::Adaptive, Metric::MaxLevel) => "adaptive max-level",
             (Method::Adaptive, Metric::MaxError) => "adaptive max-error",
+            (Method::Adaptive, Metric::FluxError) => "adaptive flux-error",
         };
         let ior = self.ior();
         let transport = match s.transport {
