@@ -85,7 +85,8 @@ pub struct FrameData {
     pub traversal: [u32; 4],
     /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold.
     pub params: [f32; 4],
-    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch.
+    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch; w: 1 for differential footprints
+    /// (rays carry their differentials: 5 vec4s each, else 2).
     pub transport: [u32; 4],
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],

@@ -7,7 +7,7 @@ use crate::passes::Passes;
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{Camera, LightKind, Material, Scene};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Method, Metric, Settings, Transport};
+use crate::settings::{Footprint, Method, Metric, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
@@ -149,7 +149,7 @@ pub struct Renderer {
     pub recorder: Recorder,
     pub timestamps: Timestamps,
     pub targets: Option<Targets>,
-    targets_key: Option<(u32, u32, u64, u32, u32)>,
+    targets_key: Option<(u32, u32, u64, u32, u32, u32)>,
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
@@ -272,8 +272,14 @@ impl Renderer {
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
         let s = &self.settings;
-        let key =
-            (s.gbuffer_side(), s.caustic_res, s.photon_budget_mib.to_bits(), s.debug_photons, s.ray_queue_capacity());
+        let key = (
+            s.gbuffer_side(),
+            s.caustic_res,
+            s.photon_budget_mib.to_bits(),
+            s.debug_photons,
+            s.ray_queue_capacity(),
+            s.ray_bytes(),
+        );
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
                 if (t.width, t.height) != (width, height) {
@@ -338,7 +344,12 @@ impl Renderer {
                 s.traversal_capacity(targets.photon.capacity),
             ],
             params: [s.error_bound, s.shadow_bias, s.flux_threshold, 0.0],
-            transport: [(s.transport == Transport::Exact) as u32, s.ray_queue_capacity(), targets.photon.capacity, 0],
+            transport: [
+                (s.transport == Transport::Exact) as u32,
+                s.ray_queue_capacity(),
+                targets.photon.capacity,
+                (s.footprint == Footprint::Differential) as u32,
+            ],
             pyramid,
         }
     }
