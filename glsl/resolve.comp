@@ -33,7 +33,7 @@ void main() {
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
     // and blue passes keep what the earlier ones wrote.
-    uint c = u_frame.transport.w;
+    uint c = u_frame.transport.w & 0xffu;
     if (c != 0u) {
         vec4 prev = c == 1u ? vec4(0.0) : imageLoad(o_irradiance, p);
         prev[c - 1u] = e[c - 1u];

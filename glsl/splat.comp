@@ -1,6 +1,6 @@
 #version 460
 // Compute splat (docs/design.md step 5, `--splat compute`), dispatched indirectly over the records the draw would
-// draw: the same separable integer-radius tent as splat.frag, evaluated at the same texel centers, each tap added
+// draw: the same separable integer-radius tent (radii rx, ry) as splat.frag, evaluated at the same texel centers, each tap added
 // to the flux map with a float atomic. The weights of a record sum to exactly 1 over the texel lattice, so flux is
 // conserved as by the point draw; only the order of the float additions differs. As with points, a record whose
 // center lies outside the map is dropped (a point primitive is clipped by its vertex).
@@ -30,7 +30,7 @@ void main() {
         s = splats[draw_cmd.z + i];
         valid = s.w > 0.0 && s.x >= 0.0 && s.y >= 0.0 && s.x <= float(size.x) && s.y <= float(size.y);
     }
-    float r = s.w;
+    vec2 r = splat_radii(s.w);
     // Texel centers p + 0.5 with |p + 0.5 - c| < r on each axis.
     ivec2 lo = ivec2(0), hi = ivec2(-1);
     if (valid) {
@@ -63,10 +63,10 @@ void main() {
     ivec2 wlo = max(org, glo), whi = min(org + SPLAT_TILE - 1, ghi);
 #endif
     for (int y = lo.y; y <= hi.y; y++) {
-        float wy = max(0.0, 1.0 - abs(float(y) + 0.5 - s.y) / r) / r;
+        float wy = max(0.0, 1.0 - abs(float(y) + 0.5 - s.y) / r.y) / r.y;
         if (wy == 0.0) continue;
         for (int x = lo.x; x <= hi.x; x++) {
-            float wx = max(0.0, 1.0 - abs(float(x) + 0.5 - s.x) / r) / r;
+            float wx = max(0.0, 1.0 - abs(float(x) + 0.5 - s.x) / r.x) / r.x;
             if (wx == 0.0) continue;
             float v = s.z * (wx * wy);
 #ifdef SPLAT_TILED

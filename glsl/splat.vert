@@ -4,18 +4,19 @@
 #include "common/photon_bindings.glsl"
 
 layout(location = 0) flat out float v_flux;
-layout(location = 1) flat out vec3 v_splat;  // center (texels), radius (texels)
+layout(location = 1) flat out vec4 v_splat;  // center (texels), radii rx, ry (texels)
 
 void main() {
     vec4 s = splats[gl_VertexIndex];
     vec2 size = u_frame.receiver_view.extent.xy;
     if (s.w > 0.0) {
         gl_Position = vec4(s.xy / size * 2.0 - 1.0, 0.5, 1.0);
-        gl_PointSize = 2.0 * s.w;
+        vec2 r = splat_radii(s.w);
+        gl_PointSize = 2.0 * max(r.x, r.y);
     } else {
         gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the point is discarded
         gl_PointSize = 1.0;
     }
     v_flux = s.z;
-    v_splat = s.xyw;
+    v_splat = vec4(s.xy, s.w > 0.0 ? splat_radii(s.w) : vec2(1.0));
 }

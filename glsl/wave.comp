@@ -27,15 +27,28 @@ shared uint s_rec_base;
 shared bool s_rays_ok;
 shared bool s_recs_ok;
 
-void store_ray(uint q, uint k, vec3 o, float w, vec3 d, uint meta) {
+// A ray is RAY_VEC4S vec4s: (origin, throughput), (direction, bits(meta)), and with differential footprints
+// (dP/dx, dP/dy.x), (dP/dy.yz, dD/dx.xy), (dD/dx.z, dD/dy).
+void queue_put(uint q, uint k, vec4 v) {
     if (q == 0u) {
-        queue0[2u * k] = vec4(o, w);
-        queue0[2u * k + 1u] = vec4(d, uintBitsToFloat(meta));
+        queue0[k] = v;
     } else {
-        queue1[2u * k] = vec4(o, w);
-        queue1[2u * k + 1u] = vec4(d, uintBitsToFloat(meta));
+        queue1[k] = v;
     }
 }
+
+void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, RayDiff r) {
+    uint b = stride * k;
+    queue_put(q, b, vec4(o, w));
+    queue_put(q, b + 1u, vec4(d, uintBitsToFloat(meta)));
+    if (stride > 2u) {
+        queue_put(q, b + 2u, vec4(r.dpx, r.dpy.x));
+        queue_put(q, b + 3u, vec4(r.dpy.yz, r.ddx.xy));
+        queue_put(q, b + 4u, vec4(r.ddx.z, r.ddy));
+    }
+}
+
+vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 
 // Add a non-negative value to a (lo, hi) fixed-point pair of the batch account.
 void account_add(uint term, float v) {
@@ -52,6 +65,9 @@ void main() {
     uint lid = gl_LocalInvocationIndex;
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
     uint wave = pc.level;
+    // `--footprint differential`: rays carry their differentials (docs/design.md step 5).
+    bool diff = (u_frame.transport.w & 0x100u) != 0u;
+    uint stride = diff ? 5u : 2u;
     bool can_abort = pc.mode != 0u;
     if (lid == 0u) {
         s_rays = 0u;
@@ -65,6 +81,11 @@ void main() {
     uint n_child = 0u;
     vec3 c_o[2], c_d[2];
     float c_w[2];
+    RayDiff c_r[2];
+    RayDiff rdf;
+    rdf.dpx = rdf.dpy = rdf.ddx = rdf.ddy = vec3(0.0);
+    c_r[0] = rdf;
+    c_r[1] = rdf;
     bool rec = false;
     float rec_flux = 0.0;
     bool one_event = false;
@@ -82,13 +103,23 @@ void main() {
             pidx = state.capacity - tstate.in_count + i;
             uvec2 cell = photons[pidx];
             cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
+            if (diff) rdf = cell_ray_diff(cell_level(cell), cell_xy(cell), rd);
             w = 1.0;
             depth = 0u;
             phi = cell_measure(cell_level(cell), cell_xy(cell));
             acc[ACC_EMITTED] = phi;
         } else {
-            vec4 a = (wave & 1u) == 0u ? queue0[2u * i] : queue1[2u * i];
-            vec4 b = (wave & 1u) == 0u ? queue0[2u * i + 1u] : queue1[2u * i + 1u];
+            uint qi = wave & 1u;
+            vec4 a = queue_get(qi, stride * i);
+            vec4 b = queue_get(qi, stride * i + 1u);
+            if (diff) {
+                vec4 e = queue_get(qi, stride * i + 2u), f = queue_get(qi, stride * i + 3u);
+                vec4 g = queue_get(qi, stride * i + 4u);
+                rdf.dpx = e.xyz;
+                rdf.dpy = vec3(e.w, f.xy);
+                rdf.ddx = vec3(f.zw, g.x);
+                rdf.ddy = g.yzw;
+            }
             ro = a.xyz;
             w = a.w;
             rd = b.xyz;
@@ -107,7 +138,9 @@ void main() {
             bool specular = inst_is_dielectric(hit.inst);
             // The normals, once: the absorption test and the interface both need them.
             vec3 ng = vec3(0.0), ns = vec3(0.0);
-            if (specular) bvh_normals(hit, ng, ns);
+            if (specular || (diff && depth > 0u)) bvh_normals(hit, ng, ns);
+            // The differentials move to the hit, in the plane of its triangle.
+            if (diff) diff_transfer(rdf, rd, dot(p - ro, rd), ng);
             float sigma = inst_sigma(hit.inst);
             if (specular && sigma > 0.0 && dot(rd, ng) > 0.0) {
                 // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation,
@@ -122,7 +155,11 @@ void main() {
                     acc[ACC_DIRECT] += flux;
                 } else {
                     View rv = u_frame.receiver_view;
-                    uint r = cell_splat_radius(photons[pidx]);
+                    uvec2 cell = photons[pidx];
+                    uint r = cell_splat_radius(cell);
+                    // Max-error clusters keep the radius traversal gave them (their children's spread).
+                    if (diff && cell_radius(cell) == 0u)
+                        r = footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r);
                     record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, float(r));
                     rec = true;
                     rec_flux = flux;
@@ -139,11 +176,23 @@ void main() {
                 } else {
                     float wr = w * s.F, wt = w * (1.0 - s.F);
                     float cut = u_frame.params.z;
+                    // Both children inherit dP; their dD follow their branch, with the interpolated normal's
+                    // derivative where the branch used it.
+                    vec3 dnx = vec3(0.0), dny = vec3(0.0);
+                    if (diff && (s.k_refl != 0.0 || s.k_refr != 0.0)) {
+                        dnx = bvh_shading_dn(hit, ns, rdf.dpx);
+                        dny = bvh_shading_dn(hit, ns, rdf.dpy);
+                    }
                     if (wr > 0.0) {
                         if (wr >= cut) {
                             c_o[n_child] = s.p_refl;
                             c_d[n_child] = normalize(s.refl);
                             c_w[n_child] = wr;
+                            if (diff) {
+                                c_r[n_child] = rdf;
+                                c_r[n_child].ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
+                                c_r[n_child].ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
+                            }
                             n_child++;
                         } else {
                             acc[ACC_THRESHOLD] += phi * wr;
@@ -154,6 +203,12 @@ void main() {
                             c_o[n_child] = s.p_refr;
                             c_d[n_child] = normalize(s.refr);
                             c_w[n_child] = wt;
+                            if (diff) {
+                                vec3 t = c_d[n_child];
+                                c_r[n_child] = rdf;
+                                c_r[n_child].ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, t, s.eta);
+                                c_r[n_child].ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, t, s.eta);
+                            }
                             n_child++;
                         } else {
                             acc[ACC_THRESHOLD] += phi * wt;
@@ -203,7 +258,7 @@ void main() {
     barrier();
     uint q = (wave + 1u) & 1u;
     if (s_rays_ok) {
-        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, c_o[c], c_w[c], c_d[c], meta);
+        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], meta, c_r[c]);
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
     // One invocation per term sums the work group's shares and adds them in fixed point.

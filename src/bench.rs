@@ -80,6 +80,9 @@ pub struct BenchArgs {
     /// Exact transport: BVH node layout (pair or single).
     #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Pair)]
     pub bvh_layout: crate::bvh::BvhLayout,
+    /// Exact transport: where the splat radius comes from (cell or differential).
+    #[arg(long, value_enum, default_value_t = Settings::default().footprint)]
+    pub footprint: crate::settings::Footprint,
     /// Max-error bound (caustic-map texels).
     #[arg(long, default_value_t = 1.0)]
     pub error_bound: f32,
@@ -341,6 +344,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             check_level: args.check_level,
             flux_threshold: args.flux_threshold,
             bvh_layout: args.bvh_layout,
+            footprint: args.footprint,
             ..Settings::default()
         };
         let mut session = Session::open(&scene_args, base.clone())?;

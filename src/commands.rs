@@ -6,7 +6,7 @@ use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
-use crate::settings::{parse_size, Driven, Method, Metric, Settings, Splat, Transport};
+use crate::settings::{parse_size, Driven, Footprint, Method, Metric, Settings, Splat, Transport};
 use crate::shaders::consts::*;
 use crate::vk::{self, Context, ContextDesc};
 use serde_json::{json, Value};
@@ -45,6 +45,10 @@ pub struct MethodArgs {
     /// float atomics (compute), or the faster of the two for the device (auto).
     #[arg(long, value_enum, default_value_t = Settings::default().splat)]
     pub splat: Splat,
+    /// Exact transport: splat radius from the photon's cell (cell) or, per map axis, from where the cell lands,
+    /// by ray differentials (differential).
+    #[arg(long, value_enum, default_value_t = Settings::default().footprint)]
+    pub footprint: Footprint,
     /// Beauty exposure in stops (EV), added to the automatic exposure before the ACES tone map.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -120,6 +124,7 @@ impl MethodArgs {
             transport: self.transport,
             exposure_ev: self.exposure,
             splat: self.splat,
+            footprint: self.footprint,
             flux_threshold: self.flux_threshold,
             bvh_layout: self.bvh_layout,
             method: self.method,
@@ -431,6 +436,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "lights": light_rows(&session.renderer, &last),
         "transport": s.transport,
         "splat": s.splat.resolve(info),
+        "footprint": s.footprint,
         "exact_transport": transport_json(session, &last),
         "photon_view": last.photon_view.map(|v| json!({
             "origin": v.origin.to_array(), "right": v.right.to_array(), "down": v.down.to_array(),

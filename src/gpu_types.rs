@@ -86,8 +86,9 @@ pub struct FrameData {
     /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold;
     /// w: flux-error's target error.
     pub params: [f32; 4],
-    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch; w: color channel of the pass (0 gray;
-    /// 1, 2, 3: red, green, blue).
+    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch; w: bits 0-7 the color channel of
+    /// the pass (0 gray; 1, 2, 3: red, green, blue), bit 8 differential footprints (rays carry their
+    /// differentials: 5 vec4s each, else 2).
     pub transport: [u32; 4],
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],

@@ -7,7 +7,7 @@ use crate::passes::Passes;
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{Camera, LightKind, Material, Scene, MAX_LIGHTS};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Method, Settings, Transport};
+use crate::settings::{Footprint, Method, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
@@ -171,7 +171,7 @@ pub struct Renderer {
     pub recorder: Recorder,
     pub timestamps: Timestamps,
     pub targets: Option<Targets>,
-    targets_key: Option<(u32, u32, u64, u32, u32, usize)>,
+    targets_key: Option<(u32, u32, u64, u32, u32, usize, u32)>,
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
@@ -316,6 +316,7 @@ impl Renderer {
             s.debug_photons,
             s.ray_queue_capacity(),
             passes,
+            s.ray_bytes(),
         );
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
@@ -387,7 +388,7 @@ impl Renderer {
                 (s.transport == Transport::Exact) as u32,
                 s.ray_queue_capacity(),
                 targets.photon.capacity,
-                channel,
+                channel | ((s.footprint == Footprint::Differential) as u32) << 8,
             ],
             pyramid,
         }

@@ -65,6 +65,26 @@ pub enum Transport {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
+pub enum Footprint {
+    /// The splat radius follows the photon's cell: its side over a caustic-map texel (today's kernel).
+    Cell,
+    /// Exact transport: the radius per map axis comes from where the cell lands, by ray differentials (Igehy
+    /// 1999) carried through every interface; the ray queues grow from 32 to 80 bytes a ray.
+    Differential,
+}
+
+impl Footprint {
+    /// vec4s per ray in the exact transport's queues.
+    pub fn ray_vec4s(self) -> u32 {
+        match self {
+            Footprint::Cell => 2,
+            Footprint::Differential => 5,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Splat {
     /// Points drawn with vkCmdDrawIndirect and additive blending (the papers' design).
     Raster,
@@ -106,6 +126,8 @@ pub struct Settings {
     pub exposure_ev: f32,
     /// How splat records reach the caustic flux map.
     pub splat: Splat,
+    /// Where the splat radius comes from (exact transport; the two-interface trace always uses the cell's).
+    pub footprint: Footprint,
     /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
     pub flux_threshold: f32,
     /// Exact transport: the BVH node layout the waves traverse.
@@ -147,6 +169,7 @@ impl Default for Settings {
             transport: Transport::Exact,
             exposure_ev: 0.0,
             splat: Splat::Auto,
+            footprint: Footprint::Cell,
             flux_threshold: 1e-3,
             bvh_layout: crate::bvh::BvhLayout::Pair,
             method: Method::Adaptive,
@@ -236,13 +259,19 @@ impl Settings {
         (((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
     }
 
-    /// Exact transport: rays per queue (32 bytes each, two queues; one binding holds at most 128 MiB) and splat
-    /// records per batch (one per photon-buffer entry, as for the two-interface trace). Two-interface: none.
+    /// Exact transport: rays per queue (32 bytes each, 80 with ray differentials; two queues; one binding holds
+    /// at most 128 MiB) and splat records per batch (one per photon-buffer entry, as for the two-interface trace).
+    /// Two-interface: none.
     pub fn ray_queue_capacity(&self) -> u32 {
         match self.transport {
-            Transport::Exact => (self.photon_capacity() / 2).clamp(8, 128 * 1024 * 1024 / 32),
+            Transport::Exact => (self.photon_capacity() / 2).clamp(8, 128 * 1024 * 1024 / self.ray_bytes()),
             Transport::TwoInterface => 0,
         }
+    }
+
+    /// Bytes per ray in the exact transport's queues.
+    pub fn ray_bytes(&self) -> u32 {
+        16 * self.footprint.ray_vec4s()
     }
 
     /// Photon-buffer entries one batch may use. Under exact transport wave 0 appends up to two children per

@@ -197,8 +197,20 @@ impl Targets {
                 gpu,
             )?,
             queues: [
-                Buffer::new(device, "ray queue 0", 32 * s.ray_queue_capacity().max(1) as u64, B::STORAGE_BUFFER, gpu)?,
-                Buffer::new(device, "ray queue 1", 32 * s.ray_queue_capacity().max(1) as u64, B::STORAGE_BUFFER, gpu)?,
+                Buffer::new(
+                    device,
+                    "ray queue 0",
+                    s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64,
+                    B::STORAGE_BUFFER,
+                    gpu,
+                )?,
+                Buffer::new(
+                    device,
+                    "ray queue 1",
+                    s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64,
+                    B::STORAGE_BUFFER,
+                    gpu,
+                )?,
             ],
             capacity,
             pyramid_offsets,

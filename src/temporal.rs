@@ -46,6 +46,9 @@ pub struct TemporalArgs {
     /// Light transport.
     #[arg(long, value_enum, default_value_t = Transport::TwoInterface)]
     pub transport: Transport,
+    /// Exact transport: where the splat radius comes from (cell or differential).
+    #[arg(long, value_enum, default_value_t = Settings::default().footprint)]
+    pub footprint: crate::settings::Footprint,
     /// Methods: dense, max-level, max-error, flux-error (comma-separated).
     #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
     pub methods: Vec<String>,
@@ -126,6 +129,7 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
         .collect::<AppResult<_>>()?;
     let base = Settings {
         transport: args.transport,
+        footprint: args.footprint,
         level: args.level,
         gbuffer_res: args.map_res,
         caustic_res: args.map_res,

@@ -27,12 +27,18 @@ layout(set = 0, binding = 8) uniform sampler2D t_recv;       // receivers from t
 //   bits(hit.x, hit.y, hit.z), 0.
 layout(std430, set = 0, binding = 9) buffer DebugBuf { uvec4 debug_header; uvec4 debug_rows[]; };
 // Splat records, one per emitted photon (same index): landing point (caustic-map texels), flux (W, before the
-// light's color), splat radius (texels; 0: the photon did not land).
+// light's color), splat radii (texels; 0: the photon did not land) as the float of rx | ry << 16, an exact integer
+// below 2^24; ry = 0 means ry = rx (a plain radius r is the isotropic tent of radius r).
 layout(std430, set = 0, binding = 10) buffer SplatBuf { vec4 splats[]; };
+vec2 splat_radii(float w) {
+    uint r = uint(w);
+    uint rx = r & 0xFFFFu, ry = r >> 16;
+    return vec2(float(rx), float(ry == 0u ? rx : ry));
+}
 
 // Exact transport (src/bvh.rs, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.
 // A ray is two vec4: origin and throughput (relative to its photon's flux); direction and bits(photon index |
-// interactions << 24). The photon index points into the photon buffer, whose cell gives the flux and footprint.
+// interactions << 24); with `--footprint differential` three more hold its ray differentials (glsl/wave.comp). The photon index points into the photon buffer, whose cell gives the flux and footprint.
 layout(std430, set = 0, binding = 11) buffer TransportBuf { TransportState tstate; };
 layout(std430, set = 0, binding = 12) buffer RayQueue0 { vec4 queue0[]; };
 layout(std430, set = 0, binding = 13) buffer RayQueue1 { vec4 queue1[]; };

@@ -26,8 +26,9 @@ struct FrameData {
                          // z: first level checked for convergence; w: photon-buffer capacity (entries)
     vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's
                          // flux threshold (relative to the photon's flux); w: flux-error's target error
-    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records; w: color
-                         // channel of this pass (0: one gray pass; 1, 2, 3: red, green, blue)
+    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records; w: bits
+                         // 0-7 the color channel of this pass (0: one gray pass; 1, 2, 3: red, green, blue),
+                         // bit 8 differential footprints
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
 };
 
