@@ -28,6 +28,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("wave.comp", "single", &[("BVH_LAYOUT_SINGLE", "1")]),
     ("wave.comp", "threaded", &[("BVH_LAYOUT_THREADED", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
+    ("composite.comp", "exact", &[("EXACT_EYE", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),
 ];

@@ -130,7 +130,12 @@ impl Renderer {
         sync: &SubmitSync,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
         let start = Instant::now();
-        self.ensure_targets(camera.width, camera.height)?;
+        // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
+        let aa = match aov {
+            Some(Aov::Caustics) | Some(Aov::Direct) => 1,
+            _ => self.settings.aa,
+        };
+        self.ensure_targets(camera.width, camera.height, aa)?;
         let views = Views::new(&self.scene, &self.settings, camera)?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the light, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
@@ -310,7 +315,7 @@ impl Ctx<'_> {
                 }
             }
             b.image(&t.receiver.geo, &[Access::ColorAttachment], &sampled);
-            b.image(&t.receiver.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled]);
+            b.image(&t.receiver.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled, Access::ComputeSampled]);
         });
     }
 
@@ -322,8 +327,9 @@ impl Ctx<'_> {
         let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
         self.barrier(cmd, |b| {
             b.image(&t.receiver.geo, &sampled, &sampled);
-            b.image(&t.receiver.shadow, &[Access::FragmentSampled], &[Access::FragmentSampled]);
-            b.image(&t.receiver.irradiance, &[Access::FragmentSampled], &[Access::FragmentSampled]);
+            let eye_read = [Access::FragmentSampled, Access::ComputeSampled];
+            b.image(&t.receiver.shadow, &eye_read, &eye_read);
+            b.image(&t.receiver.irradiance, &eye_read, &eye_read);
         });
     }
 
@@ -710,7 +716,11 @@ impl Ctx<'_> {
         });
         self.p.resolve.record(cmd, &t.ubo, &t.receiver.flux, &t.receiver.geo, &t.receiver.irradiance, self.nearest);
         self.barrier(cmd, |b| {
-            b.image(&t.receiver.irradiance, &[Access::ComputeWrite], &[Access::FragmentSampled]);
+            b.image(
+                &t.receiver.irradiance,
+                &[Access::ComputeWrite],
+                &[Access::FragmentSampled, Access::ComputeSampled],
+            );
         });
     }
 
@@ -731,7 +741,7 @@ impl Ctx<'_> {
             )
         };
         self.barrier(cmd, |b| {
-            b.image(img, &[Access::TransferDst], &[Access::FragmentSampled]);
+            b.image(img, &[Access::TransferDst], &[Access::FragmentSampled, Access::ComputeSampled]);
         });
     }
 
@@ -777,7 +787,7 @@ impl Ctx<'_> {
         );
     }
 
-    /// Step 6: deferred refraction and tone mapping.
+    /// Step 6: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
     fn composite(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;
@@ -799,8 +809,13 @@ impl Ctx<'_> {
                 back: &e.back,
                 beauty: &e.beauty,
                 hdr: &e.hdr,
+                shadow: &t.receiver.shadow,
+                irradiance: &t.receiver.irradiance,
+                recv: &t.receiver.geo,
+                bvh: &self.sb.bvh,
                 nearest: self.nearest,
                 linear: self.linear,
+                exact: self.s.transport == Transport::Exact,
             },
         );
         self.barrier(cmd, |b| {

@@ -83,9 +83,10 @@ pub struct FrameData {
     pub grid: [u32; 4],
     /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photon capacity (entries).
     pub traversal: [u32; 4],
-    /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold.
+    /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold;
+    /// w: the environment's sky radiance, W/(m²·sr) (0: off).
     pub params: [f32; 4],
-    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch.
+    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch; w: eye-ray depth cap.
     pub transport: [u32; 4],
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],

@@ -49,9 +49,12 @@ pub struct EyeTargets {
 }
 
 impl EyeTargets {
-    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+    /// The beauty images at `width`×`height`; the eye buffers they are composited from `aa` times larger per side
+    /// (the supersamples).
+    pub fn new(device: &Arc<Device>, width: u32, height: u32, aa: u32) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
-        let img = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
+        let img = |name: &str, format, usage| Image::new(device, name, format, ext(aa * width, aa * height), usage);
+        let out = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
         Ok(EyeTargets {
             radiance: img("eye radiance", HDR_FORMAT, color | U::TRANSFER_SRC)?,
@@ -62,8 +65,8 @@ impl EyeTargets {
             front_aux: img("eye refractor ior", AUX_FORMAT, color)?,
             back: img("eye refractor back", GEO_FORMAT, color)?,
             refr_depth: img("eye refractor depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
-            beauty: img("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
-            hdr: img("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+            beauty: out("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+            hdr: out("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
         })
     }
 }
@@ -93,6 +96,8 @@ pub struct Targets {
     pub readback: Buffer,
     pub width: u32,
     pub height: u32,
+    /// Eye-view supersampling factor per side (the eye buffers are `aa` times the output size).
+    pub aa: u32,
 }
 
 fn ext(w: u32, h: u32) -> vk::Extent2D {
@@ -100,7 +105,7 @@ fn ext(w: u32, h: u32) -> vk::Extent2D {
 }
 
 impl Targets {
-    pub fn new(device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<Self> {
+    pub fn new(device: &Arc<Device>, s: &Settings, width: u32, height: u32, aa: u32) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
         let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
         let r = ext(s.gbuffer_side(), s.gbuffer_side());
@@ -133,7 +138,7 @@ impl Targets {
             )?,
             irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
         };
-        let eye = EyeTargets::new(device, width, height)?;
+        let eye = EyeTargets::new(device, width, height, aa)?;
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
@@ -201,6 +206,7 @@ impl Targets {
             readback: Self::readback_buffer(device, s, width, height)?,
             width,
             height,
+            aa,
         })
     }
 
@@ -210,8 +216,9 @@ impl Targets {
     }
 
     /// A new output size: only the eye-sized targets and the readback buffer change.
-    pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<()> {
-        self.eye = EyeTargets::new(device, width, height)?;
+    pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32, aa: u32) -> VkResult<()> {
+        self.eye = EyeTargets::new(device, width, height, aa)?;
+        self.aa = aa;
         self.readback = Self::readback_buffer(device, s, width, height)?;
         self.width = width;
         self.height = height;

@@ -42,7 +42,7 @@ struct BvhInstance {
     vec4 lo;        // world bounds; w: root node bits (pair layout)
     vec4 hi;        // w: root node bits (single layout)
     vec4 material;  // x: IOR (dielectric) or albedo; y: 1 dielectric, 0 diffuse receiver
-    vec4 pad;       // x: root node bits (threaded layout)
+    vec4 pad;       // x: root node bits (threaded layout); yzw: a diffuse receiver's rgb albedo
 };
 // Two node layouts (src/bvh.rs): "pair" holds both children's boxes (loK.w: child node or first triangle, hiK.w:
 // triangle count, 0 for an inner child); "single" one box per node (lo.w: first child or triangle, hi.w: count).

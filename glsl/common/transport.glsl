@@ -5,73 +5,8 @@
 #ifndef TRANSPORT_GLSL
 #define TRANSPORT_GLSL
 #include "common/bvh.glsl"
+#include "common/interface.glsl"
 
-// Offset a hit point off its surface along the geometric normal `n` (pointing to the side the new ray leaves
-// on), by a few ulps of the point's coordinates (Waechter and Binder, "A Fast and Robust Method for Avoiding
-// Self-Intersection", Ray Tracing Gems, 2019): robust at any scale, unlike a fixed epsilon.
-vec3 offset_ray(vec3 p, vec3 n) {
-    const float origin = 1.0 / 32.0, float_scale = 1.0 / 65536.0, int_scale = 256.0;
-    ivec3 of = ivec3(int_scale * n);
-    vec3 pi = vec3(intBitsToFloat(floatBitsToInt(p.x) + (p.x < 0.0 ? -of.x : of.x)),
-                   intBitsToFloat(floatBitsToInt(p.y) + (p.y < 0.0 ? -of.y : of.y)),
-                   intBitsToFloat(floatBitsToInt(p.z) + (p.z < 0.0 ? -of.z : of.z)));
-    return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : pi.x,
-                abs(p.y) < origin ? p.y + float_scale * n.y : pi.y,
-                abs(p.z) < origin ? p.z + float_scale * n.z : pi.z);
-}
-
-// A dielectric interface, split deterministically (the CPU reference picks one branch by Russian roulette with
-// the same probabilities). The reflectance F comes from the interpolated normal where it faces the ray, else from
-// the geometric one; each branch's direction falls back to the geometric normal when the interpolated one would
-// send it to the wrong side of the surface. Total internal reflection reflects everything (F = 1).
-struct Split {
-    float F;        // reflected fraction; 1 - F is refracted
-    vec3 refl;      // reflected direction
-    vec3 refr;      // refracted direction (unused when F == 1)
-    vec3 p_refl;    // origins, offset to the side each branch leaves on
-    vec3 p_refr;
-    bool ok;        // false: no valid direction on either normal (a numerical dead end)
-};
-
-// A mirror (`mirror`) reflects everything (F = 1), with the same normal choices.
-Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) {
-    Split s;
-    bool entering = dot(d, ng) < 0.0;
-    float eta = entering ? 1.0 / ior : ior;
-    vec3 ng_f = entering ? ng : -ng;  // faces the incident side
-    vec3 ns_f = dot(ns, ng) > 0.0 ? (entering ? ns : -ns) : ng_f;
-    vec3 n = -dot(d, ns_f) > 0.0 ? ns_f : ng_f;
-    float cos_i = -dot(d, n);
-    s.ok = cos_i > 0.0;
-    s.F = 1.0;
-    s.refl = reflect(d, n);
-    if (dot(s.refl, ng_f) <= 0.0) s.refl = reflect(d, ng_f);
-    s.ok = s.ok && dot(s.refl, ng_f) > 0.0;
-    s.refr = vec3(0.0);
-    if (s.ok) {
-        float n1 = entering ? 1.0 : ior, n2 = entering ? ior : 1.0;
-        s.F = mirror ? 1.0 : fresnel_dielectric(cos_i, n1, n2);
-        vec3 t;
-        if (s.F < 1.0 && refract_dir(d, n, eta, t)) {
-            if (dot(t, ng_f) >= 0.0) {
-                // The interpolated normal bends the ray back out: refract about the geometric normal instead.
-                float c = -dot(d, ng_f);
-                if (!(c > 0.0 && refract_dir(d, ng_f, eta, t) && dot(t, ng_f) < 0.0)) s.F = 1.0;
-            }
-            s.refr = t;
-        } else {
-            s.F = 1.0;
-        }
-    }
-    s.p_refl = offset_ray(p, ng_f);
-    s.p_refr = offset_ray(p, -ng_f);
-    return s;
-}
-
-// Specular: a dielectric or a mirror (everything else is a diffuse receiver).
-bool inst_is_dielectric(uint inst) { return bvh_instances[inst].material.y > 0.5; }
-bool inst_is_mirror(uint inst) { return bvh_instances[inst].material.y > 1.5; }
-float inst_ior(uint inst) { return bvh_instances[inst].material.x; }
 
 // The photon ray of a cell: from the light through the cell's center.
 void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {

@@ -25,8 +25,9 @@ struct FrameData {
     uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error), bit 8 batching;
                          // z: first level checked for convergence; w: photon-buffer capacity (entries)
     vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's
-                         // flux threshold (relative to the photon's flux); w: unused
-    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records; w: unused
+                         // flux threshold (relative to the photon's flux); w: sky radiance (W/m^2/sr; 0: off)
+    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records;
+                         // w: eye-ray depth cap (interfaces)
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
 };
 
