@@ -51,7 +51,7 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 #ifdef EXACT_EYE
 // A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance
 // in its direction instead (so that nothing turns black where the tree is cut).
-const float EYE_THRESHOLD = 0.03;
+const float EYE_THRESHOLD = 0.05;
 const int EYE_STACK = 8;
 
 // Radiance along the eye ray ro + t rd (which reaches glass first), through every interface.
