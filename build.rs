@@ -29,6 +29,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("wave.comp", "threaded", &[("BVH_LAYOUT_THREADED", "1")]),
     ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
+    ("composite.comp", "exact", &[("EXACT_EYE", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),
 ];

@@ -1,9 +1,13 @@
 #version 460
-// Eye-view composite: deferred refraction of the refractors (Wyman & Nichols sec. 3.1) over the receivers, then
-// tone mapping into the 8-bit beauty image. Per pixel on glass: Fresnel reflection of the environment, and the
-// refracted ray through the front surface, to the back surface (bracketed search in the eye back buffer), out
-// again (total internal reflection handled), to whatever lies behind in the eye-view receiver buffer (bracketed
-// secant search), or the environment where it misses.
+// Eye-view composite (docs/design.md "Eye view"): the glass over the receivers, supersampled, then tone mapped.
+// Each output pixel averages AA x AA samples of the eye buffers (rendered AA times larger per side, AA =
+// camera extent / beauty width): the linear radiance into the HDR image, and the tone-mapped values (before the
+// sRGB encoding) into the beauty image.
+// On glass, with EXACT_EYE (`--transport exact`): the eye ray is traced through the scene BVH, splitting at every
+// dielectric interface into its reflected and refracted branches (Fresnel, total internal reflection, mirrors,
+// Beer–Lambert absorption inside the glass) down to the depth cap; a branch ends on a diffuse receiver (shaded
+// with its direct light, caustic irradiance and the environment's light) or in the environment. Without it: the
+// papers' deferred refraction through two surfaces (Wyman & Nichols sec. 3.1), in the eye g-buffers.
 #include "common/types.glsl"
 #include "common/view.glsl"
 #include "common/optics.glsl"
@@ -17,18 +21,99 @@ layout(set = 0, binding = 4) uniform sampler2D t_back;          // refractor bac
 layout(set = 0, binding = 5) uniform sampler2D t_radiance_lin;  // the radiance buffer, linear filtering
 layout(set = 0, binding = 6, rgba8) uniform writeonly image2D o_beauty;
 layout(set = 0, binding = 7, rgba32f) uniform writeonly image2D o_hdr;  // linear radiance, before exposure
+layout(set = 0, binding = 8) uniform sampler2D t_shadow;        // light depth of all objects
+layout(set = 0, binding = 9) uniform sampler2D t_irradiance;    // caustic irradiance, W/m^2 (linear filtering)
+layout(set = 0, binding = 10) uniform sampler2D t_recv;         // receivers from the light: normal, distance
+
+#include "common/receiver.glsl"
+
+#ifdef EXACT_EYE
+struct BvhInstance {
+    vec4 object_from_world[3];
+    vec4 world_from_object[3];
+    vec4 lo;
+    vec4 hi;
+    vec4 material;  // x: IOR or albedo; y: 1 dielectric, 2 mirror, 0 diffuse; z: absorption (1/m)
+    vec4 pad;       // yzw: a diffuse receiver's rgb albedo
+    vec4 ior_rgb;   // per color channel (photon passes only: the eye view traces the gray IOR)
+    vec4 sigma_rgb;
+};
+struct BvhNode { vec4 lo0; vec4 hi0; vec4 lo1; vec4 hi1; };
+layout(std430, set = 0, binding = 11) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = 12) readonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = 13) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
+layout(std430, set = 0, binding = 14) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+uint bvh_instance_count() { return uint(bvh_instances.length()); }
+#include "common/bvh.glsl"
+#define GRAY_MATERIALS
+#include "common/interface.glsl"
+#endif
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
-// A dim sky over a darker ground, in units of the scene's reference radiance.
-vec3 environment(vec3 d) {
-    float ref = 1.0 / u_frame.scene_max.w;
-    float up = clamp(d.y, -1.0, 1.0);
-    vec3 sky = mix(vec3(0.30, 0.33, 0.38), vec3(0.16, 0.22, 0.34), max(up, 0.0));
-    vec3 ground = vec3(0.08, 0.075, 0.07);
-    return ref * mix(ground, sky, smoothstep(-0.05, 0.05, up));
-}
+#ifdef EXACT_EYE
+// A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance
+// in its direction instead (so that nothing turns black where the tree is cut).
+const float EYE_THRESHOLD = 0.05;
+const int EYE_STACK = 8;
 
+// Radiance along the eye ray ro + t rd (which reaches glass first), through every interface.
+vec3 trace_glass(vec3 ro, vec3 rd) {
+    uint cap = uint(u_frame.eye.y);
+    vec3 so[EYE_STACK], sd[EYE_STACK], sw[EYE_STACK];
+    uint sn[EYE_STACK];
+    int sp = 0;
+    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u;
+    sp = 1;
+    vec3 L = vec3(0.0);
+    while (sp > 0) {
+        sp--;
+        vec3 o = so[sp], d = sd[sp], w = sw[sp];
+        uint depth = sn[sp];
+        SceneHit hit;
+        if (!bvh_closest(o, d, 1.0 / 0.0, hit)) {
+            L += w * environment(d);
+            continue;
+        }
+        vec3 p = bvh_hit_point(hit);
+        vec3 ng, ns;
+        bvh_normals(hit, ng, ns);
+        BvhInstance I = bvh_instances[hit.inst];
+        if (!inst_is_dielectric(hit.inst)) {
+            vec3 albedo = I.pad.yzw;
+            vec3 n_eye = dot(ns, d) > 0.0 ? -ns : ns;
+            vec3 e = direct_irradiance(p, ns) + caustic_irradiance(p, vec2(0.0), vec2(0.0))
+                + environment_irradiance(n_eye);
+            L += w * albedo / RECV_PI * e;
+            continue;
+        }
+        // The segment that reached an exit from the inside ran through the glass: Beer–Lambert.
+        if (dot(d, ng) > 0.0 && I.material.z > 0.0) w *= exp(-I.material.z * hit.t);
+        if (depth >= cap) {
+            L += w * environment(d);
+            continue;
+        }
+        Split s = split_interface(d, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
+        if (!s.ok) continue;
+        vec3 wr = w * s.F, wt = w * (1.0 - s.F);
+        if (s.F < 1.0) {
+            if (max(wt.r, max(wt.g, wt.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
+                so[sp] = s.p_refr; sd[sp] = normalize(s.refr); sw[sp] = wt; sn[sp] = depth + 1u;
+                sp++;
+            } else {
+                L += wt * environment(normalize(s.refr));
+            }
+        }
+        if (max(wr.r, max(wr.g, wr.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
+            so[sp] = s.p_refl; sd[sp] = normalize(s.refl); sw[sp] = wr; sn[sp] = depth + 1u;
+            sp++;
+        } else {
+            L += wr * environment(normalize(s.refl));
+        }
+    }
+    return L;
+}
+#else
 vec3 behind(View cam, vec3 o, vec3 dir) {
     vec3 lo = u_frame.scene_min.xyz, hi = u_frame.scene_max.xyz;
     vec3 pad = 1e-2 * max(hi - lo, vec3(1.0));
@@ -63,31 +148,48 @@ vec3 shade_glass(View cam, vec3 ro, vec3 rd, vec4 front, float ior) {
     }
     return F1 * reflected + (1.0 - F1) * transmitted;
 }
+#endif
 
-vec3 tonemap(vec3 x) {
-    // Narkowicz's ACES fit, then the sRGB transfer function.
-    vec3 y = clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+// Narkowicz's ACES fit (display-linear, in [0, 1]).
+vec3 aces(vec3 x) { return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0); }
+
+vec3 srgb_encode(vec3 y) {
     return mix(12.92 * y, 1.055 * pow(y, vec3(1.0 / 2.4)) - 0.055, greaterThan(y, vec3(0.0031308)));
+}
+
+// Radiance of one eye sample: buffer texel q, at uv on the image plane.
+vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
+    vec3 ro, rd;
+    view_ray(cam, uv, ro, rd);
+    vec4 rad = texelFetch(t_radiance, q, 0);
+    vec4 front = texelFetch(t_front, q, 0);
+    if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
+#ifdef EXACT_EYE
+        return trace_glass(ro, rd);
+#else
+        return shade_glass(cam, ro, rd, front, texelFetch(t_front_aux, q, 0).x);
+#endif
+    }
+    if (rad.w > 0.0) return rad.rgb;
+    return environment(rd);
 }
 
 void main() {
     View cam = u_frame.camera;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = ivec2(cam.extent.xy);
-    if (p.x >= size.x || p.y >= size.y) return;
-    vec2 uv = (vec2(p) + 0.5) * cam.extent.zw;
-    vec3 ro, rd;
-    view_ray(cam, uv, ro, rd);
-    vec4 rad = texelFetch(t_radiance, p, 0);
-    vec4 front = texelFetch(t_front, p, 0);
-    vec3 L;
-    if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
-        L = shade_glass(cam, ro, rd, front, texelFetch(t_front_aux, p, 0).x);
-    } else if (rad.w > 0.0) {
-        L = rad.rgb;
-    } else {
-        L = environment(rd);
+    ivec2 out_size = imageSize(o_beauty);
+    if (p.x >= out_size.x || p.y >= out_size.y) return;
+    int aa = max(int(cam.extent.x) / out_size.x, 1);
+    vec3 sum = vec3(0.0), mapped = vec3(0.0);
+    for (int j = 0; j < aa; j++) {
+        for (int i = 0; i < aa; i++) {
+            ivec2 q = p * aa + ivec2(i, j);
+            vec3 L = shade_sample(cam, q, (vec2(q) + 0.5) * cam.extent.zw);
+            sum += L;
+            mapped += aces(L * u_frame.scene_max.w);
+        }
     }
-    imageStore(o_beauty, p, vec4(tonemap(L * u_frame.scene_max.w), 1.0));
-    imageStore(o_hdr, p, vec4(L, 1.0));
+    float k = 1.0 / float(aa * aa);
+    imageStore(o_beauty, p, vec4(srgb_encode(mapped * k), 1.0));
+    imageStore(o_hdr, p, vec4(sum * k, 1.0));
 }

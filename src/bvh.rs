@@ -67,7 +67,8 @@ pub struct GpuInstance {
     /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
     /// coefficient inside a dielectric (1/m); w: unused.
     pub material: [f32; 4],
-    /// x: root node index bits in the threaded layout; y, z, w: unused.
+    /// x: root node index bits in the threaded layout; y, z, w: a diffuse receiver's rgb albedo (the eye-view
+    /// ray tracer shades with it).
     pub pad: [f32; 4],
     /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); w unused.
     pub ior_rgb: [f32; 4],
@@ -161,13 +162,17 @@ impl SceneBvh {
                 Material::Mirror => [0.0, 2.0, 0.0, 0.0],
                 Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
             };
+            let albedo = match obj.material {
+                Material::Diffuse { albedo } => albedo,
+                _ => Vec3::ZERO,
+            };
             bvh.instances.push(GpuInstance {
                 object_from_world: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
                 world_from_object: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
                 lo: [lo.x, lo.y, lo.z, f32::from_bits(pair_root)],
                 hi: [hi.x, hi.y, hi.z, f32::from_bits(single_root)],
                 material,
-                pad: [f32::from_bits(threaded_root), 0.0, 0.0, 0.0],
+                pad: [f32::from_bits(threaded_root), albedo.x, albedo.y, albedo.z],
                 ior_rgb,
                 sigma_rgb,
             });

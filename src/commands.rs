@@ -52,6 +52,18 @@ pub struct MethodArgs {
     /// Beauty exposure in stops (EV), added to the automatic exposure before the ACES tone map.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
+    /// Beauty anti-aliasing: N×N supersamples per pixel (1..=4; the caustics and direct AOVs are always point
+    /// samples at the pixel centers).
+    #[arg(long, default_value_t = Settings::default().aa, allow_negative_numbers = true)]
+    pub aa: u32,
+    /// Sky radiance of the environment in W/(m²·sr) (0: off) [default: 25% of the reference radiance]. It
+    /// lights the receivers and is seen through and in the glass; the caustics and direct AOVs never include it.
+    #[arg(long, allow_negative_numbers = true)]
+    pub sky: Option<f32>,
+    /// Exact transport: interfaces an eye ray is followed through (reflection and refraction) before it takes
+    /// the environment's radiance.
+    #[arg(long, default_value_t = Settings::default().eye_depth, allow_negative_numbers = true)]
+    pub eye_depth: u32,
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
@@ -123,6 +135,9 @@ impl MethodArgs {
         let s = Settings {
             transport: self.transport,
             exposure_ev: self.exposure,
+            aa: self.aa,
+            sky: self.sky,
+            eye_depth: self.eye_depth,
             splat: self.splat,
             footprint: self.footprint,
             flux_threshold: self.flux_threshold,

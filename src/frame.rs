@@ -139,7 +139,12 @@ impl Renderer {
         sync: &SubmitSync,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
         let start = Instant::now();
-        self.ensure_targets(camera.width, camera.height)?;
+        // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
+        let aa = match aov {
+            Some(Aov::Caustics) | Some(Aov::Direct) => 1,
+            _ => self.settings.aa,
+        };
+        self.ensure_targets(camera.width, camera.height, aa)?;
         let nl = self.scene.lights.len();
         // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
         let nc = self.scene.color_channels();
@@ -394,7 +399,8 @@ impl Ctx<'_> {
             }
             if receivers {
                 b.image(&self.r.geo, &[Access::ColorAttachment], &sampled);
-                b.image(&self.r.shadow, &[Access::DepthAttachment], &[Access::FragmentSampled]);
+                let eye_read = [Access::FragmentSampled, Access::ComputeSampled];
+                b.image(&self.r.shadow, &[Access::DepthAttachment], &eye_read);
             }
         });
     }
@@ -407,8 +413,9 @@ impl Ctx<'_> {
         let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
         self.barrier(cmd, |b| {
             b.image(&self.r.geo, &sampled, &sampled);
-            b.image(&self.r.shadow, &[Access::FragmentSampled], &[Access::FragmentSampled]);
-            b.image(&self.r.irradiance, &[Access::FragmentSampled], &[Access::FragmentSampled]);
+            let eye_read = [Access::FragmentSampled, Access::ComputeSampled];
+            b.image(&self.r.shadow, &eye_read, &eye_read);
+            b.image(&self.r.irradiance, &eye_read, &eye_read);
         });
     }
 
@@ -783,13 +790,14 @@ impl Ctx<'_> {
         let cmd = rec.cmd;
         rec.ts.mark(cmd, "resolve");
         // A light's later color passes write their channel and keep the earlier ones.
-        let from = if self.channel == 0 { Access::FrameStart } else { Access::FragmentSampled };
+        let earlier = [Access::FragmentSampled, Access::ComputeSampled];
+        let from: &[Access] = if self.channel == 0 { &[Access::FrameStart] } else { &earlier };
         self.barrier(cmd, |b| {
-            b.image(&self.r.irradiance, &[from], &[Access::ComputeWrite]);
+            b.image(&self.r.irradiance, from, &[Access::ComputeWrite]);
         });
         self.p.resolve.record(cmd, self.ubo, &self.r.flux, &self.r.geo, &self.r.irradiance, self.nearest);
         self.barrier(cmd, |b| {
-            b.image(&self.r.irradiance, &[Access::ComputeWrite], &[Access::FragmentSampled]);
+            b.image(&self.r.irradiance, &[Access::ComputeWrite], &[Access::FragmentSampled, Access::ComputeSampled]);
         });
     }
 
@@ -810,7 +818,7 @@ impl Ctx<'_> {
             )
         };
         self.barrier(cmd, |b| {
-            b.image(img, &[Access::TransferDst], &[Access::FragmentSampled]);
+            b.image(img, &[Access::TransferDst], &[Access::FragmentSampled, Access::ComputeSampled]);
         });
     }
 
@@ -869,7 +877,7 @@ impl Ctx<'_> {
         );
     }
 
-    /// Step 6: deferred refraction and tone mapping.
+    /// Step 6: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
     fn composite(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;
@@ -891,8 +899,13 @@ impl Ctx<'_> {
                 back: &e.back,
                 beauty: &e.beauty,
                 hdr: &e.hdr,
+                shadow: &self.r.shadow,
+                irradiance: &self.r.irradiance,
+                recv: &self.r.geo,
+                bvh: &self.sb.bvh,
                 nearest: self.nearest,
                 linear: self.linear,
+                exact: self.s.transport == Transport::Exact,
             },
         );
         self.barrier(cmd, |b| {

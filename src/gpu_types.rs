@@ -92,6 +92,8 @@ pub struct FrameData {
     pub transport: [u32; 4],
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
+    /// x: the environment's sky radiance, W/(m²·sr) (0: off); y: eye-ray depth cap (interfaces).
+    pub eye: [f32; 4],
 }
 
 /// `LevelCounters` in types.glsl.
@@ -240,7 +242,8 @@ pub struct Vertex {
 
 const _: () = {
     assert!(size_of::<GpuView>() == 160);
-    assert!(size_of::<FrameData>() == 640);
+    assert!(size_of::<FrameData>() == 656);
+    assert!(offset_of!(FrameData, eye) == 640);
     assert!(size_of::<TransportState>() == 48 + 160);
     assert!(offset_of!(TransportState, batch_account) == 48);
     assert!(offset_of!(FrameData, light_power) == 480);

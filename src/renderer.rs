@@ -305,7 +305,7 @@ impl Renderer {
 
     /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
-    pub(crate) fn ensure_targets(&mut self, width: u32, height: u32) -> VkResult<()> {
+    pub(crate) fn ensure_targets(&mut self, width: u32, height: u32, aa: u32) -> VkResult<()> {
         let s = &self.settings;
         let lights = self.scene.lights.len();
         let passes = lights * self.scene.color_channels();
@@ -320,15 +320,15 @@ impl Renderer {
         );
         match self.targets.as_mut() {
             Some(t) if self.targets_key == Some(key) => {
-                if (t.width, t.height) != (width, height) {
+                if (t.width, t.height, t.aa) != (width, height, aa) {
                     self.device.wait_idle()?;
-                    t.resize(&self.device, s, width, height)?;
+                    t.resize(&self.device, s, width, height, aa)?;
                 }
             }
             _ => {
                 self.targets = None;
                 self.device.wait_idle()?;
-                self.targets = Some(Targets::new(&self.device, s, width, height, lights, passes)?);
+                self.targets = Some(Targets::new(&self.device, s, width, height, aa, lights, passes)?);
                 self.targets_key = Some(key);
             }
         }
@@ -369,10 +369,15 @@ impl Renderer {
             pyramid[m / 4][m % 4] = *off;
         }
         let photon_view = views.photon.unwrap_or(views.receiver);
+        let sky = s.sky.unwrap_or(crate::settings::SKY_AUTO * l_ref);
+        // The eye buffers hold `aa`×`aa` samples per output pixel: the same image plane, a finer grid.
+        let mut camera = GpuView::from_camera(&views.camera);
+        let aa = targets.aa as f32;
+        camera.extent = [camera.extent[0] * aa, camera.extent[1] * aa, camera.extent[2] / aa, camera.extent[3] / aa];
         FrameData {
             photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
             receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
-            camera: GpuView::from_camera(&views.camera),
+            camera,
             light_power: [power.x, power.y, power.z, light.intensity],
             scene_min: [lo.x, lo.y, lo.z, diameter],
             scene_max: [hi.x, hi.y, hi.z, 0.6 / l_ref * s.exposure_ev.exp2()],
@@ -391,6 +396,9 @@ impl Renderer {
                 channel | ((s.footprint == Footprint::Differential) as u32) << 8,
             ],
             pyramid,
+            // The environment's light is added once: by the first light's eye pass (and the composite, which reads
+            // the first pass's uniforms).
+            eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, 0.0, 0.0],
         }
     }
 

@@ -124,6 +124,13 @@ pub struct Settings {
     /// Beauty exposure in stops, on top of the automatic one (the brightest receiver's direct radiance at the
     /// light's target maps to 0.6 before the tone map).
     pub exposure_ev: f32,
+    /// Eye-view supersampling: AA x AA samples per pixel of the beauty image (1: one at the pixel center).
+    pub aa: u32,
+    /// The environment's sky radiance, W/(m²·sr) (docs/design.md "Environment"); None: automatic (SKY_AUTO of
+    /// the reference radiance); 0: off.
+    pub sky: Option<f32>,
+    /// Exact transport: interfaces an eye ray is followed through before it takes the environment's radiance.
+    pub eye_depth: u32,
     /// How splat records reach the caustic flux map.
     pub splat: Splat,
     /// Where the splat radius comes from (exact transport; the two-interface trace always uses the cell's).
@@ -168,6 +175,9 @@ impl Default for Settings {
         Settings {
             transport: Transport::Exact,
             exposure_ev: 0.0,
+            aa: 2,
+            sky: None,
+            eye_depth: 8,
             splat: Splat::Auto,
             footprint: Footprint::Cell,
             flux_threshold: 1e-3,
@@ -200,6 +210,16 @@ pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
 
 /// Default `--target-error` of the flux-error metric.
 pub const DEFAULT_TARGET_ERROR: f32 = 0.01;
+
+/// Largest eye-view supersampling factor (per side).
+pub const MAX_AA: u32 = 4;
+
+/// Deepest eye-ray tree (interfaces).
+pub const MAX_EYE_DEPTH: u32 = 32;
+
+/// The automatic sky radiance, as a fraction of the reference radiance (the diffuse radiance of the brightest
+/// albedo under the light at its target): the sky lights a white floor to this fraction of the lit floor.
+pub const SKY_AUTO: f32 = 0.25;
 
 pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
 
@@ -236,6 +256,17 @@ impl Settings {
         }
         if !(self.exposure_ev.is_finite() && self.exposure_ev.abs() <= 32.0) {
             return bad(format!("--exposure {}: must lie in [-32, 32] stops", self.exposure_ev));
+        }
+        if !(1..=MAX_AA).contains(&self.aa) {
+            return bad(format!("--aa {}: must lie in 1..={MAX_AA}", self.aa));
+        }
+        if let Some(sky) = self.sky {
+            if !(sky.is_finite() && sky >= 0.0) {
+                return bad(format!("--sky {sky}: must be a radiance >= 0 W/(m²·sr)"));
+            }
+        }
+        if !(1..=MAX_EYE_DEPTH).contains(&self.eye_depth) {
+            return bad(format!("--eye-depth {}: must lie in 1..={MAX_EYE_DEPTH}", self.eye_depth));
         }
         if !(self.flux_threshold.is_finite() && (0.0..1.0).contains(&self.flux_threshold)) {
             return bad(format!("--flux-threshold {}: must lie in [0, 1)", self.flux_threshold));

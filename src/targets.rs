@@ -53,9 +53,12 @@ pub struct EyeTargets {
 }
 
 impl EyeTargets {
-    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+    /// The beauty images at `width`×`height`; the eye buffers they are composited from `aa` times larger per side
+    /// (the supersamples).
+    pub fn new(device: &Arc<Device>, width: u32, height: u32, aa: u32) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
-        let img = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
+        let img = |name: &str, format, usage| Image::new(device, name, format, ext(aa * width, aa * height), usage);
+        let out = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
         Ok(EyeTargets {
             radiance: img("eye radiance", HDR_FORMAT, color | U::TRANSFER_SRC)?,
@@ -66,8 +69,8 @@ impl EyeTargets {
             front_aux: img("eye refractor ior", AUX_FORMAT, color)?,
             back: img("eye refractor back", GEO_FORMAT, color)?,
             refr_depth: img("eye refractor depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
-            beauty: img("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
-            hdr: img("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+            beauty: out("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+            hdr: out("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
         })
     }
 }
@@ -99,6 +102,8 @@ pub struct Targets {
     pub readback: Buffer,
     pub width: u32,
     pub height: u32,
+    /// Eye-view supersampling factor per side (the eye buffers are `aa` times the output size).
+    pub aa: u32,
 }
 
 fn ext(w: u32, h: u32) -> vk::Extent2D {
@@ -106,13 +111,14 @@ fn ext(w: u32, h: u32) -> vk::Extent2D {
 }
 
 impl Targets {
-    /// `lights`: how many lights get their own receiver maps (1..=MAX_LIGHTS); `passes`: uniforms, one per light
-    /// and color channel.
+    /// `aa`: eye-view supersampling per side; `lights`: how many lights get their own receiver maps
+    /// (1..=MAX_LIGHTS); `passes`: uniforms, one per light and color channel.
     pub fn new(
         device: &Arc<Device>,
         s: &Settings,
         width: u32,
         height: u32,
+        aa: u32,
         lights: usize,
         passes: usize,
     ) -> VkResult<Self> {
@@ -151,7 +157,7 @@ impl Targets {
             })
         };
         let receivers = (0..lights.max(1)).map(|_| receiver()).collect::<VkResult<Vec<_>>>()?;
-        let eye = EyeTargets::new(device, width, height)?;
+        let eye = EyeTargets::new(device, width, height, aa)?;
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
@@ -235,6 +241,7 @@ impl Targets {
             readback: Self::readback_buffer(device, s, width, height)?,
             width,
             height,
+            aa,
         })
     }
 
@@ -244,8 +251,9 @@ impl Targets {
     }
 
     /// A new output size: only the eye-sized targets and the readback buffer change.
-    pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<()> {
-        self.eye = EyeTargets::new(device, width, height)?;
+    pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32, aa: u32) -> VkResult<()> {
+        self.eye = EyeTargets::new(device, width, height, aa)?;
+        self.aa = aa;
         self.readback = Self::readback_buffer(device, s, width, height)?;
         self.width = width;
         self.height = height;

@@ -3,13 +3,15 @@
 mod common;
 use common::*;
 
-/// On a diffuse receiver the linear beauty is the reflected radiance (albedo/π)·(E_direct + E_caustics), in
-/// W/(m²·sr): checked on the floor pixels the top camera sees directly (outside the sphere's 0.3 m disk, with a
-/// margin). Measured: agreement to float precision.
+/// On a diffuse receiver the linear beauty is the reflected radiance (albedo/π)·(E_direct + E_caustics + E_env),
+/// in W/(m²·sr), with E_env = π·L_sky·0.85 in the red channel on the upward floor under `--sky L_sky`
+/// (docs/design.md "Environment"): checked on the floor pixels the top camera sees directly (outside the sphere's
+/// 0.3 m disk, with a margin), one sample a pixel as the AOVs. Measured: agreement to float precision.
 #[test]
 fn linear_beauty_is_reflected_radiance() {
     let dir = out_dir("beauty_linear");
-    let base = ["--camera", "top", "--size", "128x128", "--level", "2", "--transport", "two-interface"];
+    let base = ["--camera", "top", "--size", "128x128", "--level", "2", "--transport", "two-interface", "--aa", "1"];
+    let sky = 0.02;
     fn with<'a>(base: &[&'a str], aov: &'a str) -> Vec<&'a str> {
         let mut a = base.to_vec();
         a.extend(["--aov", aov]);
@@ -30,6 +32,10 @@ fn linear_beauty_is_reflected_radiance() {
         "2",
         "--transport",
         "two-interface",
+        "--aa",
+        "1",
+        "--sky",
+        "0.02",
     ]);
     let (_, direct) = render(&dir, "direct", SPHERE, &with(&base, "direct"));
     let (_, caustics) = render(&dir, "caustics", SPHERE, &with(&base, "caustics"));
@@ -45,7 +51,7 @@ fn linear_beauty_is_reflected_radiance() {
                 continue;
             }
             let i = y * w + x;
-            let want = 0.8 / std::f64::consts::PI * (ed[i] + ec[i]);
+            let want = 0.8 / std::f64::consts::PI * (ed[i] + ec[i]) + 0.8 * 0.85 * sky;
             assert!(l[i].is_finite() && l[i] >= 0.0);
             assert!((l[i] - want).abs() <= 1e-4 * want.max(1e-3), "pixel ({x}, {y}): L {} vs {want}", l[i]);
             n += 1;

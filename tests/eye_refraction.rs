@@ -154,3 +154,156 @@ fn floor_seen_through_the_ball_is_inverted_and_magnified() {
     // And about as large: the area ratio of the dark region to the exact one within 40%.
     assert!((on / en - 1.0).abs() < 0.4, "image area {on} px vs expected {en} px");
 }
+
+/// Two glass balls in line (R = 0.12 m, n = 1.5, centers 0.7 m and 0.4 m above the floor), seen from straight
+/// above: every view ray crosses four interfaces before it reaches the floor, which the two-surface deferred
+/// refraction cannot follow. Exact transport traces the eye rays through the scene BVH; the marker's image must
+/// lie where an exact trace through two exact spheres (here, in f64) puts it, within one pixel.
+const TWO_BALLS: &str = r#"
+[[light]]
+kind = "spot"
+position = [3.0, 2.0, 0.0]
+target = [0.0, 0.0, 0.0]
+cone_deg = 30.0
+intensity = 10.0
+
+[[camera]]
+name = "top"
+kind = "orthographic"
+position = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+half_height = 0.15
+
+[[object]]
+name = "floor"
+shape = "plane"
+size = [4.0, 4.0]
+material = { kind = "diffuse", albedo = 0.8 }
+
+[[object]]
+name = "marker"
+shape = "cube"
+size = [0.012, 0.002, 0.012]
+translate = [0.02, 0.001, 0.01]
+material = { kind = "diffuse", albedo = 0.0 }
+
+[[object]]
+name = "upper"
+shape = "sphere"
+radius = 0.12
+subdivisions = 6
+translate = [0.0, 0.7, 0.0]
+material = { kind = "dielectric", ior = 1.5 }
+
+[[object]]
+name = "lower"
+shape = "sphere"
+radius = 0.12
+subdivisions = 6
+translate = [0.0, 0.4, 0.0]
+material = { kind = "dielectric", ior = 1.5 }
+"#;
+
+/// Intersect the ray with a sphere: the entry (outside) or exit (inside) distance.
+fn sphere_t(o: V, d: V, c: V, r: f64, inside: bool) -> Option<f64> {
+    let oc = add(o, c, -1.0);
+    let b = dot(oc, d);
+    let disc = b * b - (dot(oc, oc) - r * r);
+    if disc <= 0.0 {
+        return None;
+    }
+    let t = if inside { -b + disc.sqrt() } else { -b - disc.sqrt() };
+    (t > 1e-9).then_some(t)
+}
+
+/// Where the vertical view ray at (x, z) lands on the floor after both balls (refracted at all four interfaces).
+fn through_two_balls(x: f64, z: f64) -> Option<(f64, f64)> {
+    let (mut o, mut d) = ([x, 3.0, z], [0.0, -1.0, 0.0]);
+    for c in [[0.0, 0.7, 0.0], [0.0, 0.4, 0.0]] {
+        let r = 0.12;
+        let p = add(o, d, sphere_t(o, d, c, r, false)?);
+        d = refract(d, norm(add(p, c, -1.0)), 1.0 / 1.5)?;
+        let q = add(p, d, sphere_t(p, d, c, r, true)?);
+        let n = norm(add(q, c, -1.0));
+        d = refract(d, [-n[0], -n[1], -n[2]], 1.5)?;
+        o = q;
+    }
+    if d[1] >= 0.0 {
+        return None;
+    }
+    let s = -o[1] / d[1];
+    Some((o[0] + s * d[0], o[2] + s * d[2]))
+}
+
+#[test]
+fn marker_through_two_balls_is_where_the_exact_trace_puts_it() {
+    let dir = out_dir("eye_refraction_two_balls");
+    let scene = dir.join("two_balls.toml");
+    std::fs::write(&scene, TWO_BALLS).unwrap();
+    let size = 256usize;
+    let (_, out) = render(
+        &dir,
+        "beauty",
+        scene.to_str().unwrap(),
+        &["--camera", "top", "--size", "256x256", "--level", "2", "--transport", "exact"],
+    );
+    let (w, _, rgba) = caustics::image_io::read_png(&out).unwrap();
+    assert_eq!(w as usize, size);
+    let m_per_px = 0.3 / size as f64;
+    let pos = |i: usize| (i as f64 + 0.5) * m_per_px - 0.15;
+    let lum = |i: usize, j: usize| {
+        let p = &rgba[4 * (j * size + i)..];
+        (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0
+    };
+    // The inner 70% of the balls' disk; the expected image samples each pixel 4x4 (the render's default
+    // supersampling is 2x2: the centroids compare).
+    let inner = 0.7 * 0.12;
+    let (mut ex, mut ez, mut en) = (0.0, 0.0, 0.0);
+    let mut inside = Vec::new();
+    for j in 0..size {
+        for i in 0..size {
+            if pos(i).hypot(pos(j)) > inner {
+                continue;
+            }
+            inside.push((i, j));
+            for (si, sj) in (0..16).map(|k| (k % 4, k / 4)) {
+                let x = pos(i) + (si as f64 - 1.5) / 4.0 * m_per_px;
+                let z = pos(j) + (sj as f64 - 1.5) / 4.0 * m_per_px;
+                if let Some((fx, fz)) = through_two_balls(x, z) {
+                    if (0.014..=0.026).contains(&fx) && (0.004..=0.016).contains(&fz) {
+                        ex += x;
+                        ez += z;
+                        en += 1.0 / 16.0;
+                    }
+                }
+            }
+        }
+    }
+    assert!(en > 30.0, "the marker must be visible through both balls ({en} px)");
+    let (ex, ez) = (ex / 16.0 / en, ez / 16.0 / en);
+    let mut l: Vec<f64> = inside.iter().map(|&(i, j)| lum(i, j)).collect();
+    l.sort_by(|a, b| a.total_cmp(b));
+    let median = l[l.len() / 2];
+    // Darkness-weighted centroid of the marker's image (partly covered pixels count in part).
+    let (mut ox, mut oz, mut on) = (0.0, 0.0, 0.0);
+    for &(i, j) in &inside {
+        let dark = ((median - lum(i, j)) / median).clamp(0.0, 1.0);
+        if dark > 0.5 {
+            ox += dark * pos(i);
+            oz += dark * pos(j);
+            on += dark;
+        }
+    }
+    assert!(on > 0.0, "no dark marker image inside the balls");
+    let (ox, oz) = (ox / on, oz / on);
+    let err_px = (ox - ex).hypot(oz - ez) / m_per_px;
+    eprintln!(
+        "marker image: expected ({ex:.4}, {ez:.4}) m over {en:.1} px, observed ({ox:.4}, {oz:.4}) m over {on:.1} \
+         px: {err_px:.2} px apart"
+    );
+    // Inverted by the pair (on the other side of the axis from the marker at (+0.02, +0.01)).
+    assert!(ox < 0.0 && oz < 0.0, "not inverted: ({ox}, {oz})");
+    assert!(err_px <= 1.0, "the marker's image is {err_px:.2} px from the exact trace's");
+    assert!((on / en - 1.0).abs() < 0.4, "image area {on:.1} px vs expected {en:.1} px");
+}

@@ -12,7 +12,8 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 /// Light settings for lavapipe: a 256²-photon grid (level 2), 512² light maps.
-const FAST: &[&str] = &["--level", "2", "--gbuffer-res", "512", "--caustic-res", "512"];
+// No sky (`--sky 0`): the sphere test's shadowed annulus must see no light at all (docs/design.md "Environment").
+const FAST: &[&str] = &["--level", "2", "--gbuffer-res", "512", "--caustic-res", "512", "--sky", "0"];
 
 /// An Xvfb server on a free display, killed on drop.
 struct Xvfb {

@@ -48,7 +48,7 @@ struct BvhInstance {
     vec4 lo;        // world bounds; w: root node bits (pair layout)
     vec4 hi;        // w: root node bits (single layout)
     vec4 material;  // x: IOR (dielectric) or albedo; y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
-    vec4 pad;       // x: root node bits (threaded layout)
+    vec4 pad;       // x: root node bits (threaded layout); yzw: a diffuse receiver's rgb albedo
     vec4 ior_rgb;   // dielectric: IOR of the red, green and blue channels (docs/design.md "Color")
     vec4 sigma_rgb; // dielectric: absorption coefficient per channel (1/m)
 };

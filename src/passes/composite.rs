@@ -1,6 +1,9 @@
-//! Deferred refraction of the refractors over the receivers, and tone mapping into the beauty image.
+//! The eye-view composite: the glass over the receivers (traced through the scene BVH under exact transport, the
+//! papers' two-surface deferred refraction otherwise), the supersamples averaged, and tone mapping into the
+//! beauty image.
 
 use super::groups_2d;
+use crate::scene_gpu::BvhBuffers;
 use crate::shaders;
 use crate::vk::{Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
@@ -8,7 +11,10 @@ use std::sync::Arc;
 
 pub struct CompositePass {
     device: Arc<Device>,
+    /// The two-interface deferred refraction.
     pipeline: Pipeline,
+    /// The eye-ray tracer through the BVH (`--transport exact`).
+    exact: Pipeline,
 }
 
 pub struct CompositeInputs<'a> {
@@ -19,25 +25,44 @@ pub struct CompositeInputs<'a> {
     pub back: &'a Image,
     pub beauty: &'a Image,
     pub hdr: &'a Image,
+    pub shadow: &'a Image,
+    pub irradiance: &'a Image,
+    pub recv: &'a Image,
+    pub bvh: &'a BvhBuffers,
     pub nearest: &'a Sampler,
     pub linear: &'a Sampler,
+    /// Trace the glass through the BVH.
+    pub exact: bool,
 }
 
 impl CompositePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         use BindKind::*;
-        let pipeline = Pipeline::compute(
-            device,
-            "composite",
-            shaders::COMPOSITE_COMP.words(),
-            &[Uniform, Sampled, Sampled, Sampled, Sampled, Sampled, StorageImage, StorageImage],
-            0,
-        )?;
-        Ok(CompositePass { device: device.clone(), pipeline })
+        let binds = [
+            Uniform,
+            Sampled,
+            Sampled,
+            Sampled,
+            Sampled,
+            Sampled,
+            StorageImage,
+            StorageImage,
+            Sampled,
+            Sampled,
+            Sampled,
+            Storage,
+            Storage,
+            Storage,
+            Storage,
+        ];
+        let pipeline = Pipeline::compute(device, "composite", shaders::COMPOSITE_COMP.words(), &binds, 0)?;
+        let exact = Pipeline::compute(device, "composite exact", shaders::COMPOSITE_COMP_EXACT.words(), &binds, 0)?;
+        Ok(CompositePass { device: device.clone(), pipeline, exact })
     }
 
     pub fn record(&self, cmd: vk::CommandBuffer, i: &CompositeInputs) {
-        self.pipeline.bind(
+        let pipeline = if i.exact { &self.exact } else { &self.pipeline };
+        pipeline.bind(
             cmd,
             &[
                 Bind::Uniform(i.ubo),
@@ -48,6 +73,13 @@ impl CompositePass {
                 Bind::Sampled(i.radiance, i.linear),
                 Bind::StorageImage(i.beauty),
                 Bind::StorageImage(i.hdr),
+                Bind::Sampled(i.shadow, i.nearest),
+                Bind::Sampled(i.irradiance, i.linear),
+                Bind::Sampled(i.recv, i.nearest),
+                Bind::Storage(&i.bvh.pair_nodes),
+                Bind::Storage(&i.bvh.triangles),
+                Bind::Storage(&i.bvh.normals),
+                Bind::Storage(&i.bvh.instances),
             ],
         );
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);

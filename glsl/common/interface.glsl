@@ -1,0 +1,110 @@
+// A specular interface hit by a ray through the scene BVH: the ray-origin offset, the deterministic Fresnel split
+// of a dielectric (or a mirror's reflection), and the instances' materials. Shared by the exact photon transport
+// (glsl/common/transport.glsl) and the eye-view ray tracer (glsl/composite.comp). Needs optics.glsl and bvh.glsl
+// (and the BVH bindings).
+#ifndef INTERFACE_GLSL
+#define INTERFACE_GLSL
+#include "common/optics.glsl"
+#include "common/bvh.glsl"
+
+// Offset a hit point off its surface along the geometric normal `n` (pointing to the side the new ray leaves
+// on), by a few ulps of the point's coordinates (Waechter and Binder, "A Fast and Robust Method for Avoiding
+// Self-Intersection", Ray Tracing Gems, 2019): robust at any scale, unlike a fixed epsilon.
+vec3 offset_ray(vec3 p, vec3 n) {
+    const float origin = 1.0 / 32.0, float_scale = 1.0 / 65536.0, int_scale = 256.0;
+    ivec3 of = ivec3(int_scale * n);
+    vec3 pi = vec3(intBitsToFloat(floatBitsToInt(p.x) + (p.x < 0.0 ? -of.x : of.x)),
+                   intBitsToFloat(floatBitsToInt(p.y) + (p.y < 0.0 ? -of.y : of.y)),
+                   intBitsToFloat(floatBitsToInt(p.z) + (p.z < 0.0 ? -of.z : of.z)));
+    return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : pi.x,
+                abs(p.y) < origin ? p.y + float_scale * n.y : pi.y,
+                abs(p.z) < origin ? p.z + float_scale * n.z : pi.z);
+}
+
+// A dielectric interface, split deterministically (the CPU reference picks one branch by Russian roulette with
+// the same probabilities). The reflectance F comes from the interpolated normal where it faces the ray, else from
+// the geometric one; each branch's direction falls back to the geometric normal when the interpolated one would
+// send it to the wrong side of the surface. Total internal reflection reflects everything (F = 1).
+struct Split {
+    float F;        // reflected fraction; 1 - F is refracted
+    vec3 refl;      // reflected direction
+    vec3 refr;      // refracted direction (unused when F == 1)
+    vec3 p_refl;    // origins, offset to the side each branch leaves on
+    vec3 p_refr;
+    bool ok;        // false: no valid direction on either normal (a numerical dead end)
+    // For ray differentials: the normal each branch used (facing the incident side), and the multiple of the
+    // interpolated normal it is (+-1), or 0 when it is the geometric one (which does not vary across the triangle).
+    vec3 n_refl, n_refr;
+    float k_refl, k_refr;
+    float eta;      // n_incident / n_transmitted
+};
+
+// A mirror (`mirror`) reflects everything (F = 1), with the same normal choices.
+Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) {
+    Split s;
+    bool entering = dot(d, ng) < 0.0;
+    float eta = entering ? 1.0 / ior : ior;
+    vec3 ng_f = entering ? ng : -ng;  // faces the incident side
+    vec3 ns_f = dot(ns, ng) > 0.0 ? (entering ? ns : -ns) : ng_f;
+    bool use_ns = dot(ns, ng) > 0.0 && -dot(d, ns_f) > 0.0;
+    vec3 n = use_ns ? ns_f : ng_f;
+    float k_n = use_ns ? (entering ? 1.0 : -1.0) : 0.0;
+    s.eta = eta;
+    s.n_refl = n;
+    s.k_refl = k_n;
+    s.n_refr = n;
+    s.k_refr = k_n;
+    float cos_i = -dot(d, n);
+    s.ok = cos_i > 0.0;
+    s.F = 1.0;
+    s.refl = reflect(d, n);
+    if (dot(s.refl, ng_f) <= 0.0) {
+        s.refl = reflect(d, ng_f);
+        s.n_refl = ng_f;
+        s.k_refl = 0.0;
+    }
+    s.ok = s.ok && dot(s.refl, ng_f) > 0.0;
+    s.refr = vec3(0.0);
+    if (s.ok) {
+        float n1 = entering ? 1.0 : ior, n2 = entering ? ior : 1.0;
+        s.F = mirror ? 1.0 : fresnel_dielectric(cos_i, n1, n2);
+        vec3 t;
+        if (s.F < 1.0 && refract_dir(d, n, eta, t)) {
+            if (dot(t, ng_f) >= 0.0) {
+                // The interpolated normal bends the ray back out: refract about the geometric normal instead.
+                float c = -dot(d, ng_f);
+                if (!(c > 0.0 && refract_dir(d, ng_f, eta, t) && dot(t, ng_f) < 0.0)) s.F = 1.0;
+                s.n_refr = ng_f;
+                s.k_refr = 0.0;
+            }
+            s.refr = t;
+        } else {
+            s.F = 1.0;
+        }
+    }
+    s.p_refl = offset_ray(p, ng_f);
+    s.p_refr = offset_ray(p, -ng_f);
+    return s;
+}
+
+// Specular: a dielectric or a mirror (everything else is a diffuse receiver).
+bool inst_is_dielectric(uint inst) { return bvh_instances[inst].material.y > 0.5; }
+bool inst_is_mirror(uint inst) { return bvh_instances[inst].material.y > 1.5; }
+// The color channel this pass traces: 0 for one gray pass, 1..3 for red, green, blue (FrameData.transport.w).
+// The eye view (composite.comp, GRAY_MATERIALS) traces the gray IOR and absorption: its uniforms are a photon
+// pass's, whose channel is not the eye's.
+#ifdef GRAY_MATERIALS
+uint color_channel() { return 0u; }
+#else
+uint color_channel() { return u_frame.transport.w & 0xffu; }
+#endif
+float inst_ior(uint inst) {
+    uint c = color_channel();
+    return c == 0u ? bvh_instances[inst].material.x : bvh_instances[inst].ior_rgb[c - 1u];
+}
+float inst_sigma(uint inst) {
+    uint c = color_channel();
+    return c == 0u ? bvh_instances[inst].material.z : bvh_instances[inst].sigma_rgb[c - 1u];
+}
+
+#endif

@@ -1,0 +1,107 @@
+// Shading of a diffuse receiver point, shared by the eye raster (glsl/eye_receiver.frag) and the eye-view ray
+// tracer (glsl/composite.comp): direct irradiance from the light through a filtered shadow map, caustic
+// irradiance from the light-space caustic map, and the environment (docs/design.md "Eye view").
+// Needs u_frame and the samplers t_shadow (light depth of all objects), t_irradiance (caustic irradiance, linear
+// filtering) and t_recv (receivers from the light: normal, distance).
+#ifndef RECEIVER_GLSL
+#define RECEIVER_GLSL
+#include "common/types.glsl"
+#include "common/view.glsl"
+
+const float RECV_PI = 3.14159265358979;
+
+// Depth along the light's forward axis from a shadow-map depth value.
+float linear_depth(View v, float z) {
+    float n = v.down.w, f = v.forward.w;
+    return view_is_ortho(v) ? n + z * (f - n) : f * n / (f - z * (f - n));
+}
+
+// Percentage-closer filtering: a 4x4 grid of shadow-map texels with bilinear weights over a 3x3-texel tent (the
+// 2x2 bilinear PCF, box-filtered over 3x3 positions a texel apart), so that a shadow edge is a smooth ramp about
+// three texels wide instead of a staircase of texels.
+float lit_fraction(View v, vec3 p, vec3 n) {
+    vec3 img = view_image(v, p);
+    vec2 uv = (img.xy - v.window.xy) / v.window.zw;
+    if (!uv_inside_strict(uv)) return 1.0;
+    float texel = v.window.z * v.extent.z * (view_is_ortho(v) ? 1.0 : img.z);
+    vec3 l = -view_dir_to(v, p);
+    float cos_t = clamp(abs(dot(n, l)), 0.05, 1.0);
+    // The tent reaches 2 texels out: the bias grows with it along the slope.
+    float bias = u_frame.params.y * texel * (1.0 + 2.0 * sqrt(1.0 - cos_t * cos_t) / cos_t);
+    ivec2 size = textureSize(t_shadow, 0);
+    vec2 st = uv * vec2(size) - 0.5;
+    ivec2 i0 = ivec2(floor(st)) - 1;
+    vec2 f = st - floor(st);
+    // Weights of texel offsets -1..2 along one axis: the 1-texel linear kernel convolved with a 3-tap box.
+    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x) / 3.0;
+    vec4 wy = vec4(1.0 - f.y, 1.0, 1.0, f.y) / 3.0;
+    float lit = 0.0;
+    for (int j = 0; j < 4; j++) {
+        for (int i = 0; i < 4; i++) {
+            float z = texelFetch(t_shadow, clamp(i0 + ivec2(i, j), ivec2(0), size - 1), 0).x;
+            lit += wx[i] * wy[j] * (img.z - bias <= linear_depth(v, z) ? 1.0 : 0.0);
+        }
+    }
+    return lit;
+}
+
+// Direct irradiance (W/m^2) from the light at p with normal n, shadowed.
+vec3 direct_irradiance(vec3 p, vec3 n) {
+    View lv = u_frame.receiver_view;
+    vec3 img = view_image(lv, p);
+    vec3 l = -view_dir_to(lv, p);
+    float cos_s = dot(n, l);
+    if (!(cos_s > 0.0 && view_in_cone(lv, img.xy) && img.z > 0.0)) return vec3(0.0);
+    float d2 = view_is_ortho(lv) ? 1.0 : dot(p - lv.origin.xyz, p - lv.origin.xyz);
+    return u_frame.light_power.rgb * cos_s / d2 * lit_fraction(lv, p, n);
+}
+
+// Is p the receiver surface the light sees (so that the caustic map holds its irradiance)? Returns its uv.
+bool caustic_visible(vec3 p, out vec2 uv) {
+    View lv = u_frame.receiver_view;
+    uv = view_uv(lv, p);
+    if (!uv_inside_strict(uv)) return false;
+    ivec2 size = textureSize(t_recv, 0);
+    vec4 r = texelFetch(t_recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1), 0);
+    float d = view_dist(lv, p);
+    float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
+    return r.w > 0.0 && abs(r.w - d) < 4.0 * texel + 1e-3 * d;
+}
+
+// Caustic irradiance (W/m^2) averaged over a footprint in the caustic map spanned by the uv offsets dx, dy (up to
+// 8x8 bilinear taps), so that a caustic sharper than the footprint keeps its flux.
+vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
+    vec2 uv;
+    if (!caustic_visible(p, uv)) return vec3(0.0);
+    vec2 size = vec2(textureSize(t_irradiance, 0));
+    int nx = int(clamp(ceil(length(dx * size)), 1.0, 8.0));
+    int ny = int(clamp(ceil(length(dy * size)), 1.0, 8.0));
+    vec3 e = vec3(0.0);
+    for (int j = 0; j < ny; j++) {
+        for (int i = 0; i < nx; i++) {
+            vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
+            e += textureLod(t_irradiance, uv + o.x * dx + o.y * dy, 0.0).rgb;
+        }
+    }
+    return e / float(nx * ny);
+}
+
+// The environment (docs/design.md "Environment"): a sky of radiance L_sky * SKY_TINT over the upper hemisphere
+// and a ground of L_sky * GROUND_TINT below, with L_sky = eye.x in W/(m^2 sr) (0: off). Seen directly, in
+// reflections and through glass, with a soft horizon (±3°) for looks.
+const vec3 SKY_TINT = vec3(0.85, 0.95, 1.20);
+const vec3 GROUND_TINT = vec3(0.30, 0.28, 0.25);
+
+vec3 environment(vec3 d) {
+    float up = clamp(d.y, -1.0, 1.0);
+    return u_frame.eye.x * mix(GROUND_TINT, SKY_TINT, smoothstep(-0.05, 0.05, up));
+}
+
+// Irradiance (W/m^2) of the environment on an unoccluded plane with unit normal n, exact for the two hemispheres
+// (the horizon band aside): a uniform upper hemisphere seen from a plane tilted by a gives pi L (1 + cos a) / 2.
+vec3 environment_irradiance(vec3 n) {
+    float c = clamp(n.y, -1.0, 1.0);
+    return RECV_PI * u_frame.eye.x * (SKY_TINT * (1.0 + c) + GROUND_TINT * (1.0 - c)) * 0.5;
+}
+
+#endif
