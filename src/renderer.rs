@@ -32,15 +32,25 @@ impl Views {
         let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
         let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied());
         let recv = || scene.receivers().flat_map(|o| o.mesh.positions.iter().copied());
+        let behind = |o: &&crate::scene::Object| {
+            o.mesh
+                .positions
+                .iter()
+                .any(|p| (*p - light.position).dot((light.target - light.position).normalize()) <= 1e-4)
+        };
         if light.kind == LightKind::Spot {
-            if let Some(o) = scene.refractors().find(|o| {
-                o.mesh
-                    .positions
-                    .iter()
-                    .any(|p| (*p - light.position).dot((light.target - light.position).normalize()) <= 1e-4)
-            }) {
+            if let Some(o) = scene.refractors().find(behind) {
                 return Err(AppError::BadInput(format!(
                     "{}: object `{}` reaches behind the spot light's plane; a spot light must see every refractor in front of it",
+                    scene.path.display(),
+                    o.name
+                )));
+            }
+        }
+        if light.kind == LightKind::Point {
+            if let Some(o) = scene.objects.iter().find(behind) {
+                return Err(AppError::BadInput(format!(
+                    "{}: object `{}` reaches behind the plane through point light {index} facing its target; its shadow and caustic maps are one frustum, so every object must lie in front of that plane (move the light or its `target`)",
                     scene.path.display(),
                     o.name
                 )));
@@ -351,7 +361,7 @@ impl Renderer {
         let power = light.color * light.intensity;
         // Exposure: the diffuse radiance of the brightest albedo under the light at its target maps to ~0.6.
         let e_ref = match light0.kind {
-            LightKind::Spot => light0.intensity / (light0.target - light0.position).length_squared(),
+            LightKind::Spot | LightKind::Point => light0.intensity / (light0.target - light0.position).length_squared(),
             LightKind::Directional => light0.intensity,
         } * light0.color.max_element().max(1e-6);
         let albedo = self

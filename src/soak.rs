@@ -189,6 +189,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
     let cone_power = match light0.kind {
         LightKind::Spot => light0.intensity as f64 * std::f64::consts::TAU * (1.0 - (light0.cone as f64).cos()),
         LightKind::Directional => f64::INFINITY,
+        LightKind::Point => light0.intensity as f64 * 4.0 * std::f64::consts::PI,
     };
     let s_count = steps.len();
     let period = s_count * args.angles as usize;

@@ -367,6 +367,19 @@ fn gltf_two_lights_load() {
     assert_eq!(s.lights[1].color, Vec3::new(1.0, 0.5, 0.25));
 }
 
+/// A KHR_lights_punctual point light: isotropic, candela / 683 → W/sr, its maps aimed at the glass's center.
+#[test]
+fn gltf_point_light_loads() {
+    let dir = out_dir("gltf_point");
+    let (mut d, bin) = gltf_scene();
+    d["extensions"]["KHR_lights_punctual"]["lights"][0] = json!({"type": "point", "intensity": 683.0});
+    let s = Scene::load(&write(&dir, "point.gltf", embedded(d, &bin))).unwrap();
+    let l = &s.lights[0];
+    assert_eq!(l.kind, LightKind::Point);
+    assert!((l.intensity - 1.0).abs() < 1e-6);
+    assert!(close(l.position, Vec3::new(0.0, 2.0, 0.0)) && close(l.target, Vec3::new(0.0, 0.5, 0.0)), "{l:?}");
+}
+
 fn expect_bad(dir: &Path, name: &str, data: impl AsRef<[u8]>, needles: &[&str]) {
     let scene = write(dir, name, data);
     let out = dir.join(format!("{name}.exr"));
@@ -391,9 +404,11 @@ fn bad_gltf_exits_2() {
     d["extensionsRequired"] = json!(["KHR_lights_punctual", "EXT_teleport"]);
     expect_bad(&dir, "required.gltf", embedded(d, &bin), &["extensionsRequired[1]", "EXT_teleport"]);
 
+    // A point light at the center of the glass it would aim its maps at.
     let mut d = doc.clone();
     d["extensions"]["KHR_lights_punctual"]["lights"][0] = json!({"type": "point", "intensity": 683.0});
-    expect_bad(&dir, "point.gltf", embedded(d, &bin), &["point lights are not supported yet"]);
+    d["nodes"][3]["translation"] = json!([0.0, 0.5, 0.0]);
+    expect_bad(&dir, "point.gltf", embedded(d, &bin), &["point light 0", "center of the glass"]);
 
     let mut d = doc.clone();
     d["meshes"][1]["primitives"][0]["mode"] = json!(1);

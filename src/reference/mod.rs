@@ -361,17 +361,19 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
                 (LightSetup { emission: None, strata: Strata::new(1), photons: 0, phi: 0.0, color }, info)
             };
             let (emission, sampling, half) = match light.kind {
-                LightKind::Spot => {
+                LightKind::Spot | LightKind::Point => {
                     if caustics_only && refractor_pts.is_empty() {
-                        return none("spot");
+                        return none(if light.kind == LightKind::Spot { "spot" } else { "point" });
                     }
-                    let cos_spot = (light.cone as f64).cos();
+                    // A point light is a spot light whose cone is the whole sphere.
+                    let cos_spot = if light.kind == LightKind::Point { -1.0 } else { (light.cone as f64).cos() };
                     let sub = if caustics_only { bounding_cone(pos, &refractor_pts) } else { None };
                     let (axis, u, v, cos_half, sampling) = match sub {
                         Some((axis, cos_half)) if cos_half > cos_spot => {
                             let (u, v) = frame(axis);
                             (axis, u, v, cos_half, "refractor sub-cone")
                         }
+                        _ if light.kind == LightKind::Point => (fwd, right, down, cos_spot, "sphere"),
                         _ => (fwd, right, down, cos_spot, "spot cone"),
                     };
                     let e = Emission::Cone { origin: pos, u, v, axis, cos_half, spot_axis: fwd, cos_spot };
@@ -397,7 +399,11 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
             };
             let measure = emission.measure();
             let phi = light.intensity as f64 * measure / p.photons as f64;
-            let kind = if light.kind == LightKind::Spot { "spot" } else { "directional" };
+            let kind = match light.kind {
+                LightKind::Spot => "spot",
+                LightKind::Directional => "directional",
+                LightKind::Point => "point",
+            };
             let info = LightInfo {
                 kind: kind.into(),
                 sampling: sampling.into(),

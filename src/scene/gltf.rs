@@ -132,6 +132,13 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
             "the scene needs a light: a KHR_lights_punctual spot or directional light on a node",
         ));
     }
+    out.aim_point_lights();
+    if let Some(i) = out.lights.iter().position(|l| (l.target - l.position).length() < 1e-6) {
+        return Err(cx.err(
+            "extensions.KHR_lights_punctual",
+            format!("point light {i} stands at the center of the glass it would aim at: its maps have no direction"),
+        ));
+    }
     if out.lights.len() > MAX_LIGHTS {
         return Err(cx.err(
             "extensions.KHR_lights_punctual",
@@ -415,12 +422,7 @@ fn visit(
             return Err(cx.err(at, "the light node's transform is degenerate"));
         }
         let (kind, cone) = match light.kind() {
-            gltf::khr_lights_punctual::Kind::Point => {
-                return Err(cx.err(
-                    format!("{l_at}.type"),
-                    "point lights are not supported yet (use a spot or a directional light)",
-                ))
-            }
+            gltf::khr_lights_punctual::Kind::Point => (LightKind::Point, std::f32::consts::PI),
             gltf::khr_lights_punctual::Kind::Directional => (LightKind::Directional, 0.0),
             gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, .. } => {
                 let deg = outer_cone_angle.to_degrees();
@@ -433,7 +435,9 @@ fn visit(
                 (LightKind::Spot, outer_cone_angle)
             }
         };
-        out.lights.push(Light { kind, position: origin, target: origin + forward, cone, intensity, color });
+        // A point light shines every way; its maps aim at the glass (Scene::aim_point_lights, once loaded).
+        let target = if kind == LightKind::Point { Vec3::NAN } else { origin + forward };
+        out.lights.push(Light { kind, position: origin, target, cone, intensity, color });
     }
 
     for c in node.children() {

@@ -35,6 +35,9 @@ pub const MAX_LIGHTS: usize = 4;
 pub enum LightKind {
     Spot,
     Directional,
+    /// Isotropic: the same intensity in every direction. Its maps are one frustum from the light toward its
+    /// target, so its receivers and glass must lie in front of the plane through it facing the target.
+    Point,
 }
 
 #[derive(Clone, Debug)]
@@ -235,7 +238,18 @@ impl Scene {
         if objects.is_empty() {
             return Err(cx.err(0..0, "object", "the scene needs at least one [[object]]"));
         }
-        Ok(Scene { path: path.to_path_buf(), lights, cameras, objects })
+        let mut scene = Scene { path: path.to_path_buf(), lights, cameras, objects };
+        scene.aim_point_lights();
+        for (i, l) in scene.lights.iter().enumerate() {
+            if (l.target - l.position).length() < 1e-6 {
+                return Err(cx.err(
+                    file.light[i].span(),
+                    format!("light[{i}].target"),
+                    "a point light without `target` aims at the center of the glass, which is where it stands: give a `target`",
+                ));
+            }
+        }
+        Ok(scene)
     }
 
     pub fn camera(&self, name: Option<&str>) -> Result<&Camera, String> {
@@ -254,6 +268,23 @@ impl Scene {
 
     pub fn receivers(&self) -> impl Iterator<Item = &Object> {
         self.objects.iter().filter(|o| !o.is_refractor())
+    }
+
+    /// Point lights without a target aim at the center of the glass (or of the whole scene without glass).
+    pub fn aim_point_lights(&mut self) {
+        let bounds = |it: &mut dyn Iterator<Item = &Object>| {
+            it.map(|o| o.mesh.bounds())
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)))
+        };
+        let (lo, hi) = if self.has_refractors() {
+            bounds(&mut self.objects.iter().filter(|o| o.is_refractor()))
+        } else {
+            bounds(&mut self.objects.iter())
+        };
+        let center = (lo + hi) * 0.5;
+        for l in self.lights.iter_mut().filter(|l| l.kind == LightKind::Point && !l.target.is_finite()) {
+            l.target = center;
+        }
     }
 
     pub fn has_refractors(&self) -> bool {
@@ -290,11 +321,12 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
     let kind = match d.kind.get_ref().as_str() {
         "spot" => LightKind::Spot,
         "directional" => LightKind::Directional,
+        "point" => LightKind::Point,
         other => {
             return Err(cx.err(
                 d.kind.span(),
                 f("kind"),
-                format!("unknown light kind `{other}` (expected \"spot\" or \"directional\")"),
+                format!("unknown light kind `{other}` (expected \"spot\", \"directional\" or \"point\")"),
             ))
         }
     };
@@ -302,7 +334,12 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
         v.ok_or_else(|| cx.err(l.span(), f(name), format!("a light needs `{name}` (missing field `{name}`)")))
     };
     let position_s = required(d.position.clone(), "position")?;
-    let target_s = required(d.target.clone(), "target")?;
+    // A point light's target only aims its maps: by default, the center of the glass (set once the objects are
+    // known; NaN marks it here).
+    let target_s = match (kind, d.target.clone()) {
+        (LightKind::Point, None) => S::new(0..0, [f32::NAN; 3]),
+        (_, t) => required(t, "target")?,
+    };
     let intensity_s = d
         .intensity
         .clone()
@@ -312,10 +349,11 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
     if !finite3(position) {
         return Err(cx.err(position_s.span(), f("position"), FINITE));
     }
-    if !finite3(target) {
+    let default_target = kind == LightKind::Point && d.target.is_none();
+    if !default_target && !finite3(target) {
         return Err(cx.err(target_s.span(), f("target"), FINITE));
     }
-    if (Vec3::from(target) - Vec3::from(position)).length() < 1e-6 {
+    if !default_target && (Vec3::from(target) - Vec3::from(position)).length() < 1e-6 {
         return Err(cx.err(target_s.span(), f("target"), "must differ from the position"));
     }
     let cone = match (kind, &d.cone_deg) {
@@ -335,6 +373,10 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
             return Err(cx.err(c.span(), f("cone_deg"), "a directional light has no cone"));
         }
         (LightKind::Directional, None) => 0.0,
+        (LightKind::Point, Some(c)) => {
+            return Err(cx.err(c.span(), f("cone_deg"), "a point light has no cone (it shines every way)"));
+        }
+        (LightKind::Point, None) => std::f32::consts::PI,
     };
     let intensity = *intensity_s.get_ref();
     if !(intensity.is_finite() && intensity >= 0.0) {

@@ -66,7 +66,7 @@ impl LightView {
         let d = p - self.origin;
         let (a, b, c) = (d.dot(self.right), d.dot(self.down), d.dot(self.forward));
         match self.kind {
-            LightKind::Spot => (Vec2::new(a / c, b / c), c),
+            LightKind::Spot | LightKind::Point => (Vec2::new(a / c, b / c), c),
             LightKind::Directional => (Vec2::new(a, b), c),
         }
     }
@@ -81,7 +81,9 @@ impl LightView {
         let x = self.window.x0 + uv.x * self.window.w;
         let y = self.window.y0 + uv.y * self.window.w;
         match self.kind {
-            LightKind::Spot => (self.origin, (self.right * x + self.down * y + self.forward).normalize()),
+            LightKind::Spot | LightKind::Point => {
+                (self.origin, (self.right * x + self.down * y + self.forward).normalize())
+            }
             LightKind::Directional => (self.origin + self.right * x + self.down * y, self.forward),
         }
     }
@@ -98,7 +100,7 @@ impl LightView {
         let Window { x0, y0, w } = self.window;
         let (n, fa) = (self.near, self.far);
         let proj = match self.kind {
-            LightKind::Spot => rows_to_mat([
+            LightKind::Spot | LightKind::Point => rows_to_mat([
                 [2.0 / w, 0.0, -(2.0 * x0 + w) / w, 0.0],
                 [0.0, 2.0 / w, -(2.0 * y0 + w) / w, 0.0],
                 [0.0, 0.0, fa / (fa - n), -fa * n / (fa - n)],
@@ -138,12 +140,15 @@ impl LightView {
         let mut behind = false;
         for p in points {
             let (xy, c) = view.image_coords(p);
-            if view.kind == LightKind::Spot && c <= 1e-6 {
+            if view.kind != LightKind::Directional && c <= 1e-6 {
                 behind = true;
                 continue;
             }
             lo = lo.min(xy);
             hi = hi.max(xy);
+        }
+        if behind && view.kind == LightKind::Point {
+            return None;
         }
         if let Some((clo, chi)) = view.cone_square() {
             if behind {
@@ -171,7 +176,7 @@ impl LightView {
         }
         view.far = dmax * 1.05 + 1e-3;
         view.near = match view.kind {
-            LightKind::Spot => (dmin * 0.5).max(view.far * 1e-4),
+            LightKind::Spot | LightKind::Point => (dmin * 0.5).max(view.far * 1e-4),
             LightKind::Directional => dmin.min(0.0) - 1e-3,
         };
         Some(view)
