@@ -293,7 +293,9 @@ impl Renderer {
     /// What the caustic stages depend on: the lights, the geometry and materials (by generation), the settings
     /// and the light-side targets.
     pub(crate) fn caustic_key(&self) -> String {
-        format!("{:?}|{}|{:?}|{:?}", self.scene.lights, self.scene_generation, self.settings, self.targets_key)
+        // The eye view's own settings (supersampling, sky, eye-ray depth, exposure) do not touch the caustics.
+        let s = Settings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..self.settings.clone() };
+        format!("{:?}|{}|{:?}|{:?}", self.scene.lights, self.scene_generation, s, self.targets_key)
     }
 
     pub fn camera_view(&self, camera: &Camera, width: u32, height: u32) -> CameraView {

@@ -404,6 +404,8 @@ struct Viewer {
     progressive: bool,
     /// The light or the glass changed since the last frame.
     interacting: bool,
+    /// The camera of the last frame drawn (a change draws the next frame without supersampling).
+    last_camera: Option<crate::scene::Camera>,
     /// The level rendered while interacting (adapted to keep those frames near INTERACTIVE_MS).
     interactive_level: u32,
     /// The level the last frame rendered.
@@ -487,6 +489,7 @@ impl Viewer {
             animate: false,
             progressive: !args.no_progressive,
             interacting: false,
+            last_camera: None,
             interactive_level: 2,
             shown_level: 0,
             last_frame_start: None,
@@ -845,14 +848,28 @@ impl Viewer {
         // Progressive refinement: an interactive level while the light or the glass changes, then one level more
         // per frame up to the chosen one (each frame complete and flux-correct at its level).
         let chosen = renderer.settings.level;
+        let interacting = std::mem::take(&mut self.interacting);
         let level = if !self.progressive {
             chosen
-        } else if std::mem::take(&mut self.interacting) {
+        } else if interacting {
             chosen.min(self.interactive_level)
         } else {
             chosen.min(self.shown_level.saturating_add(1)).max(chosen.min(self.interactive_level))
         };
-        let (report, _) = renderer.render_frame_at(level, &view, None, Some(&mut finish), &sync)?;
+        // Supersampling waits for the view to hold still: a frame in which the camera, the light or the glass
+        // moved is drawn with one eye sample per pixel, and the next still frame with the chosen --aa.
+        let camera = orbit.camera();
+        let moved = self.last_camera.as_ref().is_some_and(|c| {
+            c.position != camera.position || c.target != camera.target || c.up != camera.up
+        });
+        self.last_camera = Some(camera);
+        let chosen_aa = renderer.settings.aa;
+        if self.progressive && (moved || interacting) {
+            renderer.settings.aa = 1;
+        }
+        let rendered = renderer.render_frame_at(level, &view, None, Some(&mut finish), &sync);
+        renderer.settings.aa = chosen_aa;
+        let (report, _) = rendered?;
         if level < chosen && !report.reused {
             // Keep interactive frames near INTERACTIVE_MS.
             if report.gpu_ms > 2.0 * INTERACTIVE_MS && self.interactive_level > 0 && level == self.interactive_level {
