@@ -180,6 +180,13 @@ void main() {
     ivec2 out_size = imageSize(o_beauty);
     if (p.x >= out_size.x || p.y >= out_size.y) return;
     int aa = max(int(cam.extent.x) / out_size.x, 1);
+    if (aa == 1) {
+        // One sample per pixel (the viewer while the view moves): no averaging loop.
+        vec3 L = shade_sample(cam, p, (vec2(p) + 0.5) * cam.extent.zw);
+        imageStore(o_beauty, p, vec4(srgb_encode(aces(L * u_frame.scene_max.w)), 1.0));
+        imageStore(o_hdr, p, vec4(L, 1.0));
+        return;
+    }
     vec3 sum = vec3(0.0), mapped = vec3(0.0);
     for (int j = 0; j < aa; j++) {
         for (int i = 0; i < aa; i++) {
