@@ -859,9 +859,10 @@ impl Viewer {
         // Supersampling waits for the view to hold still: a frame in which the camera, the light or the glass
         // moved is drawn with one eye sample per pixel, and the next still frame with the chosen --aa.
         let camera = orbit.camera();
-        let moved = self.last_camera.as_ref().is_some_and(|c| {
-            c.position != camera.position || c.target != camera.target || c.up != camera.up
-        });
+        let moved = self
+            .last_camera
+            .as_ref()
+            .is_some_and(|c| c.position != camera.position || c.target != camera.target || c.up != camera.up);
         self.last_camera = Some(camera);
         let chosen_aa = renderer.settings.aa;
         if self.progressive && (moved || interacting) {
