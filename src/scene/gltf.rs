@@ -350,12 +350,12 @@ fn visit(
                     format!("mesh \"{base_name}\": only triangles are supported (this primitive is {:?})", p.mode()),
                 ));
             }
-            let m = primitive(cx, &p, &p_at, buffers)?;
+            let (m, computed_normals) = primitive(cx, &p, &p_at, buffers)?;
             if m.triangle_count() == 0 {
                 cx.warn(&p_at, &format!("mesh \"{base_name}\" has no triangles and is skipped"));
                 continue;
             }
-            let m = m.transformed(world);
+            let mut m = m.transformed(world);
             if m.positions.iter().any(|v| !v.is_finite()) {
                 return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
             }
@@ -363,6 +363,16 @@ fn visit(
                 Some(i) => materials[i],
                 None => default_material,
             };
+            // The same repairs as an OBJ mesh's (docs/scenes.md, "Mesh files"): an open or non-manifold receiver
+            // is an ordinary surface, so only glass hears about its topology.
+            let report = super::mesh::sanitize(&mut m, computed_normals);
+            let glass = matches!(material, Material::Dielectric { .. });
+            for finding in report.findings() {
+                let topology = finding.starts_with("open") || finding.starts_with("non-");
+                if glass || !topology {
+                    cx.warn(&p_at, &format!("mesh \"{base_name}\": {finding}"));
+                }
+            }
             out.objects.push(Object { name, material, mesh: m });
         }
     }
@@ -447,7 +457,8 @@ fn visit(
     Ok(())
 }
 
-fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Result<Mesh, SceneError> {
+/// A primitive's triangles, and whether its normals were computed (the file has none).
+fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Result<(Mesh, bool), SceneError> {
     let pos = p
         .get(&gltf::Semantic::Positions)
         .ok_or_else(|| cx.err(format!("{at}.attributes"), "a primitive needs a POSITION attribute"))?;
@@ -477,10 +488,13 @@ fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Res
                 return Err(cx.err(format!("{at}.attributes.NORMAL"), "needs one finite normal per position"));
             }
             mesh.normals = normals.into_iter().map(|v| v.normalize_or_zero()).collect();
+            Ok((mesh, false))
         }
-        None => mesh.compute_normals(),
+        None => {
+            mesh.compute_normals();
+            Ok((mesh, true))
+        }
     }
-    Ok(mesh)
 }
 
 /// The bytes of each element of a (non-sparse) accessor, bounds-checked.

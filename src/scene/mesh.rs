@@ -277,6 +277,8 @@ pub struct MeshReport {
     pub inconsistent_edges: usize,
     /// A closed mesh enclosing a negative volume: every winding was reversed (it was inside out).
     pub inverted: bool,
+    /// A closed mesh whose own normals pointed inward (against its outward winding): they were negated.
+    pub normals_negated: bool,
 }
 
 impl MeshReport {
@@ -295,6 +297,9 @@ impl MeshReport {
         }
         if self.reoriented > 0 {
             out.push(format!("reversed the winding of {} triangles to agree with their neighbours", self.reoriented));
+        }
+        if self.normals_negated {
+            out.push("the closed mesh's normals pointed inward: negated them".into());
         }
         if self.inverted {
             out.push("the closed mesh was inside out (negative volume): reversed every winding".into());
@@ -435,7 +440,20 @@ pub fn sanitize(mesh: &mut Mesh, normals_from_winding: bool) -> MeshReport {
             for t in &mut tris {
                 t.swap(1, 2);
             }
-            if !normals_from_winding {
+        }
+        // The file's normals must face out as the (now outward) winding does: a closed mesh whose normals mostly
+        // point against its faces (an inside-out file, or normals and winding that disagree) gets them negated.
+        if !normals_from_winding && mesh.normals.len() == mesh.positions.len() {
+            let agreement: f64 = tris
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+                    let n = t.iter().map(|&i| mesh.normals[i as usize].as_dvec3()).sum::<glam::DVec3>();
+                    (b - a).cross(c - a).dot(n)
+                })
+                .sum();
+            if agreement < 0.0 {
+                report.normals_negated = true;
                 for n in &mut mesh.normals {
                     *n = -*n;
                 }
@@ -470,6 +488,31 @@ mod tests {
         }
         let sphere = 4.0 / 3.0 * std::f64::consts::PI * 0.027;
         assert!(vol > 0.97 * sphere && vol < sphere, "volume {vol} vs {sphere}");
+    }
+
+    /// An inside-out closed mesh is turned outward, and its own normals end up facing out whether they agreed
+    /// with the inside-out winding (inward) or already faced out.
+    #[test]
+    fn inside_out_meshes_are_turned_and_their_normals_face_out() {
+        for normals_inward in [true, false] {
+            let mut m = icosphere(0.3, 2);
+            for t in m.indices.chunks_exact_mut(3) {
+                t.swap(1, 2);
+            }
+            if normals_inward {
+                for n in &mut m.normals {
+                    *n = -*n;
+                }
+            }
+            let r = sanitize(&mut m, false);
+            assert!(r.inverted, "{r:?}");
+            assert_eq!(r.normals_negated, normals_inward, "{r:?}");
+            for t in m.indices.chunks_exact(3) {
+                let (a, b, c) = (m.positions[t[0] as usize], m.positions[t[1] as usize], m.positions[t[2] as usize]);
+                assert!((b - a).cross(c - a).dot(a + b + c) > 0.0, "winding faces out");
+                assert!(m.normals[t[0] as usize].dot(a) > 0.0, "normals face out");
+            }
+        }
     }
 
     #[test]
