@@ -142,6 +142,7 @@ impl Renderer {
         // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
         let aa = match aov {
             Some(Aov::Caustics) | Some(Aov::Direct) => 1,
+            _ if self.settings.preview => 1,
             _ => self.settings.aa,
         };
         self.ensure_targets(camera.width, camera.height, aa)?;
@@ -905,7 +906,7 @@ impl Ctx<'_> {
                 bvh: &self.sb.bvh,
                 nearest: self.nearest,
                 linear: self.linear,
-                exact: self.s.transport == Transport::Exact,
+                exact: self.s.transport == Transport::Exact && !self.s.preview,
             },
         );
         self.barrier(cmd, |b| {

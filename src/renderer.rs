@@ -293,8 +293,9 @@ impl Renderer {
     /// What the caustic stages depend on: the lights, the geometry and materials (by generation), the settings
     /// and the light-side targets.
     pub(crate) fn caustic_key(&self) -> String {
-        // The eye view's own settings (supersampling, sky, eye-ray depth, exposure) do not touch the caustics.
-        let s = Settings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..self.settings.clone() };
+        // The eye view's own settings (supersampling, sky, eye-ray depth, exposure, preview) do not touch the
+        // caustics.
+        let s = Settings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, preview: false, ..self.settings.clone() };
         format!("{:?}|{}|{:?}|{:?}", self.scene.lights, self.scene_generation, s, self.targets_key)
     }
 

@@ -131,6 +131,9 @@ pub struct Settings {
     pub sky: Option<f32>,
     /// Exact transport: interfaces an eye ray is followed through before it takes the environment's radiance.
     pub eye_depth: u32,
+    /// A preview of the eye view (the viewer's frames while the view moves; not an option): one eye sample per
+    /// pixel, and glass by the two-surface deferred refraction instead of tracing through the BVH.
+    pub preview: bool,
     /// How splat records reach the caustic flux map.
     pub splat: Splat,
     /// Where the splat radius comes from (exact transport; the two-interface trace always uses the cell's).
@@ -178,6 +181,7 @@ impl Default for Settings {
             aa: 2,
             sky: None,
             eye_depth: 8,
+            preview: false,
             splat: Splat::Auto,
             footprint: Footprint::Cell,
             flux_threshold: 1e-3,

@@ -74,6 +74,10 @@ pub struct ViewArgs {
     /// Slowly orbit the light around the vertical axis through its target (Space pauses).
     #[arg(long)]
     pub animate: bool,
+    /// Orbit the camera by this many degrees every frame (scripted input: repeatable frame-time measurements of
+    /// a camera orbit, with --frames and --stats; --animate does the same for the light).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub orbit_camera: f32,
     /// Render every frame at the chosen level (by default, while the light or the glass changes the viewer renders
     /// at an interactive level, then refines one level per frame up to the chosen one).
     #[arg(long)]
@@ -404,6 +408,8 @@ struct Viewer {
     progressive: bool,
     /// The light or the glass changed since the last frame.
     interacting: bool,
+    /// Degrees the camera orbits every frame (--orbit-camera).
+    orbit_step: f32,
     /// The camera of the last frame drawn (a change draws the next frame without supersampling).
     last_camera: Option<crate::scene::Camera>,
     /// The level rendered while interacting (adapted to keep those frames near INTERACTIVE_MS).
@@ -489,6 +495,7 @@ impl Viewer {
             animate: false,
             progressive: !args.no_progressive,
             interacting: false,
+            orbit_step: args.orbit_camera,
             last_camera: None,
             interactive_level: 2,
             shown_level: 0,
@@ -738,6 +745,10 @@ impl Viewer {
         let input = std::mem::take(&mut self.input);
         self.input = Input { left: input.left, right: input.right, cursor: input.cursor, ..Input::default() };
         self.orbit.rotate(input.orbit.0 * 0.005, input.orbit.1 * 0.005);
+        if self.orbit_step != 0.0 {
+            // Scripted camera orbit (--orbit-camera): a fixed step per frame, for repeatable frame-time runs.
+            self.orbit.rotate(self.orbit_step.to_radians(), 0.0);
+        }
         if input.zoom != 0.0 {
             self.orbit.zoom(input.zoom);
         }
@@ -856,20 +867,18 @@ impl Viewer {
         } else {
             chosen.min(self.shown_level.saturating_add(1)).max(chosen.min(self.interactive_level))
         };
-        // Supersampling waits for the view to hold still: a frame in which the camera, the light or the glass
-        // moved is drawn with one eye sample per pixel, and the next still frame with the chosen --aa.
+        // The eye view's detail waits for the view to hold still: a frame in which the camera, the light or the
+        // glass moved is a preview (one eye sample per pixel, glass by two-surface deferred refraction), and the
+        // next still frame has the chosen --aa and, under exact transport, glass traced through the BVH.
         let camera = orbit.camera();
         let moved = self
             .last_camera
             .as_ref()
             .is_some_and(|c| c.position != camera.position || c.target != camera.target || c.up != camera.up);
         self.last_camera = Some(camera);
-        let chosen_aa = renderer.settings.aa;
-        if self.progressive && (moved || interacting) {
-            renderer.settings.aa = 1;
-        }
+        renderer.settings.preview = self.progressive && (moved || interacting);
         let rendered = renderer.render_frame_at(level, &view, None, Some(&mut finish), &sync);
-        renderer.settings.aa = chosen_aa;
+        renderer.settings.preview = false;
         let (report, _) = rendered?;
         if level < chosen && !report.reused {
             // Keep interactive frames near INTERACTIVE_MS.
