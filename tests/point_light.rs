@@ -65,4 +65,16 @@ fn point_light_rules() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("behind the plane through point light 0") && err.contains("floor"), "{err}");
     assert_no_output(&out);
+    // Inside the glass, at its center (where its maps would aim): refused with the light named.
+    let inside = text.replace("position = [0.35, 1.3, 0.25]", "position = [0.0, 0.5, 0.0]");
+    let e = Scene::parse(&inside, Path::new("inside.toml")).unwrap_err().to_string();
+    assert!(e.contains("light[0].target") && e.contains("center of the glass"), "{e}");
+    // Inside the glass off its center: the glass (and the floor) reach behind the light's plane.
+    let path = dir.join("inside.toml");
+    std::fs::write(&path, text.replace("position = [0.35, 1.3, 0.25]", "position = [0.1, 0.5, 0.0]")).unwrap();
+    let o =
+        caustics(&["render", "--scene", path.to_str().unwrap(), "--aov", "caustics", "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("reaches behind the plane through point light 0"), "{err}");
 }
