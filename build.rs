@@ -30,6 +30,8 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
     ("composite.comp", "exact", &[("EXACT_EYE", "1")]),
+    ("composite.comp", "single", &[("SINGLE_SAMPLE", "1")]),
+    ("composite.comp", "exact_single", &[("EXACT_EYE", "1"), ("SINGLE_SAMPLE", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),
 ];

@@ -179,14 +179,13 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     ivec2 out_size = imageSize(o_beauty);
     if (p.x >= out_size.x || p.y >= out_size.y) return;
+#ifdef SINGLE_SAMPLE
+    // One eye sample per pixel (--aa 1, and the viewer's previews): no averaging loop in the kernel at all.
+    vec3 L = shade_sample(cam, p, (vec2(p) + 0.5) * cam.extent.zw);
+    imageStore(o_beauty, p, vec4(srgb_encode(aces(L * u_frame.scene_max.w)), 1.0));
+    imageStore(o_hdr, p, vec4(L, 1.0));
+#else
     int aa = max(int(cam.extent.x) / out_size.x, 1);
-    if (aa == 1) {
-        // One sample per pixel (the viewer while the view moves): no averaging loop.
-        vec3 L = shade_sample(cam, p, (vec2(p) + 0.5) * cam.extent.zw);
-        imageStore(o_beauty, p, vec4(srgb_encode(aces(L * u_frame.scene_max.w)), 1.0));
-        imageStore(o_hdr, p, vec4(L, 1.0));
-        return;
-    }
     vec3 sum = vec3(0.0), mapped = vec3(0.0);
     for (int j = 0; j < aa; j++) {
         for (int i = 0; i < aa; i++) {
@@ -199,4 +198,5 @@ void main() {
     float k = 1.0 / float(aa * aa);
     imageStore(o_beauty, p, vec4(srgb_encode(mapped * k), 1.0));
     imageStore(o_hdr, p, vec4(sum * k, 1.0));
+#endif
 }

@@ -15,6 +15,10 @@ pub struct CompositePass {
     pipeline: Pipeline,
     /// The eye-ray tracer through the BVH (`--transport exact`).
     exact: Pipeline,
+    /// The same two with one eye sample per pixel (`--aa 1`, the viewer's previews): kernels without the
+    /// averaging loop, which costs a CPU driver such as lavapipe even when it runs once.
+    single: Pipeline,
+    exact_single: Pipeline,
 }
 
 pub struct CompositeInputs<'a> {
@@ -57,11 +61,26 @@ impl CompositePass {
         ];
         let pipeline = Pipeline::compute(device, "composite", shaders::COMPOSITE_COMP.words(), &binds, 0)?;
         let exact = Pipeline::compute(device, "composite exact", shaders::COMPOSITE_COMP_EXACT.words(), &binds, 0)?;
-        Ok(CompositePass { device: device.clone(), pipeline, exact })
+        let single =
+            Pipeline::compute(device, "composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words(), &binds, 0)?;
+        let exact_single = Pipeline::compute(
+            device,
+            "composite exact, one sample",
+            shaders::COMPOSITE_COMP_EXACT_SINGLE.words(),
+            &binds,
+            0,
+        )?;
+        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single })
     }
 
     pub fn record(&self, cmd: vk::CommandBuffer, i: &CompositeInputs) {
-        let pipeline = if i.exact { &self.exact } else { &self.pipeline };
+        let single = i.radiance.extent.width == i.beauty.extent.width;
+        let pipeline = match (i.exact, single) {
+            (true, true) => &self.exact_single,
+            (true, false) => &self.exact,
+            (false, true) => &self.single,
+            (false, false) => &self.pipeline,
+        };
         pipeline.bind(
             cmd,
             &[
