@@ -489,10 +489,8 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
         "ray_queue_capacity": r.settings.ray_queue_capacity(),
     });
     if let Some(ts) = report.transport {
-        let mut account = ts.energy_json(r.scene.lights[0].intensity as f64);
-        account.insert("residual".into(), json!(ts.residual()));
         if let Value::Object(m) = &mut v {
-            m.insert("energy".into(), Value::Object(account));
+            m.insert("energy".into(), Value::Object(ts.account_json(r.scene.lights[0].intensity as f64)));
             m.insert("rays_traced".into(), json!(ts.rays_traced));
             m.insert("splat_records".into(), json!(ts.records_total));
             m.insert("waves".into(), json!(ts.waves));
@@ -524,9 +522,7 @@ fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
                 "gpu_ms": rep.gpu_ms,
             });
             if let (Some(ts), Value::Object(m)) = (rep.transport, &mut row) {
-                let mut account = ts.energy_json(l.intensity as f64);
-                account.insert("residual".into(), json!(ts.residual()));
-                m.insert("energy".into(), Value::Object(account));
+                m.insert("energy".into(), Value::Object(ts.account_json(l.intensity as f64)));
                 m.insert("rays_traced".into(), json!(ts.rays_traced));
             }
             row

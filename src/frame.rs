@@ -234,10 +234,10 @@ impl Renderer {
                     c.clear_irradiance(&mut rec);
                 }
             }
-            let channel = if nc == 1 { 0 } else { c.channel as u32 + 1 };
             rec.report.lights.push(LightReport {
                 light: c.light,
-                channel,
+                // The pass's channel code, as its uniforms give it to the shaders.
+                channel: c.data.transport[3] & 0xff,
                 caustics,
                 first_segment,
                 ..Default::default()

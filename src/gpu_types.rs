@@ -179,6 +179,13 @@ impl TransportState {
         ACCOUNT_TERMS.iter().zip(self.account()).map(|(n, x)| (format!("{n}_w"), (x * intensity).into())).collect()
     }
 
+    /// [`Self::energy_json`] with the `residual` key: the account as the stats report it.
+    pub fn account_json(&self, intensity: f64) -> serde_json::Map<String, serde_json::Value> {
+        let mut account = self.energy_json(intensity);
+        account.insert("residual".into(), self.residual().into());
+        account
+    }
+
     /// |emitted − every destination| / emitted: how far the account is from closing (0 when nothing was emitted).
     pub fn residual(&self) -> f64 {
         let a = self.account();

@@ -28,22 +28,7 @@ impl Summary {
 /// Per-stage summaries over frames, in first-seen stage order, each over the frames that ran the stage (a frame
 /// that reused the caustic map has no caustic stages: it does not pull their medians to 0).
 pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
-    let mut labels: Vec<&str> = Vec::new();
-    for f in frames {
-        for (l, _) in &f.stages {
-            if !labels.contains(l) {
-                labels.push(l);
-            }
-        }
-    }
-    let mut out: Vec<(String, Summary)> = labels
-        .iter()
-        .map(|l| {
-            let v: Vec<f64> =
-                frames.iter().filter_map(|f| f.stages.iter().find(|(x, _)| x == l).map(|(_, ms)| *ms)).collect();
-            (l.to_string(), Summary::of(&v))
-        })
-        .collect();
+    let mut out = summaries_by_label(frames, |f| &f.stages);
     let totals: Vec<f64> = frames.iter().map(|f| f.gpu_ms).collect();
     out.push(("gpu_total".into(), Summary::of(&totals)));
     let wall: Vec<f64> = frames.iter().map(|f| f.frame_ms).collect();
@@ -55,9 +40,17 @@ pub fn stage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
 
 /// Per-sub-stage summaries (`light_gbuffer.front`, ...) over the frames that ran them, in first-seen order.
 pub fn substage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
+    summaries_by_label(frames, |f| &f.substages)
+}
+
+/// One summary per label of `of(frame)`, in first-seen order, each over the frames that have the label.
+fn summaries_by_label(
+    frames: &[FrameReport],
+    of: impl Fn(&FrameReport) -> &[(&'static str, f64)],
+) -> Vec<(String, Summary)> {
     let mut labels: Vec<&str> = Vec::new();
     for f in frames {
-        for (l, _) in &f.substages {
+        for (l, _) in of(f) {
             if !labels.contains(l) {
                 labels.push(l);
             }
@@ -67,7 +60,7 @@ pub fn substage_summaries(frames: &[FrameReport]) -> Vec<(String, Summary)> {
         .iter()
         .map(|l| {
             let v: Vec<f64> =
-                frames.iter().filter_map(|f| f.substages.iter().find(|(x, _)| x == l).map(|(_, ms)| *ms)).collect();
+                frames.iter().filter_map(|f| of(f).iter().find(|(x, _)| x == l).map(|(_, ms)| *ms)).collect();
             (l.to_string(), Summary::of(&v))
         })
         .collect()

@@ -16,17 +16,7 @@ use std::path::Path;
 const SIZE: u32 = 256;
 
 fn reference_image(scene: &str, paths: Paths, photons: u64) -> RgbImage {
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: Aov::Caustics,
-        paths,
-        photons,
-        width: SIZE,
-        height: SIZE,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+    top_reference(scene, Aov::Caustics, paths, photons, SIZE)
 }
 
 fn gpu(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {

@@ -7,7 +7,7 @@
 mod common;
 use caustics::image_io::{read_exr, RgbImage};
 use caustics::metrics::compare;
-use caustics::reference::{self, Aov, Paths, RefParams};
+use caustics::reference::{Aov, Paths};
 use common::*;
 use std::path::Path;
 
@@ -121,17 +121,7 @@ fn color_matches_reference() {
     let dir = out_dir("color_reference");
     for (name, scene, level) in [("amber", COLORED, "3"), ("prism", PRISM, "3")] {
         let (_, img) = exact(&dir, name, scene, "256x256", level);
-        let p = RefParams {
-            camera: Some("top".into()),
-            aov: Aov::Caustics,
-            paths: Paths::All,
-            photons: 3_000_000,
-            width: 256,
-            height: 256,
-            ..RefParams::default()
-        };
-        let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-        let r = reference::cached_in(&cache, Path::new(scene), &p).expect("reference");
+        let r = top_reference(scene, Aov::Caustics, Paths::All, 3_000_000, 256);
         for c in 0..3 {
             let m = compare(&channel(&img, c), &channel(&r, c), 64, 2.0);
             eprintln!("{name} channel {c}: {m:?}");

@@ -5,24 +5,14 @@
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
-use caustics::reference::{self, Aov, Paths, RefParams};
+use caustics::reference::{Aov, Paths};
 use common::*;
 use std::path::Path;
 
 const SIZE: u32 = 256;
 
 fn reference_all(scene: &str, photons: u64) -> RgbImage {
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: Aov::Caustics,
-        paths: Paths::All,
-        photons,
-        width: SIZE,
-        height: SIZE,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+    top_reference(scene, Aov::Caustics, Paths::All, photons, SIZE)
 }
 
 fn exact(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {

@@ -6,22 +6,12 @@
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
-use caustics::reference::{self, Aov, Paths, RefParams};
+use caustics::reference::{Aov, Paths};
 use common::*;
 use std::path::Path;
 
 fn reference_image(scene: &str, paths: Paths, photons: u64) -> RgbImage {
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: Aov::Caustics,
-        paths,
-        photons,
-        width: 256,
-        height: 256,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+    top_reference(scene, Aov::Caustics, paths, photons, 256)
 }
 
 fn caustics_aov(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {

@@ -6,7 +6,7 @@
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
-use caustics::reference::{self, Aov, Paths, RefParams};
+use caustics::reference::{Aov, Paths};
 use common::*;
 use std::path::Path;
 
@@ -22,17 +22,7 @@ fn energy(s: &serde_json::Value, term: &str) -> f64 {
 }
 
 fn reference_all(scene: &str, photons: u64) -> RgbImage {
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: Aov::Caustics,
-        paths: Paths::All,
-        photons,
-        width: 256,
-        height: 256,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+    top_reference(scene, Aov::Caustics, Paths::All, photons, 256)
 }
 
 /// The differential footprint moves no flux: the same photons, the same energy account (residual below 1e-5, the

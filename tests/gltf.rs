@@ -458,23 +458,13 @@ fn gallery_gltf_is_the_tools_output() {
 #[test]
 fn gallery_gltf_matches_reference() {
     use caustics::metrics::compare;
-    use caustics::reference::{self, Aov, Paths, RefParams};
+    use caustics::reference::{Aov, Paths};
     let dir = out_dir("gltf_gallery");
     let args = ["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "256x256", "--level", "3"];
     let (s, out) = render(&dir, "gallery", GALLERY, &args);
     let rows = s["lights"].as_array().unwrap();
     assert_eq!(rows.len(), 6, "two lights, three color passes each");
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: Aov::Caustics,
-        paths: Paths::All,
-        photons: 6_000_000,
-        width: 256,
-        height: 256,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    let r = reference::cached_in(&cache, Path::new(GALLERY), &p).expect("reference");
+    let r = top_reference(GALLERY, Aov::Caustics, Paths::All, 6_000_000, 256);
     let m = compare(&caustics::image_io::read_exr(&out).unwrap(), &r, 64, 2.0);
     eprintln!("gallery.gltf vs reference: {m:?}");
     assert!((m.flux_ratio - 1.0).abs() < 0.01, "flux ratio {}", m.flux_ratio);

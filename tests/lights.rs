@@ -132,7 +132,7 @@ fn five_lights_are_refused() {
 #[test]
 fn two_lights_match_reference() {
     use caustics::metrics::compare;
-    use caustics::reference::{self, Aov, Paths, RefParams};
+    use caustics::reference::{Aov, Paths};
     let dir = out_dir("lights_reference");
     let (s, out) = render(
         &dir,
@@ -141,17 +141,7 @@ fn two_lights_match_reference() {
         &["--camera", "top", "--size", "256x256", "--level", "3", "--transport", "exact", "--aov", "caustics"],
     );
     assert_eq!(s["lights"].as_array().unwrap().len(), 2);
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: Aov::Caustics,
-        paths: Paths::All,
-        photons: 2_000_000,
-        width: 256,
-        height: 256,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    let r = reference::cached_in(&cache, Path::new(TWO), &p).expect("reference");
+    let r = top_reference(TWO, Aov::Caustics, Paths::All, 2_000_000, 256);
     let m = compare(&read_exr(&out).unwrap(), &r, 64, 2.0);
     eprintln!("two lights, exact level 3 vs reference: {m:?}");
     assert!((m.flux_ratio - 1.0).abs() < 0.005, "flux ratio {}", m.flux_ratio);

@@ -5,7 +5,7 @@
 mod common;
 use caustics::image_io::read_exr;
 use caustics::metrics::compare;
-use caustics::reference::{self, Aov, Paths, RefParams};
+use caustics::reference::{Aov, Paths};
 use caustics::scene::{LightKind, Scene};
 use common::*;
 use glam::Vec3;
@@ -24,17 +24,7 @@ fn point_light_matches_reference() {
         let args = ["--transport", "exact", "--camera", "top", "--aov", aov, "--size", "256x256", "--level", "3"];
         let (s, out) = render(&dir, aov, POINT, &args);
         assert_eq!(s["lights"][0]["kind"], "point");
-        let p = RefParams {
-            camera: Some("top".into()),
-            aov: raov,
-            paths: Paths::All,
-            photons: 4_000_000,
-            width: 256,
-            height: 256,
-            ..RefParams::default()
-        };
-        let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-        let r = reference::cached_in(&cache, Path::new(POINT), &p).expect("reference");
+        let r = top_reference(POINT, raov, Paths::All, 4_000_000, 256);
         let m = compare(&read_exr(&out).unwrap(), &r, 64, 2.0);
         eprintln!("point light {aov}: {m:?}");
         assert!((m.flux_ratio - 1.0).abs() < 0.01, "{aov}: flux ratio {}", m.flux_ratio);

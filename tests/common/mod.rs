@@ -95,3 +95,25 @@ pub fn assert_no_output(out: &Path) {
         assert!(!n.contains(".partial"), "partial file left behind: {n}");
     }
 }
+
+/// The CPU reference of `scene` through its `top` camera at `side`² (cached in the test target directory, so each
+/// configuration is traced once per machine).
+pub fn top_reference(
+    scene: &str,
+    aov: caustics::reference::Aov,
+    paths: caustics::reference::Paths,
+    photons: u64,
+    side: u32,
+) -> caustics::image_io::RgbImage {
+    let p = caustics::reference::RefParams {
+        camera: Some("top".into()),
+        aov,
+        paths,
+        photons,
+        width: side,
+        height: side,
+        ..caustics::reference::RefParams::default()
+    };
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
+    caustics::reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+}
