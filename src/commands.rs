@@ -448,6 +448,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "frames": frames.len(),
         "caustics_reused": last.reused,
         "reused_frames": frames.iter().filter(|f| f.reused).count(),
+        "eye_reused_frames": frames.iter().filter(|f| f.eye_reused).count(),
         "lights": light_rows(&session.renderer, &last),
         "transport": s.transport,
         "splat": s.splat.resolve(info),

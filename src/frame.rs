@@ -20,7 +20,7 @@ use crate::passes::eye::EyeInputs;
 use crate::passes::geometry::GeometryTarget;
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings};
 use crate::passes::Passes;
-use crate::renderer::{Aov, AovData, FrameReport, LightReport, Renderer, Views};
+use crate::renderer::{Aov, AovData, FrameReport, FrameSlot, LightReport, Renderer, Views};
 use crate::scene::view::CameraView;
 use crate::scene_gpu::SceneBuffers;
 use crate::settings::{Driven, Method, Settings, Splat, Transport};
@@ -67,6 +67,8 @@ struct Ctx<'a> {
     /// The current light's receiver maps and uniforms.
     r: &'a ReceiverTargets,
     ubo: &'a Buffer,
+    /// This frame-in-flight slot's readback buffer.
+    readback: &'a Buffer,
     light: usize,
     /// Index of this (light, color channel) pass, and its channel among the light's (0 for a gray frame).
     pass: usize,
@@ -103,6 +105,21 @@ impl Rec<'_> {
     }
 }
 
+/// A frame submitted and not read back yet (see [`Renderer::submit_frame_at`]).
+pub(crate) struct Pending {
+    slot: usize,
+    report: FrameReport,
+    start: Instant,
+    /// Index of the frame's first eye-view interval (the per-light sums stop there).
+    lights_end: usize,
+    /// The AOV its readback copies, if any.
+    aov: Option<Aov>,
+    /// Its caustic inputs (see [`Renderer::caustic_key`]).
+    key: String,
+    /// The settings it was recorded with (the readback layout and what to read depend on them).
+    settings: Settings,
+}
+
 impl Renderer {
     /// Render one frame headless and read back `aov`.
     pub fn render(&mut self, camera: &CameraView, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
@@ -119,18 +136,14 @@ impl Renderer {
         finish: Option<Finish>,
         sync: &SubmitSync,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
-        let chosen = self.settings.level;
-        if level >= chosen {
-            return self.render_frame(camera, aov, finish, sync);
-        }
-        self.settings.level = level;
-        let out = self.render_frame(camera, aov, finish, sync);
-        self.settings.level = chosen;
-        out
+        self.finish_frames()?;
+        self.submit_frame_at(level, camera, aov, finish, sync)?;
+        let pending = self.pending.pop_back().expect("the frame just submitted");
+        self.complete(pending)
     }
 
-    /// Record and submit a frame; `finish` appends commands to its last command buffer and `sync` gives that
-    /// submission its semaphores. Returns after the GPU has finished.
+    /// Record and submit a frame, and wait for its results; `finish` appends commands to its last command buffer
+    /// and `sync` gives that submission its semaphores.
     pub fn render_frame(
         &mut self,
         camera: &CameraView,
@@ -138,7 +151,68 @@ impl Renderer {
         finish: Option<Finish>,
         sync: &SubmitSync,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
+        let level = self.settings.level;
+        self.render_frame_at(level, camera, aov, finish, sync)
+    }
+
+    /// The frame-in-flight slot the next frame takes. When every slot is in flight, this first waits for the
+    /// oldest frame, the last to use that slot, and keeps its report for [`Renderer::take_completed`]. The viewer
+    /// calls it before acquiring a swapchain image with that slot's semaphore.
+    pub fn next_slot(&mut self) -> AppResult<usize> {
+        while self.pending.len() >= self.frames_in_flight() {
+            let oldest = self.pending.pop_front().expect("a frame in flight");
+            let (report, _) = self.complete(oldest)?;
+            self.completed.push(report);
+        }
+        Ok((self.submitted % self.frames_in_flight() as u64) as usize)
+    }
+
+    /// Wait for every frame in flight and keep their reports for [`Renderer::take_completed`].
+    pub fn finish_frames(&mut self) -> AppResult<()> {
+        while let Some(oldest) = self.pending.pop_front() {
+            let (report, _) = self.complete(oldest)?;
+            self.completed.push(report);
+        }
+        Ok(())
+    }
+
+    /// The reports of the frames completed since the last call, oldest first.
+    pub fn take_completed(&mut self) -> Vec<FrameReport> {
+        std::mem::take(&mut self.completed)
+    }
+
+    /// Frames submitted and not yet read back.
+    pub fn frames_pending(&self) -> usize {
+        self.pending.len()
+    }
+
+    /// Record and submit a frame at `level` (see [`Renderer::render_frame_at`]) without waiting for it: its report
+    /// comes later from [`Renderer::take_completed`], once a later frame needs its slot or
+    /// [`Renderer::finish_frames`] is called.
+    pub fn submit_frame_at(
+        &mut self,
+        level: u32,
+        camera: &CameraView,
+        aov: Option<Aov>,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+    ) -> AppResult<()> {
+        let chosen = self.settings.level;
+        self.settings.level = level.min(chosen);
+        let out = self.submit(camera, aov, finish, sync);
+        self.settings.level = chosen;
+        out
+    }
+
+    fn submit(
+        &mut self,
+        camera: &CameraView,
+        aov: Option<Aov>,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+    ) -> AppResult<()> {
         let start = Instant::now();
+        let slot = self.next_slot()?;
         // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
         let aa = match aov {
             Some(Aov::Caustics) | Some(Aov::Direct) => 1,
@@ -153,12 +227,11 @@ impl Renderer {
             (0..nl).map(|i| Views::new(&self.scene, &self.settings, camera, i)).collect::<AppResult<Vec<_>>>()?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
-        // changed since the last completed frame, only the eye and composite passes are recorded.
+        // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
+        // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
         let key = self.caustic_key();
         let self_level = self.settings.level;
         let reused = self.reuse && self.last_caustic.as_ref().is_some_and(|(k, _)| *k == key);
-        let cached = if reused { self.last_caustic.clone() } else { None };
-        self.last_caustic = None;
         let (data, slots) = {
             let t = self.targets.as_ref().expect("targets");
             let channel = |c: usize| if nc == 1 { 0 } else { c as u32 + 1 };
@@ -166,17 +239,31 @@ impl Renderer {
                 (0..nl * nc).map(|p| self.frame_data(&views[p / nc], t, p / nc, channel(p % nc))).collect();
             (data, self.batch_slots(self.settings.traversal_capacity(t.photon.capacity)))
         };
-        let Renderer {
-            device, passes, scene_buffers, nearest, linear, recorder, timestamps, targets, settings, ..
-        } = self;
+        // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
+        // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
+        let eye_key = {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            key.hash(&mut h);
+            bytemuck::cast_slice::<FrameData, u8>(&data).hash(&mut h);
+            (self.settings.preview, self.targets_generation).hash(&mut h);
+            h.finish()
+        };
+        let eye_reused =
+            reused && matches!(aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr)) && self.last_eye == Some(eye_key);
+        self.last_eye = Some(eye_key);
+        let Renderer { device, passes, scene_buffers, nearest, linear, slots: frame_slots, targets, settings, .. } =
+            self;
+        let FrameSlot { recorder, timestamps } = &mut frame_slots[slot];
         let targets = targets.as_mut().expect("targets");
-        for (ubo, d) in targets.ubos.iter_mut().zip(&data) {
+        for (ubo, d) in targets.ubos[slot].iter_mut().zip(&data) {
             ubo.write(0, std::slice::from_ref(d))?;
         }
         let splat = settings.splat.resolve(&device.info);
         let compute_splat = splat.is_compute() && targets.receivers[0].flux.format == vk::Format::R32_SFLOAT;
         let tiled_splat = splat == Splat::Tiled;
         let targets = &*targets;
+        let readback = &targets.readbacks[slot];
         // Pass `p`: light p / nc, channel p % nc.
         let ctx = |p: usize| Ctx {
             d: device,
@@ -186,7 +273,8 @@ impl Renderer {
             linear,
             t: targets,
             r: &targets.receivers[p / nc],
-            ubo: &targets.ubos[p],
+            ubo: &targets.ubos[slot][p],
+            readback,
             light: p / nc,
             pass: p,
             channel: p % nc,
@@ -209,10 +297,11 @@ impl Renderer {
         rec.report.photon_view = views[0].photon;
         rec.report.reused = reused;
         rec.report.level = self_level;
+        rec.report.preview = settings.preview;
         rec.ts.reset(rec.cmd);
         // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
         ctx(0).barrier(rec.cmd, |b| {
-            b.buffer(&targets.readback, &[Access::FrameStart], &[Access::TransferDst]);
+            b.buffer(readback, &[Access::FrameStart], &[Access::TransferDst]);
         });
         for pass in 0..nl * nc {
             let c = ctx(pass);
@@ -243,28 +332,50 @@ impl Renderer {
                 ..Default::default()
             });
         }
-        rec.ts.mark(rec.cmd, "eye");
-        for light in 0..nl {
-            ctx(light * nc).eye_receivers(&mut rec);
-        }
         let c0 = ctx(0);
-        c0.eye_refractors(&mut rec);
-        c0.composite(&mut rec);
+        rec.report.eye_reused = eye_reused;
+        // The lights' own stages end where the eye view starts.
+        let lights_end = rec.ts.len();
+        if eye_reused {
+            // The beauty and HDR images are the last frame's, left as transfer sources by its composite.
+            rec.ts.mark(rec.cmd, "eye_reused");
+        } else {
+            rec.ts.mark(rec.cmd, "eye");
+            for light in 0..nl {
+                ctx(light * nc).eye_receivers(&mut rec);
+            }
+            c0.eye_refractors(&mut rec);
+            c0.composite(&mut rec);
+        }
         rec.ts.mark(rec.cmd, "readback");
         let aov_image = c0.readback(&mut rec, aov);
         if let Some(f) = finish {
             f(c0.d, rec.cmd, c0.t);
         }
-        let last_segment = rec.ts.len();
         rec.ts.mark(rec.cmd, "");
         rec.record_time += rec.mark.elapsed().as_secs_f64();
         rec.recorder.submit_with(sync)?;
-        rec.recorder.wait()?;
         let mut report = rec.report;
         report.record_ms = rec.record_time * 1e3;
-        report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        report.segments = rec.ts.resolve()?;
-        if rec.ts.overflowed() {
+        if !reused {
+            // The maps this frame computes serve the next frames with the same inputs; its traversal and transport
+            // state join them once it completes.
+            self.last_caustic = Some((key.clone(), report.lights.clone()));
+        }
+        self.submitted += 1;
+        let settings = self.settings.clone();
+        self.pending.push_back(Pending { slot, report, start, lights_end, aov: aov_image, key, settings });
+        Ok(())
+    }
+
+    /// Wait for a submitted frame and read its timings, its traversal and transport state and its AOV.
+    fn complete(&mut self, p: Pending) -> AppResult<(FrameReport, Option<AovData>)> {
+        let FrameSlot { recorder, timestamps } = &mut self.slots[p.slot];
+        recorder.wait()?;
+        let mut report = p.report;
+        report.frame_ms = p.start.elapsed().as_secs_f64() * 1e3;
+        report.segments = timestamps.resolve()?;
+        if timestamps.overflowed() {
             log::warn!("more stages than timestamp queries: the per-stage GPU times of this frame are truncated");
         }
         report.stages = crate::vk::query::sum_by_label(&report.segments);
@@ -272,28 +383,37 @@ impl Renderer {
         report.gpu_ms = report.stages.iter().filter(|(l, _)| *l != HOST_ROUNDTRIP).map(|(_, ms)| ms).sum();
         // Each light's light-side stages: the timed intervals from its first mark to the next light's.
         let ends: Vec<usize> =
-            report.lights.iter().skip(1).map(|l| l.first_segment).chain(std::iter::once(last_segment)).collect();
+            report.lights.iter().skip(1).map(|l| l.first_segment).chain(std::iter::once(p.lights_end)).collect();
         for (l, end) in report.lights.iter_mut().zip(ends) {
             l.gpu_ms = report
                 .segments
                 .get(l.first_segment..end.min(report.segments.len()))
                 .unwrap_or(&[])
                 .iter()
-                .filter(|(label, _, _)| *label != HOST_ROUNDTRIP && *label != "eye")
+                .filter(|(label, _, _)| *label != HOST_ROUNDTRIP)
                 .map(|(_, _, ms)| ms)
                 .sum();
         }
-        if let Some((_, lights)) = cached {
-            for (l, c) in report.lights.iter_mut().zip(lights) {
-                l.state = c.state;
-                l.transport = c.transport;
+        let t = self.targets.as_ref().expect("targets");
+        let readback = &t.readbacks[p.slot];
+        let cached = self.last_caustic.as_mut().filter(|(k, _)| *k == p.key);
+        if report.reused {
+            // The frame that computed the maps completed before this one: its states are known.
+            if let Some((_, lights)) = cached {
+                for (l, c) in report.lights.iter_mut().zip(lights.iter()) {
+                    l.state = c.state;
+                    l.transport = c.transport;
+                }
+            }
+        } else {
+            read_results(t, readback, &p.settings, &mut report)?;
+            if let Some((_, lights)) = cached {
+                *lights = report.lights.clone();
             }
         }
-        c0.read_results(&mut report)?;
         report.state = report.lights[0].state;
         report.transport = report.lights[0].transport;
-        let img = c0.read_aov(aov_image)?;
-        self.last_caustic = Some((key, report.lights.clone()));
+        let img = read_aov(t, readback, &p.settings, p.aov)?;
         Ok((report, img))
     }
 }
@@ -708,25 +828,25 @@ impl Ctx<'_> {
         let t = self.t;
         self.barrier(cmd, |b| {
             b.buffer(&t.photon.state, &[Access::ComputeWrite], &[Access::TransferSrc]);
-            b.buffer(&t.readback, &[Access::FrameStart], &[Access::TransferDst]);
+            b.buffer(self.readback, &[Access::FrameStart], &[Access::TransferDst]);
         });
         let size = std::mem::size_of::<TraversalState>() as u64;
         unsafe {
             self.d.cmd_copy_buffer(
                 cmd,
                 t.photon.state.raw,
-                t.readback.raw,
+                self.readback.raw,
                 &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
             )
         };
         self.barrier(cmd, |b| {
-            b.buffer(&t.readback, &[Access::TransferDst], &[Access::HostRead]);
+            b.buffer(self.readback, &[Access::TransferDst], &[Access::HostRead]);
             b.buffer(&t.photon.state, &[Access::TransferSrc], &[Access::ComputeWrite]);
         });
     }
 
     fn read_state(&self) -> VkResult<TraversalState> {
-        Ok(self.t.readback.read::<TraversalState>(0, 1)?[0])
+        Ok(self.readback.read::<TraversalState>(0, 1)?[0])
     }
 
     /// The CPU-driven baseline: the host reads the state back after init and after each level, and records the
@@ -927,7 +1047,7 @@ impl Ctx<'_> {
         });
         self.barrier(cmd, |b| {
             // After the lights' state copies (copy_light_state): write-after-write on other ranges of the buffer.
-            b.buffer(&t.readback, &[Access::TransferDst], &[Access::TransferDst]);
+            b.buffer(self.readback, &[Access::TransferDst], &[Access::TransferDst]);
             if let Some(img) = image {
                 // The composite's outputs are already transfer sources.
                 if !std::ptr::eq(img, &t.eye.beauty) && !std::ptr::eq(img, &t.eye.hdr) {
@@ -950,13 +1070,13 @@ impl Ctx<'_> {
                     cmd,
                     img.raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    t.readback.raw,
+                    self.readback.raw,
                     &[region],
                 );
             }
         }
         self.barrier(cmd, |b| {
-            b.buffer(&t.readback, &[Access::TransferDst], &[Access::HostRead]);
+            b.buffer(self.readback, &[Access::TransferDst], &[Access::HostRead]);
         });
         aov
     }
@@ -971,16 +1091,16 @@ impl Ctx<'_> {
         let transport = std::mem::size_of::<TransportState>() as u64;
         unsafe {
             let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state + i * state, size: state }];
-            d.cmd_copy_buffer(cmd, t.photon.state.raw, t.readback.raw, &copies);
+            d.cmd_copy_buffer(cmd, t.photon.state.raw, self.readback.raw, &copies);
             let copies =
                 [vk::BufferCopy { src_offset: 0, dst_offset: layout.transport + i * transport, size: transport }];
-            d.cmd_copy_buffer(cmd, t.photon.transport.raw, t.readback.raw, &copies);
+            d.cmd_copy_buffer(cmd, t.photon.transport.raw, self.readback.raw, &copies);
             if self.s.debug_photons > 0 && self.pass == 0 {
                 let debug = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
                 d.cmd_copy_buffer(
                     cmd,
                     t.photon.debug.raw,
-                    t.readback.raw,
+                    self.readback.raw,
                     &[vk::BufferCopy { src_offset: 0, dst_offset: layout.debug, size: debug }],
                 );
                 let guard = vk::BufferCopy {
@@ -988,61 +1108,54 @@ impl Ctx<'_> {
                     dst_offset: layout.guard,
                     size: 8 * PHOTON_GUARD as u64,
                 };
-                d.cmd_copy_buffer(cmd, t.photon.photons.raw, t.readback.raw, &[guard]);
+                d.cmd_copy_buffer(cmd, t.photon.photons.raw, self.readback.raw, &[guard]);
             }
         }
     }
+}
 
-    /// Each light's state from the readback buffer (lights that ran their caustic stages this frame).
-    fn read_results(&self, report: &mut FrameReport) -> AppResult<()> {
-        let t = self.t;
-        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
-        if report.reused {
-            return Ok(());
-        }
-        for (i, l) in report.lights.iter_mut().enumerate() {
-            if !l.caustics {
-                continue;
-            }
-            let i = i as u64;
-            let st = t
-                .readback
-                .read::<TraversalState>(layout.state + i * std::mem::size_of::<TraversalState>() as u64, 1)?[0];
-            l.state = Some(st);
-            if self.s.transport == Transport::Exact {
-                let at = layout.transport + i * std::mem::size_of::<TransportState>() as u64;
-                l.transport = Some(t.readback.read::<TransportState>(at, 1)?[0]);
-            }
-        }
-        if let Some(st) = report.lights[0].state {
-            report.unfinished_tiles = if self.s.method == Method::Adaptive { st.stack_size } else { 0 };
-        }
-        if report.lights[0].caustics && self.s.debug_photons > 0 {
-            let header = t.readback.read::<[u32; 4]>(layout.debug, 1)?[0];
-            let n = header[0].min(self.s.debug_photons) as usize;
-            report.debug_rows = t.readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
-            let guard = t.readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
-            report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
-        }
-        Ok(())
+/// Each light's state from the readback buffer (lights that ran their caustic stages this frame).
+fn read_results(t: &Targets, readback: &Buffer, s: &Settings, report: &mut FrameReport) -> AppResult<()> {
+    let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
+    if report.reused {
+        return Ok(());
     }
+    for (i, l) in report.lights.iter_mut().enumerate() {
+        if !l.caustics {
+            continue;
+        }
+        let i = i as u64;
+        let st =
+            readback.read::<TraversalState>(layout.state + i * std::mem::size_of::<TraversalState>() as u64, 1)?[0];
+        l.state = Some(st);
+        if s.transport == Transport::Exact {
+            let at = layout.transport + i * std::mem::size_of::<TransportState>() as u64;
+            l.transport = Some(readback.read::<TransportState>(at, 1)?[0]);
+        }
+    }
+    if let Some(st) = report.lights[0].state {
+        report.unfinished_tiles = if s.method == Method::Adaptive { st.stack_size } else { 0 };
+    }
+    if report.lights[0].caustics && s.debug_photons > 0 {
+        let header = readback.read::<[u32; 4]>(layout.debug, 1)?[0];
+        let n = header[0].min(s.debug_photons) as usize;
+        report.debug_rows = readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
+        let guard = readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
+        report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
+    }
+    Ok(())
+}
 
-    fn read_aov(&self, aov: Option<Aov>) -> AppResult<Option<AovData>> {
-        let t = self.t;
-        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
-        let n = (t.width * t.height) as usize;
-        Ok(match aov {
-            None => None,
-            Some(Aov::Beauty) => Some(AovData::Rgba8 {
-                width: t.width,
-                height: t.height,
-                rgba: t.readback.read::<u8>(layout.aov, 4 * n)?,
-            }),
-            Some(_) => Some(AovData::Float {
-                width: t.width,
-                height: t.height,
-                rgba: t.readback.read::<[f32; 4]>(layout.aov, n)?,
-            }),
-        })
-    }
+fn read_aov(t: &Targets, readback: &Buffer, s: &Settings, aov: Option<Aov>) -> AppResult<Option<AovData>> {
+    let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
+    let n = (t.width * t.height) as usize;
+    Ok(match aov {
+        None => None,
+        Some(Aov::Beauty) => {
+            Some(AovData::Rgba8 { width: t.width, height: t.height, rgba: readback.read::<u8>(layout.aov, 4 * n)? })
+        }
+        Some(_) => {
+            Some(AovData::Float { width: t.width, height: t.height, rgba: readback.read::<[f32; 4]>(layout.aov, n)? })
+        }
+    })
 }

@@ -11,6 +11,7 @@ use crate::settings::{Footprint, Method, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
+
 use ash::vk;
 use glam::Vec3;
 use std::sync::Arc;
@@ -136,6 +137,11 @@ pub struct FrameReport {
     pub reused: bool,
     /// The photon level this frame rendered (below the chosen one while the viewer refines progressively).
     pub level: u32,
+    /// A viewer preview: one eye sample per pixel, glass by two-surface deferred refraction.
+    pub preview: bool,
+    /// Nothing the eye view depends on changed since the last frame (camera, lights, settings, the caustic map):
+    /// its beauty image was presented again, and no eye or composite pass was recorded.
+    pub eye_reused: bool,
     /// The light view of the photon grid (None without caustic passes).
     pub photon_view: Option<LightView>,
     pub state: Option<TraversalState>,
@@ -178,10 +184,21 @@ pub struct Renderer {
     pub scene_buffers: SceneBuffers,
     pub nearest: Sampler,
     pub linear: Sampler,
+    /// One-off uploads (scene buffers).
     pub recorder: Recorder,
-    pub timestamps: Timestamps,
+    /// Each frame in flight's command buffer, fence and timestamp queries.
+    pub(crate) slots: Vec<FrameSlot>,
+    /// Frames submitted and not yet read back, oldest first (at most `frames_in_flight`).
+    pub(crate) pending: std::collections::VecDeque<crate::frame::Pending>,
+    /// Reports of frames completed on the way (a new frame waiting for its slot, a resize), oldest first: see
+    /// [`Renderer::take_completed`].
+    pub(crate) completed: Vec<FrameReport>,
+    /// How many frames may be in flight at once (1: every frame is waited for before the next is recorded).
+    frames_in_flight: usize,
+    /// Frames submitted so far (the next frame's slot is this modulo `frames_in_flight`).
+    pub(crate) submitted: u64,
     pub targets: Option<Targets>,
-    targets_key: Option<(u32, u32, u64, u32, u32, usize, u32)>,
+    targets_key: Option<TargetsKey>,
     pub settings: Settings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
@@ -189,8 +206,13 @@ pub struct Renderer {
     pub reuse: bool,
     /// Bumped whenever the scene's geometry or materials change.
     scene_generation: u64,
-    /// The last completed frame's caustic inputs, with its traversal and transport state.
+    /// The last frame's caustic inputs, with its traversal and transport state (once it completed).
     pub(crate) last_caustic: Option<(String, Vec<LightReport>)>,
+    /// The last frame's eye-view inputs (caustic inputs, uniforms, preview, targets): a frame with the same ones
+    /// has the same beauty image, and records no eye or composite pass.
+    pub(crate) last_eye: Option<u64>,
+    /// Bumped whenever the targets are created or resized.
+    pub(crate) targets_generation: u64,
 }
 
 impl Drop for Renderer {
@@ -246,6 +268,22 @@ fn check_lights(scene: &Scene) -> AppResult<()> {
     Ok(())
 }
 
+/// What the targets' allocation depends on: g-buffer side, caustic map size, photon budget bits, debug photons,
+/// ray queue capacity, passes, ray size and frames in flight.
+type TargetsKey = (u32, u32, u64, u32, u32, usize, u32, usize);
+
+/// The per-frame resources of one frame in flight (its uniforms and readback buffer live in [`Targets`]).
+pub(crate) struct FrameSlot {
+    pub recorder: Recorder,
+    pub timestamps: Timestamps,
+}
+
+impl FrameSlot {
+    fn new(device: &Arc<Device>) -> VkResult<Self> {
+        Ok(FrameSlot { recorder: Recorder::new(device)?, timestamps: Timestamps::new(device, 16384)? })
+    }
+}
+
 impl Renderer {
     pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
         settings.validate()?;
@@ -257,7 +295,11 @@ impl Renderer {
             passes: Passes::new(&device)?,
             nearest: Sampler::new(&device, vk::Filter::NEAREST)?,
             linear: Sampler::new(&device, vk::Filter::LINEAR)?,
-            timestamps: Timestamps::new(&device, 16384)?,
+            slots: vec![FrameSlot::new(&device)?],
+            pending: Default::default(),
+            completed: Vec::new(),
+            frames_in_flight: 1,
+            submitted: 0,
             recorder,
             scene_buffers,
             scene,
@@ -268,6 +310,8 @@ impl Renderer {
             reuse: true,
             scene_generation: 0,
             last_caustic: None,
+            last_eye: None,
+            targets_generation: 0,
             device,
         })
     }
@@ -303,6 +347,26 @@ impl Renderer {
         CameraView::new(camera, width, height, self.scene.bounds())
     }
 
+    /// Let up to `n` frames be in flight (1..=MAX_FRAMES_IN_FLIGHT): [`Renderer::submit_frame`] then returns
+    /// before the GPU has finished, and waits only for the frame that last used the slot it takes. Headless
+    /// rendering keeps 1; the viewer uses 2.
+    pub fn set_frames_in_flight(&mut self, n: usize) -> AppResult<()> {
+        let n = n.clamp(1, crate::vk::swapchain::MAX_FRAMES_IN_FLIGHT);
+        if n == self.frames_in_flight {
+            return Ok(());
+        }
+        self.finish_frames()?;
+        while self.slots.len() < n {
+            self.slots.push(FrameSlot::new(&self.device)?);
+        }
+        self.frames_in_flight = n;
+        Ok(())
+    }
+
+    pub fn frames_in_flight(&self) -> usize {
+        self.frames_in_flight
+    }
+
     pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
         settings.validate()?;
         check_transport(&self.scene, &settings)?;
@@ -318,7 +382,7 @@ impl Renderer {
 
     /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
-    pub(crate) fn ensure_targets(&mut self, width: u32, height: u32, aa: u32) -> VkResult<()> {
+    pub(crate) fn ensure_targets(&mut self, width: u32, height: u32, aa: u32) -> AppResult<()> {
         let s = &self.settings;
         let lights = self.scene.lights.len();
         let passes = lights * self.scene.color_channels();
@@ -330,18 +394,24 @@ impl Renderer {
             s.ray_queue_capacity(),
             passes,
             s.ray_bytes(),
+            self.frames_in_flight,
         );
+        let same_key = self.targets_key == Some(key);
+        let same_size = self.targets.as_ref().is_some_and(|t| (t.width, t.height, t.aa) == (width, height, aa));
+        if same_key && same_size {
+            return Ok(());
+        }
+        // The frames in flight read their results from the buffers about to be replaced: finish them first.
+        self.finish_frames()?;
+        self.targets_generation += 1;
+        self.device.wait_idle()?;
+        let s = &self.settings;
         match self.targets.as_mut() {
-            Some(t) if self.targets_key == Some(key) => {
-                if (t.width, t.height, t.aa) != (width, height, aa) {
-                    self.device.wait_idle()?;
-                    t.resize(&self.device, s, width, height, aa)?;
-                }
-            }
+            Some(t) if same_key => t.resize(&self.device, s, width, height, aa)?,
             _ => {
                 self.targets = None;
-                self.device.wait_idle()?;
-                self.targets = Some(Targets::new(&self.device, s, width, height, aa, lights, passes)?);
+                let slots = self.frames_in_flight;
+                self.targets = Some(Targets::new(&self.device, s, width, height, aa, lights, passes, slots)?);
                 self.targets_key = Some(key);
             }
         }

@@ -91,15 +91,17 @@ pub struct PhotonBuffers {
 }
 
 pub struct Targets {
-    /// The uniforms of each pass: light-major, one per light and color channel (its views, power and channel).
-    pub ubos: Vec<Buffer>,
+    /// The uniforms of each frame in flight (`ubos[slot]`), and within it of each pass: light-major, one per light
+    /// and color channel (its views, power and channel). The host writes a slot's uniforms only after the frame
+    /// that last used that slot has finished.
+    pub ubos: Vec<Vec<Buffer>>,
     pub light: LightTargets,
     /// Each light's receiver g-buffer, shadow map, flux and irradiance maps.
     pub receivers: Vec<ReceiverTargets>,
     pub eye: EyeTargets,
     pub photon: PhotonBuffers,
-    /// Host-visible: the traversal state, the debug dump, the guard, and one AOV image.
-    pub readback: Buffer,
+    /// Host-visible, one per frame in flight: the traversal state, the debug dump, the guard, and one AOV image.
+    pub readbacks: Vec<Buffer>,
     pub width: u32,
     pub height: u32,
     /// Eye-view supersampling factor per side (the eye buffers are `aa` times the output size).
@@ -112,7 +114,8 @@ fn ext(w: u32, h: u32) -> vk::Extent2D {
 
 impl Targets {
     /// `aa`: eye-view supersampling per side; `lights`: how many lights get their own receiver maps
-    /// (1..=MAX_LIGHTS); `passes`: uniforms, one per light and color channel.
+    /// (1..=MAX_LIGHTS); `passes`: uniforms, one per light and color channel; `slots`: frames in flight.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &Arc<Device>,
         s: &Settings,
@@ -121,6 +124,7 @@ impl Targets {
         aa: u32,
         lights: usize,
         passes: usize,
+        slots: usize,
     ) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
         let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
@@ -223,38 +227,52 @@ impl Targets {
         };
 
         Ok(Targets {
-            ubos: (0..passes.max(1))
+            ubos: (0..slots.max(1))
                 .map(|_| {
-                    Buffer::new(
-                        device,
-                        "frame uniforms",
-                        std::mem::size_of::<FrameData>() as u64,
-                        B::UNIFORM_BUFFER,
-                        MemoryLocation::CpuToGpu,
-                    )
+                    (0..passes.max(1))
+                        .map(|_| {
+                            Buffer::new(
+                                device,
+                                "frame uniforms",
+                                std::mem::size_of::<FrameData>() as u64,
+                                B::UNIFORM_BUFFER,
+                                MemoryLocation::CpuToGpu,
+                            )
+                        })
+                        .collect::<VkResult<Vec<_>>>()
                 })
                 .collect::<VkResult<Vec<_>>>()?,
             light,
             receivers,
             eye,
             photon,
-            readback: Self::readback_buffer(device, s, width, height)?,
+            readbacks: Self::readback_buffers(device, s, width, height, slots)?,
             width,
             height,
             aa,
         })
     }
 
-    fn readback_buffer(device: &Arc<Device>, s: &Settings, width: u32, height: u32) -> VkResult<Buffer> {
+    fn readback_buffers(
+        device: &Arc<Device>,
+        s: &Settings,
+        width: u32,
+        height: u32,
+        slots: usize,
+    ) -> VkResult<Vec<Buffer>> {
         let bytes = Self::readback_layout(s, 16 * width as u64 * height as u64).total;
-        Buffer::new(device, "readback", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
+        (0..slots.max(1))
+            .map(|_| {
+                Buffer::new(device, "readback", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
+            })
+            .collect()
     }
 
     /// A new output size: only the eye-sized targets and the readback buffer change.
     pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32, aa: u32) -> VkResult<()> {
         self.eye = EyeTargets::new(device, width, height, aa)?;
         self.aa = aa;
-        self.readback = Self::readback_buffer(device, s, width, height)?;
+        self.readbacks = Self::readback_buffers(device, s, width, height, self.readbacks.len())?;
         self.width = width;
         self.height = height;
         Ok(())

@@ -114,3 +114,45 @@ fn progressive_refinement_converges_to_render() {
     }
     assert_eq!(caustics::vk::validation_message_count(), 0, "validation messages");
 }
+
+fn beauty(s: &mut Session, camera: &str) -> (FrameReport, Vec<u8>) {
+    let cam = s.renderer.scene.camera(Some(camera)).unwrap().clone();
+    let view = s.renderer.camera_view(&cam, 128, 128);
+    let (report, img) = s.renderer.render(&view, Some(Aov::Beauty)).expect("frame");
+    match img.unwrap() {
+        caustics::renderer::AovData::Rgba8 { rgba, .. } => (report, rgba),
+        _ => panic!("the beauty AOV is 8-bit"),
+    }
+}
+
+/// A frame in which nothing changed at all records neither the caustic stages nor the eye view: it presents the
+/// last beauty image again, byte for byte. A camera move re-runs the eye view only; an exposure change too; an
+/// AOV the composite does not write (caustics) always runs the eye view.
+#[test]
+fn nothing_changed_reuses_the_eye_view() {
+    let mut s = open(true);
+    let (r0, b0) = beauty(&mut s, "main");
+    assert!(!r0.reused && !r0.eye_reused);
+    let (r1, b1) = beauty(&mut s, "main");
+    assert!(r1.reused && r1.eye_reused, "nothing changed: both the caustics and the eye view are reused");
+    assert!(!r1.stages.iter().any(|(l, _)| *l == "eye" || *l == "composite"), "{:?}", r1.stages);
+    assert!(r1.stages.iter().any(|(l, _)| *l == "eye_reused"));
+    assert_eq!(b1, b0, "a reused eye view presents the same bytes");
+    let (r2, b2) = beauty(&mut s, "top");
+    assert!(r2.reused && !r2.eye_reused, "a camera move re-runs the eye view");
+    assert_ne!(b2, b0);
+    let (r3, _) = beauty(&mut s, "main");
+    assert!(!r3.eye_reused, "the eye view reused is only the last frame's");
+    let mut settings = s.renderer.settings.clone();
+    settings.exposure_ev += 1.0;
+    s.renderer.set_settings(settings).unwrap();
+    let (r4, b4) = beauty(&mut s, "main");
+    assert!(r4.reused && !r4.eye_reused, "an exposure change re-runs the eye view, not the caustics");
+    assert_ne!(b4, b0);
+    let (r5, _) = frame(&mut s, "main");
+    assert!(!r5.eye_reused, "the caustics AOV comes from the eye pass: it runs");
+    // The profiler's sessions reuse nothing.
+    let mut off = open(false);
+    beauty(&mut off, "main");
+    assert!(!beauty(&mut off, "main").0.eye_reused);
+}

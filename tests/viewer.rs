@@ -407,3 +407,61 @@ fn sigterm_still_writes_the_screenshot() {
     assert_eq!((w, h), (160, 120));
     assert_validation_clean(&read_json(&stats));
 }
+
+/// Two frames in flight (the default) through 200 frames of scripted, mixed interaction: camera orbits, light
+/// drags, an IOR change, a transport and a method switch, and still frames in between. Validation (with
+/// synchronization validation) must stay silent, every scripted frame must be presented, and the reuse the
+/// viewer claims must have happened: still frames present the last image again, orbit frames reuse the caustic
+/// map, and every step after a change converges to the chosen level at full quality.
+#[test]
+fn two_frames_in_flight_through_mixed_interaction() {
+    let dir = out_dir("viewer_in_flight");
+    let x = Xvfb::start();
+    let script = dir.join("mixed.txt");
+    std::fs::write(
+        &script,
+        "10 still\n40 orbit 3\n10 still\n40 drag 4 2\n20 still\n1 key ]\n19 still\n1 key x\n20 drag -4 0\n\
+         1 key 3\n38 still\n",
+    )
+    .unwrap();
+    let args = [
+        "--scene",
+        SPHERE,
+        "--size",
+        "160x120",
+        "--level",
+        "1",
+        "--gbuffer-res",
+        "256",
+        "--caustic-res",
+        "256",
+        "--sky",
+        "0",
+        "--no-vsync",
+        "--frames-in-flight",
+        "2",
+        "--script",
+        script.to_str().unwrap(),
+    ];
+    let s = view_ok(&dir, "mixed", &x.display, &args);
+    let n = |v: &serde_json::Value| v.as_u64().unwrap_or_else(|| panic!("not a count: {v}"));
+    assert_eq!(n(&s["frames_presented"]), 200);
+    assert_eq!(n(&s["frames_in_flight"]), 2);
+    let c = &s["counters"];
+    eprintln!("{}", serde_json::to_string(c).unwrap());
+    assert!(n(&c["caustics_reused_frames"]) >= 40, "orbit frames reuse the caustic map: {c}");
+    assert!(n(&c["eye_reused_frames"]) >= 20, "still frames present the last image again: {c}");
+    assert!(n(&c["preview_frames"]) >= 100, "moving frames are previews: {c}");
+    let steps = s["script"].as_array().expect("script stats");
+    assert_eq!(steps.len(), 11);
+    for st in steps {
+        assert_eq!(st["frames_presented"], st["frames_completed"], "{st}");
+        let step = st["step"].as_str().unwrap();
+        let frames: u64 = step.split_whitespace().next().unwrap().parse().unwrap();
+        assert_eq!(n(&st["frames_presented"]), frames, "{st}");
+        if step.ends_with("still") && frames >= 10 {
+            assert!(st["converged_ms"].as_f64().is_some(), "{step}: never reached the chosen level: {st}");
+            assert_eq!(st["levels"][1], 1, "{st}");
+        }
+    }
+}

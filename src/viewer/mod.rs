@@ -2,8 +2,11 @@
 //! headless renderer's frame (src/frame.rs), whose beauty image is copied into the acquired swapchain image just
 //! before the frame's last submit (present.rs).
 //!
-//! One frame is in flight: `Renderer::render_frame` waits for its fence, which also makes the single acquire
-//! semaphore and the screenshot buffer safe to reuse. Robustness: a resized window, an out-of-date or suboptimal
+//! Frames in flight (`--frames-in-flight`, default 2): the CPU records frame N+1 while the GPU works on frame N.
+//! Each slot has its own command buffer, fence, timestamp queries, uniforms, readback buffer and acquire
+//! semaphore; `Renderer::next_slot` waits for the frame that last used a slot before it is reused, and a frame's
+//! report arrives when it completes (`take_reports`). The GPU-side targets are shared: every frame's first
+//! access to them is a barrier against all earlier commands on the queue. A screenshot frame is waited for. Robustness: a resized window, an out-of-date or suboptimal
 //! swapchain are recreated (the old swapchain passed as `old_swapchain`); a zero-extent (minimized) window is not
 //! rendered and the loop waits for events; a device loss, or any other Vulkan failure, ends the viewer with an error
 //! (exit code 1).
@@ -11,6 +14,7 @@
 mod controls;
 mod orbit;
 mod present;
+mod script;
 
 pub use controls::{help_markdown, help_text, Action, CONTROLS};
 pub use present::{Capture, CaptureSource};
@@ -31,6 +35,7 @@ use glam::{Quat, Vec3};
 use orbit::Orbit;
 use present::Presenter;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use script::{Script, Verb};
 use serde_json::{json, Value};
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -51,6 +56,11 @@ const ANIMATION_PERIOD_S: f32 = 20.0;
 const ANIMATION_MAX_STEP_S: f32 = 0.25;
 /// Frame time the interactive level aims at while the light or the glass moves (progressive refinement).
 const INTERACTIVE_MS: f64 = 100.0;
+/// GPU time the eye view of a preview frame (eye and composite passes) aims at: above it, previews are drawn at a
+/// lower resolution (dynamic resolution, `--preview-scale auto`).
+const PREVIEW_EYE_MS: f64 = 20.0;
+/// The coarsest automatic preview: 1/MAX_PREVIEW_SCALE of the window's resolution per side.
+const MAX_PREVIEW_SCALE: u32 = 4;
 
 /// A light straight above its target is tilted by this much when animated, so that its orbit moves it.
 const ANIMATION_TILT_DEG: f32 = 25.0;
@@ -82,6 +92,20 @@ pub struct ViewArgs {
     /// at an interactive level, then refines one level per frame up to the chosen one).
     #[arg(long)]
     pub no_progressive: bool,
+    /// Resolution of the preview frames drawn while the view moves, as a divisor per side: 1 (full), 2, 3 or 4,
+    /// or 0 for automatic (full resolution while the eye view of a preview costs under 20 ms of GPU time,
+    /// coarser when it costs more). Still frames are always drawn at full resolution.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=4))]
+    pub preview_scale: u32,
+    /// Frames in flight: the CPU records frame N+1 while the GPU still works on frame N (1: wait for every frame
+    /// before recording the next; at most 3).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=3))]
+    pub frames_in_flight: u32,
+    /// Scripted input: one step per line, `FRAMES VERB [ARGS]` with the verbs `orbit DEG`, `drag DX DY`,
+    /// `key NAME` and `still`; the viewer quits after the last step, and --stats gains each step's frame rate and
+    /// time to converge (docs/viewer.md).
+    #[arg(long)]
+    pub script: Option<PathBuf>,
     /// Present this many frames, then exit (0: run until the window is closed).
     #[arg(long, default_value_t = 0)]
     pub frames: u32,
@@ -131,6 +155,7 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     if let Some(p) = &args.stats {
         image_io::check_output_dir(p)?;
     }
+    let script = args.script.as_deref().map(Script::load).transpose()?;
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
     let scene = Scene::load(&scene_path)?;
     let camera = pick_camera(&scene, args.camera.as_deref())?;
@@ -143,7 +168,7 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     let mut app = App {
         args,
         size: (width, height),
-        pending: Some((scene, camera, settings)),
+        pending: Some((scene, camera, settings, script)),
         scene_path,
         viewer: None,
         outcome: None,
@@ -194,7 +219,7 @@ struct Outcome {
 struct App<'a> {
     args: &'a ViewArgs,
     size: (u32, u32),
-    pending: Option<(Scene, Camera, Settings)>,
+    pending: Option<(Scene, Camera, Settings, Option<Script>)>,
     scene_path: PathBuf,
     viewer: Option<Viewer>,
     outcome: Option<Outcome>,
@@ -211,7 +236,12 @@ impl App<'_> {
 
     /// Tear down while the event loop still exists: every GPU object, then the surface, then the window.
     fn teardown(&mut self) {
-        if let Some(v) = self.viewer.take() {
+        if let Some(mut v) = self.viewer.take() {
+            if let Err(e) = v.finish_frames() {
+                if self.error.is_none() {
+                    self.error = Some(e);
+                }
+            }
             let stats = v.stats();
             let capture = v.capture.clone();
             let presented = v.counters.presented;
@@ -258,10 +288,10 @@ impl App<'_> {
 
 impl ApplicationHandler for App<'_> {
     fn resumed(&mut self, el: &ActiveEventLoop) {
-        let Some((scene, camera, settings)) = self.pending.take() else {
+        let Some((scene, camera, settings, script)) = self.pending.take() else {
             return;
         };
-        match Viewer::new(el, self.args, scene, camera, settings, self.size) {
+        match Viewer::new(el, self.args, scene, camera, settings, script, self.size) {
             Ok(v) => self.viewer = Some(v),
             Err(e) => self.fail(el, e),
         }
@@ -320,6 +350,10 @@ struct Counters {
     incomplete_frames: u64,
     resize_requests: u64,
     simulated_minimizes: u64,
+    /// Frames (completed) that reused the caustic map, that presented the last beauty image again, and previews.
+    caustics_reused_frames: u64,
+    eye_reused_frames: u64,
+    preview_frames: u64,
     max_images_per_swapchain: u64,
 }
 
@@ -414,6 +448,10 @@ struct Viewer {
     last_camera: Option<crate::scene::Camera>,
     /// The level rendered while interacting (adapted to keep those frames near INTERACTIVE_MS).
     interactive_level: u32,
+    /// Preview frames are drawn at 1/preview_scale of the window's resolution per side, upscaled when presented.
+    preview_scale: u32,
+    /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near PREVIEW_EYE_MS.
+    preview_scale_fixed: bool,
     /// The level the last frame rendered.
     shown_level: u32,
     last_frame_start: Option<Instant>,
@@ -430,6 +468,8 @@ struct Viewer {
     screenshot_request: bool,
     capture: Option<Capture>,
     resize: Option<ResizeCycle>,
+    /// --script: scripted input, step by step.
+    script: Option<Script>,
     simulated_minimize_until: Option<Instant>,
     quit: bool,
 }
@@ -441,6 +481,7 @@ impl Viewer {
         scene: Scene,
         camera: Camera,
         settings: Settings,
+        script: Option<Script>,
         (width, height): (u32, u32),
     ) -> AppResult<Self> {
         let scene_name = scene.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
@@ -464,7 +505,8 @@ impl Viewer {
             .first()
             .cloned()
             .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
-        let renderer = Renderer::new(device.clone(), scene, settings)?;
+        let mut renderer = Renderer::new(device.clone(), scene, settings)?;
+        renderer.set_frames_in_flight(args.frames_in_flight as usize)?;
         let presenter = Presenter::new(&device);
         eprintln!(
             "caustics view: {} on {} ({}){}",
@@ -498,6 +540,8 @@ impl Viewer {
             orbit_step: args.orbit_camera,
             last_camera: None,
             interactive_level: 2,
+            preview_scale: args.preview_scale.max(1),
+            preview_scale_fixed: args.preview_scale > 0,
             shown_level: 0,
             last_frame_start: None,
             dirty: false,
@@ -511,11 +555,15 @@ impl Viewer {
             screenshot_request: false,
             capture: None,
             resize: (args.resize_cycle > 0).then(|| ResizeCycle::new(args.resize_cycle, (width, height))),
+            script,
             simulated_minimize_until: None,
             quit: false,
         };
         if args.animate {
             viewer.toggle_animation();
+        }
+        if let (Some(s), Some(path)) = (&viewer.script, &args.script) {
+            eprintln!("script {}: {} steps, {} frames", path.display(), s.steps.len(), s.frames_left());
         }
         Ok(viewer)
     }
@@ -821,6 +869,7 @@ impl Viewer {
         let extent = self.swapchain.as_ref().expect("swapchain").extent;
         // Everything that may fail for reasons other than a broken device happens before the acquire: once an image
         // is acquired, its semaphore must be waited on by a submit.
+        self.script_input()?;
         self.apply_input(dt, extent);
         let capture = self.screenshot_request
             || self.capture_every_frame
@@ -828,12 +877,15 @@ impl Viewer {
         let Viewer { renderer, presenter, swapchain, orbit, counters, .. } = self;
         let sc = swapchain.as_ref().expect("swapchain");
         counters.max_images_per_swapchain = counters.max_images_per_swapchain.max(sc.images.len() as u64);
+        // The frame-in-flight slot this frame takes: this waits for the frame that last used it, so that its
+        // acquire semaphore, uniforms and readback buffer are free again.
+        let slot = renderer.next_slot()?;
         presenter.prepare(sc, capture)?;
-        let index = match sc.acquire()? {
+        let index = match sc.acquire(slot)? {
             Acquired::OutOfDate => {
                 counters.acquire_out_of_date += 1;
                 self.dirty = true;
-                return Ok(());
+                return self.take_reports();
             }
             Acquired::Image { index, suboptimal } => {
                 if suboptimal {
@@ -848,10 +900,9 @@ impl Viewer {
             // The answer (Some only where resizes apply at once) is handled by the Resized event or the present.
             let _ = self.window.request_inner_size(PhysicalSize::new(w, h));
         }
-        let view = renderer.camera_view(&orbit.camera(), extent.width, extent.height);
         let sync = SubmitSync {
             // The first access to the swapchain image is the copy into it (present.rs).
-            wait: vec![(sc.acquire_semaphore, vk::PipelineStageFlags2::ALL_TRANSFER)],
+            wait: vec![(sc.acquire_semaphores[slot], vk::PipelineStageFlags2::ALL_TRANSFER)],
             signal: vec![sc.render_done[index as usize]],
         };
         let mut finish =
@@ -868,30 +919,31 @@ impl Viewer {
             chosen.min(self.shown_level.saturating_add(1)).max(chosen.min(self.interactive_level))
         };
         // The eye view's detail waits for the view to hold still: a frame in which the camera, the light or the
-        // glass moved is a preview (one eye sample per pixel, glass by two-surface deferred refraction), and the
-        // next still frame has the chosen --aa and, under exact transport, glass traced through the BVH.
+        // glass moved, or that is still refining, is a preview (one eye sample per pixel, glass by two-surface
+        // deferred refraction, maybe at a lower resolution), and the first still frame at the chosen level has the
+        // chosen --aa and, under exact transport, glass traced through the BVH.
         let camera = orbit.camera();
         let moved = self
             .last_camera
             .as_ref()
             .is_some_and(|c| c.position != camera.position || c.target != camera.target || c.up != camera.up);
-        self.last_camera = Some(camera);
-        renderer.settings.preview = self.progressive && (moved || interacting);
-        let rendered = renderer.render_frame_at(level, &view, None, Some(&mut finish), &sync);
+        self.last_camera = Some(camera.clone());
+        // Frames that refine toward the chosen level are previews too: only the last one pays for the full eye view.
+        let preview = self.progressive && (moved || interacting || level < chosen);
+        renderer.settings.preview = preview;
+        // Dynamic resolution: a preview may be drawn smaller; the copy to the swapchain image scales it up.
+        let scale = if preview { self.preview_scale } else { 1 };
+        let view = renderer.camera_view(&camera, (extent.width / scale).max(1), (extent.height / scale).max(1));
+        let submitted = renderer.submit_frame_at(level, &view, None, Some(&mut finish), &sync);
         renderer.settings.preview = false;
-        let (report, _) = rendered?;
-        if level < chosen && !report.reused {
-            // Keep interactive frames near INTERACTIVE_MS.
-            if report.gpu_ms > 2.0 * INTERACTIVE_MS && self.interactive_level > 0 && level == self.interactive_level {
-                self.interactive_level -= 1;
-            } else if report.gpu_ms < 0.5 * INTERACTIVE_MS && level == self.interactive_level {
-                self.interactive_level += 1;
-            }
-        }
+        submitted?;
         self.shown_level = level;
-        // The shared slot policy; an incomplete frame is still presented (its image can be presented once).
-        if renderer.adapt_batch_slots(&report) != SlotVerdict::Complete {
-            counters.incomplete_frames += 1;
+        if let Some(s) = self.script.as_mut() {
+            s.submitted();
+        }
+        if capture {
+            // The screenshot buffer is read once this frame is done.
+            renderer.finish_frames()?;
         }
         let presented = match sc.present(index)? {
             Presented::Optimal => true,
@@ -907,9 +959,12 @@ impl Viewer {
             }
         };
         if !presented {
-            return Ok(());
+            return self.take_reports();
         }
         counters.presented += 1;
+        if let Some(s) = self.script.as_mut() {
+            s.presented();
+        }
         let now = Instant::now();
         if let Some(t) = self.last_present.replace(now) {
             push_bounded(&mut self.intervals, (now - t).as_secs_f64() * 1e3);
@@ -924,12 +979,81 @@ impl Viewer {
                 }
             }
         }
-        self.update_title(&report);
-        push_bounded(&mut self.ring, report);
+        self.take_reports()?;
         self.resize_tick();
         let cycle_done = self.resize.as_ref().map_or(true, |r| r.finished());
         if self.frames > 0 && self.counters.presented >= self.frames as u64 && cycle_done {
             self.quit = true;
+        }
+        if self.script.as_ref().is_some_and(|s| s.finished()) {
+            self.quit = true;
+        }
+        Ok(())
+    }
+
+    /// --script: this frame's scripted input (a camera orbit, a light drag, a key).
+    fn script_input(&mut self) -> AppResult<()> {
+        let Some((verb, first)) = self.script.as_mut().and_then(|s| s.begin_frame()) else {
+            return Ok(());
+        };
+        match verb {
+            Verb::Orbit(deg) => self.orbit.rotate(deg.to_radians(), 0.0),
+            Verb::Drag(dx, dy) => {
+                self.input.light_drag.0 += dx;
+                self.input.light_drag.1 += dy;
+            }
+            Verb::Key(action) if first => self.act(action)?,
+            Verb::Key(_) | Verb::Still => {}
+        }
+        Ok(())
+    }
+
+    /// Wait for every frame in flight and take in their reports (before reading the stats at exit).
+    fn finish_frames(&mut self) -> AppResult<()> {
+        self.renderer.finish_frames()?;
+        self.take_reports()
+    }
+
+    /// Take in the reports of the frames that completed (a frame's report arrives when a later frame needs its
+    /// slot): the title, the profiler's ring, the batch slots and the interactive level follow them.
+    fn take_reports(&mut self) -> AppResult<()> {
+        for report in self.renderer.take_completed() {
+            let chosen = self.renderer.settings.level;
+            if let Some(s) = self.script.as_mut() {
+                s.completed(report.level, chosen, report.preview);
+            }
+            self.counters.caustics_reused_frames += report.reused as u64;
+            self.counters.eye_reused_frames += report.eye_reused as u64;
+            self.counters.preview_frames += report.preview as u64;
+            if report.preview && !report.eye_reused && !self.preview_scale_fixed {
+                // Dynamic resolution: keep a preview's eye view near PREVIEW_EYE_MS (a scale s costs about 1/s² of
+                // full resolution).
+                let stage = |name: &str| report.stages.iter().find(|(l, _)| *l == name).map_or(0.0, |(_, ms)| *ms);
+                let eye_ms = stage("eye") + stage("composite");
+                let s = self.preview_scale;
+                let full_res_ms = eye_ms * (s * s) as f64;
+                let want = (1..=MAX_PREVIEW_SCALE).find(|&k| full_res_ms / (k * k) as f64 <= PREVIEW_EYE_MS);
+                let want = want.unwrap_or(MAX_PREVIEW_SCALE);
+                // Go finer only with a margin, so that the scale does not flip from frame to frame.
+                if want > s || (want < s && full_res_ms / (want * want) as f64 <= 0.6 * PREVIEW_EYE_MS) {
+                    self.preview_scale = want;
+                }
+            }
+            if report.level < chosen && !report.reused {
+                // Keep interactive frames near INTERACTIVE_MS.
+                let at_interactive = report.level == self.interactive_level;
+                if report.gpu_ms > 2.0 * INTERACTIVE_MS && self.interactive_level > 0 && at_interactive {
+                    self.interactive_level -= 1;
+                } else if report.gpu_ms < 0.5 * INTERACTIVE_MS && at_interactive {
+                    self.interactive_level += 1;
+                }
+            }
+            // The shared slot policy; an incomplete frame is still presented (its image can be presented once).
+            if self.renderer.adapt_batch_slots(&report) != SlotVerdict::Complete {
+                self.counters.incomplete_frames += 1;
+            }
+            self.update_title(&report);
+            push_bounded(&mut self.ring, report);
         }
         Ok(())
     }
@@ -1026,6 +1150,8 @@ impl Viewer {
             "equivalent_resolution": LEVEL0_RES << s.level,
             "settings": s,
             "frames_presented": self.counters.presented,
+            "frames_in_flight": self.renderer.frames_in_flight(),
+            "preview_scale": self.preview_scale,
             "counters": self.counters,
             "swapchain_recreations": self.counters.swapchain_recreations,
             "resizes_seen": self.counters.resizes_seen,
@@ -1049,6 +1175,7 @@ impl Viewer {
             "frame_ms": stage("frame_wall"),
             "present_interval_ms": interval,
             "fps": if interval.median > 0.0 { 1e3 / interval.median } else { 0.0 },
+            "script": self.script.as_ref().map(|s| s.stats()),
         })
     }
 }

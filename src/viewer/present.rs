@@ -140,7 +140,12 @@ impl Presenter {
                 .dst_image(dst)
                 .dst_image_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
                 .regions(std::slice::from_ref(&region))
-                .filter(vk::Filter::NEAREST);
+                // A preview drawn at a lower resolution is scaled up with bilinear filtering.
+                .filter(if (src_extent.width, src_extent.height) == (extent.width, extent.height) {
+                    vk::Filter::NEAREST
+                } else {
+                    vk::Filter::LINEAR
+                });
             unsafe { d.cmd_blit_image2(cmd, &info) };
         };
         match &self.intermediate {

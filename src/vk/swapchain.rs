@@ -167,6 +167,9 @@ pub enum Presented {
     OutOfDate,
 }
 
+/// The most frames the viewer keeps in flight (one acquire semaphore each).
+pub const MAX_FRAMES_IN_FLIGHT: usize = 3;
+
 /// How long an acquire may block before it is reported as an error rather than waited on forever.
 pub const ACQUIRE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
 
@@ -180,9 +183,10 @@ pub struct Swapchain {
     pub extent: vk::Extent2D,
     pub present_mode: vk::PresentModeKHR,
     pub usage: vk::ImageUsageFlags,
-    /// Signalled by an acquire, waited on by the frame's submit. One suffices because the caller waits for each
-    /// frame's fence before acquiring again.
-    pub acquire_semaphore: vk::Semaphore,
+    /// Signalled by an acquire, waited on by the frame's submit: one per frame in flight. The caller acquires with
+    /// slot `s`'s semaphore only after the frame that last used slot `s` has finished (its fence), so the semaphore
+    /// has no pending wait when it is signalled again.
+    pub acquire_semaphores: Vec<vk::Semaphore>,
     /// One per image, signalled by the frame's submit and waited on by the present: a present's wait is known to
     /// be over only when its image is acquired again.
     pub render_done: Vec<vk::Semaphore>,
@@ -297,14 +301,17 @@ impl Swapchain {
             extent,
             present_mode,
             usage,
-            acquire_semaphore: vk::Semaphore::null(),
+            acquire_semaphores: Vec::new(),
             render_done: Vec::new(),
             desc,
         };
         for (i, image) in swapchain.images.iter().enumerate() {
             device.set_name(*image, &format!("swapchain image {i}"));
         }
-        swapchain.acquire_semaphore = swapchain.semaphore("acquire")?;
+        for slot in 0..MAX_FRAMES_IN_FLIGHT {
+            let s = swapchain.semaphore(&format!("acquire {slot}"))?;
+            swapchain.acquire_semaphores.push(s);
+        }
         for i in 0..swapchain.images.len() {
             let s = swapchain.semaphore(&format!("render done {i}"))?;
             swapchain.render_done.push(s);
@@ -338,10 +345,12 @@ impl Swapchain {
         }
     }
 
-    /// Acquire the next image, signalling [`Self::acquire_semaphore`].
-    pub fn acquire(&self) -> VkResult<Acquired> {
+    /// Acquire the next image for the frame in flight `slot`, signalling its semaphore
+    /// (`acquire_semaphores[slot]`).
+    pub fn acquire(&self, slot: usize) -> VkResult<Acquired> {
         let timeout = ACQUIRE_TIMEOUT.as_nanos() as u64;
-        match unsafe { self.loader.acquire_next_image(self.raw, timeout, self.acquire_semaphore, vk::Fence::null()) } {
+        let semaphore = self.acquire_semaphores[slot % self.acquire_semaphores.len()];
+        match unsafe { self.loader.acquire_next_image(self.raw, timeout, semaphore, vk::Fence::null()) } {
             Ok((index, suboptimal)) => Ok(Acquired::Image { index, suboptimal }),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Acquired::OutOfDate),
             Err(vk::Result::TIMEOUT) | Err(vk::Result::NOT_READY) => Err(VkError::Unsupported(format!(
@@ -383,7 +392,7 @@ impl Drop for Swapchain {
         unsafe {
             // A present may still wait on the semaphores, and the images may still be read or written.
             let _ = self.device.wait_idle();
-            for s in self.render_done.drain(..).chain(std::iter::once(self.acquire_semaphore)) {
+            for s in self.render_done.drain(..).chain(self.acquire_semaphores.drain(..)) {
                 if s != vk::Semaphore::null() {
                     self.device.destroy_semaphore(s, None);
                 }
