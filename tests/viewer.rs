@@ -22,7 +22,30 @@ struct Xvfb {
 }
 
 impl Xvfb {
+    /// Start Xvfb and wait until its socket accepts connections; a server that dies on the way (this happened
+    /// once while other X servers started and stopped on the machine) is replaced, up to three times.
     fn start() -> Xvfb {
+        for _ in 0..3 {
+            let mut x = Xvfb::spawn();
+            let n = x.display.trim_start_matches(':').to_string();
+            let socket = std::path::PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(5) {
+                let alive = matches!(x.child.try_wait(), Ok(None));
+                if alive && std::os::unix::net::UnixStream::connect(&socket).is_ok() {
+                    return x;
+                }
+                if !alive {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            eprintln!("Xvfb on {} did not accept connections: starting another", x.display);
+        }
+        panic!("no Xvfb server accepted connections after three starts");
+    }
+
+    fn spawn() -> Xvfb {
         let mut child = Command::new("Xvfb")
             .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
             .stdin(Stdio::null())
