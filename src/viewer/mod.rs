@@ -54,11 +54,13 @@ const ANIMATION_PERIOD_S: f32 = 20.0;
 /// ...counting at most this much per frame, so that slow frames (lavapipe) turn it in small steps and a pause
 /// (a minimized window) does not make it jump.
 const ANIMATION_MAX_STEP_S: f32 = 0.25;
-/// Frame time the interactive level aims at while the light or the glass moves (progressive refinement).
-const INTERACTIVE_MS: f64 = 100.0;
+/// GPU time per frame the interactive level aims at while the light or the glass moves (progressive
+/// refinement), by default: about 80 fps on a GPU, at least 5 fps on a CPU device (`--interactive-ms`).
+const INTERACTIVE_MS_GPU: f64 = 12.0;
+const INTERACTIVE_MS_CPU: f64 = 150.0;
 /// GPU time the eye view of a preview frame (eye and composite passes) aims at: above it, previews are drawn at a
 /// lower resolution (dynamic resolution, `--preview-scale auto`).
-const PREVIEW_EYE_MS: f64 = 20.0;
+const PREVIEW_EYE_MS: f64 = 30.0;
 /// The coarsest automatic preview: 1/MAX_PREVIEW_SCALE of the window's resolution per side.
 const MAX_PREVIEW_SCALE: u32 = 4;
 
@@ -92,8 +94,12 @@ pub struct ViewArgs {
     /// at an interactive level, then refines one level per frame up to the chosen one).
     #[arg(long)]
     pub no_progressive: bool,
+    /// GPU milliseconds per frame that the interactive level aims at while the light or the glass moves (default:
+    /// 12 on GPUs, 150 on CPU devices such as lavapipe).
+    #[arg(long)]
+    pub interactive_ms: Option<f64>,
     /// Resolution of the preview frames drawn while the view moves, as a divisor per side: 1 (full), 2, 3 or 4,
-    /// or 0 for automatic (full resolution while the eye view of a preview costs under 20 ms of GPU time,
+    /// or 0 for automatic (full resolution while the eye view of a preview costs under 30 ms of GPU time,
     /// coarser when it costs more). Still frames are always drawn at full resolution.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=4))]
     pub preview_scale: u32,
@@ -154,6 +160,13 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     }
     if let Some(p) = &args.stats {
         image_io::check_output_dir(p)?;
+    }
+    if let Some(ms) = args.interactive_ms {
+        if !(ms.is_finite() && ms > 0.0) {
+            return Err(AppError::BadInput(format!(
+                "--interactive-ms {ms}: expected a positive number of milliseconds"
+            )));
+        }
     }
     let script = args.script.as_deref().map(Script::load).transpose()?;
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
@@ -446,8 +459,10 @@ struct Viewer {
     orbit_step: f32,
     /// The camera of the last frame drawn (a change draws the next frame without supersampling).
     last_camera: Option<crate::scene::Camera>,
-    /// The level rendered while interacting (adapted to keep those frames near INTERACTIVE_MS).
+    /// The level rendered while interacting (adapted to keep those frames near `interactive_ms`).
     interactive_level: u32,
+    /// GPU ms per frame the interactive level aims at.
+    interactive_ms: f64,
     /// Preview frames are drawn at 1/preview_scale of the window's resolution per side, upscaled when presented.
     preview_scale: u32,
     /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near PREVIEW_EYE_MS.
@@ -540,6 +555,11 @@ impl Viewer {
             orbit_step: args.orbit_camera,
             last_camera: None,
             interactive_level: 2,
+            interactive_ms: args.interactive_ms.unwrap_or(if device.info.kind == vk::PhysicalDeviceType::CPU {
+                INTERACTIVE_MS_CPU
+            } else {
+                INTERACTIVE_MS_GPU
+            }),
             preview_scale: args.preview_scale.max(1),
             preview_scale_fixed: args.preview_scale > 0,
             shown_level: 0,
@@ -1039,13 +1059,13 @@ impl Viewer {
                     self.preview_scale = want;
                 }
             }
-            if report.level < chosen && !report.reused {
-                // Keep interactive frames near INTERACTIVE_MS.
-                let at_interactive = report.level == self.interactive_level;
-                if report.gpu_ms > 2.0 * INTERACTIVE_MS && self.interactive_level > 0 && at_interactive {
-                    self.interactive_level -= 1;
-                } else if report.gpu_ms < 0.5 * INTERACTIVE_MS && at_interactive {
-                    self.interactive_level += 1;
+            let interactive = self.interactive_level.min(chosen);
+            if self.progressive && report.preview && !report.reused && report.level == interactive {
+                // Keep interactive frames near `interactive_ms` (a level costs up to 4 times the one below it).
+                if report.gpu_ms > 1.5 * self.interactive_ms && interactive > 0 {
+                    self.interactive_level = interactive - 1;
+                } else if report.gpu_ms < 0.3 * self.interactive_ms && interactive < chosen {
+                    self.interactive_level = interactive + 1;
                 }
             }
             // The shared slot policy; an incomplete frame is still presented (its image can be presented once).
@@ -1152,6 +1172,8 @@ impl Viewer {
             "frames_presented": self.counters.presented,
             "frames_in_flight": self.renderer.frames_in_flight(),
             "preview_scale": self.preview_scale,
+            "interactive_level": self.interactive_level,
+            "interactive_ms": self.interactive_ms,
             "counters": self.counters,
             "swapchain_recreations": self.counters.swapchain_recreations,
             "resizes_seen": self.counters.resizes_seen,
