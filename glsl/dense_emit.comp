@@ -5,7 +5,6 @@
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
-#include "common/view.glsl"
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
@@ -30,10 +29,7 @@ void main() {
     uint slot = 0u;
     if (xy.x < n && gl_GlobalInvocationID.y < pc.rows && xy.y < n) {
         atomicAdd(s_cand, 1u);
-        View v = u_frame.photon_view;
-        float side = v.window.z / float(n);
-        vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
-        emit = leaf_covered(level, xy) && view_in_cone(v, center);
+        emit = leaf_emitted(level, xy);
         if (emit) {
             slot = atomicAdd(s_emitted, 1u);
         } else {

@@ -8,6 +8,10 @@
 // flux-error metric (docs/design.md, "The flux-error metric") a cell is final when merging its children into one
 // photon changes the caustic map, box-filtered to 64², by at most --target-error times the cell's flux; when the
 // same traces predict that each child would be final, the four children are emitted at once (look-ahead).
+// TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
+// branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md), and
+// the last level fused into the one before: a cell at level L - 1 emits those of its four children that dense
+// emission would emit, instead of appending them as candidates of level L.
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
@@ -25,11 +29,16 @@ shared uint s_dropped;
 shared uint s_emit_base;
 shared uint s_child_base;
 shared bool s_reserved;
+shared uint s_leaf_cells;  // max-level: cells of level L - 1 whose children were tested here (fused last level)
+shared uint s_leaf_emit;   // max-level: photons those children gave
 
 const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
 const uint ACT_REFINE = 2u;
 const uint ACT_EMIT_CHILDREN = 3u;  // flux-error look-ahead: four photons, the cell's children
+const uint ACT_EMIT_LEAVES = 4u;    // max-level at level L - 1: the children that pass dense's test, as photons
+
+#ifndef TRAVERSE_MAX_LEVEL
 
 const uint CHILDREN_REFINE = 0xFFFFFFFFu;
 const uint CHILDREN_DROP = 0xFFFFFFFEu;
@@ -156,9 +165,13 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     return FE_REFINE;
 }
 
-// Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined.
-uint decide(uint level, uvec2 cell, out uvec2 out_cell) {
+#endif  // !TRAVERSE_MAX_LEVEL
+
+// Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined. `leaves` (max-level,
+// ACT_EMIT_LEAVES): bit k set when child k is emitted.
+uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
     out_cell = cell;
+    leaves = 0u;
     uvec2 xy = cell_xy(cell);
     View v = u_frame.photon_view;
     float side = cell_side(level);
@@ -167,8 +180,17 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell) {
     if (!cell_any_covered(level, xy) || !view_rect_touches_cone(v, lo, hi)) return ACT_DROP;
     if (level >= u_frame.traversal.x) {
         // The same test as the dense method, so that max-level traversal emits exactly dense's photons.
-        return leaf_covered(level, xy) && view_in_cone(v, 0.5 * (lo + hi)) ? ACT_EMIT : ACT_DROP;
+        return leaf_emitted(level, xy) ? ACT_EMIT : ACT_DROP;
     }
+#ifdef TRAVERSE_MAX_LEVEL
+    if (level + 1u == u_frame.traversal.x) {
+        for (uint k = 0u; k < 4u; k++) {
+            if (leaf_emitted(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1))) leaves |= 1u << k;
+        }
+        return ACT_EMIT_LEAVES;
+    }
+    return ACT_REFINE;
+#else
     uint metric = u_frame.traversal.y & 0xFFu;
     if (metric == 2u && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
         uint r;
@@ -196,6 +218,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell) {
         }
     }
     return ACT_REFINE;
+#endif
 }
 
 void main() {
@@ -204,6 +227,8 @@ void main() {
         s_emit_n = 0u;
         s_child_n = 0u;
         s_dropped = 0u;
+        s_leaf_cells = 0u;
+        s_leaf_emit = 0u;
     }
     barrier();
     uint per_group = TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE;
@@ -213,11 +238,18 @@ void main() {
     uint action = ACT_DROP;
     uvec2 out_cell = uvec2(0u);
     uint slot = 0u;
+    uint leaves = 0u;
     if (state.aborted == 0u && i < state.read_count) {
         uvec2 cell = photons[state.read_offset + i];
-        action = decide(cell_level(cell), cell, out_cell);
+        action = decide(cell_level(cell), cell, out_cell, leaves);
         if (action == ACT_EMIT) slot = atomicAdd(s_emit_n, 1u);
         if (action == ACT_EMIT_CHILDREN) slot = atomicAdd(s_emit_n, 4u);
+        if (action == ACT_EMIT_LEAVES) {
+            uint n = bitCount(leaves);
+            slot = atomicAdd(s_emit_n, n);
+            atomicAdd(s_leaf_cells, 1u);
+            atomicAdd(s_leaf_emit, n);
+        }
         if (action == ACT_REFINE) slot = atomicAdd(s_child_n, 1u);
         if (action == ACT_DROP) atomicAdd(s_dropped, 1u);
     }
@@ -253,6 +285,16 @@ void main() {
                 photons[state.capacity - 1u - (s_emit_base + slot + k)] =
                     pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
             }
+        } else if (action == ACT_EMIT_LEAVES) {
+            uvec2 xy = cell_xy(out_cell);
+            uint j = 0u;
+            for (uint k = 0u; k < 4u; k++) {
+                if ((leaves & (1u << k)) != 0u) {
+                    photons[state.capacity - 1u - (s_emit_base + slot + j)] =
+                        pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), 0u);
+                    j++;
+                }
+            }
         } else if (action == ACT_REFINE) {
             uvec2 xy = cell_xy(out_cell);
             uint base = state.read_offset + state.read_count + s_child_base + 4u * slot;
@@ -263,8 +305,15 @@ void main() {
     }
     if (lid == 0u) {
         // One atomic per work group instead of one per invocation.
-        if (s_reserved && s_child_n > 0u) atomicAdd(state.batch_levels[level].refined, s_child_n);
-        if (s_reserved && s_emit_n > 0u) atomicAdd(state.batch_levels[level].emitted, s_emit_n);
+        uint refined = s_child_n + s_leaf_cells, emitted = s_emit_n - s_leaf_emit;
+        if (s_reserved && refined > 0u) atomicAdd(state.batch_levels[level].refined, refined);
+        if (s_reserved && emitted > 0u) atomicAdd(state.batch_levels[level].emitted, emitted);
         if (s_dropped > 0u) atomicAdd(state.batch_levels[level].dropped, s_dropped);
+        if (s_reserved && s_leaf_cells > 0u) {
+            // The fused last level's counts, as if its candidates had been traversed there.
+            atomicAdd(state.batch_levels[level + 1u].candidates, 4u * s_leaf_cells);
+            if (s_leaf_emit > 0u) atomicAdd(state.batch_levels[level + 1u].emitted, s_leaf_emit);
+            if (4u * s_leaf_cells > s_leaf_emit) atomicAdd(state.batch_levels[level + 1u].dropped, 4u * s_leaf_cells - s_leaf_emit);
+        }
     }
 }

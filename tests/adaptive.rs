@@ -46,6 +46,42 @@ fn adaptive_max_level_matches_dense() {
     }
 }
 
+/// The emitted cells themselves, not only their number and image: adaptive max-level emits exactly dense's set
+/// of (level, x, y), also when a tiny budget splits the traversal into batches whose tiles start at deep levels.
+/// The slab overflows the spot cone, so the cone test at the cell centers matters there.
+#[test]
+fn max_level_emits_exactly_dense_cells() {
+    let dir = out_dir("max_level_cells");
+    let cells = |s: &Value| -> Vec<(u64, u64, u64)> {
+        let list = s["debug_photons"].as_array().unwrap();
+        assert_eq!(list.len() as u64, s["photons_splatted"].as_u64().unwrap(), "every photon dumped");
+        let mut v: Vec<_> = list
+            .iter()
+            .map(|p| (p["level"].as_u64().unwrap(), p["y"].as_u64().unwrap(), p["x"].as_u64().unwrap()))
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let slab = scene("slab.toml");
+    for (scene, name) in [(SPHERE, "sphere"), (slab.as_str(), "slab")] {
+        let common = ["--transport", "two-interface", "--level", "2", "--debug-photons", "200000"];
+        let (d, _) =
+            caustics_aov(&dir, &format!("{name}_dense"), scene, &[&common[..], &["--method", "dense"]].concat());
+        let dense = cells(&d);
+        assert!(dense.len() > 1000, "{name}: {} photons", dense.len());
+        assert!(dense.iter().all(|c| c.0 == 2));
+        for (tag, budget) in [("one", "64"), ("tiny", "0.125")] {
+            let extra =
+                [&common[..], &["--method", "adaptive", "--metric", "max-level", "--photon-budget", budget]].concat();
+            let (a, _) = caustics_aov(&dir, &format!("{name}_{tag}"), scene, &extra);
+            if tag == "tiny" {
+                assert!(a["batches"].as_u64().unwrap() > 1, "{name}: batches {}", a["batches"]);
+            }
+            assert!(cells(&a) == dense, "{name} ({tag}): max-level's cells differ from dense's");
+        }
+    }
+}
+
 /// GPU-driven traversal reads nothing back; the CPU-driven baseline reads each level's count back. The images
 /// are the same up to float summation order.
 #[test]

@@ -3,6 +3,7 @@
 // finer levels share the base texel that contains them.
 #ifndef COVERAGE_GLSL
 #define COVERAGE_GLSL
+#include "common/view.glsl"
 
 uint pyramid_offset(uint m) { return u_frame.pyramid[m >> 2][m & 3u]; }
 
@@ -32,6 +33,16 @@ uvec2 leaf_texel(uint level, uvec2 xy) {
 bool leaf_covered(uint level, uvec2 xy) {
     uvec2 t = leaf_texel(level, xy);
     return (coverage[pyramid_offset(0u) + t.y * u_frame.grid.x + t.x] & 1u) != 0u;
+}
+
+// Is the leaf cell (level, xy) a photon of the dense grid: its center's base texel is covered and its center lies
+// inside the cone. Dense emission and max-level traversal both decide by this one function, with the same float
+// arithmetic, so that max-level traversal emits exactly dense's cells.
+bool leaf_emitted(uint level, uvec2 xy) {
+    View v = u_frame.photon_view;
+    float side = v.window.z / float(LEVEL0_RES << level);
+    vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
+    return leaf_covered(level, xy) && view_in_cone(v, center);
 }
 
 #endif

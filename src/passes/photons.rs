@@ -1,4 +1,4 @@
-//! The photon passes: init, traverse (one pipeline per work-group size), stats, dense emission, the two-interface
+//! The photon passes: init, traverse (one pipeline per work-group size, and one per size for max-level), stats, dense emission, the two-interface
 //! trace or the exact transport's waves, and the splat. They share one binding layout
 //! (glsl/common/photon_bindings.glsl).
 
@@ -115,6 +115,8 @@ pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
     traverse: Vec<(u32, Pipeline)>,
+    /// The max-level variant (TRAVERSE_MAX_LEVEL): no metric code, the last level fused into the one before.
+    traverse_max_level: Vec<(u32, Pipeline)>,
     stats: Pipeline,
     dense_emit: Pipeline,
     trace: Pipeline,
@@ -141,6 +143,13 @@ impl PhotonPasses {
             (8, compute("traverse 8x8", shaders::TRAVERSE_COMP_WG8.words())?),
             (16, compute("traverse 16x16", shaders::TRAVERSE_COMP_WG16.words())?),
         ];
+        let traverse_max_level = vec![
+            (1, compute("traverse max-level 1x1", shaders::TRAVERSE_COMP_MAX_LEVEL_WG1.words())?),
+            (2, compute("traverse max-level 2x2", shaders::TRAVERSE_COMP_MAX_LEVEL_WG2.words())?),
+            (4, compute("traverse max-level 4x4", shaders::TRAVERSE_COMP_MAX_LEVEL_WG4.words())?),
+            (8, compute("traverse max-level 8x8", shaders::TRAVERSE_COMP_MAX_LEVEL_WG8.words())?),
+            (16, compute("traverse max-level 16x16", shaders::TRAVERSE_COMP_MAX_LEVEL_WG16.words())?),
+        ];
         let splat = Pipeline::graphics(
             device,
             "splat",
@@ -161,6 +170,7 @@ impl PhotonPasses {
             device: device.clone(),
             init: compute("init", shaders::INIT_COMP.words())?,
             traverse,
+            traverse_max_level,
             stats: compute("stats", shaders::STATS_COMP.words())?,
             dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
             trace: compute("photon trace", shaders::TRACE_COMP.words())?,
@@ -182,8 +192,10 @@ impl PhotonPasses {
         })
     }
 
-    fn traverse_pipeline(&self, wg: u32) -> &Pipeline {
-        self.traverse.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&self.traverse[3].1)
+    /// `max_level`: the max-level metric's own variant (the same photons as the general shader, faster).
+    fn traverse_pipeline(&self, wg: u32, max_level: bool) -> &Pipeline {
+        let list = if max_level { &self.traverse_max_level } else { &self.traverse };
+        list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1)
     }
 
     pub fn init(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, wg: u32) {
@@ -193,16 +205,24 @@ impl PhotonPasses {
     }
 
     /// One traversal level, launched with vkCmdDispatchIndirect from the GPU-written arguments.
-    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32) {
-        let p = self.traverse_pipeline(wg);
+    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32, max_level: bool) {
+        let p = self.traverse_pipeline(wg, max_level);
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
     }
 
     /// One traversal level with host-computed work groups (the CPU-driven baseline).
-    pub fn traverse_direct(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32, count: u32) {
-        let p = self.traverse_pipeline(wg);
+    pub fn traverse_direct(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        level: u32,
+        wg: u32,
+        count: u32,
+        max_level: bool,
+    ) {
+        let p = self.traverse_pipeline(wg, max_level);
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         let groups = count.div_ceil(wg * wg);
