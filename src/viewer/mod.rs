@@ -467,6 +467,8 @@ struct Viewer {
     preview_scale: u32,
     /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near PREVIEW_EYE_MS.
     preview_scale_fixed: bool,
+    /// The scale of each frame submitted and not yet reported, oldest first.
+    submitted_scales: VecDeque<u32>,
     /// The level the last frame rendered.
     shown_level: u32,
     last_frame_start: Option<Instant>,
@@ -562,6 +564,7 @@ impl Viewer {
             }),
             preview_scale: args.preview_scale.max(1),
             preview_scale_fixed: args.preview_scale > 0,
+            submitted_scales: VecDeque::new(),
             shown_level: 0,
             last_frame_start: None,
             dirty: false,
@@ -957,6 +960,7 @@ impl Viewer {
         let submitted = renderer.submit_frame_at(level, &view, None, Some(&mut finish), &sync);
         renderer.settings.preview = false;
         submitted?;
+        self.submitted_scales.push_back(scale);
         self.shown_level = level;
         if let Some(s) = self.script.as_mut() {
             s.submitted();
@@ -1045,18 +1049,19 @@ impl Viewer {
             self.counters.caustics_reused_frames += report.reused as u64;
             self.counters.eye_reused_frames += report.eye_reused as u64;
             self.counters.preview_frames += report.preview as u64;
-            if report.preview && !report.eye_reused && !self.preview_scale_fixed {
-                // Dynamic resolution: keep a preview's eye view near PREVIEW_EYE_MS (a scale s costs about 1/s² of
-                // full resolution).
+            // The preview scale this frame was drawn at (frames complete in the order they were submitted).
+            let drawn_at = self.submitted_scales.pop_front().unwrap_or(1);
+            if report.preview && !report.eye_reused && !self.preview_scale_fixed && drawn_at == self.preview_scale {
+                // Dynamic resolution: keep a preview's eye view under PREVIEW_EYE_MS. Coarser as soon as it costs
+                // more; finer when the next finer scale would still fit with a margin if all of the cost scaled with
+                // the pixels (part of it, the vertices, does not, so the real cost there is lower).
                 let stage = |name: &str| report.stages.iter().find(|(l, _)| *l == name).map_or(0.0, |(_, ms)| *ms);
                 let eye_ms = stage("eye") + stage("composite");
                 let s = self.preview_scale;
-                let full_res_ms = eye_ms * (s * s) as f64;
-                let want = (1..=MAX_PREVIEW_SCALE).find(|&k| full_res_ms / (k * k) as f64 <= PREVIEW_EYE_MS);
-                let want = want.unwrap_or(MAX_PREVIEW_SCALE);
-                // Go finer only with a margin, so that the scale does not flip from frame to frame.
-                if want > s || (want < s && full_res_ms / (want * want) as f64 <= 0.6 * PREVIEW_EYE_MS) {
-                    self.preview_scale = want;
+                if eye_ms > PREVIEW_EYE_MS && s < MAX_PREVIEW_SCALE {
+                    self.preview_scale = s + 1;
+                } else if s > 1 && eye_ms * ((s * s) as f64 / ((s - 1) * (s - 1)) as f64) <= 0.8 * PREVIEW_EYE_MS {
+                    self.preview_scale = s - 1;
                 }
             }
             let interactive = self.interactive_level.min(chosen);
