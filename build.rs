@@ -20,11 +20,16 @@ type Define = (&'static str, &'static str);
 
 /// (source file, variant suffix, extra macros).
 const VARIANTS: &[(&str, &str, &[Define])] = &[
-    ("traverse.comp", "wg1", &[("TRAVERSE_WG_SIDE", "1")]),
-    ("traverse.comp", "wg2", &[("TRAVERSE_WG_SIDE", "2")]),
-    ("traverse.comp", "wg4", &[("TRAVERSE_WG_SIDE", "4")]),
-    ("traverse.comp", "wg8", &[("TRAVERSE_WG_SIDE", "8")]),
-    ("traverse.comp", "wg16", &[("TRAVERSE_WG_SIDE", "16")]),
+    ("traverse.comp", "max_error_wg1", &[("TRAVERSE_WG_SIDE", "1"), ("TRAVERSE_METRIC", "1")]),
+    ("traverse.comp", "max_error_wg2", &[("TRAVERSE_WG_SIDE", "2"), ("TRAVERSE_METRIC", "1")]),
+    ("traverse.comp", "max_error_wg4", &[("TRAVERSE_WG_SIDE", "4"), ("TRAVERSE_METRIC", "1")]),
+    ("traverse.comp", "max_error_wg8", &[("TRAVERSE_WG_SIDE", "8"), ("TRAVERSE_METRIC", "1")]),
+    ("traverse.comp", "max_error_wg16", &[("TRAVERSE_WG_SIDE", "16"), ("TRAVERSE_METRIC", "1")]),
+    ("traverse.comp", "flux_error_wg1", &[("TRAVERSE_WG_SIDE", "1"), ("TRAVERSE_METRIC", "2")]),
+    ("traverse.comp", "flux_error_wg2", &[("TRAVERSE_WG_SIDE", "2"), ("TRAVERSE_METRIC", "2")]),
+    ("traverse.comp", "flux_error_wg4", &[("TRAVERSE_WG_SIDE", "4"), ("TRAVERSE_METRIC", "2")]),
+    ("traverse.comp", "flux_error_wg8", &[("TRAVERSE_WG_SIDE", "8"), ("TRAVERSE_METRIC", "2")]),
+    ("traverse.comp", "flux_error_wg16", &[("TRAVERSE_WG_SIDE", "16"), ("TRAVERSE_METRIC", "2")]),
     ("traverse.comp", "max_level_wg1", &[("TRAVERSE_WG_SIDE", "1"), ("TRAVERSE_MAX_LEVEL", "1")]),
     ("traverse.comp", "max_level_wg2", &[("TRAVERSE_WG_SIDE", "2"), ("TRAVERSE_MAX_LEVEL", "1")]),
     ("traverse.comp", "max_level_wg4", &[("TRAVERSE_WG_SIDE", "4"), ("TRAVERSE_MAX_LEVEL", "1")]),

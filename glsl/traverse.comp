@@ -11,7 +11,8 @@
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
 // branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md), and
 // the last level fused into the one before: a cell at level L - 1 emits those of its four children that dense
-// emission would emit, instead of appending them as candidates of level L.
+// emission would emit, instead of appending them as candidates of level L. Likewise TRAVERSE_METRIC (1: max-error,
+// 2: flux-error) compiles one metric's code only.
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
@@ -38,7 +39,11 @@ const uint ACT_REFINE = 2u;
 const uint ACT_EMIT_CHILDREN = 3u;  // flux-error look-ahead: four photons, the cell's children
 const uint ACT_EMIT_LEAVES = 4u;    // max-level at level L - 1: the children that pass dense's test, as photons
 
-#ifndef TRAVERSE_MAX_LEVEL
+#if !defined(TRAVERSE_MAX_LEVEL) && !defined(TRAVERSE_METRIC)
+#define TRAVERSE_METRIC 1
+#endif
+
+#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 1
 
 const uint CHILDREN_REFINE = 0xFFFFFFFFu;
 const uint CHILDREN_DROP = 0xFFFFFFFEu;
@@ -91,6 +96,10 @@ uint children_verdict(uint level, uvec2 xy) {
     if (spread > u_frame.params.x) return CHILDREN_REFINE;
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
+
+#endif  // TRAVERSE_METRIC == 1
+
+#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 2
 
 // Flux-error metric (docs/design.md, "The flux-error metric"). Each child k lands at p_k (caustic-map texels)
 // carrying the caustic flux phi_k (W: its dominant path's under exact transport, the two-interface trace's
@@ -165,7 +174,7 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     return FE_REFINE;
 }
 
-#endif  // !TRAVERSE_MAX_LEVEL
+#endif  // TRAVERSE_METRIC == 2
 
 // Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined. `leaves` (max-level,
 // ACT_EMIT_LEAVES): bit k set when child k is emitted.
@@ -190,9 +199,8 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
         return ACT_EMIT_LEAVES;
     }
     return ACT_REFINE;
-#else
-    uint metric = u_frame.traversal.y & 0xFFu;
-    if (metric == 2u && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
+#elif TRAVERSE_METRIC == 2
+    if (level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
         uint r;
         uint verdict = flux_error_verdict(level, xy, r);
         if (verdict == FE_DROP) return ACT_DROP;
@@ -204,10 +212,9 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
             out_cell = pack_cell(level, xy.x, xy.y, r);
             return ACT_EMIT_CHILDREN;
         }
-        return ACT_REFINE;
     }
-    bool max_error = metric == 1u;
-    if (max_error && level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
+#else
+    if (level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
         // Only fully covered cells inside the cone may converge: then the cluster's flux I*Omega(cell) equals the
         // sum over the leaves that max-level traversal would have emitted.
         uint r = children_verdict(level, xy);
@@ -217,8 +224,8 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
             return ACT_EMIT;
         }
     }
-    return ACT_REFINE;
 #endif
+    return ACT_REFINE;
 }
 
 void main() {

@@ -23,7 +23,7 @@ use crate::passes::Passes;
 use crate::renderer::{Aov, AovData, FrameReport, FrameSlot, LightReport, Renderer, Views};
 use crate::scene::view::CameraView;
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Driven, Method, Metric, Settings, Splat, Transport};
+use crate::settings::{Driven, Method, Settings, Splat, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{ReceiverTargets, Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::{Access, Barriers, Buffer, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
@@ -800,7 +800,7 @@ impl Ctx<'_> {
         let wg = self.s.traverse_wg;
         let cmd = rec.cmd;
         let exact = self.s.transport == Transport::Exact;
-        let max_level = self.s.metric == Metric::MaxLevel;
+        let metric = self.s.metric;
         ph.init(cmd, &b, init_mode::FRAME, wg);
         self.compute_to_compute(cmd);
         rec.report.batch_slots = slots;
@@ -810,7 +810,7 @@ impl Ctx<'_> {
             self.compute_to_compute(cmd);
             for level in 0..=self.s.level {
                 rec.ts.mark(cmd, TRAVERSE_LABELS[level as usize]);
-                ph.traverse_indirect(cmd, &b, level, wg, max_level);
+                ph.traverse_indirect(cmd, &b, level, wg, metric);
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, "stats");
                 let mode = if level == self.s.level && !exact { stats_mode::COMMIT } else { stats_mode::LEVEL };
@@ -856,7 +856,7 @@ impl Ctx<'_> {
         let b = self.bindings();
         let ph = &self.p.photons;
         let wg = self.s.traverse_wg;
-        let max_level = self.s.metric == Metric::MaxLevel;
+        let metric = self.s.metric;
         ph.init(rec.cmd, &b, init_mode::FRAME, wg);
         self.compute_to_compute(rec.cmd);
         let mut first = true;
@@ -876,7 +876,7 @@ impl Ctx<'_> {
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, TRAVERSE_LABELS[level as usize]);
                 if st.aborted == 0 {
-                    ph.traverse_direct(cmd, &b, level, wg, st.read_count, max_level);
+                    ph.traverse_direct(cmd, &b, level, wg, st.read_count, metric);
                 }
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, "stats");

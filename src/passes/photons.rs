@@ -5,6 +5,7 @@
 use super::begin_rendering;
 use crate::bvh::BvhLayout;
 use crate::gpu_types::PhotonPush;
+use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
@@ -114,9 +115,10 @@ pub mod transport_mode {
 pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
-    traverse: Vec<(u32, Pipeline)>,
-    /// The max-level variant (TRAVERSE_MAX_LEVEL): no metric code, the last level fused into the one before.
-    traverse_max_level: Vec<(u32, Pipeline)>,
+    /// Per metric (indexed by `Metric::code`), per work-group side: max-level (TRAVERSE_MAX_LEVEL: no metric
+    /// code, the last level fused into the one before), max-error and flux-error (TRAVERSE_METRIC: that metric's
+    /// code only).
+    traverse: [Vec<(u32, Pipeline)>; 3],
     stats: Pipeline,
     dense_emit: Pipeline,
     trace: Pipeline,
@@ -136,19 +138,46 @@ impl PhotonPasses {
     pub fn new(device: &Arc<Device>, flux_format: vk::Format) -> VkResult<Self> {
         let push = std::mem::size_of::<PhotonPush>() as u32;
         let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &LAYOUT, push);
-        let traverse = vec![
-            (1, compute("traverse 1x1", shaders::TRAVERSE_COMP_WG1.words())?),
-            (2, compute("traverse 2x2", shaders::TRAVERSE_COMP_WG2.words())?),
-            (4, compute("traverse 4x4", shaders::TRAVERSE_COMP_WG4.words())?),
-            (8, compute("traverse 8x8", shaders::TRAVERSE_COMP_WG8.words())?),
-            (16, compute("traverse 16x16", shaders::TRAVERSE_COMP_WG16.words())?),
-        ];
-        let traverse_max_level = vec![
-            (1, compute("traverse max-level 1x1", shaders::TRAVERSE_COMP_MAX_LEVEL_WG1.words())?),
-            (2, compute("traverse max-level 2x2", shaders::TRAVERSE_COMP_MAX_LEVEL_WG2.words())?),
-            (4, compute("traverse max-level 4x4", shaders::TRAVERSE_COMP_MAX_LEVEL_WG4.words())?),
-            (8, compute("traverse max-level 8x8", shaders::TRAVERSE_COMP_MAX_LEVEL_WG8.words())?),
-            (16, compute("traverse max-level 16x16", shaders::TRAVERSE_COMP_MAX_LEVEL_WG16.words())?),
+        // One traversal pipeline per metric (llvmpipe pays for code a metric never takes) and work-group side.
+        let sides = [1u32, 2, 4, 8, 16];
+        let variant = |metric: Metric, spv: [&[u32]; 5]| -> VkResult<Vec<(u32, Pipeline)>> {
+            sides
+                .iter()
+                .zip(spv)
+                .map(|(&s, words)| Ok((s, compute(&format!("traverse {metric:?} {s}x{s}"), words)?)))
+                .collect()
+        };
+        let traverse = [
+            variant(
+                Metric::MaxLevel,
+                [
+                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG1.words(),
+                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG2.words(),
+                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG4.words(),
+                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG8.words(),
+                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG16.words(),
+                ],
+            )?,
+            variant(
+                Metric::MaxError,
+                [
+                    shaders::TRAVERSE_COMP_MAX_ERROR_WG1.words(),
+                    shaders::TRAVERSE_COMP_MAX_ERROR_WG2.words(),
+                    shaders::TRAVERSE_COMP_MAX_ERROR_WG4.words(),
+                    shaders::TRAVERSE_COMP_MAX_ERROR_WG8.words(),
+                    shaders::TRAVERSE_COMP_MAX_ERROR_WG16.words(),
+                ],
+            )?,
+            variant(
+                Metric::FluxError,
+                [
+                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG1.words(),
+                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG2.words(),
+                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG4.words(),
+                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG8.words(),
+                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG16.words(),
+                ],
+            )?,
         ];
         let splat = Pipeline::graphics(
             device,
@@ -170,7 +199,6 @@ impl PhotonPasses {
             device: device.clone(),
             init: compute("init", shaders::INIT_COMP.words())?,
             traverse,
-            traverse_max_level,
             stats: compute("stats", shaders::STATS_COMP.words())?,
             dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
             trace: compute("photon trace", shaders::TRACE_COMP.words())?,
@@ -192,9 +220,9 @@ impl PhotonPasses {
         })
     }
 
-    /// `max_level`: the max-level metric's own variant (the same photons as the general shader, faster).
-    fn traverse_pipeline(&self, wg: u32, max_level: bool) -> &Pipeline {
-        let list = if max_level { &self.traverse_max_level } else { &self.traverse };
+    /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built).
+    fn traverse_pipeline(&self, wg: u32, metric: Metric) -> &Pipeline {
+        let list = &self.traverse[metric.code() as usize];
         list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1)
     }
 
@@ -205,8 +233,8 @@ impl PhotonPasses {
     }
 
     /// One traversal level, launched with vkCmdDispatchIndirect from the GPU-written arguments.
-    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32, max_level: bool) {
-        let p = self.traverse_pipeline(wg, max_level);
+    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32, metric: Metric) {
+        let p = self.traverse_pipeline(wg, metric);
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
@@ -220,9 +248,9 @@ impl PhotonPasses {
         level: u32,
         wg: u32,
         count: u32,
-        max_level: bool,
+        metric: Metric,
     ) {
-        let p = self.traverse_pipeline(wg, max_level);
+        let p = self.traverse_pipeline(wg, metric);
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         let groups = count.div_ceil(wg * wg);
