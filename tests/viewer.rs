@@ -15,24 +15,38 @@ use std::time::{Duration, Instant};
 // No sky (`--sky 0`): the sphere test's shadowed annulus must see no light at all (docs/design.md "Environment").
 const FAST: &[&str] = &["--level", "2", "--gbuffer-res", "512", "--caustic-res", "512", "--sky", "0"];
 
-/// An Xvfb server on a free display, killed on drop.
+/// An Xvfb server on a free display, stopped on drop.
 struct Xvfb {
     child: Child,
     display: String,
 }
 
+/// Xvfb servers start one at a time: two servers choosing a display with -displayfd at the same moment (the tests
+/// of this file run in parallel) could leave one whose display refused connections (it happened twice in full
+/// runs: the viewer then failed with "Failed to open connection to X server").
+static XVFB_START: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Whether X display `n` accepts a connection, on the abstract socket (what libxcb tries first) and on the path.
+fn display_accepts(n: &str) -> bool {
+    use std::os::linux::net::SocketAddrExt;
+    let path = format!("/tmp/.X11-unix/X{n}");
+    let abstract_ok = std::os::unix::net::SocketAddr::from_abstract_name(path.as_bytes())
+        .and_then(|a| std::os::unix::net::UnixStream::connect_addr(&a))
+        .is_ok();
+    abstract_ok && std::os::unix::net::UnixStream::connect(&path).is_ok()
+}
+
 impl Xvfb {
-    /// Start Xvfb and wait until its socket accepts connections; a server that dies on the way (this happened
-    /// once while other X servers started and stopped on the machine) is replaced, up to three times.
+    /// Start Xvfb and wait until it accepts connections; a server that does not is replaced, up to three times.
     fn start() -> Xvfb {
+        let _one = XVFB_START.lock().unwrap_or_else(|e| e.into_inner());
         for _ in 0..3 {
             let mut x = Xvfb::spawn();
             let n = x.display.trim_start_matches(':').to_string();
-            let socket = std::path::PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
             let start = Instant::now();
             while start.elapsed() < Duration::from_secs(5) {
                 let alive = matches!(x.child.try_wait(), Ok(None));
-                if alive && std::os::unix::net::UnixStream::connect(&socket).is_ok() {
+                if alive && display_accepts(&n) {
                     return x;
                 }
                 if !alive {
@@ -68,6 +82,15 @@ impl Xvfb {
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
+        // SIGTERM first, so that the server removes its lock and socket files (SIGKILL leaves them behind).
+        let _ = Command::new("kill").args(["-TERM", &self.child.id().to_string()]).status();
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(3) {
+            if !matches!(self.child.try_wait(), Ok(None)) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
