@@ -29,6 +29,7 @@ fn frame(s: &mut Session, camera: &str) -> (FrameReport, RgbImage) {
 
 fn same(a: &RgbImage, b: &RgbImage, what: &str, tol: f64) {
     let m = compare(a, b, 128, 2.0);
+    eprintln!("{what}: rel-L1 {:.3e}", m.rel_l1);
     assert!(m.rel_l1 <= tol && m.flux_ratio.is_finite(), "{what}: rel-L1 {} (tolerance {tol})", m.rel_l1);
 }
 
@@ -45,11 +46,12 @@ fn camera_moves_reuse_and_changes_recompute() {
     assert!(r2.reused);
     assert_eq!(r2.state.map(|x| x.photons_total), r0.state.map(|x| x.photons_total), "cached state");
     same(&top2, &top0, "top after a camera round trip", 1e-6);
-    // The reused main view equals a full recompute of it.
+    // The reused main view equals a full recompute of it (measured 5.6e-8 to 1.1e-7: only the order of the splat's
+    // float atomic additions differs).
     let mut fresh = open(false);
     let (rf, main_fresh) = frame(&mut fresh, "main");
     assert!(!rf.reused);
-    same(&main1, &main_fresh, "main view, reused against recomputed", 1e-5);
+    same(&main1, &main_fresh, "main view, reused against recomputed", 1e-6);
 
     // The light moves: everything that depends on it runs again, and the image equals a fresh render.
     let mut scene = s.renderer.scene.clone();
@@ -59,7 +61,7 @@ fn camera_moves_reuse_and_changes_recompute() {
     assert!(!r3.reused, "a light change must recompute");
     fresh.renderer.set_scene(scene.clone()).unwrap();
     let (_, moved_fresh) = frame(&mut fresh, "top");
-    same(&moved, &moved_fresh, "moved light", 1e-5);
+    same(&moved, &moved_fresh, "moved light", 1e-6);
     let m = compare(&moved, &top0, 128, 2.0);
     assert!(m.rel_l1 > 0.01, "the caustic must move with the light (rel-L1 {})", m.rel_l1);
 
