@@ -955,7 +955,8 @@ impl Viewer {
         let preview = self.progressive && (moved || interacting || level < chosen);
         renderer.settings.preview = preview;
         // Dynamic resolution: a preview may be drawn smaller; the copy to the swapchain image scales it up.
-        let scale = if preview { self.preview_scale } else { 1 };
+        // A screenshot frame is drawn at full resolution (it may be copied from the beauty image itself).
+        let scale = if preview && !capture { self.preview_scale } else { 1 };
         let view = renderer.camera_view(&camera, (extent.width / scale).max(1), (extent.height / scale).max(1));
         let submitted = renderer.submit_frame_at(level, &view, None, Some(&mut finish), &sync);
         renderer.settings.preview = false;
