@@ -1078,13 +1078,14 @@ impl Viewer {
             if self.renderer.adapt_batch_slots(&report) != SlotVerdict::Complete {
                 self.counters.incomplete_frames += 1;
             }
-            self.update_title(&report);
+            self.update_title(&report, drawn_at);
             push_bounded(&mut self.ring, report);
         }
         Ok(())
     }
 
-    fn update_title(&mut self, report: &FrameReport) {
+    /// `scale`: the preview scale the report's frame was drawn at.
+    fn update_title(&mut self, report: &FrameReport, scale: u32) {
         self.title_frames += 1;
         self.title_gpu_ms += report.gpu_ms;
         let elapsed = self.title_since.elapsed().as_secs_f64();
@@ -1098,8 +1099,9 @@ impl Viewer {
         } else {
             String::new()
         };
+        let preview = if report.preview && scale > 1 { format!(" — preview 1/{scale}") } else { String::new() };
         self.window.set_title(&format!(
-            "caustics — {} — {}{refining} — {fps:.1} fps — GPU {gpu:.1} ms",
+            "caustics — {} — {}{refining}{preview} — {fps:.1} fps — GPU {gpu:.1} ms",
             self.scene_name,
             self.describe()
         ));
