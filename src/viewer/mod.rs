@@ -2,7 +2,8 @@
 //! headless renderer's frame (src/frame.rs), whose beauty image is copied into the acquired swapchain image just
 //! before the frame's last submit (present.rs).
 //!
-//! Frames in flight (`--frames-in-flight`, default 2): the CPU records frame N+1 while the GPU works on frame N.
+//! Frames in flight (`--frames-in-flight`; 2 on GPUs, 1 on CPU devices): the CPU records frame N+1 while the GPU
+//! works on frame N.
 //! Each slot has its own command buffer, fence, timestamp queries, uniforms, readback buffer and acquire
 //! semaphore; `Renderer::next_slot` waits for the frame that last used a slot before it is reused, and a frame's
 //! report arrives when it completes (`take_reports`). The GPU-side targets are shared: every frame's first
@@ -103,10 +104,11 @@ pub struct ViewArgs {
     /// coarser when it costs more). Still frames are always drawn at full resolution.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=4))]
     pub preview_scale: u32,
-    /// Frames in flight: the CPU records frame N+1 while the GPU still works on frame N (1: wait for every frame
-    /// before recording the next; at most 3).
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=3))]
-    pub frames_in_flight: u32,
+    /// Frames in flight: the CPU records frame N+1 while the GPU still works on frame N (1 to 3; default: 2 on
+    /// GPUs, 1 on CPU devices, where the driver's threads already use every core and a second frame in flight
+    /// only adds a frame of latency).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=3))]
+    pub frames_in_flight: Option<u32>,
     /// Scripted input: one step per line, `FRAMES VERB [ARGS]` with the verbs `orbit DEG`, `drag DX DY`,
     /// `key NAME` and `still`; the viewer quits after the last step, and --stats gains each step's frame rate and
     /// time to converge (docs/viewer.md).
@@ -523,7 +525,8 @@ impl Viewer {
             .cloned()
             .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
         let mut renderer = Renderer::new(device.clone(), scene, settings)?;
-        renderer.set_frames_in_flight(args.frames_in_flight as usize)?;
+        let cpu_device = device.info.kind == vk::PhysicalDeviceType::CPU;
+        renderer.set_frames_in_flight(args.frames_in_flight.unwrap_or(if cpu_device { 1 } else { 2 }) as usize)?;
         let presenter = Presenter::new(&device);
         eprintln!(
             "caustics view: {} on {} ({}){}",
