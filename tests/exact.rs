@@ -7,23 +7,11 @@ use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
 use caustics::reference::{Aov, Paths};
 use common::*;
-use std::path::Path;
 
 const SIZE: u32 = 256;
 
 fn reference_all(scene: &str, photons: u64) -> RgbImage {
     top_reference(scene, Aov::Caustics, Paths::All, photons, SIZE)
-}
-
-fn exact(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {
-    let mut args = vec!["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "256x256"];
-    args.extend_from_slice(extra);
-    let (s, out) = render(dir, name, scene, &args);
-    (s, caustics::image_io::read_exr(&out).unwrap())
-}
-
-fn energy(s: &serde_json::Value, term: &str) -> f64 {
-    s["exact_transport"]["energy"][format!("{term}_w")].as_f64().unwrap_or_else(|| panic!("energy term {term}"))
 }
 
 /// The account closes (emitted = every destination) to 1e-5, nothing overflowed, no host readback happened,

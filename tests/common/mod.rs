@@ -80,6 +80,19 @@ pub fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_jso
     (s, out)
 }
 
+/// The caustics AOV of the `top` camera at 256² under exact transport, with extra args: stats and image.
+pub fn exact(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, caustics::image_io::RgbImage) {
+    let mut args = vec!["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "256x256"];
+    args.extend_from_slice(extra);
+    let (s, out) = render(dir, name, scene, &args);
+    (s, caustics::image_io::read_exr(&out).unwrap())
+}
+
+/// One term of exact transport's energy account in the stats, in W.
+pub fn energy(s: &serde_json::Value, term: &str) -> f64 {
+    s["exact_transport"]["energy"][format!("{term}_w")].as_f64().unwrap_or_else(|| panic!("energy term {term}"))
+}
+
 /// Channel 0 of an EXR as a row-major plane.
 pub fn read_plane(path: &Path) -> (usize, usize, Vec<f64>) {
     let img = caustics::image_io::read_exr(path).expect("read EXR");
