@@ -181,11 +181,6 @@ impl Renderer {
         std::mem::take(&mut self.completed)
     }
 
-    /// Frames submitted and not yet read back.
-    pub fn frames_pending(&self) -> usize {
-        self.pending.len()
-    }
-
     /// Record and submit a frame at `level` (see [`Renderer::render_frame_at`]) without waiting for it: its report
     /// comes later from [`Renderer::take_completed`], once a later frame needs its slot or
     /// [`Renderer::finish_frames`] is called.

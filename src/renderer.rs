@@ -11,7 +11,6 @@ use crate::settings::{Footprint, Method, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
-
 use ash::vk;
 use glam::Vec3;
 use std::sync::Arc;
@@ -347,9 +346,9 @@ impl Renderer {
         CameraView::new(camera, width, height, self.scene.bounds())
     }
 
-    /// Let up to `n` frames be in flight (1..=MAX_FRAMES_IN_FLIGHT): [`Renderer::submit_frame`] then returns
+    /// Let up to `n` frames be in flight (1..=MAX_FRAMES_IN_FLIGHT): [`Renderer::submit_frame_at`] then returns
     /// before the GPU has finished, and waits only for the frame that last used the slot it takes. Headless
-    /// rendering keeps 1; the viewer uses 2.
+    /// rendering keeps 1; the viewer uses 2 on GPUs.
     pub fn set_frames_in_flight(&mut self, n: usize) -> AppResult<()> {
         let n = n.clamp(1, crate::vk::swapchain::MAX_FRAMES_IN_FLIGHT);
         if n == self.frames_in_flight {

@@ -372,6 +372,14 @@ struct Counters {
     max_images_per_swapchain: u64,
 }
 
+/// What the viewer keeps of a frame until its report arrives.
+struct InFlight {
+    /// The preview scale it was drawn at.
+    scale: u32,
+    /// Its --script step.
+    step: Option<usize>,
+}
+
 /// Mouse and key input gathered between frames, applied when the next frame starts.
 #[derive(Default)]
 struct Input {
@@ -469,8 +477,8 @@ struct Viewer {
     preview_scale: u32,
     /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near PREVIEW_EYE_MS.
     preview_scale_fixed: bool,
-    /// The scale of each frame submitted and not yet reported, oldest first.
-    submitted_scales: VecDeque<u32>,
+    /// Each frame submitted and not yet reported, oldest first (frames complete in the order they were submitted).
+    in_flight: VecDeque<InFlight>,
     /// The level the last frame rendered.
     shown_level: u32,
     last_frame_start: Option<Instant>,
@@ -567,7 +575,7 @@ impl Viewer {
             }),
             preview_scale: args.preview_scale.max(1),
             preview_scale_fixed: args.preview_scale > 0,
-            submitted_scales: VecDeque::new(),
+            in_flight: VecDeque::new(),
             shown_level: 0,
             last_frame_start: None,
             dirty: false,
@@ -964,11 +972,8 @@ impl Viewer {
         let submitted = renderer.submit_frame_at(level, &view, None, Some(&mut finish), &sync);
         renderer.settings.preview = false;
         submitted?;
-        self.submitted_scales.push_back(scale);
+        self.in_flight.push_back(InFlight { scale, step: self.script.as_ref().map(|s| s.current_step()) });
         self.shown_level = level;
-        if let Some(s) = self.script.as_mut() {
-            s.submitted();
-        }
         if capture {
             // The screenshot buffer is read once this frame is done.
             renderer.finish_frames()?;
@@ -1047,14 +1052,14 @@ impl Viewer {
     fn take_reports(&mut self) -> AppResult<()> {
         for report in self.renderer.take_completed() {
             let chosen = self.renderer.settings.level;
-            if let Some(s) = self.script.as_mut() {
-                s.completed(report.level, chosen, report.preview);
+            let frame = self.in_flight.pop_front().unwrap_or(InFlight { scale: 1, step: None });
+            if let (Some(s), Some(step)) = (self.script.as_mut(), frame.step) {
+                s.completed(step, report.level, chosen, report.preview);
             }
             self.counters.caustics_reused_frames += report.reused as u64;
             self.counters.eye_reused_frames += report.eye_reused as u64;
             self.counters.preview_frames += report.preview as u64;
-            // The preview scale this frame was drawn at (frames complete in the order they were submitted).
-            let drawn_at = self.submitted_scales.pop_front().unwrap_or(1);
+            let drawn_at = frame.scale;
             if report.preview && !report.eye_reused && !self.preview_scale_fixed && drawn_at == self.preview_scale {
                 // Dynamic resolution: keep a preview's eye view under PREVIEW_EYE_MS. Coarser as soon as it costs
                 // more; finer when the next finer scale would still fit with a margin if all of the cost scaled with

@@ -52,8 +52,6 @@ pub struct Script {
     current: usize,
     frame_in_step: u32,
     logs: Vec<StepLog>,
-    /// The step of each frame submitted and not yet completed, oldest first.
-    in_flight: std::collections::VecDeque<usize>,
 }
 
 fn bad(path: &Path, line: usize, msg: &str) -> AppError {
@@ -130,7 +128,7 @@ impl Script {
             return Err(AppError::BadInput(format!("--script {}: no steps", path.display())));
         }
         let logs = vec![StepLog::default(); steps.len()];
-        Ok(Script { steps, current: 0, frame_in_step: 0, logs, in_flight: Default::default() })
+        Ok(Script { steps, current: 0, frame_in_step: 0, logs })
     }
 
     /// Every frame the script still has to present.
@@ -153,9 +151,9 @@ impl Script {
         Some((step.verb, first))
     }
 
-    /// The frame drawn by `begin_frame` was submitted (its report arrives later, in order).
-    pub fn submitted(&mut self) {
-        self.in_flight.push_back(self.current);
+    /// The step whose frame is being drawn (the viewer keeps it with the frame until its report arrives).
+    pub fn current_step(&self) -> usize {
+        self.current
     }
 
     /// The frame was presented: count it, and move on to the next step after the step's last frame.
@@ -170,11 +168,10 @@ impl Script {
         }
     }
 
-    /// A submitted frame completed, at `level` (`chosen` is the level it refines to), full quality unless
+    /// A frame of `step` completed, at `level` (`chosen` is the level it refines to), full quality unless
     /// `preview`.
-    pub fn completed(&mut self, level: u32, chosen: u32, preview: bool) {
-        let Some(step) = self.in_flight.pop_front() else { return };
-        let log = &mut self.logs[step];
+    pub fn completed(&mut self, step: usize, level: u32, chosen: u32, preview: bool) {
+        let Some(log) = self.logs.get_mut(step) else { return };
         log.completed += 1;
         log.levels = Some(log.levels.map_or((level, level), |(lo, hi)| (lo.min(level), hi.max(level))));
         if log.converged_ms.is_none() && level >= chosen && !preview {
@@ -243,16 +240,19 @@ mod tests {
     fn counts_frames_and_convergence_per_step() {
         let mut s = Script::parse(Path::new("m"), "2 drag 1 0\n3 still\n").unwrap();
         let mut verbs = Vec::new();
+        let mut steps = Vec::new();
         while let Some((v, first)) = s.begin_frame() {
             verbs.push((v, first));
-            s.submitted();
+            steps.push(s.current_step());
             s.presented();
         }
         assert_eq!(verbs.len(), 5);
         assert!(verbs[0].1 && !verbs[1].1 && verbs[2].1);
         // Frames complete in order: two previews while dragging, then levels 2, 3 and 4 (chosen 4).
-        for (level, preview) in [(2, true), (2, true), (2, false), (3, false), (4, false)] {
-            s.completed(level, 4, preview);
+        for (step, (level, preview)) in
+            steps.into_iter().zip([(2, true), (2, true), (2, false), (3, false), (4, false)])
+        {
+            s.completed(step, level, 4, preview);
         }
         let st = s.stats();
         assert_eq!(st[0]["levels"], json!([2, 2]));
