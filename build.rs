@@ -39,6 +39,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("wave.comp", "threaded", &[("BVH_LAYOUT_THREADED", "1")]),
     ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
+    ("eye_receiver.frag", "radiance", &[("RADIANCE_ONLY", "1")]),
     ("composite.comp", "exact", &[("EXACT_EYE", "1")]),
     ("composite.comp", "single", &[("SINGLE_SAMPLE", "1")]),
     ("composite.comp", "exact_single", &[("EXACT_EYE", "1"), ("SINGLE_SAMPLE", "1")]),

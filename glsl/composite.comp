@@ -15,15 +15,15 @@
 
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 layout(set = 0, binding = 1) uniform sampler2D t_radiance;      // receivers: rgb radiance, a: eye distance
-layout(set = 0, binding = 2) uniform sampler2D t_front;         // refractor front: normal, eye distance
+layout(set = 0, binding = 2) uniform usampler2D t_front;        // refractor front: normal, eye distance
 layout(set = 0, binding = 3) uniform sampler2D t_front_aux;     // refractor front: index of refraction
-layout(set = 0, binding = 4) uniform sampler2D t_back;          // refractor back: normal, eye distance
+layout(set = 0, binding = 4) uniform usampler2D t_back;         // refractor back: normal, eye distance
 layout(set = 0, binding = 5) uniform sampler2D t_radiance_lin;  // the radiance buffer, linear filtering
 layout(set = 0, binding = 6, rgba8) uniform writeonly image2D o_beauty;
 layout(set = 0, binding = 7, rgba32f) uniform writeonly image2D o_hdr;  // linear radiance, before exposure
 layout(set = 0, binding = 8) uniform sampler2D t_shadow;        // light depth of all objects
 layout(set = 0, binding = 9) uniform sampler2D t_irradiance;    // caustic irradiance, W/m^2 (linear filtering)
-layout(set = 0, binding = 10) uniform sampler2D t_recv;         // receivers from the light: normal, distance
+layout(set = 0, binding = 10) uniform usampler2D t_recv;        // receivers from the light: normal, distance
 
 #include "common/receiver.glsl"
 
@@ -162,7 +162,7 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
     vec3 ro, rd;
     view_ray(cam, uv, ro, rd);
     vec4 rad = texelFetch(t_radiance, q, 0);
-    vec4 front = texelFetch(t_front, q, 0);
+    vec4 front = geo_fetch(t_front, q);
     if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
 #ifdef EXACT_EYE
         return trace_glass(ro, rd);

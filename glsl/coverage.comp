@@ -8,8 +8,8 @@
 
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 layout(std430, set = 0, binding = 1) buffer CoverageBuf { uint coverage[]; };
-layout(set = 0, binding = 2) uniform sampler2D t_front;
-layout(set = 0, binding = 3) uniform sampler2D t_recv;  // receivers from the light
+layout(set = 0, binding = 2) uniform usampler2D t_front;
+layout(set = 0, binding = 3) uniform usampler2D t_recv;  // receivers from the light
 
 // Is the refractor surface at this texel in the light, or does a receiver stand between them?
 bool lit(ivec2 p, vec4 front) {
@@ -38,7 +38,7 @@ void main() {
     if (p.x >= pc.dst_res || p.y >= pc.dst_res) return;
     uint bits;
     if (pc.mip == 0u) {
-        vec4 front = texelFetch(t_front, ivec2(p), 0);
+        vec4 front = geo_fetch(t_front, ivec2(p));
         bits = front.w > 0.0 && lit(ivec2(p), front) ? 3u : 0u;
         if (bits == 0u && u_frame.transport.x != 0u) {
             // Exact transport traces each cell's own ray, so a cell whose texel center misses the glass may still
@@ -48,7 +48,7 @@ void main() {
             for (int dy = -1; dy <= 1; dy++)
                 for (int dx = -1; dx <= 1; dx++) {
                     ivec2 q = clamp(ivec2(p) + ivec2(dx, dy), ivec2(0), size - 1);
-                    if (texelFetch(t_front, q, 0).w > 0.0) bits = 1u;
+                    if (geo_dist(t_front, q) > 0.0) bits = 1u;
                 }
         }
     } else {

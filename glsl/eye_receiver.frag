@@ -8,7 +8,7 @@
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 layout(set = 0, binding = 1) uniform sampler2D t_shadow;      // depth of all objects from the light
 layout(set = 0, binding = 2) uniform sampler2D t_irradiance;  // caustic irradiance, W/m^2 (linear filtering)
-layout(set = 0, binding = 3) uniform sampler2D t_recv;        // receivers from the light: normal, distance
+layout(set = 0, binding = 3) uniform usampler2D t_recv;       // receivers from the light: normal, distance
 
 #include "common/receiver.glsl"
 
@@ -17,8 +17,12 @@ layout(location = 1) in vec3 v_normal;
 layout(location = 2) flat in vec3 v_albedo;
 
 layout(location = 0) out vec4 o_radiance;  // rgb: outgoing radiance (W/m^2/sr); a: distance from the eye
+// Variant RADIANCE_ONLY (frames that read back neither AOV) writes only the radiance: on GPUs with few raster
+// units each 128-bit target costs a share of the pass.
+#ifndef RADIANCE_ONLY
 layout(location = 1) out vec4 o_caustics;  // rgb: caustic irradiance (W/m^2)
 layout(location = 2) out vec4 o_direct;    // rgb: direct irradiance (W/m^2)
+#endif
 
 void main() {
     vec3 n = normalize(v_normal);
@@ -34,6 +38,8 @@ void main() {
     vec3 n_eye = dot(n, view_dir_to(u_frame.camera, p)) > 0.0 ? -n : n;
     vec3 e_env = environment_irradiance(n_eye);
     o_radiance = vec4(v_albedo / RECV_PI * (e_direct + e_caustic + e_env), max(eye_dist, 1e-6));
+#ifndef RADIANCE_ONLY
     o_caustics = vec4(e_caustic, 1.0);
     o_direct = vec4(e_direct, 1.0);
+#endif
 }

@@ -1,4 +1,5 @@
 #version 460
+#include "common/gbuffer.glsl"
 layout(push_constant) uniform Push {
     mat4 view_proj;
     vec4 origin;
@@ -11,7 +12,7 @@ layout(location = 1) in vec3 v_normal;
 layout(location = 2) flat in float v_param;
 #endif
 
-layout(location = 0) out vec4 o_geo;  // normal.xyz (interpolated, as the reference sees it), distance
+layout(location = 0) out uvec2 o_geo;  // normal (interpolated, as the reference sees it), distance: common/gbuffer.glsl
 #ifdef WITH_AUX
 layout(location = 1) out float o_aux;  // index of refraction
 #endif
@@ -19,7 +20,7 @@ layout(location = 1) out float o_aux;  // index of refraction
 void main() {
     vec3 d = v_world - pc.origin.xyz;
     float dist = pc.origin.w > 0.5 ? dot(d, pc.forward.xyz) : length(d);
-    o_geo = vec4(normalize(v_normal), max(dist, 1e-6));
+    o_geo = geo_pack(normalize(v_normal), max(dist, 1e-6));
 #ifdef WITH_AUX
     o_aux = v_param;
 #endif

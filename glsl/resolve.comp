@@ -3,10 +3,11 @@
 // A = Omega * d^2 / |cos| (spot) or side^2 / |cos| (directional), to get W/m^2.
 #include "common/types.glsl"
 #include "common/view.glsl"
+#include "common/gbuffer.glsl"
 
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 layout(set = 0, binding = 1) uniform sampler2D t_flux;
-layout(set = 0, binding = 2) uniform sampler2D t_recv;
+layout(set = 0, binding = 2) uniform usampler2D t_recv;
 layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
@@ -16,7 +17,7 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(v.extent.xy);
     if (p.x >= size.x || p.y >= size.y) return;
-    vec4 r = texelFetch(t_recv, p, 0);
+    vec4 r = geo_fetch(t_recv, p);
     vec3 e = vec3(0.0);
     if (r.w > 0.0) {
         vec2 uv = (vec2(p) + 0.5) * v.extent.zw;

@@ -79,6 +79,8 @@ struct Ctx<'a> {
     compute_splat: bool,
     /// The compute splat gathers a work group's taps in shared memory first.
     tiled_splat: bool,
+    /// The frame reads back the caustics or direct AOV, so the eye view writes them (else only the radiance).
+    eye_aovs: bool,
 }
 
 /// The mutable side of a frame: the command buffer being recorded (the CPU-driven path submits mid-frame), the
@@ -257,6 +259,7 @@ impl Renderer {
         let splat = settings.splat.resolve(&device.info);
         let compute_splat = splat.is_compute() && targets.receivers[0].flux.format == vk::Format::R32_SFLOAT;
         let tiled_splat = splat == Splat::Tiled;
+        let eye_aovs = matches!(aov, Some(Aov::Caustics) | Some(Aov::Direct));
         let targets = &*targets;
         let readback = &targets.readbacks[slot];
         // Pass `p`: light p / nc, channel p % nc.
@@ -277,6 +280,7 @@ impl Renderer {
             data: &data[p],
             compute_splat,
             tiled_splat,
+            eye_aovs,
         };
         let cmd = recorder.begin()?;
         let mut rec = Rec {
@@ -335,10 +339,11 @@ impl Renderer {
             // The beauty and HDR images are the last frame's, left as transfer sources by its composite.
             rec.ts.mark(rec.cmd, "eye_reused");
         } else {
-            rec.ts.mark(rec.cmd, "eye");
+            rec.ts.mark(rec.cmd, "eye.receivers");
             for light in 0..nl {
                 ctx(light * nc).eye_receivers(&mut rec);
             }
+            rec.ts.mark(rec.cmd, "eye.refractors");
             c0.eye_refractors(&mut rec);
             c0.composite(&mut rec);
         }
@@ -940,14 +945,16 @@ impl Ctx<'_> {
         });
     }
 
-    /// Step 5a: the eye view of the receivers under this light: radiance, caustics and direct. The first light
-    /// clears the targets; each further light adds to them (blending), so the AOVs are the sums over lights.
+    /// Step 5a: the eye view of the receivers under this light: radiance, and the caustics and direct AOVs when
+    /// the frame reads one back. The first light clears the targets; each further light adds to them (blending),
+    /// so the AOVs are the sums over lights.
     fn eye_receivers(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;
         let first = self.light == 0;
+        let colors: &[&Image] = if self.eye_aovs { &[&e.radiance, &e.caustics, &e.direct] } else { &[&e.radiance] };
         self.barrier(cmd, |b| {
-            for img in [&e.radiance, &e.caustics, &e.direct] {
+            for img in colors {
                 let from = if first { Access::FrameStart } else { Access::ColorAttachment };
                 b.image(img, &[from], &[Access::ColorAttachment]);
             }
@@ -962,7 +969,7 @@ impl Ctx<'_> {
             nearest: self.nearest,
             linear: self.linear,
         };
-        self.p.eye.record(cmd, self.sb, &inputs, [&e.radiance, &e.caustics, &e.direct], &e.depth, !first);
+        self.p.eye.record(cmd, self.sb, &inputs, colors, &e.depth, !first);
     }
 
     /// Step 5b: the eye view of the refractors: front and back g-buffers for the composite.

@@ -18,10 +18,10 @@ layout(std430, set = 0, binding = 3) buffer IndirectBuf {
     uvec4 splat_cmd;  // the compute splat's dispatch over the draw's records
 };
 layout(std430, set = 0, binding = 4) readonly buffer CoverageBuf { uint coverage[]; };
-layout(set = 0, binding = 5) uniform sampler2D t_front;      // refractor front: normal.xyz, distance (0: none)
+layout(set = 0, binding = 5) uniform usampler2D t_front;     // refractor front: normal, distance (0: none; common/gbuffer.glsl)
 layout(set = 0, binding = 6) uniform sampler2D t_front_aux;  // refractor front: index of refraction
-layout(set = 0, binding = 7) uniform sampler2D t_back;       // refractor back: normal.xyz, distance
-layout(set = 0, binding = 8) uniform sampler2D t_recv;       // receivers from the light: normal.xyz, distance
+layout(set = 0, binding = 7) uniform usampler2D t_back;      // refractor back: normal, distance
+layout(set = 0, binding = 8) uniform usampler2D t_recv;      // receivers from the light: normal, distance
 // Debug photon dump (tests), three rows per splatted photon:
 //   (cell x, cell y, level | status << 8 | radius << 16, bits(flux.r)), bits(uv.x, uv.y, map_px.x, map_px.y),
 //   bits(hit.x, hit.y, hit.z), 0.

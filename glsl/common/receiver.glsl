@@ -7,6 +7,7 @@
 #define RECEIVER_GLSL
 #include "common/types.glsl"
 #include "common/view.glsl"
+#include "common/gbuffer.glsl"
 
 const float RECV_PI = 3.14159265358979;
 
@@ -62,10 +63,10 @@ bool caustic_visible(vec3 p, out vec2 uv) {
     uv = view_uv(lv, p);
     if (!uv_inside_strict(uv)) return false;
     ivec2 size = textureSize(t_recv, 0);
-    vec4 r = texelFetch(t_recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1), 0);
+    float r_dist = geo_dist(t_recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1));
     float d = view_dist(lv, p);
     float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
-    return r.w > 0.0 && abs(r.w - d) < 4.0 * texel + 1e-3 * d;
+    return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
 }
 
 // Caustic irradiance (W/m^2) averaged over a footprint in the caustic map spanned by the uv offsets dx, dy (up to

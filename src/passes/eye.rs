@@ -10,9 +10,11 @@ use std::sync::Arc;
 
 pub struct EyePass {
     device: Arc<Device>,
-    pipeline: Pipeline,
-    /// A further light: adds its radiance and irradiances to the targets (depth loaded and tested, not written).
-    add: Pipeline,
+    /// Radiance, caustics and direct: the first light clears and writes them, a further light adds to them
+    /// (depth loaded and tested, not written).
+    aovs: [Pipeline; 2],
+    /// The radiance alone, for frames that read back neither AOV: [first light, a further light].
+    radiance: [Pipeline; 2],
 }
 
 pub struct EyeInputs<'a> {
@@ -26,14 +28,14 @@ pub struct EyeInputs<'a> {
 
 impl EyePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        let make = |name: &str, blend: Blend, depth: (vk::CompareOp, bool)| {
-            let hdr = || ColorTarget { format: HDR_FORMAT, blend };
+        let make = |name: &str, fragment: &[u32], targets: usize, blend: Blend, depth: (vk::CompareOp, bool)| {
+            let hdr = ColorTarget { format: HDR_FORMAT, blend };
             Pipeline::graphics(
                 device,
                 name,
                 &GraphicsDesc {
                     vertex: shaders::EYE_RECEIVER_VERT.words(),
-                    fragment: shaders::EYE_RECEIVER_FRAG.words(),
+                    fragment,
                     binds: &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::Sampled],
                     push_size: 0,
                     vertex_attributes: &[
@@ -45,29 +47,40 @@ impl EyePass {
                     topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                     cull: vk::CullModeFlags::NONE,
                     depth: Some((DEPTH_FORMAT, depth.0, depth.1)),
-                    colors: &[hdr(), hdr(), hdr()],
+                    colors: &[hdr; 3][..targets],
                 },
             )
         };
-        let pipeline = make("eye receivers", Blend::None, (vk::CompareOp::LESS, true))?;
-        let add = make("eye receivers (a further light)", Blend::AddRgb, (vk::CompareOp::LESS_OR_EQUAL, false))?;
-        Ok(EyePass { device: device.clone(), pipeline, add })
+        let (first, further) = ((vk::CompareOp::LESS, true), (vk::CompareOp::LESS_OR_EQUAL, false));
+        let (full, rad) = (shaders::EYE_RECEIVER_FRAG.words(), shaders::EYE_RECEIVER_FRAG_RADIANCE.words());
+        Ok(EyePass {
+            device: device.clone(),
+            aovs: [
+                make("eye receivers", full, 3, Blend::None, first)?,
+                make("eye receivers (a further light)", full, 3, Blend::AddRgb, further)?,
+            ],
+            radiance: [
+                make("eye receivers, radiance", rad, 1, Blend::None, first)?,
+                make("eye receivers, radiance (a further light)", rad, 1, Blend::AddRgb, further)?,
+            ],
+        })
     }
 
-    /// Draw the receivers into radiance, caustics and direct (and depth); `add`: add to what an earlier light's
-    /// pass drew instead of clearing.
+    /// Draw the receivers into `colors`: radiance, caustics and direct, or the radiance alone (and depth); `add`:
+    /// add to what an earlier light's pass drew instead of clearing.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
         scene: &SceneBuffers,
         i: &EyeInputs,
-        colors: [&Image; 3],
+        colors: &[&Image],
         depth: &Image,
         add: bool,
     ) {
         let d = &self.device;
-        begin_rendering_with(d, cmd, depth.extent, &colors, !add, Some(depth), !add);
-        let pipeline = if add { &self.add } else { &self.pipeline };
+        begin_rendering_with(d, cmd, depth.extent, colors, !add, Some(depth), !add);
+        let set = if colors.len() == 1 { &self.radiance } else { &self.aovs };
+        let pipeline = &set[add as usize];
         pipeline.bind(
             cmd,
             &[

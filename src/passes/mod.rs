@@ -11,7 +11,8 @@ pub mod resolve;
 use crate::vk::{Device, VkResult};
 use std::sync::Arc;
 
-pub const GEO_FORMAT: ash::vk::Format = ash::vk::Format::R32G32B32A32_SFLOAT;
+/// The view-space g-buffers: distance (float bits) and an octahedral normal (glsl/common/gbuffer.glsl).
+pub const GEO_FORMAT: ash::vk::Format = ash::vk::Format::R32G32_UINT;
 pub const AUX_FORMAT: ash::vk::Format = ash::vk::Format::R32_SFLOAT;
 pub const DEPTH_FORMAT: ash::vk::Format = ash::vk::Format::D32_SFLOAT;
 pub const HDR_FORMAT: ash::vk::Format = ash::vk::Format::R32G32B32A32_SFLOAT;

@@ -48,6 +48,7 @@ pub enum Blend {
     AddRgb,
 }
 
+#[derive(Clone, Copy, Debug)]
 pub struct ColorTarget {
     pub format: vk::Format,
     pub blend: Blend,

@@ -1,0 +1,34 @@
+// The view-space g-buffers (light-view refractor front and back, receivers from the light, the eye's refractor
+// front and back) are R32G32_UINT (GEO_FORMAT in src/passes/mod.rs): x holds the distance along the view ray as
+// float bits (0 where there is no geometry), y the unit normal in octahedral form as two snorm16 (an angular error
+// below 1e-4 rad). Half the bytes of RGBA32F: on GPUs whose few raster units export 128-bit pixels at a fraction
+// of the rate of 64-bit ones, the light view is pixel-bound on these writes.
+#ifndef GBUFFER_GLSL
+#define GBUFFER_GLSL
+
+vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
+
+vec2 oct_encode(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    return n.z >= 0.0 ? n.xy : oct_wrap(n.xy);
+}
+
+vec3 oct_decode(vec2 e) {
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = oct_wrap(n.xy);
+    return normalize(n);
+}
+
+uvec2 geo_pack(vec3 n, float dist) { return uvec2(floatBitsToUint(dist), packSnorm2x16(oct_encode(n))); }
+
+// (normal, distance) of a texel.
+vec4 geo_fetch(usampler2D t, ivec2 p) {
+    uvec2 g = texelFetch(t, p, 0).xy;
+    return vec4(oct_decode(unpackSnorm2x16(g.y)), uintBitsToFloat(g.x));
+}
+
+// The distance alone: of a g-buffer, and of a float buffer holding it in .w (the eye's receiver radiance).
+float geo_dist(usampler2D t, ivec2 p) { return uintBitsToFloat(texelFetch(t, p, 0).x); }
+float geo_dist(sampler2D t, ivec2 p) { return texelFetch(t, p, 0).w; }
+
+#endif
