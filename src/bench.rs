@@ -90,8 +90,8 @@ pub struct BenchArgs {
     /// rows' metric reads `flux-error@E`.
     #[arg(long, default_value = "0.01", value_delimiter = ',', allow_negative_numbers = true)]
     pub target_errors: Vec<f32>,
-    /// Photon budget (MiB).
-    #[arg(long, default_value_t = 64.0)]
+    /// Photon budget (MiB); 0: automatic, as for render.
+    #[arg(long, default_value_t = 0.0)]
     pub photon_budget: f64,
     /// Do not run anything: re-render the Markdown and the plot from a JSON file a previous run wrote.
     #[arg(long)]

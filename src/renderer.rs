@@ -284,8 +284,9 @@ impl FrameSlot {
 }
 
 impl Renderer {
-    pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
+    pub fn new(device: Arc<Device>, scene: Scene, mut settings: Settings) -> AppResult<Self> {
         settings.validate()?;
+        settings.resolve_for_device(&device.info)?;
         check_transport(&scene, &settings)?;
         check_lights(&scene)?;
         let mut recorder = Recorder::new(&device)?;
@@ -366,8 +367,9 @@ impl Renderer {
         self.frames_in_flight
     }
 
-    pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
+    pub fn set_settings(&mut self, mut settings: Settings) -> AppResult<()> {
         settings.validate()?;
+        settings.resolve_for_device(&self.device.info)?;
         check_transport(&self.scene, &settings)?;
         if settings.method != self.settings.method
             || settings.level != self.settings.level

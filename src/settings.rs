@@ -147,8 +147,12 @@ pub struct Settings {
     /// Photon grid level: 64·2^level cells per side (dense), or the maximal traversal level (adaptive).
     pub level: u32,
     pub driven: Driven,
-    /// Photon buffer size in MiB.
+    /// Photon buffer size in MiB; 0: automatic (the renderer picks it for the device, see
+    /// [`Settings::resolve_for_device`]).
     pub photon_budget_mib: f64,
+    /// Bytes one storage-buffer binding may span on the device (its maxStorageBufferRange, at most 2 GiB). Set by
+    /// the renderer; lavapipe's 128 MiB until then.
+    pub binding_limit: u64,
     /// Side of the light-view refractor g-buffers (power of two, >= 64).
     pub gbuffer_res: u32,
     /// Side of the caustic map, the receiver g-buffer and the shadow map.
@@ -190,7 +194,8 @@ impl Default for Settings {
             metric: Metric::MaxLevel,
             level: 5,
             driven: Driven::Gpu,
-            photon_budget_mib: 64.0,
+            photon_budget_mib: 0.0,
+            binding_limit: LAVAPIPE_BINDING_LIMIT,
             gbuffer_res: 1024,
             caustic_res: 1024,
             error_bound: 1.0,
@@ -206,8 +211,23 @@ impl Default for Settings {
     }
 }
 
-/// Largest photon budget: 8 Mi entries of 8 bytes (their splat records take 128 MiB).
-pub const MAX_BUDGET_MIB: f64 = 64.0;
+/// lavapipe's maxStorageBufferRange: the binding limit assumed until the device is known.
+pub const LAVAPIPE_BINDING_LIMIT: u64 = 128 << 20;
+
+/// The automatic photon budget: 64 MiB on CPU devices and on devices whose bindings span less than 512 MiB;
+/// elsewhere 1/64 of the largest device-local heap, within 64..=256 MiB (256 MiB: 33.5M photon entries, 2.1 GB
+/// with the splat records and exact transport's ray queues).
+pub fn auto_photon_budget_mib(info: &crate::vk::DeviceInfo, binding_limit: u64) -> f64 {
+    let small = info.kind == ash::vk::PhysicalDeviceType::CPU || binding_limit < 512 << 20;
+    let mib = if small { 64.0 } else { ((info.device_local_bytes >> 20) as f64 / 64.0).clamp(64.0, 256.0) };
+    mib.min(max_budget_mib(binding_limit))
+}
+
+/// Largest photon budget for a binding limit: the splat records (16 bytes per 8-byte photon entry) must fit one
+/// binding. 64 MiB under lavapipe's 128 MiB.
+pub fn max_budget_mib(binding_limit: u64) -> f64 {
+    (binding_limit / 2) as f64 / (1024.0 * 1024.0)
+}
 
 /// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
 pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
@@ -242,15 +262,8 @@ impl Settings {
         if self.caustic_res < 16 || self.caustic_res > 8192 {
             return bad(format!("--caustic-res {}: must lie in 16..=8192", self.caustic_res));
         }
-        if !(self.photon_budget_mib.is_finite() && self.photon_budget_mib > 0.0) {
-            return bad(format!("--photon-budget {}: must be > 0 MiB", self.photon_budget_mib));
-        }
-        if self.photon_budget_mib > MAX_BUDGET_MIB {
-            return bad(format!(
-                "--photon-budget {}: at most {MAX_BUDGET_MIB} MiB (the splat records, 16 bytes per 8-byte photon entry, \
-                 must fit one 128 MiB storage-buffer binding: lavapipe's limit)",
-                self.photon_budget_mib
-            ));
+        if !(self.photon_budget_mib.is_finite() && self.photon_budget_mib >= 0.0) {
+            return bad(format!("--photon-budget {}: must be > 0 MiB (or 0: automatic)", self.photon_budget_mib));
         }
         if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
             return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
@@ -287,19 +300,51 @@ impl Settings {
         Ok(())
     }
 
-    /// Photon-buffer entries (8 bytes each). Each has a 16-byte splat record, and that buffer must stay within one
-    /// 128 MiB binding (lavapipe's maxStorageBufferRange): at most 8 Mi entries.
-    pub fn photon_capacity(&self) -> u32 {
-        let max = 128 * 1024 * 1024 / 16;
-        (((self.photon_budget_mib * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
+    /// Fit the settings to the device: its binding limit, and the photon budget when automatic (0). A budget
+    /// larger than the device's bindings allow is bad input.
+    pub fn resolve_for_device(&mut self, info: &crate::vk::DeviceInfo) -> AppResult<()> {
+        self.binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
+        if self.photon_budget_mib == 0.0 {
+            self.photon_budget_mib = auto_photon_budget_mib(info, self.binding_limit);
+        }
+        let max = max_budget_mib(self.binding_limit);
+        if self.photon_budget_mib > max {
+            return Err(AppError::BadInput(format!(
+                "--photon-budget {}: at most {max} MiB on {} (the splat records, 16 bytes per 8-byte photon entry, \
+                 must fit one storage-buffer binding of {} MiB: its maxStorageBufferRange)",
+                self.photon_budget_mib,
+                info.name,
+                self.binding_limit >> 20
+            )));
+        }
+        Ok(())
     }
 
-    /// Exact transport: rays per queue (32 bytes each, 80 with ray differentials; two queues; one binding holds
-    /// at most 128 MiB) and splat records per batch (one per photon-buffer entry, as for the two-interface trace).
+    /// The photon budget in MiB: an automatic one (0) not resolved for a device yet counts as 64.
+    pub fn photon_budget(&self) -> f64 {
+        if self.photon_budget_mib == 0.0 {
+            64f64.min(max_budget_mib(self.binding_limit))
+        } else {
+            self.photon_budget_mib
+        }
+    }
+
+    /// Photon-buffer entries (8 bytes each). Each has a 16-byte splat record, and that buffer must stay within one
+    /// binding (`binding_limit`; 8 Mi entries under lavapipe's 128 MiB).
+    pub fn photon_capacity(&self) -> u32 {
+        let max = (self.binding_limit / 16).min(u32::MAX as u64 / 2) as u32;
+        (((self.photon_budget() * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
+    }
+
+    /// Exact transport: rays per queue (32 bytes each, 80 with ray differentials; two queues; each within one
+    /// binding) and splat records per batch (one per photon-buffer entry, as for the two-interface trace).
     /// Two-interface: none.
     pub fn ray_queue_capacity(&self) -> u32 {
         match self.transport {
-            Transport::Exact => (self.photon_capacity() / 2).clamp(8, 128 * 1024 * 1024 / self.ray_bytes()),
+            Transport::Exact => {
+                let max = (self.binding_limit / self.ray_bytes() as u64).min(u32::MAX as u64) as u32;
+                (self.photon_capacity() / 2).clamp(8, max)
+            }
             Transport::TwoInterface => 0,
         }
     }

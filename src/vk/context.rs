@@ -141,6 +141,8 @@ pub struct DeviceInfo {
     /// VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd and shaderSharedFloat32AtomicAdd (the compute
     /// splats need them).
     pub float_atomic_add: bool,
+    /// Size of the largest device-local memory heap (bytes).
+    pub device_local_bytes: u64,
 }
 
 /// What [`Device::allocation_report`] returns.
@@ -254,6 +256,14 @@ impl Device {
                 driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
                 driver_props.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
             );
+            let memory = unsafe { raw.get_physical_device_memory_properties(physical) };
+            let device_local_bytes = memory
+                .memory_heaps_as_slice()
+                .iter()
+                .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+                .map(|h| h.size)
+                .max()
+                .unwrap_or(0);
             out.push(Candidate {
                 physical,
                 info: DeviceInfo {
@@ -265,6 +275,7 @@ impl Device {
                     timestamp_period: props.limits.timestamp_period,
                     timestamp_valid_bits: families[family].timestamp_valid_bits,
                     float_atomic_add,
+                    device_local_bytes,
                 },
                 queue_family: family as u32,
             });
