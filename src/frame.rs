@@ -465,9 +465,7 @@ impl Ctx<'_> {
             b.image(&t.light.depth, &start, &[Access::DepthAttachment]);
             if receivers {
                 b.image(&self.r.geo, &start, &[Access::ColorAttachment]);
-                for img in [&self.r.depth, &self.r.shadow] {
-                    b.image(img, &start, &[Access::DepthAttachment]);
-                }
+                b.image(&self.r.shadow, &start, &[Access::DepthAttachment]);
             }
         });
         let photon_view = &self.data.photon_view;
@@ -498,18 +496,9 @@ impl Ctx<'_> {
             }
         }
         if receivers {
+            // The receivers' g-buffer and the shadow map, in one pass.
             rec.ts.mark(cmd, "light_gbuffer.receivers");
-            let recv = GeometryTarget {
-                colors: &[&self.r.geo],
-                depth: &self.r.depth,
-                view: receiver_view,
-                ranges: &[self.sb.receivers],
-            };
-            g.record(cmd, &g.surfaces, self.sb, &recv);
-            rec.ts.mark(cmd, "light_gbuffer.shadow");
-            let shadow =
-                GeometryTarget { colors: &[], depth: &self.r.shadow, view: receiver_view, ranges: &[self.sb.all] };
-            g.record(cmd, &g.depth, self.sb, &shadow);
+            g.record_receivers(cmd, self.sb, &self.r.geo, &self.r.shadow, receiver_view);
         }
         let sampled = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
         self.barrier(cmd, |b| {

@@ -19,7 +19,6 @@ pub struct SceneBuffers {
     pub indices: Buffer,
     pub receivers: DrawRange,
     pub refractors: DrawRange,
-    pub all: DrawRange,
     pub bvh: BvhBuffers,
 }
 
@@ -107,11 +106,10 @@ impl SceneBuffers {
         };
         let receivers = push(false);
         let refractors = push(true);
-        let all = DrawRange { first_index: 0, index_count: indices.len() as u32 };
         let vertices =
             upload_buffer(device, recorder, "scene vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         let indices = upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER)?;
         let bvh = BvhBuffers::new(device, recorder, scene)?;
-        Ok(SceneBuffers { vertices, indices, receivers, refractors, all, bvh })
+        Ok(SceneBuffers { vertices, indices, receivers, refractors, bvh })
     }
 }

@@ -30,7 +30,8 @@ pub struct LightTargets {
 
 pub struct ReceiverTargets {
     pub geo: Image,
-    pub depth: Image,
+    /// Depth of every object from the light: the receiver pass's depth target (receivers, then the refractors
+    /// with color writes masked), sampled as the shadow map.
     pub shadow: Image,
     pub flux: Image,
     /// The flux map as one float per texel, for the compute splat (copied into `flux` afterwards).
@@ -140,7 +141,6 @@ impl Targets {
         let receiver = || -> VkResult<ReceiverTargets> {
             Ok(ReceiverTargets {
                 geo: img("receivers from light", GEO_FORMAT, m, color)?,
-                depth: img("receivers depth", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT)?,
                 shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
                 flux: img(
                     "caustic flux map",

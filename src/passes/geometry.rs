@@ -17,8 +17,8 @@ pub struct GeometryPass {
     pub back: Pipeline,
     /// Both faces (receivers): normal + distance.
     pub surfaces: Pipeline,
-    /// Depth only (shadow map).
-    pub depth: Pipeline,
+    /// Depth only, inside the receiver pass (color writes masked): the refractors' share of the shadow map.
+    pub occluders: Pipeline,
 }
 
 /// What to draw and where.
@@ -40,7 +40,7 @@ impl GeometryPass {
         let geo = ColorTarget { format: GEO_FORMAT, blend: Blend::None };
         let aux = ColorTarget { format: AUX_FORMAT, blend: Blend::None };
         let make = |name: &str, vert: &[u32], frag: &[u32], cull: vk::CullModeFlags, colors: &[ColorTarget]| {
-            let attrs = match colors.len() {
+            let attrs = match colors.iter().filter(|c| c.blend != Blend::Masked).count() {
                 0 => &all[..1],
                 1 => &all[..2],
                 _ => &all[..],
@@ -87,12 +87,12 @@ impl GeometryPass {
                 vk::CullModeFlags::NONE,
                 &[geo3],
             )?,
-            depth: make(
-                "shadow depth",
+            occluders: make(
+                "shadow occluders",
                 shaders::GEOMETRY_VERT_DEPTH.words(),
                 shaders::DEPTH_ONLY_FRAG.words(),
                 vk::CullModeFlags::NONE,
-                &[],
+                &[ColorTarget { format: GEO_FORMAT, blend: Blend::Masked }],
             )?,
         })
     }
@@ -100,17 +100,40 @@ impl GeometryPass {
     pub fn record(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, scene: &SceneBuffers, t: &GeometryTarget) {
         let d = &self.device;
         begin_rendering(d, cmd, t.depth.extent, t.colors, true, Some(t.depth));
+        self.draw(cmd, pipeline, scene, t.view, t.ranges);
+        unsafe { d.cmd_end_rendering(cmd) };
+    }
+
+    /// The receiver pass: the receivers' g-buffer and, in the same depth target, the shadow map. The receivers are
+    /// drawn first (color and depth), then the refractors with color writes masked, so the color target holds
+    /// the receivers the light sees through the glass and the depth target the nearest of every object.
+    pub fn record_receivers(
+        &self,
+        cmd: vk::CommandBuffer,
+        scene: &SceneBuffers,
+        geo: &Image,
+        shadow: &Image,
+        view: &GpuView,
+    ) {
+        let d = &self.device;
+        begin_rendering(d, cmd, shadow.extent, &[geo], true, Some(shadow));
+        self.draw(cmd, &self.surfaces, scene, view, &[scene.receivers]);
+        self.draw(cmd, &self.occluders, scene, view, &[scene.refractors]);
+        unsafe { d.cmd_end_rendering(cmd) };
+    }
+
+    fn draw(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, scene: &SceneBuffers, view: &GpuView, ranges: &[DrawRange]) {
+        let d = &self.device;
         pipeline.bind(cmd, &[]);
-        pipeline.push(cmd, &GeometryPush::from_view(t.view));
+        pipeline.push(cmd, &GeometryPush::from_view(view));
         unsafe {
             d.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
-            for r in t.ranges {
+            for r in ranges {
                 if r.index_count > 0 {
                     d.cmd_draw_indexed(cmd, r.index_count, 1, r.first_index, 0, 0);
                 }
             }
-            d.cmd_end_rendering(cmd);
         }
     }
 }

@@ -46,6 +46,8 @@ pub enum Blend {
     /// dst.rgb += src.rgb, dst.a kept: a further light's radiance added to the eye targets (alpha holds the eye
     /// distance, which every light's pass writes alike).
     AddRgb,
+    /// Nothing written (an empty write mask): a depth-only draw inside a pass that has color targets.
+    Masked,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -244,6 +246,7 @@ impl Pipeline {
                     vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
                 match c.blend {
                     Blend::None => b,
+                    Blend::Masked => b.color_write_mask(vk::ColorComponentFlags::empty()),
                     Blend::Additive => b
                         .blend_enable(true)
                         .src_color_blend_factor(vk::BlendFactor::ONE)
