@@ -11,13 +11,17 @@ layout(push_constant) uniform Push {
     vec4 forward;  // xyz
 } pc;
 
-// Variants: WITH_AUX passes the material parameter (index of refraction); DEPTH_ONLY passes nothing.
+// Variants: WITH_AUX passes the material parameter (index of refraction); WITH_ALBEDO the rgb albedo (the eye's
+// receiver g-buffer); DEPTH_ONLY passes nothing.
 #ifndef DEPTH_ONLY
 layout(location = 0) out vec3 v_world;
 layout(location = 1) out vec3 v_normal;
 #endif
 #ifdef WITH_AUX
 layout(location = 2) flat out float v_param;
+#endif
+#ifdef WITH_ALBEDO
+layout(location = 2) flat out vec3 v_albedo;
 #endif
 
 void main() {
@@ -27,6 +31,9 @@ void main() {
 #endif
 #ifdef WITH_AUX
     v_param = a_material.x;
+#endif
+#ifdef WITH_ALBEDO
+    v_albedo = a_material.rgb;
 #endif
     gl_Position = pc.view_proj * vec4(a_position.xyz, 1.0);
 }

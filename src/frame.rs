@@ -16,7 +16,7 @@ use crate::error::AppResult;
 use crate::gpu_types::{FrameData, TransportState, TraversalState};
 use crate::passes::composite::CompositeInputs;
 use crate::passes::coverage::CoverageInputs;
-use crate::passes::eye::EyeInputs;
+use crate::passes::eye::{EyeGbuffer, EyeInputs};
 use crate::passes::geometry::GeometryTarget;
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings};
 use crate::passes::Passes;
@@ -941,14 +941,28 @@ impl Ctx<'_> {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;
         let first = self.light == 0;
-        let colors: &[&Image] = if self.eye_aovs { &[&e.radiance, &e.caustics, &e.direct] } else { &[&e.radiance] };
+        let out: &[&Image] = if self.eye_aovs { &[&e.radiance, &e.caustics, &e.direct] } else { &[&e.radiance] };
+        let g = EyeGbuffer { geo: &e.recv, albedo: &e.albedo, depth: &e.depth };
+        if first {
+            // The g-buffer does not depend on the light: drawn once, before the first light's shading.
+            self.barrier(cmd, |b| {
+                b.image(&e.recv, &[Access::FrameStart], &[Access::ColorAttachment]);
+                b.image(&e.albedo, &[Access::FrameStart], &[Access::ColorAttachment]);
+                b.image(&e.depth, &[Access::FrameStart], &[Access::DepthAttachment]);
+            });
+            self.p.eye.record_gbuffer(cmd, self.sb, &self.data.camera, &g);
+            rec.ts.mark(cmd, "eye.shade");
+        }
         self.barrier(cmd, |b| {
-            for img in colors {
-                let from = if first { Access::FrameStart } else { Access::ColorAttachment };
-                b.image(img, &[from], &[Access::ColorAttachment]);
+            if first {
+                b.image(&e.recv, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+                b.image(&e.albedo, &[Access::ColorAttachment], &[Access::ComputeSampled]);
             }
-            let from = if first { Access::FrameStart } else { Access::DepthAttachment };
-            b.image(&e.depth, &[from], &[Access::DepthAttachment]);
+            for img in out {
+                // A further light reads what the last one wrote, pixel by pixel.
+                let from = if first { Access::FrameStart } else { Access::ComputeWrite };
+                b.image(img, &[from], &[Access::ComputeWrite]);
+            }
         });
         let inputs = EyeInputs {
             ubo: self.ubo,
@@ -958,7 +972,7 @@ impl Ctx<'_> {
             nearest: self.nearest,
             linear: self.linear,
         };
-        self.p.eye.record(cmd, self.sb, &inputs, colors, &e.depth, !first);
+        self.p.eye.record_shade(cmd, &inputs, &g, out, !first);
     }
 
     /// Step 5b: the eye view of the refractors: front and back g-buffers for the composite.
@@ -997,7 +1011,8 @@ impl Ctx<'_> {
         let e = &t.eye;
         rec.ts.mark(cmd, "composite");
         self.barrier(cmd, |b| {
-            for img in [&e.radiance, &e.front, &e.front_aux, &e.back] {
+            b.image(&e.radiance, &[Access::ComputeWrite], &[Access::ComputeSampled]);
+            for img in [&e.front, &e.front_aux, &e.back] {
                 b.image(img, &[Access::ColorAttachment], &[Access::ComputeSampled]);
             }
             b.image(&e.beauty, &[Access::FrameStart], &[Access::ComputeWrite]);
@@ -1044,7 +1059,7 @@ impl Ctx<'_> {
             if let Some(img) = image {
                 // The composite's outputs are already transfer sources.
                 if !std::ptr::eq(img, &t.eye.beauty) && !std::ptr::eq(img, &t.eye.hdr) {
-                    b.image(img, &[Access::ColorAttachment], &[Access::TransferSrc]);
+                    b.image(img, &[Access::ComputeWrite], &[Access::TransferSrc]);
                 }
             }
         });

@@ -40,10 +40,14 @@ pub struct ReceiverTargets {
 }
 
 pub struct EyeTargets {
+    /// The receivers' eye-view g-buffer: normal and distance, albedo, depth.
+    pub recv: Image,
+    pub albedo: Image,
+    pub depth: Image,
+    /// Written by the shading pass: the radiance (a: eye distance) and the AOVs.
     pub radiance: Image,
     pub caustics: Image,
     pub direct: Image,
-    pub depth: Image,
     pub front: Image,
     pub front_aux: Image,
     pub back: Image,
@@ -61,11 +65,14 @@ impl EyeTargets {
         let img = |name: &str, format, usage| Image::new(device, name, format, ext(aa * width, aa * height), usage);
         let out = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
+        let shaded = U::STORAGE | U::SAMPLED | U::TRANSFER_SRC;
         Ok(EyeTargets {
-            radiance: img("eye radiance", HDR_FORMAT, color | U::TRANSFER_SRC)?,
-            caustics: img("eye caustics", HDR_FORMAT, color | U::TRANSFER_SRC)?,
-            direct: img("eye direct", HDR_FORMAT, color | U::TRANSFER_SRC)?,
+            recv: img("eye receivers", GEO_FORMAT, color)?,
+            albedo: img("eye receiver albedo", crate::passes::eye::ALBEDO_FORMAT, color)?,
             depth: img("eye depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
+            radiance: img("eye radiance", HDR_FORMAT, shaded)?,
+            caustics: img("eye caustics", HDR_FORMAT, shaded)?,
+            direct: img("eye direct", HDR_FORMAT, shaded)?,
             front: img("eye refractor front", GEO_FORMAT, color)?,
             front_aux: img("eye refractor ior", AUX_FORMAT, color)?,
             back: img("eye refractor back", GEO_FORMAT, color)?,

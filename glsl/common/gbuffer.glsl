@@ -19,6 +19,7 @@ vec3 oct_decode(vec2 e) {
     return normalize(n);
 }
 
+// n need not be unit length (the octahedral map divides by its L1 norm).
 uvec2 geo_pack(vec3 n, float dist) { return uvec2(floatBitsToUint(dist), packSnorm2x16(oct_encode(n))); }
 
 // (normal, distance) of a texel.

@@ -1,20 +1,24 @@
-//! The eye view of the receivers: radiance, caustic and direct irradiance (the AOVs).
+//! The eye view of the receivers, deferred: a raster pass writes their eye-view g-buffer (normal and distance,
+//! albedo), then a compute pass shades each pixel under each light into the radiance and, when the frame reads
+//! one back, the caustics and direct AOVs.
 
-use super::{begin_rendering_with, DEPTH_FORMAT, HDR_FORMAT};
-use crate::gpu_types::Vertex;
+use super::{begin_rendering, groups_2d, DEPTH_FORMAT, GEO_FORMAT};
+use crate::gpu_types::{GeometryPush, GpuView, Vertex};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
+/// The receivers' albedo in the eye g-buffer (albedos lie in [0, 1]).
+pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+
 pub struct EyePass {
     device: Arc<Device>,
-    /// Radiance, caustics and direct: the first light clears and writes them, a further light adds to them
-    /// (depth loaded and tested, not written).
-    aovs: [Pipeline; 2],
-    /// The radiance alone, for frames that read back neither AOV: [first light, a further light].
-    radiance: [Pipeline; 2],
+    /// The receivers' eye-view g-buffer: normal and distance, albedo (and depth).
+    gbuffer: Pipeline,
+    /// Shading: [the radiance alone, the radiance and the caustics and direct AOVs].
+    shade: [Pipeline; 2],
 }
 
 pub struct EyeInputs<'a> {
@@ -26,70 +30,70 @@ pub struct EyeInputs<'a> {
     pub linear: &'a Sampler,
 }
 
+/// The eye g-buffer of the receivers.
+pub struct EyeGbuffer<'a> {
+    pub geo: &'a Image,
+    pub albedo: &'a Image,
+    pub depth: &'a Image,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ShadePush {
+    add: u32,
+}
+const _: () = assert!(std::mem::size_of::<ShadePush>() == 4);
+
 impl EyePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        let make = |name: &str, fragment: &[u32], targets: usize, blend: Blend, depth: (vk::CompareOp, bool)| {
-            let hdr = ColorTarget { format: HDR_FORMAT, blend };
-            Pipeline::graphics(
-                device,
-                name,
-                &GraphicsDesc {
-                    vertex: shaders::EYE_RECEIVER_VERT.words(),
-                    fragment,
-                    binds: &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::Sampled],
-                    push_size: 0,
-                    vertex_attributes: &[
-                        (vk::Format::R32G32B32A32_SFLOAT, 0),
-                        (vk::Format::R32G32B32A32_SFLOAT, 16),
-                        (vk::Format::R32G32B32A32_SFLOAT, 32),
-                    ],
-                    vertex_stride: std::mem::size_of::<Vertex>() as u32,
-                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                    cull: vk::CullModeFlags::NONE,
-                    depth: Some((DEPTH_FORMAT, depth.0, depth.1)),
-                    colors: &[hdr; 3][..targets],
-                },
-            )
-        };
-        let (first, further) = ((vk::CompareOp::LESS, true), (vk::CompareOp::LESS_OR_EQUAL, false));
-        let (full, rad) = (shaders::EYE_RECEIVER_FRAG.words(), shaders::EYE_RECEIVER_FRAG_RADIANCE.words());
-        Ok(EyePass {
-            device: device.clone(),
-            aovs: [
-                make("eye receivers", full, 3, Blend::None, first)?,
-                make("eye receivers (a further light)", full, 3, Blend::AddRgb, further)?,
-            ],
-            radiance: [
-                make("eye receivers, radiance", rad, 1, Blend::None, first)?,
-                make("eye receivers, radiance (a further light)", rad, 1, Blend::AddRgb, further)?,
-            ],
-        })
+        let gbuffer = Pipeline::graphics(
+            device,
+            "eye receivers g-buffer",
+            &GraphicsDesc {
+                vertex: shaders::GEOMETRY_VERT_ALBEDO.words(),
+                fragment: shaders::GEOMETRY_FRAG_ALBEDO.words(),
+                binds: &[],
+                push_size: std::mem::size_of::<GeometryPush>() as u32,
+                vertex_attributes: &[
+                    (vk::Format::R32G32B32A32_SFLOAT, 0),
+                    (vk::Format::R32G32B32A32_SFLOAT, 16),
+                    (vk::Format::R32G32B32A32_SFLOAT, 32),
+                ],
+                vertex_stride: std::mem::size_of::<Vertex>() as u32,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                cull: vk::CullModeFlags::NONE,
+                depth: Some((DEPTH_FORMAT, vk::CompareOp::LESS, true)),
+                colors: &[
+                    ColorTarget { format: GEO_FORMAT, blend: Blend::None },
+                    ColorTarget { format: ALBEDO_FORMAT, blend: Blend::None },
+                ],
+            },
+        )?;
+        let binds = [
+            BindKind::Uniform,
+            BindKind::Sampled,
+            BindKind::Sampled,
+            BindKind::Sampled,
+            BindKind::Sampled,
+            BindKind::Sampled,
+            BindKind::StorageImage,
+            BindKind::StorageImage,
+            BindKind::StorageImage,
+        ];
+        let push = std::mem::size_of::<ShadePush>() as u32;
+        let shade = [
+            Pipeline::compute(device, "eye shade", shaders::EYE_SHADE_COMP.words(), &binds[..7], push)?,
+            Pipeline::compute(device, "eye shade (AOVs)", shaders::EYE_SHADE_COMP_AOVS.words(), &binds, push)?,
+        ];
+        Ok(EyePass { device: device.clone(), gbuffer, shade })
     }
 
-    /// Draw the receivers into `colors`: radiance, caustics and direct, or the radiance alone (and depth); `add`:
-    /// add to what an earlier light's pass drew instead of clearing.
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        scene: &SceneBuffers,
-        i: &EyeInputs,
-        colors: &[&Image],
-        depth: &Image,
-        add: bool,
-    ) {
+    /// Rasterize the receivers seen from `camera` into the g-buffer (once per frame, whatever the lights).
+    pub fn record_gbuffer(&self, cmd: vk::CommandBuffer, scene: &SceneBuffers, camera: &GpuView, g: &EyeGbuffer) {
         let d = &self.device;
-        begin_rendering_with(d, cmd, depth.extent, colors, !add, Some(depth), !add);
-        let set = if colors.len() == 1 { &self.radiance } else { &self.aovs };
-        let pipeline = &set[add as usize];
-        pipeline.bind(
-            cmd,
-            &[
-                Bind::Uniform(i.ubo),
-                Bind::Sampled(i.shadow, i.nearest),
-                Bind::Sampled(i.irradiance, i.linear),
-                Bind::Sampled(i.recv, i.nearest),
-            ],
-        );
+        begin_rendering(d, cmd, g.depth.extent, &[g.geo, g.albedo], true, Some(g.depth));
+        self.gbuffer.bind(cmd, &[]);
+        self.gbuffer.push(cmd, &GeometryPush::from_view(camera));
         unsafe {
             d.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
@@ -98,5 +102,24 @@ impl EyePass {
             }
             d.cmd_end_rendering(cmd);
         }
+    }
+
+    /// Shade the g-buffer under one light into `out`: the radiance, or the radiance, caustics and direct. `add`:
+    /// add to what an earlier light's dispatch wrote instead of writing.
+    pub fn record_shade(&self, cmd: vk::CommandBuffer, i: &EyeInputs, g: &EyeGbuffer, out: &[&Image], add: bool) {
+        let pipeline = &self.shade[(out.len() > 1) as usize];
+        let mut binds = vec![
+            Bind::Uniform(i.ubo),
+            Bind::Sampled(i.shadow, i.nearest),
+            Bind::Sampled(i.irradiance, i.linear),
+            Bind::Sampled(i.recv, i.nearest),
+            Bind::Sampled(g.geo, i.nearest),
+            Bind::Sampled(g.albedo, i.nearest),
+        ];
+        binds.extend(out.iter().map(|img| Bind::StorageImage(img)));
+        pipeline.bind(cmd, &binds);
+        pipeline.push(cmd, &ShadePush { add: add as u32 });
+        let (gx, gy) = groups_2d(out[0].extent.width, out[0].extent.height);
+        unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
     }
 }

@@ -122,7 +122,14 @@ impl GeometryPass {
         unsafe { d.cmd_end_rendering(cmd) };
     }
 
-    fn draw(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, scene: &SceneBuffers, view: &GpuView, ranges: &[DrawRange]) {
+    fn draw(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &Pipeline,
+        scene: &SceneBuffers,
+        view: &GpuView,
+        ranges: &[DrawRange],
+    ) {
         let d = &self.device;
         pipeline.bind(cmd, &[]);
         pipeline.push(cmd, &GeometryPush::from_view(view));

@@ -1,0 +1,87 @@
+#version 460
+// Eye view of the receivers (docs/design.md step 6), deferred: the raster pass wrote their eye-view g-buffer
+// (normal and distance, and albedo); here each pixel is shaded under one light: direct irradiance through a
+// filtered shadow map, caustic irradiance averaged over the pixel's footprint on the caustic map, and the
+// environment. The first light writes the targets, each further light adds its light (dispatches in order).
+// Shading runs on every compute unit: on GPUs whose graphics units are few, the fragment shader that did this
+// was the eye view's largest cost.
+// Variant WITH_AOVS also writes the caustics and direct AOVs (W/m^2), for frames that read one back.
+#include "common/types.glsl"
+#include "common/view.glsl"
+#include "common/gbuffer.glsl"
+
+layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
+layout(set = 0, binding = 1) uniform sampler2D t_shadow;      // depth of all objects from the light
+layout(set = 0, binding = 2) uniform sampler2D t_irradiance;  // caustic irradiance, W/m^2 (linear filtering)
+layout(set = 0, binding = 3) uniform usampler2D t_recv;       // receivers from the light: normal, distance
+
+#include "common/receiver.glsl"
+
+layout(set = 0, binding = 4) uniform usampler2D t_eye;     // receivers from the eye: normal, distance (0: none)
+layout(set = 0, binding = 5) uniform sampler2D t_albedo;   // their albedo
+layout(set = 0, binding = 6, rgba32f) uniform image2D o_radiance;  // rgb: radiance (W/m^2/sr); a: eye distance
+#ifdef WITH_AOVS
+layout(set = 0, binding = 7, rgba32f) uniform image2D o_caustics;  // rgb: caustic irradiance (W/m^2)
+layout(set = 0, binding = 8, rgba32f) uniform image2D o_direct;    // rgb: direct irradiance (W/m^2)
+#endif
+
+layout(push_constant) uniform Push {
+    uint add;  // 0: the first light (write), 1: a further light (add)
+} pc;
+
+layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
+
+void store(ivec2 q, vec4 radiance, vec3 caustic, vec3 direct) {
+    if (pc.add != 0u) {
+        radiance.rgb += imageLoad(o_radiance, q).rgb;
+#ifdef WITH_AOVS
+        caustic += imageLoad(o_caustics, q).rgb;
+        direct += imageLoad(o_direct, q).rgb;
+#endif
+    }
+    imageStore(o_radiance, q, radiance);
+#ifdef WITH_AOVS
+    imageStore(o_caustics, q, vec4(caustic, 1.0));
+    imageStore(o_direct, q, vec4(direct, 1.0));
+#endif
+}
+
+// Where pixel q's ray meets the plane through p with normal n (p itself when the ray grazes it).
+vec3 on_plane(View cam, ivec2 q, vec3 p, vec3 n) {
+    vec3 ro, rd;
+    view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+    float c = dot(rd, n);
+    return abs(c) > 1e-6 ? ro + rd * (dot(p - ro, n) / c) : p;
+}
+
+void main() {
+    View cam = u_frame.camera;
+    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = imageSize(o_radiance);
+    if (q.x >= size.x || q.y >= size.y) return;
+    vec4 g = geo_fetch(t_eye, q);
+    if (g.w <= 0.0) {
+        // No receiver: the first light clears the pixel, a further one leaves it.
+        if (pc.add == 0u) store(q, vec4(0.0), vec3(0.0), vec3(0.0));
+        return;
+    }
+    // The g-buffer's distance runs along the pixel's ray from its origin (view.glsl), for both projections.
+    vec3 ro, rd;
+    view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+    vec3 p = ro + rd * g.w;
+    vec3 n = g.xyz;
+    vec3 e_direct = direct_irradiance(p, n);
+    // Caustics, averaged over the pixel's footprint on the map: the uv offsets to where the next pixels' rays
+    // meet the receiver's tangent plane (the screen-space derivatives of uv), so that a caustic sharper than a
+    // pixel keeps its flux: sum E * pixel area stays the flux that landed under the pixel.
+    View lv = u_frame.receiver_view;
+    vec2 uv = view_uv(lv, p);
+    vec2 dx = view_uv(lv, on_plane(cam, q + ivec2(1, 0), p, n)) - uv;
+    vec2 dy = view_uv(lv, on_plane(cam, q + ivec2(0, 1), p, n)) - uv;
+    vec3 e_caustic = caustic_irradiance(p, dx, dy);
+    // The environment lights the side the eye sees (its radiance is 0 in further lights' uniforms).
+    vec3 n_eye = dot(n, view_dir_to(cam, p)) > 0.0 ? -n : n;
+    vec3 e_env = environment_irradiance(n_eye);
+    vec3 albedo = texelFetch(t_albedo, q, 0).rgb;
+    store(q, vec4(albedo / RECV_PI * (e_direct + e_caustic + e_env), g.w), e_caustic, e_direct);
+}
