@@ -979,15 +979,25 @@ impl Ctx<'_> {
     fn eye_refractors(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;
+        let g = &self.p.geometry;
+        let cam = &self.data.camera;
+        let ranges = [self.sb.refractors];
+        if self.exact_eye() {
+            // The composite traces the glass through the BVH: it needs only where the front surface is.
+            self.barrier(cmd, |b| {
+                b.image(&e.front, &[Access::FrameStart], &[Access::ColorAttachment]);
+                b.image(&e.refr_depth, &[Access::FrameStart], &[Access::DepthAttachment]);
+            });
+            let target = GeometryTarget { colors: &[&e.front], depth: &e.refr_depth, view: cam, ranges: &ranges };
+            g.record(cmd, &g.front_only, self.sb, &target);
+            return;
+        }
         self.barrier(cmd, |b| {
             for img in [&e.front, &e.front_aux, &e.back] {
                 b.image(img, &[Access::FrameStart], &[Access::ColorAttachment]);
             }
             b.image(&e.refr_depth, &[Access::FrameStart], &[Access::DepthAttachment]);
         });
-        let g = &self.p.geometry;
-        let cam = &self.data.camera;
-        let ranges = [self.sb.refractors];
         g.record(
             cmd,
             &g.front,
@@ -1005,6 +1015,12 @@ impl Ctx<'_> {
         );
     }
 
+    /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts
+    /// through the eye's front and back buffers.
+    fn exact_eye(&self) -> bool {
+        self.s.transport == Transport::Exact && !self.s.preview
+    }
+
     /// Step 6: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
     fn composite(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
@@ -1012,8 +1028,11 @@ impl Ctx<'_> {
         rec.ts.mark(cmd, "composite");
         self.barrier(cmd, |b| {
             b.image(&e.radiance, &[Access::ComputeWrite], &[Access::ComputeSampled]);
-            for img in [&e.front, &e.front_aux, &e.back] {
-                b.image(img, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+            b.image(&e.front, &[Access::ColorAttachment], &[Access::ComputeSampled]);
+            // Bound but not read by the exact composite, which draws neither.
+            let from = if self.exact_eye() { Access::FrameStart } else { Access::ColorAttachment };
+            for img in [&e.front_aux, &e.back] {
+                b.image(img, &[from], &[Access::ComputeSampled]);
             }
             b.image(&e.beauty, &[Access::FrameStart], &[Access::ComputeWrite]);
             b.image(&e.hdr, &[Access::FrameStart], &[Access::ComputeWrite]);
@@ -1034,7 +1053,7 @@ impl Ctx<'_> {
                 bvh: &self.sb.bvh,
                 nearest: self.nearest,
                 linear: self.linear,
-                exact: self.s.transport == Transport::Exact && !self.s.preview,
+                exact: self.exact_eye(),
             },
         );
         self.barrier(cmd, |b| {

@@ -13,6 +13,8 @@ pub struct GeometryPass {
     device: Arc<Device>,
     /// Nearest front faces: normal + distance, and the index of refraction.
     pub front: Pipeline,
+    /// Nearest front faces: normal + distance alone (the eye view under exact transport).
+    pub front_only: Pipeline,
     /// Nearest back faces: normal + distance.
     pub back: Pipeline,
     /// Both faces (receivers): normal + distance.
@@ -62,8 +64,6 @@ impl GeometryPass {
                 },
             )
         };
-        let geo2 = ColorTarget { format: GEO_FORMAT, blend: Blend::None };
-        let geo3 = ColorTarget { format: GEO_FORMAT, blend: Blend::None };
         Ok(GeometryPass {
             device: device.clone(),
             front: make(
@@ -73,19 +73,26 @@ impl GeometryPass {
                 vk::CullModeFlags::BACK,
                 &[geo, aux],
             )?,
+            front_only: make(
+                "geometry front (no aux)",
+                shaders::GEOMETRY_VERT.words(),
+                shaders::GEOMETRY_FRAG.words(),
+                vk::CullModeFlags::BACK,
+                &[geo],
+            )?,
             back: make(
                 "geometry back",
                 shaders::GEOMETRY_VERT.words(),
                 shaders::GEOMETRY_FRAG.words(),
                 vk::CullModeFlags::FRONT,
-                &[geo2],
+                &[geo],
             )?,
             surfaces: make(
                 "geometry surfaces",
                 shaders::GEOMETRY_VERT.words(),
                 shaders::GEOMETRY_FRAG.words(),
                 vk::CullModeFlags::NONE,
-                &[geo3],
+                &[geo],
             )?,
             occluders: make(
                 "shadow occluders",
