@@ -167,7 +167,7 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
 #ifdef EXACT_EYE
         return trace_glass(ro, rd);
 #else
-        return shade_glass(cam, ro, rd, front, texelFetch(t_front_aux, q, 0).x);
+        return shade_glass(cam, ro, rd, front, FRONT_IOR(texelFetch(t_front_aux, q, 0).x));
 #endif
     }
     if (rad.w > 0.0) return rad.rgb;

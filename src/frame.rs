@@ -471,13 +471,13 @@ impl Ctx<'_> {
         let photon_view = &self.data.photon_view;
         let receiver_view = &self.data.receiver_view;
         if caustics {
-            let front = GeometryTarget {
-                colors: &[&t.light.front, &t.light.front_aux],
-                depth: &t.light.depth,
-                view: photon_view,
-                ranges: &[self.sb.refractors],
-            };
-            g.record(cmd, &g.front, self.sb, &front);
+            // The IOR buffer is drawn only when the refractors' IORs differ (else the shaders read the uniform).
+            let colors: &[&Image] =
+                if self.shared_ior() { &[&t.light.front] } else { &[&t.light.front, &t.light.front_aux] };
+            let pipeline = if self.shared_ior() { &g.front_only } else { &g.front };
+            let front =
+                GeometryTarget { colors, depth: &t.light.depth, view: photon_view, ranges: &[self.sb.refractors] };
+            g.record(cmd, pipeline, self.sb, &front);
             // Exact transport reads only the front buffer (coverage); the back surface is the two-interface
             // trace's.
             if self.s.transport == Transport::TwoInterface {
@@ -998,12 +998,9 @@ impl Ctx<'_> {
             }
             b.image(&e.refr_depth, &[Access::FrameStart], &[Access::DepthAttachment]);
         });
-        g.record(
-            cmd,
-            &g.front,
-            self.sb,
-            &GeometryTarget { colors: &[&e.front, &e.front_aux], depth: &e.refr_depth, view: cam, ranges: &ranges },
-        );
+        let colors: &[&Image] = if self.shared_ior() { &[&e.front] } else { &[&e.front, &e.front_aux] };
+        let pipeline = if self.shared_ior() { &g.front_only } else { &g.front };
+        g.record(cmd, pipeline, self.sb, &GeometryTarget { colors, depth: &e.refr_depth, view: cam, ranges: &ranges });
         self.barrier(cmd, |b| {
             b.image(&e.refr_depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
         });
@@ -1013,6 +1010,11 @@ impl Ctx<'_> {
             self.sb,
             &GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &ranges },
         );
+    }
+
+    /// Every refractor has the same index of refraction: it is in the uniforms, and no IOR buffer is drawn.
+    fn shared_ior(&self) -> bool {
+        self.data.material[0] != 0.0
     }
 
     /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts

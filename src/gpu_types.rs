@@ -94,6 +94,9 @@ pub struct FrameData {
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
     /// x: the environment's sky radiance, W/(m²·sr) (0: off); y: eye-ray depth cap (interfaces).
     pub eye: [f32; 4],
+    /// x: the index of refraction every refractor shares (-1: all mirrors), 0 when they differ: then the light
+    /// and eye views draw it per texel into their IOR buffers.
+    pub material: [f32; 4],
 }
 
 /// `LevelCounters` in types.glsl.
@@ -249,7 +252,7 @@ pub struct Vertex {
 
 const _: () = {
     assert!(size_of::<GpuView>() == 160);
-    assert!(size_of::<FrameData>() == 656);
+    assert!(size_of::<FrameData>() == 672);
     assert!(offset_of!(FrameData, eye) == 640);
     assert!(size_of::<TransportState>() == 48 + 160);
     assert!(offset_of!(TransportState, batch_account) == 48);

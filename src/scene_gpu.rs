@@ -83,6 +83,23 @@ impl BvhBuffers {
     }
 }
 
+/// A refractor's gray index of refraction as the light and eye views' IOR buffers hold it. A negative IOR marks a
+/// mirror for the eye view's deferred shading (composite.comp).
+fn refractor_ior(m: &Material) -> f32 {
+    match *m {
+        Material::Dielectric { ior, .. } => ior,
+        _ => -1.0,
+    }
+}
+
+/// The IOR buffer's value when every refractor of the scene has the same one: the frame then passes it in its
+/// uniforms and draws no IOR buffer (in the light view that buffer cost a fifth of the front pass on an H200).
+pub fn shared_ior(scene: &Scene) -> Option<f32> {
+    let mut iors = scene.objects.iter().filter(|o| o.is_refractor()).map(|o| refractor_ior(&o.material));
+    let first = iors.next()?;
+    iors.all(|x| x == first).then_some(first)
+}
+
 impl SceneBuffers {
     pub fn new(device: &Arc<Device>, recorder: &mut Recorder, scene: &Scene) -> VkResult<Self> {
         let mut vertices = Vec::new();
@@ -93,9 +110,7 @@ impl SceneBuffers {
                 let base = vertices.len() as u32;
                 let material = match o.material {
                     Material::Diffuse { albedo } => [albedo.x, albedo.y, albedo.z, 0.0],
-                    Material::Dielectric { ior, .. } => [ior, 0.0, 0.0, 1.0],
-                    // A negative IOR marks a mirror for the eye view's deferred shading (composite.comp).
-                    Material::Mirror => [-1.0, 0.0, 0.0, 1.0],
+                    _ => [refractor_ior(&o.material), 0.0, 0.0, 1.0],
                 };
                 for (p, n) in o.mesh.positions.iter().zip(&o.mesh.normals) {
                     vertices.push(Vertex { position: [p.x, p.y, p.z, 1.0], normal: [n.x, n.y, n.z, 0.0], material });

@@ -40,7 +40,7 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     vec3 p1 = ro + rd * front.w;
     // (A receiver between the light and the refractor shadows it: coverage.comp leaves such texels uncovered.)
     ivec2 aux_size = textureSize(t_front_aux, 0);
-    float ior = texelFetch(t_front_aux, clamp(ivec2(uv * vec2(aux_size)), ivec2(0), aux_size - 1), 0).x;
+    float ior = FRONT_IOR(texelFetch(t_front_aux, clamp(ivec2(uv * vec2(aux_size)), ivec2(0), aux_size - 1), 0).x);
     vec3 n1 = dot(front.xyz, rd) > 0.0 ? -front.xyz : front.xyz;
     float F1 = fresnel_dielectric(-dot(rd, n1), 1.0, ior);
     vec3 t1;

@@ -31,7 +31,11 @@ struct FrameData {
                          // bit 8 differential footprints
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
     vec4 eye;            // x: sky radiance (W/m^2/sr; 0: off); y: eye-ray depth cap (interfaces)
+    vec4 material;       // x: the IOR every refractor shares (-1: mirrors), 0 if they differ (then: IOR buffers)
 };
+
+// The front surface's index of refraction: shared by the scene's refractors, else from the IOR buffer's texel.
+#define FRONT_IOR(aux_texel) (u_frame.material.x != 0.0 ? u_frame.material.x : (aux_texel))
 
 struct LevelCounters {
     uint candidates;
