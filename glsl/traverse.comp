@@ -123,7 +123,7 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     vec2 p[4];
     float phi[4];
     uint status[4], events[4];
-    float t_max = 0.0;
+    float t_max = 0.0, t_min = 1.0, rest = 0.0;
     for (uint k = 0u; k < 4u; k++) {
         uvec2 c = 2u * xy + uvec2(k & 1u, k >> 1);
         if (exact) {
@@ -131,6 +131,8 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
             status[k] = trace_dominant(level + 1u, c, p[k], events[k], thr);
             phi[k] = status[k] == DOM_OK ? intensity * cell_measure(level + 1u, c) * thr : 0.0;
             t_max = max(t_max, thr);
+            t_min = min(t_min, thr);
+            rest += intensity * cell_measure(level + 1u, c) * (1.0 - thr);
         } else {
             Hit h = trace_cell(level + 1u, c);
             status[k] = h.status;
@@ -143,11 +145,15 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     }
     bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
     uint ok = exact ? DOM_OK : HIT_OK;
-    // All four end the same other way: as under max-error, two-interface drops the cell (it carries nothing to a
-    // receiver) and exact transport emits it (its weaker branches may still reach one; its waves trace them all).
-    if (same && status[0] != ok) return exact ? FE_FINAL : FE_DROP;
     float cell_flux = intensity * cell_measure(level, xy);
     float budget = u_frame.params.w * cell_flux;
+    // All four end the same other way: two-interface drops the cell (it carries nothing to a receiver). Under exact
+    // transport the weaker branches, the share 1 - T_k of each child's flux, may still reach one, anywhere: the
+    // merged photon's between nothing and I Omega(cell) (1 - T_min), the children's in total `rest`.
+    if (same && status[0] != ok) {
+        if (!exact) return FE_DROP;
+        return cell_flux * (1.0 - t_min) + rest <= budget ? FE_FINAL : FE_REFINE;
+    }
     float w = float(u_frame.grid.z) / 64.0;
     float total = phi[0] + phi[1] + phi[2] + phi[3];
     // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.
