@@ -6,7 +6,7 @@
 // A cell is final at the maximal level, or, under the max-error metric, when its 2x2 children land within the
 // error bound of one another in the caustic map: then one photon carries the whole cell's flux. Under the
 // flux-error metric (docs/design.md, "The flux-error metric") a cell is final when merging its children into one
-// photon changes the caustic map, box-filtered to 64², by at most --target-error times the cell's flux; when the
+// photon changes the caustic map, box-filtered to 64², by at most tau times the cell's flux; when the
 // same traces predict that each child would be final, the four children are emitted at once (look-ahead).
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
 // branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md), and
@@ -110,7 +110,8 @@ uint children_verdict(uint level, uvec2 xy) {
 // of interfaces does not matter if they land together). Children that end differently (a silhouette, TIR, an
 // escape) can make the merged photon deposit anything between nothing and the cell's flux times the largest
 // throughput, so then E = I Omega(cell) max_k T_k + sum_k phi_k. The cell is final when E <= tau I Omega(cell): summed over the final cells, the
-// merging error is at most tau times the flux that meets the refractor. `--target-error` sets tau.
+// merging error is at most tau times the flux that meets the refractor. tau (params.w) is what src/calibration.rs
+// maps `--target-error` to.
 const uint FE_REFINE = 0u;
 const uint FE_FINAL = 1u;     // emit the cell as one photon
 const uint FE_CHILDREN = 2u;  // emit its four children (each predicted final)
