@@ -6,7 +6,7 @@
 // A cell is final at the maximal level, or, under the max-error metric, when its 2x2 children land within the
 // error bound of one another in the caustic map: then one photon carries the whole cell's flux. Under the
 // flux-error metric (docs/design.md, "The flux-error metric") a cell is final when merging its children into one
-// photon changes the caustic map, box-filtered to 64², by at most --target-error times the cell's flux; when the
+// photon changes the caustic map, box-filtered to 64², by at most tau times the cell's flux; when the
 // same traces predict that each child would be final, the four children are emitted at once (look-ahead).
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
 // branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md), and
@@ -110,7 +110,8 @@ uint children_verdict(uint level, uvec2 xy) {
 // of interfaces does not matter if they land together). Children that end differently (a silhouette, TIR, an
 // escape) can make the merged photon deposit anything between nothing and the cell's flux times the largest
 // throughput, so then E = I Omega(cell) max_k T_k + sum_k phi_k. The cell is final when E <= tau I Omega(cell): summed over the final cells, the
-// merging error is at most tau times the flux that meets the refractor. `--target-error` sets tau.
+// merging error is at most tau times the flux that meets the refractor. tau (params.w) is what src/calibration.rs
+// maps `--target-error` to.
 const uint FE_REFINE = 0u;
 const uint FE_FINAL = 1u;     // emit the cell as one photon
 const uint FE_CHILDREN = 2u;  // emit its four children (each predicted final)
@@ -123,7 +124,7 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     vec2 p[4];
     float phi[4];
     uint status[4], events[4];
-    float t_max = 0.0;
+    float t_max = 0.0, t_min = 1.0, rest = 0.0;
     for (uint k = 0u; k < 4u; k++) {
         uvec2 c = 2u * xy + uvec2(k & 1u, k >> 1);
         if (exact) {
@@ -131,6 +132,8 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
             status[k] = trace_dominant(level + 1u, c, p[k], events[k], thr);
             phi[k] = status[k] == DOM_OK ? intensity * cell_measure(level + 1u, c) * thr : 0.0;
             t_max = max(t_max, thr);
+            t_min = min(t_min, thr);
+            rest += intensity * cell_measure(level + 1u, c) * (1.0 - thr);
         } else {
             Hit h = trace_cell(level + 1u, c);
             status[k] = h.status;
@@ -143,11 +146,15 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     }
     bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
     uint ok = exact ? DOM_OK : HIT_OK;
-    // All four end the same other way: as under max-error, two-interface drops the cell (it carries nothing to a
-    // receiver) and exact transport emits it (its weaker branches may still reach one; its waves trace them all).
-    if (same && status[0] != ok) return exact ? FE_FINAL : FE_DROP;
     float cell_flux = intensity * cell_measure(level, xy);
     float budget = u_frame.params.w * cell_flux;
+    // All four end the same other way: two-interface drops the cell (it carries nothing to a receiver). Under exact
+    // transport the weaker branches, the share 1 - T_k of each child's flux, may still reach one, anywhere: the
+    // merged photon's between nothing and I Omega(cell) (1 - T_min), the children's in total `rest`.
+    if (same && status[0] != ok) {
+        if (!exact) return FE_DROP;
+        return cell_flux * (1.0 - t_min) + rest <= budget ? FE_FINAL : FE_REFINE;
+    }
     float w = float(u_frame.grid.z) / 64.0;
     float total = phi[0] + phi[1] + phi[2] + phi[3];
     // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.

@@ -15,6 +15,7 @@ use crate::renderer::{Aov, FrameReport};
 use crate::settings::{Driven, Method, Metric, Settings, Transport, TRAVERSE_WG_SWEEP};
 use crate::shaders::consts::*;
 use serde_json::json;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -86,9 +87,11 @@ pub struct BenchArgs {
     /// Max-error bound (caustic-map texels).
     #[arg(long, default_value_t = 1.0)]
     pub error_bound: f32,
-    /// Flux-error metric: the target errors to sweep (comma-separated, each in (0, 1]); with more than one, the
-    /// rows' metric reads `flux-error@E`.
-    #[arg(long, default_value = "0.01", value_delimiter = ',', allow_negative_numbers = true)]
+    /// Flux-error metric: the target errors to sweep (comma-separated, each in (0, 1]: the relative L1 at 64²
+    /// that merging may add to max-level's image), each mapped to its per-cell threshold tau by the calibration
+    /// table; with more than one, the rows' metric reads `flux-error@E`. When max-level runs too, each flux-error
+    /// row's `extra` holds `added_rel_l1_64`: its rel-L1 at 64² against max-level's image at the same level.
+    #[arg(long, default_values_t = [crate::settings::DEFAULT_TARGET_ERROR], value_delimiter = ',', allow_negative_numbers = true)]
     pub target_errors: Vec<f32>,
     /// Photon budget (MiB); 0: automatic, as for render.
     #[arg(long, default_value_t = 0.0)]
@@ -192,7 +195,7 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
     for e in &args.target_errors {
         if !(e.is_finite() && *e > 0.0 && *e <= 1.0) {
             return Err(AppError::BadInput(format!(
-                "--target-errors {e}: each must lie in (0, 1] (relative L1 at 64²)"
+                "--target-errors {e}: each must lie in (0, 1] (the relative L1 at 64² that merging may add)"
             )));
         }
     }
@@ -348,6 +351,10 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             ..Settings::default()
         };
         let mut session = Session::open(&scene_args, base.clone())?;
+        // Max-level's image per (transport, level), and the flux-error rows to score against it once the scene's
+        // sweep is done (the methods may come in any order).
+        let mut max_level_images: HashMap<(&'static str, u32), RgbImage> = HashMap::new();
+        let mut flux_error_rows: Vec<(usize, &'static str, u32, RgbImage)> = Vec::new();
         // Every timed frame runs every stage.
         session.renderer.reuse = false;
         device = format!("{} ({})", session.device().info.name, session.device().info.driver);
@@ -398,6 +405,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                 let (m64, m256) = (score(&refs.main, 64), score(&refs.main, 256));
                 let (o64, o256) = (score(&refs.other, 64), score(&refs.other, 256));
                 let nan = f64::NAN;
+                let flux_error = p.method == Method::Adaptive && p.metric == Metric::FluxError;
                 let row = BenchRow {
                     scene: name.clone(),
                     transport: transport_name(transport).into(),
@@ -421,7 +429,8 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                             "flux_ratio": o64.map(|m| m.flux_ratio),
                         },
                         "traverse_wg": p.wg,
-                        "target_error": (p.metric == Metric::FluxError).then_some(p.target_error),
+                        "target_error": flux_error.then_some(p.target_error),
+                        "tau": flux_error.then(|| crate::calibration::tau_for_target_error(p.target_error)),
                         "traverse_ms": stage_median(&frames, "traverse"),
                         "photon_trace_ms": stage_median(&frames, "photon_trace"),
                         "transport_ms": stage_median(&frames, "transport"),
@@ -449,10 +458,30 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     bench_report::num(row.flux_ratio, 4)
                 );
                 let slow = row.frame_ms_median > args.max_frame_s * 1e3;
+                if flux_error {
+                    flux_error_rows.push((rows.len(), transport_name(transport), level, image));
+                } else if p.method == Method::Adaptive && p.metric == Metric::MaxLevel {
+                    max_level_images.entry((transport_name(transport), level)).or_insert(image);
+                }
                 rows.push(row);
                 if slow {
                     eprintln!("{name} {key}: frames take over {} s; skipping its deeper levels", args.max_frame_s);
                     break;
+                }
+            }
+        }
+        for (i, transport, level, image) in flux_error_rows {
+            if let Some(ml) = max_level_images.get(&(transport, level)) {
+                let added = metrics::compare(&image, ml, 64, 2.0).rel_l1;
+                let r = &mut rows[i];
+                eprintln!(
+                    "{} {} {} L{level}: rel-L1 64² against max-level (added by merging) {added:.6}",
+                    r.scene,
+                    r.transport,
+                    r.metric.as_deref().unwrap_or("")
+                );
+                if let serde_json::Value::Object(m) = &mut r.extra {
+                    m.insert("added_rel_l1_64".into(), json!(added));
                 }
             }
         }

@@ -96,10 +96,15 @@ pub struct MethodArgs {
     /// Max-error metric: convergence bound in caustic-map texels.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub error_bound: f32,
-    /// Flux-error metric: the target error, relative L1 at 64² that merging cells may add (docs/design.md)
-    /// [default: 0.01] (--metric flux-error only; other metrics warn that they ignore it).
+    /// Flux-error metric: the target error, the relative L1 at 64² that merging cells may add to max-level's
+    /// image at the same level, in (0, 1]; mapped to the metric's per-cell threshold by a measured table
+    /// (docs/design.md) [default: 0.001] (--metric flux-error only; other metrics warn that they ignore it).
     #[arg(long, allow_negative_numbers = true)]
     pub target_error: Option<f32>,
+    /// Testing and calibration: the flux-error metric's per-cell threshold tau itself, instead of the one
+    /// --target-error maps to.
+    #[arg(long, hide = true, allow_negative_numbers = true)]
+    pub tau: Option<f32>,
     /// Max-error and flux-error metrics: first level checked for convergence.
     #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = level_arg)]
     pub check_level: u32,
@@ -152,6 +157,7 @@ impl MethodArgs {
             caustic_res: self.caustic_res,
             error_bound: self.error_bound,
             target_error: self.target_error.unwrap_or(crate::settings::DEFAULT_TARGET_ERROR),
+            tau: self.tau,
             check_level: self.check_level,
             traverse_wg: self.traverse_wg,
             batching: !self.no_batching,
@@ -168,8 +174,13 @@ impl MethodArgs {
                 }
             }
         }
-        if self.target_error.is_some() && (s.method == Method::Dense || s.metric != Metric::FluxError) {
-            eprintln!("warning: --target-error applies to --method adaptive --metric flux-error only; ignored");
+        for (flag, given) in [("--target-error", self.target_error.is_some()), ("--tau", self.tau.is_some())] {
+            if given && (s.method == Method::Dense || s.metric != Metric::FluxError) {
+                eprintln!("warning: {flag} applies to --method adaptive --metric flux-error only; ignored");
+            }
+        }
+        if self.target_error.is_some() && self.tau.is_some() {
+            eprintln!("warning: --tau overrides the threshold --target-error maps to");
         }
         if s.method == Method::Dense && s.level > 12 {
             return Err(AppError::BadInput(format!(
@@ -404,6 +415,11 @@ fn level_rows(report: &FrameReport, max_level: u32) -> Vec<Value> {
         .collect()
 }
 
+/// Whether the settings run the flux-error metric (the stats then report its target error and tau).
+pub fn flux_error(s: &Settings) -> bool {
+    s.method == Method::Adaptive && s.metric == Metric::FluxError
+}
+
 /// The stats JSON of docs/design.md, over `frames` (the per-frame counts are the last frame's).
 pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Value {
     let r = &session.renderer;
@@ -423,6 +439,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "size": [session.width, session.height],
         "method": s.method,
         "metric": if s.method == Method::Adaptive { json!(s.metric) } else { Value::Null },
+        "target_error": flux_error(s).then_some(s.target_error),
+        "tau": flux_error(s).then(|| s.tau()),
         "level": s.level,
         "equivalent_resolution": LEVEL0_RES << s.level,
         "driven": if s.method == Method::Adaptive { json!(s.driven) } else { Value::Null },

@@ -84,7 +84,7 @@ pub struct FrameData {
     /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photon capacity (entries).
     pub traversal: [u32; 4],
     /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold;
-    /// w: flux-error's target error.
+    /// w: flux-error's per-cell threshold tau (`Settings::tau`).
     pub params: [f32; 4],
     /// x: 1 for exact transport; y: rays per queue; z: splat records per batch; w: bits 0-7 the color channel of
     /// the pass (0 gray; 1, 2, 3: red, green, blue), bit 8 differential footprints (rays carry their

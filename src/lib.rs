@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod bench_report;
 pub mod bvh;
+pub mod calibration;
 pub mod commands;
 pub mod error;
 pub mod frame;

@@ -472,7 +472,7 @@ impl Renderer {
                 s.check_level,
                 s.traversal_capacity(targets.photon.capacity),
             ],
-            params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.target_error],
+            params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.tau()],
             transport: [
                 (s.transport == Transport::Exact) as u32,
                 s.ray_queue_capacity(),

@@ -159,8 +159,12 @@ pub struct Settings {
     pub caustic_res: u32,
     /// Max-error bound, in caustic-map texels.
     pub error_bound: f32,
-    /// Flux-error metric: the target error tau (relative L1 at 64² that merging may add, per unit of flux).
+    /// Flux-error metric: the target error E, the relative L1 at 64² that merging cells may add to max-level's
+    /// image at the same level; mapped to the per-cell threshold tau by the measured table of src/calibration.rs.
     pub target_error: f32,
+    /// Flux-error metric: tau itself, overriding the one derived from `target_error` (the hidden `--tau`, for
+    /// measuring the calibration).
+    pub tau: Option<f32>,
     /// First level at which max-error and flux-error check convergence (Wyman: the 512² level, 3).
     pub check_level: u32,
     /// Traversal work-group side (1, 2, 4, 8, 16).
@@ -200,6 +204,7 @@ impl Default for Settings {
             caustic_res: 1024,
             error_bound: 1.0,
             target_error: DEFAULT_TARGET_ERROR,
+            tau: None,
             check_level: 3,
             traverse_wg: TRAVERSE_WG,
             batching: true,
@@ -232,8 +237,9 @@ pub fn max_budget_mib(binding_limit: u64) -> f64 {
 /// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
 pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
 
-/// Default `--target-error` of the flux-error metric.
-pub const DEFAULT_TARGET_ERROR: f32 = 0.01;
+/// Default `--target-error` of the flux-error metric: a rel-L1 (64²) of at most 0.1% added to max-level's image
+/// (τ = 0.02 by src/calibration.rs; docs/design.md, "The flux-error metric", says why).
+pub const DEFAULT_TARGET_ERROR: f32 = 0.001;
 
 /// Largest eye-view supersampling factor (per side).
 pub const MAX_AA: u32 = 4;
@@ -269,7 +275,15 @@ impl Settings {
             return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
         }
         if !(self.target_error.is_finite() && self.target_error > 0.0 && self.target_error <= 1.0) {
-            return bad(format!("--target-error {}: must lie in (0, 1] (relative L1 at 64²)", self.target_error));
+            return bad(format!(
+                "--target-error {}: must lie in (0, 1] (the relative L1 at 64² that merging may add)",
+                self.target_error
+            ));
+        }
+        if let Some(tau) = self.tau {
+            if !(tau.is_finite() && tau > 0.0 && tau <= crate::calibration::TAU_MAX) {
+                return bad(format!("--tau {tau}: must lie in (0, {}]", crate::calibration::TAU_MAX));
+            }
         }
         if !(self.exposure_ev.is_finite() && self.exposure_ev.abs() <= 32.0) {
             return bad(format!("--exposure {}: must lie in [-32, 32] stops", self.exposure_ev));
@@ -318,6 +332,12 @@ impl Settings {
             )));
         }
         Ok(())
+    }
+
+    /// The flux-error metric's per-cell threshold tau: `--tau` if given, else the one the calibration table maps
+    /// `--target-error` to.
+    pub fn tau(&self) -> f32 {
+        self.tau.unwrap_or_else(|| crate::calibration::tau_for_target_error(self.target_error))
     }
 
     /// The photon budget in MiB: an automatic one (0) not resolved for a device yet counts as 64.

@@ -131,7 +131,9 @@ fn bench_json_args_are_structured_and_missing_values_print_as_dashes() {
         "--transports",
         "two-interface",
         "--methods",
-        "dense,max-level",
+        "dense,flux-error,max-level",
+        "--target-errors",
+        "0.001,0.01",
         "--levels",
         "1",
         "--frames",
@@ -159,6 +161,16 @@ fn bench_json_args_are_structured_and_missing_values_print_as_dashes() {
     assert!(doc["args"].is_object(), "args: {}", doc["args"]);
     assert_eq!(doc["args"]["check_level"], 1);
     assert_eq!(doc["args"]["levels"], "1");
+    // Flux-error rows: one per target error, with its tau and, max-level having run too (after them), the error
+    // merging added over max-level's image.
+    let rows = doc["rows"].as_array().unwrap();
+    for target in [0.001, 0.01] {
+        let label = format!("flux-error@{target}");
+        let row = rows.iter().find(|r| r["metric"] == label.as_str()).unwrap_or_else(|| panic!("no {label} row"));
+        assert_eq!(row["extra"]["target_error"].as_f64().unwrap() as f32, target as f32, "{row}");
+        assert!(row["extra"]["tau"].as_f64().unwrap() > 0.0, "{row}");
+        assert!(row["extra"]["added_rel_l1_64"].as_f64().unwrap() <= target, "{row}");
+    }
     let table = std::fs::read_to_string(&md).unwrap();
     assert!(!table.contains("NaN") && !table.contains("-0.0"), "{table}");
     assert!(table.contains("| wg |") && table.contains("| 4x4 |") && table.contains("| 8x8 |"), "{table}");

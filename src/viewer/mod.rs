@@ -1182,6 +1182,8 @@ impl Viewer {
             "ior": self.ior(),
             "method": s.method,
             "metric": if s.method == Method::Adaptive { json!(s.metric) } else { Value::Null },
+            "target_error": crate::commands::flux_error(s).then_some(s.target_error),
+            "tau": crate::commands::flux_error(s).then(|| s.tau()),
             "level": s.level,
             "equivalent_resolution": LEVEL0_RES << s.level,
             "settings": s,
