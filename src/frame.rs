@@ -1,12 +1,14 @@
 //! One frame, in its fixed pass order, with the barriers that join the passes (docs/design.md "Pipeline"):
 //!
-//! 1. light-view g-buffers: refractor front and back (photon view), receivers and shadow depth (receiver view)
+//! 1. light-view g-buffers: refractor front and back (photon view), receivers with the shadow map as their depth
+//!    (receiver view)
 //! 2. coverage pyramid
 //! 3. photons: dense emission, or adaptive init → traverse × levels → stats, in batches; each batch splatted
 //!    into the caustic flux map with vkCmdDrawIndirect
 //! 4. resolve: flux → caustic irradiance
-//! 5. eye: receivers (radiance, caustics, direct), refractor front and back
-//! 6. composite: deferred refraction and tone mapping
+//! 5. eye: the receivers' g-buffer, shaded in compute under each light (radiance, caustics, direct); refractor
+//!    front and back
+//! 6. composite: the glass (BVH-traced eye rays, or deferred refraction) and tone mapping
 //!
 //! With no refractor in the light, steps 2-4 are not recorded at all. GPU-driven traversal records every level
 //! with vkCmdDispatchIndirect from arguments that the stats shader wrote; the CPU-driven baseline submits after
@@ -934,9 +936,9 @@ impl Ctx<'_> {
         });
     }
 
-    /// Step 5a: the eye view of the receivers under this light: radiance, and the caustics and direct AOVs when
-    /// the frame reads one back. The first light clears the targets; each further light adds to them (blending),
-    /// so the AOVs are the sums over lights.
+    /// Step 5a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
+    /// each light's shading writes (the first) or adds to (the others) the radiance, and the caustics and direct
+    /// AOVs when the frame reads one back, so the AOVs are the sums over lights.
     fn eye_receivers(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;

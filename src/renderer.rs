@@ -106,7 +106,7 @@ pub struct LightReport {
     /// Its traversal state and exact transport's account (kept from the last frame when reused).
     pub state: Option<TraversalState>,
     pub transport: Option<crate::gpu_types::TransportState>,
-    /// GPU ms of its light-side stages (light view, coverage, photons, resolve); its eye pass is in `eye`.
+    /// GPU ms of its light-side stages (light view, coverage, photons, resolve); its eye shading is in `eye`.
     pub gpu_ms: f64,
     /// Index of its first timed interval in the frame's segments.
     pub first_segment: usize,
@@ -480,7 +480,7 @@ impl Renderer {
                 channel | ((s.footprint == Footprint::Differential) as u32) << 8,
             ],
             pyramid,
-            // The environment's light is added once: by the first light's eye pass (and the composite, which reads
+            // The environment's light is added once: by the first light's eye shading (and the composite, which reads
             // the first pass's uniforms).
             eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, 0.0, 0.0],
             material: [crate::scene_gpu::shared_ior(&self.scene).unwrap_or(0.0), 0.0, 0.0, 0.0],
