@@ -46,10 +46,13 @@ void store(ivec2 q, vec4 radiance, vec3 caustic, vec3 direct) {
 #endif
 }
 
+// The ray through pixel q's center.
+void pixel_ray(View cam, ivec2 q, out vec3 ro, out vec3 rd) { view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd); }
+
 // Where pixel q's ray meets the plane through p with normal n (p itself when the ray grazes it).
 vec3 on_plane(View cam, ivec2 q, vec3 p, vec3 n) {
     vec3 ro, rd;
-    view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+    pixel_ray(cam, q, ro, rd);
     float c = dot(rd, n);
     return abs(c) > 1e-6 ? ro + rd * (dot(p - ro, n) / c) : p;
 }
@@ -67,7 +70,7 @@ void main() {
     }
     // The g-buffer's distance runs along the pixel's ray from its origin (view.glsl), for both projections.
     vec3 ro, rd;
-    view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+    pixel_ray(cam, q, ro, rd);
     vec3 p = ro + rd * g.w;
     vec3 n = g.xyz;
     vec3 e_direct = direct_irradiance(p, n);

@@ -474,12 +474,8 @@ impl Ctx<'_> {
         let receiver_view = &self.data.receiver_view;
         if caustics {
             // The IOR buffer is drawn only when the refractors' IORs differ (else the shaders read the uniform).
-            let colors: &[&Image] =
-                if self.shared_ior() { &[&t.light.front] } else { &[&t.light.front, &t.light.front_aux] };
-            let pipeline = if self.shared_ior() { &g.front_only } else { &g.front };
-            let front =
-                GeometryTarget { colors, depth: &t.light.depth, view: photon_view, ranges: &[self.sb.refractors] };
-            g.record(cmd, pipeline, self.sb, &front);
+            let ior = self.sb.shared_ior.is_none().then_some(&t.light.front_aux);
+            g.record_front(cmd, self.sb, &t.light.front, ior, &t.light.depth, photon_view);
             // Exact transport reads only the front buffer (coverage); the back surface is the two-interface
             // trace's.
             if self.s.transport == Transport::TwoInterface {
@@ -983,26 +979,22 @@ impl Ctx<'_> {
         let e = &t.eye;
         let g = &self.p.geometry;
         let cam = &self.data.camera;
-        let ranges = [self.sb.refractors];
-        if self.exact_eye() {
-            // The composite traces the glass through the BVH: it needs only where the front surface is.
-            self.barrier(cmd, |b| {
-                b.image(&e.front, &[Access::FrameStart], &[Access::ColorAttachment]);
-                b.image(&e.refr_depth, &[Access::FrameStart], &[Access::DepthAttachment]);
-            });
-            let target = GeometryTarget { colors: &[&e.front], depth: &e.refr_depth, view: cam, ranges: &ranges };
-            g.record(cmd, &g.front_only, self.sb, &target);
-            return;
-        }
+        // The exact composite traces the glass through the BVH: it needs only where the front surface is.
+        let exact = self.exact_eye();
         self.barrier(cmd, |b| {
-            for img in [&e.front, &e.front_aux, &e.back] {
-                b.image(img, &[Access::FrameStart], &[Access::ColorAttachment]);
+            b.image(&e.front, &[Access::FrameStart], &[Access::ColorAttachment]);
+            if !exact {
+                for img in [&e.front_aux, &e.back] {
+                    b.image(img, &[Access::FrameStart], &[Access::ColorAttachment]);
+                }
             }
             b.image(&e.refr_depth, &[Access::FrameStart], &[Access::DepthAttachment]);
         });
-        let colors: &[&Image] = if self.shared_ior() { &[&e.front] } else { &[&e.front, &e.front_aux] };
-        let pipeline = if self.shared_ior() { &g.front_only } else { &g.front };
-        g.record(cmd, pipeline, self.sb, &GeometryTarget { colors, depth: &e.refr_depth, view: cam, ranges: &ranges });
+        let ior = (!exact && self.sb.shared_ior.is_none()).then_some(&e.front_aux);
+        g.record_front(cmd, self.sb, &e.front, ior, &e.refr_depth, cam);
+        if exact {
+            return;
+        }
         self.barrier(cmd, |b| {
             b.image(&e.refr_depth, &[Access::DepthAttachment], &[Access::DepthAttachment]);
         });
@@ -1010,13 +1002,8 @@ impl Ctx<'_> {
             cmd,
             &g.back,
             self.sb,
-            &GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &ranges },
+            &GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &[self.sb.refractors] },
         );
-    }
-
-    /// Every refractor has the same index of refraction: it is in the uniforms, and no IOR buffer is drawn.
-    fn shared_ior(&self) -> bool {
-        self.data.material[0] != 0.0
     }
 
     /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts

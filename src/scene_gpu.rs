@@ -19,6 +19,8 @@ pub struct SceneBuffers {
     pub indices: Buffer,
     pub receivers: DrawRange,
     pub refractors: DrawRange,
+    /// The IOR every refractor's vertices carry, when they all carry the same ([`shared_ior`]).
+    pub shared_ior: Option<f32>,
     pub bvh: BvhBuffers,
 }
 
@@ -125,6 +127,6 @@ impl SceneBuffers {
             upload_buffer(device, recorder, "scene vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         let indices = upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER)?;
         let bvh = BvhBuffers::new(device, recorder, scene)?;
-        Ok(SceneBuffers { vertices, indices, receivers, refractors, bvh })
+        Ok(SceneBuffers { vertices, indices, receivers, refractors, shared_ior: shared_ior(scene), bvh })
     }
 }

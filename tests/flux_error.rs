@@ -166,44 +166,29 @@ fn target_error_bounds_the_added_error() {
     }
 }
 
-/// Bad input: a target error outside (0, 1] is refused with exit code 2.
+/// Bad input: a target error outside (0, 1], or a tau outside (0, 1], is refused with exit code 2.
 #[test]
 fn bad_target_error_exits_2() {
     let dir = out_dir("flux_error_bad");
     let out = dir.join("x.exr");
-    for bad in ["0", "-0.1", "2", "nan"] {
-        let o = caustics(&[
-            "render",
-            "--metric",
-            "flux-error",
-            "--target-error",
-            bad,
-            "--aov",
-            "caustics",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "--target-error {bad}: {stderr}");
-        assert!(stderr.contains("--target-error"), "{stderr}");
-        assert_no_output(&out);
-    }
     // The hidden --tau (calibration) is checked the same way.
-    for bad in ["0", "-1", "1.5", "inf"] {
-        let o = caustics(&[
-            "render",
-            "--metric",
-            "flux-error",
-            "--tau",
-            bad,
-            "--aov",
-            "caustics",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "--tau {bad}: {stderr}");
-        assert!(stderr.contains("--tau"), "{stderr}");
-        assert_no_output(&out);
+    for (flag, bads) in [("--target-error", ["0", "-0.1", "2", "nan"]), ("--tau", ["0", "-1", "1.5", "inf"])] {
+        for bad in bads {
+            let o = caustics(&[
+                "render",
+                "--metric",
+                "flux-error",
+                flag,
+                bad,
+                "--aov",
+                "caustics",
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{flag} {bad}: {stderr}");
+            assert!(stderr.contains(flag), "{stderr}");
+            assert_no_output(&out);
+        }
     }
 }

@@ -111,6 +111,34 @@ impl GeometryPass {
         unsafe { d.cmd_end_rendering(cmd) };
     }
 
+    /// The refractors' nearest front faces from `view` into `front` (normal and distance) and, when given, their
+    /// index of refraction into `ior` (needed only where the refractors differ in it and a pass reads it).
+    pub fn record_front(
+        &self,
+        cmd: vk::CommandBuffer,
+        scene: &SceneBuffers,
+        front: &Image,
+        ior: Option<&Image>,
+        depth: &Image,
+        view: &GpuView,
+    ) {
+        let ranges = [scene.refractors];
+        match ior {
+            Some(ior) => self.record(
+                cmd,
+                &self.front,
+                scene,
+                &GeometryTarget { colors: &[front, ior], depth, view, ranges: &ranges },
+            ),
+            None => self.record(
+                cmd,
+                &self.front_only,
+                scene,
+                &GeometryTarget { colors: &[front], depth, view, ranges: &ranges },
+            ),
+        }
+    }
+
     /// The receiver pass: the receivers' g-buffer and, in the same depth target, the shadow map. The receivers are
     /// drawn first (color and depth), then the refractors with color writes masked, so the color target holds
     /// the receivers the light sees through the glass and the depth target the nearest of every object.
