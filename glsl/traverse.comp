@@ -39,6 +39,9 @@ const uint ACT_REFINE = 2u;
 const uint ACT_EMIT_CHILDREN = 3u;  // flux-error look-ahead: four photons, the cell's children
 const uint ACT_EMIT_LEAVES = 4u;    // max-level at level L - 1: the children that pass dense's test, as photons
 
+// The order in which a metric traces a cell's four children (k: x = k & 1, y = k >> 1): the diagonal pair first.
+const uint CHILD_ORDER[4] = uint[4](0u, 3u, 1u, 2u);
+
 #if !defined(TRAVERSE_MAX_LEVEL) && !defined(TRAVERSE_METRIC)
 #define TRAVERSE_METRIC 1
 #endif
@@ -61,17 +64,24 @@ uint children_verdict_exact(uint level, uvec2 xy) {
     vec2 p[4];
     uint status[4], events[4];
     float thr;
-    for (uint k = 0u; k < 4u; k++) {
+    // Diagonal children first: they land farthest apart, so a cell that refines is known to after two traces.
+    // Every early return is a REFINE the four traces would have given (the tests below only tighten as children are
+    // added), so the verdicts, and the photons, are the same as tracing all four.
+    for (uint j = 0u; j < 4u; j++) {
+        uint k = CHILD_ORDER[j];
         status[k] = trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p[k], events[k], thr);
+        if (j == 0u) continue;
+        if (status[k] != status[0]) return CHILDREN_REFINE;
+        if (status[k] != DOM_OK) continue;
+        if (events[k] != events[0]) return CHILDREN_REFINE;
+        for (uint i = 0u; i < j; i++) {
+            if (distance(p[k], p[CHILD_ORDER[i]]) > u_frame.params.x) return CHILDREN_REFINE;
+        }
     }
-    bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
-    if (!same) return CHILDREN_REFINE;
     if (status[0] != DOM_OK) return 0u;
-    if (events[0] != events[1] || events[1] != events[2] || events[2] != events[3]) return CHILDREN_REFINE;
     float spread = 0.0;
     for (uint a = 0u; a < 4u; a++)
         for (uint b = a + 1u; b < 4u; b++) spread = max(spread, distance(p[a], p[b]));
-    if (spread > u_frame.params.x) return CHILDREN_REFINE;
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
@@ -79,21 +89,24 @@ uint children_verdict(uint level, uvec2 xy) {
     if (u_frame.transport.x != 0u) return children_verdict_exact(level, xy);
     vec2 p[4];
     uint status[4];
-    bool all_ok = true;
-    for (uint k = 0u; k < 4u; k++) {
+    // As in children_verdict_exact: stop tracing once the verdict can only be REFINE (a status that differs, or two
+    // children that both reached the map farther apart than the bound).
+    for (uint j = 0u; j < 4u; j++) {
+        uint k = CHILD_ORDER[j];
         Hit h = trace_cell(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1));
         status[k] = h.status;
-        all_ok = all_ok && h.status == HIT_OK;
         p[k] = h.map_px;
+        if (j == 0u) continue;
+        if (status[k] != status[0]) return CHILDREN_REFINE;
+        if (status[k] != HIT_OK) continue;
+        for (uint i = 0u; i < j; i++) {
+            if (distance(p[k], p[CHILD_ORDER[i]]) > u_frame.params.x) return CHILDREN_REFINE;
+        }
     }
-    if (!all_ok) {
-        bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
-        return same ? CHILDREN_DROP : CHILDREN_REFINE;
-    }
+    if (status[0] != HIT_OK) return CHILDREN_DROP;
     float spread = 0.0;
     for (uint a = 0u; a < 4u; a++)
         for (uint b = a + 1u; b < 4u; b++) spread = max(spread, distance(p[a], p[b]));
-    if (spread > u_frame.params.x) return CHILDREN_REFINE;
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
@@ -122,10 +135,18 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     bool exact = u_frame.transport.x != 0u;
     float intensity = u_frame.light_power.w;
     vec2 p[4];
-    float phi[4];
+    float phi[4] = float[4](0.0, 0.0, 0.0, 0.0);
     uint status[4], events[4];
     float t_max = 0.0, t_min = 1.0, rest = 0.0;
-    for (uint k = 0u; k < 4u; k++) {
+    float cell_flux = intensity * cell_measure(level, xy);
+    float budget = u_frame.params.w * cell_flux;
+    float w = float(u_frame.grid.z) / 64.0;
+    // A cell refines when E exceeds this (twice the budget where the look-ahead may still emit the children).
+    float refine_above = level + 1u < u_frame.traversal.x ? 2.0 * budget : budget;
+    uint ok = exact ? DOM_OK : HIT_OK;
+    bool mixed = false;
+    for (uint j = 0u; j < 4u; j++) {
+        uint k = CHILD_ORDER[j];
         uvec2 c = 2u * xy + uvec2(k & 1u, k >> 1);
         if (exact) {
             float thr;
@@ -143,11 +164,28 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
             float full = intensity * cell_measure(level + 1u, c);
             t_max = max(t_max, full > 0.0 ? h.flux / full : 0.0);
         }
+        // Stop tracing once the verdict can only be REFINE. Both bounds below only grow as children are added:
+        // the mixed-endings E (t_max and the landed flux), and, while the children so far all landed, a lower
+        // bound on the same-endings E: for any centroid c, |p_a - c|_1 + |p_b - c|_1 >= |p_a - p_b|_1, so
+        // E >= 2 min(phi_a, phi_b) min(1, |p_a - p_b|_1 / w) for every pair. A 1% margin keeps rounding (and a
+        // compiler's different fusing of the final expressions) from turning an early REFINE into a different
+        // verdict: the photons are the same as with four traces.
+        if (j == 0u) continue;
+        mixed = mixed || status[k] != status[0];
+        float partial = phi[0] + phi[1] + phi[2] + phi[3];  // the children not traced yet hold 0
+        bool mixed_refines = cell_flux * t_max + partial > 1.01 * budget;
+        if (mixed && mixed_refines) return FE_REFINE;
+        if (!mixed && status[0] == ok && mixed_refines) {
+            float lower = 0.0;
+            for (uint i = 0u; i < j; i++) {
+                uint b = CHILD_ORDER[i];
+                vec2 d = abs(p[k] - p[b]);
+                lower = max(lower, 2.0 * min(phi[k], phi[b]) * min(1.0, (d.x + d.y) / w));
+            }
+            if (lower > 1.01 * refine_above) return FE_REFINE;
+        }
     }
     bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
-    uint ok = exact ? DOM_OK : HIT_OK;
-    float cell_flux = intensity * cell_measure(level, xy);
-    float budget = u_frame.params.w * cell_flux;
     // All four end the same other way: two-interface drops the cell (it carries nothing to a receiver). Under exact
     // transport the weaker branches, the share 1 - T_k of each child's flux, may still reach one, anywhere: the
     // merged photon's between nothing and I Omega(cell) (1 - T_min), the children's in total `rest`.
@@ -155,7 +193,6 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
         if (!exact) return FE_DROP;
         return cell_flux * (1.0 - t_min) + rest <= budget ? FE_FINAL : FE_REFINE;
     }
-    float w = float(u_frame.grid.z) / 64.0;
     float total = phi[0] + phi[1] + phi[2] + phi[3];
     // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.
     if (!same) return cell_flux * t_max + total <= budget ? FE_FINAL : FE_REFINE;
