@@ -50,6 +50,41 @@ void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, 
 
 vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 
+// Weak branches (`--weak-branches`, docs/design.md step 5): a Fresnel branch below u_frame.material.y of its
+// photon's flux is traced once per 2x2 block of sibling photons instead of by each of them. At a split of depth d
+// the block's emitted siblings take turns (sibling d mod n of the n emitted, in raster order): that one traces
+// the weak branch carrying the block's share (its weight times `scale`, the block's solid angle over its own),
+// flagged LOD_RAY so that it splats as wide as the block; the others leave it (ACC_WEAK_LEFT), and the extra
+// weight the one carries is ACC_WEAK_CARRIED, so the account still closes exactly. Only photons of the maximal
+// level without a cluster radius take part: dense's, and adaptive's where the traversal refined down to the last
+// level, whose siblings are then exactly the block's cells that pass dense's test.
+const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
+
+bool weak_branches_apply(uvec2 cell) {
+    return u_frame.material.y > 0.0 && cell_radius(cell) == 0u && cell_level(cell) == u_frame.traversal.x;
+}
+
+// Whether this photon carries the block's weak branches at `depth`, and the weight factor when it does.
+bool weak_carrier(uvec2 cell, uint depth, out float scale) {
+    uint level = cell_level(cell);
+    uvec2 xy = cell_xy(cell);
+    uvec2 b = xy & ~uvec2(1u);
+    float own = cell_measure(level, xy), total = 0.0;
+    uint n = 0u, self_i = 0u;
+    for (uint k = 0u; k < 4u; k++) {
+        uvec2 c = b + uvec2(k & 1u, k >> 1);
+        if (all(equal(c, xy))) {
+            self_i = n;
+        } else if (!leaf_emitted(level, c)) {
+            continue;
+        }
+        total += all(equal(c, xy)) ? own : cell_measure(level, c);
+        n++;
+    }
+    scale = total / own;
+    return depth % n == self_i;
+}
+
 // Add a non-negative value to a (lo, hi) fixed-point pair of the batch account.
 void account_add(uint term, float v) {
     if (!(v > 0.0)) return;
@@ -81,6 +116,7 @@ void main() {
     uint n_child = 0u;
     vec3 c_o[2], c_d[2];
     float c_w[2];
+    uint c_meta[2];
     RayDiff c_r[2];
     RayDiff rdf;
     rdf.dpx = rdf.dpy = rdf.ddx = rdf.ddy = vec3(0.0);
@@ -90,7 +126,6 @@ void main() {
     float rec_flux = 0.0;
     bool one_event = false;
     vec4 record = vec4(0.0);
-    uint meta = 0u;
     float phi = 0.0;  // the photon's flux / intensity
     uint ray_slot = 0u, rec_slot = 0u;
     bool live = i < tstate.in_count && !(can_abort && state.aborted != 0u);
@@ -99,6 +134,7 @@ void main() {
         float w;
         uint depth;
         uint pidx;
+        bool lod = false;  // a weak branch carried for the photon's block
         if (wave == 0u) {
             pidx = state.capacity - tstate.in_count + i;
             uvec2 cell = photons[pidx];
@@ -125,7 +161,8 @@ void main() {
             rd = b.xyz;
             uint m = floatBitsToUint(b.w);
             pidx = m & 0xFFFFFFu;
-            depth = m >> 24;
+            depth = (m >> 24) & 0x3Fu;
+            lod = (m & LOD_RAY) != 0u;
             uvec2 cell = photons[pidx];
             phi = cell_measure(cell_level(cell), cell_xy(cell));
         }
@@ -156,7 +193,7 @@ void main() {
                 } else {
                     View rv = u_frame.receiver_view;
                     uvec2 cell = photons[pidx];
-                    uint r = cell_splat_radius(cell);
+                    uint r = lod ? weak_splat_radius(cell) : cell_splat_radius(cell);
                     // Max-error clusters keep the radius traversal gave them (their children's spread).
                     if (diff && cell_radius(cell) == 0u)
                         r = footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r);
@@ -175,7 +212,14 @@ void main() {
                     acc[ACC_LOST] += flux;
                 } else {
                     float wr = w * s.F, wt = w * (1.0 - s.F);
-                    float cut = u_frame.params.z;
+                    // A carried weak branch holds its block's share: it is cut where its siblings' would be.
+                    float cut = u_frame.params.z * (lod ? 4.0 : 1.0);
+                    uvec2 cell = photons[pidx];
+                    float weak = !lod && weak_branches_apply(cell) ? u_frame.material.y : 0.0;
+                    float scale = 1.0;
+                    bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak) ? weak_carrier(cell, depth, scale)
+                                                                                      : false;
+                    uint meta = pidx | ((depth + 1u) << 24) | (lod ? LOD_RAY : 0u);
                     // Both children inherit dP; their dD follow their branch, with the interpolated normal's
                     // derivative where the branch used it.
                     vec3 dnx = vec3(0.0), dny = vec3(0.0);
@@ -184,37 +228,48 @@ void main() {
                         dny = bvh_shading_dn(hit, ns, rdf.dpy);
                     }
                     if (wr > 0.0) {
-                        if (wr >= cut) {
+                        if (wr < cut) {
+                            acc[ACC_THRESHOLD] += phi * wr;
+                        } else if (wr < weak && !carrier) {
+                            acc[ACC_WEAK_LEFT] += phi * wr;
+                        } else {
+                            bool carried = wr < weak;
                             c_o[n_child] = s.p_refl;
                             c_d[n_child] = normalize(s.refl);
-                            c_w[n_child] = wr;
+                            c_w[n_child] = carried ? wr * scale : wr;
+                            c_meta[n_child] = carried ? meta | LOD_RAY : meta;
+                            if (carried) acc[ACC_WEAK_CARRIED] += phi * wr * (scale - 1.0);
                             if (diff) {
                                 c_r[n_child] = rdf;
                                 c_r[n_child].ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
                                 c_r[n_child].ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
+                                if (carried) diff_scale(c_r[n_child], 2.0);
                             }
                             n_child++;
-                        } else {
-                            acc[ACC_THRESHOLD] += phi * wr;
                         }
                     }
                     if (wt > 0.0) {
-                        if (wt >= cut) {
+                        if (wt < cut) {
+                            acc[ACC_THRESHOLD] += phi * wt;
+                        } else if (wt < weak && !carrier) {
+                            acc[ACC_WEAK_LEFT] += phi * wt;
+                        } else {
+                            bool carried = wt < weak;
                             c_o[n_child] = s.p_refr;
                             c_d[n_child] = normalize(s.refr);
-                            c_w[n_child] = wt;
+                            c_w[n_child] = carried ? wt * scale : wt;
+                            c_meta[n_child] = carried ? meta | LOD_RAY : meta;
+                            if (carried) acc[ACC_WEAK_CARRIED] += phi * wt * (scale - 1.0);
                             if (diff) {
                                 vec3 t = c_d[n_child];
                                 c_r[n_child] = rdf;
                                 c_r[n_child].ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, t, s.eta);
                                 c_r[n_child].ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, t, s.eta);
+                                if (carried) diff_scale(c_r[n_child], 2.0);
                             }
                             n_child++;
-                        } else {
-                            acc[ACC_THRESHOLD] += phi * wt;
                         }
                     }
-                    meta = pidx | ((depth + 1u) << 24);
                     if (n_child > 0u) ray_slot = atomicAdd(s_rays, n_child);
                 }
             }
@@ -258,7 +313,7 @@ void main() {
     barrier();
     uint q = (wave + 1u) & 1u;
     if (s_rays_ok) {
-        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], meta, c_r[c]);
+        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c]);
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
     // One invocation per term sums the work group's shares and adds them in fixed point.

@@ -78,6 +78,9 @@ pub struct BenchArgs {
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux.
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
+    /// Exact transport: the weak-branch fraction (see `render --weak-branches`).
+    #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
+    pub weak_branches: f32,
     /// Exact transport: BVH node layout (pair or single).
     #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Pair)]
     pub bvh_layout: crate::bvh::BvhLayout,
@@ -346,6 +349,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             photon_budget_mib: args.photon_budget,
             check_level: args.check_level,
             flux_threshold: args.flux_threshold,
+            weak_branches: args.weak_branches,
             bvh_layout: args.bvh_layout,
             footprint: args.footprint,
             ..Settings::default()

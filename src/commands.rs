@@ -67,6 +67,11 @@ pub struct MethodArgs {
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
+    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per 2×2 block of
+    /// sibling photons (by one of them, carrying the block's share, with a splat as wide as the block) instead of
+    /// by each; the flux moved is accounted (0: off).
+    #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
+    pub weak_branches: f32,
     /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).
     #[arg(long, value_enum, default_value_t = BvhLayout::Pair)]
     pub bvh_layout: BvhLayout,
@@ -147,6 +152,7 @@ impl MethodArgs {
             splat: self.splat,
             footprint: self.footprint,
             flux_threshold: self.flux_threshold,
+            weak_branches: self.weak_branches,
             bvh_layout: self.bvh_layout,
             method: self.method,
             metric: self.metric.unwrap_or(Metric::MaxLevel),
@@ -505,6 +511,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
             },
         },
         "flux_threshold": r.settings.flux_threshold,
+        "weak_branches": r.settings.weak_branches,
         "max_interactions": MAX_INTERACTIONS,
         "ray_queue_capacity": r.settings.ray_queue_capacity(),
     });

@@ -136,9 +136,13 @@ pub struct TraversalState {
 }
 
 /// Energy-account terms of exact transport (`ACC_*` in types.glsl), in order.
-/// The last, `caustics_one_interaction`, is the part of `caustics` with exactly one interaction (for a closed
-/// mesh: a single external reflection); it is not a term of the partition.
-pub const ACCOUNT_TERMS: [&str; 10] = [
+/// `caustics_one_interaction` is the part of `caustics` with exactly one interaction (for a closed mesh: a single
+/// external reflection); it is not a term of the partition. The last two are the weak branches
+/// (`--weak-branches`): `weak_left`, the flux photons left to the sibling that carries their block's weak branches,
+/// and `weak_carried`, the extra flux those carriers took on. The account closes as
+/// `emitted + weak_carried = caustics + direct + escaped + cut_threshold + cut_cap + lost + overflow + absorbed +
+/// weak_left` ([`TransportState::residual`]).
+pub const ACCOUNT_TERMS: [&str; 12] = [
     "emitted",
     "caustics",
     "direct",
@@ -149,6 +153,8 @@ pub const ACCOUNT_TERMS: [&str; 10] = [
     "overflow",
     "absorbed",
     "caustics_one_interaction",
+    "weak_left",
+    "weak_carried",
 ];
 
 /// `TransportState` in types.glsl (a storage buffer, std430).
@@ -167,13 +173,13 @@ pub struct TransportState {
     pub records_total: u32,
     pub waves: u32,
     pub max_depth: u32,
-    pub batch_account: [[u32; 2]; 10],
-    pub account: [[u32; 2]; 10],
+    pub batch_account: [[u32; 2]; 12],
+    pub account: [[u32; 2]; 12],
 }
 
 impl TransportState {
     /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
-    pub fn account(&self) -> [f64; 10] {
+    pub fn account(&self) -> [f64; 12] {
         self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
     }
 
@@ -189,15 +195,17 @@ impl TransportState {
         account
     }
 
-    /// |emitted − every destination| / emitted: how far the account is from closing (0 when nothing was emitted).
+    /// |emitted + weak_carried − every destination| / emitted: how far the account is from closing (0 when
+    /// nothing was emitted).
     pub fn residual(&self) -> f64 {
         let a = self.account();
-        // Terms 1..9 partition the emitted flux; the last (one-interaction) is a part of `caustics`.
-        let out: f64 = a[1..ACCOUNT_TERMS.len() - 1].iter().sum();
+        // Terms 1..=8 and weak_left partition what came in; one-interaction is a part of `caustics`.
+        let input = a[0] + a[11];
+        let out: f64 = a[1..=8].iter().sum::<f64>() + a[10];
         if a[0] > 0.0 {
-            (a[0] - out).abs() / a[0]
+            (input - out).abs() / a[0]
         } else {
-            out.abs()
+            (input - out).abs()
         }
     }
 }
@@ -254,7 +262,7 @@ const _: () = {
     assert!(size_of::<GpuView>() == 160);
     assert!(size_of::<FrameData>() == 672);
     assert!(offset_of!(FrameData, eye) == 640);
-    assert!(size_of::<TransportState>() == 48 + 160);
+    assert!(size_of::<TransportState>() == 48 + 2 * 12 * 8);
     assert!(offset_of!(TransportState, batch_account) == 48);
     assert!(offset_of!(FrameData, light_power) == 480);
     assert!(offset_of!(FrameData, grid) == 528);

@@ -140,6 +140,9 @@ pub struct Settings {
     pub footprint: Footprint,
     /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
     pub flux_threshold: f32,
+    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per 2×2 block of
+    /// sibling photons, by one of them carrying the block's share with a splat as wide as the block (0: off).
+    pub weak_branches: f32,
     /// Exact transport: the BVH node layout the waves traverse.
     pub bvh_layout: crate::bvh::BvhLayout,
     pub method: Method,
@@ -193,6 +196,7 @@ impl Default for Settings {
             splat: Splat::Auto,
             footprint: Footprint::Cell,
             flux_threshold: 1e-3,
+            weak_branches: 0.05,
             bvh_layout: crate::bvh::BvhLayout::Pair,
             method: Method::Adaptive,
             metric: Metric::MaxLevel,
@@ -301,6 +305,9 @@ impl Settings {
         }
         if !(self.flux_threshold.is_finite() && (0.0..1.0).contains(&self.flux_threshold)) {
             return bad(format!("--flux-threshold {}: must lie in [0, 1)", self.flux_threshold));
+        }
+        if !(self.weak_branches.is_finite() && (0.0..1.0).contains(&self.weak_branches)) {
+            return bad(format!("--weak-branches {}: must lie in [0, 1)", self.weak_branches));
         }
         if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
             return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));

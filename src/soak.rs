@@ -253,9 +253,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
             }
         }
         if let Some(ts) = report.transport {
-            let acc = ts.account();
-            let out: f64 = acc[1..8].iter().sum();
-            let residual = if acc[0] > 0.0 { (acc[0] - out).abs() / acc[0] } else { out.abs() };
+            let residual = ts.residual();
             worst_residual = worst_residual.max(residual);
             if residual > 1e-6 {
                 fail(format!("exact transport's energy account residual {residual:.2e}"));

@@ -20,6 +20,7 @@ fn negative_numbers_get_the_range_message() {
         ("--photon-budget", "must be > 0 MiB"),
         ("--error-bound", "must be > 0 texels"),
         ("--flux-threshold", "must lie in [0, 1)"),
+        ("--weak-branches", "must lie in [0, 1)"),
     ] {
         let o = caustics(&["render", "--aov", "caustics", "--out", out, flag, "-1"]);
         let e = stderr_of(&o);

@@ -425,6 +425,7 @@ proptest! {
         budget in prop_oneof![Just(64.0f64), Just(1e-300), Just(f64::NAN), Just(-1.0), Just(f64::INFINITY), 0.0f64..100.0],
         error_bound in prop_oneof![Just(f32::NAN), Just(0.0f32), any::<f32>()],
         flux_threshold in prop_oneof![Just(1.0f32), Just(-0.0f32), any::<f32>(), 0.0f32..1.0],
+        weak_branches in prop_oneof![Just(1.0f32), Just(f32::NAN), any::<f32>(), 0.0f32..1.0],
         traverse_wg in 0u32..20,
         batch_slots in prop_oneof![Just(0u32), any::<u32>()],
         debug_photons in prop_oneof![Just(0u32), any::<u32>()],
@@ -436,7 +437,7 @@ proptest! {
             metric: if max_error { Metric::MaxError } else { Metric::MaxLevel },
             driven: Driven::Gpu,
             level, gbuffer_res, caustic_res, photon_budget_mib: budget, error_bound, flux_threshold, traverse_wg,
-            batch_slots, debug_photons,
+            batch_slots, debug_photons, weak_branches,
             ..Settings::default()
         };
         match s.validate() {
@@ -445,6 +446,7 @@ proptest! {
                 prop_assert!(s.traversal_capacity(s.photon_capacity()) >= 8);
                 prop_assert!(s.gbuffer_res.is_power_of_two() && s.gbuffer_level() < 16);
                 prop_assert!(budget.is_finite() && error_bound.is_finite() && flux_threshold.is_finite());
+                prop_assert!((0.0..1.0).contains(&weak_branches));
             }
             Err(e) => prop_assert!(e.to_string().starts_with("--"), "{e}"),
         }

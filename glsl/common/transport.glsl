@@ -60,6 +60,14 @@ void diff_transfer(inout RayDiff r, vec3 rd, float t, vec3 n) {
     r.dpy = py;
 }
 
+// Differentials across `k` cells instead of one (a weak branch carried for a 2x2 block: k = 2).
+void diff_scale(inout RayDiff r, float k) {
+    r.dpx *= k;
+    r.dpy *= k;
+    r.ddx *= k;
+    r.ddy *= k;
+}
+
 // Reflection R = D - 2 (D.N) N: dR = dD - 2 ((D.N) dN + (dD.N + D.dN) N).
 vec3 diff_reflect(vec3 d, vec3 dd, vec3 n, vec3 dn) {
     return dd - 2.0 * (dot(d, n) * dn + (dot(dd, n) + dot(d, dn)) * n);

@@ -31,7 +31,8 @@ struct FrameData {
                          // bit 8 differential footprints
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
     vec4 eye;            // x: sky radiance (W/m^2/sr; 0: off); y: eye-ray depth cap (interfaces)
-    vec4 material;       // x: the IOR every refractor shares (-1: mirrors), 0 if they differ (then: IOR buffers)
+    vec4 material;       // x: the IOR every refractor shares (-1: mirrors), 0 if they differ (then: IOR buffers);
+                         // y: exact transport's weak-branch fraction (0: off; wave.comp)
 };
 
 // The front surface's index of refraction: shared by the scene's refractors, else from the IOR buffer's texel.
@@ -86,7 +87,10 @@ const uint ACC_LOST = 6u;       // numerical dead ends (no valid direction on ei
 const uint ACC_OVERFLOW = 7u;   // did not fit a queue (only without batching: with it the batch is split instead)
 const uint ACC_ABSORBED = 8u;   // absorbed inside glass (Beer–Lambert)
 const uint ACC_ONE_EVENT = 9u;  // the part of ACC_CAUSTIC with exactly one interaction (not in the partition)
-const uint ACC_TERMS = 10u;
+const uint ACC_WEAK_LEFT = 10u;     // weak branches a photon left to the sibling that carries its block's
+const uint ACC_WEAK_CARRIED = 11u;  // the weight carriers added for their siblings (an input: emitted + carried
+                                    // = the partition + left)
+const uint ACC_TERMS = 12u;
 
 struct TransportState {
     uint in_count;         // rays of the wave being traced (wave 0: the emitted photons)
