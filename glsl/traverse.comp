@@ -130,8 +130,19 @@ const uint FE_FINAL = 1u;     // emit the cell as one photon
 const uint FE_CHILDREN = 2u;  // emit its four children (each predicted final)
 const uint FE_DROP = 3u;
 
-uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
+// Prediction (flux-error only): where the map is locally linear, E over the budget halves from one level to the next
+// (E has a quarter of the flux and half the spread, the budget a quarter). A cell that refines with E above
+// FE_PREDICT budgets has children at about FE_PREDICT / 2 = 2 budgets: they are refined without their check
+// (their candidates carry CHECK_SKIP in the radius bits, which candidates do not otherwise use). Where the map
+// bends, a child so refined might have merged: it then costs photons, never error. Measured on lavapipe at level
+// 5: 8 predicted too few cells to matter (the bunny's level-4 checks fell by 12%, against 21% with 4), and 4
+// changed the photon counts by at most 0.5%.
+const float FE_PREDICT = 4.0;
+const uint CHECK_SKIP = 255u;
+
+uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_refine) {
     radius = 0u;
+    predict_refine = false;
     bool exact = u_frame.transport.x != 0u;
     float intensity = u_frame.light_power.w;
     vec2 p[4];
@@ -143,6 +154,10 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
     float w = float(u_frame.grid.z) / 64.0;
     // A cell refines when E exceeds this (twice the budget where the look-ahead may still emit the children).
     float refine_above = level + 1u < u_frame.traversal.x ? 2.0 * budget : budget;
+    // Where the children would be checked, a cell that refines on the same-endings bound goes on tracing until
+    // the bound also says whether they are predicted to refine (FE_PREDICT): their checks cost more than these
+    // traces.
+    float stop_above = 1.01 * (level + 2u <= u_frame.traversal.x ? max(refine_above, FE_PREDICT * budget) : refine_above);
     uint ok = exact ? DOM_OK : HIT_OK;
     bool mixed = false;
     for (uint j = 0u; j < 4u; j++) {
@@ -182,7 +197,10 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
                 vec2 d = abs(p[k] - p[b]);
                 lower = max(lower, 2.0 * min(phi[k], phi[b]) * min(1.0, (d.x + d.y) / w));
             }
-            if (lower > 1.01 * refine_above) return FE_REFINE;
+            if (lower > stop_above) {
+                predict_refine = lower > FE_PREDICT * budget;
+                return FE_REFINE;
+            }
         }
     }
     bool same = status[0] == status[1] && status[1] == status[2] && status[2] == status[3];
@@ -215,17 +233,19 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius) {
         radius = uint(clamp(ceil(0.5 * spread), 1.0, float(MAX_SPLAT_RADIUS)));
         return FE_CHILDREN;
     }
+    predict_refine = e > FE_PREDICT * budget;
     return FE_REFINE;
 }
 
 #endif  // TRAVERSE_METRIC == 2
 
-// Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined. `leaves` (max-level,
-// ACT_EMIT_LEAVES): bit k set when child k is emitted.
+// Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined (`out_cell`'s radius
+// bits are then its children's: CHECK_SKIP or 0). `leaves` (max-level, ACT_EMIT_LEAVES): bit k set when child k is
+// emitted.
 uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
-    out_cell = cell;
-    leaves = 0u;
     uvec2 xy = cell_xy(cell);
+    out_cell = pack_cell(level, xy.x, xy.y, 0u);
+    leaves = 0u;
     View v = u_frame.photon_view;
     float side = cell_side(level);
     vec2 lo = v.window.xy + vec2(xy) * side;
@@ -245,8 +265,10 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
     return ACT_REFINE;
 #elif TRAVERSE_METRIC == 2
     if (level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
+        if (cell_radius(cell) == CHECK_SKIP) return ACT_REFINE;
         uint r;
-        uint verdict = flux_error_verdict(level, xy, r);
+        bool predict_refine;
+        uint verdict = flux_error_verdict(level, xy, r, predict_refine);
         if (verdict == FE_DROP) return ACT_DROP;
         if (verdict == FE_FINAL) {
             out_cell = pack_cell(level, xy.x, xy.y, r);
@@ -256,6 +278,8 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
             out_cell = pack_cell(level, xy.x, xy.y, r);
             return ACT_EMIT_CHILDREN;
         }
+        // Children that will be checked (not the last level's) skip their check when it is predicted to refine.
+        if (predict_refine && level + 2u <= u_frame.traversal.x) out_cell = pack_cell(level, xy.x, xy.y, CHECK_SKIP);
     }
 #else
     if (level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
@@ -348,9 +372,10 @@ void main() {
             }
         } else if (action == ACT_REFINE) {
             uvec2 xy = cell_xy(out_cell);
+            uint r = cell_radius(out_cell);
             uint base = state.read_offset + state.read_count + s_child_base + 4u * slot;
             for (uint k = 0u; k < 4u; k++) {
-                photons[base + k] = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), 0u);
+                photons[base + k] = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
             }
         }
     }
