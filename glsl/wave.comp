@@ -51,28 +51,35 @@ void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, 
 vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 
 // Weak branches (`--weak-branches`, docs/design.md step 5): a Fresnel branch below u_frame.material.y of its
-// photon's flux is traced once per 2x2 block of sibling photons instead of by each of them. At a split of depth d
-// the block's emitted siblings take turns (sibling d mod n of the n emitted, in raster order): that one traces
-// the weak branch carrying the block's share (its weight times `scale`, the block's solid angle over its own),
-// flagged LOD_RAY so that it splats as wide as the block; the others leave it (ACC_WEAK_LEFT), and the extra
-// weight the one carries is ACC_WEAK_CARRIED, so the account still closes exactly. Only photons of the maximal
+// photon's flux is traced once per block of sibling photons (weak_block() cells a side) instead of by each of them.
+// At a split of depth d the block's emitted siblings take turns (sibling d mod n of the n emitted, in raster
+// order): that one traces the weak branch carrying the block's share (its weight times `scale`, the block's solid
+// angle over its own), flagged LOD_RAY so that it splats as wide as the block; the others leave it
+// (ACC_WEAK_LEFT), and the extra weight the one carries is ACC_WEAK_CARRIED, so the account still closes exactly.
+// Only photons of the maximal
 // level without a cluster radius take part: dense's, and adaptive's where the traversal refined down to the last
-// level, whose siblings are then exactly the block's cells that pass dense's test.
+// level, whose siblings are then exactly the block's cells that pass dense's test (4x4 blocks under dense and
+// max-level; 2x2 under the merging metrics, where only a refined cell's four children are sure to be photons).
 const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
 
 bool weak_branches_apply(uvec2 cell) {
     return u_frame.material.y > 0.0 && cell_radius(cell) == 0u && cell_level(cell) == u_frame.traversal.x;
 }
 
+// The side of a weak-branch block, in cells (u_frame.material.z: 2, or 4 where every cell of the maximal level that
+// passes dense's test is a photon: dense and max-level).
+uint weak_block() { return uint(u_frame.material.z); }
+
 // Whether this photon carries the block's weak branches at `depth`, and the weight factor when it does.
 bool weak_carrier(uvec2 cell, uint depth, out float scale) {
     uint level = cell_level(cell);
     uvec2 xy = cell_xy(cell);
-    uvec2 b = xy & ~uvec2(1u);
+    uint side = weak_block();
+    uvec2 b = xy & ~uvec2(side - 1u);
     float own = cell_measure(level, xy), total = 0.0;
     uint n = 0u, self_i = 0u;
-    for (uint k = 0u; k < 4u; k++) {
-        uvec2 c = b + uvec2(k & 1u, k >> 1);
+    for (uint k = 0u; k < side * side; k++) {
+        uvec2 c = b + uvec2(k % side, k / side);
         if (all(equal(c, xy))) {
             self_i = n;
         } else if (!leaf_emitted(level, c)) {
@@ -213,7 +220,8 @@ void main() {
                 } else {
                     float wr = w * s.F, wt = w * (1.0 - s.F);
                     // A carried weak branch holds its block's share: it is cut where its siblings' would be.
-                    float cut = u_frame.params.z * (lod ? 4.0 : 1.0);
+                    float block = float(weak_block());
+                    float cut = u_frame.params.z * (lod ? block * block : 1.0);
                     uvec2 cell = photons[pidx];
                     float weak = !lod && weak_branches_apply(cell) ? u_frame.material.y : 0.0;
                     float scale = 1.0;
@@ -243,7 +251,7 @@ void main() {
                                 c_r[n_child] = rdf;
                                 c_r[n_child].ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
                                 c_r[n_child].ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
-                                if (carried) diff_scale(c_r[n_child], 2.0);
+                                if (carried) diff_scale(c_r[n_child], block);
                             }
                             n_child++;
                         }
@@ -265,7 +273,7 @@ void main() {
                                 c_r[n_child] = rdf;
                                 c_r[n_child].ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, t, s.eta);
                                 c_r[n_child].ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, t, s.eta);
-                                if (carried) diff_scale(c_r[n_child], 2.0);
+                                if (carried) diff_scale(c_r[n_child], block);
                             }
                             n_child++;
                         }

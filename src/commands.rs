@@ -67,9 +67,9 @@ pub struct MethodArgs {
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
-    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per 2×2 block of
-    /// sibling photons (by one of them, carrying the block's share, with a splat as wide as the block) instead of
-    /// by each; the flux moved is accounted (0: off).
+    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
+    /// sibling photons (4×4 under dense and max-level, 2×2 under max-error and flux-error; by one of them, carrying
+    /// the block's share, with a splat as wide as the block) instead of by each; the flux moved is accounted (0: off).
     #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
     pub weak_branches: f32,
     /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).
@@ -512,6 +512,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
         },
         "flux_threshold": r.settings.flux_threshold,
         "weak_branches": r.settings.weak_branches,
+        "weak_block": r.settings.weak_block(),
         "max_interactions": MAX_INTERACTIONS,
         "ray_queue_capacity": r.settings.ray_queue_capacity(),
     });

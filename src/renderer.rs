@@ -483,7 +483,7 @@ impl Renderer {
             // The environment's light is added once: by the first light's eye shading (and the composite, which reads
             // the first pass's uniforms).
             eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, 0.0, 0.0],
-            material: [self.scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, 0.0, 0.0],
+            material: [self.scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block() as f32, 0.0],
         }
     }
 

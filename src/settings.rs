@@ -140,8 +140,9 @@ pub struct Settings {
     pub footprint: Footprint,
     /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
     pub flux_threshold: f32,
-    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per 2×2 block of
-    /// sibling photons, by one of them carrying the block's share with a splat as wide as the block (0: off).
+    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
+    /// sibling photons ([`Settings::weak_block`]), by one of them carrying the block's share with a splat as wide as
+    /// the block (0: off).
     pub weak_branches: f32,
     /// Exact transport: the BVH node layout the waves traverse.
     pub bvh_layout: crate::bvh::BvhLayout,
@@ -345,6 +346,18 @@ impl Settings {
     /// `--target-error` to.
     pub fn tau(&self) -> f32 {
         self.tau.unwrap_or_else(|| crate::calibration::tau_for_target_error(self.target_error))
+    }
+
+    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md step 5): 4 where
+    /// every cell of that level that passes dense's test is a photon (dense and max-level), so that a block's
+    /// siblings are known without the traversal; 2 under the metrics that merge cells (a refined cell's four
+    /// children are all candidates).
+    pub fn weak_block(&self) -> u32 {
+        if self.method == Method::Dense || self.metric == Metric::MaxLevel {
+            4
+        } else {
+            2
+        }
     }
 
     /// The photon budget in MiB: an automatic one (0) not resolved for a device yet counts as 64.

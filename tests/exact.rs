@@ -135,24 +135,36 @@ fn tiny_budget_gives_the_same_image() {
     assert!((a / b - 1.0).abs() < 1e-5, "caustic flux {a} vs {b} W");
 }
 
-/// Weak branches (`--weak-branches`, default 0.05): one photon of each 2×2 block traces the block's weak Fresnel
-/// branches. Against every photon tracing its own (`--weak-branches 0`), at dense level 3: the account still closes,
-/// the flux the photons left equals what the carriers took on to within a few 1e-3 (they differ only where a
-/// block's siblings' branches differ), far fewer rays are traced, and the image and its error against every path
-/// barely move. Measured on lavapipe: rays 0.629 (sphere) and 0.577 (bunny) of off's; carried / left 1.0000 and
-/// 0.9975; caustic flux equal to 1e-4; rel-L1 (64²) on against off 0.0002 and 0.0031; against every path 1.0015%
-/// against 1.0010% (sphere) and 5.026% against 5.013% (bunny).
+/// Weak branches (`--weak-branches`, default 0.05): one photon of each block of siblings (4×4 under dense and
+/// max-level, 2×2 under the merging metrics) traces the block's weak Fresnel branches. Against every photon tracing
+/// its own (`--weak-branches 0`), at level 3: the account still closes, the flux the photons left equals what the
+/// carriers took on to within a few 1e-3 (they differ only where a block's siblings' branches differ), far fewer
+/// rays are traced, and the image and its error against every path barely move. Measured on lavapipe (sphere dense,
+/// bunny dense, bunny max-error): rays 0.536, 0.472 and 0.577 of off's; carried / left within 0.2%; caustic flux
+/// equal to 1e-4; rel-L1 (64²) on against off 0.0006, 0.0059 and 0.0031; against every path 1.0049% against
+/// 1.0010%, 5.055% and 5.026% against 5.013%.
 #[test]
 fn weak_branches_are_traced_once_per_block() {
     let dir = out_dir("exact_weak_branches");
-    for (name, path) in [("sphere", SPHERE.to_string()), ("bunny", scene("bunny.toml"))] {
-        let args = ["--method", "dense", "--level", "3"];
+    let cases = [
+        // Dense: 4×4 blocks. Max-error at the check level emits dense's cells, in 2×2 blocks (its refined cells'
+        // four children).
+        ("sphere", SPHERE.to_string(), "dense", 4),
+        ("bunny", scene("bunny.toml"), "dense", 4),
+        ("bunny_max_error", scene("bunny.toml"), "max-error", 2),
+    ];
+    for (name, path, method, block) in cases {
+        let args = match method {
+            "dense" => vec!["--method", "dense", "--level", "3"],
+            _ => vec!["--method", "adaptive", "--metric", "max-error", "--level", "3", "--check-level", "3"],
+        };
         let (son, ion) = exact(&dir, &format!("{name}_on"), &path, &args);
         let mut off_args = args.to_vec();
         off_args.extend_from_slice(&["--weak-branches", "0"]);
         let (soff, ioff) = exact(&dir, &format!("{name}_off"), &path, &off_args);
         assert_sound(name, &son, &ion);
         assert_eq!(son["exact_transport"]["weak_branches"].as_f64().unwrap() as f32, 0.05);
+        assert_eq!(son["exact_transport"]["weak_block"], block, "{name}: block side");
         assert_eq!(energy(&soff, "weak_left"), 0.0, "{name}: weak branches off");
         let (left, carried) = (energy(&son, "weak_left"), energy(&son, "weak_carried"));
         let rays = |s: &serde_json::Value| s["exact_transport"]["rays_traced"].as_f64().unwrap();
@@ -169,7 +181,7 @@ fn weak_branches_are_traced_once_per_block() {
         assert!(left > 0.0 && (carried / left - 1.0).abs() < 0.01, "{name}: left {left} W, carried {carried} W");
         assert!(ron < 0.75 * roff, "{name}: {ron} rays against {roff}");
         assert!((con / coff - 1.0).abs() < 1e-3, "{name}: caustic flux {con} against {coff} W");
-        assert!(between.rel_l1 < 0.005, "{name}: rel-L1 on against off {}", between.rel_l1);
+        assert!(between.rel_l1 < 0.008, "{name}: rel-L1 on against off {}", between.rel_l1);
         assert!(mon.rel_l1 < moff.rel_l1 + 0.001, "{name}: rel-L1 {} against {}", mon.rel_l1, moff.rel_l1);
     }
 }

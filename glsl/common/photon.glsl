@@ -80,10 +80,11 @@ uint cell_splat_radius(uvec2 cell) {
     return r;
 }
 
-// The footprint of a weak branch carried for its photon's 2x2 block (wave.comp): the block's side on the map.
+// The footprint of a weak branch carried for its photon's block (wave.comp): the block's side on the map.
 uint weak_splat_radius(uvec2 cell) {
     float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
-    return uint(clamp(round(2.0 * cell_side(cell_level(cell)) / texel), 1.0, float(MAX_SPLAT_RADIUS)));
+    float side = u_frame.material.z * cell_side(cell_level(cell));
+    return uint(clamp(round(side / texel), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
