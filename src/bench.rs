@@ -81,6 +81,9 @@ pub struct BenchArgs {
     /// Exact transport: the weak-branch fraction (see `render --weak-branches`).
     #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
     pub weak_branches: f32,
+    /// Exact transport: the weak-branch block side (see `render --weak-block`; 0: automatic).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
+    pub weak_block: u32,
     /// Exact transport: BVH node layout (pair or single).
     #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Pair)]
     pub bvh_layout: crate::bvh::BvhLayout,
@@ -350,6 +353,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             check_level: args.check_level,
             flux_threshold: args.flux_threshold,
             weak_branches: args.weak_branches,
+            weak_block: args.weak_block,
             bvh_layout: args.bvh_layout,
             footprint: args.footprint,
             ..Settings::default()

@@ -72,6 +72,10 @@ pub struct MethodArgs {
     /// the block's share, with a splat as wide as the block) instead of by each; the flux moved is accounted (0: off).
     #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
     pub weak_branches: f32,
+    /// Exact transport: the side of a weak-branch block in cells, 2 or 4 (4 only under dense and max-level);
+    /// 0: automatic (4 under dense and max-level, 2 under max-error and flux-error).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
+    pub weak_block: u32,
     /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).
     #[arg(long, value_enum, default_value_t = BvhLayout::Pair)]
     pub bvh_layout: BvhLayout,
@@ -153,6 +157,7 @@ impl MethodArgs {
             footprint: self.footprint,
             flux_threshold: self.flux_threshold,
             weak_branches: self.weak_branches,
+            weak_block: self.weak_block,
             bvh_layout: self.bvh_layout,
             method: self.method,
             metric: self.metric.unwrap_or(Metric::MaxLevel),

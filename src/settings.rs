@@ -144,6 +144,8 @@ pub struct Settings {
     /// sibling photons ([`Settings::weak_block`]), by one of them carrying the block's share with a splat as wide as
     /// the block (0: off).
     pub weak_branches: f32,
+    /// The side of a weak-branch block in cells: 2 or 4, 0 for automatic ([`Settings::weak_block`]).
+    pub weak_block: u32,
     /// Exact transport: the BVH node layout the waves traverse.
     pub bvh_layout: crate::bvh::BvhLayout,
     pub method: Method,
@@ -198,6 +200,7 @@ impl Default for Settings {
             footprint: Footprint::Cell,
             flux_threshold: 1e-3,
             weak_branches: 0.05,
+            weak_block: 0,
             bvh_layout: crate::bvh::BvhLayout::Pair,
             method: Method::Adaptive,
             metric: Metric::MaxLevel,
@@ -310,6 +313,15 @@ impl Settings {
         if !(self.weak_branches.is_finite() && (0.0..1.0).contains(&self.weak_branches)) {
             return bad(format!("--weak-branches {}: must lie in [0, 1)", self.weak_branches));
         }
+        if ![0, 2, 4].contains(&self.weak_block) {
+            return bad(format!("--weak-block {}: must be 2, 4 or 0 (automatic)", self.weak_block));
+        }
+        if self.weak_block == 4 && !self.all_leaves_are_photons() {
+            return bad(format!(
+                "--weak-block 4: only dense and max-level emit every cell of the last level; --metric {} needs 2",
+                self.metric.name()
+            ));
+        }
         if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
             return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));
         }
@@ -348,16 +360,21 @@ impl Settings {
         self.tau.unwrap_or_else(|| crate::calibration::tau_for_target_error(self.target_error))
     }
 
-    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md step 5): 4 where
-    /// every cell of that level that passes dense's test is a photon (dense and max-level), so that a block's
-    /// siblings are known without the traversal; 2 under the metrics that merge cells (a refined cell's four
-    /// children are all candidates).
+    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md step 5):
+    /// `--weak-block` if given, else 4 where every cell of that level that passes dense's test is a photon (dense
+    /// and max-level), so that a block's siblings are known without the traversal, and 2 under the metrics that
+    /// merge cells (a refined cell's four children are all candidates).
     pub fn weak_block(&self) -> u32 {
-        if self.method == Method::Dense || self.metric == Metric::MaxLevel {
-            4
-        } else {
-            2
+        match self.weak_block {
+            0 if self.all_leaves_are_photons() => 4,
+            0 => 2,
+            b => b,
         }
+    }
+
+    /// Whether every cell of the last level that passes dense's test becomes a photon (dense and max-level).
+    fn all_leaves_are_photons(&self) -> bool {
+        self.method == Method::Dense || self.metric == Metric::MaxLevel
     }
 
     /// The photon budget in MiB: an automatic one (0) not resolved for a device yet counts as 64.

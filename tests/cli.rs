@@ -29,6 +29,28 @@ fn negative_numbers_get_the_range_message() {
     }
 }
 
+/// `--weak-block`: 2, 4 or 0, and 4 only where every cell of the last level is a photon (dense, max-level); else
+/// exit code 2 naming the flag, before any output.
+#[test]
+fn weak_block_is_checked() {
+    let dir = out_dir("cli_weak_block");
+    let out = dir.join("x.exr");
+    let out = out.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--weak-block", "3"], "--weak-block 3: must be 2, 4 or 0"),
+        (vec!["--weak-block", "4", "--metric", "flux-error"], "--metric flux-error needs 2"),
+        (vec!["--weak-block", "4", "--metric", "max-error"], "--metric max-error needs 2"),
+    ] {
+        let mut a = vec!["render", "--aov", "caustics", "--out", out];
+        a.extend_from_slice(&args);
+        let o = caustics(&a);
+        let e = stderr_of(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(e.contains(needle), "{args:?}: {e}");
+        assert_no_output(std::path::Path::new(out));
+    }
+}
+
 fn device_error(hint: &str) -> (Option<i32>, String) {
     let dir = out_dir(&format!("cli_device_{hint}"));
     let out = dir.join("x.exr");
