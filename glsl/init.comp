@@ -37,7 +37,7 @@ void main() {
         state.emit_count = 0u;
         state.aborted = 0u;
         for (uint l = 0u; l < MAX_LEVELS; l++) {
-            state.batch_levels[l] = LevelCounters(0u, 0u, 0u, 0u);
+            state.batch_levels[l] = LevelCounters(0u, 0u, 0u, 0u, 0u, 0u);
             dispatch_cmd[l] = uvec4(0u, 0u, 1u, 0u);
         }
         set_emitted(0u, state.capacity);

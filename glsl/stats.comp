@@ -41,6 +41,8 @@ void commit() {
         state.levels[l].refined += b.refined;
         state.levels[l].emitted += b.emitted;
         state.levels[l].dropped += b.dropped;
+        state.levels[l].checks_skipped += b.checks_skipped;
+        state.levels[l].unchecked += b.unchecked;
     }
     uint n = min(state.emit_count, state.capacity);
     state.batches_committed += 1u;

@@ -32,6 +32,8 @@ shared uint s_child_base;
 shared bool s_reserved;
 shared uint s_leaf_cells;  // max-level: cells of level L - 1 whose children were tested here (fused last level)
 shared uint s_leaf_emit;   // max-level: photons those children gave
+shared uint s_skipped;     // checks skipped (predicted by the parent's)
+shared uint s_unchecked;   // candidates from the check level on that could not be checked
 
 const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
@@ -133,10 +135,12 @@ const uint FE_DROP = 3u;
 // Prediction (flux-error only): where the map is locally linear, E over the budget halves from one level to the next
 // (E has a quarter of the flux and half the spread, the budget a quarter). A cell that refines with E above
 // FE_PREDICT budgets has children at about FE_PREDICT / 2 = 2 budgets: they are refined without their check
-// (their candidates carry CHECK_SKIP in the radius bits, which candidates do not otherwise use). Where the map
-// bends, a child so refined might have merged: it then costs photons, never error. Measured on lavapipe at level
-// 5: 8 predicted too few cells to matter (the bunny's level-4 checks fell by 12%, against 21% with 4), and 4
-// changed the photon counts by at most 0.5%.
+// (their candidates carry CHECK_SKIP in the radius bits, which candidates do not otherwise use). A cell whose
+// children end differently (a silhouette, a TIR edge) lies on a boundary that its children straddle too; the same
+// threshold on its mixed-endings E predicts them. Where the map bends, or a child lies off the boundary, a child so
+// refined might have merged: it then costs photons, never error. Measured on lavapipe at level 5: 8 predicted too
+// few cells to matter (the bunny's level-4 checks fell by 12%, against 21% with 4); 4 changed the photon counts by
+// at most 0.5%, and the mixed endings added at most 0.2% more.
 const float FE_PREDICT = 4.0;
 const uint CHECK_SKIP = 255u;
 
@@ -189,7 +193,10 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_
         mixed = mixed || status[k] != status[0];
         float partial = phi[0] + phi[1] + phi[2] + phi[3];  // the children not traced yet hold 0
         bool mixed_refines = cell_flux * t_max + partial > 1.01 * budget;
-        if (mixed && mixed_refines) return FE_REFINE;
+        if (mixed && mixed_refines) {
+            predict_refine = cell_flux * t_max + partial > FE_PREDICT * budget;
+            return FE_REFINE;
+        }
         if (!mixed && status[0] == ok && mixed_refines) {
             float lower = 0.0;
             for (uint i = 0u; i < j; i++) {
@@ -213,7 +220,11 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_
     }
     float total = phi[0] + phi[1] + phi[2] + phi[3];
     // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.
-    if (!same) return cell_flux * t_max + total <= budget ? FE_FINAL : FE_REFINE;
+    if (!same) {
+        float e_mixed = cell_flux * t_max + total;
+        predict_refine = e_mixed > FE_PREDICT * budget;
+        return e_mixed <= budget ? FE_FINAL : FE_REFINE;
+    }
     vec2 c = total > 0.0 ? (phi[0] * p[0] + phi[1] * p[1] + phi[2] * p[2] + phi[3] * p[3]) / total
                          : 0.25 * (p[0] + p[1] + p[2] + p[3]);
     float e = 0.0, spread = 0.0;
@@ -241,11 +252,12 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_
 
 // Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined (`out_cell`'s radius
 // bits are then its children's: CHECK_SKIP or 0). `leaves` (max-level, ACT_EMIT_LEAVES): bit k set when child k is
-// emitted.
-uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
+// emitted. `no_check`: 1 when a metric's check was skipped (predicted), 2 when the candidate could not be checked.
+uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uint no_check) {
     uvec2 xy = cell_xy(cell);
     out_cell = pack_cell(level, xy.x, xy.y, 0u);
     leaves = 0u;
+    no_check = 0u;
     View v = u_frame.photon_view;
     float side = cell_side(level);
     vec2 lo = v.window.xy + vec2(xy) * side;
@@ -263,9 +275,21 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
         return ACT_EMIT_LEAVES;
     }
     return ACT_REFINE;
-#elif TRAVERSE_METRIC == 2
-    if (level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
-        if (cell_radius(cell) == CHECK_SKIP) return ACT_REFINE;
+#else
+    // Only fully covered cells inside the cone are checked: then the cluster's flux I*Omega(cell) equals the sum
+    // over the leaves that max-level traversal would have emitted.
+    bool checkable = false;
+    if (level >= u_frame.traversal.z) {
+        checkable = cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
+        if (!checkable) no_check = 2u;
+    }
+#endif
+#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 2
+    if (checkable) {
+        if (cell_radius(cell) == CHECK_SKIP) {
+            no_check = 1u;
+            return ACT_REFINE;
+        }
         uint r;
         bool predict_refine;
         uint verdict = flux_error_verdict(level, xy, r, predict_refine);
@@ -281,10 +305,8 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves) {
         // Children that will be checked (not the last level's) skip their check when it is predicted to refine.
         if (predict_refine && level + 2u <= u_frame.traversal.x) out_cell = pack_cell(level, xy.x, xy.y, CHECK_SKIP);
     }
-#else
-    if (level >= u_frame.traversal.z && cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
-        // Only fully covered cells inside the cone may converge: then the cluster's flux I*Omega(cell) equals the
-        // sum over the leaves that max-level traversal would have emitted.
+#elif defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 1
+    if (checkable) {
         uint r = children_verdict(level, xy);
         if (r == CHILDREN_DROP) return ACT_DROP;
         if (r != CHILDREN_REFINE) {
@@ -304,6 +326,8 @@ void main() {
         s_dropped = 0u;
         s_leaf_cells = 0u;
         s_leaf_emit = 0u;
+        s_skipped = 0u;
+        s_unchecked = 0u;
     }
     barrier();
     uint per_group = TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE;
@@ -316,7 +340,12 @@ void main() {
     uint leaves = 0u;
     if (state.aborted == 0u && i < state.read_count) {
         uvec2 cell = photons[state.read_offset + i];
-        action = decide(cell_level(cell), cell, out_cell, leaves);
+        uint no_check;
+        action = decide(cell_level(cell), cell, out_cell, leaves, no_check);
+#ifndef TRAVERSE_MAX_LEVEL
+        if (no_check == 1u) atomicAdd(s_skipped, 1u);
+        if (no_check == 2u) atomicAdd(s_unchecked, 1u);
+#endif
         if (action == ACT_EMIT) slot = atomicAdd(s_emit_n, 1u);
         if (action == ACT_EMIT_CHILDREN) slot = atomicAdd(s_emit_n, 4u);
         if (action == ACT_EMIT_LEAVES) {
@@ -385,6 +414,8 @@ void main() {
         if (s_reserved && refined > 0u) atomicAdd(state.batch_levels[level].refined, refined);
         if (s_reserved && emitted > 0u) atomicAdd(state.batch_levels[level].emitted, emitted);
         if (s_dropped > 0u) atomicAdd(state.batch_levels[level].dropped, s_dropped);
+        if (s_reserved && s_skipped > 0u) atomicAdd(state.batch_levels[level].checks_skipped, s_skipped);
+        if (s_reserved && s_unchecked > 0u) atomicAdd(state.batch_levels[level].unchecked, s_unchecked);
         if (s_reserved && s_leaf_cells > 0u) {
             // The fused last level's counts, as if its candidates had been traversed there.
             atomicAdd(state.batch_levels[level + 1u].candidates, 4u * s_leaf_cells);

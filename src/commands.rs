@@ -421,7 +421,11 @@ fn level_rows(report: &FrameReport, max_level: u32) -> Vec<Value> {
     (0..=max_level.min(MAX_LEVELS - 1))
         .map(|l| {
             let c = st.levels[l as usize];
-            json!({"level": l, "grid": LEVEL0_RES << l, "candidates": c.candidates, "refined": c.refined, "emitted": c.emitted, "dropped": c.dropped})
+            json!({
+                "level": l, "grid": LEVEL0_RES << l, "candidates": c.candidates, "refined": c.refined,
+                "emitted": c.emitted, "dropped": c.dropped, "checks_skipped": c.checks_skipped,
+                "unchecked": c.unchecked,
+            })
         })
         .collect()
 }

@@ -107,6 +107,11 @@ pub struct LevelCounters {
     pub refined: u32,
     pub emitted: u32,
     pub dropped: u32,
+    /// Max-error and flux-error: candidates refined without a check, predicted by their parent's.
+    pub checks_skipped: u32,
+    /// From the check level on: candidates not checked because they are only partly covered or reach outside
+    /// the cone.
+    pub unchecked: u32,
 }
 
 /// `TraversalState` in types.glsl (a storage buffer, std430).
@@ -268,11 +273,13 @@ const _: () = {
     assert!(offset_of!(FrameData, grid) == 528);
     assert!(offset_of!(FrameData, transport) == 576);
     assert!(offset_of!(FrameData, pyramid) == 592);
-    assert!(size_of::<LevelCounters>() == 16);
+    assert!(size_of::<LevelCounters>() == 24);
     assert!(offset_of!(TraversalState, tile) == 64);
     assert!(offset_of!(TraversalState, batch_levels) == 80);
-    assert!(offset_of!(TraversalState, levels) == 80 + 16 * MAX_LEVELS as usize);
-    assert!(size_of::<TraversalState>() == 80 + 32 * MAX_LEVELS as usize + 16 * TILE_STACK as usize);
+    assert!(offset_of!(TraversalState, levels) == 80 + 24 * MAX_LEVELS as usize);
+    // std430 aligns the ivec4 stack to 16 bytes; Rust packs it right after the levels, so that must be aligned.
+    assert!(offset_of!(TraversalState, stack) % 16 == 0);
+    assert!(size_of::<TraversalState>() == 80 + 48 * MAX_LEVELS as usize + 16 * TILE_STACK as usize);
     assert!(size_of::<PhotonPush>() == 32);
     assert!(size_of::<GeometryPush>() == 96);
     assert!(size_of::<CoveragePush>() == 16);

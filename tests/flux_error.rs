@@ -105,11 +105,23 @@ fn batches_gpu_driven_under_both_transports() {
 /// error merging added: rel-L1 (64²) against max-level's image at the same level (the error `--target-error`
 /// bounds; against the reference, the differences at small targets would be below its noise).
 fn added_errors(name: &str, scene: &str, base: &[&str], targets: &[&str]) -> Vec<(f64, f64, u64, f64)> {
+    added_errors_and_skips(name, scene, base, targets)
+        .into_iter()
+        .map(|(e, tau, n, added, _)| (e, tau, n, added))
+        .collect()
+}
+
+/// [`added_errors`], with the checks each run skipped by prediction (the stats' `levels[].checks_skipped`, summed).
+fn added_errors_and_skips(name: &str, scene: &str, base: &[&str], targets: &[&str]) -> Vec<(f64, f64, u64, f64, u64)> {
     let dir = out_dir(name);
     let mut ml_args = base.to_vec();
     ml_args.extend_from_slice(&["--metric", "max-level"]);
     let (sm, r) = caustics_aov(&dir, "max-level", scene, &ml_args);
     assert!(sm["target_error"].is_null() && sm["tau"].is_null(), "max-level reports no target error");
+    let skipped = |s: &serde_json::Value| -> u64 {
+        s["levels"].as_array().unwrap().iter().map(|l| l["checks_skipped"].as_u64().unwrap()).sum()
+    };
+    assert_eq!(skipped(&sm), 0, "max-level checks nothing");
     let mut out = Vec::new();
     for target in targets {
         let mut args = base.to_vec();
@@ -123,7 +135,7 @@ fn added_errors(name: &str, scene: &str, base: &[&str], targets: &[&str]) -> Vec
             "{name}: target {target}: tau {tau:.4}, {n} photons (max-level {}), added rel-L1 64² {added:.6}",
             photons(&sm)
         );
-        out.push((e, tau, n, added));
+        out.push((e, tau, n, added, skipped(&s)));
     }
     out
 }
@@ -171,14 +183,17 @@ fn target_error_bounds_the_added_error() {
 /// Prediction (docs/design.md, "The flux-error metric"): from `--check-level` + 2 on, the children of a cell whose
 /// merging error is over four budgets skip their check and refine. That never merges more, so the error merging
 /// adds over max-level stays within E; a flag that leaked into a photon (its radius bits) would splat it 255 texels
-/// wide and fail this. Sphere, level 4, check level 2, E = 0.001, both transports. Measured on lavapipe: 411,268
-/// photons (two-interface) and 415,321 (exact), the same as without prediction, added rel-L1 1e-6 and 7.9e-5.
+/// wide and fail this. Sphere, level 4, check level 2, E = 0.001, both transports; the stats must show skipped
+/// checks. Measured on lavapipe: 58,448 (two-interface) and 58,464 (exact) level-3 checks skipped, 411,268 and
+/// 415,321 photons, the same as without prediction, added rel-L1 1e-6 and 7.9e-5.
 #[test]
 fn predicted_refinement_adds_no_error() {
     for transport in ["two-interface", "exact"] {
         let base = ["--transport", transport, "--level", "4", "--check-level", "2", "--weak-block", "2"];
         let name = format!("flux_error_prediction_{transport}");
-        for (e, tau, n, added) in added_errors(&name, SPHERE, &base, &["0.001"]) {
+        for (e, tau, n, added, skipped) in added_errors_and_skips(&name, SPHERE, &base, &["0.001"]) {
+            eprintln!("{transport}: {skipped} checks skipped");
+            assert!(skipped > 0, "{transport}: prediction skipped no check");
             assert!(added <= e, "{transport}: target {e} (tau {tau}), {n} photons: merging added rel-L1 {added}");
         }
     }

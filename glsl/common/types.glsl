@@ -43,6 +43,9 @@ struct LevelCounters {
     uint refined;
     uint emitted;
     uint dropped;
+    uint checks_skipped;  // max-error and flux-error: refined without a check, predicted by the parent's
+    uint unchecked;       // ...and from the check level on, candidates not checked because they are only partly
+                          // covered or reach outside the cone (refined, or dropped if nothing is covered)
 };
 
 // Traversal state, read and written by init, traverse and stats (Piao's shared command buffer), extended with a
