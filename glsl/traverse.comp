@@ -66,7 +66,7 @@ uint children_verdict_exact(uint level, uvec2 xy) {
     vec2 p[4];
     uint status[4], events[4];
     float thr;
-    // Diagonal children first: they land farthest apart, so a cell that refines is known to after two traces.
+    // Diagonal children first: they land farthest apart, so a cell that refines is usually known to after two.
     // Every early return is a REFINE the four traces would have given (the tests below only tighten as children are
     // added), so the verdicts, and the photons, are the same as tracing all four.
     for (uint j = 0u; j < 4u; j++) {

@@ -56,10 +56,10 @@ vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 // order): that one traces the weak branch carrying the block's share (its weight times `scale`, the block's solid
 // angle over its own), flagged LOD_RAY so that it splats as wide as the block; the others leave it
 // (ACC_WEAK_LEFT), and the extra weight the one carries is ACC_WEAK_CARRIED, so the account still closes exactly.
-// Only photons of the maximal
-// level without a cluster radius take part: dense's, and adaptive's where the traversal refined down to the last
-// level, whose siblings are then exactly the block's cells that pass dense's test (4x4 blocks under dense and
-// max-level; 2x2 under the merging metrics, where only a refined cell's four children are sure to be photons).
+// Only photons of the maximal level without a cluster radius take part: dense's, and adaptive's where the traversal
+// refined down to the last level, whose siblings are then exactly the block's cells that pass dense's test (4x4
+// blocks under dense and max-level; 2x2 under the merging metrics, where only a refined cell's four children are
+// sure to be photons).
 const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
 
 bool weak_branches_apply(uvec2 cell) {
