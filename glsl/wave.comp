@@ -70,22 +70,21 @@ bool weak_branches_apply(uvec2 cell) {
 // passes dense's test is a photon: dense and max-level).
 uint weak_block() { return uint(u_frame.material.z); }
 
-// Whether this photon carries the block's weak branches at `depth`, and the weight factor when it does.
-bool weak_carrier(uvec2 cell, uint depth, out float scale) {
+// Whether this photon (`own`: its cell's measure, the photon's phi) carries the block's weak branches at `depth`,
+// and the weight factor when it does.
+bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
     uint level = cell_level(cell);
     uvec2 xy = cell_xy(cell);
     uint side = weak_block();
     uvec2 b = xy & ~uvec2(side - 1u);
-    float own = cell_measure(level, xy), total = 0.0;
+    float total = 0.0;
     uint n = 0u, self_i = 0u;
     for (uint k = 0u; k < side * side; k++) {
         uvec2 c = b + uvec2(k % side, k / side);
-        if (all(equal(c, xy))) {
-            self_i = n;
-        } else if (!leaf_emitted(level, c)) {
-            continue;
-        }
-        total += all(equal(c, xy)) ? own : cell_measure(level, c);
+        bool self = all(equal(c, xy));
+        if (!self && !leaf_emitted(level, c)) continue;
+        if (self) self_i = n;
+        total += self ? own : cell_measure(level, c);
         n++;
     }
     scale = total / own;
@@ -141,10 +140,11 @@ void main() {
         float w;
         uint depth;
         uint pidx;
+        uvec2 cell;        // the photon's cell, read once
         bool lod = false;  // a weak branch carried for the photon's block
         if (wave == 0u) {
             pidx = state.capacity - tstate.in_count + i;
-            uvec2 cell = photons[pidx];
+            cell = photons[pidx];
             cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
             if (diff) rdf = cell_ray_diff(cell_level(cell), cell_xy(cell), rd);
             w = 1.0;
@@ -170,7 +170,7 @@ void main() {
             pidx = m & 0xFFFFFFu;
             depth = (m >> 24) & 0x3Fu;
             lod = (m & LOD_RAY) != 0u;
-            uvec2 cell = photons[pidx];
+            cell = photons[pidx];
             phi = cell_measure(cell_level(cell), cell_xy(cell));
         }
         float flux = phi * w;
@@ -199,7 +199,6 @@ void main() {
                     acc[ACC_DIRECT] += flux;
                 } else {
                     View rv = u_frame.receiver_view;
-                    uvec2 cell = photons[pidx];
                     uint r = lod ? weak_splat_radius(cell) : cell_splat_radius(cell);
                     // Max-error clusters keep the radius traversal gave them (their children's spread).
                     if (diff && cell_radius(cell) == 0u)
@@ -222,11 +221,11 @@ void main() {
                     // A carried weak branch holds its block's share: it is cut where its siblings' would be.
                     float block = float(weak_block());
                     float cut = u_frame.params.z * (lod ? block * block : 1.0);
-                    uvec2 cell = photons[pidx];
                     float weak = !lod && weak_branches_apply(cell) ? u_frame.material.y : 0.0;
                     float scale = 1.0;
-                    bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak) ? weak_carrier(cell, depth, scale)
-                                                                                      : false;
+                    bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
+                        ? weak_carrier(cell, phi, depth, scale)
+                        : false;
                     uint meta = pidx | ((depth + 1u) << 24) | (lod ? LOD_RAY : 0u);
                     // Both children inherit dP; their dD follow their branch, with the interpolated normal's
                     // derivative where the branch used it.

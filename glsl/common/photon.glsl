@@ -69,23 +69,21 @@ float cell_side(uint level) { return u_frame.photon_view.window.z / float(LEVEL0
 // Exact: (x + 0.5) needs at most 23 bits at level 16 and the divisor is a power of two.
 vec2 cell_center_uv(uint level, uvec2 xy) { return (vec2(xy) + 0.5) / float(LEVEL0_RES << level); }
 
+// A splat radius (caustic-map texels) for a light-view square of `side`: its size on the map.
+uint side_splat_radius(float side) {
+    float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
+    return uint(clamp(round(side / texel), 1.0, float(MAX_SPLAT_RADIUS)));
+}
+
 // The splat footprint follows the cell: its size on the caustic map for max-level and dense photons (so that
 // neighbours' tents overlap and interpolate), the children's spread for max-error clusters.
 uint cell_splat_radius(uvec2 cell) {
     uint r = cell_radius(cell);
-    if (r == 0u) {
-        float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
-        r = uint(clamp(round(cell_side(cell_level(cell)) / texel), 1.0, float(MAX_SPLAT_RADIUS)));
-    }
-    return r;
+    return r == 0u ? side_splat_radius(cell_side(cell_level(cell))) : r;
 }
 
 // The footprint of a weak branch carried for its photon's block (wave.comp): the block's side on the map.
-uint weak_splat_radius(uvec2 cell) {
-    float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
-    float side = u_frame.material.z * cell_side(cell_level(cell));
-    return uint(clamp(round(side / texel), 1.0, float(MAX_SPLAT_RADIUS)));
-}
+uint weak_splat_radius(uvec2 cell) { return side_splat_radius(u_frame.material.z * cell_side(cell_level(cell))); }
 
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {
