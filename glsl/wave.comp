@@ -51,44 +51,52 @@ void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, 
 vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 
 // Weak branches (`--weak-branches`, docs/design.md step 5): a Fresnel branch below u_frame.material.y of its
-// photon's flux is traced once per block of sibling photons (weak_block() cells a side) instead of by each of them.
-// At a split of depth d the block's emitted siblings take turns (sibling d mod n of the n emitted, in raster
-// order): that one traces the weak branch carrying the block's share (its weight times `scale`, the block's solid
-// angle over its own), flagged LOD_RAY so that it splats as wide as the block; the others leave it
-// (ACC_WEAK_LEFT), and the extra weight the one carries is ACC_WEAK_CARRIED, so the account still closes exactly.
-// Only photons of the maximal level without a cluster radius take part: dense's, and adaptive's where the traversal
-// refined down to the last level, whose siblings are then exactly the block's cells that pass dense's test (4x4
-// blocks under dense and max-level; 2x2 under the merging metrics, where only a refined cell's four children are
-// sure to be photons).
+// photon's flux is traced once per block of the maximal level's cells (weak_block() of them a side) instead of by
+// each photon in the block. At a split of depth d the block's cells that pass dense's test take turns (cell d mod n
+// of the n, in raster order): the photon that contains that cell traces the weak branch carrying the block's share
+// (its weight times `scale`, the block's solid angle over its own), flagged LOD_RAY so that it splats as wide as
+// the block; the others leave it (ACC_WEAK_LEFT), and the extra weight the one carries is ACC_WEAK_CARRIED, so the
+// account still closes exactly. The turn depends only on the block and the depth, never on which photons the
+// traversal made, so photons of different levels share a block consistently: dense's and max-level's cells, and
+// under the merging metrics a refined cell's children, look-ahead children and clusters finer than the block alike.
+// A photon as large as the block or larger traces its own weak branches (it is its own block).
 const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
 
+// The side of a weak-branch block, in cells of the maximal level (u_frame.material.z: 2 or 4), and its log2.
+uint weak_block() { return uint(u_frame.material.z); }
+uint weak_block_shift() { return findLSB(weak_block()); }
+
 bool weak_branches_apply(uvec2 cell) {
-    return u_frame.material.y > 0.0 && cell_radius(cell) == 0u && cell_level(cell) == u_frame.traversal.x;
+    return u_frame.material.y > 0.0 && cell_level(cell) + weak_block_shift() > u_frame.traversal.x;
 }
 
-// The side of a weak-branch block, in cells (u_frame.material.z: 2, or 4 where every cell of the maximal level that
-// passes dense's test is a photon: dense and max-level).
-uint weak_block() { return uint(u_frame.material.z); }
+// The block's side over the photon's cell's: how much wider a carried branch is than the photon's own.
+float weak_widen(uvec2 cell) {
+    return exp2(float(weak_block_shift()) - float(u_frame.traversal.x - cell_level(cell)));
+}
 
-// Whether this photon (`own`: its cell's measure, the photon's phi) carries the block's weak branches at `depth`,
+// Whether this photon (`own`: its cell's measure, the photon's phi) carries its block's weak branches at `depth`,
 // and the weight factor when it does.
 bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
-    uint level = cell_level(cell);
+    uint top = u_frame.traversal.x;
+    uint up = top - cell_level(cell);  // the photon's cell is 2^up cells of the maximal level a side
     uvec2 xy = cell_xy(cell);
     uint side = weak_block();
-    uvec2 b = xy & ~uvec2(side - 1u);
+    uvec2 b = (xy << up) & ~uvec2(side - 1u);
     float total = 0.0;
-    uint n = 0u, self_i = 0u;
+    uint n = 0u, counted = 0u, mine = 0u;
     for (uint k = 0u; k < side * side; k++) {
         uvec2 c = b + uvec2(k % side, k / side);
-        bool self = all(equal(c, xy));
-        if (!self && !leaf_emitted(level, c)) continue;
-        if (self) self_i = n;
-        total += self ? own : cell_measure(level, c);
+        if (!leaf_emitted(top, c)) continue;
+        counted |= 1u << k;
+        if (all(equal(c >> up, xy))) mine |= 1u << k;
+        total += cell_measure(top, c);
         n++;
     }
     scale = total / own;
-    return depth % n == self_i;
+    if (mine == 0u) return false;
+    for (uint t = depth % n; t > 0u; t--) counted &= counted - 1u;  // drop the turns before this depth's
+    return (mine & (1u << findLSB(counted))) != 0u;
 }
 
 // Add a non-negative value to a (lo, hi) fixed-point pair of the batch account.
@@ -199,7 +207,7 @@ void main() {
                     acc[ACC_DIRECT] += flux;
                 } else {
                     View rv = u_frame.receiver_view;
-                    uint r = lod ? weak_splat_radius(cell) : cell_splat_radius(cell);
+                    uint r = lod ? weak_splat_radius() : cell_splat_radius(cell);
                     // Max-error clusters keep the radius traversal gave them (their children's spread).
                     if (diff && cell_radius(cell) == 0u)
                         r = footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r);
@@ -219,8 +227,8 @@ void main() {
                 } else {
                     float wr = w * s.F, wt = w * (1.0 - s.F);
                     // A carried weak branch holds its block's share: it is cut where its siblings' would be.
-                    float block = float(weak_block());
-                    float cut = u_frame.params.z * (lod ? block * block : 1.0);
+                    float widen = weak_widen(cell);
+                    float cut = u_frame.params.z * (lod ? widen * widen : 1.0);
                     float weak = !lod && weak_branches_apply(cell) ? u_frame.material.y : 0.0;
                     float scale = 1.0;
                     bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
@@ -250,7 +258,7 @@ void main() {
                                 c_r[n_child] = rdf;
                                 c_r[n_child].ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
                                 c_r[n_child].ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
-                                if (carried) diff_scale(c_r[n_child], block);
+                                if (carried) diff_scale(c_r[n_child], widen);
                             }
                             n_child++;
                         }
@@ -272,7 +280,7 @@ void main() {
                                 c_r[n_child] = rdf;
                                 c_r[n_child].ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, t, s.eta);
                                 c_r[n_child].ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, t, s.eta);
-                                if (carried) diff_scale(c_r[n_child], block);
+                                if (carried) diff_scale(c_r[n_child], widen);
                             }
                             n_child++;
                         }

@@ -68,12 +68,12 @@ pub struct MethodArgs {
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,
     /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
-    /// sibling photons (4×4 under dense and max-level, 2×2 under max-error and flux-error; by one of them, carrying
-    /// the block's share, with a splat as wide as the block) instead of by each; the flux moved is accounted (0: off).
+    /// the finest level's cells (`--weak-block`; by one of the block's photons, carrying the block's share, with a
+    /// splat as wide as the block) instead of by each photon; the flux moved is accounted (0: off).
     #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
     pub weak_branches: f32,
-    /// Exact transport: the side of a weak-branch block in cells, 2 or 4 (4 only under dense and max-level);
-    /// 0: automatic (4 under dense and max-level, 2 under max-error and flux-error).
+    /// Exact transport: the side of a weak-branch block in cells of the finest level, 2 or 4; 0: automatic (4).
+    /// Photons as large as the block or larger trace their own weak branches.
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub weak_block: u32,
     /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).

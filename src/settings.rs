@@ -144,7 +144,8 @@ pub struct Settings {
     /// sibling photons ([`Settings::weak_block`]), by one of them carrying the block's share with a splat as wide as
     /// the block (0: off).
     pub weak_branches: f32,
-    /// The side of a weak-branch block in cells: 2 or 4, 0 for automatic ([`Settings::weak_block`]).
+    /// The side of a weak-branch block in cells of the maximal level: 2 or 4, 0 for automatic
+    /// ([`Settings::weak_block`]).
     pub weak_block: u32,
     /// Exact transport: the BVH node layout the waves traverse.
     pub bvh_layout: crate::bvh::BvhLayout,
@@ -316,12 +317,6 @@ impl Settings {
         if ![0, 2, 4].contains(&self.weak_block) {
             return bad(format!("--weak-block {}: must be 2, 4 or 0 (automatic)", self.weak_block));
         }
-        if self.weak_block == 4 && !self.all_leaves_are_photons() {
-            return bad(format!(
-                "--weak-block 4: only dense and max-level emit every cell of the last level; --metric {} needs 2",
-                self.metric.name()
-            ));
-        }
         if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
             return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));
         }
@@ -361,20 +356,13 @@ impl Settings {
     }
 
     /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md step 5):
-    /// `--weak-block` if given, else 4 where every cell of that level that passes dense's test is a photon (dense
-    /// and max-level), so that a block's siblings are known without the traversal, and 2 under the metrics that
-    /// merge cells (a refined cell's four children are all candidates).
+    /// `--weak-block` if given, else 4. A block's turns follow its cells, not its photons, so every method shares
+    /// the same blocks.
     pub fn weak_block(&self) -> u32 {
         match self.weak_block {
-            0 if self.all_leaves_are_photons() => 4,
-            0 => 2,
+            0 => 4,
             b => b,
         }
-    }
-
-    /// Whether every cell of the last level that passes dense's test becomes a photon (dense and max-level).
-    fn all_leaves_are_photons(&self) -> bool {
-        self.method == Method::Dense || self.metric == Metric::MaxLevel
     }
 
     /// The photon budget in MiB: an automatic one (0) not resolved for a device yet counts as 64.
