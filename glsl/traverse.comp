@@ -134,14 +134,16 @@ const uint FE_DROP = 3u;
 
 // Prediction (flux-error only): where the map is locally linear, E over the budget halves from one level to the next
 // (E has a quarter of the flux and half the spread, the budget a quarter). A cell that refines with E above
-// FE_PREDICT budgets has children at about FE_PREDICT / 2 = 2 budgets: they are refined without their check
-// (their candidates carry CHECK_SKIP in the radius bits, which candidates do not otherwise use). A cell whose
-// children end differently (a silhouette, a TIR edge) lies on a boundary that its children straddle too; the same
-// threshold on its mixed-endings E predicts them. Where the map bends, or a child lies off the boundary, a child so
-// refined might have merged: it then costs photons, never error. Measured on lavapipe at level 5: 8 predicted too
-// few cells to matter (the bunny's level-4 checks fell by 12%, against 21% with 4); 4 changed the photon counts by
-// at most 0.5%, and the mixed endings added at most 0.2% more.
-const float FE_PREDICT = 4.0;
+// FE_PREDICT budgets has children at about FE_PREDICT / 2 = 1 budget: they are refined without their check (their
+// candidates carry CHECK_SKIP in the radius bits, which candidates do not otherwise use). A cell whose children end
+// differently (a silhouette, a TIR edge) lies on a boundary that its children straddle too; the same threshold on
+// its mixed-endings E predicts them. Where the map bends, or a child lies off the boundary, a child so refined might
+// have merged: it then costs photons, never error. FE_PREDICT = 2 is the look-ahead's own bound, so every cell that
+// refines beyond the look-ahead's band predicts its children, and below the check level only the children of cells
+// that could not be checked (partly covered) are. Measured on lavapipe at level 5 against 4 (a factor-2 margin):
+// the bunny's frame 4% and 14% shorter at E = 0.001 and 0.0158, the sphere's 11%, 6% and 0% at E = 0.001, 0.005 and
+// 0.0158, for 0.2% to 4% more photons and the same error (docs/results.md); 8 predicted too few cells to matter.
+const float FE_PREDICT = 2.0;
 const uint CHECK_SKIP = 255u;
 
 uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_refine) {

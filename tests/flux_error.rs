@@ -182,11 +182,11 @@ fn target_error_bounds_the_added_error() {
 }
 
 /// Prediction (docs/design.md, "The flux-error metric"): from `--check-level` + 2 on, the children of a cell whose
-/// merging error is over four budgets skip their check and refine. That never merges more, so the error merging
+/// merging error is over two budgets skip their check and refine. That never merges more, so the error merging
 /// adds over max-level stays within E; a flag that leaked into a photon (its radius bits) would splat it 255 texels
 /// wide and fail this. Sphere, level 4, check level 2, E = 0.001, both transports; the stats must show skipped
-/// checks. Measured on lavapipe: 58,448 (two-interface) and 58,464 (exact) level-3 checks skipped, 411,268 and
-/// 415,321 photons, the same as without prediction, added rel-L1 1e-6 and 9.7e-5 (7.9e-5 in 2×2 weak-branch blocks).
+/// checks. Measured on lavapipe: 88,880 (two-interface) and 88,928 (exact) level-3 checks skipped, 412,108 and
+/// 416,287 photons (411,268 and 415,321 without prediction), added rel-L1 1e-6 and 9.7e-5.
 #[test]
 fn predicted_refinement_adds_no_error() {
     for transport in ["two-interface", "exact"] {
