@@ -34,6 +34,11 @@ shared uint s_leaf_cells;  // max-level: cells of level L - 1 whose children wer
 shared uint s_leaf_emit;   // max-level: photons those children gave
 shared uint s_skipped;     // checks skipped (predicted by the parent's)
 shared uint s_unchecked;   // candidates from the check level on that could not be checked
+#if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
+// Each candidate's action, so that a photon can tell whether its three siblings (the same group of four candidates,
+// which a refined cell appends together) became photons of its level too: weak-branch sharing (wave.comp).
+shared uint s_act[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
+#endif
 
 const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
@@ -359,7 +364,31 @@ void main() {
         if (action == ACT_REFINE) slot = atomicAdd(s_child_n, 1u);
         if (action == ACT_DROP) atomicAdd(s_dropped, 1u);
     }
+#if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
+    s_act[lid] = action;
+#endif
     barrier();
+    // Weak-branch siblings (glsl/common/types.glsl, wave.comp): a photon too large for the maximal level's weak-branch
+    // blocks shares its weak branches with its three siblings when each of them is a photon of its level too, or
+    // covers nothing. Candidates below the tile's first level come in groups of four siblings (a refined cell's
+    // children, appended together, aligned to four in the work group); a look-ahead's four photons are such a group
+    // by construction.
+    uint siblings = 0u;
+    bool weak_level = level + 1u + findLSB(uint(u_frame.material.z)) <= u_frame.traversal.x;
+#if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
+    if (action == ACT_EMIT && level > state.start_level && level + findLSB(uint(u_frame.material.z)) <= u_frame.traversal.x) {
+        uint g = lid & ~3u, self = lid & 3u, j = 0u;
+        bool whole = true;
+        for (uint k = 0u; k < 4u; k++) {
+            if (k == self) continue;
+            uint a = s_act[g + k];
+            if (a == ACT_EMIT) siblings |= 1u << j;
+            else if (a != ACT_DROP) whole = false;
+            j++;
+        }
+        if (!whole) siblings = 0u;
+    }
+#endif
     if (lid == 0u) {
         // One reservation per work group for all its photons and children. On overflow the batch is aborted (and
         // later split) or, with batching off, the group's entries are dropped and counted; either way nothing is
@@ -383,13 +412,13 @@ void main() {
     barrier();
     if (s_reserved) {
         if (action == ACT_EMIT) {
-            photons[state.capacity - 1u - (s_emit_base + slot)] = out_cell;
+            photons[state.capacity - 1u - (s_emit_base + slot)] = with_siblings(out_cell, siblings);
         } else if (action == ACT_EMIT_CHILDREN) {
             uvec2 xy = cell_xy(out_cell);
             uint r = cell_radius(out_cell);
             for (uint k = 0u; k < 4u; k++) {
-                photons[state.capacity - 1u - (s_emit_base + slot + k)] =
-                    pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
+                uvec2 c = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
+                photons[state.capacity - 1u - (s_emit_base + slot + k)] = weak_level ? with_siblings(c, 7u) : c;
             }
         } else if (action == ACT_EMIT_LEAVES) {
             uvec2 xy = cell_xy(out_cell);

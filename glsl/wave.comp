@@ -51,36 +51,60 @@ void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, 
 vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 
 // Weak branches (`--weak-branches`, docs/design.md step 5): a Fresnel branch below u_frame.material.y of its
-// photon's flux is traced once per block of the maximal level's cells (weak_block() of them a side) instead of by
-// each photon in the block. At a split of depth d the block's cells that pass dense's test take turns (cell d mod n
-// of the n, in raster order): the photon that contains that cell traces the weak branch carrying the block's share
-// (its weight times `scale`, the block's solid angle over its own), flagged LOD_RAY so that it splats as wide as
-// the block; the others leave it (ACC_WEAK_LEFT), and the extra weight the one carries is ACC_WEAK_CARRIED, so the
-// account still closes exactly. The turn depends only on the block and the depth, never on which photons the
-// traversal made, so photons of different levels share a block consistently: dense's and max-level's cells, and
-// under the merging metrics a refined cell's children, look-ahead children and clusters finer than the block alike.
-// A photon as large as the block or larger traces its own weak branches (it is its own block).
+// photon's flux is traced once per block instead of by each photon in the block. At a split of depth d the block's
+// members take turns (member d mod n of the n, in raster order): the photon whose turn it is traces the weak branch
+// carrying the block's share (its weight times `scale`, the block's solid angle over its own), flagged LOD_RAY so
+// that it splats as wide as the block; the others leave it (ACC_WEAK_LEFT), and the extra weight the one carries is
+// ACC_WEAK_CARRIED, so the account still closes exactly. Two kinds of blocks, so that the turns never depend on
+// which photons another batch made:
+// - the maximal level's blocks, weak_block() of its cells a side, whose members are those cells that pass dense's
+//   test: the turn goes to the photon that contains the member, so photons of different levels (dense's and
+//   max-level's cells, and under the merging metrics a refined cell's children, look-ahead children and clusters
+//   smaller than the block) share a block consistently;
+// - a larger photon (a cluster) shares with its three siblings when traversal found each of them a photon of its
+//   level too, or empty (cell_siblings, glsl/common/types.glsl); otherwise it traces its own weak branches.
 const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
 
-// The side of a weak-branch block, in cells of the maximal level (u_frame.material.z: 2 or 4), and its log2.
+// The side of a maximal-level block, in cells of the maximal level (u_frame.material.z: 2 or 4), and its log2.
 uint weak_block() { return uint(u_frame.material.z); }
 uint weak_block_shift() { return findLSB(weak_block()); }
 
+// Whether the photon shares the maximal level's blocks (else its siblings, if traversal marked any).
+bool weak_fine(uvec2 cell) { return cell_level(cell) + weak_block_shift() > u_frame.traversal.x; }
+
 bool weak_branches_apply(uvec2 cell) {
-    return u_frame.material.y > 0.0 && cell_level(cell) + weak_block_shift() > u_frame.traversal.x;
+    return u_frame.material.y > 0.0 && (weak_fine(cell) || cell_siblings(cell) != 0u);
 }
 
 // The block's side over the photon's cell's: how much wider a carried branch is than the photon's own.
 float weak_widen(uvec2 cell) {
-    return exp2(float(weak_block_shift()) - float(u_frame.traversal.x - cell_level(cell)));
+    return weak_fine(cell) ? exp2(float(weak_block_shift()) - float(u_frame.traversal.x - cell_level(cell))) : 2.0;
 }
 
 // Whether this photon (`own`: its cell's measure, the photon's phi) carries its block's weak branches at `depth`,
 // and the weight factor when it does.
 bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
+    uvec2 xy = cell_xy(cell);
+    if (!weak_fine(cell)) {
+        // Siblings: the members are the photon and those of its three siblings the mask names, in raster order.
+        uint level = cell_level(cell), mask = cell_siblings(cell);
+        uint self_k = (xy.x & 1u) | ((xy.y & 1u) << 1);
+        float total = 0.0;
+        uint n = 0u, self_i = 0u, j = 0u;
+        for (uint k = 0u; k < 4u; k++) {
+            if (k == self_k) {
+                self_i = n++;
+                total += own;
+            } else if ((mask & (1u << j++)) != 0u) {
+                total += cell_measure(level, (xy & ~uvec2(1u)) + uvec2(k & 1u, k >> 1));
+                n++;
+            }
+        }
+        scale = total / own;
+        return depth % n == self_i;
+    }
     uint top = u_frame.traversal.x;
     uint up = top - cell_level(cell);  // the photon's cell is 2^up cells of the maximal level a side
-    uvec2 xy = cell_xy(cell);
     uint side = weak_block();
     uvec2 b = (xy << up) & ~uvec2(side - 1u);
     float total = 0.0;
@@ -207,7 +231,8 @@ void main() {
                     acc[ACC_DIRECT] += flux;
                 } else {
                     View rv = u_frame.receiver_view;
-                    uint r = lod ? weak_splat_radius() : cell_splat_radius(cell);
+                    uint r = lod ? side_splat_radius(weak_widen(cell) * cell_side(cell_level(cell)))
+                                 : cell_splat_radius(cell);
                     // Max-error clusters keep the radius traversal gave them (their children's spread).
                     if (diff && cell_radius(cell) == 0u)
                         r = footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r);

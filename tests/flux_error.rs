@@ -78,12 +78,18 @@ fn bunny_matches_dense_with_fewer_photons() {
 #[test]
 fn batches_gpu_driven_under_both_transports() {
     let dir = out_dir("flux_error_batching");
-    for (transport, level) in [("two-interface", "4"), ("exact", "3")] {
-        let common = ["--transport", transport, "--metric", "flux-error", "--level", level, "--check-level", "2"];
-        let (big, bi) = caustics_aov(&dir, &format!("{transport}-big"), SPHERE, &common);
+    // Exact transport with 2×2 weak-branch blocks: the clusters of level 2 share their siblings' turns, which the
+    // traversal marks; batches must not change which do.
+    for (transport, level, block) in [("two-interface", "4", "4"), ("exact", "3", "4"), ("exact", "3", "2")] {
+        let common = [
+            "--transport", transport, "--metric", "flux-error", "--level", level, "--check-level", "2", "--weak-block",
+            block,
+        ];
+        let tag = format!("{transport}-{block}");
+        let (big, bi) = caustics_aov(&dir, &format!("{tag}-big"), SPHERE, &common);
         let mut tiny_args = common.to_vec();
         tiny_args.extend_from_slice(&["--photon-budget", "0.25"]);
-        let (tiny, ti) = caustics_aov(&dir, &format!("{transport}-tiny"), SPHERE, &tiny_args);
+        let (tiny, ti) = caustics_aov(&dir, &format!("{tag}-tiny"), SPHERE, &tiny_args);
         for s in [&big, &tiny] {
             assert_eq!(s["host_readbacks_per_frame"], 0, "{transport}");
             assert_eq!(s["unfinished_tiles"], 0, "{transport}");

@@ -82,10 +82,6 @@ uint cell_splat_radius(uvec2 cell) {
     return r == 0u ? side_splat_radius(cell_side(cell_level(cell))) : r;
 }
 
-// The footprint of a weak branch carried for its photon's block (wave.comp): the block's side on the map, the block
-// being u_frame.material.z cells of the maximal level a side.
-uint weak_splat_radius() { return side_splat_radius(u_frame.material.z * cell_side(u_frame.traversal.x)); }
-
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {
     View v = u_frame.photon_view;

@@ -114,11 +114,15 @@ struct TransportState {
 
 // Photon encoding: a quadtree cell (level, x, y) with exact integer addressing.
 //   .x: bits 0..23 cell x, bits 24..31 splat radius in caustic-map texels (0: derive from the level)
-//   .y: bits 0..23 cell y, bits 24..28 level
+//   .y: bits 0..23 cell y, bits 24..28 level, bits 29..31 the weak-branch siblings of a photon too large for the
+//       maximal level's blocks (traverse.comp, wave.comp; 0: none shared): which of its three siblings, in raster
+//       order, are photons of its level, set only where every sibling is such a photon or covers nothing
 uvec2 pack_cell(uint level, uint x, uint y, uint radius) {
     return uvec2((x & 0xFFFFFFu) | (min(radius, 255u) << 24), (y & 0xFFFFFFu) | (level << 24));
 }
-uint cell_level(uvec2 c) { return c.y >> 24; }
+uint cell_level(uvec2 c) { return (c.y >> 24) & 0x1Fu; }
+uint cell_siblings(uvec2 c) { return c.y >> 29; }
+uvec2 with_siblings(uvec2 c, uint mask) { return uvec2(c.x, (c.y & 0x1FFFFFFFu) | (mask << 29)); }
 uvec2 cell_xy(uvec2 c) { return uvec2(c.x & 0xFFFFFFu, c.y & 0xFFFFFFu); }
 uint cell_radius(uvec2 c) { return c.x >> 24; }
 
