@@ -151,7 +151,9 @@ const uint FE_DROP = 3u;
 const float FE_PREDICT = 2.0;
 const uint CHECK_SKIP = 255u;
 
-uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_refine) {
+// `merge_only`: the caller only needs to know whether the cell could merge (one level above the check level), so
+// the traces stop as soon as e is known to exceed the budget.
+uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, out bool predict_refine) {
     radius = 0u;
     predict_refine = false;
     bool exact = u_frame.transport.x != 0u;
@@ -168,7 +170,9 @@ uint flux_error_verdict(uint level, uvec2 xy, out uint radius, out bool predict_
     // Where the children would be checked, a cell that refines on the same-endings bound goes on tracing until
     // the bound also says whether they are predicted to refine (FE_PREDICT): their checks cost more than these
     // traces.
-    float stop_above = 1.01 * (level + 2u <= u_frame.traversal.x ? max(refine_above, FE_PREDICT * budget) : refine_above);
+    float stop_above = 1.01 * (merge_only                          ? budget
+                               : level + 2u <= u_frame.traversal.x ? max(refine_above, FE_PREDICT * budget)
+                                                                   : refine_above);
     uint ok = exact ? DOM_OK : HIT_OK;
     bool mixed = false;
     for (uint j = 0u; j < 4u; j++) {
@@ -296,26 +300,24 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uin
     // it could merge (e <= its budget; each child is then predicted at an eighth of it, against a quarter) its
     // children are emitted now, without their own checks; otherwise they are checked as usual (no prediction from
     // here). The look-ahead's own band (up to 2 budgets) added more than E to the bunny at level 5 (0.520% at
-    // E = 0.005), against 0.474% without this.
-    if (level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x &&
-        cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi)) {
-        uint r;
-        bool predict_refine;
-        uint verdict = flux_error_verdict(level, xy, r, predict_refine);
-        if (verdict != FE_FINAL) return ACT_REFINE;
-        // The children's splat radius is half the spread: ceil(ceil(s) / 2) = ceil(s / 2); 0 (no spread) stays 0.
-        r = (r + 1u) / 2u;
-        out_cell = pack_cell(level, xy.x, xy.y, r);
-        return ACT_EMIT_CHILDREN;
-    }
-    if (checkable) {
-        if (cell_radius(cell) == CHECK_SKIP) {
+    // E = 0.005), against 0.474% without this. One call site for the verdict: llvmpipe inlines it, and a second copy
+    // slowed every level of this shader.
+    bool early = level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x &&
+                 cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
+    if (checkable || early) {
+        if (checkable && cell_radius(cell) == CHECK_SKIP) {
             no_check = 1u;
             return ACT_REFINE;
         }
         uint r;
         bool predict_refine;
-        uint verdict = flux_error_verdict(level, xy, r, predict_refine);
+        uint verdict = flux_error_verdict(level, xy, early, r, predict_refine);
+        if (early) {
+            if (verdict != FE_FINAL) return ACT_REFINE;
+            // The children's splat radius is half the spread: ceil(ceil(s) / 2) = ceil(s / 2); 0 stays 0.
+            out_cell = pack_cell(level, xy.x, xy.y, (r + 1u) / 2u);
+            return ACT_EMIT_CHILDREN;
+        }
         if (verdict == FE_DROP) return ACT_DROP;
         if (verdict == FE_FINAL) {
             out_cell = pack_cell(level, xy.x, xy.y, r);

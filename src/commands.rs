@@ -114,7 +114,8 @@ pub struct MethodArgs {
     /// --target-error maps to.
     #[arg(long, hide = true, allow_negative_numbers = true)]
     pub tau: Option<f32>,
-    /// Max-error and flux-error metrics: first level checked for convergence.
+    /// Max-error and flux-error metrics: first level checked for convergence (flux-error's look-ahead starts one
+    /// level above it: a cell there may emit its four children at once, never itself).
     #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = level_arg)]
     pub check_level: u32,
     /// Traversal work-group side (1, 2, 4, 8 or 16).
