@@ -150,7 +150,8 @@ fn tiny_budget_gives_the_same_image() {
 #[test]
 fn weak_branches_are_traced_once_per_block() {
     let dir = out_dir("exact_weak_branches");
-    let merging = |metric: &'static str| vec!["--method", "adaptive", "--metric", metric, "--level", "3", "--check-level", "2"];
+    let merging =
+        |metric: &'static str| vec!["--method", "adaptive", "--metric", metric, "--level", "3", "--check-level", "2"];
     let cases = [
         ("sphere", SPHERE.to_string(), vec!["--method", "dense", "--level", "3"]),
         ("bunny", scene("bunny.toml"), vec!["--method", "dense", "--level", "3"]),

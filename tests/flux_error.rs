@@ -82,7 +82,15 @@ fn batches_gpu_driven_under_both_transports() {
     // traversal marks; batches must not change which do.
     for (transport, level, block) in [("two-interface", "4", "4"), ("exact", "3", "4"), ("exact", "3", "2")] {
         let common = [
-            "--transport", transport, "--metric", "flux-error", "--level", level, "--check-level", "2", "--weak-block",
+            "--transport",
+            transport,
+            "--metric",
+            "flux-error",
+            "--level",
+            level,
+            "--check-level",
+            "2",
+            "--weak-block",
             block,
         ];
         let tag = format!("{transport}-{block}");
