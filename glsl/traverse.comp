@@ -391,10 +391,12 @@ void main() {
     // covers nothing. Candidates below the tile's first level come in groups of four siblings (a refined cell's
     // children, appended together, aligned to four in the work group); a look-ahead's four photons are such a group
     // by construction.
+    // (A work group of one candidate, `--traverse-wg 1`, cannot see its siblings: its clusters share nothing.)
     uint siblings = 0u;
-    bool weak_level = level + 1u + findLSB(uint(u_frame.material.z)) <= u_frame.traversal.x;
+    uint block_levels = findLSB(uint(u_frame.material.z));  // the maximal level's weak-branch block, log2 of its side
+    bool weak_level = level + 1u + block_levels <= u_frame.traversal.x;
 #if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
-    if (action == ACT_EMIT && level > state.start_level && level + findLSB(uint(u_frame.material.z)) <= u_frame.traversal.x) {
+    if (action == ACT_EMIT && level > state.start_level && level + block_levels <= u_frame.traversal.x) {
         uint g = lid & ~3u, self = lid & 3u, j = 0u;
         bool whole = true;
         for (uint k = 0u; k < 4u; k++) {
