@@ -393,10 +393,8 @@ void main() {
     // by construction.
     // (A work group of one candidate, `--traverse-wg 1`, cannot see its siblings: its clusters share nothing.)
     uint siblings = 0u;
-    uint block_levels = findLSB(uint(u_frame.material.z));  // the maximal level's weak-branch block, log2 of its side
-    bool weak_level = level + 1u + block_levels <= u_frame.traversal.x;
 #if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
-    if (action == ACT_EMIT && level > state.start_level && level + block_levels <= u_frame.traversal.x) {
+    if (action == ACT_EMIT && level > state.start_level && weak_by_siblings(level)) {
         uint g = lid & ~3u, self = lid & 3u, j = 0u;
         bool whole = true;
         for (uint k = 0u; k < 4u; k++) {
@@ -438,7 +436,8 @@ void main() {
             uint r = cell_radius(out_cell);
             for (uint k = 0u; k < 4u; k++) {
                 uvec2 c = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
-                photons[state.capacity - 1u - (s_emit_base + slot + k)] = weak_level ? with_siblings(c, 7u) : c;
+                photons[state.capacity - 1u - (s_emit_base + slot + k)] =
+                    weak_by_siblings(level + 1u) ? with_siblings(c, 7u) : c;
             }
         } else if (action == ACT_EMIT_LEAVES) {
             uvec2 xy = cell_xy(out_cell);

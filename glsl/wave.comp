@@ -65,12 +65,8 @@ vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 //   level too, or empty (cell_siblings, glsl/common/types.glsl); otherwise it traces its own weak branches.
 const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
 
-// The side of a maximal-level block, in cells of the maximal level (u_frame.material.z: 2 or 4), and its log2.
-uint weak_block() { return uint(u_frame.material.z); }
-uint weak_block_shift() { return findLSB(weak_block()); }
-
 // Whether the photon shares the maximal level's blocks (else its siblings, if traversal marked any).
-bool weak_fine(uvec2 cell) { return cell_level(cell) + weak_block_shift() > u_frame.traversal.x; }
+bool weak_fine(uvec2 cell) { return !weak_by_siblings(cell_level(cell)); }
 
 bool weak_branches_apply(uvec2 cell) {
     return u_frame.material.y > 0.0 && (weak_fine(cell) || cell_siblings(cell) != 0u);

@@ -9,11 +9,22 @@ fn stderr_of(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// `caustics render --aov caustics --out <dir>/x.exr` with `args`: it must exit with code 2 before writing any
+/// output. Returns its stderr.
+fn render_refused(dir: &std::path::Path, args: &[&str]) -> String {
+    let out = dir.join("x.exr");
+    let mut a = vec!["render", "--aov", "caustics", "--out", out.to_str().unwrap()];
+    a.extend_from_slice(args);
+    let o = caustics(&a);
+    let e = stderr_of(&o);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+    assert_no_output(&out);
+    e
+}
+
 #[test]
 fn negative_numbers_get_the_range_message() {
     let dir = out_dir("cli_negative");
-    let out = dir.join("x.exr");
-    let out = out.to_str().unwrap();
     for (flag, needle) in [
         ("--level", "must be an integer in 0..="),
         ("--check-level", "must be an integer in 0..="),
@@ -22,9 +33,7 @@ fn negative_numbers_get_the_range_message() {
         ("--flux-threshold", "must lie in [0, 1)"),
         ("--weak-branches", "must lie in [0, 1)"),
     ] {
-        let o = caustics(&["render", "--aov", "caustics", "--out", out, flag, "-1"]);
-        let e = stderr_of(&o);
-        assert_eq!(o.status.code(), Some(2), "{flag} -1: {e}");
+        let e = render_refused(&dir, &[flag, "-1"]);
         assert!(e.contains(needle) && !e.contains("unexpected argument"), "{flag} -1: {e}");
     }
 }
@@ -33,20 +42,13 @@ fn negative_numbers_get_the_range_message() {
 #[test]
 fn weak_block_is_checked() {
     let dir = out_dir("cli_weak_block");
-    let out = dir.join("x.exr");
-    let out = out.to_str().unwrap();
     for (args, needle) in [
         (vec!["--weak-block", "3"], "--weak-block 3: must be 2, 4 or 0"),
         (vec!["--weak-block", "8", "--metric", "flux-error"], "--weak-block 8: must be 2, 4 or 0"),
         (vec!["--weak-block", "1", "--method", "dense"], "--weak-block 1: must be 2, 4 or 0"),
     ] {
-        let mut a = vec!["render", "--aov", "caustics", "--out", out];
-        a.extend_from_slice(&args);
-        let o = caustics(&a);
-        let e = stderr_of(&o);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        let e = render_refused(&dir, &args);
         assert!(e.contains(needle), "{args:?}: {e}");
-        assert_no_output(std::path::Path::new(out));
     }
 }
 

@@ -142,8 +142,9 @@ fn tiny_budget_gives_the_same_image() {
 /// traced, and the image and its error against every path barely move. Under the merging metrics (check level 2)
 /// a block holds clusters of level 2 beside level-3 photons, and the turns, which follow the block's cells, still
 /// give each block one carrier per depth; in 2×2 blocks the clusters of level 2 are too large for them, and take
-/// turns with their siblings where traversal found all four to be clusters. Measured on lavapipe (sphere dense, bunny dense, bunny max-error, sphere
-/// flux-error, and sphere flux-error whose clusters share with their siblings): rays 0.536, 0.472, 0.474, 0.598 and
+/// turns with their siblings where traversal found all four to be clusters. Measured on lavapipe (sphere dense,
+/// bunny dense, bunny max-error, sphere flux-error, and sphere flux-error whose clusters share with their
+/// siblings): rays 0.536, 0.472, 0.474, 0.598 and
 /// 0.667 of off's (bunny max-error in 2×2 blocks before clusters took part: 0.577); carried / left within 0.2%;
 /// caustic flux equal to 1e-4; rel-L1 (64²) on against off 0.0006, 0.0059, 0.0058, 0.0006 and 0.0003; against every
 /// path the error rises by 0.004, 0.042, 0.048, 0.004 and 0.0005 points.

@@ -99,19 +99,19 @@ fn batches_gpu_driven_under_both_transports() {
         tiny_args.extend_from_slice(&["--photon-budget", "0.25"]);
         let (tiny, ti) = caustics_aov(&dir, &format!("{tag}-tiny"), SPHERE, &tiny_args);
         for s in [&big, &tiny] {
-            assert_eq!(s["host_readbacks_per_frame"], 0, "{transport}");
-            assert_eq!(s["unfinished_tiles"], 0, "{transport}");
+            assert_eq!(s["host_readbacks_per_frame"], 0, "{tag}");
+            assert_eq!(s["unfinished_tiles"], 0, "{tag}");
         }
-        assert!(tiny["batches"].as_u64().unwrap() >= 4, "{transport}: batches {}", tiny["batches"]);
-        assert_eq!(big["photons_splatted"], tiny["photons_splatted"], "{transport}");
-        assert_eq!(big["levels"], tiny["levels"], "{transport}: per-level counts do not depend on batching");
+        assert!(tiny["batches"].as_u64().unwrap() >= 4, "{tag}: batches {}", tiny["batches"]);
+        assert_eq!(big["photons_splatted"], tiny["photons_splatted"], "{tag}");
+        assert_eq!(big["levels"], tiny["levels"], "{tag}: per-level counts do not depend on batching");
         let m = compare(&ti, &bi, 64, 2.0);
-        assert!(m.rel_l1 <= 1e-4, "{transport}: rel-L1 {}", m.rel_l1);
+        assert!(m.rel_l1 <= 1e-4, "{tag}: rel-L1 {}", m.rel_l1);
         // Some cells converged before the maximal level.
         let levels = big["levels"].as_array().unwrap();
         let early: u64 = levels[..levels.len() - 1].iter().map(|l| l["emitted"].as_u64().unwrap()).sum();
-        eprintln!("{transport}: {} photons, {early} before the last level", photons(&big));
-        assert!(early > 0, "{transport}: nothing converged early");
+        eprintln!("{tag}: {} photons, {early} before the last level", photons(&big));
+        assert!(early > 0, "{tag}: nothing converged early");
     }
 }
 

@@ -82,6 +82,13 @@ uint cell_splat_radius(uvec2 cell) {
     return r == 0u ? side_splat_radius(cell_side(cell_level(cell))) : r;
 }
 
+// Weak branches (glsl/wave.comp, docs/design.md step 5): the maximal level's blocks are weak_block() (2 or 4) of
+// its cells a side. A photon at least as large as a block shares with its siblings instead, where traverse.comp
+// marks them.
+uint weak_block() { return uint(u_frame.material.z); }
+uint weak_block_shift() { return findLSB(weak_block()); }
+bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame.traversal.x; }
+
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {
     View v = u_frame.photon_view;
