@@ -139,23 +139,47 @@ const uint FE_DROP = 3u;
 
 // Prediction (flux-error only): where the map is locally linear, E over the budget halves from one level to the next
 // (E has a quarter of the flux and half the spread, the budget a quarter). A cell that refines with E above
-// FE_PREDICT budgets has children at about FE_PREDICT / 2 = 1 budget: they are refined without their check (their
-// candidates carry CHECK_SKIP in the radius bits, which candidates do not otherwise use). A cell whose children end
-// differently (a silhouette, a TIR edge) lies on a boundary that its children straddle too; the same threshold on
-// its mixed-endings E predicts them. Where the map bends, or a child lies off the boundary, a child so refined might
-// have merged: it then costs photons, never error. FE_PREDICT = 2 is the look-ahead's own bound, so every cell that
-// refines beyond the look-ahead's band predicts its children, and below the check level only the children of cells
-// that could not be checked (partly covered) are. Measured on lavapipe at level 5 against 4 (a factor-2 margin):
-// the bunny's frame 4% and 14% shorter at E = 0.001 and 0.0158, the sphere's 11%, 6% and 0% at E = 0.001, 0.005 and
-// 0.0158, for 0.2% to 4% more photons and the same error (docs/results.md); 8 predicted too few cells to matter.
+// FE_PREDICT budgets has children at about FE_PREDICT / 2 = 1 budget, and one above 2^(d-1) FE_PREDICT budgets has
+// descendants d levels down at about 1 budget: those d levels refine without their checks (predicted_skip). The
+// candidates carry how many levels still skip in their radius bits, which candidates do not otherwise use (0:
+// checked). Where the children end differently (a silhouette, a TIR edge), or all end away from the receivers (the
+// weak branches' bound), E is in proportion to the flux and does not halve: every checked level below skips
+// (predicted_skip_mixed). Where the map bends, or a child lies off the boundary, a cell so refined might have merged:
+// it then costs photons, never error. FE_PREDICT = 2 is the look-ahead's own bound, so every cell that refines
+// beyond the look-ahead's band predicts its children. Measured on lavapipe at level 5 (docs/results.md): one level
+// against none, the bunny's frame 4% and 14% shorter at E = 0.001 and 0.0158 (a factor-2 margin, 4, against 2: the
+// sphere's 11%, 6% and 0% at E = 0.001, 0.005 and 0.0158); the chains over several levels, from the early look-ahead
+// on and through the mixed and weak bounds, the bunny's 27%, 26% and 11% shorter again, the sphere's 4%, 1% and 0%,
+// for 0.02% to 6% more photons and the same error or less.
 const float FE_PREDICT = 2.0;
-const uint CHECK_SKIP = 255u;
 
-// `merge_only`: the caller only needs to know whether the cell could merge (one level above the check level), so
-// the traces stop as soon as e is known to exceed the budget.
-uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, out bool predict_refine) {
+// The levels below `level` whose cells are checked: the last level's are not (they are leaves).
+uint checked_levels_below(uint level) {
+    return level + 2u <= u_frame.traversal.x ? u_frame.traversal.x - level - 1u : 0u;
+}
+
+// How many levels below a refining cell skip their checks, from its E over its budget (`ratio`): the d-th level down
+// is predicted to refine when ratio > 2^(d-1) FE_PREDICT. A chain that stops short of the last checked level skips
+// one level less: the cells where it stops refine unchecked, and their four times as many children would all be
+// checked, knowing nothing, where a check of the cells themselves costs a quarter and predicts for their children.
+uint predicted_skip(uint level, float ratio) {
+    uint below = min(checked_levels_below(level), 8u);
+    uint d = ratio > FE_PREDICT ? uint(floor(log2(ratio / FE_PREDICT))) + 1u : 0u;
+    return d >= below ? below : max(d, 1u) - 1u;
+}
+
+// Mixed endings (or the weak branches' bound, where all four children end away from the receivers): E is in
+// proportion to the cell's flux, so E over the budget does not halve from one level to the next.
+uint predicted_skip_mixed(uint level, float ratio) {
+    return ratio > FE_PREDICT ? min(checked_levels_below(level), 8u) : 0u;
+}
+
+// `merge_only`: the caller only needs to know whether the cell could merge (one level above the check level), and
+// how many levels below it are predicted to refine, so the traces stop as soon as e is known to exceed the budget
+// and every checked level's prediction.
+uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, out uint skip) {
     radius = 0u;
-    predict_refine = false;
+    skip = 0u;
     bool exact = u_frame.transport.x != 0u;
     float intensity = u_frame.light_power.w;
     vec2 p[4];
@@ -168,11 +192,11 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     // A cell refines when E exceeds this (twice the budget where the look-ahead may still emit the children).
     float refine_above = level + 1u < u_frame.traversal.x ? 2.0 * budget : budget;
     // Where the children would be checked, a cell that refines on the same-endings bound goes on tracing until
-    // the bound also says whether they are predicted to refine (FE_PREDICT): their checks cost more than these
-    // traces.
-    float stop_above = 1.01 * (merge_only                          ? budget
-                               : level + 2u <= u_frame.traversal.x ? max(refine_above, FE_PREDICT * budget)
-                                                                   : refine_above);
+    // the bound also says how many levels below are predicted to refine (predicted_skip): their checks cost more
+    // than these traces. `deepest`: the E from which every checked level below is.
+    uint below = checked_levels_below(level);
+    float deepest = below > 0u ? FE_PREDICT * exp2(float(below - 1u)) * budget : 0.0;
+    float stop_above = 1.01 * max(merge_only ? budget : refine_above, deepest);
     uint ok = exact ? DOM_OK : HIT_OK;
     bool mixed = false;
     for (uint j = 0u; j < 4u; j++) {
@@ -205,7 +229,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
         float partial = phi[0] + phi[1] + phi[2] + phi[3];  // the children not traced yet hold 0
         bool mixed_refines = cell_flux * t_max + partial > 1.01 * budget;
         if (mixed && mixed_refines) {
-            predict_refine = cell_flux * t_max + partial > FE_PREDICT * budget;
+            skip = predicted_skip_mixed(level, (cell_flux * t_max + partial) / budget);
             return FE_REFINE;
         }
         if (!mixed && status[0] == ok && mixed_refines) {
@@ -216,7 +240,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
                 lower = max(lower, 2.0 * min(phi[k], phi[b]) * min(1.0, (d.x + d.y) / w));
             }
             if (lower > stop_above) {
-                predict_refine = lower > FE_PREDICT * budget;
+                skip = predicted_skip(level, lower / budget);
                 return FE_REFINE;
             }
         }
@@ -227,14 +251,18 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     // merged photon's between nothing and I Omega(cell) (1 - T_min), the children's in total `rest`.
     if (same && status[0] != ok) {
         if (!exact) return FE_DROP;
-        return cell_flux * (1.0 - t_min) + rest <= budget ? FE_FINAL : FE_REFINE;
+        float e_weak = cell_flux * (1.0 - t_min) + rest;
+        if (e_weak <= budget) return FE_FINAL;
+        skip = predicted_skip_mixed(level, e_weak / budget);  // a bound in proportion to the flux, as below
+        return FE_REFINE;
     }
     float total = phi[0] + phi[1] + phi[2] + phi[3];
     // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.
     if (!same) {
         float e_mixed = cell_flux * t_max + total;
-        predict_refine = e_mixed > FE_PREDICT * budget;
-        return e_mixed <= budget ? FE_FINAL : FE_REFINE;
+        if (e_mixed <= budget) return FE_FINAL;
+        skip = predicted_skip_mixed(level, e_mixed / budget);
+        return FE_REFINE;
     }
     vec2 c = total > 0.0 ? (phi[0] * p[0] + phi[1] * p[1] + phi[2] * p[2] + phi[3] * p[3]) / total
                          : 0.25 * (p[0] + p[1] + p[2] + p[3]);
@@ -255,15 +283,16 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
         radius = uint(clamp(ceil(0.5 * spread), 1.0, float(MAX_SPLAT_RADIUS)));
         return FE_CHILDREN;
     }
-    predict_refine = e > FE_PREDICT * budget;
+    skip = predicted_skip(level, e / budget);
     return FE_REFINE;
 }
 
 #endif  // TRAVERSE_METRIC == 2
 
 // Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined (`out_cell`'s radius
-// bits are then its children's: CHECK_SKIP or 0). `leaves` (max-level, ACT_EMIT_LEAVES): bit k set when child k is
-// emitted. `no_check`: 1 when a metric's check was skipped (predicted), 2 when the candidate could not be checked.
+// bits are then its children's: how many levels skip their checks, or 0). `leaves` (max-level, ACT_EMIT_LEAVES):
+// bit k set when child k is emitted. `no_check`: 1 when a metric's check was skipped (predicted), 2 when the
+// candidate could not be checked.
 uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uint no_check) {
     uvec2 xy = cell_xy(cell);
     out_cell = pack_cell(level, xy.x, xy.y, 0u);
@@ -298,22 +327,27 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uin
 #if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 2
     // The look-ahead starts one level above the check level: a cell there never becomes a photon itself, but when
     // it could merge (e <= its budget; each child is then predicted at an eighth of it, against a quarter) its
-    // children are emitted now, without their own checks; otherwise they are checked as usual (no prediction from
-    // here). The look-ahead's own band (up to 2 budgets) added more than E to the bunny at level 5 (0.520% at
-    // E = 0.005), against 0.474% without this. One call site for the verdict: llvmpipe inlines it, and a second copy
-    // slowed every level of this shader.
+    // children are emitted now, without their own checks; otherwise they refine, and skip the checks that its e
+    // predicts to refine (predicted_skip). The look-ahead's own band (up to 2 budgets) added more than E to the
+    // bunny at level 5 (0.520% at E = 0.005), against 0.474% without this. One call site for the verdict: llvmpipe
+    // inlines it, and a second copy slowed every level of this shader.
     bool early = level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x &&
                  cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
     if (checkable || early) {
-        if (checkable && cell_radius(cell) == CHECK_SKIP) {
+        uint skip = cell_radius(cell);
+        if (checkable && skip != 0u) {
+            // Predicted to refine by an ancestor's check: the levels it predicted below this one skip theirs too.
             no_check = 1u;
+            out_cell = pack_cell(level, xy.x, xy.y, skip - 1u);
             return ACT_REFINE;
         }
         uint r;
-        bool predict_refine;
-        uint verdict = flux_error_verdict(level, xy, early, r, predict_refine);
+        uint verdict = flux_error_verdict(level, xy, early, r, skip);
         if (early) {
-            if (verdict != FE_FINAL) return ACT_REFINE;
+            if (verdict != FE_FINAL) {
+                out_cell = pack_cell(level, xy.x, xy.y, skip);
+                return ACT_REFINE;
+            }
             // The children's splat radius is half the spread: ceil(ceil(s) / 2) = ceil(s / 2); 0 stays 0.
             out_cell = pack_cell(level, xy.x, xy.y, (r + 1u) / 2u);
             return ACT_EMIT_CHILDREN;
@@ -328,7 +362,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uin
             return ACT_EMIT_CHILDREN;
         }
         // Children that will be checked (not the last level's) skip their check when it is predicted to refine.
-        if (predict_refine && level + 2u <= u_frame.traversal.x) out_cell = pack_cell(level, xy.x, xy.y, CHECK_SKIP);
+        out_cell = pack_cell(level, xy.x, xy.y, skip);
     }
 #elif defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 1
     if (checkable) {
