@@ -72,9 +72,10 @@ pub struct BenchArgs {
     /// Side of the light-view refractor g-buffers (power of two).
     #[arg(long, default_value_t = 1024)]
     pub gbuffer_res: u32,
-    /// Max-error metric: first level checked for convergence (below it, max-error emits dense's cells).
-    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = crate::commands::level_arg)]
-    pub check_level: u32,
+    /// Max-error and flux-error metrics: first level checked for convergence [default: 3; flux-error: 3, at most
+    /// the row's level - 1].
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::level_arg)]
+    pub check_level: Option<u32>,
     /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux.
     #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
     pub flux_threshold: f32,

@@ -114,10 +114,11 @@ pub struct MethodArgs {
     /// --target-error maps to.
     #[arg(long, hide = true, allow_negative_numbers = true)]
     pub tau: Option<f32>,
-    /// Max-error and flux-error metrics: first level checked for convergence (flux-error's look-ahead starts one
-    /// level above it: a cell there may emit its four children at once, never itself).
-    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = level_arg)]
-    pub check_level: u32,
+    /// Max-error and flux-error metrics: first level checked for convergence [default: 3; flux-error: 3, at most
+    /// --level - 1]. Flux-error's look-ahead starts one level above it: a cell there may emit its four children at
+    /// once, never itself.
+    #[arg(long, allow_negative_numbers = true, value_parser = level_arg)]
+    pub check_level: Option<u32>,
     /// Traversal work-group side (1, 2, 4, 8 or 16).
     #[arg(long, default_value_t = TRAVERSE_WG)]
     pub traverse_wg: u32,
@@ -458,6 +459,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "target_error": flux_error(s).then_some(s.target_error),
         "tau": flux_error(s).then(|| s.tau()),
         "level": s.level,
+        "check_level": (s.method == Method::Adaptive && s.metric != Metric::MaxLevel).then(|| s.check_level()),
         "equivalent_resolution": LEVEL0_RES << s.level,
         "driven": if s.method == Method::Adaptive { json!(s.driven) } else { Value::Null },
         "settings": s,

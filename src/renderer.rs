@@ -469,7 +469,7 @@ impl Renderer {
             traversal: [
                 s.level,
                 s.metric.code() | ((s.batching as u32) << 8),
-                s.check_level,
+                s.check_level(),
                 s.traversal_capacity(targets.photon.capacity),
             ],
             params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.tau()],

@@ -53,7 +53,7 @@ fn against_dense(name: &str, scene: &str, level: &str, target: &str) -> (u64, Me
 }
 
 /// Sphere, exact transport, level 4, `--target-error 0.0158` (τ 0.3), every-path reference of 4M photons.
-/// Measured: dense 824,416 photons, rel-L1 (64²) 0.742%; flux-error 231,760 photons (28.1% of dense's), 0.761%.
+/// Measured: dense 824,416 photons, rel-L1 (64²) 0.742%; flux-error 232,204 photons (28.2% of dense's), 0.765%.
 #[test]
 fn sphere_matches_dense_with_fewer_photons() {
     let (pd, d, pf, f) = against_dense("flux_error_sphere", SPHERE, "4", TAU_03);
@@ -64,7 +64,7 @@ fn sphere_matches_dense_with_fewer_photons() {
 
 /// Bunny, exact transport, level 4, `--target-error 0.0158` (τ 0.3). Its thin parts send the children's dominant
 /// paths different ways (escapes, different interfaces) far more often than on the sphere, so fewer cells
-/// converge. Measured: dense 491,341 photons, rel-L1 3.24%; flux-error 246,160 (50.1%), 3.58% (before cells whose
+/// converge. Measured: dense 491,341 photons, rel-L1 3.28%; flux-error 251,887 (51.3%), 3.53% (before cells whose
 /// four dominant paths all end the same other way had to fit the budget: 212,506 photons, 3.70%).
 #[test]
 fn bunny_matches_dense_with_fewer_photons() {
@@ -237,6 +237,47 @@ fn bad_target_error_exits_2() {
             assert_eq!(o.status.code(), Some(2), "{flag} {bad}: {stderr}");
             assert!(stderr.contains(flag), "{stderr}");
             assert_no_output(&out);
+        }
+    }
+}
+
+/// The default check level (src/settings.rs, `Settings::check_level`): 3, and under flux-error at most `--level` - 1,
+/// so that the metric merges at levels 3 and below too instead of emitting max-level's photons through a traversal.
+/// Max-error keeps 3; `--check-level` overrides both. The stats report the level used. Sphere, two-interface.
+#[test]
+fn default_check_level_follows_the_level() {
+    let dir = out_dir("flux_error_check_level");
+    let cases: [(&str, &[&str], u64); 4] = [
+        ("fe2", &["--metric", "flux-error", "--level", "2"], 1),
+        ("fe4", &["--metric", "flux-error", "--level", "4"], 3),
+        ("fe2_given", &["--metric", "flux-error", "--level", "2", "--check-level", "2"], 2),
+        ("me2", &["--metric", "max-error", "--level", "2"], 3),
+    ];
+    let mut level2 = Vec::new();
+    for (name, extra, want) in cases {
+        let args = [&["--transport", "two-interface", "--method", "adaptive"][..], extra].concat();
+        let (s, _) = caustics_aov(&dir, name, SPHERE, &args);
+        assert_eq!(s["check_level"].as_u64(), Some(want), "{name}: {}", s["check_level"]);
+        let levels = s["levels"].as_array().unwrap();
+        let early: u64 = levels[..levels.len() - 1].iter().map(|l| l["emitted"].as_u64().unwrap()).sum();
+        if name.ends_with('2') {
+            level2.push((name, photons(&s), early));
+        }
+    }
+    let (dense, _) =
+        caustics_aov(&dir, "dense2", SPHERE, &["--transport", "two-interface", "--method", "dense", "--level", "2"]);
+    assert!(dense["check_level"].is_null(), "dense checks nothing: {}", dense["check_level"]);
+    // At level 2 flux-error merges (photons before the last level, fewer photons than dense); with the check level
+    // at 2, and under max-error's 3, nothing is checked and the photons are dense's.
+    for (name, n, early) in level2 {
+        if name == "fe2" {
+            assert!(early > 0 && n < photons(&dense), "{name}: {n} photons ({early} early), dense {}", photons(&dense));
+        } else {
+            assert!(
+                early == 0 && n == photons(&dense),
+                "{name}: {n} photons ({early} early), dense {}",
+                photons(&dense)
+            );
         }
     }
 }
