@@ -8,11 +8,11 @@
 // flux-error metric (docs/design.md, "The flux-error metric") a cell is final when merging its children into one
 // photon changes the caustic map, box-filtered to 64², by at most tau times the cell's flux; when the
 // same traces predict that each child would be final, the four children are emitted at once (look-ahead).
+// In every variant the last level is fused into the one before: a cell at level L - 1 that refines emits those of
+// its four children that dense emission would emit, instead of appending them as candidates of level L.
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
-// branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md), and
-// the last level fused into the one before: a cell at level L - 1 emits those of its four children that dense
-// emission would emit, instead of appending them as candidates of level L. Likewise TRAVERSE_METRIC (1: max-error,
-// 2: flux-error) compiles one metric's code only.
+// branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md).
+// Likewise TRAVERSE_METRIC (1: max-error, 2: flux-error) compiles one metric's code only.
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
@@ -30,8 +30,8 @@ shared uint s_dropped;
 shared uint s_emit_base;
 shared uint s_child_base;
 shared bool s_reserved;
-shared uint s_leaf_cells;  // max-level: cells of level L - 1 whose children were tested here (fused last level)
-shared uint s_leaf_emit;   // max-level: photons those children gave
+shared uint s_leaf_cells;  // cells of level L - 1 whose children were tested here (fused last level)
+shared uint s_leaf_emit;   // photons those children gave
 shared uint s_skipped;     // checks skipped (predicted by the parent's)
 shared uint s_unchecked;   // candidates from the check level on that could not be checked
 #if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
@@ -44,7 +44,7 @@ const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
 const uint ACT_REFINE = 2u;
 const uint ACT_EMIT_CHILDREN = 3u;  // flux-error look-ahead: four photons, the cell's children
-const uint ACT_EMIT_LEAVES = 4u;    // max-level at level L - 1: the children that pass dense's test, as photons
+const uint ACT_EMIT_LEAVES = 4u;    // refined at level L - 1: the children that pass dense's test, as photons
 
 // The order in which a metric traces a cell's four children (k: x = k & 1, y = k >> 1): the diagonal pair first.
 const uint CHILD_ORDER[4] = uint[4](0u, 3u, 1u, 2u);
@@ -290,13 +290,11 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
 #endif  // TRAVERSE_METRIC == 2
 
 // Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined (`out_cell`'s radius
-// bits are then its children's: how many levels skip their checks, or 0). `leaves` (max-level, ACT_EMIT_LEAVES):
-// bit k set when child k is emitted. `no_check`: 1 when a metric's check was skipped (predicted), 2 when the
-// candidate could not be checked.
-uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uint no_check) {
+// bits are then its children's: how many levels skip their checks, or 0). `no_check`: 1 when a metric's check was
+// skipped (predicted), 2 when the candidate could not be checked.
+uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
     uvec2 xy = cell_xy(cell);
     out_cell = pack_cell(level, xy.x, xy.y, 0u);
-    leaves = 0u;
     no_check = 0u;
     View v = u_frame.photon_view;
     float side = cell_side(level);
@@ -308,12 +306,6 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint leaves, out uin
         return leaf_emitted(level, xy) ? ACT_EMIT : ACT_DROP;
     }
 #ifdef TRAVERSE_MAX_LEVEL
-    if (level + 1u == u_frame.traversal.x) {
-        for (uint k = 0u; k < 4u; k++) {
-            if (leaf_emitted(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1))) leaves |= 1u << k;
-        }
-        return ACT_EMIT_LEAVES;
-    }
     return ACT_REFINE;
 #else
     // Only fully covered cells inside the cone are checked: then the cluster's flux I*Omega(cell) equals the sum
@@ -400,7 +392,16 @@ void main() {
     if (state.aborted == 0u && i < state.read_count) {
         uvec2 cell = photons[state.read_offset + i];
         uint no_check;
-        action = decide(cell_level(cell), cell, out_cell, leaves, no_check);
+        action = decide(cell_level(cell), cell, out_cell, no_check);
+        // The last level fused into the one before: a cell of level L - 1 that refines emits those of its four
+        // children that dense emission would emit, instead of appending them as candidates of level L, whose
+        // traversal then has nothing to do.
+        if (action == ACT_REFINE && level + 1u == u_frame.traversal.x) {
+            for (uint k = 0u; k < 4u; k++) {
+                if (leaf_emitted(level + 1u, 2u * cell_xy(cell) + uvec2(k & 1u, k >> 1))) leaves |= 1u << k;
+            }
+            action = ACT_EMIT_LEAVES;
+        }
 #ifndef TRAVERSE_MAX_LEVEL
         if (no_check == 1u) atomicAdd(s_skipped, 1u);
         if (no_check == 2u) atomicAdd(s_unchecked, 1u);
