@@ -263,11 +263,15 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
 struct References {
     main: Option<RgbImage>,
     other: Option<RgbImage>,
+    /// The main reference's own noise, rel-L1 at 64² and 256²: half the rel-L1 between its two halves.
+    noise: Option<(f64, f64)>,
 }
 
 /// Reference photons for a sweep up to `max_level`: `--reference-photons`, else 4 per cell of the finest grid,
-/// clamped to 1M..=32M (the reference's noise stays below the finest point's sampling error, and a sweep of small
-/// levels does not wait for a 32M-photon reference).
+/// clamped to 1M..=32M (so that a sweep of small levels does not wait for a 32M-photon reference). That keeps the
+/// reference's noise below dense's error up to level 4, not at level 5: on the sphere an 8M-photon reference is
+/// 0.51% (rel-L1 64²) from a 256M one, where dense at level 5 is 0.12% (docs/results.md, "Stop 23"). The bench
+/// measures the noise of the reference it uses and reports it with every row (`reference_noise`).
 pub fn reference_photons(explicit: Option<u64>, max_level: u32) -> u64 {
     explicit.unwrap_or_else(|| {
         let cells = ((LEVEL0_RES as u64) << max_level).pow(2);
@@ -277,30 +281,49 @@ pub fn reference_photons(explicit: Option<u64>, max_level: u32) -> u64 {
 
 fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: u64) -> AppResult<References> {
     if args.no_reference {
-        return Ok(References { main: None, other: None });
+        return Ok(References { main: None, other: None, noise: None });
     }
     let (main, other) = match args.paths.as_str() {
         "two-refractions" => (Paths::TwoRefractions, Paths::All),
         "all" => (Paths::All, Paths::TwoRefractions),
         p => return Err(AppError::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
     };
-    let make = |paths| {
+    let make = |paths, photons, seed| {
         let p = RefParams {
             camera: Some(args.camera.clone()),
             paths,
             photons,
             width,
             height,
+            seed,
             progress: true,
             ..RefParams::default()
         };
         let t = Instant::now();
-        eprintln!("reference {:?} for {}: {photons} photons (cached once built)", paths, scene.display());
+        eprintln!("reference {:?} for {}: {photons} photons, seed {seed} (cached once built)", paths, scene.display());
         let img = reference::cached(scene, &p)?;
         eprintln!("reference {:?} for {}: ready in {:.1} s", paths, scene.display(), t.elapsed().as_secs_f64());
         Ok::<_, AppError>(img)
     };
-    Ok(References { main: Some(make(main)?), other: Some(make(other)?) })
+    // The main reference is two independent halves, averaged: the rel-L1 between them is about twice the noise of
+    // their mean (each half's deviation has sqrt(2) times the mean's, their difference sqrt(2) times a half's).
+    let half = photons.div_ceil(2);
+    let (a, b) = (make(main, half, 1)?, make(main, half, 2)?);
+    let noise = (metrics::compare(&a, &b, 64, 2.0).rel_l1 / 2.0, metrics::compare(&a, &b, 256, 2.0).rel_l1 / 2.0);
+    let mut mean = a;
+    for (m, q) in mean.data.iter_mut().zip(&b.data) {
+        for c in 0..3 {
+            m[c] = 0.5 * (m[c] + q[c]);
+        }
+    }
+    eprintln!(
+        "reference {:?} for {}: noise rel-L1 64² {:.4}%, 256² {:.3}% (half the difference of its halves)",
+        main,
+        scene.display(),
+        100.0 * noise.0,
+        100.0 * noise.1
+    );
+    Ok(References { main: Some(mean), other: Some(make(other, photons, 1)?), noise: Some(noise) })
 }
 
 fn median_of(frames: &[FrameReport], f: impl Fn(&FrameReport) -> f64) -> f64 {
@@ -433,6 +456,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     peak_offset_m: m256.map(|m| m.peak_offset_m).unwrap_or(nan),
                     extra: json!({
                         "reference_paths": args.paths,
+                        "reference_noise": refs.noise.map(|(n64, n256)| json!({"rel_l1_64": n64, "rel_l1_256": n256})),
                         "other_reference": {
                             "rel_l1_64": o64.map(|m| m.rel_l1), "rel_l1_256": o256.map(|m| m.rel_l1),
                             "flux_ratio": o64.map(|m| m.flux_ratio),

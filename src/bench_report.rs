@@ -490,6 +490,23 @@ pub fn transport_table(rows: &[BenchRow]) -> String {
 /// Everything that applies to these rows: the full table, then the pivots.
 pub fn markdown_report(rows: &[BenchRow]) -> String {
     let mut out = markdown_table(rows);
+    // The reference's own noise: every row's rel-L1 includes it, so errors well below it read as about the noise,
+    // and their differences shrink.
+    let mut noise: Vec<(String, f64)> = Vec::new();
+    for r in rows {
+        let n = r.extra.get("reference_noise").and_then(|v| v.get("rel_l1_64")).and_then(|v| v.as_f64());
+        if let (Some(n), false) = (n, noise.iter().any(|(s, _)| *s == r.scene)) {
+            noise.push((r.scene.clone(), n));
+        }
+    }
+    if !noise.is_empty() {
+        let list: Vec<String> = noise.iter().map(|(s, n)| format!("{s} {:.4}%", 100.0 * n)).collect();
+        out.push_str(&format!(
+            "\nReference noise, rel-L1 64² (half the difference of the reference's two halves): {}. Every rel-L1 \
+             above includes it: errors well below it read as about the noise, and their differences shrink.\n",
+            list.join(", ")
+        ));
+    }
     if rows.iter().any(|r| r.transport == "exact") && rows.iter().any(|r| r.transport == "two-interface") {
         out.push_str("\n### Exact transport against two-interface\n\n");
         out.push_str(&transport_table(rows));

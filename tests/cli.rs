@@ -144,6 +144,61 @@ fn reference_with_a_perspective_camera_names_the_usable_ones() {
     assert!(e.contains("perspective") && e.contains("--camera top"), "{e}");
 }
 
+/// The bench measures its reference's noise (half the rel-L1 between the reference's two independent halves) and
+/// reports it with every row and under the table. Noise falls as 1/sqrt(photons): 4× the photons halves it
+/// (measured on the sphere's two-refraction caustic, a 64×64 image: 1.44% and 0.74% for 0.25M and 1M photons, a
+/// ratio of 1.94; bounds 1.6 to 2.5, 2 expected).
+#[test]
+fn bench_reports_its_reference_noise() {
+    let dir = out_dir("cli_bench_noise");
+    let mut noise = Vec::new();
+    for photons in ["250000", "1000000"] {
+        let (json, md) = (dir.join(format!("b{photons}.json")), dir.join(format!("b{photons}.md")));
+        let o = caustics(&[
+            "bench",
+            "--transports",
+            "two-interface",
+            "--methods",
+            "dense",
+            "--levels",
+            "1",
+            "--frames",
+            "1",
+            "--warmup-s",
+            "0",
+            "--size",
+            "64x64",
+            "--reference-photons",
+            photons,
+            "--json",
+            json.to_str().unwrap(),
+            "--markdown",
+            md.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr_of(&o));
+        let row = &read_json(&json)["rows"][0];
+        let n = row["extra"]["reference_noise"]["rel_l1_64"].as_f64().unwrap_or(f64::NAN);
+        assert!(n > 0.0 && n < 0.05, "{photons} photons: noise {n}");
+        // The noise is part of what every row's error measures.
+        assert!(
+            n < row["rel_l1_64"].as_f64().unwrap(),
+            "{photons}: noise {n} above the row's error {}",
+            row["rel_l1_64"]
+        );
+        let table = std::fs::read_to_string(&md).unwrap();
+        assert!(
+            table.contains(&format!(
+                "Reference noise, rel-L1 64² (half the difference of the reference's two halves): sphere {:.4}%",
+                100.0 * n
+            )),
+            "{table}"
+        );
+        noise.push(n);
+    }
+    let ratio = noise[0] / noise[1];
+    assert!((1.6..=2.5).contains(&ratio), "noise {noise:?}: ratio {ratio} for 4x the photons");
+}
+
 #[test]
 fn bench_json_args_are_structured_and_missing_values_print_as_dashes() {
     let dir = out_dir("cli_bench");
