@@ -229,8 +229,10 @@ void main() {
                     View rv = u_frame.receiver_view;
                     uint r = lod ? side_splat_radius(weak_widen(cell) * cell_side(cell_level(cell)))
                                  : cell_splat_radius(cell);
-                    // Max-error clusters keep the radius traversal gave them (their children's spread).
-                    if (diff && cell_radius(cell) == 0u)
+                    // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius
+                    // traversal gave it (its children's spread): the parallelogram the whole cell covers where it
+                    // lands, which a round splat of the spread fits only where that is round.
+                    if (diff)
                         r = footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r);
                     record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, float(r));
                     rec = true;
