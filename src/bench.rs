@@ -279,6 +279,9 @@ pub fn reference_photons(explicit: Option<u64>, max_level: u32) -> u64 {
     })
 }
 
+/// The bench warns when its reference's noise exceeds this share of a scene's smallest error (rel-L1 64²).
+const NOISE_WARN: f64 = 0.3;
+
 fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: u64) -> AppResult<References> {
     if args.no_reference {
         return Ok(References { main: None, other: None, noise: None });
@@ -516,6 +519,19 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                 if let serde_json::Value::Object(m) = &mut r.extra {
                     m.insert("added_rel_l1_64".into(), json!(added));
                 }
+            }
+        }
+        if let Some((noise, _)) = refs.noise {
+            let best = rows.iter().filter(|r| r.scene == name).map(|r| r.rel_l1_64).fold(f64::INFINITY, f64::min);
+            if noise > NOISE_WARN * best {
+                eprintln!(
+                    "warning: {name}: the reference's noise (rel-L1 64² {:.4}%) is over {:.0}% of the smallest error \
+                     ({:.4}%): the errors near it mostly measure the reference, and their differences shrink; raise \
+                     --reference-photons (4× the photons halve the noise)",
+                    100.0 * noise,
+                    100.0 * NOISE_WARN,
+                    100.0 * best
+                );
             }
         }
         crate::commands::validation_verdict(&session)?;
