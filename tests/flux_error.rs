@@ -249,23 +249,25 @@ fn bad_target_error_exits_2() {
 #[test]
 fn default_check_level_follows_the_level() {
     let dir = out_dir("flux_error_check_level");
-    let cases: [(&str, &[&str], u64); 4] = [
-        ("fe2", &["--metric", "flux-error", "--level", "2"], 1),
-        ("fe4", &["--metric", "flux-error", "--level", "4"], 3),
-        ("fe2_given", &["--metric", "flux-error", "--level", "2", "--check-level", "2"], 2),
-        ("me2", &["--metric", "max-error", "--level", "2"], 3),
+    // (name, metric, --level, extra arguments, the check level expected)
+    let cases: [(&str, &str, &str, &[&str], u64); 4] = [
+        ("fe2", "flux-error", "2", &[], 1),
+        ("fe4", "flux-error", "4", &[], 3),
+        ("fe2_given", "flux-error", "2", &["--check-level", "2"], 2),
+        ("me2", "max-error", "2", &[], 3),
     ];
     let mut level2 = Vec::new();
-    for (name, extra, want) in cases {
-        let args = [&["--transport", "two-interface", "--method", "adaptive"][..], extra].concat();
-        let (s, _) = caustics_aov(&dir, name, SPHERE, &args);
+    for (name, metric, level, extra, want) in cases {
+        let base = ["--transport", "two-interface", "--method", "adaptive", "--metric", metric, "--level", level];
+        let (s, _) = caustics_aov(&dir, name, SPHERE, &[&base[..], extra].concat());
         assert_eq!(s["check_level"].as_u64(), Some(want), "{name}: {}", s["check_level"]);
         let levels = s["levels"].as_array().unwrap();
         let early: u64 = levels[..levels.len() - 1].iter().map(|l| l["emitted"].as_u64().unwrap()).sum();
-        if name.ends_with('2') {
+        if level == "2" {
             level2.push((name, photons(&s), early));
         }
     }
+    assert_eq!(level2.len(), 3, "the three cases at level 2");
     let (dense, _) =
         caustics_aov(&dir, "dense2", SPHERE, &["--transport", "two-interface", "--method", "dense", "--level", "2"]);
     assert!(dense["check_level"].is_null(), "dense checks nothing: {}", dense["check_level"]);
