@@ -4,8 +4,10 @@
 
 mod common;
 use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
-fn stderr_of(o: &std::process::Output) -> String {
+fn stderr_of(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
@@ -144,6 +146,16 @@ fn reference_with_a_perspective_camera_names_the_usable_ones() {
     assert!(e.contains("perspective") && e.contains("--camera top"), "{e}");
 }
 
+/// `caustics bench` at level 1 under two-interface transport, one frame of 64×64, writing `NAME.json` and `NAME.md`
+/// into `dir`, with `extra` arguments.
+fn small_bench(dir: &Path, name: &str, extra: &[&str]) -> (Output, PathBuf, PathBuf) {
+    let (json, md) = (dir.join(format!("{name}.json")), dir.join(format!("{name}.md")));
+    let base = ["bench", "--transports", "two-interface", "--levels", "1", "--frames", "1", "--warmup-s", "0"];
+    let out = [json.to_str().unwrap(), md.to_str().unwrap()];
+    let files = ["--size", "64x64", "--json", out[0], "--markdown", out[1]];
+    (caustics(&[&base[..], &files, extra].concat()), json, md)
+}
+
 /// The bench measures its reference's noise (half the rel-L1 between the reference's two independent halves) and
 /// reports it with every row and under the table. Noise falls as 1/sqrt(photons): 4× the photons halves it
 /// (measured on the sphere's two-refraction caustic, a 64×64 image: 1.44% and 0.74% for 0.25M and 1M photons, a
@@ -154,28 +166,8 @@ fn bench_reports_its_reference_noise() {
     let dir = out_dir("cli_bench_noise");
     let mut noise = Vec::new();
     for photons in ["250000", "1000000"] {
-        let (json, md) = (dir.join(format!("b{photons}.json")), dir.join(format!("b{photons}.md")));
-        let o = caustics(&[
-            "bench",
-            "--transports",
-            "two-interface",
-            "--methods",
-            "dense",
-            "--levels",
-            "1",
-            "--frames",
-            "1",
-            "--warmup-s",
-            "0",
-            "--size",
-            "64x64",
-            "--reference-photons",
-            photons,
-            "--json",
-            json.to_str().unwrap(),
-            "--markdown",
-            md.to_str().unwrap(),
-        ]);
+        let (o, json, md) =
+            small_bench(&dir, &format!("b{photons}"), &["--methods", "dense", "--reference-photons", photons]);
         let e = stderr_of(&o);
         assert!(o.status.success(), "{e}");
         let warned = e.contains("warning: sphere: the reference's noise");
@@ -206,38 +198,25 @@ fn bench_reports_its_reference_noise() {
 #[test]
 fn bench_json_args_are_structured_and_missing_values_print_as_dashes() {
     let dir = out_dir("cli_bench");
-    let json = dir.join("b.json");
-    let md = dir.join("b.md");
-    let o = caustics(&[
-        "bench",
-        "--no-reference",
-        "--transports",
-        "two-interface",
-        "--methods",
-        "dense,flux-error,max-level",
-        "--target-errors",
-        "0.001,0.01",
-        "--levels",
-        "1",
-        "--frames",
-        "1",
-        "--warmup-s",
-        "0",
-        "--size",
-        "64x64",
-        "--gbuffer-res",
-        "256",
-        "--caustic-res",
-        "256",
-        "--check-level",
-        "1",
-        "--traverse-wg",
-        "4,8",
-        "--json",
-        json.to_str().unwrap(),
-        "--markdown",
-        md.to_str().unwrap(),
-    ]);
+    let (o, json, md) = small_bench(
+        &dir,
+        "b",
+        &[
+            "--no-reference",
+            "--methods",
+            "dense,flux-error,max-level",
+            "--target-errors",
+            "0.001,0.01",
+            "--gbuffer-res",
+            "256",
+            "--caustic-res",
+            "256",
+            "--check-level",
+            "1",
+            "--traverse-wg",
+            "4,8",
+        ],
+    );
     let e = stderr_of(&o);
     assert!(o.status.success(), "{e}");
     let doc = read_json(&json);
