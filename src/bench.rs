@@ -85,8 +85,8 @@ pub struct BenchArgs {
     /// Exact transport: the weak-branch block side (see `render --weak-block`; 0: automatic).
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub weak_block: u32,
-    /// Exact transport: BVH node layout (pair or single).
-    #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Pair)]
+    /// Exact transport: BVH node layout (auto: single on GPUs, pair on CPU devices; pair; single; threaded).
+    #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Auto)]
     pub bvh_layout: crate::bvh::BvhLayout,
     /// Exact transport: where the splat radius comes from (cell or differential).
     #[arg(long, value_enum, default_value_t = Settings::default().footprint)]

@@ -76,8 +76,9 @@ pub struct MethodArgs {
     /// Photons as large as the block or larger trace their own weak branches.
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub weak_block: u32,
-    /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node).
-    #[arg(long, value_enum, default_value_t = BvhLayout::Pair)]
+    /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node;
+    /// auto: single on GPUs, pair on CPU devices, the faster on each in docs/results.md).
+    #[arg(long, value_enum, default_value_t = BvhLayout::Auto)]
     pub bvh_layout: BvhLayout,
     /// Photon source: dense grid, or adaptive traversal.
     #[arg(long, value_enum, default_value_t = Method::Adaptive)]
@@ -517,7 +518,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
             "triangles": bvh.triangle_count,
             "instances": bvh.instance_count,
             "nodes": match r.settings.bvh_layout {
-                BvhLayout::Pair => bvh.pair_node_count,
+                BvhLayout::Pair | BvhLayout::Auto => bvh.pair_node_count,
                 BvhLayout::Single => bvh.single_node_count,
                 BvhLayout::Threaded => bvh.threaded_node_count,
             },

@@ -32,6 +32,43 @@ use crate::vk::{Access, Barriers, Buffer, Device, Image, Recorder, Sampler, Subm
 use ash::vk;
 use std::time::Instant;
 
+/// Exact transport's waves after the first, as sub-stages of `transport_bounces` (index: wave - 1), so that a
+/// profile shows where the bounces' time goes: the early waves carry most rays, the late ones a long tail.
+const WAVE_LABELS: [&str; MAX_INTERACTIONS as usize] = [
+    "transport_bounces.wave_01",
+    "transport_bounces.wave_02",
+    "transport_bounces.wave_03",
+    "transport_bounces.wave_04",
+    "transport_bounces.wave_05",
+    "transport_bounces.wave_06",
+    "transport_bounces.wave_07",
+    "transport_bounces.wave_08",
+    "transport_bounces.wave_09",
+    "transport_bounces.wave_10",
+    "transport_bounces.wave_11",
+    "transport_bounces.wave_12",
+    "transport_bounces.wave_13",
+    "transport_bounces.wave_14",
+    "transport_bounces.wave_15",
+    "transport_bounces.wave_16",
+    "transport_bounces.wave_17",
+    "transport_bounces.wave_18",
+    "transport_bounces.wave_19",
+    "transport_bounces.wave_20",
+    "transport_bounces.wave_21",
+    "transport_bounces.wave_22",
+    "transport_bounces.wave_23",
+    "transport_bounces.wave_24",
+    "transport_bounces.wave_25",
+    "transport_bounces.wave_26",
+    "transport_bounces.wave_27",
+    "transport_bounces.wave_28",
+    "transport_bounces.wave_29",
+    "transport_bounces.wave_30",
+    "transport_bounces.wave_31",
+    "transport_bounces.wave_32",
+];
+
 const TRAVERSE_LABELS: [&str; MAX_LEVELS as usize] = [
     "traverse_L0",
     "traverse_L1",
@@ -735,8 +772,8 @@ impl Ctx<'_> {
         ph.transport(cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort);
         for wave in 0..=MAX_INTERACTIONS {
             self.barrier(cmd, step);
-            if wave == 1 {
-                rec.ts.mark(cmd, "transport_bounces");
+            if wave >= 1 {
+                rec.ts.mark(cmd, WAVE_LABELS[wave as usize - 1]);
             }
             ph.wave(cmd, &b, wave, may_abort, self.s.bvh_layout);
             self.barrier(cmd, step);

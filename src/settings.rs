@@ -147,7 +147,8 @@ pub struct Settings {
     /// The side of a weak-branch block in cells of the maximal level: 2 or 4, 0 for automatic
     /// ([`Settings::weak_block`]).
     pub weak_block: u32,
-    /// Exact transport: the BVH node layout the waves traverse.
+    /// Exact transport: the BVH node layout the waves traverse (`auto` until [`Settings::resolve_for_device`]
+    /// picks one).
     pub bvh_layout: crate::bvh::BvhLayout,
     pub method: Method,
     pub metric: Metric,
@@ -203,7 +204,7 @@ impl Default for Settings {
             flux_threshold: 1e-3,
             weak_branches: 0.05,
             weak_block: 0,
-            bvh_layout: crate::bvh::BvhLayout::Pair,
+            bvh_layout: crate::bvh::BvhLayout::Auto,
             method: Method::Adaptive,
             metric: Metric::MaxLevel,
             level: 5,
@@ -332,10 +333,12 @@ impl Settings {
         Ok(())
     }
 
-    /// Fit the settings to the device: its binding limit, and the photon budget when automatic (0). A budget
+    /// Fit the settings to the device: its binding limit, the BVH layout when `auto`, and the photon budget when
+    /// automatic (0). A budget
     /// larger than the device's bindings allow is bad input.
     pub fn resolve_for_device(&mut self, info: &crate::vk::DeviceInfo) -> AppResult<()> {
         self.binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
+        self.bvh_layout = self.bvh_layout.resolve(info);
         if self.photon_budget_mib == 0.0 {
             self.photon_budget_mib = auto_photon_budget_mib(info, self.binding_limit);
         }

@@ -295,7 +295,8 @@ impl PhotonPasses {
     /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
     pub fn wave(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, wave: u32, may_abort: bool, layout: BvhLayout) {
         let p = match layout {
-            BvhLayout::Pair => &self.wave_pair,
+            // `auto` is resolved with the settings (Settings::resolve_for_device); pair is its fallback.
+            BvhLayout::Pair | BvhLayout::Auto => &self.wave_pair,
             BvhLayout::Single => &self.wave_single,
             BvhLayout::Threaded => &self.wave_threaded,
         };
