@@ -30,6 +30,12 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("traverse.comp", "flux_error_wg4", &[("TRAVERSE_WG_SIDE", "4"), ("TRAVERSE_METRIC", "2")]),
     ("traverse.comp", "flux_error_wg8", &[("TRAVERSE_WG_SIDE", "8"), ("TRAVERSE_METRIC", "2")]),
     ("traverse.comp", "flux_error_wg16", &[("TRAVERSE_WG_SIDE", "16"), ("TRAVERSE_METRIC", "2")]),
+    ("traverse.comp", "max_error_coop", &[("TRAVERSE_WG_SIDE", "8"), ("TRAVERSE_METRIC", "1"), ("TRAVERSE_COOP", "1")]),
+    (
+        "traverse.comp",
+        "flux_error_coop",
+        &[("TRAVERSE_WG_SIDE", "8"), ("TRAVERSE_METRIC", "2"), ("TRAVERSE_COOP", "1")],
+    ),
     ("traverse.comp", "max_level_wg1", &[("TRAVERSE_WG_SIDE", "1"), ("TRAVERSE_MAX_LEVEL", "1")]),
     ("traverse.comp", "max_level_wg2", &[("TRAVERSE_WG_SIDE", "2"), ("TRAVERSE_MAX_LEVEL", "1")]),
     ("traverse.comp", "max_level_wg4", &[("TRAVERSE_WG_SIDE", "4"), ("TRAVERSE_MAX_LEVEL", "1")]),

@@ -13,6 +13,11 @@
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
 // branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md).
 // Likewise TRAVERSE_METRIC (1: max-error, 2: flux-error) compiles one metric's code only.
+// TRAVERSE_COOP (exact transport, max-error and flux-error; `--coop-checks`): four invocations share each
+// candidate, so a work group of side^2 invocations takes side^2 / 4 candidates. Each lane first traces one child's
+// dominant path into shared memory, then lane 0 decides with the four results. A check then waits for the
+// longest of four paths instead of all four in a row: on a GPU, where a level's few checked cells leave most
+// lanes idle, that is about 4x shorter; on a CPU device it is the same work, and early returns trace less.
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
@@ -39,6 +44,35 @@ shared uint s_unchecked;   // candidates from the check level on that could not 
 // which a refined cell appends together) became photons of its level too: weak-branch sharing (wave.comp).
 shared uint s_act[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
 #endif
+
+#ifdef TRAVERSE_COOP
+const uint LANES = 4u;  // invocations per candidate
+// The dominant paths of each candidate's four children (index 4 * candidate + child), traced one per lane, and
+// whether a candidate's were traced.
+shared vec2 s_dom_p[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
+shared uint s_dom_status[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
+shared uint s_dom_events[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
+shared float s_dom_thr[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
+shared bool s_dom_ok[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE / 4];
+uint g_cand = 0u;  // this invocation's candidate in the work group
+#else
+const uint LANES = 1u;
+#endif
+
+// Child k's dominant path (trace_dominant) for the metrics' checks: from the lanes' shared results when they traced
+// it (TRAVERSE_COOP), else traced here.
+uint child_dominant(uint level, uvec2 xy, uint k, out vec2 p, out uint events, out float thr) {
+#ifdef TRAVERSE_COOP
+    if (s_dom_ok[g_cand]) {
+        uint j = 4u * g_cand + k;
+        p = s_dom_p[j];
+        events = s_dom_events[j];
+        thr = s_dom_thr[j];
+        return s_dom_status[j];
+    }
+#endif
+    return trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p, events, thr);
+}
 
 const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
@@ -76,7 +110,7 @@ uint children_verdict_exact(uint level, uvec2 xy) {
     // added), so the verdicts, and the photons, are the same as tracing all four.
     for (uint j = 0u; j < 4u; j++) {
         uint k = CHILD_ORDER[j];
-        status[k] = trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p[k], events[k], thr);
+        status[k] = child_dominant(level, xy, k, p[k], events[k], thr);
         if (j == 0u) continue;
         if (status[k] != status[0]) return CHILDREN_REFINE;
         if (status[k] != DOM_OK) continue;
@@ -204,7 +238,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
         uvec2 c = 2u * xy + uvec2(k & 1u, k >> 1);
         if (exact) {
             float thr;
-            status[k] = trace_dominant(level + 1u, c, p[k], events[k], thr);
+            status[k] = child_dominant(level, xy, k, p[k], events[k], thr);
             phi[k] = status[k] == DOM_OK ? intensity * cell_measure(level + 1u, c) * thr : 0.0;
             t_max = max(t_max, thr);
             t_min = min(t_min, thr);
@@ -288,6 +322,30 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
 }
 
 #endif  // TRAVERSE_METRIC == 2
+
+#ifdef TRAVERSE_COOP
+// Whether decide() checks `cell` with its four children's dominant paths: the same tests in the same order. A cell
+// this missed would be traced by decide itself (child_dominant), so the two need to agree only for speed.
+bool needs_checks(uint level, uvec2 cell) {
+    if (u_frame.transport.x == 0u) return false;
+    uvec2 xy = cell_xy(cell);
+    View v = u_frame.photon_view;
+    float side = cell_side(level);
+    vec2 lo = v.window.xy + vec2(xy) * side;
+    vec2 hi = lo + side;
+    if (!cell_any_covered(level, xy) || !view_rect_touches_cone(v, lo, hi)) return false;
+    if (level >= u_frame.traversal.x) return false;
+    bool inside = cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
+    bool checkable = level >= u_frame.traversal.z && inside;
+#if TRAVERSE_METRIC == 2
+    bool early = level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x && inside;
+    if (checkable && cell_radius(cell) != 0u) return false;  // predicted to refine: no check
+    return checkable || early;
+#else
+    return checkable;
+#endif
+}
+#endif
 
 // Decide what happens to one candidate: dropped, emitted as a photon (`out_cell`), or refined (`out_cell`'s radius
 // bits are then its children's: how many levels skip their checks, or 0). `no_check`: 1 when a metric's check was
@@ -381,15 +439,38 @@ void main() {
         s_unchecked = 0u;
     }
     barrier();
-    uint per_group = TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE;
+    uint per_group = TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE / LANES;
     uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    uint i = group * per_group + lid;
+    uint lane = lid % LANES, me = lid / LANES;  // me: the candidate's index in the work group
+    uint i = group * per_group + me;
     uint level = pc.level;
     uint action = ACT_DROP;
     uvec2 out_cell = uvec2(0u);
     uint slot = 0u;
     uint leaves = 0u;
-    if (state.aborted == 0u && i < state.read_count) {
+    bool have = state.aborted == 0u && i < state.read_count;
+#ifdef TRAVERSE_COOP
+    {
+        // Lane k traces child k's dominant path when the candidate will be checked.
+        g_cand = me;
+        uvec2 cell = have ? photons[state.read_offset + i] : uvec2(0u);
+        bool traced = have && needs_checks(cell_level(cell), cell);
+        if (traced) {
+            vec2 p;
+            uint events;
+            float thr;
+            uvec2 c = 2u * cell_xy(cell) + uvec2(lane & 1u, lane >> 1);
+            uint j = LANES * me + lane;
+            s_dom_status[j] = trace_dominant(cell_level(cell) + 1u, c, p, events, thr);
+            s_dom_p[j] = p;
+            s_dom_events[j] = events;
+            s_dom_thr[j] = thr;
+        }
+        if (lane == 0u) s_dom_ok[me] = traced;
+        barrier();
+    }
+#endif
+    if (have && lane == 0u) {
         uvec2 cell = photons[state.read_offset + i];
         uint no_check;
         action = decide(cell_level(cell), cell, out_cell, no_check);
@@ -418,7 +499,7 @@ void main() {
         if (action == ACT_DROP) atomicAdd(s_dropped, 1u);
     }
 #if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
-    s_act[lid] = action;
+    if (lane == 0u) s_act[me] = action;
 #endif
     barrier();
     // Weak-branch siblings (glsl/common/types.glsl, wave.comp): a photon too large for the maximal level's weak-branch
@@ -430,7 +511,7 @@ void main() {
     uint siblings = 0u;
 #if !defined(TRAVERSE_MAX_LEVEL) && TRAVERSE_WG_SIDE >= 2
     if (action == ACT_EMIT && level > state.start_level && weak_by_siblings(level)) {
-        uint g = lid & ~3u, self = lid & 3u, j = 0u;
+        uint g = me & ~3u, self = me & 3u, j = 0u;
         bool whole = true;
         for (uint k = 0u; k < 4u; k++) {
             if (k == self) continue;

@@ -6,7 +6,7 @@ use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
-use crate::settings::{parse_size, Driven, Footprint, Method, Metric, Settings, Splat, Transport};
+use crate::settings::{parse_size, CoopChecks, Driven, Footprint, Method, Metric, Settings, Splat, Transport};
 use crate::shaders::consts::*;
 use crate::vk::{self, Context, ContextDesc};
 use serde_json::{json, Value};
@@ -123,6 +123,10 @@ pub struct MethodArgs {
     /// Traversal work-group side (1, 2, 4, 8 or 16).
     #[arg(long, default_value_t = TRAVERSE_WG)]
     pub traverse_wg: u32,
+    /// Exact transport, max-error and flux-error at --traverse-wg 8: trace each cell's four checks in four
+    /// invocations at once (on) or in one, one after another (off); auto: on for GPUs, off for CPU devices.
+    #[arg(long, value_enum, default_value_t = CoopChecks::Auto)]
+    pub coop_checks: CoopChecks,
     /// Batch slots recorded per frame for GPU-driven batching (0: automatic, adapted between frames).
     #[arg(long, default_value_t = 0)]
     pub batch_slots: u32,
@@ -174,6 +178,7 @@ impl MethodArgs {
             tau: self.tau,
             check_level: self.check_level,
             traverse_wg: self.traverse_wg,
+            coop_checks: self.coop_checks,
             batching: !self.no_batching,
             batch_slots: self.batch_slots,
             debug_photons: self.debug_photons,

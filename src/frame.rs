@@ -20,7 +20,7 @@ use crate::passes::composite::CompositeInputs;
 use crate::passes::coverage::CoverageInputs;
 use crate::passes::eye::{EyeGbuffer, EyeInputs};
 use crate::passes::geometry::GeometryTarget;
-use crate::passes::photons::{init_mode, stats_mode, PhotonBindings};
+use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape};
 use crate::passes::Passes;
 use crate::renderer::{Aov, AovData, FrameReport, FrameSlot, LightReport, Renderer, Views};
 use crate::scene::view::CameraView;
@@ -782,7 +782,7 @@ impl Ctx<'_> {
         self.barrier(cmd, step);
         rec.ts.mark(cmd, "stats");
         if commit {
-            ph.stats(cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_wg);
+            ph.stats(cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg());
             self.barrier(cmd, step);
         }
         ph.transport(cmd, &b, tm::COMMIT, may_abort);
@@ -821,10 +821,10 @@ impl Ctx<'_> {
     fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) {
         let b = self.bindings();
         let ph = &self.p.photons;
-        let wg = self.s.traverse_wg;
+        let wg = self.s.traverse_dispatch_wg();
+        let shape = TraverseShape { wg, metric: self.s.metric, coop: self.s.coop_traversal() };
         let cmd = rec.cmd;
         let exact = self.s.transport == Transport::Exact;
-        let metric = self.s.metric;
         ph.init(cmd, &b, init_mode::FRAME, wg);
         self.compute_to_compute(cmd);
         rec.report.batch_slots = slots;
@@ -834,7 +834,7 @@ impl Ctx<'_> {
             self.compute_to_compute(cmd);
             for level in 0..=self.s.level {
                 rec.ts.mark(cmd, TRAVERSE_LABELS[level as usize]);
-                ph.traverse_indirect(cmd, &b, level, wg, metric);
+                ph.traverse_indirect(cmd, &b, level, shape);
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, "stats");
                 let mode = if level == self.s.level && !exact { stats_mode::COMMIT } else { stats_mode::LEVEL };
@@ -879,8 +879,8 @@ impl Ctx<'_> {
     fn adaptive_cpu(&self, rec: &mut Rec) -> VkResult<()> {
         let b = self.bindings();
         let ph = &self.p.photons;
-        let wg = self.s.traverse_wg;
-        let metric = self.s.metric;
+        let wg = self.s.traverse_dispatch_wg();
+        let shape = TraverseShape { wg, metric: self.s.metric, coop: self.s.coop_traversal() };
         ph.init(rec.cmd, &b, init_mode::FRAME, wg);
         self.compute_to_compute(rec.cmd);
         let mut first = true;
@@ -900,7 +900,7 @@ impl Ctx<'_> {
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, TRAVERSE_LABELS[level as usize]);
                 if st.aborted == 0 {
-                    ph.traverse_direct(cmd, &b, level, wg, st.read_count, metric);
+                    ph.traverse_direct(cmd, &b, level, st.read_count, shape);
                 }
                 self.compute_to_compute(cmd);
                 rec.ts.mark(cmd, "stats");

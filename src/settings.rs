@@ -63,6 +63,30 @@ pub enum Transport {
     TwoInterface,
 }
 
+/// Whether four invocations share each traversal candidate's checks (`--coop-checks`, glsl/traverse.comp
+/// TRAVERSE_COOP): under exact transport, max-error and flux-error trace a cell's four children's dominant paths in
+/// four lanes at once instead of one after another.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CoopChecks {
+    /// On for GPUs, off for CPU devices (docs/results.md, "Cooperative checks").
+    Auto,
+    On,
+    Off,
+}
+
+impl CoopChecks {
+    /// `auto` follows the measured rule: on a GPU a level's checks are few and long, and four lanes finish them
+    /// about four times sooner; a CPU device runs the same work either way and loses the early returns.
+    pub fn resolve(self, info: &crate::vk::DeviceInfo) -> CoopChecks {
+        match self {
+            CoopChecks::Auto if info.kind == ash::vk::PhysicalDeviceType::CPU => CoopChecks::Off,
+            CoopChecks::Auto => CoopChecks::On,
+            c => c,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Footprint {
@@ -178,6 +202,9 @@ pub struct Settings {
     pub check_level: Option<u32>,
     /// Traversal work-group side (1, 2, 4, 8, 16).
     pub traverse_wg: u32,
+    /// Four lanes per candidate for the metrics' checks (`auto` until [`Settings::resolve_for_device`]); used where
+    /// [`Settings::coop_traversal`] says.
+    pub coop_checks: CoopChecks,
     /// Split batches on overflow (off only for tests: overflowing work is then dropped and counted).
     pub batching: bool,
     /// Batch slots recorded per frame for GPU-driven batching (0: automatic).
@@ -218,6 +245,7 @@ impl Default for Settings {
             tau: None,
             check_level: None,
             traverse_wg: TRAVERSE_WG,
+            coop_checks: CoopChecks::Auto,
             batching: true,
             batch_slots: 0,
             shadow_bias: 1.5,
@@ -265,6 +293,8 @@ pub const MAX_EYE_DEPTH: u32 = 32;
 pub const SKY_AUTO: f32 = 0.25;
 
 pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
+/// The traversal work-group side built with cooperative checks (build.rs: `traverse.comp` `*_coop`).
+pub const COOP_WG: u32 = 8;
 
 impl Settings {
     pub fn validate(&self) -> AppResult<()> {
@@ -333,12 +363,34 @@ impl Settings {
         Ok(())
     }
 
+    /// Whether traversal runs the cooperative checks: `--coop-checks on` (or `auto` on a GPU), exact transport,
+    /// max-error or flux-error, and work groups of 8x8 (the one side built with four lanes per candidate: 16
+    /// candidates a group).
+    pub fn coop_traversal(&self) -> bool {
+        self.coop_checks == CoopChecks::On
+            && self.transport == Transport::Exact
+            && self.method == Method::Adaptive
+            && matches!(self.metric, Metric::MaxError | Metric::FluxError)
+            && self.traverse_wg == COOP_WG
+    }
+
+    /// Traversal's work-group side as the dispatches count candidates: `traverse_wg`, or half of it with the
+    /// cooperative checks (four invocations per candidate).
+    pub fn traverse_dispatch_wg(&self) -> u32 {
+        if self.coop_traversal() {
+            self.traverse_wg / 2
+        } else {
+            self.traverse_wg
+        }
+    }
+
     /// Fit the settings to the device: its binding limit, the BVH layout when `auto`, and the photon budget when
     /// automatic (0). A budget
     /// larger than the device's bindings allow is bad input.
     pub fn resolve_for_device(&mut self, info: &crate::vk::DeviceInfo) -> AppResult<()> {
         self.binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
         self.bvh_layout = self.bvh_layout.resolve(info);
+        self.coop_checks = self.coop_checks.resolve(info);
         if self.photon_budget_mib == 0.0 {
             self.photon_budget_mib = auto_photon_budget_mib(info, self.binding_limit);
         }

@@ -119,6 +119,8 @@ pub struct PhotonPasses {
     /// code, the last level fused into the one before), max-error and flux-error (TRAVERSE_METRIC: that metric's
     /// code only).
     traverse: [Vec<(u32, Pipeline)>; 3],
+    /// Max-error's and flux-error's 8x8 traversal with four lanes per candidate (TRAVERSE_COOP).
+    traverse_coop: [Pipeline; 2],
     stats: Pipeline,
     dense_emit: Pipeline,
     trace: Pipeline,
@@ -131,6 +133,15 @@ pub struct PhotonPasses {
     splat_compute: Option<Pipeline>,
     /// The same with a work group's taps gathered in shared memory first (SPLAT_TILED).
     splat_compute_tiled: Option<Pipeline>,
+}
+
+/// How traversal runs: the work-group side its dispatches count candidates in
+/// ([`crate::settings::Settings::traverse_dispatch_wg`]), the metric, and whether the checks are cooperative.
+#[derive(Clone, Copy, Debug)]
+pub struct TraverseShape {
+    pub wg: u32,
+    pub metric: Metric,
+    pub coop: bool,
 }
 
 impl PhotonPasses {
@@ -195,10 +206,15 @@ impl PhotonPasses {
                 colors: &[ColorTarget { format: flux_format, blend: Blend::Additive }],
             },
         )?;
+        let traverse_coop = [
+            compute("traverse MaxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_MAX_ERROR_COOP.words())?,
+            compute("traverse FluxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_FLUX_ERROR_COOP.words())?,
+        ];
         Ok(PhotonPasses {
             device: device.clone(),
             init: compute("init", shaders::INIT_COMP.words())?,
             traverse,
+            traverse_coop,
             stats: compute("stats", shaders::STATS_COMP.words())?,
             dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
             trace: compute("photon trace", shaders::TRACE_COMP.words())?,
@@ -220,8 +236,14 @@ impl PhotonPasses {
         })
     }
 
-    /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built).
-    fn traverse_pipeline(&self, wg: u32, metric: Metric) -> &Pipeline {
+    /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built); `coop`: the
+    /// cooperative checks' 8x8 pipeline of max-error or flux-error, whose groups take 4x4 candidates (`wg` is 4).
+    fn traverse_pipeline(&self, wg: u32, metric: Metric, coop: bool) -> &Pipeline {
+        match (coop, metric) {
+            (true, Metric::MaxError) => return &self.traverse_coop[0],
+            (true, Metric::FluxError) => return &self.traverse_coop[1],
+            _ => {}
+        }
         let list = &self.traverse[metric.code() as usize];
         list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1)
     }
@@ -233,10 +255,10 @@ impl PhotonPasses {
     }
 
     /// One traversal level, launched with vkCmdDispatchIndirect from the GPU-written arguments.
-    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, wg: u32, metric: Metric) {
-        let p = self.traverse_pipeline(wg, metric);
+    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, shape: TraverseShape) {
+        let p = self.traverse_pipeline(shape.wg, shape.metric, shape.coop);
         p.bind(cmd, &b.binds());
-        p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
+        p.push(cmd, &PhotonPush { level, wg_side: shape.wg, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
     }
 
@@ -246,11 +268,10 @@ impl PhotonPasses {
         cmd: vk::CommandBuffer,
         b: &PhotonBindings,
         level: u32,
-        wg: u32,
         count: u32,
-        metric: Metric,
+        shape: TraverseShape,
     ) {
-        let p = self.traverse_pipeline(wg, metric);
+        let (wg, p) = (shape.wg, self.traverse_pipeline(shape.wg, shape.metric, shape.coop));
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         let groups = count.div_ceil(wg * wg);
