@@ -3,7 +3,8 @@
 // adaptive: nothing when the batch has no tile or aborted), mode 2 follows each wave (the appended children become
 // the next wave, with its dispatch-indirect arguments), mode 3 commits the batch (its energy account joins the
 // frame's and the splat draws its records) unless it aborted, in which case traversal's commit splits its tile.
-// Push: mode; rows = 1 when the batch may abort (adaptive traversal with batching).
+// Push: mode; rows = 1 when the batch may abort (adaptive traversal with batching); level: after a wave, the next
+// wave's index (its rays count to wave_rays there; the rays past the last wave are none: paths end at the cap).
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 
@@ -28,6 +29,7 @@ void main() {
         for (uint k = 0u; k < ACC_TERMS; k++) tstate.batch_account[k] = uvec2(0u);
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;
+        tstate.wave_rays[0] += tstate.in_count;
         set_draw(0u, 0u);
     } else if (pc.mode == AFTER_WAVE) {
         tstate.in_count = aborted && pc.rows != 0u ? 0u : tstate.out_count;
@@ -35,6 +37,7 @@ void main() {
         tstate.out_reserved = 0u;
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;
+        tstate.wave_rays[min(pc.level, MAX_INTERACTIONS)] += tstate.in_count;
     } else {
         tstate.in_count = 0u;
         wave_cmd = uvec4(0u, 0u, 1u, 0u);

@@ -540,6 +540,9 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
             m.insert("rays_traced".into(), json!(ts.rays_traced));
             m.insert("splat_records".into(), json!(ts.records_total));
             m.insert("waves".into(), json!(ts.waves));
+            let rays = ts.wave_rays();
+            let last = rays.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
+            m.insert("wave_rays".into(), json!(&rays[..last]));
             m.insert("max_depth".into(), json!(ts.max_depth));
             m.insert("queue_overflows".into(), json!(ts.overflows));
         }

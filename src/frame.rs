@@ -769,7 +769,7 @@ impl Ctx<'_> {
             }
         };
         rec.ts.mark(cmd, "transport_primary");
-        ph.transport(cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort);
+        ph.transport(cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort, 0);
         for wave in 0..=MAX_INTERACTIONS {
             self.barrier(cmd, step);
             if wave >= 1 {
@@ -777,7 +777,7 @@ impl Ctx<'_> {
             }
             ph.wave(cmd, &b, wave, may_abort, self.s.bvh_layout);
             self.barrier(cmd, step);
-            ph.transport(cmd, &b, tm::AFTER_WAVE, may_abort);
+            ph.transport(cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1);
         }
         self.barrier(cmd, step);
         rec.ts.mark(cmd, "stats");
@@ -785,7 +785,7 @@ impl Ctx<'_> {
             ph.stats(cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg());
             self.barrier(cmd, step);
         }
-        ph.transport(cmd, &b, tm::COMMIT, may_abort);
+        ph.transport(cmd, &b, tm::COMMIT, may_abort, 0);
     }
 
     fn dense(&self, rec: &mut Rec) -> VkResult<()> {

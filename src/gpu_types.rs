@@ -180,9 +180,17 @@ pub struct TransportState {
     pub max_depth: u32,
     pub batch_account: [[u32; 2]; 12],
     pub account: [[u32; 2]; 12],
+    /// Rays each wave traced this frame, in pairs ([`TransportState::wave_rays`] flattens them: waves 0 to
+    /// MAX_INTERACTIONS, then a pad), because bytemuck and Default stop at 32-element arrays.
+    pub wave_rays_pairs: [[u32; 2]; (MAX_INTERACTIONS as usize + 2) / 2],
 }
 
 impl TransportState {
+    /// Rays each wave traced this frame (index: the wave; 0: the photons' primary rays). They sum to `rays_traced`.
+    pub fn wave_rays(&self) -> Vec<u32> {
+        self.wave_rays_pairs.iter().flatten().copied().take(MAX_INTERACTIONS as usize + 1).collect()
+    }
+
     /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
     pub fn account(&self) -> [f64; 12] {
         self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
@@ -267,7 +275,9 @@ const _: () = {
     assert!(size_of::<GpuView>() == 160);
     assert!(size_of::<FrameData>() == 672);
     assert!(offset_of!(FrameData, eye) == 640);
-    assert!(size_of::<TransportState>() == 48 + 2 * 12 * 8);
+    assert!(size_of::<TransportState>() == 48 + 2 * 12 * 8 + 4 * 34);
+    assert!(offset_of!(TransportState, wave_rays_pairs) == 48 + 2 * 12 * 8);
+    assert!(MAX_INTERACTIONS % 2 == 0);
     assert!(offset_of!(TransportState, batch_account) == 48);
     assert!(offset_of!(FrameData, light_power) == 480);
     assert!(offset_of!(FrameData, grid) == 528);

@@ -15,8 +15,12 @@ fn reference_all(scene: &str, photons: u64) -> RgbImage {
 }
 
 /// The account closes (emitted = every destination) to 1e-5, nothing overflowed, no host readback happened,
-/// and the AOV is finite.
+/// the waves' ray counts add up to the rays traced, and the AOV is finite.
 fn assert_sound(name: &str, s: &serde_json::Value, img: &RgbImage) {
+    let t = &s["exact_transport"];
+    let waves: Vec<u64> = t["wave_rays"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    assert_eq!(waves.iter().sum::<u64>(), t["rays_traced"].as_u64().unwrap(), "{name}: rays per wave {waves:?}");
+    assert!(waves.len() <= 33 && waves.len() as u64 <= t["waves"].as_u64().unwrap(), "{name}: {waves:?}");
     let residual = s["exact_transport"]["energy"]["residual"].as_f64().unwrap();
     assert!(residual < 1e-5, "{name}: energy account residual {residual}");
     assert_eq!(energy(s, "overflow"), 0.0, "{name}: overflow");

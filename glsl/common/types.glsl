@@ -110,6 +110,7 @@ struct TransportState {
     uint max_depth;        // most specular interactions of a deposited path (frame)
     uvec2 batch_account[ACC_TERMS];
     uvec2 account[ACC_TERMS];
+    uint wave_rays[MAX_INTERACTIONS + 2u];  // rays each wave traced (frame; index: the wave, 0 the photons; + a pad)
 };
 
 // Photon encoding: a quadtree cell (level, x, y) with exact integer addressing.

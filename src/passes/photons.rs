@@ -306,10 +306,12 @@ impl PhotonPasses {
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, TRACE_OFFSET) };
     }
 
-    /// Exact transport's bookkeeping (`transport_mode`); `may_abort`: the batch is split on overflow.
-    pub fn transport(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, may_abort: bool) {
+    /// Exact transport's bookkeeping (`transport_mode`); `may_abort`: the batch is split on overflow; `next_wave`:
+    /// after a wave, the index of the wave it prepares (0 otherwise).
+    pub fn transport(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, may_abort: bool, next_wave: u32) {
         self.transport.bind(cmd, &b.binds());
-        self.transport.push(cmd, &PhotonPush { mode, rows: may_abort as u32, ..Default::default() });
+        let push = PhotonPush { mode, rows: may_abort as u32, level: next_wave, ..Default::default() };
+        self.transport.push(cmd, &push);
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
     }
 
