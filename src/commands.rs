@@ -731,8 +731,13 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
         );
         let photons = last.state.map(|x| x.photons_total as u64);
         print!("{}", profiler::table(&summaries, reports.len(), photons));
-        for (l, v) in profiler::substage_summaries(&reports) {
+        let subs = profiler::substage_summaries(&reports);
+        let (waves, parts): (Vec<_>, Vec<_>) = subs.iter().partition(|(l, _)| l.starts_with("transport_bounces.wave_"));
+        for (l, v) in parts {
             println!("  {l:<28} median {:8.3} ms", v.median);
+        }
+        if !waves.is_empty() {
+            print!("{}", wave_lines(&waves, last.transport.map(|t| t.wave_rays())));
         }
     }
     if let Some(p) = &args.trace {
@@ -740,6 +745,30 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
         eprintln!("wrote {}", p.display());
     }
     validation_verdict(&session)
+}
+
+/// The bounce waves in two lines, from wave 1 (wave 0 is `transport_primary`): each wave's median ms and, when the
+/// frame counted them, its rays; the empty waves at the end in one sum.
+fn wave_lines(waves: &[&(String, profiler::Summary)], rays: Option<Vec<u32>>) -> String {
+    let ms: Vec<f64> = waves.iter().map(|(_, v)| v.median).collect();
+    let live = rays.as_ref().map_or(ms.len(), |r| r.iter().skip(1).rposition(|&n| n > 0).map_or(0, |i| i + 1));
+    let cell = |x: f64| if x >= 10.0 { format!("{x:.1}") } else { format!("{x:.3}") };
+    let mut out = format!("  transport_bounces waves 1-{live}, median ms:\n   ");
+    for x in &ms[..live.min(ms.len())] {
+        out += &format!(" {}", cell(*x));
+    }
+    out.push('\n');
+    if let Some(r) = &rays {
+        out += "  rays:\n   ";
+        for n in r.iter().skip(1).take(live) {
+            out += &format!(" {n}");
+        }
+        out.push('\n');
+    }
+    if live < ms.len() {
+        out += &format!("  waves {}-{} empty: {:.3} ms together\n", live + 1, ms.len(), ms[live..].iter().sum::<f64>());
+    }
+    out
 }
 
 #[cfg(test)]
