@@ -111,6 +111,7 @@ uint children_verdict_exact(uint level, uvec2 xy) {
     for (uint j = 0u; j < 4u; j++) {
         uint k = CHILD_ORDER[j];
         status[k] = child_dominant(level, xy, k, p[k], events[k], thr);
+        if (status[k] == DOM_LONG) return CHILDREN_REFINE;  // trapped in the glass: where it lands is unknown
         if (j == 0u) continue;
         if (status[k] != status[0]) return CHILDREN_REFINE;
         if (status[k] != DOM_OK) continue;
@@ -239,7 +240,11 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
         if (exact) {
             float thr;
             status[k] = child_dominant(level, xy, k, p[k], events[k], thr);
-            phi[k] = status[k] == DOM_OK ? intensity * cell_measure(level + 1u, c) * thr : 0.0;
+            // A path still in the glass after the checks' cap may land anywhere with its dominant flux: it counts
+            // as a child that ends differently, carrying that flux (an upper bound on what it deposits).
+            bool known = status[k] == DOM_OK || status[k] == DOM_LONG;
+            phi[k] = known ? intensity * cell_measure(level + 1u, c) * thr : 0.0;
+            if (status[k] == DOM_LONG) mixed = true;
             t_max = max(t_max, thr);
             t_min = min(t_min, thr);
             rest += intensity * cell_measure(level + 1u, c) * (1.0 - thr);
@@ -283,7 +288,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     // All four end the same other way: two-interface drops the cell (it carries nothing to a receiver). Under exact
     // transport the weaker branches, the share 1 - T_k of each child's flux, may still reach one, anywhere: the
     // merged photon's between nothing and I Omega(cell) (1 - T_min), the children's in total `rest`.
-    if (same && status[0] != ok) {
+    if (same && status[0] != ok && status[0] != DOM_LONG) {
         if (!exact) return FE_DROP;
         float e_weak = cell_flux * (1.0 - t_min) + rest;
         if (e_weak <= budget) return FE_FINAL;
@@ -292,7 +297,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     }
     float total = phi[0] + phi[1] + phi[2] + phi[3];
     // Mixed endings: the merged photon deposits between nothing and I Omega(cell) T_max, the children total.
-    if (!same) {
+    if (!same || status[0] == DOM_LONG) {
         float e_mixed = cell_flux * t_max + total;
         if (e_mixed <= budget) return FE_FINAL;
         skip = predicted_skip_mixed(level, e_mixed / budget);

@@ -258,7 +258,7 @@ fn max_error_follows_dominant_paths() {
 /// decides; `auto` turns them on for GPUs only) give the verdicts of one lane tracing the four in a row: the same
 /// photons level by level, and images that differ only in the order of float additions. Bunny at level 3, check
 /// level 1 (the metrics check levels 1 and 2, flux-error looks ahead from level 0), 256²; measured on lavapipe:
-/// max-error 93,991 and flux-error 122,992 photons both ways, rel-L1 2.5e-8 and 2.7e-8 (at level 4: 3.6e-8 and
+/// max-error 97,309 and flux-error 122,992 photons both ways, rel-L1 2.2e-8 and 2.4e-8 (at level 4: 3.6e-8 and
 /// 4.4e-8).
 #[test]
 fn coop_checks_give_the_same_photons() {

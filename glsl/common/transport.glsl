@@ -109,6 +109,14 @@ const uint DOM_OK = 0u;       // landed on a receiver after >= 1 specular intera
 const uint DOM_DIRECT = 1u;   // landed on a receiver with none
 const uint DOM_ESCAPED = 2u;
 const uint DOM_CUT = 3u;      // interaction cap or a dead end
+const uint DOM_LONG = 4u;     // still in the glass after CHECK_INTERACTIONS: where it lands is not known
+
+// The checks follow a dominant path through at most this many interactions (the waves, through MAX_INTERACTIONS).
+// A longer path is a light path trapped in the glass (total internal reflection): its cell refines under max-error,
+// and flux-error bounds it as a child that may land anywhere with its dominant flux.
+#ifndef CHECK_INTERACTIONS
+#define CHECK_INTERACTIONS 8u
+#endif
 
 // Follow a cell's dominant path (the larger branch at every interface) to where it ends, for the max-error
 // and flux-error metrics: its status, the landing texel of the caustic map, its interaction count, and its
@@ -120,6 +128,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
     events = 0u;
     throughput = 1.0;
     for (uint k = 0u; k <= MAX_INTERACTIONS; k++) {
+        if (k == CHECK_INTERACTIONS) return DOM_LONG;
         SceneHit hit;
         if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) return DOM_ESCAPED;
         vec3 p = bvh_hit_point(hit);
