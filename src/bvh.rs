@@ -111,7 +111,7 @@ impl BvhLayout {
     /// on lavapipe the pair layout is about 20% faster.
     pub fn resolve(self, info: &crate::vk::DeviceInfo) -> BvhLayout {
         match self {
-            BvhLayout::Auto if info.kind == ash::vk::PhysicalDeviceType::CPU => BvhLayout::Pair,
+            BvhLayout::Auto if info.is_cpu() => BvhLayout::Pair,
             BvhLayout::Auto => BvhLayout::Single,
             l => l,
         }

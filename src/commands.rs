@@ -300,7 +300,7 @@ impl Session {
     /// become several rays each), 100× less on a GPU. `None` for max-error and flux-error, whose counts are not
     /// known ahead.
     pub fn estimate_frame_s(&self) -> Option<f64> {
-        frame_estimate_s(&self.renderer.settings, self.device().info.kind == ash::vk::PhysicalDeviceType::CPU)
+        frame_estimate_s(&self.renderer.settings, self.device().info.is_cpu())
     }
 
     /// Warn when a frame is estimated to take longer than [`SLOW_FRAME_S`], and turn on progress lines.

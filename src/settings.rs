@@ -80,7 +80,7 @@ impl CoopChecks {
     /// about four times sooner; a CPU device runs the same work either way and loses the early returns.
     pub fn resolve(self, info: &crate::vk::DeviceInfo) -> CoopChecks {
         match self {
-            CoopChecks::Auto if info.kind == ash::vk::PhysicalDeviceType::CPU => CoopChecks::Off,
+            CoopChecks::Auto if info.is_cpu() => CoopChecks::Off,
             CoopChecks::Auto => CoopChecks::On,
             c => c,
         }
@@ -130,7 +130,7 @@ impl Splat {
             return Splat::Raster;
         }
         match self {
-            Splat::Auto if info.kind == ash::vk::PhysicalDeviceType::CPU => Splat::Compute,
+            Splat::Auto if info.is_cpu() => Splat::Compute,
             Splat::Auto => Splat::Tiled,
             s => s,
         }
@@ -262,7 +262,7 @@ pub const LAVAPIPE_BINDING_LIMIT: u64 = 128 << 20;
 /// elsewhere 1/64 of the largest device-local heap, within 64..=256 MiB (256 MiB: 33.5M photon entries, 2.1 GB
 /// with the splat records and exact transport's ray queues).
 pub fn auto_photon_budget_mib(info: &crate::vk::DeviceInfo, binding_limit: u64) -> f64 {
-    let small = info.kind == ash::vk::PhysicalDeviceType::CPU || binding_limit < 512 << 20;
+    let small = info.is_cpu() || binding_limit < 512 << 20;
     let mib = if small { 64.0 } else { ((info.device_local_bytes >> 20) as f64 / 64.0).clamp(64.0, 256.0) };
     mib.min(max_budget_mib(binding_limit))
 }
@@ -276,10 +276,10 @@ pub fn max_budget_mib(binding_limit: u64) -> f64 {
 /// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
 pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
 
-/// Default `--target-error` of the flux-error metric: a rel-L1 (64²) of at most 0.1% added to max-level's image
-/// (τ = 0.02 by src/calibration.rs; docs/design.md, "The flux-error metric", says why).
 /// Max-error's first checked level, and flux-error's up to `--level` - 1 ([`Settings::check_level`]).
 pub const DEFAULT_CHECK_LEVEL: u32 = 3;
+/// Default `--target-error` of the flux-error metric: a rel-L1 (64²) of at most 0.1% added to max-level's image
+/// (τ = 0.02 by src/calibration.rs; docs/design.md, "The flux-error metric", says why).
 pub const DEFAULT_TARGET_ERROR: f32 = 0.001;
 
 /// Largest eye-view supersampling factor (per side).
@@ -384,9 +384,8 @@ impl Settings {
         }
     }
 
-    /// Fit the settings to the device: its binding limit, the BVH layout when `auto`, and the photon budget when
-    /// automatic (0). A budget
-    /// larger than the device's bindings allow is bad input.
+    /// Fit the settings to the device: its binding limit, the BVH layout and the cooperative checks when `auto`,
+    /// and the photon budget when automatic (0). A budget larger than the device's bindings allow is bad input.
     pub fn resolve_for_device(&mut self, info: &crate::vk::DeviceInfo) -> AppResult<()> {
         self.binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
         self.bvh_layout = self.bvh_layout.resolve(info);

@@ -533,7 +533,7 @@ impl Viewer {
             .cloned()
             .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
         let mut renderer = Renderer::new(device.clone(), scene, settings)?;
-        let cpu_device = device.info.kind == vk::PhysicalDeviceType::CPU;
+        let cpu_device = device.info.is_cpu();
         renderer.set_frames_in_flight(args.frames_in_flight.unwrap_or(if cpu_device { 1 } else { 2 }) as usize)?;
         let presenter = Presenter::new(&device);
         eprintln!(
@@ -568,7 +568,7 @@ impl Viewer {
             orbit_step: args.orbit_camera,
             last_camera: None,
             interactive_level: 2,
-            interactive_ms: args.interactive_ms.unwrap_or(if device.info.kind == vk::PhysicalDeviceType::CPU {
+            interactive_ms: args.interactive_ms.unwrap_or(if device.info.is_cpu() {
                 INTERACTIVE_MS_CPU
             } else {
                 INTERACTIVE_MS_GPU

@@ -145,6 +145,13 @@ pub struct DeviceInfo {
     pub device_local_bytes: u64,
 }
 
+impl DeviceInfo {
+    /// A CPU device (lavapipe): the `auto` settings' rules pick differently there than on GPUs.
+    pub fn is_cpu(&self) -> bool {
+        self.kind == vk::PhysicalDeviceType::CPU
+    }
+}
+
 /// What [`Device::allocation_report`] returns.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AllocationTotals {
@@ -301,7 +308,7 @@ impl Device {
                 .join(", ")
         };
         let h = hint.trim().to_ascii_lowercase();
-        let is_cpu = |c: &Candidate| c.info.kind == vk::PhysicalDeviceType::CPU;
+        let is_cpu = |c: &Candidate| c.info.is_cpu();
         let pos = match h.as_str() {
             "cpu" | "lavapipe" | "llvmpipe" => match candidates.iter().position(is_cpu) {
                 Some(i) => i,
