@@ -540,9 +540,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
             m.insert("rays_traced".into(), json!(ts.rays_traced));
             m.insert("splat_records".into(), json!(ts.records_total));
             m.insert("waves".into(), json!(ts.waves));
-            let rays = ts.wave_rays();
-            let last = rays.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
-            m.insert("wave_rays".into(), json!(&rays[..last]));
+            m.insert("wave_rays".into(), json!(ts.wave_rays()));
             m.insert("max_depth".into(), json!(ts.max_depth));
             m.insert("queue_overflows".into(), json!(ts.overflows));
         }
@@ -748,10 +746,11 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
 }
 
 /// The bounce waves in two lines, from wave 1 (wave 0 is `transport_primary`): each wave's median ms and, when the
-/// frame counted them, its rays; the empty waves at the end in one sum.
+/// frame counted them (`TransportState::wave_rays`, up to the last wave with rays), its rays; the empty waves at the
+/// end in one sum.
 fn wave_lines(waves: &[&(String, profiler::Summary)], rays: Option<Vec<u32>>) -> String {
     let ms: Vec<f64> = waves.iter().map(|(_, v)| v.median).collect();
-    let live = rays.as_ref().map_or(ms.len(), |r| r.iter().skip(1).rposition(|&n| n > 0).map_or(0, |i| i + 1));
+    let live = rays.as_ref().map_or(ms.len(), |r| r.len().saturating_sub(1));
     let cell = |x: f64| if x >= 10.0 { format!("{x:.1}") } else { format!("{x:.3}") };
     let mut out = format!("  transport_bounces waves 1-{live}, median ms:\n   ");
     for x in &ms[..live.min(ms.len())] {

@@ -186,9 +186,14 @@ pub struct TransportState {
 }
 
 impl TransportState {
-    /// Rays each wave traced this frame (index: the wave; 0: the photons' primary rays). They sum to `rays_traced`.
+    /// Rays each wave traced this frame (index: the wave; 0: the photons' primary rays), up to the last wave that
+    /// traced any. They sum to `rays_traced`.
     pub fn wave_rays(&self) -> Vec<u32> {
-        self.wave_rays_pairs.iter().flatten().copied().take(MAX_INTERACTIONS as usize + 1).collect()
+        let mut rays: Vec<u32> =
+            self.wave_rays_pairs.iter().flatten().copied().take(MAX_INTERACTIONS as usize + 1).collect();
+        let live = rays.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
+        rays.truncate(live);
+        rays
     }
 
     /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
