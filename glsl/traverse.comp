@@ -83,6 +83,33 @@ const uint ACT_EMIT_LEAVES = 4u;    // refined at level L - 1: the children that
 // The order in which a metric traces a cell's four children (k: x = k & 1, y = k >> 1): the diagonal pair first.
 const uint CHILD_ORDER[4] = uint[4](0u, 3u, 1u, 2u);
 
+// The photon view's rectangle of cell (level, xy).
+void cell_rect(uint level, uvec2 xy, out vec2 lo, out vec2 hi) {
+    float side = cell_side(level);
+    lo = u_frame.photon_view.window.xy + vec2(xy) * side;
+    hi = lo + side;
+}
+
+// Whether the cell touches a refractor inside the cone at all (else it is dropped).
+bool cell_in_play(uint level, uvec2 xy) {
+    vec2 lo, hi;
+    cell_rect(level, xy, lo, hi);
+    return cell_any_covered(level, xy) && view_rect_touches_cone(u_frame.photon_view, lo, hi);
+}
+
+// Whether the cell lies wholly on the refractors and inside the cone: the metrics check only such cells, because
+// then the cluster's flux I*Omega(cell) equals the sum over the leaves that max-level traversal would have emitted.
+bool cell_inside(uint level, uvec2 xy) {
+    vec2 lo, hi;
+    cell_rect(level, xy, lo, hi);
+    return cell_all_covered(level, xy) && view_rect_inside_cone(u_frame.photon_view, lo, hi);
+}
+
+// Flux-error's look-ahead level: one above the check level, when that is above the maximal level's.
+bool look_ahead_level(uint level) {
+    return level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x;
+}
+
 #if !defined(TRAVERSE_MAX_LEVEL) && !defined(TRAVERSE_METRIC)
 #define TRAVERSE_METRIC 1
 #endif
@@ -329,23 +356,15 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
 #endif  // TRAVERSE_METRIC == 2
 
 #ifdef TRAVERSE_COOP
-// Whether decide() checks `cell` with its four children's dominant paths: the same tests in the same order. A cell
-// this missed would be traced by decide itself (child_dominant), so the two need to agree only for speed.
+// Whether decide() checks `cell` with its four children's dominant paths, by decide's own tests. A cell this missed
+// would be traced by decide itself (child_dominant), so the two need to agree only for speed.
 bool needs_checks(uint level, uvec2 cell) {
-    if (u_frame.transport.x == 0u) return false;
     uvec2 xy = cell_xy(cell);
-    View v = u_frame.photon_view;
-    float side = cell_side(level);
-    vec2 lo = v.window.xy + vec2(xy) * side;
-    vec2 hi = lo + side;
-    if (!cell_any_covered(level, xy) || !view_rect_touches_cone(v, lo, hi)) return false;
-    if (level >= u_frame.traversal.x) return false;
-    bool inside = cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
-    bool checkable = level >= u_frame.traversal.z && inside;
+    if (u_frame.transport.x == 0u || !cell_in_play(level, xy) || level >= u_frame.traversal.x) return false;
+    bool checkable = level >= u_frame.traversal.z && cell_inside(level, xy);
 #if TRAVERSE_METRIC == 2
-    bool early = level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x && inside;
-    if (checkable && cell_radius(cell) != 0u) return false;  // predicted to refine: no check
-    return checkable || early;
+    if (checkable) return cell_radius(cell) == 0u;  // else predicted to refine: no check
+    return look_ahead_level(level) && cell_inside(level, xy);
 #else
     return checkable;
 #endif
@@ -359,11 +378,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
     uvec2 xy = cell_xy(cell);
     out_cell = pack_cell(level, xy.x, xy.y, 0u);
     no_check = 0u;
-    View v = u_frame.photon_view;
-    float side = cell_side(level);
-    vec2 lo = v.window.xy + vec2(xy) * side;
-    vec2 hi = lo + side;
-    if (!cell_any_covered(level, xy) || !view_rect_touches_cone(v, lo, hi)) return ACT_DROP;
+    if (!cell_in_play(level, xy)) return ACT_DROP;
     if (level >= u_frame.traversal.x) {
         // The same test as the dense method, so that max-level traversal emits exactly dense's photons.
         return leaf_emitted(level, xy) ? ACT_EMIT : ACT_DROP;
@@ -371,11 +386,10 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
 #ifdef TRAVERSE_MAX_LEVEL
     return ACT_REFINE;
 #else
-    // Only fully covered cells inside the cone are checked: then the cluster's flux I*Omega(cell) equals the sum
-    // over the leaves that max-level traversal would have emitted.
+    // Only fully covered cells inside the cone are checked (cell_inside).
     bool checkable = false;
     if (level >= u_frame.traversal.z) {
-        checkable = cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
+        checkable = cell_inside(level, xy);
         if (!checkable) no_check = 2u;
     }
 #endif
@@ -386,8 +400,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
     // predicts to refine (predicted_skip). The look-ahead's own band (up to 2 budgets) added more than E to the
     // bunny at level 5 (0.520% at E = 0.005), against 0.474% without this. One call site for the verdict: llvmpipe
     // inlines it, and a second copy slowed every level of this shader.
-    bool early = level + 1u == u_frame.traversal.z && u_frame.traversal.z < u_frame.traversal.x &&
-                 cell_all_covered(level, xy) && view_rect_inside_cone(v, lo, hi);
+    bool early = look_ahead_level(level) && cell_inside(level, xy);
     if (checkable || early) {
         uint skip = cell_radius(cell);
         if (checkable && skip != 0u) {
@@ -454,11 +467,11 @@ void main() {
     uint slot = 0u;
     uint leaves = 0u;
     bool have = state.aborted == 0u && i < state.read_count;
+    uvec2 cell = have ? photons[state.read_offset + i] : uvec2(0u);
 #ifdef TRAVERSE_COOP
     {
         // Lane k traces child k's dominant path when the candidate will be checked.
         g_cand = me;
-        uvec2 cell = have ? photons[state.read_offset + i] : uvec2(0u);
         bool traced = have && needs_checks(cell_level(cell), cell);
         if (traced) {
             vec2 p;
@@ -476,7 +489,6 @@ void main() {
     }
 #endif
     if (have && lane == 0u) {
-        uvec2 cell = photons[state.read_offset + i];
         uint no_check;
         action = decide(cell_level(cell), cell, out_cell, no_check);
         // The last level fused into the one before: a cell of level L - 1 that refines emits those of its four
