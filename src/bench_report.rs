@@ -487,6 +487,81 @@ pub fn transport_table(rows: &[BenchRow]) -> String {
     out
 }
 
+/// The reference's noise for a scene (half the rel-L1 64² between the reference's two halves), when the rows
+/// carry it.
+fn reference_noise(rows: &[BenchRow], scene: &str) -> Option<f64> {
+    rows.iter()
+        .filter(|r| r.scene == scene)
+        .find_map(|r| r.extra.get("reference_noise").and_then(|v| v.get("rel_l1_64")).and_then(|v| v.as_f64()))
+}
+
+/// The fastest setting to each error: per scene and transport, the GPU-driven rows that no other row beats on
+/// both GPU time and rel-L1 64² (the lower-left front of the error-against-time plot), fastest first. Beside each,
+/// the fastest dense row that reaches its error, and how many times faster the row is ("–" where no dense row
+/// reaches it). Errors within 0.1% of each other (the same image, summed in another order) are one error: only
+/// the fastest of them is on the front. A front row whose error is below the previous one's by less than the
+/// reference's noise is marked: every row is scored against the same reference, so the order may still hold,
+/// but the reference alone cannot vouch for it.
+pub fn front_table(rows: &[BenchRow]) -> String {
+    const SAME_ERROR: f64 = 1e-3;
+    let usable = |r: &&BenchRow| {
+        r.driven == "gpu" && r.rel_l1_64.is_finite() && r.gpu_ms_median.is_finite() && r.gpu_ms_median > 0.0
+    };
+    let mut groups: Vec<(String, String)> = Vec::new();
+    for r in rows.iter().filter(usable) {
+        let g = (r.scene.clone(), r.transport.clone());
+        if !groups.contains(&g) {
+            groups.push(g);
+        }
+    }
+    let mut out = String::new();
+    for (scene, transport) in groups {
+        let mut rs: Vec<&BenchRow> =
+            rows.iter().filter(usable).filter(|r| r.scene == scene && r.transport == transport).collect();
+        rs.sort_by(|a, b| a.gpu_ms_median.total_cmp(&b.gpu_ms_median).then(a.rel_l1_64.total_cmp(&b.rel_l1_64)));
+        let noise = reference_noise(rows, &scene);
+        out.push_str(&format!(
+            "\n**{scene}** ({transport}): the fastest setting to each error\n\n\
+             | setting | level | photons | rel-L1 64² | GPU ms | fastest dense to this error | faster than it | note |\n\
+             |---|--:|--:|--:|--:|---|--:|---|\n"
+        ));
+        let mut best = f64::INFINITY;
+        for r in rs.iter().copied() {
+            if r.rel_l1_64 >= best * (1.0 - SAME_ERROR) {
+                continue;
+            }
+            let dense = rs
+                .iter()
+                .filter(|d| d.method == "dense" && d.rel_l1_64 <= r.rel_l1_64 * (1.0 + SAME_ERROR))
+                .min_by(|a, b| a.gpu_ms_median.total_cmp(&b.gpu_ms_median));
+            let (dense_cell, speedup) = match dense {
+                Some(d) => (
+                    format!("dense L{} ({} ms)", d.level, num(d.gpu_ms_median, 2)),
+                    format!("{}x", num(d.gpu_ms_median / r.gpu_ms_median, 2)),
+                ),
+                None => ("none reaches it".to_string(), "–".to_string()),
+            };
+            let note = match noise {
+                Some(n) if best.is_finite() && best - r.rel_l1_64 < n => "within the noise of the row above",
+                _ => "",
+            };
+            out.push_str(&format!(
+                "| {} | {} | {} | {}% | {} | {} | {} | {} |\n",
+                cell(&r.method_label()),
+                r.level,
+                r.photons,
+                num(100.0 * r.rel_l1_64, 4),
+                num(r.gpu_ms_median, 2),
+                dense_cell,
+                speedup,
+                note
+            ));
+            best = r.rel_l1_64;
+        }
+    }
+    out
+}
+
 /// Everything that applies to these rows: the full table, then the pivots.
 pub fn markdown_report(rows: &[BenchRow]) -> String {
     let mut out = markdown_table(rows);
@@ -494,8 +569,7 @@ pub fn markdown_report(rows: &[BenchRow]) -> String {
     // and their differences shrink.
     let mut noise: Vec<(String, f64)> = Vec::new();
     for r in rows {
-        let n = r.extra.get("reference_noise").and_then(|v| v.get("rel_l1_64")).and_then(|v| v.as_f64());
-        if let (Some(n), false) = (n, noise.iter().any(|(s, _)| *s == r.scene)) {
+        if let (Some(n), false) = (reference_noise(rows, &r.scene), noise.iter().any(|(s, _)| *s == r.scene)) {
             noise.push((r.scene.clone(), n));
         }
     }
@@ -506,6 +580,10 @@ pub fn markdown_report(rows: &[BenchRow]) -> String {
              above includes it: errors well below it read as about the noise, and their differences shrink.\n",
             list.join(", ")
         ));
+    }
+    if rows.iter().filter(|r| r.rel_l1_64.is_finite()).count() > 1 {
+        out.push_str("\n### The fastest setting to each error (the plot's lower-left front)\n");
+        out.push_str(&front_table(rows));
     }
     if rows.iter().any(|r| r.transport == "exact") && rows.iter().any(|r| r.transport == "two-interface") {
         out.push_str("\n### Exact transport against two-interface\n\n");
@@ -647,6 +725,39 @@ mod tests {
         // A single transport keeps the old labels and has no transport pivot.
         let single = markdown_report(&rows());
         assert!(!single.contains("Exact transport against") && !single.contains("two-interface dense"), "{single}");
+    }
+
+    #[test]
+    fn the_front_keeps_the_rows_nothing_beats_and_names_dense_at_their_error() {
+        let mut rs = rows();
+        rs.push(row("sphere", "adaptive", Some("max-error"), 4, 20.0, 0.055));
+        // The same error as dense level 1 (summed in another order) and slower: not on the front.
+        rs.push(row("sphere", "adaptive", Some("max-level"), 1, 5.1, 0.2 * (1.0 - 1e-9)));
+        rs.push(row("sphere", "dense", None, 4, 35.0, 0.03));
+        for r in rs.iter_mut().filter(|r| r.scene == "sphere") {
+            r.extra = serde_json::json!({ "reference_noise": { "rel_l1_64": 0.015 } });
+        }
+        let t = front_table(&rs);
+        let lines: Vec<&str> = t.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| setting")).collect();
+        assert_eq!(
+            lines,
+            [
+                // The fastest row is on the front, and is its own dense.
+                "| dense | 1 | 16384 | 20.0000% | 5.00 | dense L1 (5.00 ms) | 1.00x |  |",
+                // Dense level 4 (0.03, 35 ms) is the fastest dense row at or below 0.06 (level 3: 0.05, 40 ms).
+                "| max-error | 3 | 262144 | 6.0000% | 12.00 | dense L4 (35.00 ms) | 2.92x |  |",
+                // 0.005 below the previous front row, under the noise (0.015).
+                "| max-error | 4 | 1048576 | 5.5000% | 20.00 | dense L4 (35.00 ms) | 1.75x | within the noise of the row above |",
+                "| max-error | 5 | 4194304 | 2.0000% | 30.00 | none reaches it | – |  |",
+                // Bunny: the row without a GPU time is left out.
+                "| max-level | 4 | 1048576 | 8.0000% | 25.00 | none reaches it | – |  |",
+            ],
+            "{t}"
+        );
+        // Dense levels 3 and 4 (slower than max-error level 5 and worse) are not on the front.
+        assert!(!t.contains("| dense | 3 |") && !t.contains("| dense | 4 |") && !t.contains("max-level | 1"), "{t}");
+        assert!(t.contains("**sphere** (two-interface)") && t.contains("**bunny** (two-interface)"), "{t}");
+        assert!(markdown_report(&rs).contains("### The fastest setting to each error"));
     }
 
     #[test]
