@@ -94,7 +94,7 @@ pub struct MethodArgs {
     #[arg(long, value_enum)]
     pub driven: Option<Driven>,
     /// Photon buffer size in MiB (batches are split to fit); 0: automatic (64 MiB on CPU devices; on GPUs 1/64 of
-    /// device memory, 64 to 256 MiB, within what one storage-buffer binding allows)
+    /// device memory, 64 to 512 MiB, within what one storage-buffer binding allows)
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub photon_budget: f64,
     /// Side of the light-view refractor g-buffers (power of two).

@@ -259,13 +259,18 @@ impl Default for Settings {
 pub const LAVAPIPE_BINDING_LIMIT: u64 = 128 << 20;
 
 /// The automatic photon budget: 64 MiB on CPU devices and on devices whose bindings span less than 512 MiB;
-/// elsewhere 1/64 of the largest device-local heap, within 64..=256 MiB (256 MiB: 33.5M photon entries, 2.1 GB
-/// with the splat records and exact transport's ray queues).
+/// elsewhere 1/64 of the largest device-local heap, within 64..=512 MiB. 512 MiB is 67M photon entries, 3.8 GB
+/// with the splat records and exact transport's ray queues (33.5M rays each), and the most a batch can use: its
+/// 16.8M photons (half a queue) fill the waves' 24-bit photon index ([`MAX_BATCH_PHOTONS`]). On a GPU of 32 GB or
+/// more, exact transport then runs level 6 (13.2M photons on the sphere) in one batch.
 pub fn auto_photon_budget_mib(info: &crate::vk::DeviceInfo, binding_limit: u64) -> f64 {
     let small = info.is_cpu() || binding_limit < 512 << 20;
-    let mib = if small { 64.0 } else { ((info.device_local_bytes >> 20) as f64 / 64.0).clamp(64.0, 256.0) };
+    let mib = if small { 64.0 } else { ((info.device_local_bytes >> 20) as f64 / 64.0).clamp(64.0, 512.0) };
     mib.min(max_budget_mib(binding_limit))
 }
+
+/// Photons one exact-transport batch may hold: a ray names its photon by a 24-bit index (glsl/wave.comp).
+pub const MAX_BATCH_PHOTONS: u32 = 1 << 24;
 
 /// Largest photon budget for a binding limit: the splat records (16 bytes per 8-byte photon entry) must fit one
 /// binding. 64 MiB under lavapipe's 128 MiB.
@@ -469,10 +474,10 @@ impl Settings {
 
     /// Photon-buffer entries one batch may use. Under exact transport wave 0 appends up to two children per
     /// photon, so a batch emits at most half a ray queue: a larger one would traverse, then overflow its queue and
-    /// be split after all its work.
+    /// be split after all its work. And at most [`MAX_BATCH_PHOTONS`], which the rays' photon index can name.
     pub fn traversal_capacity(&self, capacity: u32) -> u32 {
         match self.transport {
-            Transport::Exact => capacity.min(self.ray_queue_capacity() / 2).max(8),
+            Transport::Exact => capacity.min(self.ray_queue_capacity() / 2).min(MAX_BATCH_PHOTONS).max(8),
             Transport::TwoInterface => capacity,
         }
     }
@@ -505,4 +510,43 @@ pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
         return Err(bad());
     }
     Ok((w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ash::vk as avk;
+
+    fn device(kind: avk::PhysicalDeviceType, gib: u64) -> crate::vk::DeviceInfo {
+        crate::vk::DeviceInfo {
+            name: "test".into(),
+            driver: "test".into(),
+            kind,
+            api_version: 0,
+            limits: avk::PhysicalDeviceLimits { max_storage_buffer_range: u32::MAX, ..Default::default() },
+            timestamp_period: 1.0,
+            timestamp_valid_bits: 64,
+            float_atomic_add: true,
+            device_local_bytes: gib << 30,
+        }
+    }
+
+    #[test]
+    fn the_automatic_budget_follows_device_memory_and_a_batch_fits_the_photon_index() {
+        let gpu = avk::PhysicalDeviceType::DISCRETE_GPU;
+        let binding = 2u64 << 30;
+        assert_eq!(auto_photon_budget_mib(&device(gpu, 141), binding), 512.0);
+        assert_eq!(auto_photon_budget_mib(&device(gpu, 16), binding), 256.0);
+        assert_eq!(auto_photon_budget_mib(&device(gpu, 2), binding), 64.0);
+        assert_eq!(auto_photon_budget_mib(&device(avk::PhysicalDeviceType::CPU, 64), binding), 64.0);
+        assert_eq!(auto_photon_budget_mib(&device(gpu, 141), LAVAPIPE_BINDING_LIMIT), 64.0);
+        // The automatic budget on a large GPU, and the largest a 2 GiB binding allows: a batch never holds more
+        // photons than the rays' 24-bit index names.
+        for (mib, batch) in [(512.0, MAX_BATCH_PHOTONS), (1024.0, MAX_BATCH_PHOTONS), (256.0, 1 << 23)] {
+            let s = Settings { photon_budget_mib: mib, binding_limit: binding, ..Settings::default() };
+            let t = s.traversal_capacity(s.photon_capacity());
+            assert_eq!(t, batch, "{mib} MiB");
+            assert!(t <= s.ray_queue_capacity() / 2, "{mib} MiB");
+        }
+    }
 }
