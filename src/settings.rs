@@ -477,7 +477,7 @@ impl Settings {
     /// be split after all its work. And at most [`MAX_BATCH_PHOTONS`], which the rays' photon index can name.
     pub fn traversal_capacity(&self, capacity: u32) -> u32 {
         match self.transport {
-            Transport::Exact => capacity.min(self.ray_queue_capacity() / 2).min(MAX_BATCH_PHOTONS).max(8),
+            Transport::Exact => capacity.min(self.ray_queue_capacity() / 2).clamp(8, MAX_BATCH_PHOTONS),
             Transport::TwoInterface => capacity,
         }
     }
