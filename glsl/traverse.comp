@@ -544,13 +544,20 @@ void main() {
         // One reservation per work group for all its photons and children. On overflow the batch is aborted (and
         // later split) or, with batching off, the group's entries are dropped and counted; either way nothing is
         // written past the buffer.
+        // A batch's photons are bounded apart (u_frame.traversal.w, at most the buffer's entries): with batching a
+        // reservation within the buffer may still exceed it, which aborts the batch; without, the buffer is that
+        // bound, and the photons, counted in `used` too, cannot exceed it.
         uint entries = s_emit_n + 4u * s_child_n;
         s_reserved = false;
         if (entries > 0u) {
             uint base = atomicAdd(state.used, entries);
-            if (base + entries <= state.capacity) {
-                s_reserved = true;
+            bool fits = base + entries <= state.capacity;
+            if (fits) {
                 s_emit_base = atomicAdd(state.emit_count, s_emit_n);
+                fits = s_emit_base + s_emit_n <= u_frame.traversal.w;
+            }
+            if (fits) {
+                s_reserved = true;
                 s_child_base = atomicAdd(state.write_count, 4u * s_child_n);
             } else if (state.batching != 0u) {
                 atomicExchange(state.aborted, 1u);

@@ -167,7 +167,8 @@ void main() {
         vec3 ro, rd;
         float w;
         uint depth;
-        uint pidx;
+        uint pidx;  // the photon's entry; a ray carries it counted from the buffer's top (the batch's photons
+                    // fill it from there down), which a 24-bit field holds for any batch (Settings::batch_photons)
         uvec2 cell;        // the photon's cell, read once
         bool lod = false;  // a weak branch carried for the photon's block
         if (wave == 0u) {
@@ -195,7 +196,7 @@ void main() {
             w = a.w;
             rd = b.xyz;
             uint m = floatBitsToUint(b.w);
-            pidx = m & 0xFFFFFFu;
+            pidx = state.capacity - 1u - (m & 0xFFFFFFu);
             depth = (m >> 24) & 0x3Fu;
             lod = (m & LOD_RAY) != 0u;
             cell = photons[pidx];
@@ -257,7 +258,7 @@ void main() {
                     bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
                         ? weak_carrier(cell, phi, depth, scale)
                         : false;
-                    uint meta = pidx | ((depth + 1u) << 24) | (lod ? LOD_RAY : 0u);
+                    uint meta = (state.capacity - 1u - pidx) | ((depth + 1u) << 24) | (lod ? LOD_RAY : 0u);
                     // Both children inherit dP; their dD follow their branch, with the interpolated normal's
                     // derivative where the branch used it.
                     vec3 dnx = vec3(0.0), dny = vec3(0.0);

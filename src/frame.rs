@@ -273,7 +273,7 @@ impl Renderer {
             let channel = |c: usize| if nc == 1 { 0 } else { c as u32 + 1 };
             let data: Vec<FrameData> =
                 (0..nl * nc).map(|p| self.frame_data(&views[p / nc], t, p / nc, channel(p % nc))).collect();
-            (data, self.batch_slots(self.settings.traversal_capacity(t.photon.capacity)))
+            (data, self.batch_slots(t.photon.capacity))
         };
         // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
         // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
@@ -794,7 +794,7 @@ impl Ctx<'_> {
         let n = LEVEL0_RES << self.s.level;
         // Bands of rows sized so that even a fully covered band fits the photon buffer (and, under exact
         // transport, half a ray queue).
-        let per_band = self.s.traversal_capacity(self.t.photon.capacity);
+        let per_band = self.s.batch_photons(self.t.photon.capacity);
         let rows = (per_band / n).clamp(1, n).min(65535 * TILE_WG);
         let bands = n.div_ceil(rows);
         rec.report.batch_slots = bands;

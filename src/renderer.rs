@@ -470,7 +470,7 @@ impl Renderer {
                 s.level,
                 s.metric.code() | ((s.batching as u32) << 8),
                 s.check_level(),
-                s.traversal_capacity(targets.photon.capacity),
+                s.batch_photons(targets.photon.capacity),
             ],
             params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.tau()],
             transport: [
@@ -516,15 +516,19 @@ impl Renderer {
         if s.method != Method::Adaptive {
             return 1;
         }
+        // The worst case: every cell of every level a candidate (the buffer's entries), and every cell of the
+        // last level a photon (the batch's photons).
         let cells0 = (LEVEL0_RES * LEVEL0_RES) as f64;
         let l = s.level as i32;
-        let worst = cells0 * ((4f64.powi(l + 1) - 1.0) / 3.0 + 4f64.powi(l));
-        if worst <= capacity as f64 {
+        let photons = cells0 * 4f64.powi(l);
+        let worst = cells0 * (4f64.powi(l + 1) - 1.0) / 3.0 + photons;
+        let need = (worst / capacity as f64).max(photons / s.batch_photons(capacity) as f64);
+        if need <= 1.0 {
             return 1;
         }
         if self.slots_hint > 0 {
             return self.slots_hint;
         }
-        ((worst / capacity as f64).ceil() as u32).clamp(2, 64)
+        (need.ceil() as u32).clamp(2, 64)
     }
 }

@@ -472,10 +472,12 @@ impl Settings {
         16 * self.footprint.ray_vec4s()
     }
 
-    /// Photon-buffer entries one batch may use. Under exact transport wave 0 appends up to two children per
-    /// photon, so a batch emits at most half a ray queue: a larger one would traverse, then overflow its queue and
-    /// be split after all its work. And at most [`MAX_BATCH_PHOTONS`], which the rays' photon index can name.
-    pub fn traversal_capacity(&self, capacity: u32) -> u32 {
+    /// Photons one batch may emit (a dense band, or an adaptive batch's photons; an adaptive batch's candidates
+    /// may fill the rest of the buffer beside them while it traverses). Under exact transport wave 0 appends up
+    /// to two children per photon, so a batch emits at most half a ray queue: a larger one would traverse, then
+    /// overflow its queue and be split after all its work. And at most [`MAX_BATCH_PHOTONS`], which the rays'
+    /// photon index can name.
+    pub fn batch_photons(&self, capacity: u32) -> u32 {
         match self.transport {
             Transport::Exact => capacity.min(self.ray_queue_capacity() / 2).clamp(8, MAX_BATCH_PHOTONS),
             Transport::TwoInterface => capacity,
@@ -544,7 +546,7 @@ mod tests {
         // photons than the rays' 24-bit index names.
         for (mib, batch) in [(512.0, MAX_BATCH_PHOTONS), (1024.0, MAX_BATCH_PHOTONS), (256.0, 1 << 23)] {
             let s = Settings { photon_budget_mib: mib, binding_limit: binding, ..Settings::default() };
-            let t = s.traversal_capacity(s.photon_capacity());
+            let t = s.batch_photons(s.photon_capacity());
             assert_eq!(t, batch, "{mib} MiB");
             assert!(t <= s.ray_queue_capacity() / 2, "{mib} MiB");
         }

@@ -139,6 +139,23 @@ fn tiny_budget_gives_the_same_image() {
     assert!((a / b - 1.0).abs() < 1e-5, "caustic flux {a} vs {b} W");
 }
 
+/// A batch's photons are bounded apart from its candidates. Under exact transport a batch emits at most a quarter
+/// of the photon buffer's entries (half a ray queue, for wave 0's two children a photon), and while it traverses,
+/// its candidates may fill the rest of the buffer. At 7 MiB (917,504 entries, 229,376 photons a batch) max-level
+/// level 3 on the sphere, 206,336 photons beside about 70,000 candidates (276,080 entries at the peak), runs in
+/// one batch. When photons and candidates shared the quarter, it overflowed once and ran in four.
+#[test]
+fn candidates_do_not_count_against_a_batchs_photons() {
+    let dir = out_dir("exact_batch_photons");
+    let args = ["--method", "adaptive", "--metric", "max-level", "--level", "3", "--photon-budget", "7"];
+    let (s, img) = exact(&dir, "budget7", SPHERE, &args);
+    assert_sound("7 MiB", &s, &img);
+    assert_eq!(s["photons_splatted"], 206_336);
+    assert_eq!((s["batches"].as_u64(), s["overflow_events"].as_u64()), (Some(1), Some(0)), "{s}");
+    let peak = s["photon_buffer_bytes"].as_u64().unwrap() / 8;
+    assert!(peak > 229_376 && peak <= 917_504, "peak entries {peak}: photons and candidates past a quarter");
+}
+
 /// The three BVH node layouts (`--bvh-layout`) find the same closest hits: on the bunny at dense level 2 (256²)
 /// they trace the same rays to the same account, and their images differ only in the order of float additions
 /// (measured on lavapipe: rel-L1 2.4e-8 single and 2.5e-8 threaded against pair at 256², caustic flux equal to

@@ -10,7 +10,7 @@
 mod common;
 use caustics::renderer::Views;
 use caustics::scene::{mesh, CameraView, Scene};
-use caustics::settings::{parse_size, Driven, Method, Metric, Settings, Transport};
+use caustics::settings::{parse_size, Driven, Method, Metric, Settings, Transport, MAX_BATCH_PHOTONS};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use std::path::{Path, PathBuf};
@@ -443,7 +443,8 @@ proptest! {
         match s.validate() {
             Ok(()) => {
                 prop_assert!(s.photon_capacity() >= 8 && s.photon_capacity() <= 8 << 20);
-                prop_assert!(s.traversal_capacity(s.photon_capacity()) >= 8);
+                let batch = s.batch_photons(s.photon_capacity());
+                prop_assert!((8..=s.photon_capacity()).contains(&batch) && batch <= MAX_BATCH_PHOTONS);
                 prop_assert!(s.gbuffer_res.is_power_of_two() && s.gbuffer_level() < 16);
                 prop_assert!(budget.is_finite() && error_bound.is_finite() && flux_threshold.is_finite());
                 prop_assert!((0.0..1.0).contains(&weak_branches));

@@ -23,10 +23,11 @@ struct FrameData {
     vec4 scene_max;      // xyz; w: exposure (1 / reference radiance)
     uvec4 grid;          // x: refractor g-buffer res R; y: log2(R/64); z: caustic map res M; w: pyramid mips
     uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error, 2 flux-error), bit 8 batching;
-                         // z: first level checked for convergence; w: photon-buffer capacity (entries)
+                         // z: first level checked for convergence; w: photons one batch may emit
     vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's
                          // flux threshold (relative to the photon's flux); w: flux-error's target error
-    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records; w: bits
+    uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records (one per
+                         // photon-buffer entry: the buffer's entries); w: bits
                          // 0-7 the color channel of this pass (0: one gray pass; 1, 2, 3: red, green, blue),
                          // bit 8 differential footprints
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
@@ -58,7 +59,7 @@ struct TraversalState {
     uint write_count;    // children appended this level (atomic); they follow the candidates
     uint emit_count;     // photons emitted this batch (atomic); they fill the buffer from the top down
     uint used;           // entries reserved this batch (atomic): candidates + children + emitted
-    uint capacity;       // photon buffer entries
+    uint capacity;       // photon buffer entries a batch may use (photons and, while traversing, candidates)
     uint start_level;    // the batch's first traversal level (MAX_LEVELS: no tile, nothing to do)
     uint aborted;        // the batch overflowed
     uint batching;       // 1: an overflow aborts and splits the batch; 0: the overflowing work is dropped
