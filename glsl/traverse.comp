@@ -541,12 +541,11 @@ void main() {
     }
 #endif
     if (lid == 0u) {
-        // One reservation per work group for all its photons and children. On overflow the batch is aborted (and
-        // later split) or, with batching off, the group's entries are dropped and counted; either way nothing is
-        // written past the buffer.
-        // A batch's photons are bounded apart (u_frame.traversal.w, at most the buffer's entries): with batching a
-        // reservation within the buffer may still exceed it, which aborts the batch; without, the buffer is that
-        // bound, and the photons, counted in `used` too, cannot exceed it.
+        // One reservation per work group for all its photons and children, against two bounds: the batch's entries
+        // (state.capacity) and its photons alone (u_frame.traversal.w). On overflow the batch is aborted (and later
+        // split) or, with batching off, the group's entries are dropped and counted; either way nothing is written
+        // past the buffer. Without batching state.capacity is traversal.w itself, and the photons, counted in
+        // `used` too, cannot exceed it, so only the first bound can fail there.
         uint entries = s_emit_n + 4u * s_child_n;
         s_reserved = false;
         if (entries > 0u) {

@@ -469,6 +469,12 @@ impl Ctx<'_> {
         (self.s.debug_photons > 0).then_some(self.s.debug_min_level)
     }
 
+    /// How this frame's traversal runs (work-group side as its dispatches count candidates, metric, cooperative
+    /// checks); both the GPU- and the CPU-driven loop use it.
+    fn traverse_shape(&self) -> TraverseShape {
+        TraverseShape { wg: self.s.traverse_dispatch_wg(), metric: self.s.metric, coop: self.s.coop_traversal() }
+    }
+
     fn bindings(&self) -> PhotonBindings<'_> {
         let t = self.t;
         PhotonBindings {
@@ -821,8 +827,8 @@ impl Ctx<'_> {
     fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) {
         let b = self.bindings();
         let ph = &self.p.photons;
-        let wg = self.s.traverse_dispatch_wg();
-        let shape = TraverseShape { wg, metric: self.s.metric, coop: self.s.coop_traversal() };
+        let shape = self.traverse_shape();
+        let wg = shape.wg;
         let cmd = rec.cmd;
         let exact = self.s.transport == Transport::Exact;
         ph.init(cmd, &b, init_mode::FRAME, wg);
@@ -879,8 +885,8 @@ impl Ctx<'_> {
     fn adaptive_cpu(&self, rec: &mut Rec) -> VkResult<()> {
         let b = self.bindings();
         let ph = &self.p.photons;
-        let wg = self.s.traverse_dispatch_wg();
-        let shape = TraverseShape { wg, metric: self.s.metric, coop: self.s.coop_traversal() };
+        let shape = self.traverse_shape();
+        let wg = shape.wg;
         ph.init(rec.cmd, &b, init_mode::FRAME, wg);
         self.compute_to_compute(rec.cmd);
         let mut first = true;
