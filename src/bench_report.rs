@@ -232,6 +232,11 @@ pub fn svg_string(rows: &[BenchRow]) -> Result<String, Box<dyn std::error::Error
     let series = plot_series(rows);
     let xr = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.0)), (0.1, 100.0));
     let yr = log_range(series.iter().flat_map(|s| s.1.iter().map(|p| p.1)), (1e-3, 1.0));
+    let y_label = match rows.iter().find_map(|r| r.extra.get("reference_paths").and_then(|v| v.as_str())) {
+        Some("all") => "rel-L1 at 64² vs the all-paths reference",
+        Some("two-refractions") => "rel-L1 at 64² vs the two-refraction reference",
+        _ => "rel-L1 at 64² vs reference",
+    };
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (960, 640)).into_drawing_area();
@@ -249,7 +254,7 @@ pub fn svg_string(rows: &[BenchRow]) -> Result<String, Box<dyn std::error::Error
         chart
             .configure_mesh()
             .x_desc("GPU ms per frame (median)")
-            .y_desc("rel-L1 at 64² vs reference")
+            .y_desc(y_label)
             .x_label_formatter(&|v| short(*v))
             .y_label_formatter(&|v| short(*v))
             .draw()?;
@@ -562,9 +567,36 @@ pub fn front_table(rows: &[BenchRow]) -> String {
     out
 }
 
-/// Everything that applies to these rows: the full table, then the pivots.
+/// Which CPU reference the rows' errors are measured against, in words, from their `extra.reference_paths`:
+/// None when no row was scored.
+pub fn reference_label(rows: &[BenchRow]) -> Option<String> {
+    let paths: std::collections::BTreeSet<&str> = rows
+        .iter()
+        .filter(|r| r.rel_l1_64.is_finite())
+        .filter_map(|r| r.extra.get("reference_paths").and_then(|v| v.as_str()))
+        .collect();
+    let name = |p: &str| match p {
+        "all" => "every light path (`--paths all`: ground truth)".to_string(),
+        "two-refractions" => {
+            "light refracted exactly twice (`--paths two-refractions`: the two-interface model's own paths)".into()
+        }
+        p => format!("`--paths {p}`"),
+    };
+    match paths.len() {
+        0 => None,
+        1 => paths.first().map(|p| name(p)),
+        _ => Some(format!("mixed: {}", paths.iter().map(|p| name(p)).collect::<Vec<_>>().join("; "))),
+    }
+}
+
+/// Everything that applies to these rows: the full table, then the pivots. Every table's errors are against the
+/// reference [`reference_label`] names, stated first.
 pub fn markdown_report(rows: &[BenchRow]) -> String {
-    let mut out = markdown_table(rows);
+    let mut out = match reference_label(rows) {
+        Some(l) => format!("Errors (rel-L1, flux ratio, peak offset) are against the CPU reference of {l}.\n\n"),
+        None => "No reference: timings and photon counts only.\n\n".to_string(),
+    };
+    out.push_str(&markdown_table(rows));
     // The reference's own noise: every row's rel-L1 includes it, so errors well below it read as about the noise,
     // and their differences shrink.
     let mut noise: Vec<(String, f64)> = Vec::new();

@@ -81,7 +81,18 @@ fn restore_sigpipe() {
 fn main() {
     #[cfg(unix)]
     restore_sigpipe();
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).format_timestamp(None).init();
+    // The library reports through `log`; the CLI prints its warnings as `warning: ...` lines on stderr (and, with
+    // RUST_LOG=info or debug, the rest with their level and module).
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
+        .format(|buf, record| {
+            use std::io::Write;
+            match record.level() {
+                log::Level::Error => writeln!(buf, "error: {}", record.args()),
+                log::Level::Warn => writeln!(buf, "warning: {}", record.args()),
+                level => writeln!(buf, "[{level} {}] {}", record.target(), record.args()),
+            }
+        })
+        .init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
         eprintln!("error: {e}");

@@ -110,6 +110,12 @@ pub fn comparison_size(res: u32, width: u32, height: u32) -> (usize, usize) {
     (ow, oh)
 }
 
+/// The finest comparison width two images both carry: the narrower one's width (the comparison grid keeps the
+/// aspect ratio, so its height follows).
+pub fn max_comparison_res(a: &RgbImage, b: &RgbImage) -> u32 {
+    a.width.min(b.width)
+}
+
 /// Compare `a` (under test) against `reference` at comparison width `res`, for an image `extent_m` meters wide.
 pub fn compare(a: &RgbImage, reference: &RgbImage, res: u32, extent_m: f32) -> Metrics {
     let (ow, oh) = comparison_size(res, reference.width, reference.height);
@@ -144,9 +150,11 @@ pub struct CompareArgs {
     pub a: PathBuf,
     /// Reference image (EXR).
     pub b: PathBuf,
-    /// Comparison resolution for the peak offset and the thresholds (rel-L1 is always printed at 64² and 256²).
-    #[arg(long, default_value_t = 64)]
-    pub res: u32,
+    /// Comparison resolution for the peak offset and the thresholds (rel-L1 is also printed at 64² and 256², where
+    /// the images are that wide or wider).
+    /// [default: 64, or the images' width where they are narrower]
+    #[arg(long)]
+    pub res: Option<u32>,
     /// Physical width of the images in meters (2.0 for the canonical `top` camera).
     #[arg(long, default_value_t = 2.0)]
     pub extent: f32,
@@ -169,8 +177,9 @@ pub struct CompareArgs {
 pub struct CompareReport {
     pub a: String,
     pub b: String,
-    pub rel_l1_64: f64,
-    pub rel_l1_256: f64,
+    /// Null where the images are narrower than 64 (or 256) pixels: a comparison finer than the images is not made.
+    pub rel_l1_64: Option<f64>,
+    pub rel_l1_256: Option<f64>,
     /// The metrics at `--res`, on which the thresholds act.
     pub at_res: Metrics,
     pub extent_m: f32,
@@ -240,7 +249,7 @@ pub fn check_pair(
 }
 
 pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
-    if args.res == 0 {
+    if args.res == Some(0) {
         return Err(AppError::BadInput("--res: must be at least 1".into()));
     }
     if !(args.extent.is_finite() && args.extent > 0.0) {
@@ -261,9 +270,36 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
             b.height
         )));
     }
-    let m64 = compare(&a, &b, 64, args.extent);
-    let m256 = compare(&a, &b, 256, args.extent);
-    let m = compare(&a, &b, args.res, args.extent);
+    if (a.width, a.height) != (b.width, b.height) {
+        log::warn!(
+            "{} is {}x{} and {} is {}x{}: both are box-filtered to the comparison sizes, which only go up to the \
+             smaller image",
+            args.a.display(),
+            a.width,
+            a.height,
+            args.b.display(),
+            b.width,
+            b.height
+        );
+    }
+    // Only the resolutions both images can carry: filtering an image up to a finer grid than its own pixels would
+    // measure the filter, not the images (a 64² pair "compared at 256²" reads many times its real error).
+    let carried = max_comparison_res(&a, &b);
+    let res = args.res.unwrap_or(64.min(carried));
+    if res > carried {
+        return Err(AppError::BadInput(format!(
+            "--res {res}: above what the images carry ({carried} columns; {} is {}x{}, {} is {}x{})",
+            args.a.display(),
+            a.width,
+            a.height,
+            args.b.display(),
+            b.width,
+            b.height
+        )));
+    }
+    let m64 = (carried >= 64).then(|| compare(&a, &b, 64, args.extent));
+    let m256 = (carried >= 256).then(|| compare(&a, &b, 256, args.extent));
+    let m = compare(&a, &b, res, args.extent);
     let mut failures = Vec::new();
     // A NaN fails every threshold.
     let above = |v: f64, max: f64| v.is_nan() || v > max;
@@ -287,16 +323,20 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
         let report = CompareReport {
             a: args.a.display().to_string(),
             b: args.b.display().to_string(),
-            rel_l1_64: m64.rel_l1,
-            rel_l1_256: m256.rel_l1,
+            rel_l1_64: m64.map(|m| m.rel_l1),
+            rel_l1_256: m256.map(|m| m.rel_l1),
             at_res: m,
             extent_m: args.extent,
             failures: failures.clone(),
         };
         println!("{}", serde_json::to_string_pretty(&report).map_err(|e| AppError::Failed(e.to_string()))?);
     } else {
-        println!("rel-L1 (64²):  {:.6}", m64.rel_l1);
-        println!("rel-L1 (256²): {:.6}", m256.rel_l1);
+        for (label, m) in [("rel-L1 (64²): ", m64), ("rel-L1 (256²):", m256)] {
+            match m {
+                Some(m) => println!("{label} {:.6}", m.rel_l1),
+                None => println!("{label} – (finer than the images: {carried} columns)"),
+            }
+        }
         if ![64, 256].contains(&m.res) {
             println!("rel-L1 ({}²): {:.6}", m.res, m.rel_l1);
         }

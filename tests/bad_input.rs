@@ -158,3 +158,27 @@ fn unknown_light_kind_is_reported_before_missing_fields() {
     let text = SCENE.replace("kind = \"spot\"", "kind = \"area\"").replace("intensity = 1.0\n", "");
     expect_bad("light_kind_first", &text, &[], &["{scene}:2: light[0].kind", "unknown light kind `area`"]);
 }
+
+/// A file that is neither TOML nor glTF given as `--scene` is refused by its type, naming the accepted ones (not
+/// with a TOML parse error): an OBJ gets the hint to reference it from a TOML scene.
+#[test]
+fn a_scene_of_the_wrong_file_type_names_the_accepted_types() {
+    let dir = out_dir("wrong_scene_type");
+    let out = dir.join("c.exr");
+    let bunny = format!("{}/assets/meshes/bunny.obj", env!("CARGO_MANIFEST_DIR"));
+    let text = dir.join("scene.txt");
+    std::fs::write(&text, SCENE).unwrap();
+    for (scene, needles) in [
+        (bunny.as_str(), vec!["not a scene file", ".toml", ".gltf, .glb", "found .obj", "shape = \"mesh\""]),
+        (text.to_str().unwrap(), vec!["not a scene file", ".toml", ".gltf, .glb", "found .txt"]),
+    ] {
+        let o = caustics(&["render", "--scene", scene, "--aov", "caustics", "--out", out.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{scene}: {stderr}");
+        for n in needles {
+            assert!(stderr.contains(n), "{scene}: stderr lacks `{n}`:\n{stderr}");
+        }
+        assert!(!stderr.contains("expected") && !stderr.contains("panicked"), "{stderr}");
+        assert_no_output(&out);
+    }
+}

@@ -167,7 +167,12 @@ fn bench_reports_its_reference_noise() {
     let mut noise = Vec::new();
     for photons in ["250000", "1000000"] {
         let (o, json, md) =
-            small_bench(&dir, &format!("b{photons}"), &["--methods", "dense", "--reference-photons", photons]);
+            // The two-interface model's own reference (its paths), named: the default is every path.
+            small_bench(
+                &dir,
+                &format!("b{photons}"),
+                &["--methods", "dense", "--reference-photons", photons, "--paths", "two-refractions"],
+            );
         let e = stderr_of(&o);
         assert!(o.status.success(), "{e}");
         let warned = e.contains("warning: sphere: the reference's noise");
@@ -189,6 +194,14 @@ fn bench_reports_its_reference_noise() {
             )),
             "{table}"
         );
+        assert!(
+            table.contains(
+                "Errors (rel-L1, flux ratio, peak offset) are against the CPU reference of light refracted exactly twice"
+            ),
+            "the report names its reference first:\n{table}"
+        );
+        // 64×64 images carry no 256² comparison: the column is empty, not a filtered-up number.
+        assert!(row["rel_l1_256"].is_null(), "{row}");
         noise.push(n);
     }
     let ratio = noise[0] / noise[1];
@@ -223,6 +236,8 @@ fn bench_json_args_are_structured_and_missing_values_print_as_dashes() {
     assert!(doc["args"].is_object(), "args: {}", doc["args"]);
     assert_eq!(doc["args"]["check_level"], 1);
     assert_eq!(doc["args"]["levels"], "1");
+    // The bench scores against every light path unless told otherwise.
+    assert_eq!(doc["args"]["paths"], "all");
     // Flux-error rows: one per target error, with its tau and, max-level having run too (after them), the error
     // merging added over max-level's image.
     let rows = doc["rows"].as_array().unwrap();

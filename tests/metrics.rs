@@ -263,3 +263,36 @@ fn peak_offset_is_stable() {
         assert!(m.peak_offset_m < 0.002, "res {res}: {m:?}");
     }
 }
+
+/// `compare` reports only the resolutions both images carry: 64×64 images have no 256² rel-L1 (a box filter up to
+/// 256² measured 0.616 where the 64² error was 0.063), `--res` finer than the images is refused (exit 2), and two
+/// sizes that differ get a warning.
+#[test]
+fn compare_reports_only_the_resolutions_the_images_carry() {
+    let dir = temp_dir("carry");
+    let b = blob(64, 64);
+    let (pa, pb, pbig) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("big.exr"));
+    write_exr(&pb, &b).unwrap();
+    write_exr(&pa, &image(64, 64, |x, y| b.at(x, y)[0] * 1.1)).unwrap();
+    let big = blob(256, 256);
+    write_exr(&pbig, &big).unwrap();
+    let (a, bs, bg) = (pa.to_str().unwrap(), pb.to_str().unwrap(), pbig.to_str().unwrap());
+    let (code, out, err) = run_compare(&[a, bs, "--json"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!((v["rel_l1_64"].as_f64().unwrap() - 0.1).abs() < 1e-6, "{out}");
+    assert!(v["rel_l1_256"].is_null(), "{out}");
+    let (code, out, _) = run_compare(&[a, bs]);
+    assert_eq!(code, 0);
+    assert!(out.contains("rel-L1 (256²): – (finer than the images: 64 columns)"), "{out}");
+    let (code, _, err) = run_compare(&[a, bs, "--res", "128"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--res 128") && err.contains("64 columns"), "{err}");
+    // A 64² image against a 256² one: compared at 64², with a warning that the sizes differ.
+    let (code, out, err) = run_compare(&[a, bg, "--json"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(err.contains("warning") && err.contains("64x64") && err.contains("256x256"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["rel_l1_64"].is_number() && v["rel_l1_256"].is_null(), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -233,6 +233,11 @@ fn presents_sphere_frames_and_saves_the_last_one() {
     args.extend_from_slice(FAST);
     let s = view_ok(&dir, "sphere", &x.display, &args);
     assert_eq!(s["frames_presented"], 60);
+    // fps is its definition: the frames presented over the wall time from the first frame to the last present.
+    let (fps, wall) = (s["fps"].as_f64().unwrap(), s["wall_s"].as_f64().unwrap());
+    assert!(wall > 0.0 && (fps - 60.0 / wall).abs() <= 1e-9 * fps, "fps {fps}, wall {wall} s");
+    let interval_sum = s["present_interval_ms"]["mean"].as_f64().unwrap() * 59.0 * 1e-3;
+    assert!(interval_sum <= wall * 1.000001, "59 present intervals ({interval_sum} s) within the wall time {wall} s");
     assert_eq!(s["screenshot"]["source"], "swapchain", "the screenshot copies the presented swapchain image");
     assert_eq!(s["screenshot"]["size"], serde_json::json!([480, 360]));
     assert_eq!(s["swapchain"]["present_mode"], "FIFO");

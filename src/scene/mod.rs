@@ -175,9 +175,28 @@ fn finite3(v: [f32; 3]) -> bool {
 const FINITE: &str = "must be finite (within ±1e9)";
 
 impl Scene {
+    /// Load a scene by its file type: TOML (`.toml`), or glTF 2.0 (`.gltf`, `.glb`). Any other file type is
+    /// refused with the accepted ones named (an OBJ is a mesh: a TOML scene's `[[object]]` references it).
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         if gltf::is_gltf(path) {
             return gltf::load(path);
+        }
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        if ext.as_deref() != Some("toml") {
+            let hint = match ext.as_deref() {
+                Some("obj") => {
+                    "; an OBJ is a mesh, not a scene: add it to a TOML scene as an [[object]] with shape = \"mesh\" \
+                     and path = \"...\" (docs/scenes.md)"
+                }
+                _ => "",
+            };
+            return Err(SceneError::Io {
+                file: path.display().to_string(),
+                message: format!(
+                    "not a scene file: scenes are TOML (.toml) or glTF 2.0 (.gltf, .glb), found {}{hint}",
+                    ext.map_or("no extension".to_string(), |e| format!(".{e}"))
+                ),
+            });
         }
         let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
             file: path.display().to_string(),

@@ -489,6 +489,8 @@ struct Viewer {
     ring: VecDeque<FrameReport>,
     intervals: VecDeque<f64>,
     last_present: Option<Instant>,
+    /// When the first frame started (the viewer's fps is the frames presented over the wall time since then).
+    first_frame_start: Option<Instant>,
     title_since: Instant,
     title_frames: u32,
     title_gpu_ms: f64,
@@ -583,6 +585,7 @@ impl Viewer {
             ring: VecDeque::with_capacity(PROFILE_FRAMES),
             intervals: VecDeque::with_capacity(PROFILE_FRAMES),
             last_present: None,
+            first_frame_start: None,
             title_since: Instant::now(),
             title_frames: 0,
             title_gpu_ms: 0.0,
@@ -900,6 +903,7 @@ impl Viewer {
         let start = Instant::now();
         let dt = self.last_frame_start.map(|t| (start - t).as_secs_f32().min(ANIMATION_MAX_STEP_S)).unwrap_or(0.0);
         self.last_frame_start = Some(start);
+        self.first_frame_start.get_or_insert(start);
         let extent = self.swapchain.as_ref().expect("swapchain").extent;
         // Everything that may fail for reasons other than a broken device happens before the acquire: once an image
         // is acquired, its semaphore must be waited on by a submit.
@@ -1169,6 +1173,10 @@ impl Viewer {
         let stage = |name: &str| summaries.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
         let intervals: Vec<f64> = self.intervals.iter().copied().collect();
         let interval = profiler::Summary::of(&intervals);
+        let wall_s = match (self.first_frame_start, self.last_present) {
+            (Some(a), Some(b)) => (b - a).as_secs_f64(),
+            _ => 0.0,
+        };
         let info = &self.device().info;
         let s = &self.renderer.settings;
         let last = frames.last();
@@ -1214,7 +1222,10 @@ impl Viewer {
             "gpu_total_ms": stage("gpu_total"),
             "frame_ms": stage("frame_wall"),
             "present_interval_ms": interval,
-            "fps": if interval.median > 0.0 { 1e3 / interval.median } else { 0.0 },
+            "wall_s": wall_s,
+            // Frames over wall time: every frame presented, divided by the time from the first frame's start to
+            // the last present (a median interval would hide slow frames among reused ones).
+            "fps": if wall_s > 0.0 { self.counters.presented as f64 / wall_s } else { 0.0 },
             "script": self.script.as_ref().map(|s| s.stats()),
         })
     }
