@@ -3,8 +3,8 @@
 // (normal and distance, and albedo); here each pixel is shaded under one light: direct irradiance through a
 // filtered shadow map, caustic irradiance averaged over the pixel's footprint on the caustic map, and the
 // environment. The first light writes the targets, each further light adds its light (dispatches in order).
-// Shading runs on every compute unit: on GPUs whose graphics units are few, the fragment shader that did this
-// was the eye view's largest cost.
+// Shading runs on every compute unit: on GPUs whose graphics units are few, a fragment shader doing this is the
+// eye view's largest cost.
 // Variant WITH_AOVS also writes the caustics and direct AOVs (W/m^2), for frames that read one back.
 #include "common/types.glsl"
 #include "common/view.glsl"

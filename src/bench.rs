@@ -271,7 +271,7 @@ struct References {
 /// Reference photons for a sweep up to `max_level`: `--reference-photons`, else 4 per cell of the finest grid,
 /// clamped to 1M..=32M (so that a sweep of small levels does not wait for a 32M-photon reference). That keeps the
 /// reference's noise below dense's error up to level 4, not at level 5: on the sphere an 8M-photon reference is
-/// 0.51% (rel-L1 64²) from a 256M one, where dense at level 5 is 0.12% (docs/results.md, "Stop 23"). The bench
+/// 0.51% (rel-L1 64²) from a 256M one, where dense at level 5 is 0.12% (docs/design.md, "Ground truth and error"). The bench
 /// measures the noise of the reference it uses and reports it with every row (`reference_noise`).
 pub fn reference_photons(explicit: Option<u64>, max_level: u32) -> u64 {
     explicit.unwrap_or_else(|| {

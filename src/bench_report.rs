@@ -10,7 +10,7 @@
 //!   branch), null for two-interface;
 //! - `gpu_ms_median` (summed GPU stages of one frame) and `frame_ms_median` (wall time of one frame), over frames;
 //! - the metric against the reference (crate::metrics): `rel_l1_64`, `rel_l1_256`, `flux_ratio`, and
-//!   `peak_offset_m` (added to the brief's shape, because docs/design.md reports all three; defaults to 0 when absent);
+//!   `peak_offset_m` (docs/design.md reports all three; defaults to 0 when absent);
 //! - `extra`: anything else (per-stage times, overflow counts), free-form JSON, defaults to null.
 
 use crate::error::{AppError, AppResult};
@@ -754,7 +754,7 @@ mod tests {
         assert!(report.contains("### Exact transport against two-interface"));
         // The photon table names the transport beside the method when the rows mix them.
         assert!(report.contains(" exact dense | ") && report.contains(" two-interface dense | "), "{report}");
-        // A single transport keeps the old labels and has no transport pivot.
+        // A single transport keeps the plain labels and has no transport pivot.
         let single = markdown_report(&rows());
         assert!(!single.contains("Exact transport against") && !single.contains("two-interface dense"), "{single}");
     }

@@ -7,8 +7,11 @@
 //!
 //! Node layout ("pair", after Aila and Laine 2009): an inner node holds both children's boxes, so one node fetch
 //! tests two boxes and the traversal descends into the nearer child. A child is either another inner node or a
-//! leaf of up to [`MAX_LEAF_TRIS`] consecutive triangles. The alternative layout, one box per node as obvhs keeps
-//! it, was measured against this one (see docs/results.md): `--bvh-layout single` selects it. Both are uploaded.
+//! leaf of up to [`MAX_LEAF_TRIS`] consecutive triangles. Two other layouts are built beside it: "single", one box
+//! per node as obvhs keeps it, and "threaded", one box per node in depth-first order with escape links for a
+//! stackless walk. All three are uploaded; `--bvh-layout` picks the one the waves trace (`auto`: single on GPUs,
+//! pair on CPU devices, the faster on each in docs/results.md), and the traversal checks and the eye composite
+//! walk the pair layout.
 //!
 //! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.

@@ -81,7 +81,8 @@ pub struct FrameData {
     pub scene_max: [f32; 4],
     /// x: refractor g-buffer resolution R; y: log2(R/64); z: caustic map resolution M; w: pyramid mips.
     pub grid: [u32; 4],
-    /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photon capacity (entries).
+    /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photons one batch may emit
+    /// (`Settings::batch_photons`).
     pub traversal: [u32; 4],
     /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold;
     /// w: flux-error's per-cell threshold tau (`Settings::tau`).
@@ -95,7 +96,8 @@ pub struct FrameData {
     /// x: the environment's sky radiance, W/(m²·sr) (0: off); y: eye-ray depth cap (interfaces).
     pub eye: [f32; 4],
     /// x: the index of refraction every refractor shares (-1: all mirrors), 0 when they differ: then the light
-    /// and eye views draw it per texel into their IOR buffers.
+    /// and eye views draw it per texel into their IOR buffers; y: exact transport's weak-branch fraction (0: off);
+    /// z: the weak-branch block side in cells.
     pub material: [f32; 4],
 }
 

@@ -90,7 +90,7 @@ impl CoopChecks {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Footprint {
-    /// The splat radius follows the photon's cell: its side over a caustic-map texel (today's kernel).
+    /// The splat radius follows the photon's cell: its side over a caustic-map texel.
     Cell,
     /// Exact transport: the radius per map axis comes from where the cell lands, by ray differentials (Igehy
     /// 1999) carried through every interface; the ray queues grow from 32 to 80 bytes a ray.

@@ -63,8 +63,8 @@ struct Case {
 }
 
 /// GPU exact transport against the CPU reference with every path, dense level 3 (lavapipe, a few seconds each).
-/// The two-interface method's all-paths errors on the same scenes (issue 9's table, level 4): sphere 4.9%, bunny
-/// 22.9%, tilted cube 55.2%, IOR 2.4 11.8%. The remaining error here is the sampling of a level-3 grid (it halves
+/// The two-interface model cannot get near these at any level: against every path it stays at about 5% on the sphere,
+/// 24% on the bunny and 47% on the tilted cube (docs/results.md). The remaining error here is the sampling of a level-3 grid (it halves
 /// with each level: bunny 9.3% at level 2, 5.0% at level 3) plus the reference's own noise (about 0.2%).
 #[test]
 fn exact_matches_all_paths_reference() {

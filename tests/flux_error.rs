@@ -29,8 +29,8 @@ fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
     compare(img, r, 64, 2.0)
 }
 
-/// The target error the calibration table maps to tau = 0.3, the tau these tests used before `--target-error` was
-/// calibrated (it was tau itself then).
+/// The target error the calibration table maps to tau = 0.3, the threshold these tests' photon counts and error
+/// bounds are sized for.
 const TAU_03: &str = "0.0158";
 
 /// Dense and flux-error at level `level` under exact transport, scored against the every-path reference.
@@ -180,7 +180,7 @@ fn target_error_is_monotonic() {
 /// `--target-error` E. Exact transport, level 4, the sphere and the bunny, E = 0.001 (the default; τ 0.02) and
 /// 0.005 (τ 0.1). Measured on lavapipe (both in their default 4×4 weak-branch blocks): sphere 0.0053% and 0.0583%
 /// (481,480 and 293,314 photons of max-level's 824,416), bunny 0.0044% and 0.343% (472,471 and 338,029 of 491,341;
-/// before the prediction over several levels, stop 22: 0.0053%, 0.0593%, 0.0053% and 0.406%). Margin 1 (the assertion is added ≤ E):
+/// with prediction over one level only: 0.0053%, 0.0593%, 0.0053% and 0.406%). Margin 1 (the assertion is added ≤ E):
 /// these runs are among those the table was built from, whose worst cases for these two τ are 0.081% (the tilted
 /// cube under two-interface) and 0.46% (the bunny under exact transport), both at level 5 (docs/results.md,
 /// "Calibrating --target-error"); the test guards the table, the mapping and the metric against regressions.
@@ -201,7 +201,7 @@ fn target_error_bounds_the_added_error() {
 /// adds over max-level stays within E. Sphere, level 4, check level 2 (so the early look-ahead at level 1 predicts
 /// for level 2, and level 2 for level 3), E = 0.001, both transports; the stats must show skipped checks. Measured
 /// on lavapipe: 110,960 checks skipped under each transport, 413,404 and 417,487 photons (411,268 and 415,321 with
-/// no prediction; 412,108 and 416,287 with one level, stop 22), added rel-L1 1e-6 and 2.0e-4. One level of
+/// no prediction; 412,108 and 416,287 with prediction over one level), added rel-L1 1e-6 and 2.0e-4. One level of
 /// prediction skipped 88,880 and 88,928 checks: more than 100,000 shows the chains over two levels (from the early
 /// look-ahead at level 1 down to level 3) at work.
 #[test]

@@ -192,7 +192,7 @@ fn compare_refuses_an_empty_or_non_finite_reference() {
     n.data[5] = [f32::NAN, 0.0, 0.0];
     write_exr(&pn, &n).unwrap();
     let (a, z, nn) = (pa.to_str().unwrap(), pz.to_str().unwrap(), pn.to_str().unwrap());
-    // Two all-zero images used to score rel-L1 0 and flux ratio 1.
+    // Two all-zero images would score rel-L1 0 and flux ratio 1: a reference must not be all zero.
     for (test, reference, needle) in
         [(z, z, "all zero"), (a, z, "all zero"), (a, nn, "non-finite"), (nn, a, "non-finite")]
     {

@@ -25,7 +25,8 @@ struct FrameData {
     uvec4 traversal;     // x: max level; y: bits 0-7 metric (0 max-level, 1 max-error, 2 flux-error), bit 8 batching;
                          // z: first level checked for convergence; w: photons one batch may emit
     vec4 params;         // x: error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's
-                         // flux threshold (relative to the photon's flux); w: flux-error's target error
+                         // flux threshold (relative to the photon's flux); w: flux-error's per-cell threshold tau
+                         // (src/calibration.rs maps --target-error to it)
     uvec4 transport;     // x: 1 exact transport, 0 two-interface; y: rays per queue; z: splat records (one per
                          // photon-buffer entry: the buffer's entries); w: bits
                          // 0-7 the color channel of this pass (0: one gray pass; 1, 2, 3: red, green, blue),
@@ -33,7 +34,8 @@ struct FrameData {
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
     vec4 eye;            // x: sky radiance (W/m^2/sr; 0: off); y: eye-ray depth cap (interfaces)
     vec4 material;       // x: the IOR every refractor shares (-1: mirrors), 0 if they differ (then: IOR buffers);
-                         // y: exact transport's weak-branch fraction (0: off; wave.comp)
+                         // y: exact transport's weak-branch fraction (0: off; wave.comp); z: the weak-branch
+                         // block side in cells (2 or 4)
 };
 
 // The front surface's index of refraction: shared by the scene's refractors, else from the IOR buffer's texel.
@@ -80,7 +82,7 @@ struct TraversalState {
 // account. Wave k traces ray queue k & 1 (wave 0: the batch's emitted photons) and appends the children to queue
 // (k + 1) & 1 with atomicAdd; the transport shader turns out_count into the next wave's dispatch arguments.
 // Account terms are flux / light intensity (sr for spot lights, m^2 for directional ones) in 64-bit fixed point
-// (ACCOUNT_SCALE units per 1), added as (lo, hi) word pairs with a carry, so the sums are exact and repeatable.
+// (2^ACCOUNT_SHIFT units per 1), added as (lo, hi) word pairs with a carry, so the sums are exact and repeatable.
 const uint ACC_EMITTED = 0u;    // photons that entered the transport
 const uint ACC_CAUSTIC = 1u;    // reached a receiver after one or more specular interactions
 const uint ACC_DIRECT = 2u;     // reached a receiver with none (direct light, counted by the direct AOV)

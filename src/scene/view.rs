@@ -1,6 +1,6 @@
 //! Light and camera views: the light-space parametrization that photons, the caustic map and the shadow map
 //! share, and the eye camera. Everything the shaders compute from these comes from the same numbers (see
-//! `glsl/common/light.glsl`), so the Rust and GLSL sides agree to float rounding.
+//! `glsl/common/view.glsl`), so the Rust and GLSL sides agree to float rounding.
 //!
 //! Light image coordinates: a spot light's image plane sits at distance 1 along its forward axis, so the point
 //! (x, y) on it is the direction x·right + y·down + forward. A directional light's image coordinates are meters

@@ -1,5 +1,5 @@
-//! The viewer's controls: one table that drives both the key handling and the help that `H` prints (and that the
-//! README copies).
+//! The viewer's controls: one table that drives both the key handling and the help that `H` prints (and that
+//! docs/viewer.md copies; tests/docs.rs checks the copy).
 
 use winit::keyboard::{Key, NamedKey};
 
@@ -144,7 +144,7 @@ pub fn help_text() -> String {
     out
 }
 
-/// The controls as a Markdown table (for the README).
+/// The controls as a Markdown table (`caustics view --print-controls`; docs/viewer.md holds a copy).
 pub fn help_markdown() -> String {
     let mut out = String::from("| Input | Action |\n|---|---|\n");
     for c in CONTROLS {
