@@ -12,7 +12,7 @@ use crate::metrics;
 use crate::profiler::Summary;
 use crate::reference::{self, Paths, RefParams};
 use crate::renderer::{Aov, FrameReport};
-use crate::settings::{Driven, Method, Metric, Settings, Transport, TRAVERSE_WG_SWEEP};
+use crate::settings::{Driven, Method, Metric, Quality, Settings, Transport, Tuning, TRAVERSE_WG_SWEEP};
 use crate::shaders::consts::*;
 use serde_json::json;
 use std::collections::HashMap;
@@ -70,31 +70,10 @@ pub struct BenchArgs {
     /// Side of the caustic map (and of the shadow map).
     #[arg(long, default_value_t = 1024)]
     pub caustic_res: u32,
-    /// Side of the light-view refractor g-buffers (power of two).
-    #[arg(long, default_value_t = 1024)]
-    pub gbuffer_res: u32,
-    /// Max-error and flux-error metrics: first level checked for convergence [default: 3; flux-error: 3, at most
-    /// the row's level - 1].
-    #[arg(long, allow_negative_numbers = true, value_parser = crate::commands::level_arg)]
-    pub check_level: Option<u32>,
-    /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux.
-    #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
-    pub flux_threshold: f32,
-    /// Exact transport: the weak-branch fraction (see `render --weak-branches`).
-    #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
-    pub weak_branches: f32,
-    /// Exact transport: the weak-branch block side (see `render --weak-block`; 0: automatic).
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    pub weak_block: u32,
-    /// Exact transport: BVH node layout (auto: single on GPUs, pair on CPU devices; pair; single; threaded).
-    #[arg(long, value_enum, default_value_t = crate::bvh::BvhLayout::Auto)]
-    pub bvh_layout: crate::bvh::BvhLayout,
-    /// Exact transport: where the splat radius comes from (cell or differential).
-    #[arg(long, value_enum, default_value_t = Settings::default().footprint)]
-    pub footprint: crate::settings::Footprint,
-    /// Max-error bound (caustic-map texels).
-    #[arg(long, default_value_t = 1.0)]
-    pub error_bound: f32,
+    /// The tuning knobs, as `render` takes them (the bench sweeps --driven and --traverse-wg itself).
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub tuning: crate::commands::TuningArgs,
     /// Flux-error metric: the target errors to sweep (comma-separated, each in (0, 1]: the relative L1 at 64²
     /// that merging may add to max-level's image), each mapped to its per-cell threshold tau by the calibration
     /// table; with more than one, the rows' metric reads `flux-error@E`. When max-level runs too, each flux-error
@@ -376,17 +355,12 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
         let scene_args =
             SceneArgs { scene: Some(scene_path.clone()), camera: Some(args.camera.clone()), size: args.size.clone() };
         let base = Settings {
-            caustic_res: args.caustic_res,
-            gbuffer_res: args.gbuffer_res,
-            error_bound: args.error_bound,
-            photon_budget_mib: args.photon_budget,
-            check_level: args.check_level,
-            flux_threshold: args.flux_threshold,
-            weak_branches: args.weak_branches,
-            weak_block: args.weak_block,
-            bvh_layout: args.bvh_layout,
-            footprint: args.footprint,
-            ..Settings::default()
+            quality: Quality {
+                caustic_res: args.caustic_res,
+                photon_budget_mib: args.photon_budget,
+                ..Quality::default()
+            },
+            tuning: args.tuning.tuning(Driven::Gpu, TRAVERSE_WG),
         };
         let mut session = Session::open(&scene_args, base.clone())?;
         // Max-level's image per (transport, level), and the flux-error rows to score against it once the scene's
@@ -413,14 +387,15 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                     continue;
                 }
                 let s = Settings {
-                    transport,
-                    method: p.method,
-                    metric: p.metric,
-                    level,
-                    driven: p.driven,
-                    traverse_wg: p.wg,
-                    target_error: p.target_error,
-                    ..base.clone()
+                    quality: Quality {
+                        transport,
+                        method: p.method,
+                        metric: p.metric,
+                        level: Some(level),
+                        target_error: p.target_error,
+                        ..base.quality.clone()
+                    },
+                    tuning: Tuning { driven: p.driven, traverse_wg: p.wg, ..base.tuning.clone() },
                 };
                 session.renderer.set_settings(s)?;
                 let t = Instant::now();

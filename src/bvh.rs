@@ -97,8 +97,8 @@ const _: () = {
 #[serde(rename_all = "kebab-case")]
 pub enum BvhLayout {
     /// The faster layout for the device, by the rule measured in docs/results.md ("Exact transport on the H200"):
-    /// single on GPUs, pair on CPU devices. `Settings::resolve_for_device` replaces it with the layout it picks,
-    /// so the stats report that.
+    /// single on GPUs, pair on CPU devices. The settings resolve it to the layout it picks, so the stats report
+    /// that.
     Auto,
     /// Both children's boxes in the parent (64-byte nodes).
     Pair,
@@ -112,9 +112,9 @@ impl BvhLayout {
     /// The layout a device traces with: `auto` follows the measured rule. On the H200 the single-box layout's
     /// bounce waves are 10-15% faster than the pair layout's (frame: 8-10% faster at level 5, sphere and bunny);
     /// on lavapipe the pair layout is about 20% faster.
-    pub fn resolve(self, info: &crate::vk::DeviceInfo) -> BvhLayout {
+    pub fn resolve(self, class: crate::settings::DeviceClass) -> BvhLayout {
         match self {
-            BvhLayout::Auto if info.is_cpu() => BvhLayout::Pair,
+            BvhLayout::Auto if class == crate::settings::DeviceClass::Cpu => BvhLayout::Pair,
             BvhLayout::Auto => BvhLayout::Single,
             l => l,
         }

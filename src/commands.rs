@@ -6,7 +6,10 @@ use crate::image_io::{self, RgbImage};
 use crate::profiler;
 use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
-use crate::settings::{parse_size, CoopChecks, Driven, Footprint, Method, Metric, Settings, Splat, Transport};
+use crate::settings::{
+    parse_size, CoopChecks, Driven, Footprint, Method, Metric, Quality, ResolvedSettings, Settings, Splat, Transport,
+    Tuning, DEFAULT_TARGET_ERROR,
+};
 use crate::shaders::consts::*;
 use crate::vk::{self, Context, ContextDesc};
 use serde_json::{json, Value};
@@ -35,82 +38,86 @@ pub struct SceneArgs {
     pub size: String,
 }
 
-#[derive(clap::Args, Debug, Clone)]
-pub struct MethodArgs {
+/// The quality options of `render`, `profile` and `view`: what is rendered and how finely.
+#[derive(clap::Args, Debug, Clone, serde::Serialize)]
+pub struct QualityArgs {
     /// Light transport through the glass: exact (every path, traced through a BVH in waves) or the papers'
-    /// two-interface image-space model.
-    #[arg(long, value_enum, default_value_t = Settings::default().transport)]
+    /// two-interface image-space model (light refracted exactly twice).
+    #[arg(long, value_enum, default_value_t = Quality::default().transport)]
     pub transport: Transport,
-    /// How splat records reach the caustic flux map: points drawn indirectly (raster), a compute pass with
-    /// float atomics (compute), or the faster of the two for the device (auto).
-    #[arg(long, value_enum, default_value_t = Settings::default().splat)]
-    pub splat: Splat,
-    /// Exact transport: splat radius from the photon's cell (cell) or, per map axis, from where the cell lands,
-    /// by ray differentials (differential).
-    #[arg(long, value_enum, default_value_t = Settings::default().footprint)]
-    pub footprint: Footprint,
+    /// Photon source: dense grid, or adaptive traversal of the photon quadtree.
+    #[arg(long, value_enum, default_value_t = Quality::default().method)]
+    pub method: Method,
+    /// Adaptive stopping metric [default: max-level] (adaptive only; dense warns that it ignores it).
+    #[arg(long, value_enum)]
+    pub metric: Option<Metric>,
+    /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive) [default: 5].
+    #[arg(long, allow_negative_numbers = true, value_parser = level_arg)]
+    pub level: Option<u32>,
+    /// Flux-error metric: the target error, the relative L1 at 64² that merging cells may add to max-level's
+    /// image at the same level, in (0, 1]; mapped to the metric's per-cell threshold by a measured table
+    /// (docs/design.md) [default: 0.001] (--metric flux-error only; other metrics warn that they ignore it).
+    #[arg(long, allow_negative_numbers = true)]
+    pub target_error: Option<f32>,
+    /// Side of the caustic map (and of the shadow map).
+    #[arg(long, default_value_t = Quality::default().caustic_res)]
+    pub caustic_res: u32,
+    /// Beauty anti-aliasing: N×N supersamples per pixel (1..=4; the caustics and direct AOVs are always point
+    /// samples at the pixel centers).
+    #[arg(long, default_value_t = Quality::default().aa, allow_negative_numbers = true)]
+    pub aa: u32,
     /// Beauty exposure in stops (EV), added to the automatic exposure before the ACES tone map.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
-    /// Beauty anti-aliasing: N×N supersamples per pixel (1..=4; the caustics and direct AOVs are always point
-    /// samples at the pixel centers).
-    #[arg(long, default_value_t = Settings::default().aa, allow_negative_numbers = true)]
-    pub aa: u32,
     /// Sky radiance of the environment in W/(m²·sr) (0: off) [default: 25% of the reference radiance]. It
     /// lights the receivers and is seen through and in the glass; the caustics and direct AOVs never include it.
     #[arg(long, allow_negative_numbers = true)]
     pub sky: Option<f32>,
     /// Exact transport: interfaces an eye ray is followed through (reflection and refraction) before it takes
     /// the environment's radiance.
-    #[arg(long, default_value_t = Settings::default().eye_depth, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = Quality::default().eye_depth, allow_negative_numbers = true)]
     pub eye_depth: u32,
-    /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
-    #[arg(long, default_value_t = Settings::default().flux_threshold, allow_negative_numbers = true)]
-    pub flux_threshold: f32,
-    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
-    /// the finest level's cells (`--weak-block`; by one of the block's photons, carrying the block's share, with a
-    /// splat as wide as the block) instead of by each photon; the flux moved is accounted (0: off).
-    #[arg(long, default_value_t = Settings::default().weak_branches, allow_negative_numbers = true)]
-    pub weak_branches: f32,
-    /// Exact transport: the side of a weak-branch block in cells of the finest level, 2 or 4; 0: automatic (4).
-    /// Photons as large as the block or larger trace their own weak branches.
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    pub weak_block: u32,
-    /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node;
-    /// auto: single on GPUs, pair on CPU devices, the faster on each in docs/results.md).
-    #[arg(long, value_enum, default_value_t = BvhLayout::Auto)]
-    pub bvh_layout: BvhLayout,
-    /// Photon source: dense grid, or adaptive traversal.
-    #[arg(long, value_enum, default_value_t = Method::Adaptive)]
-    pub method: Method,
-    /// Adaptive stopping metric [default: max-level] (adaptive only; dense warns that it ignores it).
-    #[arg(long, value_enum)]
-    pub metric: Option<Metric>,
-    /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive).
-    #[arg(long, default_value_t = 5, allow_negative_numbers = true, value_parser = level_arg)]
-    pub level: u32,
-    /// Who writes the traversal's dispatch arguments: the GPU (indirect) or the host (readback per level)
-    /// [default: gpu] (adaptive only; dense warns that it ignores it).
-    #[arg(long, value_enum)]
-    pub driven: Option<Driven>,
     /// Photon buffer size in MiB (batches are split to fit); 0: automatic (64 MiB on CPU devices; on GPUs 1/64 of
     /// device memory, 64 to 512 MiB, within what one storage-buffer binding allows)
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub photon_budget: f64,
+}
+
+/// The tuning knobs (`--help` lists them under "Tuning"): each default is the measured best for the device, so a
+/// user needs none of them; they exist to measure the alternatives.
+#[derive(clap::Args, Debug, Clone, serde::Serialize)]
+pub struct TuningArgs {
+    /// How splat records reach the caustic flux map: points drawn indirectly (raster), a compute pass with
+    /// float atomics (compute), that pass gathering a work group's taps in shared memory first (tiled), or the
+    /// faster for the device (auto).
+    #[arg(long, value_enum, default_value_t = Tuning::default().splat, help_heading = "Tuning")]
+    pub splat: Splat,
+    /// Exact transport: splat radius from the photon's cell (cell) or, per map axis, from where the cell lands,
+    /// by ray differentials (differential).
+    #[arg(long, value_enum, default_value_t = Tuning::default().footprint, help_heading = "Tuning")]
+    pub footprint: Footprint,
+    /// Exact transport: cut a Fresnel branch below this fraction of its photon's flux (the cut flux is accounted).
+    #[arg(long, default_value_t = Tuning::default().flux_threshold, allow_negative_numbers = true, help_heading = "Tuning")]
+    pub flux_threshold: f32,
+    /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
+    /// the finest level's cells (`--weak-block`; by one of the block's photons, carrying the block's share, with a
+    /// splat as wide as the block) instead of by each photon; the flux moved is accounted (0: off).
+    #[arg(long, default_value_t = Tuning::default().weak_branches, allow_negative_numbers = true, help_heading = "Tuning")]
+    pub weak_branches: f32,
+    /// Exact transport: the side of a weak-branch block in cells of the finest level, 2 or 4; 0: automatic (4).
+    /// Photons as large as the block or larger trace their own weak branches.
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, help_heading = "Tuning")]
+    pub weak_block: u32,
+    /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node;
+    /// threaded: stackless; auto: single on GPUs, pair on CPU devices, the faster on each).
+    #[arg(long, value_enum, default_value_t = BvhLayout::Auto, help_heading = "Tuning")]
+    pub bvh_layout: BvhLayout,
     /// Side of the light-view refractor g-buffers (power of two).
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = Tuning::default().gbuffer_res, help_heading = "Tuning")]
     pub gbuffer_res: u32,
-    /// Side of the caustic map (and of the shadow map).
-    #[arg(long, default_value_t = 1024)]
-    pub caustic_res: u32,
     /// Max-error metric: convergence bound in caustic-map texels.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, help_heading = "Tuning")]
     pub error_bound: f32,
-    /// Flux-error metric: the target error, the relative L1 at 64² that merging cells may add to max-level's
-    /// image at the same level, in (0, 1]; mapped to the metric's per-cell threshold by a measured table
-    /// (docs/design.md) [default: 0.001] (--metric flux-error only; other metrics warn that they ignore it).
-    #[arg(long, allow_negative_numbers = true)]
-    pub target_error: Option<f32>,
     /// Testing and calibration: the flux-error metric's per-cell threshold tau itself, instead of the one
     /// --target-error maps to.
     #[arg(long, hide = true, allow_negative_numbers = true)]
@@ -118,17 +125,14 @@ pub struct MethodArgs {
     /// Max-error and flux-error metrics: first level checked for convergence [default: 3; flux-error: 3, at most
     /// --level - 1]. Flux-error's look-ahead starts one level above it: a cell there may emit its four children at
     /// once, never itself.
-    #[arg(long, allow_negative_numbers = true, value_parser = level_arg)]
+    #[arg(long, allow_negative_numbers = true, value_parser = level_arg, help_heading = "Tuning")]
     pub check_level: Option<u32>,
-    /// Traversal work-group side (1, 2, 4, 8 or 16).
-    #[arg(long, default_value_t = TRAVERSE_WG)]
-    pub traverse_wg: u32,
     /// Exact transport, max-error and flux-error at --traverse-wg 8: trace each cell's four checks in four
     /// invocations at once (on) or in one, one after another (off); auto: on for GPUs, off for CPU devices.
-    #[arg(long, value_enum, default_value_t = CoopChecks::Auto)]
+    #[arg(long, value_enum, default_value_t = CoopChecks::Auto, help_heading = "Tuning")]
     pub coop_checks: CoopChecks,
     /// Batch slots recorded per frame for GPU-driven batching (0: automatic, adapted between frames).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, help_heading = "Tuning")]
     pub batch_slots: u32,
     /// Testing: do not split batches on overflow (overflowing work is dropped and counted).
     #[arg(long, hide = true)]
@@ -139,6 +143,73 @@ pub struct MethodArgs {
     /// Testing: dump only photons of this level or deeper.
     #[arg(long, hide = true, default_value_t = 0)]
     pub debug_min_level: u32,
+}
+
+/// Adaptive traversal's single-valued tuning (the bench sweeps both as lists instead).
+#[derive(clap::Args, Debug, Clone, serde::Serialize)]
+pub struct TraversalArgs {
+    /// Who writes the traversal's dispatch arguments: the GPU (indirect) or the host (readback per level)
+    /// [default: gpu] (adaptive only; dense warns that it ignores it).
+    #[arg(long, value_enum, help_heading = "Tuning")]
+    pub driven: Option<Driven>,
+    /// Traversal work-group side (1, 2, 4, 8 or 16).
+    #[arg(long, default_value_t = TRAVERSE_WG, help_heading = "Tuning")]
+    pub traverse_wg: u32,
+}
+
+/// Every option that shapes a frame: the quality, then the tuning.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MethodArgs {
+    #[command(flatten)]
+    pub quality: QualityArgs,
+    #[command(flatten)]
+    pub traversal: TraversalArgs,
+    #[command(flatten)]
+    pub tuning: TuningArgs,
+}
+
+impl TuningArgs {
+    /// The tuning these flags give (driven and the work group from `traversal`, or the bench's row).
+    pub fn tuning(&self, driven: Driven, traverse_wg: u32) -> Tuning {
+        Tuning {
+            splat: self.splat,
+            footprint: self.footprint,
+            flux_threshold: self.flux_threshold,
+            weak_branches: self.weak_branches,
+            weak_block: self.weak_block,
+            bvh_layout: self.bvh_layout,
+            driven,
+            gbuffer_res: self.gbuffer_res,
+            error_bound: self.error_bound,
+            tau: self.tau,
+            check_level: self.check_level,
+            traverse_wg,
+            coop_checks: self.coop_checks,
+            batching: !self.no_batching,
+            batch_slots: self.batch_slots,
+            debug_photons: self.debug_photons,
+            debug_min_level: self.debug_min_level,
+            ..Tuning::default()
+        }
+    }
+}
+
+impl QualityArgs {
+    pub fn quality(&self) -> Quality {
+        Quality {
+            transport: self.transport,
+            method: self.method,
+            metric: self.metric.unwrap_or(Quality::default().metric),
+            level: self.level,
+            target_error: self.target_error.unwrap_or(DEFAULT_TARGET_ERROR),
+            caustic_res: self.caustic_res,
+            aa: self.aa,
+            exposure_ev: self.exposure,
+            sky: self.sky,
+            eye_depth: self.eye_depth,
+            photon_budget_mib: self.photon_budget,
+        }
+    }
 }
 
 /// A level flag (`--level`, `--check-level`): an integer in 0..MAX_LEVELS, with a range message for anything else
@@ -153,59 +224,37 @@ pub fn level_arg(s: &str) -> Result<u32, String> {
 }
 
 impl MethodArgs {
+    /// The settings these flags give, validated, with a warning for each flag the method ignores.
     pub fn settings(&self) -> AppResult<Settings> {
+        let (q, t) = (&self.quality, &self.traversal);
         let s = Settings {
-            transport: self.transport,
-            exposure_ev: self.exposure,
-            aa: self.aa,
-            sky: self.sky,
-            eye_depth: self.eye_depth,
-            splat: self.splat,
-            footprint: self.footprint,
-            flux_threshold: self.flux_threshold,
-            weak_branches: self.weak_branches,
-            weak_block: self.weak_block,
-            bvh_layout: self.bvh_layout,
-            method: self.method,
-            metric: self.metric.unwrap_or(Metric::MaxLevel),
-            level: self.level,
-            driven: self.driven.unwrap_or(Driven::Gpu),
-            photon_budget_mib: self.photon_budget,
-            gbuffer_res: self.gbuffer_res,
-            caustic_res: self.caustic_res,
-            error_bound: self.error_bound,
-            target_error: self.target_error.unwrap_or(crate::settings::DEFAULT_TARGET_ERROR),
-            tau: self.tau,
-            check_level: self.check_level,
-            traverse_wg: self.traverse_wg,
-            coop_checks: self.coop_checks,
-            batching: !self.no_batching,
-            batch_slots: self.batch_slots,
-            debug_photons: self.debug_photons,
-            debug_min_level: self.debug_min_level,
-            ..Settings::default()
+            quality: q.quality(),
+            tuning: self.tuning.tuning(t.driven.unwrap_or(Driven::Gpu), t.traverse_wg),
         };
         s.validate()?;
-        if s.method == Method::Dense {
-            for (flag, given) in [("--metric", self.metric.is_some()), ("--driven", self.driven.is_some())] {
+        let (method, metric) = (s.quality.method, s.quality.metric);
+        if method == Method::Dense {
+            for (flag, given) in [("--metric", q.metric.is_some()), ("--driven", t.driven.is_some())] {
                 if given {
-                    eprintln!("warning: {flag} applies to --method adaptive only; --method dense ignores it");
+                    log::warn!("{flag} applies to --method adaptive only; --method dense ignores it");
                 }
             }
         }
-        for (flag, given) in [("--target-error", self.target_error.is_some()), ("--tau", self.tau.is_some())] {
-            if given && (s.method == Method::Dense || s.metric != Metric::FluxError) {
-                eprintln!("warning: {flag} applies to --method adaptive --metric flux-error only; ignored");
+        for (flag, given) in [("--target-error", q.target_error.is_some()), ("--tau", self.tuning.tau.is_some())] {
+            if given && (method == Method::Dense || metric != Metric::FluxError) {
+                log::warn!("{flag} applies to --method adaptive --metric flux-error only; ignored");
             }
         }
-        if self.target_error.is_some() && self.tau.is_some() {
-            eprintln!("warning: --tau overrides the threshold --target-error maps to");
+        if q.target_error.is_some() && self.tuning.tau.is_some() {
+            log::warn!("--tau overrides the threshold --target-error maps to");
         }
-        if s.method == Method::Dense && s.level > 12 {
-            return Err(AppError::BadInput(format!(
-                "--level {}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper levels",
-                s.level
-            )));
+        if let (Method::Dense, Some(level)) = (method, q.level) {
+            if level > 12 {
+                return Err(AppError::BadInput(format!(
+                    "--level {level}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper \
+                     levels"
+                )));
+            }
         }
         Ok(s)
     }
@@ -300,13 +349,13 @@ impl Session {
     /// become several rays each), 100× less on a GPU. `None` for max-error and flux-error, whose counts are not
     /// known ahead.
     pub fn estimate_frame_s(&self) -> Option<f64> {
-        frame_estimate_s(&self.renderer.settings, self.device().info.is_cpu())
+        frame_estimate_s(self.renderer.config(), self.device().info.is_cpu())
     }
 
     /// Warn when a frame is estimated to take longer than [`SLOW_FRAME_S`], and turn on progress lines.
     pub fn warn_if_slow(&mut self) {
         if let Some(est) = self.estimate_frame_s().filter(|&t| t > SLOW_FRAME_S) {
-            let s = &self.renderer.settings;
+            let s = self.renderer.config();
             eprintln!(
                 "warning: level {} emits up to {} photons ({}²); a frame may take up to about {:.0} s on {}; \
                  a lower --level (or --method adaptive --metric max-error) is faster",
@@ -383,7 +432,7 @@ fn check_output(aov: Aov, out: &Path) -> AppResult<Aov> {
 }
 
 /// See [`Session::estimate_frame_s`]; `cpu`: the device is a CPU driver (lavapipe).
-pub fn frame_estimate_s(s: &Settings, cpu: bool) -> Option<f64> {
+pub fn frame_estimate_s(s: &ResolvedSettings, cpu: bool) -> Option<f64> {
     if s.method == Method::Adaptive && s.metric != Metric::MaxLevel {
         return None;
     }
@@ -439,14 +488,14 @@ fn level_rows(report: &FrameReport, max_level: u32) -> Vec<Value> {
 }
 
 /// Whether the settings run the flux-error metric (the stats then report its target error and tau).
-pub fn flux_error(s: &Settings) -> bool {
+pub fn flux_error(s: &ResolvedSettings) -> bool {
     s.method == Method::Adaptive && s.metric == Metric::FluxError
 }
 
 /// The stats JSON of docs/design.md, over `frames` (the per-frame counts are the last frame's).
 pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Value {
     let r = &session.renderer;
-    let s = &r.settings;
+    let s = r.config();
     let last = frames.last().cloned().unwrap_or_default();
     let st = last.state;
     let info = &session.device().info;
@@ -512,27 +561,27 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
 /// (emitted = caustics + direct + escaped + cut_threshold + cut_cap + lost + overflow, with the residual).
 fn transport_json(session: &Session, report: &FrameReport) -> Value {
     let r = &session.renderer;
-    if r.settings.transport != Transport::Exact {
+    if r.config().transport != Transport::Exact {
         return Value::Null;
     }
     let bvh = &r.scene_buffers.bvh;
     let mut v = json!({
         "bvh": {
-            "layout": r.settings.bvh_layout,
+            "layout": r.config().bvh_layout,
             "build_ms": bvh.build_ms,
             "triangles": bvh.triangle_count,
             "instances": bvh.instance_count,
-            "nodes": match r.settings.bvh_layout {
+            "nodes": match r.config().bvh_layout {
                 BvhLayout::Pair | BvhLayout::Auto => bvh.pair_node_count,
                 BvhLayout::Single => bvh.single_node_count,
                 BvhLayout::Threaded => bvh.threaded_node_count,
             },
         },
-        "flux_threshold": r.settings.flux_threshold,
-        "weak_branches": r.settings.weak_branches,
-        "weak_block": r.settings.weak_block(),
+        "flux_threshold": r.config().flux_threshold,
+        "weak_branches": r.config().weak_branches,
+        "weak_block": r.config().weak_block(),
         "max_interactions": MAX_INTERACTIONS,
-        "ray_queue_capacity": r.settings.ray_queue_capacity(),
+        "ray_queue_capacity": r.config().ray_queue_capacity(),
     });
     if let Some(ts) = report.transport {
         if let Value::Object(m) = &mut v {
@@ -636,7 +685,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
 
 /// The EXR header metadata of a rendered AOV (docs/design.md, "CLI contract").
 fn exr_meta(session: &Session, aov: &str) -> image_io::ExrMeta {
-    let s = &session.renderer.settings;
+    let s = &session.renderer.config();
     let mut m = image_io::ExrMeta::new();
     m.insert("scene".into(), session.scene_path.display().to_string());
     m.insert("scene_hash".into(), image_io::file_hash(&session.scene_path));
@@ -712,7 +761,7 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
         let stats = stats_json(&session, &reports, json!({}));
         println!("{}", serde_json::to_string_pretty(&stats).unwrap_or_default());
     } else {
-        let s = &session.renderer.settings;
+        let s = &session.renderer.config();
         let last = reports.last().expect("frames");
         println!(
             "{} | {} | {:?} {} level {} ({}²) {} | {} photons, {} batches, {} host readbacks/frame",
@@ -776,7 +825,8 @@ mod tests {
 
     #[test]
     fn slow_frames_are_foreseen() {
-        let at = |method, level, transport| Settings { method, level, transport, ..Settings::default() };
+        let at =
+            |method, level, transport| ResolvedSettings { method, level, transport, ..ResolvedSettings::default() };
         let dense8 = frame_estimate_s(&at(Method::Dense, 8, Transport::TwoInterface), true).unwrap();
         assert!(dense8 > SLOW_FRAME_S, "dense level 8 on lavapipe: {dense8} s");
         let dense2 = frame_estimate_s(&at(Method::Dense, 2, Transport::TwoInterface), true).unwrap();

@@ -25,7 +25,7 @@ use crate::passes::Passes;
 use crate::renderer::{Aov, AovData, FrameReport, FrameSlot, LightReport, Renderer, Views};
 use crate::scene::view::CameraView;
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Driven, Method, Settings, Splat, Transport};
+use crate::settings::{Driven, Method, ResolvedSettings, Splat, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{ReceiverTargets, Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::{Access, Barriers, Buffer, Device, Image, Recorder, Sampler, SubmitSync, Timestamps, VkResult};
@@ -112,7 +112,9 @@ struct Ctx<'a> {
     /// Index of this (light, color channel) pass, and its channel among the light's (0 for a gray frame).
     pass: usize,
     channel: usize,
-    s: &'a Settings,
+    s: &'a ResolvedSettings,
+    /// A viewer preview: one eye sample per pixel, glass by two-surface deferred refraction.
+    preview: bool,
     data: &'a FrameData,
     /// The records are splatted by the compute pass into the flux texels (else drawn as points).
     compute_splat: bool,
@@ -158,7 +160,7 @@ pub(crate) struct Pending {
     /// Its caustic inputs (see [`Renderer::caustic_key`]).
     key: String,
     /// The settings it was recorded with (the readback layout and what to read depend on them).
-    settings: Settings,
+    settings: ResolvedSettings,
 }
 
 impl Renderer {
@@ -172,13 +174,14 @@ impl Renderer {
     pub fn render_frame_at(
         &mut self,
         level: u32,
+        preview: bool,
         camera: &CameraView,
         aov: Option<Aov>,
         finish: Option<Finish>,
         sync: &SubmitSync,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
         self.finish_frames()?;
-        self.submit_frame_at(level, camera, aov, finish, sync)?;
+        self.submit_frame_at(level, preview, camera, aov, finish, sync)?;
         let pending = self.pending.pop_back().expect("the frame just submitted");
         self.complete(pending)
     }
@@ -192,8 +195,8 @@ impl Renderer {
         finish: Option<Finish>,
         sync: &SubmitSync,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
-        let level = self.settings.level;
-        self.render_frame_at(level, camera, aov, finish, sync)
+        let level = self.config.level;
+        self.render_frame_at(level, false, camera, aov, finish, sync)
     }
 
     /// The frame-in-flight slot the next frame takes. When every slot is in flight, this first waits for the
@@ -228,20 +231,22 @@ impl Renderer {
     pub fn submit_frame_at(
         &mut self,
         level: u32,
+        preview: bool,
         camera: &CameraView,
         aov: Option<Aov>,
         finish: Option<Finish>,
         sync: &SubmitSync,
     ) -> AppResult<()> {
-        let chosen = self.settings.level;
-        self.settings.level = level.min(chosen);
-        let out = self.submit(camera, aov, finish, sync);
-        self.settings.level = chosen;
+        let chosen = self.config.level;
+        self.config.level = level.min(chosen);
+        let out = self.submit(preview, camera, aov, finish, sync);
+        self.config.level = chosen;
         out
     }
 
     fn submit(
         &mut self,
+        preview: bool,
         camera: &CameraView,
         aov: Option<Aov>,
         finish: Option<Finish>,
@@ -252,21 +257,20 @@ impl Renderer {
         // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
         let aa = match aov {
             Some(Aov::Caustics) | Some(Aov::Direct) => 1,
-            _ if self.settings.preview => 1,
-            _ => self.settings.aa,
+            _ if preview => 1,
+            _ => self.config.aa,
         };
         self.ensure_targets(camera.width, camera.height, aa)?;
         let nl = self.scene.lights.len();
         // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
         let nc = self.scene.color_channels();
-        let views =
-            (0..nl).map(|i| Views::new(&self.scene, &self.settings, camera, i)).collect::<AppResult<Vec<_>>>()?;
+        let views = (0..nl).map(|i| Views::new(&self.scene, &self.config, camera, i)).collect::<AppResult<Vec<_>>>()?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
         let key = self.caustic_key();
-        let self_level = self.settings.level;
+        let self_level = self.config.level;
         let reused = self.reuse && self.last_caustic.as_ref().is_some_and(|(k, _)| *k == key);
         let (data, slots) = {
             let t = self.targets.as_ref().expect("targets");
@@ -282,20 +286,29 @@ impl Renderer {
             let mut h = std::collections::hash_map::DefaultHasher::new();
             key.hash(&mut h);
             bytemuck::cast_slice::<FrameData, u8>(&data).hash(&mut h);
-            (self.settings.preview, self.targets_generation).hash(&mut h);
+            (preview, self.targets_generation).hash(&mut h);
             h.finish()
         };
         let eye_reused =
             reused && matches!(aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr)) && self.last_eye == Some(eye_key);
         self.last_eye = Some(eye_key);
-        let Renderer { device, passes, scene_buffers, nearest, linear, slots: frame_slots, targets, settings, .. } =
-            self;
+        let Renderer {
+            device,
+            passes,
+            scene_buffers,
+            nearest,
+            linear,
+            slots: frame_slots,
+            targets,
+            config: settings,
+            ..
+        } = self;
         let FrameSlot { recorder, timestamps } = &mut frame_slots[slot];
         let targets = targets.as_mut().expect("targets");
         for (ubo, d) in targets.ubos[slot].iter_mut().zip(&data) {
             ubo.write(0, std::slice::from_ref(d))?;
         }
-        let splat = settings.splat.resolve(&device.info);
+        let splat = settings.splat;
         let compute_splat = splat.is_compute() && targets.receivers[0].flux.format == vk::Format::R32_SFLOAT;
         let tiled_splat = splat == Splat::Tiled;
         let eye_aovs = matches!(aov, Some(Aov::Caustics) | Some(Aov::Direct));
@@ -316,6 +329,7 @@ impl Renderer {
             pass: p,
             channel: p % nc,
             s: settings,
+            preview,
             data: &data[p],
             compute_splat,
             tiled_splat,
@@ -335,7 +349,7 @@ impl Renderer {
         rec.report.photon_view = views[0].photon;
         rec.report.reused = reused;
         rec.report.level = self_level;
-        rec.report.preview = settings.preview;
+        rec.report.preview = preview;
         rec.ts.reset(rec.cmd);
         // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
         ctx(0).barrier(rec.cmd, |b| {
@@ -402,7 +416,7 @@ impl Renderer {
             self.last_caustic = Some((key.clone(), report.lights.clone()));
         }
         self.submitted += 1;
-        let settings = self.settings.clone();
+        let settings = self.config.clone();
         self.pending.push_back(Pending { slot, report, start, lights_end, aov: aov_image, key, settings });
         Ok(())
     }
@@ -1052,7 +1066,7 @@ impl Ctx<'_> {
     /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts
     /// through the eye's front and back buffers.
     fn exact_eye(&self) -> bool {
-        self.s.transport == Transport::Exact && !self.s.preview
+        self.s.transport == Transport::Exact && !self.preview
     }
 
     /// Step 6: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
@@ -1176,7 +1190,7 @@ impl Ctx<'_> {
 }
 
 /// Each light's state from the readback buffer (lights that ran their caustic stages this frame).
-fn read_results(t: &Targets, readback: &Buffer, s: &Settings, report: &mut FrameReport) -> AppResult<()> {
+fn read_results(t: &Targets, readback: &Buffer, s: &ResolvedSettings, report: &mut FrameReport) -> AppResult<()> {
     let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
     if report.reused {
         return Ok(());
@@ -1207,7 +1221,7 @@ fn read_results(t: &Targets, readback: &Buffer, s: &Settings, report: &mut Frame
     Ok(())
 }
 
-fn read_aov(t: &Targets, readback: &Buffer, s: &Settings, aov: Option<Aov>) -> AppResult<Option<AovData>> {
+fn read_aov(t: &Targets, readback: &Buffer, s: &ResolvedSettings, aov: Option<Aov>) -> AppResult<Option<AovData>> {
     let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
     let n = (t.width * t.height) as usize;
     Ok(match aov {

@@ -7,7 +7,7 @@ use crate::passes::Passes;
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{Camera, LightKind, Material, Scene, MAX_LIGHTS};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Footprint, Method, Settings, Transport};
+use crate::settings::{Footprint, Method, ResolvedSettings, Settings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, Timestamps, VkResult};
@@ -27,7 +27,7 @@ pub struct Views {
 
 impl Views {
     /// The views of light `index`.
-    pub fn new(scene: &Scene, settings: &Settings, camera: &CameraView, index: usize) -> AppResult<Views> {
+    pub fn new(scene: &Scene, settings: &ResolvedSettings, camera: &CameraView, index: usize) -> AppResult<Views> {
         let light = &scene.lights[index];
         let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
         let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied());
@@ -198,7 +198,9 @@ pub struct Renderer {
     pub(crate) submitted: u64,
     pub targets: Option<Targets>,
     targets_key: Option<TargetsKey>,
-    pub settings: Settings,
+    /// The settings asked for, and what they resolved to on this device (what every frame reads).
+    settings: Settings,
+    pub(crate) config: ResolvedSettings,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame).
     pub slots_hint: u32,
     /// Reuse the caustic stages when nothing they depend on changed (off for profiling, which times them).
@@ -222,7 +224,7 @@ impl Drop for Renderer {
 }
 
 /// The two-interface model refracts through front and back glass surfaces; it has no mirrors.
-fn check_transport(scene: &Scene, settings: &Settings) -> AppResult<()> {
+fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> AppResult<()> {
     if settings.transport == Transport::TwoInterface {
         if let Some(o) = scene
             .objects
@@ -284,10 +286,9 @@ impl FrameSlot {
 }
 
 impl Renderer {
-    pub fn new(device: Arc<Device>, scene: Scene, mut settings: Settings) -> AppResult<Self> {
-        settings.validate()?;
-        settings.resolve_for_device(&device.info)?;
-        check_transport(&scene, &settings)?;
+    pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
+        let config = settings.resolve(&device.info)?;
+        check_transport(&scene, &config)?;
         check_lights(&scene)?;
         let mut recorder = Recorder::new(&device)?;
         let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
@@ -306,6 +307,7 @@ impl Renderer {
             targets: None,
             targets_key: None,
             settings,
+            config,
             slots_hint: 0,
             reuse: true,
             scene_generation: 0,
@@ -319,7 +321,7 @@ impl Renderer {
     /// Replace the scene (after moving the light, changing an IOR, ...): re-uploads its triangles when they
     /// changed. Lights and cameras are read every frame, so changing only them is free.
     pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
-        check_transport(&scene, &self.settings)?;
+        check_transport(&scene, &self.config)?;
         check_lights(&scene)?;
         let same_geometry = scene.objects.len() == self.scene.objects.len()
             && scene.objects.iter().zip(&self.scene.objects).all(|(a, b)| {
@@ -339,7 +341,7 @@ impl Renderer {
     pub(crate) fn caustic_key(&self) -> String {
         // The eye view's own settings (supersampling, sky, eye-ray depth, exposure, preview) do not touch the
         // caustics.
-        let s = Settings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, preview: false, ..self.settings.clone() };
+        let s = ResolvedSettings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..self.config.clone() };
         format!("{:?}|{}|{:?}|{:?}", self.scene.lights, self.scene_generation, s, self.targets_key)
     }
 
@@ -367,24 +369,35 @@ impl Renderer {
         self.frames_in_flight
     }
 
-    pub fn set_settings(&mut self, mut settings: Settings) -> AppResult<()> {
-        settings.validate()?;
-        settings.resolve_for_device(&self.device.info)?;
-        check_transport(&self.scene, &settings)?;
-        if settings.method != self.settings.method
-            || settings.level != self.settings.level
-            || settings.metric != self.settings.metric
+    /// Replace the settings: resolved for this device and checked against the scene before they take effect.
+    pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
+        let config = settings.resolve(&self.device.info)?;
+        check_transport(&self.scene, &config)?;
+        if config.method != self.config.method
+            || config.level != self.config.level
+            || config.metric != self.config.metric
         {
             self.slots_hint = 0;
         }
         self.settings = settings;
+        self.config = config;
         Ok(())
+    }
+
+    /// The settings asked for (automatic choices still automatic).
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The settings as this device resolved them: what every frame renders with.
+    pub fn config(&self) -> &ResolvedSettings {
+        &self.config
     }
 
     /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
     pub(crate) fn ensure_targets(&mut self, width: u32, height: u32, aa: u32) -> AppResult<()> {
-        let s = &self.settings;
+        let s = &self.config;
         let lights = self.scene.lights.len();
         let passes = lights * self.scene.color_channels();
         let key = (
@@ -406,7 +419,7 @@ impl Renderer {
         self.finish_frames()?;
         self.targets_generation += 1;
         self.device.wait_idle()?;
-        let s = &self.settings;
+        let s = &self.config;
         match self.targets.as_mut() {
             Some(t) if same_key => t.resize(&self.device, s, width, height, aa)?,
             _ => {
@@ -422,7 +435,7 @@ impl Renderer {
     /// The uniforms of one pass: light `index` (its views and power; the exposure follows the first light) and
     /// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue).
     pub fn frame_data(&self, views: &Views, targets: &Targets, index: usize, channel: u32) -> FrameData {
-        let s = &self.settings;
+        let s = &self.config;
         let light = &self.scene.lights[index];
         let light0 = &self.scene.lights[0];
         let (lo, hi) = self.scene.bounds();
@@ -469,10 +482,10 @@ impl Renderer {
             traversal: [
                 s.level,
                 s.metric.code() | ((s.batching as u32) << 8),
-                s.check_level(),
+                s.check_level,
                 s.batch_photons(targets.photon.capacity),
             ],
-            params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.tau()],
+            params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.tau],
             transport: [
                 (s.transport == Transport::Exact) as u32,
                 s.ray_queue_capacity(),
@@ -483,7 +496,7 @@ impl Renderer {
             // The environment's light is added once: by the first light's eye shading (and the composite, which reads
             // the first pass's uniforms).
             eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, 0.0, 0.0],
-            material: [self.scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block() as f32, 0.0],
+            material: [self.scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block as f32, 0.0],
         }
     }
 
@@ -509,7 +522,7 @@ impl Renderer {
     /// Batch slots to record for GPU-driven adaptive traversal: one when the worst case (every cell of the photon
     /// window covered) fits the photon buffer, else an estimate refined from frame to frame.
     pub fn batch_slots(&self, capacity: u32) -> u32 {
-        let s = &self.settings;
+        let s = &self.config;
         if s.batch_slots > 0 {
             return s.batch_slots;
         }

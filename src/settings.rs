@@ -78,9 +78,9 @@ pub enum CoopChecks {
 impl CoopChecks {
     /// `auto` follows the measured rule: on a GPU a level's checks are few and long, and four lanes finish them
     /// about four times sooner; a CPU device runs the same work either way and loses the early returns.
-    pub fn resolve(self, info: &crate::vk::DeviceInfo) -> CoopChecks {
+    pub fn resolve(self, class: DeviceClass) -> CoopChecks {
         match self {
-            CoopChecks::Auto if info.is_cpu() => CoopChecks::Off,
+            CoopChecks::Auto if class == DeviceClass::Cpu => CoopChecks::Off,
             CoopChecks::Auto => CoopChecks::On,
             c => c,
         }
@@ -142,22 +142,60 @@ impl Splat {
     }
 }
 
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Settings {
+/// The quality a user chooses against time: what is rendered and how finely. Everything here has a flag of
+/// `render` and a line in its `--help`; the defaults are chosen for the device where they say so.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Quality {
+    /// How light travels through the glass.
     pub transport: Transport,
+    /// Where photons come from: a dense grid, or adaptive traversal of the photon quadtree.
+    pub method: Method,
+    /// Adaptive traversal's stopping metric.
+    pub metric: Metric,
+    /// Photon grid level: 64·2^level cells per side (dense), or the maximal traversal level (adaptive). None: the
+    /// device's default ([`default_level`]).
+    pub level: Option<u32>,
+    /// Flux-error metric: the target error E, the relative L1 at 64² that merging cells may add to max-level's
+    /// image at the same level; mapped to the per-cell threshold tau by the measured table of src/calibration.rs.
+    pub target_error: f32,
+    /// Side of the caustic map, the receiver g-buffer and the shadow map.
+    pub caustic_res: u32,
+    /// Eye-view supersampling: AA x AA samples per pixel of the beauty image (1: one at the pixel center).
+    pub aa: u32,
     /// Beauty exposure in stops, on top of the automatic one (the brightest receiver's direct radiance at the
     /// light's target maps to 0.6 before the tone map).
     pub exposure_ev: f32,
-    /// Eye-view supersampling: AA x AA samples per pixel of the beauty image (1: one at the pixel center).
-    pub aa: u32,
     /// The environment's sky radiance, W/(m²·sr) (docs/design.md "Environment"); None: automatic (SKY_AUTO of
     /// the reference radiance); 0: off.
     pub sky: Option<f32>,
     /// Exact transport: interfaces an eye ray is followed through before it takes the environment's radiance.
     pub eye_depth: u32,
-    /// A preview of the eye view (the viewer's frames while the view moves; not an option): one eye sample per
-    /// pixel, and glass by the two-surface deferred refraction instead of tracing through the BVH.
-    pub preview: bool,
+    /// Photon buffer size in MiB; 0: automatic ([`auto_photon_budget_mib`]).
+    pub photon_budget_mib: f64,
+}
+
+impl Default for Quality {
+    fn default() -> Self {
+        Quality {
+            transport: Transport::Exact,
+            method: Method::Adaptive,
+            metric: Metric::MaxLevel,
+            level: None,
+            target_error: DEFAULT_TARGET_ERROR,
+            caustic_res: 1024,
+            aa: 2,
+            exposure_ev: 0.0,
+            sky: None,
+            eye_depth: 8,
+            photon_budget_mib: 0.0,
+        }
+    }
+}
+
+/// The knobs for measuring and tuning the renderer (`--help` lists them under "Tuning"). Their defaults are the
+/// measured best per device, so a user needs none of them; each exists so that its alternative can be measured.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Tuning {
     /// How splat records reach the caustic flux map.
     pub splat: Splat,
     /// Where the splat radius comes from (exact transport; the two-interface trace always uses the cell's).
@@ -165,45 +203,27 @@ pub struct Settings {
     /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
     pub flux_threshold: f32,
     /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
-    /// sibling photons ([`Settings::weak_block`]), by one of them carrying the block's share with a splat as wide as
+    /// sibling photons ([`ResolvedSettings::weak_block`]), by one of them carrying the block's share with a splat as wide as
     /// the block (0: off).
     pub weak_branches: f32,
-    /// The side of a weak-branch block in cells of the maximal level: 2 or 4, 0 for automatic
-    /// ([`Settings::weak_block`]).
+    /// The side of a weak-branch block in cells of the maximal level: 2 or 4, 0 for automatic (4).
     pub weak_block: u32,
-    /// Exact transport: the BVH node layout the waves traverse (`auto` until [`Settings::resolve_for_device`]
-    /// picks one).
+    /// Exact transport: the BVH node layout the waves traverse.
     pub bvh_layout: crate::bvh::BvhLayout,
-    pub method: Method,
-    pub metric: Metric,
-    /// Photon grid level: 64·2^level cells per side (dense), or the maximal traversal level (adaptive).
-    pub level: u32,
+    /// Who writes adaptive traversal's dispatch arguments: the GPU, or the host after a readback per level.
     pub driven: Driven,
-    /// Photon buffer size in MiB; 0: automatic (the renderer picks it for the device, see
-    /// [`Settings::resolve_for_device`]).
-    pub photon_budget_mib: f64,
-    /// Bytes one storage-buffer binding may span on the device (its maxStorageBufferRange, at most 2 GiB). Set by
-    /// the renderer; lavapipe's 128 MiB until then.
-    pub binding_limit: u64,
     /// Side of the light-view refractor g-buffers (power of two, >= 64).
     pub gbuffer_res: u32,
-    /// Side of the caustic map, the receiver g-buffer and the shadow map.
-    pub caustic_res: u32,
     /// Max-error bound, in caustic-map texels.
     pub error_bound: f32,
-    /// Flux-error metric: the target error E, the relative L1 at 64² that merging cells may add to max-level's
-    /// image at the same level; mapped to the per-cell threshold tau by the measured table of src/calibration.rs.
-    pub target_error: f32,
-    /// Flux-error metric: tau itself, overriding the one derived from `target_error` (the hidden `--tau`, for
-    /// measuring the calibration).
+    /// Flux-error metric: tau itself, overriding the one derived from the target error (for measuring the
+    /// calibration).
     pub tau: Option<f32>,
-    /// First level at which max-error and flux-error check convergence (`--check-level`); None: the default,
-    /// [`Settings::check_level`].
+    /// First level at which max-error and flux-error check convergence; None: [`default_check_level`].
     pub check_level: Option<u32>,
     /// Traversal work-group side (1, 2, 4, 8, 16).
     pub traverse_wg: u32,
-    /// Four lanes per candidate for the metrics' checks (`auto` until [`Settings::resolve_for_device`]); used where
-    /// [`Settings::coop_traversal`] says.
+    /// Four lanes per candidate for the metrics' checks.
     pub coop_checks: CoopChecks,
     /// Split batches on overflow (off only for tests: overflowing work is then dropped and counted).
     pub batching: bool,
@@ -217,31 +237,18 @@ pub struct Settings {
     pub debug_min_level: u32,
 }
 
-impl Default for Settings {
+impl Default for Tuning {
     fn default() -> Self {
-        Settings {
-            transport: Transport::Exact,
-            exposure_ev: 0.0,
-            aa: 2,
-            sky: None,
-            eye_depth: 8,
-            preview: false,
+        Tuning {
             splat: Splat::Auto,
             footprint: Footprint::Cell,
             flux_threshold: 1e-3,
             weak_branches: 0.05,
             weak_block: 0,
             bvh_layout: crate::bvh::BvhLayout::Auto,
-            method: Method::Adaptive,
-            metric: Metric::MaxLevel,
-            level: 5,
             driven: Driven::Gpu,
-            photon_budget_mib: 0.0,
-            binding_limit: LAVAPIPE_BINDING_LIMIT,
             gbuffer_res: 1024,
-            caustic_res: 1024,
             error_bound: 1.0,
-            target_error: DEFAULT_TARGET_ERROR,
             tau: None,
             check_level: None,
             traverse_wg: TRAVERSE_WG,
@@ -255,6 +262,79 @@ impl Default for Settings {
     }
 }
 
+/// What a renderer is asked for: the user's quality choices and the tuning knobs. [`Settings::resolve`] turns it
+/// into the [`ResolvedSettings`] a device renders with.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Settings {
+    pub quality: Quality,
+    pub tuning: Tuning,
+}
+
+/// Settings resolved for one device: every automatic choice made (level, photon budget, splat, BVH layout,
+/// cooperative checks, weak-branch block, check level, tau) and the device's binding limit known. The renderer
+/// and the GPU code read only this; it changes only through [`Settings::resolve`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ResolvedSettings {
+    pub transport: Transport,
+    pub method: Method,
+    pub metric: Metric,
+    pub level: u32,
+    pub target_error: f32,
+    pub caustic_res: u32,
+    pub aa: u32,
+    pub exposure_ev: f32,
+    pub sky: Option<f32>,
+    pub eye_depth: u32,
+    /// Photon buffer size in MiB (the automatic budget resolved).
+    pub photon_budget_mib: f64,
+    /// The splat that runs (never `auto`).
+    pub splat: Splat,
+    pub footprint: Footprint,
+    pub flux_threshold: f32,
+    pub weak_branches: f32,
+    /// The weak-branch block side in cells of the maximal level: 2 or 4.
+    pub weak_block: u32,
+    /// The BVH layout the waves trace (never `auto`).
+    pub bvh_layout: crate::bvh::BvhLayout,
+    pub driven: Driven,
+    pub gbuffer_res: u32,
+    pub error_bound: f32,
+    /// Flux-error's per-cell threshold: the tuning's `tau`, else the one the target error maps to.
+    pub tau: f32,
+    /// The first level max-error and flux-error check.
+    pub check_level: u32,
+    pub traverse_wg: u32,
+    /// On or off (never `auto`).
+    pub coop_checks: CoopChecks,
+    pub batching: bool,
+    pub batch_slots: u32,
+    pub shadow_bias: f32,
+    pub debug_photons: u32,
+    pub debug_min_level: u32,
+    /// Bytes one storage-buffer binding may span on the device (its maxStorageBufferRange, at most 2 GiB).
+    pub binding_limit: u64,
+}
+
+impl Default for ResolvedSettings {
+    /// The default settings as lavapipe resolves them (for host-side computations and tests that need no device).
+    fn default() -> Self {
+        Settings::default().resolve_with(DeviceClass::Cpu, LAVAPIPE_BINDING_LIMIT, 0).expect("the defaults are valid")
+    }
+}
+
+/// What the automatic settings depend on: CPU devices (lavapipe) and GPUs differ in what runs fastest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeviceClass {
+    Cpu,
+    Gpu,
+}
+
+/// The default photon level for a device class: 5 (a 2048² grid) on GPUs; on CPU devices the same, until the
+/// measured CPU default replaces it.
+pub fn default_level(_class: DeviceClass) -> u32 {
+    5
+}
+
 /// lavapipe's maxStorageBufferRange: the binding limit assumed until the device is known.
 pub const LAVAPIPE_BINDING_LIMIT: u64 = 128 << 20;
 
@@ -263,9 +343,9 @@ pub const LAVAPIPE_BINDING_LIMIT: u64 = 128 << 20;
 /// with the splat records and exact transport's ray queues (33.5M rays each), and the most a batch can use: its
 /// 16.8M photons (half a queue) fill the waves' 24-bit photon index ([`MAX_BATCH_PHOTONS`]). On a GPU of 32 GB or
 /// more, exact transport then runs level 6 (13.2M photons on the sphere) in one batch.
-pub fn auto_photon_budget_mib(info: &crate::vk::DeviceInfo, binding_limit: u64) -> f64 {
-    let small = info.is_cpu() || binding_limit < 512 << 20;
-    let mib = if small { 64.0 } else { ((info.device_local_bytes >> 20) as f64 / 64.0).clamp(64.0, 512.0) };
+pub fn auto_photon_budget_mib(cpu: bool, binding_limit: u64, device_local_bytes: u64) -> f64 {
+    let small = cpu || binding_limit < 512 << 20;
+    let mib = if small { 64.0 } else { ((device_local_bytes >> 20) as f64 / 64.0).clamp(64.0, 512.0) };
     mib.min(max_budget_mib(binding_limit))
 }
 
@@ -281,7 +361,7 @@ pub fn max_budget_mib(binding_limit: u64) -> f64 {
 /// The debug photon dump (48 bytes per photon) must fit one 128 MiB storage-buffer binding.
 pub const MAX_DEBUG_PHOTONS: u32 = 2_000_000;
 
-/// Max-error's first checked level, and flux-error's up to `--level` - 1 ([`Settings::check_level`]).
+/// Max-error's first checked level, and flux-error's up to `--level` - 1 ([`default_check_level`]).
 pub const DEFAULT_CHECK_LEVEL: u32 = 3;
 /// Default `--target-error` of the flux-error metric: a rel-L1 (64²) of at most 0.1% added to max-level's image
 /// (τ = 0.02 by src/calibration.rs; docs/design.md, "The flux-error metric", says why).
@@ -302,75 +382,173 @@ pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
 pub const COOP_WG: u32 = 8;
 
 impl Settings {
+    /// Check every value's range; the messages name the flag.
     pub fn validate(&self) -> AppResult<()> {
+        let (q, t) = (&self.quality, &self.tuning);
         let bad = |m: String| Err(AppError::BadInput(m));
-        if self.level >= MAX_LEVELS {
-            return bad(format!("--level {}: must be at most {}", self.level, MAX_LEVELS - 1));
+        if let Some(level) = q.level {
+            if level >= MAX_LEVELS {
+                return bad(format!("--level {level}: must be at most {}", MAX_LEVELS - 1));
+            }
         }
-        if !self.gbuffer_res.is_power_of_two() || self.gbuffer_res < LEVEL0_RES || self.gbuffer_res > 8192 {
-            return bad(format!("--gbuffer-res {}: must be a power of two in 64..=8192", self.gbuffer_res));
+        if !t.gbuffer_res.is_power_of_two() || t.gbuffer_res < LEVEL0_RES || t.gbuffer_res > 8192 {
+            return bad(format!("--gbuffer-res {}: must be a power of two in 64..=8192", t.gbuffer_res));
         }
-        if self.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros() >= MAX_PYRAMID_MIPS {
-            return bad(format!("--gbuffer-res {}: too many pyramid levels", self.gbuffer_res));
+        if t.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros() >= MAX_PYRAMID_MIPS {
+            return bad(format!("--gbuffer-res {}: too many pyramid levels", t.gbuffer_res));
         }
-        if self.caustic_res < 16 || self.caustic_res > 8192 {
-            return bad(format!("--caustic-res {}: must lie in 16..=8192", self.caustic_res));
+        if q.caustic_res < 16 || q.caustic_res > 8192 {
+            return bad(format!("--caustic-res {}: must lie in 16..=8192", q.caustic_res));
         }
-        if !(self.photon_budget_mib.is_finite() && self.photon_budget_mib >= 0.0) {
-            return bad(format!("--photon-budget {}: must be > 0 MiB (or 0: automatic)", self.photon_budget_mib));
+        if !(q.photon_budget_mib.is_finite() && q.photon_budget_mib >= 0.0) {
+            return bad(format!("--photon-budget {}: must be > 0 MiB (or 0: automatic)", q.photon_budget_mib));
         }
-        if !(self.error_bound.is_finite() && self.error_bound > 0.0) {
-            return bad(format!("--error-bound {}: must be > 0 texels", self.error_bound));
+        if !(t.error_bound.is_finite() && t.error_bound > 0.0) {
+            return bad(format!("--error-bound {}: must be > 0 texels", t.error_bound));
         }
-        if !(self.target_error.is_finite() && self.target_error > 0.0 && self.target_error <= 1.0) {
+        if !(q.target_error.is_finite() && q.target_error > 0.0 && q.target_error <= 1.0) {
             return bad(format!(
                 "--target-error {}: must lie in (0, 1] (the relative L1 at 64² that merging may add)",
-                self.target_error
+                q.target_error
             ));
         }
-        if let Some(tau) = self.tau {
+        if let Some(tau) = t.tau {
             if !(tau.is_finite() && tau > 0.0 && tau <= crate::calibration::TAU_MAX) {
                 return bad(format!("--tau {tau}: must lie in (0, {}]", crate::calibration::TAU_MAX));
             }
         }
-        if !(self.exposure_ev.is_finite() && self.exposure_ev.abs() <= 32.0) {
-            return bad(format!("--exposure {}: must lie in [-32, 32] stops", self.exposure_ev));
+        if !(q.exposure_ev.is_finite() && q.exposure_ev.abs() <= 32.0) {
+            return bad(format!("--exposure {}: must lie in [-32, 32] stops", q.exposure_ev));
         }
-        if !(1..=MAX_AA).contains(&self.aa) {
-            return bad(format!("--aa {}: must lie in 1..={MAX_AA}", self.aa));
+        if !(1..=MAX_AA).contains(&q.aa) {
+            return bad(format!("--aa {}: must lie in 1..={MAX_AA}", q.aa));
         }
-        if let Some(sky) = self.sky {
+        if let Some(sky) = q.sky {
             if !(sky.is_finite() && sky >= 0.0) {
                 return bad(format!("--sky {sky}: must be a radiance >= 0 W/(m²·sr)"));
             }
         }
-        if !(1..=MAX_EYE_DEPTH).contains(&self.eye_depth) {
-            return bad(format!("--eye-depth {}: must lie in 1..={MAX_EYE_DEPTH}", self.eye_depth));
+        if !(1..=MAX_EYE_DEPTH).contains(&q.eye_depth) {
+            return bad(format!("--eye-depth {}: must lie in 1..={MAX_EYE_DEPTH}", q.eye_depth));
         }
-        if !(self.flux_threshold.is_finite() && (0.0..1.0).contains(&self.flux_threshold)) {
-            return bad(format!("--flux-threshold {}: must lie in [0, 1)", self.flux_threshold));
+        if !(t.flux_threshold.is_finite() && (0.0..1.0).contains(&t.flux_threshold)) {
+            return bad(format!("--flux-threshold {}: must lie in [0, 1)", t.flux_threshold));
         }
-        if !(self.weak_branches.is_finite() && (0.0..1.0).contains(&self.weak_branches)) {
-            return bad(format!("--weak-branches {}: must lie in [0, 1)", self.weak_branches));
+        if !(t.weak_branches.is_finite() && (0.0..1.0).contains(&t.weak_branches)) {
+            return bad(format!("--weak-branches {}: must lie in [0, 1)", t.weak_branches));
         }
-        if ![0, 2, 4].contains(&self.weak_block) {
-            return bad(format!("--weak-block {}: must be 2, 4 or 0 (automatic)", self.weak_block));
+        if ![0, 2, 4].contains(&t.weak_block) {
+            return bad(format!("--weak-block {}: must be 2, 4 or 0 (automatic)", t.weak_block));
         }
-        if !TRAVERSE_WG_SWEEP.contains(&self.traverse_wg) {
-            return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", self.traverse_wg));
+        if !TRAVERSE_WG_SWEEP.contains(&t.traverse_wg) {
+            return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", t.traverse_wg));
         }
-        if self.debug_photons > MAX_DEBUG_PHOTONS {
-            return bad(format!("--debug-photons {}: at most {MAX_DEBUG_PHOTONS}", self.debug_photons));
+        if t.debug_photons > MAX_DEBUG_PHOTONS {
+            return bad(format!("--debug-photons {}: at most {MAX_DEBUG_PHOTONS}", t.debug_photons));
         }
-        if self.batch_slots > MAX_BATCHES {
-            return bad(format!("--batch-slots {}: at most {MAX_BATCHES}", self.batch_slots));
+        if t.batch_slots > MAX_BATCHES {
+            return bad(format!("--batch-slots {}: at most {MAX_BATCHES}", t.batch_slots));
         }
         Ok(())
     }
 
-    /// Whether traversal runs the cooperative checks: `--coop-checks on` (or `auto` on a GPU), exact transport,
-    /// max-error or flux-error, and work groups of 8x8 (the one side built with four lanes per candidate: 16
-    /// candidates a group).
+    /// Resolve the settings for a device: its binding limit, and every automatic choice by the rules measured on
+    /// each device class. A photon budget larger than the device's bindings allow is bad input.
+    pub fn resolve(&self, info: &crate::vk::DeviceInfo) -> AppResult<ResolvedSettings> {
+        let class = if info.is_cpu() { DeviceClass::Cpu } else { DeviceClass::Gpu };
+        let binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
+        let mut c = self.resolve_with(class, binding_limit, info.device_local_bytes)?;
+        c.splat = self.tuning.splat.resolve(info);
+        let max = max_budget_mib(binding_limit);
+        if c.photon_budget_mib > max {
+            return Err(AppError::BadInput(format!(
+                "--photon-budget {}: at most {max} MiB on {} (the splat records, 16 bytes per 8-byte photon entry, \
+                 must fit one storage-buffer binding of {} MiB: its maxStorageBufferRange)",
+                c.photon_budget_mib,
+                info.name,
+                binding_limit >> 20
+            )));
+        }
+        Ok(c)
+    }
+
+    /// [`Settings::resolve`] from the device's class, binding limit and device-local memory (the splat as the
+    /// class resolves it with float atomics).
+    pub fn resolve_with(
+        &self,
+        class: DeviceClass,
+        binding_limit: u64,
+        device_local_bytes: u64,
+    ) -> AppResult<ResolvedSettings> {
+        self.validate()?;
+        let (q, t) = (&self.quality, &self.tuning);
+        let cpu = class == DeviceClass::Cpu;
+        let level = q.level.unwrap_or(default_level(class));
+        if q.method == Method::Dense && level > 12 {
+            return Err(AppError::BadInput(format!(
+                "--level {level}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper levels"
+            )));
+        }
+        let photon_budget_mib = if q.photon_budget_mib == 0.0 {
+            auto_photon_budget_mib(cpu, binding_limit, device_local_bytes)
+        } else {
+            q.photon_budget_mib
+        };
+        let splat = match t.splat {
+            Splat::Auto if cpu => Splat::Compute,
+            Splat::Auto => Splat::Tiled,
+            s => s,
+        };
+        Ok(ResolvedSettings {
+            transport: q.transport,
+            method: q.method,
+            metric: q.metric,
+            level,
+            target_error: q.target_error,
+            caustic_res: q.caustic_res,
+            aa: q.aa,
+            exposure_ev: q.exposure_ev,
+            sky: q.sky,
+            eye_depth: q.eye_depth,
+            photon_budget_mib,
+            splat,
+            footprint: t.footprint,
+            flux_threshold: t.flux_threshold,
+            weak_branches: t.weak_branches,
+            weak_block: if t.weak_block == 0 { 4 } else { t.weak_block },
+            bvh_layout: t.bvh_layout.resolve(class),
+            driven: t.driven,
+            gbuffer_res: t.gbuffer_res,
+            error_bound: t.error_bound,
+            tau: t.tau.unwrap_or_else(|| crate::calibration::tau_for_target_error(q.target_error)),
+            check_level: t.check_level.unwrap_or_else(|| default_check_level(q.metric, level)),
+            traverse_wg: t.traverse_wg,
+            coop_checks: t.coop_checks.resolve(class),
+            batching: t.batching,
+            batch_slots: t.batch_slots,
+            shadow_bias: t.shadow_bias,
+            debug_photons: t.debug_photons,
+            debug_min_level: t.debug_min_level,
+            binding_limit,
+        })
+    }
+}
+
+/// The first level checked for convergence when the tuning names none: level 3 (Wyman & Nichols' 512² level),
+/// and under flux-error at most `level` - 1, so that the metric acts at every level from 1 on (with the check
+/// level at `level` or above it would emit max-level's photons and pay for a traversal; at level 3, check level 2
+/// reaches dense's error on the sphere in the same time and 0.9% in 21% less, docs/results.md).
+pub fn default_check_level(metric: Metric, level: u32) -> u32 {
+    match metric {
+        Metric::FluxError => DEFAULT_CHECK_LEVEL.min(level.saturating_sub(1)),
+        _ => DEFAULT_CHECK_LEVEL,
+    }
+}
+
+impl ResolvedSettings {
+    /// Whether traversal runs the cooperative checks: on (`auto` on a GPU), exact transport, max-error or
+    /// flux-error, and work groups of 8x8 (the one side built with four lanes per candidate: 16 candidates a
+    /// group).
     pub fn coop_traversal(&self) -> bool {
         self.coop_checks == CoopChecks::On
             && self.transport == Transport::Exact
@@ -389,62 +567,25 @@ impl Settings {
         }
     }
 
-    /// Fit the settings to the device: its binding limit, the BVH layout and the cooperative checks when `auto`,
-    /// and the photon budget when automatic (0). A budget larger than the device's bindings allow is bad input.
-    pub fn resolve_for_device(&mut self, info: &crate::vk::DeviceInfo) -> AppResult<()> {
-        self.binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
-        self.bvh_layout = self.bvh_layout.resolve(info);
-        self.coop_checks = self.coop_checks.resolve(info);
-        if self.photon_budget_mib == 0.0 {
-            self.photon_budget_mib = auto_photon_budget_mib(info, self.binding_limit);
-        }
-        let max = max_budget_mib(self.binding_limit);
-        if self.photon_budget_mib > max {
-            return Err(AppError::BadInput(format!(
-                "--photon-budget {}: at most {max} MiB on {} (the splat records, 16 bytes per 8-byte photon entry, \
-                 must fit one storage-buffer binding of {} MiB: its maxStorageBufferRange)",
-                self.photon_budget_mib,
-                info.name,
-                self.binding_limit >> 20
-            )));
-        }
-        Ok(())
-    }
-
-    /// The flux-error metric's per-cell threshold tau: `--tau` if given, else the one the calibration table maps
-    /// `--target-error` to.
+    /// The flux-error metric's per-cell threshold tau.
     pub fn tau(&self) -> f32 {
-        self.tau.unwrap_or_else(|| crate::calibration::tau_for_target_error(self.target_error))
+        self.tau
     }
 
-    /// The first level checked for convergence: `--check-level` if given, else level 3 (Wyman & Nichols' 512²
-    /// level), and under flux-error at most `--level` - 1, so that the metric acts at every level from 1 on (with
-    /// the check level at `--level` or above it would emit max-level's photons and pay for a traversal; at level 3,
-    /// check level 2 reaches dense's error on the sphere in the same time and 0.9% in 21% less, docs/results.md).
+    /// The first level checked for convergence.
     pub fn check_level(&self) -> u32 {
-        self.check_level.unwrap_or(match self.metric {
-            Metric::FluxError => DEFAULT_CHECK_LEVEL.min(self.level.saturating_sub(1)),
-            _ => DEFAULT_CHECK_LEVEL,
-        })
+        self.check_level
     }
 
-    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md step 5):
-    /// `--weak-block` if given, else 4. A block's turns follow its cells, not its photons, so every method shares
-    /// the same blocks.
+    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md, "Pipeline"). A
+    /// block's turns follow its cells, not its photons, so every method shares the same blocks.
     pub fn weak_block(&self) -> u32 {
-        match self.weak_block {
-            0 => 4,
-            b => b,
-        }
+        self.weak_block
     }
 
-    /// The photon budget in MiB: an automatic one (0) not resolved for a device yet counts as 64.
+    /// The photon budget in MiB.
     pub fn photon_budget(&self) -> f64 {
-        if self.photon_budget_mib == 0.0 {
-            64f64.min(max_budget_mib(self.binding_limit))
-        } else {
-            self.photon_budget_mib
-        }
+        self.photon_budget_mib
     }
 
     /// Photon-buffer entries (8 bytes each). Each has a 16-byte splat record, and that buffer must stay within one
@@ -517,38 +658,37 @@ pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ash::vk as avk;
 
-    fn device(kind: avk::PhysicalDeviceType, gib: u64) -> crate::vk::DeviceInfo {
-        crate::vk::DeviceInfo {
-            name: "test".into(),
-            driver: "test".into(),
-            kind,
-            api_version: 0,
-            limits: avk::PhysicalDeviceLimits { max_storage_buffer_range: u32::MAX, ..Default::default() },
-            timestamp_period: 1.0,
-            timestamp_valid_bits: 64,
-            float_atomic_add: true,
-            device_local_bytes: gib << 30,
+    #[test]
+    fn the_automatic_budget_follows_device_memory_and_a_batch_fits_the_photon_index() {
+        let binding = 2u64 << 30;
+        assert_eq!(auto_photon_budget_mib(false, binding, 141 << 30), 512.0);
+        assert_eq!(auto_photon_budget_mib(false, binding, 16 << 30), 256.0);
+        assert_eq!(auto_photon_budget_mib(false, binding, 2 << 30), 64.0);
+        assert_eq!(auto_photon_budget_mib(true, binding, 64 << 30), 64.0);
+        assert_eq!(auto_photon_budget_mib(false, LAVAPIPE_BINDING_LIMIT, 141 << 30), 64.0);
+        // The automatic budget on a large GPU, and the largest a 2 GiB binding allows: a batch never holds more
+        // photons than the rays' 24-bit index names.
+        for (mib, batch) in [(512.0, MAX_BATCH_PHOTONS), (1024.0, MAX_BATCH_PHOTONS), (256.0, 1 << 23)] {
+            let mut s = Settings::default();
+            s.quality.photon_budget_mib = mib;
+            let c = s.resolve_with(DeviceClass::Gpu, binding, 141 << 30).unwrap();
+            let t = c.batch_photons(c.photon_capacity());
+            assert_eq!(t, batch, "{mib} MiB");
+            assert!(t <= c.ray_queue_capacity() / 2, "{mib} MiB");
         }
     }
 
     #[test]
-    fn the_automatic_budget_follows_device_memory_and_a_batch_fits_the_photon_index() {
-        let gpu = avk::PhysicalDeviceType::DISCRETE_GPU;
-        let binding = 2u64 << 30;
-        assert_eq!(auto_photon_budget_mib(&device(gpu, 141), binding), 512.0);
-        assert_eq!(auto_photon_budget_mib(&device(gpu, 16), binding), 256.0);
-        assert_eq!(auto_photon_budget_mib(&device(gpu, 2), binding), 64.0);
-        assert_eq!(auto_photon_budget_mib(&device(avk::PhysicalDeviceType::CPU, 64), binding), 64.0);
-        assert_eq!(auto_photon_budget_mib(&device(gpu, 141), LAVAPIPE_BINDING_LIMIT), 64.0);
-        // The automatic budget on a large GPU, and the largest a 2 GiB binding allows: a batch never holds more
-        // photons than the rays' 24-bit index names.
-        for (mib, batch) in [(512.0, MAX_BATCH_PHOTONS), (1024.0, MAX_BATCH_PHOTONS), (256.0, 1 << 23)] {
-            let s = Settings { photon_budget_mib: mib, binding_limit: binding, ..Settings::default() };
-            let t = s.batch_photons(s.photon_capacity());
-            assert_eq!(t, batch, "{mib} MiB");
-            assert!(t <= s.ray_queue_capacity() / 2, "{mib} MiB");
+    fn resolving_makes_every_automatic_choice() {
+        for class in [DeviceClass::Cpu, DeviceClass::Gpu] {
+            let c = Settings::default().resolve_with(class, LAVAPIPE_BINDING_LIMIT, 1 << 30).unwrap();
+            assert_eq!(c.level, default_level(class));
+            assert!(c.photon_budget_mib > 0.0);
+            assert!(!matches!(c.splat, Splat::Auto));
+            assert_ne!(c.bvh_layout, crate::bvh::BvhLayout::Auto);
+            assert_ne!(c.coop_checks, CoopChecks::Auto);
+            assert!([2, 4].contains(&c.weak_block));
         }
     }
 }

@@ -23,7 +23,7 @@ use crate::error::{AppError, AppResult};
 use crate::image_io;
 use crate::renderer::Aov;
 use crate::scene::{LightKind, Material, Scene};
-use crate::settings::{Method, Metric, Settings, Transport};
+use crate::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
 use crate::vk;
 use glam::{Quat, Vec3};
 use serde_json::json;
@@ -173,7 +173,10 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         image_io::check_output_dir(p)?;
     }
     let steps = schedule(args.max_level);
-    let base = Settings { gbuffer_res: args.map_res, caustic_res: args.map_res, ..Settings::default() };
+    let base = Settings {
+        quality: Quality { caustic_res: args.map_res, ..Quality::default() },
+        tuning: Tuning { gbuffer_res: args.map_res, ..Tuning::default() },
+    };
     let scene_args = SceneArgs { scene: args.scene.clone(), camera: Some(args.camera.clone()), size: "64x64".into() };
     let mut session = Session::open(&scene_args, base.clone())?;
     if session.pixel_area().is_none() {
@@ -217,11 +220,14 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         scene.lights[0].position = light0.target + Quat::from_rotation_y(angle) * d;
         session.renderer.set_scene(scene)?;
         session.renderer.set_settings(Settings {
-            transport: step.transport,
-            method: step.method,
-            metric: step.metric,
-            level: step.level,
-            ..base.clone()
+            quality: Quality {
+                transport: step.transport,
+                method: step.method,
+                metric: step.metric,
+                level: Some(step.level),
+                ..base.quality.clone()
+            },
+            tuning: base.tuning.clone(),
         })?;
         (session.width, session.height) = step.size;
         let t = Instant::now();

@@ -8,7 +8,7 @@ use crate::scene::MAX_LIGHTS;
 
 /// Passes of a frame at most: a light's three color passes, for every light.
 pub const MAX_PASSES: usize = 3 * MAX_LIGHTS;
-use crate::settings::Settings;
+use crate::settings::ResolvedSettings as Settings;
 use crate::vk::{Buffer, Device, Image, VkResult};
 use ash::vk;
 use gpu_allocator::MemoryLocation;

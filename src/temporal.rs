@@ -20,7 +20,7 @@ use crate::metrics;
 use crate::reference::{self, Paths, RefParams};
 use crate::renderer::Aov;
 use crate::scene::{Projection, Scene};
-use crate::settings::{Method, Metric, Settings, Transport};
+use crate::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
 use glam::{Quat, Vec3};
 use serde_json::json;
 use std::path::PathBuf;
@@ -47,7 +47,7 @@ pub struct TemporalArgs {
     #[arg(long, value_enum, default_value_t = Transport::TwoInterface)]
     pub transport: Transport,
     /// Exact transport: where the splat radius comes from (cell or differential).
-    #[arg(long, value_enum, default_value_t = Settings::default().footprint)]
+    #[arg(long, value_enum, default_value_t = Tuning::default().footprint)]
     pub footprint: crate::settings::Footprint,
     /// Methods: dense, max-level, max-error, flux-error (comma-separated).
     #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
@@ -128,12 +128,13 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
         })
         .collect::<AppResult<_>>()?;
     let base = Settings {
-        transport: args.transport,
-        footprint: args.footprint,
-        level: args.level,
-        gbuffer_res: args.map_res,
-        caustic_res: args.map_res,
-        ..Settings::default()
+        quality: Quality {
+            transport: args.transport,
+            level: Some(args.level),
+            caustic_res: args.map_res,
+            ..Quality::default()
+        },
+        tuning: Tuning { footprint: args.footprint, gbuffer_res: args.map_res, ..Tuning::default() },
     };
     let scene_args =
         SceneArgs { scene: args.scene.clone(), camera: Some(args.camera.clone()), size: args.size.clone() };
@@ -171,7 +172,10 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
         (1..refs.len()).map(|t| l1(&refs[t], &refs[t - 1]) / sum(&refs[t])).sum::<f64>() / (refs.len() - 1) as f64;
     let mut rows = Vec::new();
     for (name, method, metric) in &methods {
-        session.renderer.set_settings(Settings { method: *method, metric: *metric, ..base.clone() })?;
+        session.renderer.set_settings(Settings {
+            quality: Quality { method: *method, metric: *metric, ..base.quality.clone() },
+            tuning: base.tuning.clone(),
+        })?;
         let mut planes = Vec::new();
         let mut ms = Vec::new();
         for k in 0..args.frames {

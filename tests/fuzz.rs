@@ -10,7 +10,10 @@
 mod common;
 use caustics::renderer::Views;
 use caustics::scene::{mesh, CameraView, Scene};
-use caustics::settings::{parse_size, Driven, Method, Metric, Settings, Transport, MAX_BATCH_PHOTONS};
+use caustics::settings::{
+    parse_size, DeviceClass, Driven, Method, Metric, Quality, ResolvedSettings, Settings, Transport, Tuning,
+    MAX_BATCH_PHOTONS,
+};
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use std::path::{Path, PathBuf};
@@ -82,7 +85,7 @@ fn check_scene(scene: &Scene) {
         assert!(l.position.is_finite() && l.target.is_finite() && (l.target - l.position).length() > 0.0);
         assert!((l.target - l.position).normalize().is_finite());
     }
-    let settings = Settings { gbuffer_res: 64, caustic_res: 64, ..Settings::default() };
+    let settings = ResolvedSettings { gbuffer_res: 64, caustic_res: 64, ..ResolvedSettings::default() };
     for c in &scene.cameras {
         let view = CameraView::new(c, 64, 48, scene.bounds());
         for i in 0..scene.lights.len() {
@@ -432,16 +435,21 @@ proptest! {
         dense in any::<bool>(), exact in any::<bool>(), max_error in any::<bool>(),
     ) {
         let s = Settings {
-            transport: if exact { Transport::Exact } else { Transport::TwoInterface },
-            method: if dense { Method::Dense } else { Method::Adaptive },
-            metric: if max_error { Metric::MaxError } else { Metric::MaxLevel },
-            driven: Driven::Gpu,
-            level, gbuffer_res, caustic_res, photon_budget_mib: budget, error_bound, flux_threshold, traverse_wg,
-            batch_slots, debug_photons, weak_branches,
-            ..Settings::default()
+            quality: Quality {
+                transport: if exact { Transport::Exact } else { Transport::TwoInterface },
+                method: if dense { Method::Dense } else { Method::Adaptive },
+                metric: if max_error { Metric::MaxError } else { Metric::MaxLevel },
+                level: Some(level), caustic_res, photon_budget_mib: budget,
+                ..Quality::default()
+            },
+            tuning: Tuning {
+                driven: Driven::Gpu, gbuffer_res, error_bound, flux_threshold, traverse_wg, batch_slots, debug_photons,
+                weak_branches,
+                ..Tuning::default()
+            },
         };
-        match s.validate() {
-            Ok(()) => {
+        match s.resolve_with(DeviceClass::Cpu, 128 << 20, 2 << 30) {
+            Ok(s) => {
                 prop_assert!(s.photon_capacity() >= 8 && s.photon_capacity() <= 8 << 20);
                 let batch = s.batch_photons(s.photon_capacity());
                 prop_assert!((8..=s.photon_capacity()).contains(&batch) && batch <= MAX_BATCH_PHOTONS);

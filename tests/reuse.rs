@@ -7,14 +7,15 @@ use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
 use caustics::renderer::{Aov, FrameReport};
 use caustics::scene::Material;
-use caustics::settings::{Method, Settings, Transport};
+use caustics::settings::{Method, Quality, Settings, Transport};
 
 const SPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/sphere.toml");
 
 fn open(reuse: bool) -> Session {
     std::env::set_var("CAUSTICS_VALIDATION", "1");
     let args = SceneArgs { scene: Some(SPHERE.into()), camera: Some("top".into()), size: "128x128".into() };
-    let settings = Settings { transport: Transport::Exact, method: Method::Dense, level: 1, ..Settings::default() };
+    let quality = Quality { transport: Transport::Exact, method: Method::Dense, level: Some(1), ..Quality::default() };
+    let settings = Settings { quality, ..Settings::default() };
     let mut s = Session::open(&args, settings).expect("session");
     s.renderer.reuse = reuse;
     s
@@ -76,8 +77,8 @@ fn camera_moves_reuse_and_changes_recompute() {
     assert!(frame(&mut s, "top").0.reused);
 
     // Settings: a new level recomputes.
-    let mut settings = s.renderer.settings.clone();
-    settings.level = 2;
+    let mut settings = s.renderer.settings().clone();
+    settings.quality.level = Some(2);
     s.renderer.set_settings(settings).unwrap();
     assert!(!frame(&mut s, "top").0.reused, "a settings change must recompute");
     assert_eq!(caustics::vk::validation_message_count(), 0, "validation messages");
@@ -89,8 +90,8 @@ fn camera_moves_reuse_and_changes_recompute() {
 #[test]
 fn progressive_refinement_converges_to_render() {
     let mut s = open(true);
-    let mut settings = s.renderer.settings.clone();
-    settings.level = 2;
+    let mut settings = s.renderer.settings().clone();
+    settings.quality.level = Some(2);
     s.renderer.set_settings(settings).unwrap();
     let cam = s.renderer.scene.camera(Some("top")).unwrap().clone();
     let view = s.renderer.camera_view(&cam, 128, 128);
@@ -98,15 +99,15 @@ fn progressive_refinement_converges_to_render() {
     let mut steps = Vec::new();
     for level in 0..=2 {
         let (r, img) =
-            s.renderer.render_frame_at(level, &view, Some(Aov::Caustics), None, &Default::default()).unwrap();
+            s.renderer.render_frame_at(level, false, &view, Some(Aov::Caustics), None, &Default::default()).unwrap();
         assert_eq!(r.level, level);
         assert!(!r.reused, "each refinement step recomputes");
         steps.push(to_rgb(&img.unwrap()).unwrap());
     }
-    assert_eq!(s.renderer.settings.level, 2, "the chosen level is kept");
+    assert_eq!(s.renderer.config().level, 2, "the chosen level is kept");
     let mut fresh = open(false);
-    let mut settings = fresh.renderer.settings.clone();
-    settings.level = 2;
+    let mut settings = fresh.renderer.settings().clone();
+    settings.quality.level = Some(2);
     fresh.renderer.set_settings(settings).unwrap();
     let (_, final_fresh) = frame(&mut fresh, "top");
     same(&steps[2], &final_fresh, "refined against a fresh render", 1e-4);
@@ -145,8 +146,8 @@ fn nothing_changed_reuses_the_eye_view() {
     assert_ne!(b2, b0);
     let (r3, _) = beauty(&mut s, "main");
     assert!(!r3.eye_reused, "the eye view reused is only the last frame's");
-    let mut settings = s.renderer.settings.clone();
-    settings.exposure_ev += 1.0;
+    let mut settings = s.renderer.settings().clone();
+    settings.quality.exposure_ev += 1.0;
     s.renderer.set_settings(settings).unwrap();
     let (r4, b4) = beauty(&mut s, "main");
     assert!(r4.reused && !r4.eye_reused, "an exposure change re-runs the eye view, not the caustics");

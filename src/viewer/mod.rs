@@ -26,7 +26,7 @@ use crate::image_io;
 use crate::profiler;
 use crate::renderer::{FrameReport, Renderer, SlotVerdict, Views};
 use crate::scene::{Camera, Light, Material, Projection, Scene};
-use crate::settings::{parse_size, Method, Metric, Settings};
+use crate::settings::{parse_size, Method, Metric, Quality, Settings};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use crate::vk::swapchain::{self, Acquired, LiveCounts, Presented, Surface, Swapchain, SwapchainDesc};
@@ -677,7 +677,14 @@ impl Viewer {
 
     fn act(&mut self, action: Action) -> AppResult<()> {
         use Action::*;
-        let s = self.renderer.settings.clone();
+        let c = self.renderer.config().clone();
+        // A change asks for the current settings with one quality choice changed (the tuning stays).
+        let with = |f: &dyn Fn(&mut Quality)| {
+            let mut s = self.renderer.settings().clone();
+            s.quality.level = Some(c.level);
+            f(&mut s.quality);
+            s
+        };
         match action {
             Orbit | Zoom | DragLight => {}
             LightLeft => self.input.light_keys.x -= 1.0,
@@ -688,23 +695,28 @@ impl Viewer {
             LightAway => self.input.light_keys.z += 1.0,
             IorDown => self.change_ior(-0.05)?,
             IorUp => self.change_ior(0.05)?,
-            LevelDown => self.change_settings(Settings { level: s.level.saturating_sub(1), ..s })?,
-            LevelUp => self.change_settings(Settings { level: s.level + 1, ..s })?,
-            ResolutionDown => self.change_settings(Settings { caustic_res: (s.caustic_res / 2).max(64), ..s })?,
-            ResolutionUp => self.change_settings(Settings { caustic_res: (s.caustic_res * 2).min(4096), ..s })?,
-            Dense => self.change_settings(Settings { method: Method::Dense, level: s.level.min(12), ..s })?,
-            AdaptiveMaxLevel => {
-                self.change_settings(Settings { method: Method::Adaptive, metric: Metric::MaxLevel, ..s })?
-            }
-            AdaptiveMaxError => {
-                self.change_settings(Settings { method: Method::Adaptive, metric: Metric::MaxError, ..s })?
-            }
+            LevelDown => self.change_settings(with(&|q| q.level = Some(c.level.saturating_sub(1))))?,
+            LevelUp => self.change_settings(with(&|q| q.level = Some(c.level + 1)))?,
+            ResolutionDown => self.change_settings(with(&|q| q.caustic_res = (c.caustic_res / 2).max(64)))?,
+            ResolutionUp => self.change_settings(with(&|q| q.caustic_res = (c.caustic_res * 2).min(4096)))?,
+            Dense => self.change_settings(with(&|q| {
+                q.method = Method::Dense;
+                q.level = Some(c.level.min(12));
+            }))?,
+            AdaptiveMaxLevel => self.change_settings(with(&|q| {
+                q.method = Method::Adaptive;
+                q.metric = Metric::MaxLevel;
+            }))?,
+            AdaptiveMaxError => self.change_settings(with(&|q| {
+                q.method = Method::Adaptive;
+                q.metric = Metric::MaxError;
+            }))?,
             Transport => {
-                let transport = match s.transport {
+                let transport = match c.transport {
                     crate::settings::Transport::Exact => crate::settings::Transport::TwoInterface,
                     crate::settings::Transport::TwoInterface => crate::settings::Transport::Exact,
                 };
-                self.change_settings(Settings { transport, ..s })?
+                self.change_settings(with(&|q| q.transport = transport))?
             }
             Animate => self.toggle_animation(),
             Screenshot => self.screenshot_request = true,
@@ -735,7 +747,7 @@ impl Viewer {
     }
 
     fn describe(&self) -> String {
-        let s = &self.renderer.settings;
+        let s = &self.renderer.config();
         let method = match (s.method, s.metric) {
             (Method::Dense, _) => "dense",
             (Method::Adaptive, Metric::MaxLevel) => "adaptive max-level",
@@ -815,7 +827,7 @@ impl Viewer {
     fn set_light(&mut self, light: Light) -> bool {
         let old = std::mem::replace(&mut self.renderer.scene.lights[0], light);
         let view = self.renderer.camera_view(&self.orbit.camera(), 16, 16);
-        match Views::new(&self.renderer.scene, &self.renderer.settings, &view, 0) {
+        match Views::new(&self.renderer.scene, self.renderer.config(), &view, 0) {
             Ok(_) => true,
             Err(e) => {
                 self.renderer.scene.lights[0] = old;
@@ -947,7 +959,7 @@ impl Viewer {
             |_: &Device, cmd: vk::CommandBuffer, t: &Targets| presenter.record(cmd, &t.eye.beauty, sc, index, capture);
         // Progressive refinement: an interactive level while the light or the glass changes, then one level more
         // per frame up to the chosen one (each frame complete and flux-correct at its level).
-        let chosen = renderer.settings.level;
+        let chosen = renderer.config().level;
         let interacting = std::mem::take(&mut self.interacting);
         let level = if !self.progressive {
             chosen
@@ -968,14 +980,11 @@ impl Viewer {
         self.last_camera = Some(camera.clone());
         // Frames that refine toward the chosen level are previews too: only the last one pays for the full eye view.
         let preview = self.progressive && (moved || interacting || level < chosen);
-        renderer.settings.preview = preview;
         // Dynamic resolution: a preview may be drawn smaller; the copy to the swapchain image scales it up.
         // A screenshot frame is drawn at full resolution (it may be copied from the beauty image itself).
         let scale = if preview && !capture { self.preview_scale } else { 1 };
         let view = renderer.camera_view(&camera, (extent.width / scale).max(1), (extent.height / scale).max(1));
-        let submitted = renderer.submit_frame_at(level, &view, None, Some(&mut finish), &sync);
-        renderer.settings.preview = false;
-        submitted?;
+        renderer.submit_frame_at(level, preview, &view, None, Some(&mut finish), &sync)?;
         self.in_flight.push_back(InFlight { scale, step: self.script.as_ref().map(|s| s.current_step()) });
         self.shown_level = level;
         if capture {
@@ -1055,7 +1064,7 @@ impl Viewer {
     /// slot): the title, the profiler's ring, the batch slots and the interactive level follow them.
     fn take_reports(&mut self) -> AppResult<()> {
         for report in self.renderer.take_completed() {
-            let chosen = self.renderer.settings.level;
+            let chosen = self.renderer.config().level;
             let frame = self.in_flight.pop_front().unwrap_or(InFlight { scale: 1, step: None });
             if let (Some(s), Some(step)) = (self.script.as_mut(), frame.step) {
                 s.completed(step, report.level, chosen, report.preview);
@@ -1106,7 +1115,7 @@ impl Viewer {
         }
         let fps = self.title_frames as f64 / elapsed;
         let gpu = self.title_gpu_ms / self.title_frames as f64;
-        let refining = if report.level < self.renderer.settings.level {
+        let refining = if report.level < self.renderer.config().level {
             format!(" — refining: level {}", report.level)
         } else {
             String::new()
@@ -1178,7 +1187,7 @@ impl Viewer {
             _ => 0.0,
         };
         let info = &self.device().info;
-        let s = &self.renderer.settings;
+        let s = &self.renderer.config();
         let last = frames.last();
         let st = last.and_then(|r| r.state);
         let light = &self.renderer.scene.lights[0];
