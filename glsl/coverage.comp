@@ -1,5 +1,5 @@
 #version 460
-// Coverage pyramid (docs/design.md step 1): mip 0 marks the refractor front buffer's covered texels (those whose
+// Coverage pyramid (docs/design.md step 2): mip 0 marks the refractor front buffer's covered texels (those whose
 // surface is in the light: a receiver between the light and the glass shadows it); each coarser mip
 // takes the max (bit 0, "any covered": a conservative test for traversal) and the min (bit 1, "all covered":
 // max-error clusters must be fully covered) of its 2x2 children.

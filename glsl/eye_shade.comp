@@ -1,5 +1,5 @@
 #version 460
-// Eye view of the receivers (docs/design.md step 6), deferred: the raster pass wrote their eye-view g-buffer
+// Eye view of the receivers (docs/design.md step 7), deferred: the raster pass wrote their eye-view g-buffer
 // (normal and distance, and albedo); here each pixel is shaded under one light: direct irradiance through a
 // filtered shadow map, caustic irradiance averaged over the pixel's footprint on the caustic map, and the
 // environment. The first light writes the targets, each further light adds its light (dispatches in order).

@@ -1,5 +1,5 @@
 #version 460
-// Splat (docs/design.md step 5, second half), drawn with vkCmdDrawIndirect: one point per emitted photon, at its
+// Splat (docs/design.md step 5), drawn with vkCmdDrawIndirect: one point per emitted photon, at its
 // landing texel of the light-space caustic map, sized by its footprint. The trace pass filled the splat records.
 #include "common/photon_bindings.glsl"
 

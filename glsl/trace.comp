@@ -1,5 +1,5 @@
 #version 460
-// Photon trace (docs/design.md step 5, first half): each emitted photon is refracted through the front surface
+// Photon trace (docs/design.md step 4, two-interface): each emitted photon is refracted through the front surface
 // (Fresnel), to the back surface, out again, and to the receivers; its landing point, flux and splat radius go
 // into a splat record. Dispatched indirectly over the batch's emitted photons, with arguments the stats shader
 // wrote. Tracing in compute rather than in the splat's vertex shader keeps the heavy arithmetic on every shader

@@ -1,5 +1,5 @@
 #version 460
-// The exact transport's bookkeeping (one invocation; docs/design.md step 5): mode 0/1 begins a batch's waves (1 for
+// The exact transport's bookkeeping (one invocation; docs/design.md step 4): mode 0/1 begins a batch's waves (1 for
 // adaptive: nothing when the batch has no tile or aborted), mode 2 follows each wave (the appended children become
 // the next wave, with its dispatch-indirect arguments), mode 3 commits the batch (its energy account joins the
 // frame's and the splat draws its records) unless it aborted, in which case traversal's commit splits its tile.

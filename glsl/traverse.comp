@@ -11,7 +11,7 @@
 // In every variant the last level is fused into the one before: a cell at level L - 1 that refines emits those of
 // its four children that dense emission would emit, instead of appending them as candidates of level L.
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
-// branch under a mask, so code that max-level never takes still costs its full price there; docs/results.md).
+// branch under a mask, so code that max-level never takes still costs its full price there; docs/experiments.md).
 // Likewise TRAVERSE_METRIC (1: max-error, 2: flux-error) compiles one metric's code only.
 // TRAVERSE_COOP (exact transport, max-error and flux-error; `--coop-checks`): four invocations share each
 // candidate, so a work group of side^2 invocations takes side^2 / 4 candidates. Each lane first traces one child's
@@ -208,7 +208,7 @@ const uint FE_DROP = 3u;
 // weak branches' bound), E is in proportion to the flux and does not halve: every checked level below skips
 // (predicted_skip_mixed). Where the map bends, or a child lies off the boundary, a cell so refined might have merged:
 // it then costs photons, never error. FE_PREDICT = 2 is the look-ahead's own bound, so every cell that refines
-// beyond the look-ahead's band predicts its children. Measured on lavapipe at level 5 (docs/results.md): one level
+// beyond the look-ahead's band predicts its children. Measured on lavapipe at level 5 (docs/experiments.md): one level
 // against none, the bunny's frame 4% and 14% shorter at E = 0.001 and 0.0158 (a factor-2 margin, 4, against 2: the
 // sphere's 11%, 6% and 0% at E = 0.001, 0.005 and 0.0158); the chains over several levels, from the early look-ahead
 // on and through the mixed and weak bounds, the bunny's 27%, 26% and 11% shorter again, the sphere's 4%, 1% and 0%,

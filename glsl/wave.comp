@@ -1,5 +1,5 @@
 #version 460
-// One wave of exact photon transport (docs/design.md step 5, `--transport exact`), dispatched indirectly with the
+// One wave of exact photon transport (docs/design.md step 4, `--transport exact`), dispatched indirectly with the
 // arguments the transport shader wrote after the previous wave. Wave 0 turns each emitted photon into a ray from
 // the light through its cell's center; wave k > 0 traces ray queue k & 1. At a dielectric the Fresnel split
 // appends the reflected and refracted children (each above the flux threshold) to queue (k + 1) & 1; at a diffuse
@@ -50,7 +50,7 @@ void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, 
 
 vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 
-// Weak branches (`--weak-branches`, docs/design.md step 5): a Fresnel branch below u_frame.material.y of its
+// Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.material.y of its
 // photon's flux is traced once per block instead of by each photon in the block. At a split of depth d the block's
 // members take turns (member d mod n of the n, in raster order): the photon whose turn it is traces the weak branch
 // carrying the block's share (its weight times `scale`, the block's solid angle over its own), flagged LOD_RAY so

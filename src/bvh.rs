@@ -10,8 +10,8 @@
 //! leaf of up to [`MAX_LEAF_TRIS`] consecutive triangles. Two other layouts are built beside it: "single", one box
 //! per node as obvhs keeps it, and "threaded", one box per node in depth-first order with escape links for a
 //! stackless walk. All three are uploaded; `--bvh-layout` picks the one the waves trace (`auto`: single on GPUs,
-//! pair on CPU devices, the faster on each in docs/results.md), and the traversal checks and the eye composite
-//! walk the pair layout.
+//! pair on CPU devices, the faster on each in docs/experiments.md, "BVH layouts"), and the traversal checks and
+//! the eye composite walk the pair layout.
 //!
 //! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
@@ -96,7 +96,7 @@ const _: () = {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum BvhLayout {
-    /// The faster layout for the device, by the rule measured in docs/results.md ("Exact transport on the H200"):
+    /// The faster layout for the device, by the rule measured in docs/experiments.md ("BVH layouts"):
     /// single on GPUs, pair on CPU devices. The settings resolve it to the layout it picks, so the stats report
     /// that.
     Auto,

@@ -4,8 +4,8 @@
 //! That bound is conservative by one to three orders of magnitude, and by how much depends on the scene, so τ
 //! itself is a poor knob. E is what a user asks for: the rel-L1 at 64² that merging may add to max-level's image
 //! at the same `--level`. The table below maps one to the other. It was measured with
-//! `tools/calibrate-target-error` (docs/results.md, "Calibrating --target-error"): for each τ of a sweep, the
-//! largest added rel-L1 over the calibration runs (sphere, bunny and tilted cube under exact and two-interface
+//! `tools/calibrate-target-error` (docs/bench/llvmpipe-llvm-15-0-6-256-bits/calibration_target_error.md): for
+//! each τ of a sweep, the largest added rel-L1 over the calibration runs (sphere, bunny and tilted cube under exact and two-interface
 //! transport at level 3 with check level 2 and level 4 with the default check level 3; at level 5 the three
 //! scenes under two-interface and the sphere and the bunny under exact transport), made non-decreasing in τ and
 //! rounded up to three significant digits. E maps to the largest τ of the sweep whose error stayed within E on

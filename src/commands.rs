@@ -345,7 +345,7 @@ impl Session {
 
     /// A rough upper bound of one frame's time in seconds, from its photon count: every cell of the level's grid
     /// (dense and adaptive max-level emit at most that many) times a per-photon cost measured on lavapipe
-    /// (docs/results.md: about 0.25 µs per photon for two-interface, 6 µs for exact transport, whose photons
+    /// (about 0.25 µs per photon for two-interface, 6 µs for exact transport, whose photons
     /// become several rays each), 100× less on a GPU. `None` for max-error and flux-error, whose counts are not
     /// known ahead.
     pub fn estimate_frame_s(&self) -> Option<f64> {
@@ -492,7 +492,7 @@ pub fn flux_error(s: &ResolvedSettings) -> bool {
     s.method == Method::Adaptive && s.metric == Metric::FluxError
 }
 
-/// The stats JSON of docs/design.md, over `frames` (the per-frame counts are the last frame's).
+/// The stats JSON of docs/cli.md, over `frames` (the per-frame counts are the last frame's).
 pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Value {
     let r = &session.renderer;
     let s = r.config();
@@ -557,8 +557,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
     v
 }
 
-/// Exact transport's stats: the BVH (with its host build time), the waves, and the energy account in W
-/// (emitted = caustics + direct + escaped + cut_threshold + cut_cap + lost + overflow, with the residual).
+/// Exact transport's stats: the BVH (with its host build time), the waves, and the energy account in W with its
+/// residual (docs/design.md, "Exact transport's energy account").
 fn transport_json(session: &Session, report: &FrameReport) -> Value {
     let r = &session.renderer;
     if r.config().transport != Transport::Exact {

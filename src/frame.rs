@@ -1,18 +1,21 @@
-//! One frame, in its fixed pass order, with the barriers that join the passes (docs/design.md "Pipeline"):
+//! One frame, in its fixed pass order, with the barriers that join the passes. The steps are those of
+//! docs/design.md "Pipeline", with the same numbers:
 //!
 //! 1. light-view g-buffers: refractor front and back (photon view), receivers with the shadow map as their depth
 //!    (receiver view)
 //! 2. coverage pyramid
-//! 3. photons: dense emission, or adaptive init → traverse × levels → stats, in batches; each batch splatted
-//!    into the caustic flux map with vkCmdDrawIndirect
-//! 4. resolve: flux → caustic irradiance
-//! 5. eye: the receivers' g-buffer, shaded in compute under each light (radiance, caustics, direct); refractor
-//!    front and back
-//! 6. composite: the glass (BVH-traced eye rays, or deferred refraction) and tone mapping
+//! 3. photons: dense emission, or adaptive init → traverse × levels → stats, in batches
+//! 4. transport: each batch's photons traced to the receivers (exact transport's waves, or the two-interface
+//!    trace)
+//! 5. splat: each batch's landings into the caustic flux map (compute, or vkCmdDrawIndirect)
+//! 6. resolve: flux → caustic irradiance
+//! 7. eye view: the receivers' g-buffer, shaded in compute under each light (radiance, caustics, direct);
+//!    refractor front and back
+//! 8. composite: the glass (BVH-traced eye rays, or deferred refraction) and tone mapping
 //!
-//! With no refractor in the light, steps 2-4 are not recorded at all. GPU-driven traversal records every level
-//! with vkCmdDispatchIndirect from arguments that the stats shader wrote; the CPU-driven baseline submits after
-//! each level, reads the count back, and records the next dispatch directly.
+//! Steps 3 to 5 repeat per batch. With no refractor in the light, steps 2-6 are not recorded at all. GPU-driven
+//! traversal records every level with vkCmdDispatchIndirect from arguments that the stats shader wrote; the
+//! CPU-driven baseline submits after each level, reads the count back, and records the next dispatch directly.
 
 use crate::error::AppResult;
 use crate::gpu_types::{FrameData, TransportState, TraversalState};
@@ -606,7 +609,8 @@ impl Ctx<'_> {
         });
     }
 
-    /// Step 3: photons, in batches, each splatted into the caustic flux map.
+    /// Step 3: photons, in batches; each batch's photons are traced (step 4) and splatted (step 5) into the
+    /// caustic flux map.
     fn photons(&self, rec: &mut Rec, slots: u32) -> VkResult<()> {
         let (t, d) = (self.t, self.d);
         let cmd = rec.cmd;
@@ -729,7 +733,7 @@ impl Ctx<'_> {
         });
     }
 
-    /// The batch's emitted photons: trace them (compute, dispatched indirectly), then splat them (draw indirect).
+    /// Steps 4 and 5 for one batch: trace its emitted photons (compute, dispatched indirectly), then splat them.
     /// `commit`: adaptive traversal's last stats pass, which commits or splits the batch. Under two-interface
     /// transport it ran already; under exact transport it runs after the waves, which may abort the batch.
     fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) {
@@ -770,7 +774,7 @@ impl Ctx<'_> {
         });
     }
 
-    /// Exact transport of the batch's emitted photons, in waves (docs/design.md step 5): every wave is one
+    /// Exact transport of the batch's emitted photons, in waves (docs/design.md step 4): every wave is one
     /// vkCmdDispatchIndirect whose arguments the transport pass wrote from the previous wave's appends. The host
     /// records MAX_INTERACTIONS + 1 waves; those after the queue empties dispatch zero work groups.
     fn exact_transport(&self, rec: &mut Rec, commit: bool) {
@@ -952,7 +956,7 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    /// Step 4: caustic flux → irradiance.
+    /// Step 6: caustic flux → irradiance.
     fn resolve(&self, rec: &mut Rec) {
         let cmd = rec.cmd;
         rec.ts.mark(cmd, "resolve");
@@ -989,7 +993,7 @@ impl Ctx<'_> {
         });
     }
 
-    /// Step 5a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
+    /// Step 7a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
     /// each light's shading writes (the first) or adds to (the others) the radiance, and the caustics and direct
     /// AOVs when the frame reads one back, so the AOVs are the sums over lights.
     fn eye_receivers(&self, rec: &mut Rec) {
@@ -1030,7 +1034,7 @@ impl Ctx<'_> {
         self.p.eye.record_shade(cmd, &inputs, &g, out, !first);
     }
 
-    /// Step 5b: the eye view of the refractors: front and back g-buffers for the composite.
+    /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.
     fn eye_refractors(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;
@@ -1069,7 +1073,7 @@ impl Ctx<'_> {
         self.s.transport == Transport::Exact && !self.preview
     }
 
-    /// Step 6: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
+    /// Step 8: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
     fn composite(&self, rec: &mut Rec) {
         let (t, cmd) = (self.t, rec.cmd);
         let e = &t.eye;

@@ -15,7 +15,8 @@ Environment:
                        target/reference-cache.
 
 Exit codes: 0 success, 2 bad input (an argument, a scene or an image; the message names it), 1 anything else.
-Docs: README.md, docs/design.md (units, metric, contracts), docs/scenes.md (every scene key).";
+Docs: README.md, docs/cli.md (every option, the stats keys), docs/design.md (units, metric, contracts),
+docs/scenes.md (every scene key), docs/viewer.md (the viewer's controls).";
 
 #[derive(Parser, Debug)]
 #[command(

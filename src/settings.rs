@@ -69,7 +69,7 @@ pub enum Transport {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum CoopChecks {
-    /// On for GPUs, off for CPU devices (docs/results.md, "Cooperative checks").
+    /// On for GPUs, off for CPU devices (docs/experiments.md, "Cooperative checks").
     Auto,
     On,
     Off,
@@ -121,7 +121,7 @@ pub enum Splat {
 }
 
 impl Splat {
-    /// The splat a device runs. `auto` follows the measured rule (docs/results.md, "Throughput"): on an H100 the
+    /// The splat a device runs. `auto` follows the measured rule (docs/results.md, "Splat throughput"): on an H200 the
     /// compute splats are 12-20x faster than the point draw and the tiled one is faster still where light
     /// focuses; on lavapipe the compute splat is 6-8x faster than the point draw, and the tiled one's barriers
     /// make it about 2x slower than the untiled one. Without float atomics: raster.
@@ -537,7 +537,8 @@ impl Settings {
 /// The first level checked for convergence when the tuning names none: level 3 (Wyman & Nichols' 512² level),
 /// and under flux-error at most `level` - 1, so that the metric acts at every level from 1 on (with the check
 /// level at `level` or above it would emit max-level's photons and pay for a traversal; at level 3, check level 2
-/// reaches dense's error on the sphere in the same time and 0.9% in 21% less, docs/results.md).
+/// reaches dense's error on the sphere 9% faster and 0.87% in 27% less time on lavapipe,
+/// docs/bench/llvmpipe-llvm-15-0-6-256-bits/speed_error_exact_levels3-5.md).
 pub fn default_check_level(metric: Metric, level: u32) -> u32 {
     match metric {
         Metric::FluxError => DEFAULT_CHECK_LEVEL.min(level.saturating_sub(1)),
@@ -577,7 +578,7 @@ impl ResolvedSettings {
         self.check_level
     }
 
-    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md, "Pipeline"). A
+    /// Exact transport's weak-branch block side, in cells of the maximal level (docs/design.md step 4). A
     /// block's turns follow its cells, not its photons, so every method shares the same blocks.
     pub fn weak_block(&self) -> u32 {
         self.weak_block

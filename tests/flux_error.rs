@@ -182,12 +182,13 @@ fn target_error_is_monotonic() {
 /// (481,480 and 293,314 photons of max-level's 824,416), bunny 0.0044% and 0.343% (472,471 and 338,029 of 491,341;
 /// with prediction over one level only: 0.0053%, 0.0593%, 0.0053% and 0.406%). Margin 1 (the assertion is added ≤ E):
 /// these runs are among those the table was built from, whose worst cases for these two τ are 0.081% (the tilted
-/// cube under two-interface) and 0.46% (the bunny under exact transport), both at level 5 (docs/results.md,
-/// "Calibrating --target-error"); the test guards the table, the mapping and the metric against regressions.
+/// cube under two-interface) and 0.46% (the bunny under exact transport), both at level 5
+/// (docs/bench/llvmpipe-llvm-15-0-6-256-bits/calibration_target_error.md); the test guards the table, the mapping
+/// and the metric against regressions.
 #[test]
 fn target_error_bounds_the_added_error() {
     // Both in the same (default) weak-branch blocks: E bounds what merging adds, and 4×4 blocks differ from 2×2 by
-    // more (0.36% on the bunny at level 4; docs/results.md).
+    // more (0.36% rel-L1 64² on the bunny at level 4, measured on lavapipe).
     let base = ["--transport", "exact", "--level", "4"];
     for (name, scene) in [("flux_error_calibration_sphere", SPHERE), ("flux_error_calibration_bunny", BUNNY)] {
         for (e, tau, _, added) in added_errors(name, scene, &base, &["0.001", "0.005"]) {

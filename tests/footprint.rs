@@ -67,7 +67,7 @@ fn conserves_flux_and_the_splats_agree(tag: &str, base: &[&str]) {
 /// Where light spreads (the sphere's caustic outside its focus, a convex mirror's reflection), low-level photons
 /// land several cell sizes apart and the cell kernel leaves moiré and speckles; the differential footprint widens
 /// each splat to the spacing of its neighbours. Measured on lavapipe (dense, rel-L1 at 256² against the 4M-photon
-/// all-paths reference used here; with 8M, `caustics bench` in docs/results.md: 0.2204/0.0374 and 0.8564/0.1935):
+/// all-paths reference used here; with 8M, `caustics bench` in docs/experiments.md: 0.2204/0.0374 and 0.8564/0.1935):
 /// sphere level 1 0.2209 (cell) against 0.0438 (differential), mirror_sphere level 3 0.8596 against 0.2269. The
 /// test asks the differential footprint to win by half the measured margin and to stay within 15% of its measure.
 #[test]

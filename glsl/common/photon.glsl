@@ -1,4 +1,4 @@
-// Tracing one photon from the light through the refractor to the receivers (docs/design.md step 5): front surface
+// Tracing one photon from the light through the refractor to the receivers (docs/design.md step 4): front surface
 // from the light-view front buffer, refraction with Fresnel transmittance, the exit point on the back surface by
 // a bracketed search, refraction out (total internal reflection drops the photon: a two-interface method cannot
 // follow it), and the receiver hit by a bracketed secant search. Used by the splat for every emitted photon and
@@ -82,7 +82,7 @@ uint cell_splat_radius(uvec2 cell) {
     return r == 0u ? side_splat_radius(cell_side(cell_level(cell))) : r;
 }
 
-// Weak branches (glsl/wave.comp, docs/design.md step 5): the maximal level's blocks are weak_block() (2 or 4) of
+// Weak branches (glsl/wave.comp, docs/design.md step 4): the maximal level's blocks are weak_block() (2 or 4) of
 // its cells a side. A photon at least as large as a block shares with its siblings instead, where traverse.comp
 // marks them.
 uint weak_block() { return uint(u_frame.material.z); }

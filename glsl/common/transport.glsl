@@ -1,4 +1,4 @@
-// Exact photon transport (docs/design.md step 5, `--transport exact`): rays through the scene BVH, a deterministic
+// Exact photon transport (docs/design.md step 4, `--transport exact`): rays through the scene BVH, a deterministic
 // Fresnel split at every dielectric interface, and the landing point of a path on the receivers. The wave shader
 // follows every branch; the traversal's max-error metric follows each child's dominant branch.
 // Needs photon_bindings, photon.glsl and bvh.glsl.

@@ -78,7 +78,7 @@ struct TraversalState {
     ivec4 stack[TILE_STACK];
 };
 
-// Exact transport (docs/design.md step 5, `--transport exact`): the state of the waves of one batch and the energy
+// Exact transport (docs/design.md step 4, `--transport exact`): the state of the waves of one batch and the energy
 // account. Wave k traces ray queue k & 1 (wave 0: the batch's emitted photons) and appends the children to queue
 // (k + 1) & 1 with atomicAdd; the transport shader turns out_count into the next wave's dispatch arguments.
 // Account terms are flux / light intensity (sr for spot lights, m^2 for directional ones) in 64-bit fixed point

@@ -1,5 +1,5 @@
 //! glTF 2.0 import (`.gltf` and `.glb`): meshes baked to world space with their node transforms, cameras, one
-//! KHR_lights_punctual spot or directional light, and the materials the renderer has (docs/scenes.md, "glTF").
+//! KHR_lights_punctual spot or directional light, and the materials the renderer has (docs/scenes.md, "glTF scenes").
 //!
 //! Every error is a [`SceneError::Gltf`] naming the file and the JSON path (`meshes[0].primitives[1].mode`);
 //! the CLI reports it with exit code 2. The file is validated before use and accessors are bounds-checked here,
@@ -363,7 +363,7 @@ fn visit(
                 Some(i) => materials[i],
                 None => default_material,
             };
-            // The same repairs as an OBJ mesh's (docs/scenes.md, "Mesh files"): an open or non-manifold receiver
+            // The same repairs as an OBJ mesh's (docs/cli.md, "Input checks"): an open or non-manifold receiver
             // is an ordinary surface, so only glass hears about its topology.
             let report = super::mesh::sanitize(&mut m, computed_normals);
             let glass = matches!(material, Material::Dielectric { .. });
