@@ -368,7 +368,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
         let mut max_level_images: HashMap<(&'static str, u32), RgbImage> = HashMap::new();
         let mut flux_error_rows: Vec<(usize, &'static str, u32, RgbImage)> = Vec::new();
         // Every timed frame runs every stage.
-        session.renderer.reuse = false;
+        session.renderer.set_reuse(false);
         device = format!("{} ({})", session.device().info.name, session.device().info.driver);
         let photons = reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0));
         let refs = references(args, scene_path, session.width, session.height, photons)?;
@@ -379,7 +379,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             session.frame(None)?;
         }
         let name = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let intensity = session.renderer.scene.lights.first().map_or(0.0, |l| l.intensity as f64);
+        let intensity = session.renderer.scene().lights.first().map_or(0.0, |l| l.intensity as f64);
         for (&transport, p) in args.transports.iter().flat_map(|t| pts.iter().map(move |p| (t, p))) {
             let key = format!("{} {}", transport_name(transport), p.key());
             for &level in &levels {

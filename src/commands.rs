@@ -4,7 +4,7 @@ use crate::bvh::BvhLayout;
 use crate::error::{AppError, AppResult};
 use crate::image_io::{self, RgbImage};
 use crate::profiler;
-use crate::renderer::{Aov, AovData, FrameReport, Renderer, SlotVerdict};
+use crate::renderer::{Aov, AovData, FrameDesc, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Projection, Scene};
 use crate::settings::{
     parse_size, CoopChecks, Driven, Footprint, Method, Metric, Quality, ResolvedSettings, Settings, Splat, Transport,
@@ -340,7 +340,7 @@ impl Session {
     }
 
     pub fn device(&self) -> &Arc<vk::Device> {
-        &self.renderer.device
+        self.renderer.device()
     }
 
     /// A rough upper bound of one frame's time in seconds, from its photon count: every cell of the level's grid
@@ -374,10 +374,10 @@ impl Session {
         let view = self.renderer.camera_view(&self.camera, self.width, self.height);
         loop {
             let (report, img) = match self.slow_frame_s {
-                None => self.renderer.render(&view, aov)?,
+                None => self.renderer.render(&FrameDesc::new(&view, aov))?,
                 Some(est) => {
                     let renderer = &mut self.renderer;
-                    with_progress(est, || renderer.render(&view, aov))?
+                    with_progress(est, || renderer.render(&FrameDesc::new(&view, aov)))?
                 }
             };
             match self.renderer.adapt_batch_slots(&report) {
@@ -391,7 +391,9 @@ impl Session {
                 }
                 SlotVerdict::Incomplete => eprintln!(
                     "batching: {} tiles pending after {} batch slots; rendering again with {}",
-                    report.unfinished_tiles, report.batch_slots, self.renderer.slots_hint
+                    report.unfinished_tiles,
+                    report.batch_slots,
+                    self.renderer.slots_hint()
                 ),
             }
         }
@@ -564,7 +566,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
     if r.config().transport != Transport::Exact {
         return Value::Null;
     }
-    let bvh = &r.scene_buffers.bvh;
+    let bvh = &r.scene_buffers().bvh;
     let mut v = json!({
         "bvh": {
             "layout": r.config().bvh_layout,
@@ -585,7 +587,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
     });
     if let Some(ts) = report.transport {
         if let Value::Object(m) = &mut v {
-            m.insert("energy".into(), Value::Object(ts.account_json(r.scene.lights[0].intensity as f64)));
+            m.insert("energy".into(), Value::Object(ts.account_json(r.scene().lights[0].intensity as f64)));
             m.insert("rays_traced".into(), json!(ts.rays_traced));
             m.insert("splat_records".into(), json!(ts.records_total));
             m.insert("waves".into(), json!(ts.waves));
@@ -605,7 +607,7 @@ fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
         .lights
         .iter()
         .map(|rep| {
-            let l = &r.scene.lights[rep.light];
+            let l = &r.scene().lights[rep.light];
             let channel = ["gray", "red", "green", "blue"][rep.channel.min(3) as usize];
             let mut row = json!({
                 "light": rep.light,
@@ -637,7 +639,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     }
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
-    session.renderer.reuse = !args.no_reuse;
+    session.renderer.set_reuse(!args.no_reuse);
     session.warn_if_slow();
     let mut reports = Vec::new();
     let mut image = None;
@@ -743,7 +745,7 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
     // The profiler times every stage: nothing is reused.
-    session.renderer.reuse = false;
+    session.renderer.set_reuse(false);
     session.warn_if_slow();
     for _ in 0..args.warmup {
         session.frame(None)?;

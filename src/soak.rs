@@ -182,7 +182,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
     if session.pixel_area().is_none() {
         return Err(AppError::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
     }
-    let scene0 = session.renderer.scene.clone();
+    let scene0 = session.renderer.scene().clone();
     let light0 = scene0.lights[0].clone();
     // A light straight above its target is first tilted 25°, so that its orbit moves it (as the viewer does).
     let mut d = light0.position - light0.target;
@@ -215,7 +215,8 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         let (si, ai) = (i % s_count, (i / s_count) % args.angles as usize);
         let step = &steps[si];
         let angle = std::f32::consts::TAU * ai as f32 / args.angles as f32;
-        let mut scene = if step.ior != ior_now { with_ior(&scene0, step.ior) } else { session.renderer.scene.clone() };
+        let mut scene =
+            if step.ior != ior_now { with_ior(&scene0, step.ior) } else { session.renderer.scene().clone() };
         ior_now = step.ior;
         scene.lights[0].position = light0.target + Quat::from_rotation_y(angle) * d;
         session.renderer.set_scene(scene)?;

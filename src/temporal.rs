@@ -145,7 +145,7 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
             return Err(AppError::BadInput(format!("--camera {}: must be orthographic", args.camera)))
         }
     };
-    let scene0 = session.renderer.scene.clone();
+    let scene0 = session.renderer.scene().clone();
     let light = &scene0.lights[0];
     let mut d = light.position - light.target;
     if d.normalize().dot(Vec3::Y).abs() > 0.99 {

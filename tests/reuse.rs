@@ -5,7 +5,7 @@
 use caustics::commands::{to_rgb, SceneArgs, Session};
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
-use caustics::renderer::{Aov, FrameReport};
+use caustics::renderer::{Aov, FrameDesc, FrameReport};
 use caustics::scene::Material;
 use caustics::settings::{Method, Quality, Settings, Transport};
 
@@ -17,14 +17,14 @@ fn open(reuse: bool) -> Session {
     let quality = Quality { transport: Transport::Exact, method: Method::Dense, level: Some(1), ..Quality::default() };
     let settings = Settings { quality, ..Settings::default() };
     let mut s = Session::open(&args, settings).expect("session");
-    s.renderer.reuse = reuse;
+    s.renderer.set_reuse(reuse);
     s
 }
 
 fn frame(s: &mut Session, camera: &str) -> (FrameReport, RgbImage) {
-    let cam = s.renderer.scene.camera(Some(camera)).unwrap().clone();
+    let cam = s.renderer.scene().camera(Some(camera)).unwrap().clone();
     let view = s.renderer.camera_view(&cam, 128, 128);
-    let (report, img) = s.renderer.render(&view, Some(Aov::Caustics)).expect("frame");
+    let (report, img) = s.renderer.render(&FrameDesc::new(&view, Some(Aov::Caustics))).expect("frame");
     (report, to_rgb(&img.unwrap()).unwrap())
 }
 
@@ -55,7 +55,7 @@ fn camera_moves_reuse_and_changes_recompute() {
     same(&main1, &main_fresh, "main view, reused against recomputed", 1e-6);
 
     // The light moves: everything that depends on it runs again, and the image equals a fresh render.
-    let mut scene = s.renderer.scene.clone();
+    let mut scene = s.renderer.scene().clone();
     scene.lights[0].position.x += 0.1;
     s.renderer.set_scene(scene.clone()).unwrap();
     let (r3, moved) = frame(&mut s, "top");
@@ -93,13 +93,13 @@ fn progressive_refinement_converges_to_render() {
     let mut settings = s.renderer.settings().clone();
     settings.quality.level = Some(2);
     s.renderer.set_settings(settings).unwrap();
-    let cam = s.renderer.scene.camera(Some("top")).unwrap().clone();
+    let cam = s.renderer.scene().camera(Some("top")).unwrap().clone();
     let view = s.renderer.camera_view(&cam, 128, 128);
     let flux = |img: &RgbImage| img.data.iter().map(|p| p[0] as f64).sum::<f64>();
     let mut steps = Vec::new();
     for level in 0..=2 {
-        let (r, img) =
-            s.renderer.render_frame_at(level, false, &view, Some(Aov::Caustics), None, &Default::default()).unwrap();
+        let desc = FrameDesc { level: Some(level), ..FrameDesc::new(&view, Some(Aov::Caustics)) };
+        let (r, img) = s.renderer.render(&desc).unwrap();
         assert_eq!(r.level, level);
         assert!(!r.reused, "each refinement step recomputes");
         steps.push(to_rgb(&img.unwrap()).unwrap());
@@ -119,9 +119,9 @@ fn progressive_refinement_converges_to_render() {
 }
 
 fn beauty(s: &mut Session, camera: &str) -> (FrameReport, Vec<u8>) {
-    let cam = s.renderer.scene.camera(Some(camera)).unwrap().clone();
+    let cam = s.renderer.scene().camera(Some(camera)).unwrap().clone();
     let view = s.renderer.camera_view(&cam, 128, 128);
-    let (report, img) = s.renderer.render(&view, Some(Aov::Beauty)).expect("frame");
+    let (report, img) = s.renderer.render(&FrameDesc::new(&view, Some(Aov::Beauty))).expect("frame");
     match img.unwrap() {
         caustics::renderer::AovData::Rgba8 { rgba, .. } => (report, rgba),
         _ => panic!("the beauty AOV is 8-bit"),

@@ -40,7 +40,7 @@ pub enum LightKind {
     Point,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Light {
     pub kind: LightKind,
     pub position: Vec3,
@@ -63,7 +63,7 @@ pub enum Projection {
     },
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub name: String,
     pub projection: Projection,

@@ -24,7 +24,7 @@ use crate::commands::{default_scene, MethodArgs};
 use crate::error::{AppError, AppResult};
 use crate::image_io;
 use crate::profiler;
-use crate::renderer::{FrameReport, Renderer, SlotVerdict, Views};
+use crate::renderer::{FrameDesc, FrameReport, Renderer, SlotVerdict};
 use crate::scene::{Camera, Light, Material, Projection, Scene};
 use crate::settings::{parse_size, Method, Metric, Quality, Settings};
 use crate::shaders::consts::*;
@@ -606,7 +606,7 @@ impl Viewer {
     }
 
     fn device(&self) -> &Arc<Device> {
-        &self.renderer.device
+        &self.renderer.device()
     }
 
     /// Zero extent, minimized, or (testing) a simulated minimize.
@@ -737,7 +737,8 @@ impl Viewer {
             }
             Reset => {
                 self.orbit.reset();
-                self.renderer.scene.lights[0] = self.initial_light.clone();
+                let light = self.initial_light.clone();
+                self.set_light(light);
                 eprintln!("camera and light reset");
             }
             Help => print!("{}", help_text()),
@@ -770,7 +771,7 @@ impl Viewer {
 
     /// The first dielectric's index of refraction (all of them change together).
     fn ior(&self) -> Option<f32> {
-        self.renderer.scene.refractors().find_map(|o| match o.material {
+        self.renderer.scene().refractors().find_map(|o| match o.material {
             Material::Dielectric { ior, .. } => Some(ior),
             _ => None,
         })
@@ -786,7 +787,7 @@ impl Viewer {
     }
 
     fn change_ior(&mut self, delta: f32) -> AppResult<()> {
-        let mut scene = self.renderer.scene.clone();
+        let mut scene = self.renderer.scene().clone();
         let mut changed = false;
         for o in scene.objects.iter_mut() {
             if let Material::Dielectric { ior, .. } = &mut o.material {
@@ -810,7 +811,7 @@ impl Viewer {
             eprintln!("light animation paused");
             return;
         }
-        let light = self.renderer.scene.lights[0].clone();
+        let light = self.renderer.scene().lights[0].clone();
         let d = light.position - light.target;
         if Vec3::new(d.x, 0.0, d.z).length() < 1e-3 * d.length().max(1e-6) {
             // Straight above (or below) its target, the light would turn in place: lean it first.
@@ -825,12 +826,9 @@ impl Viewer {
 
     /// Move the light if every refractor stays in front of it (else the frame could not be rendered).
     fn set_light(&mut self, light: Light) -> bool {
-        let old = std::mem::replace(&mut self.renderer.scene.lights[0], light);
-        let view = self.renderer.camera_view(&self.orbit.camera(), 16, 16);
-        match Views::new(&self.renderer.scene, self.renderer.config(), &view, 0) {
-            Ok(_) => true,
+        match self.renderer.set_light(0, light) {
+            Ok(()) => true,
             Err(e) => {
-                self.renderer.scene.lights[0] = old;
                 eprintln!("light not moved: {e}");
                 false
             }
@@ -849,7 +847,7 @@ impl Viewer {
         if input.zoom != 0.0 {
             self.orbit.zoom(input.zoom);
         }
-        let (lo, hi) = self.renderer.scene.bounds();
+        let (lo, hi) = self.renderer.scene().bounds();
         let size = (hi - lo).length().max(1e-3);
         let view = self.renderer.camera_view(&self.orbit.camera(), extent.width.max(1), extent.height.max(1));
         let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize_or_zero();
@@ -860,13 +858,13 @@ impl Viewer {
         let offset = right * (input.light_keys.x * step + input.light_drag.0 * per_pixel)
             + away * (input.light_keys.z * step - input.light_drag.1 * per_pixel)
             + Vec3::Y * input.light_keys.y * step;
-        let mut light = self.renderer.scene.lights[0].clone();
+        let mut light = self.renderer.scene().lights[0].clone();
         light.position += offset;
         if self.animate {
             let turn = Quat::from_rotation_y(dt * std::f32::consts::TAU / ANIMATION_PERIOD_S);
             light.position = light.target + turn * (light.position - light.target);
         }
-        if light.position != self.renderer.scene.lights[0].position {
+        if light.position != self.renderer.scene().lights[0].position {
             if self.set_light(light) {
                 self.interacting = true;
             } else if self.animate {
@@ -984,7 +982,11 @@ impl Viewer {
         // A screenshot frame is drawn at full resolution (it may be copied from the beauty image itself).
         let scale = if preview && !capture { self.preview_scale } else { 1 };
         let view = renderer.camera_view(&camera, (extent.width / scale).max(1), (extent.height / scale).max(1));
-        renderer.submit_frame_at(level, preview, &view, None, Some(&mut finish), &sync)?;
+        renderer.submit(
+            &FrameDesc { camera: &view, aov: None, level: Some(level), preview },
+            Some(&mut finish),
+            &sync,
+        )?;
         self.in_flight.push_back(InFlight { scale, step: self.script.as_ref().map(|s| s.current_step()) });
         self.shown_level = level;
         if capture {
@@ -1190,7 +1192,7 @@ impl Viewer {
         let s = &self.renderer.config();
         let last = frames.last();
         let st = last.and_then(|r| r.state);
-        let light = &self.renderer.scene.lights[0];
+        let light = &self.renderer.scene().lights[0];
         json!({
             "device": {"name": info.name, "driver": info.driver, "kind": crate::vk::context::kind_name(info.kind)},
             "camera": self.camera_name,

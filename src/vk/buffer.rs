@@ -9,6 +9,9 @@ use std::sync::Arc;
 
 pub struct Buffer {
     device: Arc<Device>,
+    /// Unique for the process's lifetime (a raw handle may be reused once destroyed): what
+    /// [`super::Tracker`] keys its history by.
+    pub id: u64,
     pub raw: vk::Buffer,
     pub size: u64,
     allocation: Option<Allocation>,
@@ -47,7 +50,14 @@ impl Buffer {
             return Err(VkError::Call { call: "vkBindBufferMemory", result: e });
         }
         device.set_name(raw, name);
-        Ok(Buffer { device: device.clone(), raw, size, allocation: Some(allocation), name: name.to_string() })
+        Ok(Buffer {
+            device: device.clone(),
+            id: super::next_resource_id(),
+            raw,
+            size,
+            allocation: Some(allocation),
+            name: name.to_string(),
+        })
     }
 
     /// A host-visible buffer filled with `data` (uniforms, readbacks, staging).

@@ -9,6 +9,9 @@ use std::sync::Arc;
 
 pub struct Image {
     device: Arc<Device>,
+    /// Unique for the process's lifetime (a raw handle may be reused once destroyed): what
+    /// [`super::Tracker`] keys its history by.
+    pub id: u64,
     pub raw: vk::Image,
     pub view: vk::ImageView,
     pub format: vk::Format,
@@ -91,6 +94,7 @@ impl Image {
         };
         device.set_name(raw, name);
         Ok(Image {
+            id: super::next_resource_id(),
             device: device.clone(),
             raw,
             view,

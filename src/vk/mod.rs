@@ -11,6 +11,7 @@ pub mod pipeline;
 pub mod query;
 pub mod swapchain;
 pub mod sync;
+pub mod tracker;
 
 pub use buffer::Buffer;
 pub use cmd::{Recorder, SubmitSync};
@@ -21,3 +22,10 @@ pub use image::{Image, Sampler};
 pub use pipeline::{Bind, BindKind, Blend, ColorTarget, GraphicsDesc, Pipeline};
 pub use query::Timestamps;
 pub use sync::{Access, Barriers};
+pub use tracker::Tracker;
+
+/// A fresh id for a buffer or an image.
+fn next_resource_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}

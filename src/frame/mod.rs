@@ -1,0 +1,235 @@
+//! One frame as data flow: [`record_frame`] records the pipeline's steps in order over resources it borrows, and
+//! never sees the renderer. Each step declares how it uses its images and buffers to the frame's
+//! [`Tracker`](crate::vk::Tracker), which emits the barriers (no step names what came before it). The steps are
+//! those of docs/design.md "Pipeline", with the same numbers:
+//!
+//! 1. light-view g-buffers: refractor front and back (photon view), receivers with the shadow map as their depth
+//!    (receiver view)
+//! 2. coverage pyramid
+//! 3. photons: dense emission, or adaptive init → traverse × levels → stats, in batches
+//! 4. transport: each batch's photons traced to the receivers (exact transport's waves, or the two-interface
+//!    trace)
+//! 5. splat: each batch's landings into the caustic flux map (compute, or vkCmdDrawIndirect)
+//! 6. resolve: flux → caustic irradiance
+//! 7. eye view: the receivers' g-buffer, shaded in compute under each light (radiance, caustics, direct);
+//!    refractor front and back
+//! 8. composite: the glass (BVH-traced eye rays, or deferred refraction) and tone mapping
+//!
+//! Steps 3 to 5 repeat per batch. With no refractor in the light, steps 2-6 are not recorded at all. GPU-driven
+//! traversal records every level with vkCmdDispatchIndirect from arguments that the stats shader wrote; the
+//! CPU-driven baseline submits after each level, reads the count back, and records the next dispatch directly.
+
+mod photons;
+pub mod report;
+mod steps;
+
+use crate::gpu_types::FrameData;
+use crate::passes::Passes;
+use crate::scene::view::LightView;
+use crate::scene_gpu::SceneBuffers;
+use crate::settings::{ResolvedSettings, Splat};
+use crate::targets::{ReceiverTargets, Targets};
+use crate::vk::{Access, Buffer, Device, Recorder, Sampler, Timestamps, Tracker, VkResult};
+use ash::vk;
+pub use report::{Aov, AovData, FrameReport, LightReport, SlotVerdict};
+use std::time::Instant;
+
+/// Stage label of the CPU-driven traversal's host round trips (GPU idle while the host reads and records).
+pub const HOST_ROUNDTRIP: &str = "host_roundtrip";
+
+/// Extra commands appended to the frame's last command buffer (the viewer's blit to the swapchain).
+pub type Finish<'a> = &'a mut dyn FnMut(&Device, vk::CommandBuffer, &Targets);
+
+/// What a frame records with, borrowed: the device, the pipelines, the scene on the GPU, the samplers and the
+/// targets, with the frame-in-flight slot whose uniforms and readback buffer it uses.
+pub(crate) struct FrameResources<'a> {
+    pub device: &'a Device,
+    pub passes: &'a Passes,
+    pub scene: &'a SceneBuffers,
+    pub nearest: &'a Sampler,
+    pub linear: &'a Sampler,
+    pub targets: &'a Targets,
+    pub slot: usize,
+}
+
+/// What a frame records: the decisions made before recording (by the renderer, from its inputs).
+pub(crate) struct FramePlan<'a> {
+    /// The settings at this frame's level.
+    pub settings: &'a ResolvedSettings,
+    /// The uniforms of each pass (light-major: one per light and color channel), already written to the slot's
+    /// uniform buffers.
+    pub data: &'a [FrameData],
+    /// Per light: whether a refractor lies in its light (its caustic stages run).
+    pub caustics: &'a [bool],
+    /// Color channels per light: 1, or 3 when some glass needs color.
+    pub channels: usize,
+    /// The first light's photon view (for the report).
+    pub photon_view: Option<LightView>,
+    /// The caustic maps of the last frame serve this one: steps 1 to 6 are not recorded.
+    pub reused: bool,
+    /// The eye view of the last frame serves this one too: steps 7 and 8 are not recorded.
+    pub eye_reused: bool,
+    /// A preview: one eye sample per pixel, glass by the two-surface deferred refraction.
+    pub preview: bool,
+    /// The AOV to copy to the readback buffer.
+    pub aov: Option<Aov>,
+    /// GPU-driven batching: the batch slots to record.
+    pub batch_slots: u32,
+}
+
+impl FramePlan<'_> {
+    fn lights(&self) -> usize {
+        self.caustics.len()
+    }
+}
+
+/// The mutable side of a frame: the command buffer being recorded (the CPU-driven path submits mid-frame), the
+/// access tracker, the timestamps and the report.
+pub(crate) struct Rec<'a> {
+    /// None when the frame records into a command buffer the host owns (then it cannot submit mid-frame).
+    pub recorder: Option<&'a mut Recorder>,
+    pub ts: &'a mut Timestamps,
+    pub sync: &'a mut Tracker,
+    pub cmd: vk::CommandBuffer,
+    pub report: FrameReport,
+    pub record_time: f64,
+    pub mark: Instant,
+}
+
+impl Rec<'_> {
+    /// Submit what is recorded, wait for it, and start a new command buffer (CPU-driven traversal only).
+    fn roundtrip(&mut self) -> VkResult<()> {
+        let Some(recorder) = self.recorder.as_mut() else {
+            return Err(crate::vk::VkError::Unsupported(
+                "CPU-driven traversal submits mid-frame; it cannot record into a host's command buffer".into(),
+            ));
+        };
+        self.ts.mark(self.cmd, HOST_ROUNDTRIP);
+        self.record_time += self.mark.elapsed().as_secs_f64();
+        recorder.submit_and_wait()?;
+        self.report.host_readbacks += 1;
+        self.mark = Instant::now();
+        self.cmd = recorder.begin()?;
+        Ok(())
+    }
+
+    /// Emit the barriers the declared accesses need.
+    fn flush(&mut self, d: &Device) {
+        self.sync.flush(d, self.cmd);
+    }
+}
+
+/// One pass of the frame's light-side steps (a light, in one color channel), with everything its steps read.
+struct Ctx<'a> {
+    d: &'a Device,
+    p: &'a Passes,
+    sb: &'a SceneBuffers,
+    nearest: &'a Sampler,
+    linear: &'a Sampler,
+    t: &'a Targets,
+    /// The current light's receiver maps.
+    r: &'a ReceiverTargets,
+    ubo: &'a Buffer,
+    /// This frame-in-flight slot's readback buffer.
+    readback: &'a Buffer,
+    light: usize,
+    /// Index of this (light, color channel) pass, and its channel among the light's (0 for a gray frame).
+    pass: usize,
+    channel: usize,
+    s: &'a ResolvedSettings,
+    preview: bool,
+    data: &'a FrameData,
+    /// The records are splatted by the compute pass into the flux texels (else drawn as points).
+    compute_splat: bool,
+    /// The compute splat gathers a work group's taps in shared memory first.
+    tiled_splat: bool,
+    /// The frame reads back the caustics or direct AOV, so the eye view writes them (else only the radiance).
+    eye_aovs: bool,
+}
+
+/// Record one frame into `rec`: the steps in order, every barrier from the declared accesses. Returns the index of
+/// the frame's first eye-view interval (the per-light sums of GPU time stop there) and the AOV its readback holds.
+pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec) -> VkResult<(usize, Option<Aov>)> {
+    let s = plan.settings;
+    let t = res.targets;
+    let nc = plan.channels;
+    let compute_splat = s.splat.is_compute() && t.receivers[0].flux.format == vk::Format::R32_SFLOAT;
+    let readback = &t.readbacks[res.slot];
+    let ctx = |p: usize| Ctx {
+        d: res.device,
+        p: res.passes,
+        sb: res.scene,
+        nearest: res.nearest,
+        linear: res.linear,
+        t,
+        r: &t.receivers[p / nc],
+        ubo: &t.ubos[res.slot][p],
+        readback,
+        light: p / nc,
+        pass: p,
+        channel: p % nc,
+        s,
+        preview: plan.preview,
+        data: &plan.data[p],
+        compute_splat,
+        tiled_splat: s.splat == Splat::Tiled,
+        eye_aovs: matches!(plan.aov, Some(Aov::Caustics) | Some(Aov::Direct)),
+    };
+    rec.report.caustics = plan.caustics.first().copied().unwrap_or(false);
+    rec.report.compute_splat = compute_splat;
+    rec.report.photon_view = plan.photon_view;
+    rec.report.reused = plan.reused;
+    rec.report.level = s.level;
+    rec.report.preview = plan.preview;
+    rec.ts.reset(rec.cmd);
+    // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
+    rec.sync.buffer(readback, &[Access::TransferDst]);
+    for pass in 0..plan.lights() * nc {
+        let c = ctx(pass);
+        let first_segment = rec.ts.len();
+        let caustics = plan.caustics[c.light];
+        let first_channel = c.channel == 0;
+        if plan.reused {
+            if first_channel {
+                c.reuse_caustics(rec);
+            }
+        } else {
+            c.light_gbuffers(rec, caustics, first_channel);
+            if caustics {
+                c.coverage(rec);
+                c.photons(rec, plan.batch_slots)?;
+                c.resolve(rec);
+                c.copy_light_state(rec);
+            } else if first_channel {
+                c.clear_irradiance(rec);
+            }
+        }
+        rec.report.lights.push(LightReport {
+            light: c.light,
+            // The pass's channel code, as its uniforms give it to the shaders.
+            channel: c.data.transport[3] & 0xff,
+            caustics,
+            first_segment,
+            ..Default::default()
+        });
+    }
+    let c0 = ctx(0);
+    rec.report.eye_reused = plan.eye_reused;
+    // The lights' own stages end where the eye view starts.
+    let lights_end = rec.ts.len();
+    if plan.eye_reused {
+        // The beauty and HDR images are the last frame's, left as transfer sources by its composite.
+        rec.ts.mark(rec.cmd, "eye_reused");
+    } else {
+        rec.ts.mark(rec.cmd, "eye.receivers");
+        for light in 0..plan.lights() {
+            ctx(light * nc).eye_receivers(rec);
+        }
+        rec.ts.mark(rec.cmd, "eye.refractors");
+        c0.eye_refractors(rec);
+        c0.composite(rec);
+    }
+    rec.ts.mark(rec.cmd, "readback");
+    let aov = c0.readback(rec, plan.aov);
+    Ok((lights_end, aov))
+}

@@ -1,0 +1,420 @@
+//! Steps 3 to 5: the photons (dense emission, or adaptive traversal GPU- or CPU-driven), in batches, each traced
+//! (exact transport's waves, or the two-interface trace) and splatted into the caustic flux map.
+
+use super::{Ctx, Rec};
+use crate::gpu_types::TraversalState;
+use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape};
+use crate::settings::{Driven, Method, Transport};
+use crate::shaders::consts::*;
+use crate::targets::{CANARY, PHOTON_GUARD};
+use crate::vk::{Access, VkResult};
+use ash::vk;
+
+/// Exact transport's waves after the first, as sub-stages of `transport_bounces` (index: wave - 1), so that a
+/// profile shows where the bounces' time goes: the early waves carry most rays, the late ones a long tail.
+const WAVE_LABELS: [&str; MAX_INTERACTIONS as usize] = [
+    "transport_bounces.wave_01",
+    "transport_bounces.wave_02",
+    "transport_bounces.wave_03",
+    "transport_bounces.wave_04",
+    "transport_bounces.wave_05",
+    "transport_bounces.wave_06",
+    "transport_bounces.wave_07",
+    "transport_bounces.wave_08",
+    "transport_bounces.wave_09",
+    "transport_bounces.wave_10",
+    "transport_bounces.wave_11",
+    "transport_bounces.wave_12",
+    "transport_bounces.wave_13",
+    "transport_bounces.wave_14",
+    "transport_bounces.wave_15",
+    "transport_bounces.wave_16",
+    "transport_bounces.wave_17",
+    "transport_bounces.wave_18",
+    "transport_bounces.wave_19",
+    "transport_bounces.wave_20",
+    "transport_bounces.wave_21",
+    "transport_bounces.wave_22",
+    "transport_bounces.wave_23",
+    "transport_bounces.wave_24",
+    "transport_bounces.wave_25",
+    "transport_bounces.wave_26",
+    "transport_bounces.wave_27",
+    "transport_bounces.wave_28",
+    "transport_bounces.wave_29",
+    "transport_bounces.wave_30",
+    "transport_bounces.wave_31",
+    "transport_bounces.wave_32",
+];
+
+const TRAVERSE_LABELS: [&str; MAX_LEVELS as usize] = [
+    "traverse_L0",
+    "traverse_L1",
+    "traverse_L2",
+    "traverse_L3",
+    "traverse_L4",
+    "traverse_L5",
+    "traverse_L6",
+    "traverse_L7",
+    "traverse_L8",
+    "traverse_L9",
+    "traverse_L10",
+    "traverse_L11",
+    "traverse_L12",
+    "traverse_L13",
+    "traverse_L14",
+    "traverse_L15",
+    "traverse_L16",
+];
+
+/// How the photon passes use the traversal's buffers: the state, the photon buffer and the indirect arguments are
+/// read and written by each compute pass, and the arguments drive the next dispatch or draw.
+const TRAVERSAL: [Access; 2] = [Access::ComputeWrite, Access::IndirectRead];
+
+impl Ctx<'_> {
+    /// The splat's debug dump: off, or from which level.
+    fn debug(&self) -> Option<u32> {
+        (self.s.debug_photons > 0).then_some(self.s.debug_min_level)
+    }
+
+    /// How this frame's traversal runs (work-group side as its dispatches count candidates, metric, cooperative
+    /// checks); both the GPU- and the CPU-driven loop use it.
+    fn traverse_shape(&self) -> TraverseShape {
+        TraverseShape { wg: self.s.traverse_dispatch_wg(), metric: self.s.metric, coop: self.s.coop_traversal() }
+    }
+
+    fn bindings(&self) -> PhotonBindings<'_> {
+        let t = self.t;
+        PhotonBindings {
+            ubo: self.ubo,
+            state: &t.photon.state,
+            photons: &t.photon.photons,
+            indirect: &t.photon.indirect,
+            coverage: &t.photon.coverage,
+            front: &t.light.front,
+            front_aux: &t.light.front_aux,
+            back: &t.light.back,
+            recv: &self.r.geo,
+            debug: &t.photon.debug,
+            splats: &t.photon.splats,
+            sampler: self.nearest,
+            transport: &t.photon.transport,
+            queues: [&t.photon.queues[0], &t.photon.queues[1]],
+            bvh: &self.sb.bvh,
+            flux_texels: &self.r.flux_texels,
+        }
+    }
+
+    /// Step 3: photons, in batches; each batch's photons are traced (step 4) and splatted (step 5) into the
+    /// caustic flux map.
+    pub(super) fn photons(&self, rec: &mut Rec, slots: u32) -> VkResult<()> {
+        let (t, d) = (self.t, self.d);
+        rec.ts.mark(rec.cmd, "photon_init");
+        let debug = self.s.debug_photons > 0;
+        for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect, &t.photon.debug, &t.photon.transport] {
+            rec.sync.buffer(buf, &[Access::TransferDst]);
+        }
+        if self.compute_splat {
+            rec.sync.buffer(&self.r.flux_texels, &[Access::TransferDst]);
+        } else {
+            rec.sync.discard(&self.r.flux, &[Access::ColorAttachment]);
+        }
+        rec.flush(d);
+        let cmd = rec.cmd;
+        unsafe {
+            if self.compute_splat {
+                d.cmd_fill_buffer(cmd, self.r.flux_texels.raw, 0, vk::WHOLE_SIZE, 0);
+            }
+            d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
+            d.cmd_fill_buffer(cmd, t.photon.transport.raw, 0, vk::WHOLE_SIZE, 0);
+            // Header (count, capacity) and rows: disjoint ranges, so the two transfers need no barrier between them.
+            d.cmd_update_buffer(cmd, t.photon.debug.raw, 0, bytemuck::bytes_of(&[0u32, self.s.debug_photons, 0, 0]));
+            d.cmd_fill_buffer(cmd, t.photon.debug.raw, 16, vk::WHOLE_SIZE, 0);
+            if debug {
+                // Canary after the capacity: a shader writing past its photon budget would overwrite it.
+                let cap = 8 * t.photon.capacity as u64;
+                d.cmd_fill_buffer(cmd, t.photon.photons.raw, cap, 8 * PHOTON_GUARD as u64, CANARY);
+            }
+        }
+        for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect] {
+            rec.sync.buffer(buf, &TRAVERSAL);
+        }
+        rec.sync.buffer(&t.photon.debug, &[Access::ComputeWrite]);
+        rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
+        rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
+        rec.sync.buffer(&t.photon.coverage, &[Access::ComputeRead]);
+        if self.compute_splat {
+            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
+        }
+        for q in &t.photon.queues {
+            rec.sync.buffer(q, &[Access::ComputeWrite]);
+        }
+        rec.flush(d);
+        match self.s.method {
+            Method::Dense => self.dense(rec),
+            Method::Adaptive => match self.s.driven {
+                Driven::Gpu => {
+                    self.adaptive_gpu(rec, slots);
+                    Ok(())
+                }
+                Driven::Cpu => self.adaptive_cpu(rec),
+            },
+        }?;
+        if self.compute_splat {
+            self.copy_flux_texels(rec);
+        }
+        Ok(())
+    }
+
+    /// The compute splat's flux texels → the flux image the resolve samples.
+    fn copy_flux_texels(&self, rec: &mut Rec) {
+        let img = &self.r.flux;
+        rec.sync.buffer(&self.r.flux_texels, &[Access::TransferSrc]);
+        rec.sync.discard(img, &[Access::TransferDst]);
+        rec.flush(self.d);
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D { width: img.extent.width, height: img.extent.height, depth: 1 });
+        unsafe {
+            self.d.cmd_copy_buffer_to_image(
+                rec.cmd,
+                self.r.flux_texels.raw,
+                img.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Between one batch's splat and the next batch's compute passes: the next batch writes what this one's
+    /// trace and splat read.
+    fn after_splat(&self, rec: &mut Rec) {
+        let t = self.t;
+        if self.compute_splat {
+            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
+        } else {
+            rec.sync.image(&self.r.flux, &[Access::ColorAttachment]);
+        }
+        rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
+        for buf in [&t.photon.photons, &t.photon.state, &t.photon.indirect] {
+            rec.sync.buffer(buf, &TRAVERSAL);
+        }
+        rec.flush(self.d);
+    }
+
+    /// Steps 4 and 5 for one batch: trace its emitted photons (compute, dispatched indirectly), then splat them.
+    /// `commit`: adaptive traversal's last stats pass, which commits or splits the batch. Under two-interface
+    /// transport it ran already; under exact transport it runs after the waves, which may abort the batch.
+    fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) {
+        let t = self.t;
+        let (b, ph) = (self.bindings(), &self.p.photons);
+        self.traversal_step(rec);
+        if self.s.transport == Transport::Exact {
+            self.exact_transport(rec, commit);
+        } else {
+            rec.ts.mark(rec.cmd, "photon_trace");
+            ph.trace(rec.cmd, &b, self.debug());
+        }
+        let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
+        rec.sync.buffer(&t.photon.splats, &[reader]);
+        // The compute splat reads its record range from the draw command as well as dispatching from it.
+        rec.sync.buffer(&t.photon.indirect, &[Access::IndirectRead, Access::ComputeRead]);
+        rec.flush(self.d);
+        rec.ts.mark(rec.cmd, "splat");
+        if self.compute_splat {
+            ph.splat_compute(rec.cmd, &b, self.tiled_splat);
+        } else {
+            ph.splat(rec.cmd, &b, &self.r.flux, clear);
+        }
+    }
+
+    /// Between two compute passes of the traversal: each reads and writes the traversal's buffers (and exact
+    /// transport's state), and the next dispatch may read the arguments the last one wrote.
+    fn traversal_step(&self, rec: &mut Rec) {
+        let t = self.t;
+        for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect] {
+            rec.sync.buffer(buf, &TRAVERSAL);
+        }
+        if self.s.transport == Transport::Exact {
+            rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
+        }
+        rec.flush(self.d);
+    }
+
+    /// Exact transport of the batch's emitted photons, in waves (docs/design.md step 4): every wave is one
+    /// vkCmdDispatchIndirect whose arguments the transport pass wrote from the previous wave's appends. The host
+    /// records MAX_INTERACTIONS + 1 waves; those after the queue empties dispatch zero work groups.
+    fn exact_transport(&self, rec: &mut Rec, commit: bool) {
+        use crate::passes::photons::transport_mode as tm;
+        let (t, b, ph) = (self.t, self.bindings(), &self.p.photons);
+        let adaptive = self.s.method == Method::Adaptive;
+        let may_abort = adaptive && self.s.batching;
+        // Every transport and wave pass reads and writes the wave state, the traversal state, the queues and the
+        // splat records, and the next dispatch reads the arguments they wrote.
+        let step = |rec: &mut Rec| {
+            for buf in [&t.photon.transport, &t.photon.indirect, &t.photon.state] {
+                rec.sync.buffer(buf, &TRAVERSAL);
+            }
+            rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
+            for q in &t.photon.queues {
+                rec.sync.buffer(q, &[Access::ComputeWrite]);
+            }
+            rec.flush(self.d);
+        };
+        rec.ts.mark(rec.cmd, "transport_primary");
+        ph.transport(rec.cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort, 0);
+        for wave in 0..=MAX_INTERACTIONS {
+            step(rec);
+            if wave >= 1 {
+                rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
+            }
+            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout);
+            step(rec);
+            ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1);
+        }
+        step(rec);
+        rec.ts.mark(rec.cmd, "stats");
+        if commit {
+            ph.stats(rec.cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg());
+            step(rec);
+        }
+        ph.transport(rec.cmd, &b, tm::COMMIT, may_abort, 0);
+    }
+
+    fn dense(&self, rec: &mut Rec) -> VkResult<()> {
+        let b = self.bindings();
+        let ph = &self.p.photons;
+        let n = LEVEL0_RES << self.s.level;
+        // Bands of rows sized so that even a fully covered band fits the photon buffer (and, under exact
+        // transport, half a ray queue).
+        let per_band = self.s.batch_photons(self.t.photon.capacity);
+        let rows = (per_band / n).clamp(1, n).min(65535 * TILE_WG);
+        let bands = n.div_ceil(rows);
+        rec.report.batch_slots = bands;
+        for band in 0..bands {
+            let row0 = band * rows;
+            rec.ts.mark(rec.cmd, "photon_init");
+            ph.init(rec.cmd, &b, init_mode::DENSE, self.s.traverse_wg);
+            self.traversal_step(rec);
+            rec.ts.mark(rec.cmd, "dense_emit");
+            ph.dense_emit(rec.cmd, &b, self.s.level, row0, rows.min(n - row0));
+            self.traversal_step(rec);
+            rec.ts.mark(rec.cmd, "stats");
+            ph.stats(rec.cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
+            self.trace_and_splat(rec, band == 0, false);
+            if band + 1 < bands {
+                self.after_splat(rec);
+            }
+        }
+        Ok(())
+    }
+
+    /// GPU-driven adaptive traversal: a fixed command sequence per batch slot, every dispatch and draw indirect.
+    fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) {
+        let b = self.bindings();
+        let ph = &self.p.photons;
+        let shape = self.traverse_shape();
+        let wg = shape.wg;
+        let exact = self.s.transport == Transport::Exact;
+        ph.init(rec.cmd, &b, init_mode::FRAME, wg);
+        self.traversal_step(rec);
+        rec.report.batch_slots = slots;
+        for slot in 0..slots {
+            rec.ts.mark(rec.cmd, "photon_init");
+            ph.init(rec.cmd, &b, init_mode::BATCH, wg);
+            self.traversal_step(rec);
+            for level in 0..=self.s.level {
+                rec.ts.mark(rec.cmd, TRAVERSE_LABELS[level as usize]);
+                ph.traverse_indirect(rec.cmd, &b, level, shape);
+                self.traversal_step(rec);
+                rec.ts.mark(rec.cmd, "stats");
+                let mode = if level == self.s.level && !exact { stats_mode::COMMIT } else { stats_mode::LEVEL };
+                ph.stats(rec.cmd, &b, level, mode, wg);
+                self.traversal_step(rec);
+            }
+            self.trace_and_splat(rec, slot == 0, exact);
+            if slot + 1 < slots {
+                self.after_splat(rec);
+            }
+        }
+    }
+
+    /// Copy the traversal state to the readback buffer, for the host after the submit.
+    fn copy_state(&self, rec: &mut Rec) {
+        let t = self.t;
+        rec.sync.buffer(&t.photon.state, &[Access::TransferSrc]);
+        rec.sync.buffer(self.readback, &[Access::TransferDst]);
+        rec.flush(self.d);
+        let size = std::mem::size_of::<TraversalState>() as u64;
+        unsafe {
+            self.d.cmd_copy_buffer(
+                rec.cmd,
+                t.photon.state.raw,
+                self.readback.raw,
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }],
+            )
+        };
+        rec.sync.buffer(self.readback, &[Access::HostRead]);
+        rec.flush(self.d);
+    }
+
+    fn read_state(&self) -> VkResult<TraversalState> {
+        Ok(self.readback.read::<TraversalState>(0, 1)?[0])
+    }
+
+    /// The CPU-driven baseline: the host reads the state back after init and after each level, and records the
+    /// next traversal dispatch with host-computed work groups.
+    fn adaptive_cpu(&self, rec: &mut Rec) -> VkResult<()> {
+        let b = self.bindings();
+        let ph = &self.p.photons;
+        let shape = self.traverse_shape();
+        let wg = shape.wg;
+        ph.init(rec.cmd, &b, init_mode::FRAME, wg);
+        self.traversal_step(rec);
+        let mut first = true;
+        let mut batches = 0;
+        loop {
+            rec.ts.mark(rec.cmd, "photon_init");
+            ph.init(rec.cmd, &b, init_mode::BATCH, wg);
+            self.copy_state(rec);
+            rec.roundtrip()?;
+            let mut st = self.read_state()?;
+            if st.start_level >= MAX_LEVELS {
+                break;
+            }
+            batches += 1;
+            for level in st.start_level..=self.s.level {
+                self.traversal_step(rec);
+                rec.ts.mark(rec.cmd, TRAVERSE_LABELS[level as usize]);
+                if st.aborted == 0 {
+                    ph.traverse_direct(rec.cmd, &b, level, st.read_count, shape);
+                }
+                self.traversal_step(rec);
+                rec.ts.mark(rec.cmd, "stats");
+                let last = level == self.s.level;
+                let commit = last && self.s.transport == Transport::TwoInterface;
+                ph.stats(rec.cmd, &b, level, if commit { stats_mode::COMMIT } else { stats_mode::LEVEL }, wg);
+                if !last {
+                    self.copy_state(rec);
+                    rec.roundtrip()?;
+                    st = self.read_state()?;
+                }
+            }
+            self.trace_and_splat(rec, first, self.s.transport == Transport::Exact);
+            self.after_splat(rec);
+            first = false;
+        }
+        rec.report.batch_slots = batches;
+        if first && !self.compute_splat {
+            // No batch at all: the flux map still needs clearing (the compute splat's texels were cleared).
+            crate::passes::begin_rendering(self.d, rec.cmd, self.r.flux.extent, &[&self.r.flux], true, None);
+            unsafe { self.d.cmd_end_rendering(rec.cmd) };
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,168 @@
+//! What a frame reports once it has completed: its GPU timings, its traversal and transport state, and the AOV
+//! it read back.
+
+use crate::error::{AppError, AppResult};
+use crate::gpu_types::{TransportState, TraversalState};
+use crate::scene::view::LightView;
+use crate::settings::{Method, ResolvedSettings, Transport};
+use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
+use crate::vk::Buffer;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Aov {
+    Beauty,
+    /// The beauty image before exposure and tone mapping: linear radiance, W/(m²·sr) (written as EXR).
+    BeautyHdr,
+    Caustics,
+    Direct,
+}
+
+impl std::str::FromStr for Aov {
+    type Err = AppError;
+    fn from_str(s: &str) -> AppResult<Aov> {
+        match s {
+            "beauty" => Ok(Aov::Beauty),
+            "caustics" => Ok(Aov::Caustics),
+            "direct" => Ok(Aov::Direct),
+            _ => Err(AppError::BadInput(format!("--aov `{s}`: expected beauty, caustics or direct"))),
+        }
+    }
+}
+
+/// One pass of a frame: one light, in one color channel (or the only, gray one).
+#[derive(Clone, Debug, Default)]
+pub struct LightReport {
+    /// The light's index in the scene.
+    pub light: usize,
+    /// 0: the gray pass; 1, 2, 3: red, green, blue.
+    pub channel: u32,
+    /// Whether this light's caustic stages ran (a refractor lies in its light).
+    pub caustics: bool,
+    /// Its traversal state and exact transport's account (kept from the last frame when reused).
+    pub state: Option<TraversalState>,
+    pub transport: Option<TransportState>,
+    /// GPU ms of its light-side stages (light view, coverage, photons, resolve); its eye shading is in `eye`.
+    pub gpu_ms: f64,
+    /// Index of its first timed interval in the frame's segments.
+    pub first_segment: usize,
+}
+
+/// What one frame did, read back after it completed.
+#[derive(Clone, Debug, Default)]
+pub struct FrameReport {
+    /// GPU milliseconds per stage, in order (intervals with the same label summed).
+    pub stages: Vec<(&'static str, f64)>,
+    /// GPU milliseconds of the parts of a stage timed on their own (`light_gbuffer.front`, ...), in order.
+    pub substages: Vec<(&'static str, f64)>,
+    /// Every timed interval: (label, start ms from the frame's first timestamp, duration ms).
+    pub segments: Vec<(&'static str, f64, f64)>,
+    /// Sum of the stages (excluding host round trips of the CPU-driven traversal).
+    pub gpu_ms: f64,
+    /// Wall-clock time from the start of recording until the results were available.
+    pub frame_ms: f64,
+    /// CPU time spent recording commands.
+    pub record_ms: f64,
+    /// Whether the caustic passes were recorded (the scene has a refractor inside the light).
+    pub caustics: bool,
+    /// Whether the records were splatted by the compute pass (else drawn as points).
+    pub compute_splat: bool,
+    /// The light-view stages, the photons and the caustic map were reused from the last frame (nothing they
+    /// depend on changed); only the eye and composite passes ran.
+    pub reused: bool,
+    /// The photon level this frame rendered (below the chosen one while the viewer refines progressively).
+    pub level: u32,
+    /// A viewer preview: one eye sample per pixel, glass by two-surface deferred refraction.
+    pub preview: bool,
+    /// Nothing the eye view depends on changed since the last frame (camera, lights, settings, the caustic map):
+    /// its beauty image was presented again, and no eye or composite pass was recorded.
+    pub eye_reused: bool,
+    /// The light view of the photon grid (None without caustic passes).
+    pub photon_view: Option<LightView>,
+    pub state: Option<TraversalState>,
+    /// Exact transport's wave counts and energy account.
+    pub transport: Option<TransportState>,
+    pub host_readbacks: u32,
+    /// Each pass (light-major; one per light, or three with color), in order (`state` and `transport` above are
+    /// the first pass's).
+    pub lights: Vec<LightReport>,
+    /// Batch slots recorded (GPU-driven adaptive) or bands (dense).
+    pub batch_slots: u32,
+    /// Tiles still pending when the frame ended (GPU-driven batching ran out of slots).
+    pub unfinished_tiles: u32,
+    /// Debug photon dump: 3 rows per photon (see photon_bindings.glsl).
+    pub debug_rows: Vec<[u32; 4]>,
+    /// Debug runs: whether the photon buffer's guard region kept its canary.
+    pub guard_intact: Option<bool>,
+}
+
+/// Whether a frame traversed every tile (see [`Renderer::adapt_batch_slots`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SlotVerdict {
+    Complete,
+    /// Tiles were left over; the next frame records more slots.
+    Incomplete,
+    /// Tiles were left over with the most slots a frame records (`MAX_BATCHES`): raise the photon budget.
+    OutOfSlots,
+}
+
+/// A float or 8-bit image read back from the GPU.
+pub enum AovData {
+    Float { width: u32, height: u32, rgba: Vec<[f32; 4]> },
+    Rgba8 { width: u32, height: u32, rgba: Vec<u8> },
+}
+
+/// Each light's state from the readback buffer (lights that ran their caustic stages this frame).
+pub(crate) fn read_results(
+    t: &Targets,
+    readback: &Buffer,
+    s: &ResolvedSettings,
+    report: &mut FrameReport,
+) -> AppResult<()> {
+    let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
+    if report.reused {
+        return Ok(());
+    }
+    for (i, l) in report.lights.iter_mut().enumerate() {
+        if !l.caustics {
+            continue;
+        }
+        let i = i as u64;
+        let st =
+            readback.read::<TraversalState>(layout.state + i * std::mem::size_of::<TraversalState>() as u64, 1)?[0];
+        l.state = Some(st);
+        if s.transport == Transport::Exact {
+            let at = layout.transport + i * std::mem::size_of::<TransportState>() as u64;
+            l.transport = Some(readback.read::<TransportState>(at, 1)?[0]);
+        }
+    }
+    if let Some(st) = report.lights[0].state {
+        report.unfinished_tiles = if s.method == Method::Adaptive { st.stack_size } else { 0 };
+    }
+    if report.lights[0].caustics && s.debug_photons > 0 {
+        let header = readback.read::<[u32; 4]>(layout.debug, 1)?[0];
+        let n = header[0].min(s.debug_photons) as usize;
+        report.debug_rows = readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
+        let guard = readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
+        report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
+    }
+    Ok(())
+}
+
+pub(crate) fn read_aov(
+    t: &Targets,
+    readback: &Buffer,
+    s: &ResolvedSettings,
+    aov: Option<Aov>,
+) -> AppResult<Option<AovData>> {
+    let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
+    let n = (t.width * t.height) as usize;
+    Ok(match aov {
+        None => None,
+        Some(Aov::Beauty) => {
+            Some(AovData::Rgba8 { width: t.width, height: t.height, rgba: readback.read::<u8>(layout.aov, 4 * n)? })
+        }
+        Some(_) => {
+            Some(AovData::Float { width: t.width, height: t.height, rgba: readback.read::<[f32; 4]>(layout.aov, n)? })
+        }
+    })
+}

@@ -1,0 +1,339 @@
+//! The steps around the photons: the light-view g-buffers (1), coverage (2), the resolve (6), the eye view (7), the
+//! composite (8) and the readback. Each declares its accesses before it records; the tracker places the barriers.
+
+use super::{Aov, Ctx, Rec};
+use crate::gpu_types::{TransportState, TraversalState};
+use crate::passes::composite::CompositeInputs;
+use crate::passes::coverage::CoverageInputs;
+use crate::passes::eye::{EyeGbuffer, EyeInputs};
+use crate::passes::geometry::GeometryTarget;
+use crate::settings::Transport;
+use crate::targets::{Targets, DEBUG_ROWS, PHOTON_GUARD};
+use crate::vk::{Access, Image};
+use ash::vk;
+
+/// Where a sampled g-buffer is read: the photon passes (compute), the raster splat (vertex) and the eye view.
+const SAMPLED: [Access; 3] = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
+/// Where the eye view reads a light's maps.
+const EYE_READ: [Access; 2] = [Access::FragmentSampled, Access::ComputeSampled];
+
+impl Ctx<'_> {
+    /// Step 1: light-view g-buffers.
+    /// `receivers`: also the receiver g-buffer and the shadow map (a light's first color pass draws them).
+    pub(super) fn light_gbuffers(&self, rec: &mut Rec, caustics: bool, receivers: bool) {
+        let (t, g) = (self.t, &self.p.geometry);
+        rec.ts.mark(rec.cmd, "light_gbuffer.front");
+        for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
+            rec.sync.discard(img, &[Access::ColorAttachment]);
+        }
+        rec.sync.discard(&t.light.depth, &[Access::DepthAttachment]);
+        if receivers {
+            rec.sync.discard(&self.r.geo, &[Access::ColorAttachment]);
+            rec.sync.discard(&self.r.shadow, &[Access::DepthAttachment]);
+        }
+        rec.flush(self.d);
+        let cmd = rec.cmd;
+        let photon_view = &self.data.photon_view;
+        let receiver_view = &self.data.receiver_view;
+        if caustics {
+            // The IOR buffer is drawn only when the refractors' IORs differ (else the shaders read the uniform).
+            let ior = self.sb.shared_ior.is_none().then_some(&t.light.front_aux);
+            g.record_front(cmd, self.sb, &t.light.front, ior, &t.light.depth, photon_view);
+            // Exact transport reads only the front buffer (coverage); the back surface is the two-interface
+            // trace's.
+            if self.s.transport == Transport::TwoInterface {
+                rec.ts.mark(cmd, "light_gbuffer.back");
+                // The depth buffer is reused (cleared) by the back-face pass.
+                rec.sync.image(&t.light.depth, &[Access::DepthAttachment]);
+                rec.flush(self.d);
+                let back = GeometryTarget {
+                    colors: &[&t.light.back],
+                    depth: &t.light.depth,
+                    view: photon_view,
+                    ranges: &[self.sb.refractors],
+                };
+                g.record(cmd, &g.back, self.sb, &back);
+            }
+        }
+        if receivers {
+            // The receivers' g-buffer and the shadow map, in one pass.
+            rec.ts.mark(cmd, "light_gbuffer.receivers");
+            g.record_receivers(cmd, self.sb, &self.r.geo, &self.r.shadow, receiver_view);
+        }
+        if caustics {
+            for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
+                rec.sync.image(img, &SAMPLED);
+            }
+        }
+        if receivers {
+            rec.sync.image(&self.r.geo, &SAMPLED);
+            rec.sync.image(&self.r.shadow, &EYE_READ);
+        }
+        rec.flush(self.d);
+    }
+
+    /// A frame that reuses the caustic map, the receiver g-buffer and the shadow map of the last one: the same
+    /// reads of the same images (the tracker orders them after the last frame's writes, which are visible to them).
+    pub(super) fn reuse_caustics(&self, rec: &mut Rec) {
+        rec.ts.mark(rec.cmd, "reused");
+        rec.sync.image(&self.r.geo, &SAMPLED);
+        rec.sync.image(&self.r.shadow, &EYE_READ);
+        rec.sync.image(&self.r.irradiance, &EYE_READ);
+        rec.flush(self.d);
+    }
+
+    /// Step 2: the coverage pyramid.
+    pub(super) fn coverage(&self, rec: &mut Rec) {
+        let t = self.t;
+        rec.ts.mark(rec.cmd, "coverage");
+        rec.sync.buffer(&t.photon.coverage, &[Access::ComputeWrite]);
+        rec.sync.image(&t.light.front, &[Access::ComputeSampled]);
+        rec.sync.image(&self.r.geo, &[Access::ComputeSampled]);
+        rec.flush(self.d);
+        let mips = self.s.gbuffer_level() + 1;
+        let inputs = CoverageInputs {
+            ubo: self.ubo,
+            coverage: &t.photon.coverage,
+            front: &t.light.front,
+            recv: &self.r.geo,
+            sampler: self.nearest,
+            mips,
+        };
+        self.p.coverage.record(rec.cmd, &inputs);
+    }
+
+    /// Step 6: caustic flux → irradiance.
+    pub(super) fn resolve(&self, rec: &mut Rec) {
+        rec.ts.mark(rec.cmd, "resolve");
+        // A light's later color passes write their channel and keep the earlier ones.
+        if self.channel == 0 {
+            rec.sync.discard(&self.r.irradiance, &[Access::ComputeWrite]);
+        } else {
+            rec.sync.image(&self.r.irradiance, &[Access::ComputeWrite]);
+        }
+        rec.sync.image(&self.r.flux, &[Access::ComputeSampled]);
+        rec.sync.image(&self.r.geo, &[Access::ComputeSampled]);
+        rec.flush(self.d);
+        self.p.resolve.record(rec.cmd, self.ubo, &self.r.flux, &self.r.geo, &self.r.irradiance, self.nearest);
+        rec.sync.image(&self.r.irradiance, &EYE_READ);
+        rec.flush(self.d);
+    }
+
+    /// No refractor: the irradiance map is zero (no caustic pass is recorded).
+    pub(super) fn clear_irradiance(&self, rec: &mut Rec) {
+        let img = &self.r.irradiance;
+        rec.sync.discard(img, &[Access::TransferDst]);
+        rec.flush(self.d);
+        unsafe {
+            self.d.cmd_clear_color_image(
+                rec.cmd,
+                img.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue { float32: [0.0; 4] },
+                &[img.range()],
+            )
+        };
+        rec.sync.image(img, &EYE_READ);
+        rec.flush(self.d);
+    }
+
+    /// Step 7a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
+    /// each light's shading writes (the first) or adds to (the others) the radiance, and the caustics and direct
+    /// AOVs when the frame reads one back, so the AOVs are the sums over lights.
+    pub(super) fn eye_receivers(&self, rec: &mut Rec) {
+        let e = &self.t.eye;
+        let first = self.light == 0;
+        let out: &[&Image] = if self.eye_aovs { &[&e.radiance, &e.caustics, &e.direct] } else { &[&e.radiance] };
+        let g = EyeGbuffer { geo: &e.recv, albedo: &e.albedo, depth: &e.depth };
+        if first {
+            // The g-buffer does not depend on the light: drawn once, before the first light's shading.
+            rec.sync.discard(&e.recv, &[Access::ColorAttachment]);
+            rec.sync.discard(&e.albedo, &[Access::ColorAttachment]);
+            rec.sync.discard(&e.depth, &[Access::DepthAttachment]);
+            rec.flush(self.d);
+            self.p.eye.record_gbuffer(rec.cmd, self.sb, &self.data.camera, &g);
+            rec.ts.mark(rec.cmd, "eye.shade");
+        }
+        rec.sync.image(&e.recv, &[Access::ComputeSampled]);
+        rec.sync.image(&e.albedo, &[Access::ComputeSampled]);
+        for img in out {
+            // A further light reads what the last one wrote, pixel by pixel.
+            if first {
+                rec.sync.discard(img, &[Access::ComputeWrite]);
+            } else {
+                rec.sync.image(img, &[Access::ComputeWrite]);
+            }
+        }
+        rec.sync.image(&self.r.shadow, &EYE_READ);
+        rec.sync.image(&self.r.irradiance, &EYE_READ);
+        rec.sync.image(&self.r.geo, &SAMPLED);
+        rec.flush(self.d);
+        let inputs = EyeInputs {
+            ubo: self.ubo,
+            shadow: &self.r.shadow,
+            irradiance: &self.r.irradiance,
+            recv: &self.r.geo,
+            nearest: self.nearest,
+            linear: self.linear,
+        };
+        self.p.eye.record_shade(rec.cmd, &inputs, &g, out, !first);
+    }
+
+    /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.
+    pub(super) fn eye_refractors(&self, rec: &mut Rec) {
+        let e = &self.t.eye;
+        let g = &self.p.geometry;
+        let cam = &self.data.camera;
+        // The exact composite traces the glass through the BVH: it needs only where the front surface is.
+        let exact = self.exact_eye();
+        rec.sync.discard(&e.front, &[Access::ColorAttachment]);
+        if !exact {
+            for img in [&e.front_aux, &e.back] {
+                rec.sync.discard(img, &[Access::ColorAttachment]);
+            }
+        }
+        rec.sync.discard(&e.refr_depth, &[Access::DepthAttachment]);
+        rec.flush(self.d);
+        let ior = (!exact && self.sb.shared_ior.is_none()).then_some(&e.front_aux);
+        g.record_front(rec.cmd, self.sb, &e.front, ior, &e.refr_depth, cam);
+        if exact {
+            return;
+        }
+        rec.sync.image(&e.refr_depth, &[Access::DepthAttachment]);
+        rec.flush(self.d);
+        g.record(
+            rec.cmd,
+            &g.back,
+            self.sb,
+            &GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &[self.sb.refractors] },
+        );
+    }
+
+    /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts
+    /// through the eye's front and back buffers.
+    fn exact_eye(&self) -> bool {
+        self.s.transport == Transport::Exact && !self.preview
+    }
+
+    /// Step 8: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
+    pub(super) fn composite(&self, rec: &mut Rec) {
+        let e = &self.t.eye;
+        rec.ts.mark(rec.cmd, "composite");
+        rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
+        // The exact composite binds the refractors' IOR and back buffers but reads neither (nor draws them).
+        for img in [&e.front, &e.front_aux, &e.back] {
+            rec.sync.image(img, &[Access::ComputeSampled]);
+        }
+        rec.sync.discard(&e.beauty, &[Access::ComputeWrite]);
+        rec.sync.discard(&e.hdr, &[Access::ComputeWrite]);
+        rec.sync.image(&self.r.shadow, &EYE_READ);
+        rec.sync.image(&self.r.irradiance, &EYE_READ);
+        rec.sync.image(&self.r.geo, &SAMPLED);
+        rec.flush(self.d);
+        self.p.composite.record(
+            rec.cmd,
+            &CompositeInputs {
+                ubo: self.ubo,
+                radiance: &e.radiance,
+                front: &e.front,
+                front_aux: &e.front_aux,
+                back: &e.back,
+                beauty: &e.beauty,
+                hdr: &e.hdr,
+                shadow: &self.r.shadow,
+                irradiance: &self.r.irradiance,
+                recv: &self.r.geo,
+                bvh: &self.sb.bvh,
+                nearest: self.nearest,
+                linear: self.linear,
+                exact: self.exact_eye(),
+            },
+        );
+        rec.sync.image(&e.beauty, &[Access::TransferSrc]);
+        rec.sync.image(&e.hdr, &[Access::TransferSrc]);
+        rec.flush(self.d);
+    }
+
+    /// Copy the requested AOV to the readback buffer, and make the buffer visible to the host.
+    pub(super) fn readback(&self, rec: &mut Rec, aov: Option<Aov>) -> Option<Aov> {
+        let (t, d) = (self.t, self.d);
+        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
+        let image: Option<&Image> = aov.map(|a| match a {
+            Aov::Beauty => &t.eye.beauty,
+            Aov::BeautyHdr => &t.eye.hdr,
+            Aov::Caustics => &t.eye.caustics,
+            Aov::Direct => &t.eye.direct,
+        });
+        // After the lights' state copies: other ranges of the same buffer.
+        rec.sync.buffer(self.readback, &[Access::TransferDst]);
+        if let Some(img) = image {
+            rec.sync.image(img, &[Access::TransferSrc]);
+        }
+        rec.flush(d);
+        if let Some(img) = image {
+            let region = vk::BufferImageCopy::default()
+                .buffer_offset(layout.aov)
+                .image_subresource(vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                })
+                .image_extent(vk::Extent3D { width: t.width, height: t.height, depth: 1 });
+            unsafe {
+                d.cmd_copy_image_to_buffer(
+                    rec.cmd,
+                    img.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    self.readback.raw,
+                    &[region],
+                )
+            };
+        }
+        rec.sync.buffer(self.readback, &[Access::HostRead]);
+        rec.flush(d);
+        aov
+    }
+
+    /// Copy this light's traversal and transport state (and, for the first light, the debug dump and the guard)
+    /// to its slot of the readback buffer, before the next light's photons reset them.
+    pub(super) fn copy_light_state(&self, rec: &mut Rec) {
+        let (t, d) = (self.t, self.d);
+        let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
+        let i = self.pass as u64;
+        let state = std::mem::size_of::<TraversalState>() as u64;
+        let transport = std::mem::size_of::<TransportState>() as u64;
+        let debug = self.s.debug_photons > 0 && self.pass == 0;
+        rec.sync.buffer(self.readback, &[Access::TransferDst]);
+        rec.sync.buffer(&t.photon.state, &[Access::TransferSrc]);
+        rec.sync.buffer(&t.photon.transport, &[Access::TransferSrc]);
+        if debug {
+            rec.sync.buffer(&t.photon.debug, &[Access::TransferSrc]);
+            rec.sync.buffer(&t.photon.photons, &[Access::TransferSrc]);
+        }
+        rec.flush(d);
+        let cmd = rec.cmd;
+        unsafe {
+            let copies = [vk::BufferCopy { src_offset: 0, dst_offset: layout.state + i * state, size: state }];
+            d.cmd_copy_buffer(cmd, t.photon.state.raw, self.readback.raw, &copies);
+            let copies =
+                [vk::BufferCopy { src_offset: 0, dst_offset: layout.transport + i * transport, size: transport }];
+            d.cmd_copy_buffer(cmd, t.photon.transport.raw, self.readback.raw, &copies);
+            if debug {
+                let bytes = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
+                d.cmd_copy_buffer(
+                    cmd,
+                    t.photon.debug.raw,
+                    self.readback.raw,
+                    &[vk::BufferCopy { src_offset: 0, dst_offset: layout.debug, size: bytes }],
+                );
+                let guard = vk::BufferCopy {
+                    src_offset: 8 * t.photon.capacity as u64,
+                    dst_offset: layout.guard,
+                    size: 8 * PHOTON_GUARD as u64,
+                };
+                d.cmd_copy_buffer(cmd, t.photon.photons.raw, self.readback.raw, &[guard]);
+            }
+        }
+    }
+}

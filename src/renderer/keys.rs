@@ -1,0 +1,79 @@
+//! Reuse by dependency: what the caustic stages and the eye view depend on, as typed keys. A frame whose key equals
+//! the last frame's reuses that frame's maps (or its whole beauty image).
+
+use crate::frame::LightReport;
+use crate::scene::Light;
+use crate::settings::ResolvedSettings;
+
+/// What the targets' allocation depends on: the sizes of the light maps and buffers, the passes, the ray size and
+/// the frames in flight (the output size only touches the eye-sized targets).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct TargetsKey {
+    pub gbuffer_side: u32,
+    pub caustic_res: u32,
+    pub photon_budget_bits: u64,
+    pub debug_photons: u32,
+    pub ray_queue_capacity: u32,
+    pub passes: usize,
+    pub ray_bytes: u32,
+    pub frames_in_flight: usize,
+}
+
+impl TargetsKey {
+    pub fn new(s: &ResolvedSettings, passes: usize, frames_in_flight: usize) -> Self {
+        TargetsKey {
+            gbuffer_side: s.gbuffer_side(),
+            caustic_res: s.caustic_res,
+            photon_budget_bits: s.photon_budget_mib.to_bits(),
+            debug_photons: s.debug_photons,
+            ray_queue_capacity: s.ray_queue_capacity(),
+            passes,
+            ray_bytes: s.ray_bytes(),
+            frames_in_flight,
+        }
+    }
+}
+
+/// What the caustic stages depend on: the lights, the geometry and materials (by generation), the settings that
+/// touch them (not the eye view's own: supersampling, sky, eye-ray depth, exposure) and the light-side targets.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct CausticKey {
+    pub lights: Vec<Light>,
+    pub scene_generation: u64,
+    pub settings: ResolvedSettings,
+    pub targets: Option<TargetsKey>,
+}
+
+impl CausticKey {
+    pub fn new(lights: &[Light], scene_generation: u64, s: &ResolvedSettings, targets: Option<TargetsKey>) -> Self {
+        let settings = ResolvedSettings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..s.clone() };
+        CausticKey { lights: lights.to_vec(), scene_generation, settings, targets }
+    }
+}
+
+/// What the eye view depends on besides the caustic maps: every pass's uniforms (camera, light views, exposure,
+/// sky), the preview flag and the eye targets (by generation).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct EyeKey {
+    pub caustic: CausticKey,
+    /// The uniforms' bytes.
+    pub uniforms: Vec<u8>,
+    pub preview: bool,
+    pub targets_generation: u64,
+}
+
+/// The last frame's keys: its caustic inputs with the traversal and transport state of each pass (filled in once
+/// the frame completes), and its eye-view inputs.
+#[derive(Default)]
+pub(crate) struct Caches {
+    pub caustic: Option<(CausticKey, Vec<LightReport>)>,
+    pub eye: Option<EyeKey>,
+}
+
+impl Caches {
+    /// Forget both: the next frame recomputes everything.
+    pub fn clear(&mut self) {
+        self.caustic = None;
+        self.eye = None;
+    }
+}

@@ -1,0 +1,465 @@
+//! The renderer: the pipelines, the scene on the GPU, the targets and the frames in flight. It turns a frame's
+//! inputs (a [`FrameDesc`]) into the decisions of a [`FramePlan`](crate::frame::FramePlan) (views, uniforms,
+//! what the last frame's maps can serve) and hands the recording to [`crate::frame::record_frame`], which sees only
+//! what it borrows.
+
+mod keys;
+mod queue;
+mod uniforms;
+mod views;
+
+pub use crate::frame::{Aov, AovData, FrameReport, LightReport, SlotVerdict};
+pub use queue::MAX_FRAMES_IN_FLIGHT;
+pub use views::Views;
+
+use crate::error::{AppError, AppResult};
+use crate::frame::{FramePlan, FrameResources, Rec};
+use crate::passes::Passes;
+use crate::scene::view::CameraView;
+use crate::scene::{Camera, Material, Scene, MAX_LIGHTS};
+use crate::scene_gpu::SceneBuffers;
+use crate::settings::{ResolvedSettings, Settings, Transport};
+use crate::targets::Targets;
+use crate::vk::{Device, Recorder, Sampler, SubmitSync, Tracker};
+use ash::vk;
+use keys::{Caches, CausticKey, EyeKey, TargetsKey};
+use queue::{FrameQueue, Pending};
+use std::sync::Arc;
+use std::time::Instant;
+
+pub use crate::frame::Finish;
+
+/// One frame's inputs: the camera and output size, what to read back, and the viewer's per-frame choices.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameDesc<'a> {
+    /// The eye camera at the output size (see [`Renderer::camera_view`]).
+    pub camera: &'a CameraView,
+    /// The AOV to read back (None: none; the beauty image stays on the GPU for a presenter).
+    pub aov: Option<Aov>,
+    /// Render at this level when it is below the settings' level (progressive refinement); None: the settings'.
+    pub level: Option<u32>,
+    /// A preview: one eye sample per pixel, and glass by the two-surface deferred refraction.
+    pub preview: bool,
+}
+
+impl<'a> FrameDesc<'a> {
+    /// A full frame from `camera`, reading back `aov`.
+    pub fn new(camera: &'a CameraView, aov: Option<Aov>) -> Self {
+        FrameDesc { camera, aov, level: None, preview: false }
+    }
+}
+
+pub struct Renderer {
+    device: Arc<Device>,
+    passes: Passes,
+    scene: Scene,
+    scene_buffers: SceneBuffers,
+    nearest: Sampler,
+    linear: Sampler,
+    /// One-off uploads (scene buffers).
+    recorder: Recorder,
+    queue: FrameQueue,
+    targets: Option<Targets>,
+    targets_key: Option<TargetsKey>,
+    /// Bumped whenever the targets are created or resized.
+    targets_generation: u64,
+    /// Every tracked resource's last access, from frame to frame (the queue runs frames in recording order).
+    tracker: Tracker,
+    /// The settings asked for, and what they resolved to on this device (what every frame reads).
+    settings: Settings,
+    config: ResolvedSettings,
+    /// Reuse the caustic stages when nothing they depend on changed (off for profiling, which times them).
+    reuse: bool,
+    /// Bumped whenever the scene's geometry or materials change.
+    scene_generation: u64,
+    caches: Caches,
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // Nothing the GPU may still use is destroyed before it is done (an error can leave a submit in flight).
+        let _ = self.device.wait_idle();
+    }
+}
+
+/// The two-interface model refracts through front and back glass surfaces; it has no mirrors.
+fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> AppResult<()> {
+    if settings.transport == Transport::TwoInterface {
+        if let Some(o) = scene
+            .objects
+            .iter()
+            .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0))
+        {
+            return Err(AppError::BadInput(format!(
+                "{}: object `{}` absorbs: absorption needs --transport exact (the two-interface model has none)",
+                scene.path.display(),
+                o.name
+            )));
+        }
+        if let Some(m) = scene.objects.iter().find(|o| o.is_mirror()) {
+            return Err(AppError::BadInput(format!(
+                "{}: object `{}` is a mirror: mirrors need --transport exact (the two-interface model only refracts)",
+                scene.path.display(),
+                m.name
+            )));
+        }
+        if let Some(o) =
+            scene.objects.iter().find(|o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0))
+        {
+            return Err(AppError::BadInput(format!(
+                "{}: object `{}` disperses (`abbe`): dispersion needs --transport exact (the two-interface model has one IOR per texel)",
+                scene.path.display(),
+                o.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// 1..=MAX_LIGHTS lights (the scene parsers enforce it; scenes built in code are checked here).
+fn check_lights(scene: &Scene) -> AppResult<()> {
+    let n = scene.lights.len();
+    if n == 0 || n > MAX_LIGHTS {
+        return Err(AppError::BadInput(format!(
+            "{}: the scene has {n} lights; this renderer handles 1 to {MAX_LIGHTS}",
+            scene.path.display()
+        )));
+    }
+    Ok(())
+}
+
+impl Renderer {
+    pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
+        let config = settings.resolve(&device.info)?;
+        check_transport(&scene, &config)?;
+        check_lights(&scene)?;
+        let mut recorder = Recorder::new(&device)?;
+        let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
+        Ok(Renderer {
+            passes: Passes::new(&device)?,
+            nearest: Sampler::new(&device, vk::Filter::NEAREST)?,
+            linear: Sampler::new(&device, vk::Filter::LINEAR)?,
+            queue: FrameQueue::new(&device)?,
+            recorder,
+            scene_buffers,
+            scene,
+            targets: None,
+            targets_key: None,
+            targets_generation: 0,
+            tracker: Tracker::new(),
+            settings,
+            config,
+            reuse: true,
+            scene_generation: 0,
+            caches: Caches::default(),
+            device,
+        })
+    }
+
+    pub fn device(&self) -> &Arc<Device> {
+        &self.device
+    }
+
+    /// The scene as the renderer holds it.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The scene's buffers on the GPU (its BVH's statistics among them).
+    pub fn scene_buffers(&self) -> &SceneBuffers {
+        &self.scene_buffers
+    }
+
+    /// Replace the scene (after moving the light, changing an IOR, ...): re-uploads its triangles when they
+    /// changed. Lights and cameras are read every frame, so changing only them is free.
+    pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
+        check_transport(&scene, &self.config)?;
+        check_lights(&scene)?;
+        let same_geometry = scene.objects.len() == self.scene.objects.len()
+            && scene.objects.iter().zip(&self.scene.objects).all(|(a, b)| {
+                a.material == b.material && a.mesh.positions == b.mesh.positions && a.mesh.indices == b.mesh.indices
+            });
+        if !same_geometry {
+            self.device.wait_idle()?;
+            self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &scene)?;
+            self.scene_generation += 1;
+        }
+        self.scene = scene;
+        Ok(())
+    }
+
+    /// Replace light `index` (its position, target, power...). Checked as a whole scene would be: a light
+    /// that would see an object behind it is refused, and the scene keeps the light it had.
+    pub fn set_light(&mut self, index: usize, light: crate::scene::Light) -> AppResult<()> {
+        if index >= self.scene.lights.len() {
+            return Err(AppError::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
+        }
+        let old = std::mem::replace(&mut self.scene.lights[index], light);
+        let view = CameraView::new(
+            &self.scene.cameras.first().cloned().unwrap_or_else(default_camera),
+            16,
+            16,
+            self.scene.bounds(),
+        );
+        if let Err(e) = Views::new(&self.scene, &self.config, &view, index) {
+            self.scene.lights[index] = old;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Replace the settings: resolved for this device and checked against the scene before they take effect.
+    pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
+        let config = settings.resolve(&self.device.info)?;
+        check_transport(&self.scene, &config)?;
+        if config.method != self.config.method
+            || config.level != self.config.level
+            || config.metric != self.config.metric
+        {
+            self.queue.reset_batch_slots();
+        }
+        self.settings = settings;
+        self.config = config;
+        Ok(())
+    }
+
+    /// The settings asked for (automatic choices still automatic).
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The settings as this device resolved them: what every frame renders with.
+    pub fn config(&self) -> &ResolvedSettings {
+        &self.config
+    }
+
+    /// Reuse the last frame's caustic maps (and beauty image) when nothing they depend on changed (the default),
+    /// or recompute every stage of every frame (profiling and benchmarks).
+    pub fn set_reuse(&mut self, reuse: bool) {
+        self.reuse = reuse;
+    }
+
+    pub fn camera_view(&self, camera: &Camera, width: u32, height: u32) -> CameraView {
+        CameraView::new(camera, width, height, self.scene.bounds())
+    }
+
+    /// Let up to `n` frames be in flight (1..=MAX_FRAMES_IN_FLIGHT): [`Renderer::submit`] then returns before the
+    /// GPU has finished, and waits only for the frame that last used the slot it takes. Headless rendering keeps
+    /// 1; the viewer uses 2 on GPUs.
+    pub fn set_frames_in_flight(&mut self, n: usize) -> AppResult<()> {
+        let n = n.clamp(1, MAX_FRAMES_IN_FLIGHT);
+        if n == self.queue.frames_in_flight() {
+            return Ok(());
+        }
+        self.finish_frames()?;
+        self.queue.set_frames_in_flight(&self.device, n)?;
+        Ok(())
+    }
+
+    pub fn frames_in_flight(&self) -> usize {
+        self.queue.frames_in_flight()
+    }
+
+    /// Render one frame and wait for it: its report, and the AOV it read back.
+    pub fn render(&mut self, desc: &FrameDesc) -> AppResult<(FrameReport, Option<AovData>)> {
+        self.render_with(desc, None, &SubmitSync::default())
+    }
+
+    /// [`Renderer::render`], with commands appended to the frame's last command buffer (`finish`) and semaphores
+    /// for its submission (`sync`).
+    pub fn render_with(
+        &mut self,
+        desc: &FrameDesc,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+    ) -> AppResult<(FrameReport, Option<AovData>)> {
+        self.finish_frames()?;
+        self.submit(desc, finish, sync)?;
+        self.queue.wait_last(self.targets.as_ref(), &mut self.caches)
+    }
+
+    /// The frame-in-flight slot the next frame takes. When every slot is in flight, this first waits for the
+    /// oldest frame, the last to use that slot, and keeps its report for [`Renderer::take_completed`]. The viewer
+    /// calls it before acquiring a swapchain image with that slot's semaphore.
+    pub fn next_slot(&mut self) -> AppResult<usize> {
+        self.queue.next_slot(self.targets.as_ref(), &mut self.caches)
+    }
+
+    /// Wait for every frame in flight and keep their reports for [`Renderer::take_completed`].
+    pub fn finish_frames(&mut self) -> AppResult<()> {
+        self.queue.finish(self.targets.as_ref(), &mut self.caches)
+    }
+
+    /// The reports of the frames completed since the last call, oldest first.
+    pub fn take_completed(&mut self) -> Vec<FrameReport> {
+        self.queue.take_completed()
+    }
+
+    /// After a frame, adapt the batch slots GPU-driven batching records next time (see
+    /// [`SlotVerdict`]); an incomplete frame's maps are not reused.
+    pub fn adapt_batch_slots(&mut self, report: &FrameReport) -> SlotVerdict {
+        self.queue.adapt_batch_slots(report, &mut self.caches)
+    }
+
+    /// The batch slots GPU-driven batching records next (0: not adapted yet).
+    pub fn slots_hint(&self) -> u32 {
+        self.queue.slots_hint()
+    }
+
+    /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
+    /// only touches the eye-sized targets, not the light maps or the photon buffer.
+    fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> AppResult<()> {
+        let lights = self.scene.lights.len();
+        let passes = lights * self.scene.color_channels();
+        let key = TargetsKey::new(s, passes, self.queue.frames_in_flight());
+        let same_key = self.targets_key == Some(key);
+        let same_size = self.targets.as_ref().is_some_and(|t| (t.width, t.height, t.aa) == (width, height, aa));
+        if same_key && same_size {
+            return Ok(());
+        }
+        // The frames in flight read their results from the buffers about to be replaced: finish them first.
+        self.finish_frames()?;
+        self.targets_generation += 1;
+        self.device.wait_idle()?;
+        // The replaced resources' history goes with them; the kept ones' stays.
+        match self.targets.as_mut() {
+            Some(t) if same_key => t.resize(&self.device, s, width, height, aa)?,
+            _ => {
+                self.targets = None;
+                self.tracker.clear();
+                let slots = self.queue.frames_in_flight();
+                self.targets = Some(Targets::new(&self.device, s, width, height, aa, lights, passes, slots)?);
+                self.targets_key = Some(key);
+            }
+        }
+        Ok(())
+    }
+
+    /// Record and submit a frame without waiting for it: its report comes later from
+    /// [`Renderer::take_completed`], once a later frame needs its slot or [`Renderer::finish_frames`] is called.
+    /// `finish` appends commands to its last command buffer and `sync` gives that submission its semaphores.
+    pub fn submit(&mut self, desc: &FrameDesc, finish: Option<Finish>, sync: &SubmitSync) -> AppResult<()> {
+        let start = Instant::now();
+        let slot = self.next_slot()?;
+        // The settings at this frame's level (progressive refinement renders below the chosen one).
+        let mut s = self.config.clone();
+        s.level = desc.level.map_or(s.level, |l| l.min(s.level));
+        let camera = desc.camera;
+        // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
+        let aa = match desc.aov {
+            Some(Aov::Caustics) | Some(Aov::Direct) => 1,
+            _ if desc.preview => 1,
+            _ => s.aa,
+        };
+        self.ensure_targets(&s, camera.width, camera.height, aa)?;
+        let nl = self.scene.lights.len();
+        // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
+        let nc = self.scene.color_channels();
+        let views = (0..nl).map(|i| Views::new(&self.scene, &s, camera, i)).collect::<AppResult<Vec<_>>>()?;
+        // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
+        // geometry and materials, and the settings, not on the camera or the output size. When none of those
+        // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
+        // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
+        let key = CausticKey::new(&self.scene.lights, self.scene_generation, &s, self.targets_key);
+        let reused = self.reuse && self.caches.caustic.as_ref().is_some_and(|(k, _)| *k == key);
+        let targets = self.targets.as_mut().expect("targets");
+        let channel = |c: usize| if nc == 1 { 0 } else { c as u32 + 1 };
+        let data: Vec<_> = (0..nl * nc)
+            .map(|p| {
+                uniforms::frame_data(
+                    &self.scene,
+                    &self.scene_buffers,
+                    &s,
+                    &views[p / nc],
+                    targets,
+                    p / nc,
+                    channel(p % nc),
+                )
+            })
+            .collect();
+        // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
+        // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
+        let eye_key = EyeKey {
+            caustic: key.clone(),
+            uniforms: bytemuck::cast_slice(&data).to_vec(),
+            preview: desc.preview,
+            targets_generation: self.targets_generation,
+        };
+        let eye_reused = reused
+            && matches!(desc.aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr))
+            && self.caches.eye.as_ref() == Some(&eye_key);
+        self.caches.eye = Some(eye_key);
+        for (ubo, d) in targets.ubos[slot].iter_mut().zip(&data) {
+            ubo.write(0, std::slice::from_ref(d))?;
+        }
+        let targets = &*targets;
+        let caustics: Vec<bool> = views.iter().map(|v| v.photon.is_some()).collect();
+        let plan = FramePlan {
+            settings: &s,
+            data: &data,
+            caustics: &caustics,
+            channels: nc,
+            photon_view: views[0].photon,
+            reused,
+            eye_reused,
+            preview: desc.preview,
+            aov: desc.aov,
+            batch_slots: self.queue.batch_slots(&s, targets.photon.capacity),
+        };
+        let res = FrameResources {
+            device: &self.device,
+            passes: &self.passes,
+            scene: &self.scene_buffers,
+            nearest: &self.nearest,
+            linear: &self.linear,
+            targets,
+            slot,
+        };
+        let frame_slot = &mut self.queue.slots[slot];
+        let cmd = frame_slot.recorder.begin()?;
+        let mut rec = Rec {
+            recorder: Some(&mut frame_slot.recorder),
+            ts: &mut frame_slot.timestamps,
+            sync: &mut self.tracker,
+            cmd,
+            report: FrameReport::default(),
+            record_time: 0.0,
+            mark: Instant::now(),
+        };
+        let recorded = crate::frame::record_frame(&res, &plan, &mut rec);
+        let (lights_end, aov) = match recorded {
+            Ok(r) => r,
+            Err(e) => {
+                // What the queue will run of this frame is not known: forget what the tracker and caches knew.
+                rec.sync.forget();
+                self.caches.clear();
+                return Err(e.into());
+            }
+        };
+        if let Some(f) = finish {
+            f(&self.device, rec.cmd, targets);
+        }
+        rec.ts.mark(rec.cmd, "");
+        rec.record_time += rec.mark.elapsed().as_secs_f64();
+        let mut report = rec.report;
+        report.record_ms = rec.record_time * 1e3;
+        frame_slot.recorder.submit_with(sync)?;
+        if !reused {
+            // The maps this frame computes serve the next frames with the same inputs; its traversal and transport
+            // state join them once it completes.
+            self.caches.caustic = Some((key.clone(), report.lights.clone()));
+        }
+        self.queue.push(Pending { slot, report, start, lights_end, aov, key, settings: s });
+        Ok(())
+    }
+}
+
+fn default_camera() -> Camera {
+    Camera {
+        name: "default".into(),
+        projection: crate::scene::Projection::Perspective { fov: 0.8 },
+        position: glam::Vec3::new(0.0, 1.0, 3.0),
+        target: glam::Vec3::ZERO,
+        up: glam::Vec3::Y,
+    }
+}

@@ -1,0 +1,84 @@
+//! The uniforms of one pass (`FrameData`, types.glsl): its light's views and power, the camera, the settings the
+//! shaders read, and the exposure.
+
+use super::Views;
+use crate::gpu_types::{FrameData, GpuView};
+use crate::scene::{LightKind, Material, Scene};
+use crate::scene_gpu::SceneBuffers;
+use crate::settings::{Footprint, ResolvedSettings, Transport};
+use crate::shaders::consts::*;
+use crate::targets::Targets;
+use glam::Vec3;
+
+/// The uniforms of one pass: light `index` (its views and power; the exposure follows the first light) and
+/// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue).
+pub(crate) fn frame_data(
+    scene: &Scene,
+    scene_buffers: &SceneBuffers,
+    s: &ResolvedSettings,
+    views: &Views,
+    targets: &Targets,
+    index: usize,
+    channel: u32,
+) -> FrameData {
+    let light = &scene.lights[index];
+    let light0 = &scene.lights[0];
+    let (lo, hi) = scene.bounds();
+    let (rlo, rhi) = scene
+        .refractors()
+        .map(|o| o.mesh.bounds())
+        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(a, b), (c, d)| (a.min(c), b.max(d)));
+    let diameter = if scene.has_refractors() { (rhi - rlo).length() } else { 0.0 };
+    let power = light.color * light.intensity;
+    // Exposure: the diffuse radiance of the brightest albedo under the light at its target maps to ~0.6.
+    let e_ref = match light0.kind {
+        LightKind::Spot | LightKind::Point => light0.intensity / (light0.target - light0.position).length_squared(),
+        LightKind::Directional => light0.intensity,
+    } * light0.color.max_element().max(1e-6);
+    let albedo = scene
+        .receivers()
+        .map(|o| match o.material {
+            Material::Diffuse { albedo } => albedo.max_element(),
+            _ => 0.0,
+        })
+        .fold(0.0f32, f32::max)
+        .max(0.05);
+    let l_ref = (albedo / std::f32::consts::PI * e_ref).max(1e-12);
+    let mut pyramid = [[0u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize];
+    for (m, off) in targets.photon.pyramid_offsets.iter().enumerate() {
+        pyramid[m / 4][m % 4] = *off;
+    }
+    let photon_view = views.photon.unwrap_or(views.receiver);
+    let sky = s.sky.unwrap_or(crate::settings::SKY_AUTO * l_ref);
+    // The eye buffers hold `aa`×`aa` samples per output pixel: the same image plane, a finer grid.
+    let mut camera = GpuView::from_camera(&views.camera);
+    let aa = targets.aa as f32;
+    camera.extent = [camera.extent[0] * aa, camera.extent[1] * aa, camera.extent[2] / aa, camera.extent[3] / aa];
+    FrameData {
+        photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
+        receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
+        camera,
+        light_power: [power.x, power.y, power.z, light.intensity],
+        scene_min: [lo.x, lo.y, lo.z, diameter],
+        scene_max: [hi.x, hi.y, hi.z, 0.6 / l_ref * s.exposure_ev.exp2()],
+        grid: [s.gbuffer_side(), s.gbuffer_level(), s.caustic_res, s.gbuffer_level() + 1],
+        traversal: [
+            s.level,
+            s.metric.code() | ((s.batching as u32) << 8),
+            s.check_level,
+            s.batch_photons(targets.photon.capacity),
+        ],
+        params: [s.error_bound, s.shadow_bias, s.flux_threshold, s.tau],
+        transport: [
+            (s.transport == Transport::Exact) as u32,
+            s.ray_queue_capacity(),
+            targets.photon.capacity,
+            channel | ((s.footprint == Footprint::Differential) as u32) << 8,
+        ],
+        pyramid,
+        // The environment's light is added once: by the first light's eye shading (and the composite, which reads
+        // the first pass's uniforms).
+        eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, 0.0, 0.0],
+        material: [scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block as f32, 0.0],
+    }
+}
