@@ -13,36 +13,26 @@
 #include "common/optics.glsl"
 #include "common/march.glsl"
 
-layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
-layout(set = 0, binding = 1) uniform sampler2D t_radiance;      // receivers: rgb radiance, a: eye distance
-layout(set = 0, binding = 2) uniform usampler2D t_front;        // refractor front: normal, eye distance
-layout(set = 0, binding = 3) uniform sampler2D t_front_aux;     // refractor front: index of refraction
-layout(set = 0, binding = 4) uniform usampler2D t_back;         // refractor back: normal, eye distance
-layout(set = 0, binding = 5) uniform sampler2D t_radiance_lin;  // the radiance buffer, linear filtering
-layout(set = 0, binding = 6, rgba8) uniform writeonly image2D o_beauty;
-layout(set = 0, binding = 7, rgba32f) uniform writeonly image2D o_hdr;  // linear radiance, before exposure
-layout(set = 0, binding = 8) uniform sampler2D t_shadow;        // light depth of all objects
-layout(set = 0, binding = 9) uniform sampler2D t_irradiance;    // caustic irradiance, W/m^2 (linear filtering)
-layout(set = 0, binding = 10) uniform usampler2D t_recv;        // receivers from the light: normal, distance
+layout(std140, set = 0, binding = CB_FRAME) uniform FrameUbo { FrameData u_frame; };
+layout(set = 0, binding = CB_RADIANCE) uniform sampler2D t_radiance;      // receivers: rgb radiance, a: eye distance
+layout(set = 0, binding = CB_FRONT) uniform usampler2D t_front;        // refractor front: normal, eye distance
+layout(set = 0, binding = CB_FRONT_AUX) uniform sampler2D t_front_aux;     // refractor front: index of refraction
+layout(set = 0, binding = CB_BACK) uniform usampler2D t_back;         // refractor back: normal, eye distance
+layout(set = 0, binding = CB_RADIANCE_LINEAR) uniform sampler2D t_radiance_lin;  // the radiance buffer, linear filtering
+layout(set = 0, binding = CB_BEAUTY, rgba8) uniform writeonly image2D o_beauty;
+layout(set = 0, binding = CB_HDR, rgba32f) uniform writeonly image2D o_hdr;  // linear radiance, before exposure
+layout(set = 0, binding = CB_SHADOW) uniform sampler2D t_shadow;        // light depth of all objects
+layout(set = 0, binding = CB_IRRADIANCE) uniform sampler2D t_irradiance;    // caustic irradiance, W/m^2 (linear filtering)
+layout(set = 0, binding = CB_RECEIVERS) uniform usampler2D t_recv;        // receivers from the light: normal, distance
 
 #include "common/receiver.glsl"
 
 #ifdef EXACT_EYE
-struct BvhInstance {
-    vec4 object_from_world[3];
-    vec4 world_from_object[3];
-    vec4 lo;
-    vec4 hi;
-    vec4 material;  // x: IOR or albedo; y: 1 dielectric, 2 mirror, 0 diffuse; z: absorption (1/m)
-    vec4 pad;       // yzw: a diffuse receiver's rgb albedo
-    vec4 ior_rgb;   // per color channel (photon passes only: the eye view traces the gray IOR)
-    vec4 sigma_rgb;
-};
-struct BvhNode { vec4 lo0; vec4 hi0; vec4 lo1; vec4 hi1; };
-layout(std430, set = 0, binding = 11) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, set = 0, binding = 12) readonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = 13) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
-layout(std430, set = 0, binding = 14) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+#include "common/bvh_types.glsl"
+layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
+layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 uint bvh_instance_count() { return uint(bvh_instances.length()); }
 #include "common/bvh.glsl"
 #define GRAY_MATERIALS

@@ -10,19 +10,19 @@
 #include "common/view.glsl"
 #include "common/gbuffer.glsl"
 
-layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
-layout(set = 0, binding = 1) uniform sampler2D t_shadow;      // depth of all objects from the light
-layout(set = 0, binding = 2) uniform sampler2D t_irradiance;  // caustic irradiance, W/m^2 (linear filtering)
-layout(set = 0, binding = 3) uniform usampler2D t_recv;       // receivers from the light: normal, distance
+layout(std140, set = 0, binding = EB_FRAME) uniform FrameUbo { FrameData u_frame; };
+layout(set = 0, binding = EB_SHADOW) uniform sampler2D t_shadow;      // depth of all objects from the light
+layout(set = 0, binding = EB_IRRADIANCE) uniform sampler2D t_irradiance;  // caustic irradiance, W/m^2 (linear filtering)
+layout(set = 0, binding = EB_RECEIVERS) uniform usampler2D t_recv;       // receivers from the light: normal, distance
 
 #include "common/receiver.glsl"
 
-layout(set = 0, binding = 4) uniform usampler2D t_eye;     // receivers from the eye: normal, distance (0: none)
-layout(set = 0, binding = 5) uniform sampler2D t_albedo;   // their albedo
-layout(set = 0, binding = 6, rgba32f) uniform image2D o_radiance;  // rgb: radiance (W/m^2/sr); a: eye distance
+layout(set = 0, binding = EB_EYE) uniform usampler2D t_eye;     // receivers from the eye: normal, distance (0: none)
+layout(set = 0, binding = EB_ALBEDO) uniform sampler2D t_albedo;   // their albedo
+layout(set = 0, binding = EB_RADIANCE, rgba32f) uniform image2D o_radiance;  // rgb: radiance (W/m^2/sr); a: eye distance
 #ifdef WITH_AOVS
-layout(set = 0, binding = 7, rgba32f) uniform image2D o_caustics;  // rgb: caustic irradiance (W/m^2)
-layout(set = 0, binding = 8, rgba32f) uniform image2D o_direct;    // rgb: direct irradiance (W/m^2)
+layout(set = 0, binding = EB_CAUSTICS, rgba32f) uniform image2D o_caustics;  // rgb: caustic irradiance (W/m^2)
+layout(set = 0, binding = EB_DIRECT, rgba32f) uniform image2D o_direct;    // rgb: direct irradiance (W/m^2)
 #endif
 
 layout(push_constant) uniform Push {

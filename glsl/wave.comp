@@ -27,7 +27,8 @@ shared uint s_rec_base;
 shared bool s_rays_ok;
 shared bool s_recs_ok;
 
-// A ray is RAY_VEC4S vec4s: (origin, throughput), (direction, bits(meta)), and with differential footprints
+// A ray is RAY_VEC4S_CELL vec4s, (origin, throughput), (direction, bits(meta)), or with differential footprints
+// RAY_VEC4S_DIFFERENTIAL, the two and
 // (dP/dx, dP/dy.x), (dP/dy.yz, dD/dx.xy), (dD/dx.z, dD/dy).
 void queue_put(uint q, uint k, vec4 v) {
     if (q == 0u) {
@@ -41,7 +42,7 @@ void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, 
     uint b = stride * k;
     queue_put(q, b, vec4(o, w));
     queue_put(q, b + 1u, vec4(d, uintBitsToFloat(meta)));
-    if (stride > 2u) {
+    if (stride > RAY_VEC4S_CELL) {
         queue_put(q, b + 2u, vec4(r.dpx, r.dpy.x));
         queue_put(q, b + 3u, vec4(r.dpy.yz, r.ddx.xy));
         queue_put(q, b + 4u, vec4(r.ddx.z, r.ddy));
@@ -63,7 +64,7 @@ vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
 //   smaller than the block) share a block consistently;
 // - a larger photon (a cluster) shares with its three siblings when traversal found each of them a photon of its
 //   level too, or empty (cell_siblings, glsl/common/types.glsl); otherwise it traces its own weak branches.
-const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (depth stays in bits 24..29)
+const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (the depth stays in the 6 bits above PHOTON_INDEX_BITS)
 
 // Whether the photon shares the maximal level's blocks (else its siblings, if traversal marked any).
 bool weak_fine(uvec2 cell) { return !weak_by_siblings(cell_level(cell)); }
@@ -136,7 +137,7 @@ void main() {
     uint wave = pc.level;
     // `--footprint differential`: rays carry their differentials (docs/design.md step 5).
     bool diff = (u_frame.transport.w & 0x100u) != 0u;
-    uint stride = diff ? 5u : 2u;
+    uint stride = diff ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
     bool can_abort = pc.mode != 0u;
     if (lid == 0u) {
         s_rays = 0u;
@@ -196,8 +197,8 @@ void main() {
             w = a.w;
             rd = b.xyz;
             uint m = floatBitsToUint(b.w);
-            pidx = state.capacity - 1u - (m & 0xFFFFFFu);
-            depth = (m >> 24) & 0x3Fu;
+            pidx = state.capacity - 1u - (m & ((1u << PHOTON_INDEX_BITS) - 1u));
+            depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
             lod = (m & LOD_RAY) != 0u;
             cell = photons[pidx];
             phi = cell_measure(cell_level(cell), cell_xy(cell));
@@ -258,7 +259,7 @@ void main() {
                     bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
                         ? weak_carrier(cell, phi, depth, scale)
                         : false;
-                    uint meta = (state.capacity - 1u - pidx) | ((depth + 1u) << 24) | (lod ? LOD_RAY : 0u);
+                    uint meta = (state.capacity - 1u - pidx) | ((depth + 1u) << PHOTON_INDEX_BITS) | (lod ? LOD_RAY : 0u);
                     // Both children inherit dP; their dD follow their branch, with the interpolated normal's
                     // derivative where the branch used it.
                     vec3 dnx = vec3(0.0), dny = vec3(0.0);

@@ -149,7 +149,7 @@ pub struct TraversalState {
 /// and `weak_carried`, the extra flux those carriers took on. The account closes as
 /// `emitted + weak_carried = caustics + direct + escaped + cut_threshold + cut_cap + lost + overflow + absorbed +
 /// weak_left` ([`TransportState::residual`]).
-pub const ACCOUNT_TERMS: [&str; 12] = [
+pub const ACCOUNT_TERMS: [&str; ACC_TERMS as usize] = [
     "emitted",
     "caustics",
     "direct",
@@ -180,8 +180,8 @@ pub struct TransportState {
     pub records_total: u32,
     pub waves: u32,
     pub max_depth: u32,
-    pub batch_account: [[u32; 2]; 12],
-    pub account: [[u32; 2]; 12],
+    pub batch_account: [[u32; 2]; ACC_TERMS as usize],
+    pub account: [[u32; 2]; ACC_TERMS as usize],
     /// Rays each wave traced this frame, in pairs ([`TransportState::wave_rays`] flattens them: waves 0 to
     /// MAX_INTERACTIONS, then a pad), because bytemuck and Default stop at 32-element arrays.
     pub wave_rays_pairs: [[u32; 2]; (MAX_INTERACTIONS as usize + 2) / 2],
@@ -199,7 +199,7 @@ impl TransportState {
     }
 
     /// The frame's energy account, in units of the light's intensity (sr, or m² for directional lights).
-    pub fn account(&self) -> [f64; 12] {
+    pub fn account(&self) -> [f64; ACC_TERMS as usize] {
         self.account.map(|[lo, hi]| ((hi as u64) << 32 | lo as u64) as f64 / (1u64 << ACCOUNT_SHIFT) as f64)
     }
 
@@ -220,10 +220,11 @@ impl TransportState {
     pub fn residual(&self) -> f64 {
         let a = self.account();
         // Terms 1..=8 and weak_left partition what came in; one-interaction is a part of `caustics`.
-        let input = a[0] + a[11];
-        let out: f64 = a[1..=8].iter().sum::<f64>() + a[10];
-        if a[0] > 0.0 {
-            (input - out).abs() / a[0]
+        let term = |k: u32| a[k as usize];
+        let input = term(ACC_EMITTED) + term(ACC_WEAK_CARRIED);
+        let out: f64 = (ACC_CAUSTIC..=ACC_ABSORBED).map(term).sum::<f64>() + term(ACC_WEAK_LEFT);
+        if term(ACC_EMITTED) > 0.0 {
+            (input - out).abs() / term(ACC_EMITTED)
         } else {
             (input - out).abs()
         }

@@ -101,8 +101,8 @@ impl Footprint {
     /// vec4s per ray in the exact transport's queues.
     pub fn ray_vec4s(self) -> u32 {
         match self {
-            Footprint::Cell => 2,
-            Footprint::Differential => 5,
+            Footprint::Cell => RAY_VEC4S_CELL,
+            Footprint::Differential => RAY_VEC4S_DIFFERENTIAL,
         }
     }
 }
@@ -350,7 +350,7 @@ pub fn auto_photon_budget_mib(cpu: bool, binding_limit: u64, device_local_bytes:
 }
 
 /// Photons one exact-transport batch may hold: a ray names its photon by a 24-bit index (glsl/wave.comp).
-pub const MAX_BATCH_PHOTONS: u32 = 1 << 24;
+pub const MAX_BATCH_PHOTONS: u32 = 1 << PHOTON_INDEX_BITS;
 
 /// Largest photon budget for a binding limit: the splat records (16 bytes per 8-byte photon entry) must fit one
 /// binding. 64 MiB under lavapipe's 128 MiB.

@@ -25,3 +25,107 @@ pub const TILE_STACK: u32 = 96;
 pub const MAX_INTERACTIONS: u32 = 32;
 /// Exact transport: energy-account terms are fixed point with 2^ACCOUNT_SHIFT units per sr (or m²).
 pub const ACCOUNT_SHIFT: u32 = 44;
+
+// Exact transport's energy account: the index of each term in `TransportState.account` (src/gpu_types.rs
+// ACCOUNT_TERMS names them in this order).
+/// Photons that entered the transport.
+pub const ACC_EMITTED: u32 = 0;
+/// Reached a receiver after one or more specular interactions.
+pub const ACC_CAUSTIC: u32 = 1;
+/// Reached a receiver with none (direct light, counted by the direct AOV).
+pub const ACC_DIRECT: u32 = 2;
+/// Left the scene.
+pub const ACC_ESCAPED: u32 = 3;
+/// Children below the flux threshold.
+pub const ACC_THRESHOLD: u32 = 4;
+/// Met a dielectric after the interaction cap.
+pub const ACC_CAP: u32 = 5;
+/// Numerical dead ends (no valid direction on either normal).
+pub const ACC_LOST: u32 = 6;
+/// Did not fit a queue (only without batching: with it the batch is split instead).
+pub const ACC_OVERFLOW: u32 = 7;
+/// Absorbed inside glass (Beer–Lambert).
+pub const ACC_ABSORBED: u32 = 8;
+/// The part of ACC_CAUSTIC with exactly one interaction (not a term of the partition).
+pub const ACC_ONE_EVENT: u32 = 9;
+/// Weak branches a photon left to the sibling that carries its block's.
+pub const ACC_WEAK_LEFT: u32 = 10;
+/// The extra flux the weight carriers took on for their siblings (an input: emitted + carried = the outputs).
+pub const ACC_WEAK_CARRIED: u32 = 11;
+/// Terms of the account.
+pub const ACC_TERMS: u32 = 12;
+
+// The indirect-command buffer, in 16-byte commands: one dispatch per traversal level (0..MAX_LEVELS), then these.
+/// The two-interface trace's dispatch.
+pub const INDIRECT_TRACE: u32 = MAX_LEVELS;
+/// The raster splat's draw (vertexCount, instanceCount, firstVertex, firstInstance).
+pub const INDIRECT_DRAW: u32 = MAX_LEVELS + 1;
+/// Exact transport: the current wave's dispatch.
+pub const INDIRECT_WAVE: u32 = MAX_LEVELS + 2;
+/// The compute splat's dispatch over the draw's records.
+pub const INDIRECT_SPLAT: u32 = MAX_LEVELS + 3;
+/// Commands in the buffer.
+pub const INDIRECT_COMMANDS: u32 = MAX_LEVELS + 4;
+
+// Exact transport's rays.
+/// vec4s per ray with the cell footprint: (origin, throughput), (direction, bits(meta)).
+pub const RAY_VEC4S_CELL: u32 = 2;
+/// vec4s per ray with ray differentials: three more, (dP/dx, dP/dy.x), (dP/dy.yz, dD/dx.xy), (dD/dx.z, dD/dy).
+pub const RAY_VEC4S_DIFFERENTIAL: u32 = 5;
+/// A ray's meta word holds its photon's index (counted from the photon buffer's top) in this many low bits, and
+/// its interactions above them: a batch holds at most 2^PHOTON_INDEX_BITS photons.
+pub const PHOTON_INDEX_BITS: u32 = 24;
+
+// Binding indices of the photon passes' shared layout (glsl/common/photon_bindings.glsl, src/passes/photons.rs).
+pub const PB_FRAME: u32 = 0;
+pub const PB_STATE: u32 = 1;
+pub const PB_PHOTONS: u32 = 2;
+pub const PB_INDIRECT: u32 = 3;
+pub const PB_COVERAGE: u32 = 4;
+pub const PB_FRONT: u32 = 5;
+pub const PB_FRONT_AUX: u32 = 6;
+pub const PB_BACK: u32 = 7;
+pub const PB_RECEIVERS: u32 = 8;
+pub const PB_DEBUG: u32 = 9;
+pub const PB_SPLATS: u32 = 10;
+pub const PB_TRANSPORT: u32 = 11;
+pub const PB_QUEUE0: u32 = 12;
+pub const PB_QUEUE1: u32 = 13;
+pub const PB_BVH_PAIR: u32 = 14;
+pub const PB_BVH_TRIS: u32 = 15;
+pub const PB_BVH_NORMALS: u32 = 16;
+pub const PB_BVH_INSTANCES: u32 = 17;
+pub const PB_BVH_SINGLE: u32 = 18;
+pub const PB_FLUX_TEXELS: u32 = 19;
+pub const PB_BVH_THREADED: u32 = 20;
+pub const PB_COUNT: u32 = 21;
+
+// Binding indices of the composite (glsl/composite.comp, src/passes/composite.rs).
+pub const CB_FRAME: u32 = 0;
+pub const CB_RADIANCE: u32 = 1;
+pub const CB_FRONT: u32 = 2;
+pub const CB_FRONT_AUX: u32 = 3;
+pub const CB_BACK: u32 = 4;
+pub const CB_RADIANCE_LINEAR: u32 = 5;
+pub const CB_BEAUTY: u32 = 6;
+pub const CB_HDR: u32 = 7;
+pub const CB_SHADOW: u32 = 8;
+pub const CB_IRRADIANCE: u32 = 9;
+pub const CB_RECEIVERS: u32 = 10;
+pub const CB_BVH_PAIR: u32 = 11;
+pub const CB_BVH_TRIS: u32 = 12;
+pub const CB_BVH_NORMALS: u32 = 13;
+pub const CB_BVH_INSTANCES: u32 = 14;
+pub const CB_COUNT: u32 = 15;
+
+// Binding indices of the eye view's shading (glsl/eye_shade.comp, src/passes/eye.rs).
+pub const EB_FRAME: u32 = 0;
+pub const EB_SHADOW: u32 = 1;
+pub const EB_IRRADIANCE: u32 = 2;
+pub const EB_RECEIVERS: u32 = 3;
+pub const EB_EYE: u32 = 4;
+pub const EB_ALBEDO: u32 = 5;
+pub const EB_RADIANCE: u32 = 6;
+pub const EB_CAUSTICS: u32 = 7;
+pub const EB_DIRECT: u32 = 8;
+pub const EB_COUNT: u32 = 9;

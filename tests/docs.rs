@@ -532,7 +532,7 @@ fn every_bench_file_is_named() {
     assert!(unnamed.is_empty(), "files under docs/bench that no document or tool names:\n{}", unnamed.join("\n"));
 }
 
-/// The pipeline's steps: docs/design.md's "### N. Title" headings under "## Pipeline" are 1..=n, src/frame.rs lists
+/// The pipeline's steps: docs/design.md's "### N. Title" headings under "## Pipeline" are 1..=n, src/frame/mod.rs lists
 /// the same n, and every "design.md step N" or "design.md, step N" cited anywhere has 1 <= N <= n.
 #[test]
 fn pipeline_steps_are_numbered_once() {
@@ -543,13 +543,13 @@ fn pipeline_steps_are_numbered_once() {
         section.lines().filter_map(|l| l.strip_prefix("### ")?.split_once(". ")?.0.parse().ok()).collect();
     let n = steps.len() as u32;
     assert!(n > 0 && steps == (1..=n).collect::<Vec<_>>(), "docs/design.md's steps: {steps:?}");
-    let frame = read("src/frame.rs");
+    let frame = read("src/frame/mod.rs");
     let listed = frame
         .lines()
         .take_while(|l| l.starts_with("//!"))
         .filter(|l| l.starts_with("//! ") && l[4..].split_once(". ").is_some_and(|(k, _)| k.parse::<u32>().is_ok()))
         .count();
-    assert_eq!(listed as u32, n, "src/frame.rs's header lists {listed} steps, docs/design.md {n}");
+    assert_eq!(listed as u32, n, "src/frame/mod.rs's header lists {listed} steps, docs/design.md {n}");
     let mut bad = Vec::new();
     for (name, text) in tracked_files() {
         let Some(text) = text else { continue };

@@ -83,20 +83,7 @@ struct TraversalState {
 // (k + 1) & 1 with atomicAdd; the transport shader turns out_count into the next wave's dispatch arguments.
 // Account terms are flux / light intensity (sr for spot lights, m^2 for directional ones) in 64-bit fixed point
 // (2^ACCOUNT_SHIFT units per 1), added as (lo, hi) word pairs with a carry, so the sums are exact and repeatable.
-const uint ACC_EMITTED = 0u;    // photons that entered the transport
-const uint ACC_CAUSTIC = 1u;    // reached a receiver after one or more specular interactions
-const uint ACC_DIRECT = 2u;     // reached a receiver with none (direct light, counted by the direct AOV)
-const uint ACC_ESCAPED = 3u;    // left the scene
-const uint ACC_THRESHOLD = 4u;  // children below the flux threshold
-const uint ACC_CAP = 5u;        // met a dielectric after the interaction cap
-const uint ACC_LOST = 6u;       // numerical dead ends (no valid direction on either normal)
-const uint ACC_OVERFLOW = 7u;   // did not fit a queue (only without batching: with it the batch is split instead)
-const uint ACC_ABSORBED = 8u;   // absorbed inside glass (Beer–Lambert)
-const uint ACC_ONE_EVENT = 9u;  // the part of ACC_CAUSTIC with exactly one interaction (not in the partition)
-const uint ACC_WEAK_LEFT = 10u;     // weak branches a photon left to the sibling that carries its block's
-const uint ACC_WEAK_CARRIED = 11u;  // the weight carriers added for their siblings (an input: emitted + carried
-                                    // = the partition + left)
-const uint ACC_TERMS = 12u;
+// The terms' indices (ACC_EMITTED ... ACC_WEAK_CARRIED, ACC_TERMS) are constants of src/shader_consts.rs.
 
 struct TransportState {
     uint in_count;         // rays of the wave being traced (wave 0: the emitted photons)

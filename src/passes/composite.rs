@@ -5,6 +5,8 @@
 use super::groups_2d;
 use crate::scene_gpu::BvhBuffers;
 use crate::shaders;
+use crate::shaders::consts::*;
+use crate::vk::pipeline::{kinds, ordered};
 use crate::vk::{Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -39,26 +41,29 @@ pub struct CompositeInputs<'a> {
     pub exact: bool,
 }
 
+/// The composite's bindings (glsl/composite.comp declares each with the same constant).
+const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
+    (CB_FRAME, BindKind::Uniform),
+    (CB_RADIANCE, BindKind::Sampled),
+    (CB_FRONT, BindKind::Sampled),
+    (CB_FRONT_AUX, BindKind::Sampled),
+    (CB_BACK, BindKind::Sampled),
+    (CB_RADIANCE_LINEAR, BindKind::Sampled),
+    (CB_BEAUTY, BindKind::StorageImage),
+    (CB_HDR, BindKind::StorageImage),
+    (CB_SHADOW, BindKind::Sampled),
+    (CB_IRRADIANCE, BindKind::Sampled),
+    (CB_RECEIVERS, BindKind::Sampled),
+    (CB_BVH_PAIR, BindKind::Storage),
+    (CB_BVH_TRIS, BindKind::Storage),
+    (CB_BVH_NORMALS, BindKind::Storage),
+    (CB_BVH_INSTANCES, BindKind::Storage),
+];
+const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
+
 impl CompositePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        use BindKind::*;
-        let binds = [
-            Uniform,
-            Sampled,
-            Sampled,
-            Sampled,
-            Sampled,
-            Sampled,
-            StorageImage,
-            StorageImage,
-            Sampled,
-            Sampled,
-            Sampled,
-            Storage,
-            Storage,
-            Storage,
-            Storage,
-        ];
+        let binds = kinds(&LAYOUT);
         let pipeline = Pipeline::compute(device, "composite", shaders::COMPOSITE_COMP.words(), &binds, 0)?;
         let exact = Pipeline::compute(device, "composite exact", shaders::COMPOSITE_COMP_EXACT.words(), &binds, 0)?;
         let single =
@@ -83,23 +88,23 @@ impl CompositePass {
         };
         pipeline.bind(
             cmd,
-            &[
-                Bind::Uniform(i.ubo),
-                Bind::Sampled(i.radiance, i.nearest),
-                Bind::Sampled(i.front, i.nearest),
-                Bind::Sampled(i.front_aux, i.nearest),
-                Bind::Sampled(i.back, i.nearest),
-                Bind::Sampled(i.radiance, i.linear),
-                Bind::StorageImage(i.beauty),
-                Bind::StorageImage(i.hdr),
-                Bind::Sampled(i.shadow, i.nearest),
-                Bind::Sampled(i.irradiance, i.linear),
-                Bind::Sampled(i.recv, i.nearest),
-                Bind::Storage(&i.bvh.pair_nodes),
-                Bind::Storage(&i.bvh.triangles),
-                Bind::Storage(&i.bvh.normals),
-                Bind::Storage(&i.bvh.instances),
-            ],
+            &ordered([
+                (CB_FRAME, Bind::Uniform(i.ubo)),
+                (CB_RADIANCE, Bind::Sampled(i.radiance, i.nearest)),
+                (CB_FRONT, Bind::Sampled(i.front, i.nearest)),
+                (CB_FRONT_AUX, Bind::Sampled(i.front_aux, i.nearest)),
+                (CB_BACK, Bind::Sampled(i.back, i.nearest)),
+                (CB_RADIANCE_LINEAR, Bind::Sampled(i.radiance, i.linear)),
+                (CB_BEAUTY, Bind::StorageImage(i.beauty)),
+                (CB_HDR, Bind::StorageImage(i.hdr)),
+                (CB_SHADOW, Bind::Sampled(i.shadow, i.nearest)),
+                (CB_IRRADIANCE, Bind::Sampled(i.irradiance, i.linear)),
+                (CB_RECEIVERS, Bind::Sampled(i.recv, i.nearest)),
+                (CB_BVH_PAIR, Bind::Storage(&i.bvh.pair_nodes)),
+                (CB_BVH_TRIS, Bind::Storage(&i.bvh.triangles)),
+                (CB_BVH_NORMALS, Bind::Storage(&i.bvh.normals)),
+                (CB_BVH_INSTANCES, Bind::Storage(&i.bvh.instances)),
+            ]),
         );
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };

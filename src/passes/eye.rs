@@ -6,6 +6,8 @@ use super::{begin_rendering, groups_2d, DEPTH_FORMAT, GEO_FORMAT};
 use crate::gpu_types::{GeometryPush, GpuView, Vertex};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
+use crate::shaders::consts::*;
+use crate::vk::pipeline::kinds;
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -44,6 +46,21 @@ struct ShadePush {
 }
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 4);
 
+/// The eye shading's bindings (glsl/eye_shade.comp declares each with the same constant); without the AOVs, the
+/// first seven.
+const SHADE_LAYOUT: [(u32, BindKind); EB_COUNT as usize] = [
+    (EB_FRAME, BindKind::Uniform),
+    (EB_SHADOW, BindKind::Sampled),
+    (EB_IRRADIANCE, BindKind::Sampled),
+    (EB_RECEIVERS, BindKind::Sampled),
+    (EB_EYE, BindKind::Sampled),
+    (EB_ALBEDO, BindKind::Sampled),
+    (EB_RADIANCE, BindKind::StorageImage),
+    (EB_CAUSTICS, BindKind::StorageImage),
+    (EB_DIRECT, BindKind::StorageImage),
+];
+const _: () = assert!(crate::vk::pipeline::bindings_in_order(&SHADE_LAYOUT));
+
 impl EyePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         let gbuffer = Pipeline::graphics(
@@ -69,20 +86,16 @@ impl EyePass {
                 ],
             },
         )?;
-        let binds = [
-            BindKind::Uniform,
-            BindKind::Sampled,
-            BindKind::Sampled,
-            BindKind::Sampled,
-            BindKind::Sampled,
-            BindKind::Sampled,
-            BindKind::StorageImage,
-            BindKind::StorageImage,
-            BindKind::StorageImage,
-        ];
+        let binds = kinds(&SHADE_LAYOUT);
         let push = std::mem::size_of::<ShadePush>() as u32;
         let shade = [
-            Pipeline::compute(device, "eye shade", shaders::EYE_SHADE_COMP.words(), &binds[..7], push)?,
+            Pipeline::compute(
+                device,
+                "eye shade",
+                shaders::EYE_SHADE_COMP.words(),
+                &binds[..EB_CAUSTICS as usize],
+                push,
+            )?,
             Pipeline::compute(device, "eye shade (AOVs)", shaders::EYE_SHADE_COMP_AOVS.words(), &binds, push)?,
         ];
         Ok(EyePass { device: device.clone(), gbuffer, shade })
@@ -109,14 +122,17 @@ impl EyePass {
     pub fn record_shade(&self, cmd: vk::CommandBuffer, i: &EyeInputs, g: &EyeGbuffer, out: &[&Image], add: bool) {
         let pipeline = &self.shade[(out.len() > 1) as usize];
         let mut binds = vec![
-            Bind::Uniform(i.ubo),
-            Bind::Sampled(i.shadow, i.nearest),
-            Bind::Sampled(i.irradiance, i.linear),
-            Bind::Sampled(i.recv, i.nearest),
-            Bind::Sampled(g.geo, i.nearest),
-            Bind::Sampled(g.albedo, i.nearest),
+            (EB_FRAME, Bind::Uniform(i.ubo)),
+            (EB_SHADOW, Bind::Sampled(i.shadow, i.nearest)),
+            (EB_IRRADIANCE, Bind::Sampled(i.irradiance, i.linear)),
+            (EB_RECEIVERS, Bind::Sampled(i.recv, i.nearest)),
+            (EB_EYE, Bind::Sampled(g.geo, i.nearest)),
+            (EB_ALBEDO, Bind::Sampled(g.albedo, i.nearest)),
         ];
-        binds.extend(out.iter().map(|img| Bind::StorageImage(img)));
+        binds
+            .extend(out.iter().zip([EB_RADIANCE, EB_CAUSTICS, EB_DIRECT]).map(|(img, b)| (b, Bind::StorageImage(img))));
+        assert!(crate::vk::pipeline::bindings_in_order(&binds), "the eye shading's bindings out of order");
+        let binds: Vec<Bind> = binds.into_iter().map(|(_, b)| b).collect();
         pipeline.bind(cmd, &binds);
         pipeline.push(cmd, &ShadePush { add: add as u32 });
         let (gx, gy) = groups_2d(out[0].extent.width, out[0].extent.height);

@@ -1,4 +1,4 @@
-//! One file per pass. Each owns its pipelines and records itself; src/frame.rs puts them in order and joins
+//! One file per pass. Each owns its pipelines and records itself; src/frame/ puts them in order and joins
 //! them with barriers.
 
 pub mod composite;

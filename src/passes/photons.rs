@@ -7,43 +7,45 @@ use crate::bvh::BvhLayout;
 use crate::gpu_types::PhotonPush;
 use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
+use crate::vk::pipeline::kinds;
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
-const LAYOUT: [BindKind; 21] = [
-    BindKind::Uniform, // frame
-    BindKind::Storage, // traversal state
-    BindKind::Storage, // photon buffer
-    BindKind::Storage, // indirect commands
-    BindKind::Storage, // coverage pyramid
-    BindKind::Sampled, // refractor front
-    BindKind::Sampled, // refractor front IOR
-    BindKind::Sampled, // refractor back
-    BindKind::Sampled, // receivers from the light
-    BindKind::Storage, // debug photon dump
-    BindKind::Storage, // splat records
-    BindKind::Storage, // transport state
-    BindKind::Storage, // ray queue 0
-    BindKind::Storage, // ray queue 1
-    BindKind::Storage, // BVH nodes (pair layout)
-    BindKind::Storage, // BVH triangles
-    BindKind::Storage, // BVH vertex normals
-    BindKind::Storage, // BVH instances
-    BindKind::Storage, // BVH nodes (single layout)
-    BindKind::Storage, // flux map as texels (compute splat)
-    BindKind::Storage, // BVH nodes (threaded layout)
+/// The photon passes' shared layout (glsl/common/photon_bindings.glsl declares each with the same constant).
+const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
+    (PB_FRAME, BindKind::Uniform),
+    (PB_STATE, BindKind::Storage),
+    (PB_PHOTONS, BindKind::Storage),
+    (PB_INDIRECT, BindKind::Storage),
+    (PB_COVERAGE, BindKind::Storage),
+    (PB_FRONT, BindKind::Sampled),
+    (PB_FRONT_AUX, BindKind::Sampled),
+    (PB_BACK, BindKind::Sampled),
+    (PB_RECEIVERS, BindKind::Sampled),
+    (PB_DEBUG, BindKind::Storage),
+    (PB_SPLATS, BindKind::Storage),
+    (PB_TRANSPORT, BindKind::Storage),
+    (PB_QUEUE0, BindKind::Storage),
+    (PB_QUEUE1, BindKind::Storage),
+    (PB_BVH_PAIR, BindKind::Storage),
+    (PB_BVH_TRIS, BindKind::Storage),
+    (PB_BVH_NORMALS, BindKind::Storage),
+    (PB_BVH_INSTANCES, BindKind::Storage),
+    (PB_BVH_SINGLE, BindKind::Storage),
+    (PB_FLUX_TEXELS, BindKind::Storage),
+    (PB_BVH_THREADED, BindKind::Storage),
 ];
+const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
-/// Byte offsets in the indirect buffer: one dispatch command per traversal level, the photon trace's
-/// dispatch, then the splat's draw command.
-pub const TRACE_OFFSET: u64 = 16 * MAX_LEVELS as u64;
-pub const DRAW_OFFSET: u64 = TRACE_OFFSET + 16;
+/// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
+pub const TRACE_OFFSET: u64 = 16 * INDIRECT_TRACE as u64;
+pub const DRAW_OFFSET: u64 = 16 * INDIRECT_DRAW as u64;
 /// Exact transport: the current wave's dispatch.
-pub const WAVE_OFFSET: u64 = DRAW_OFFSET + 16;
+pub const WAVE_OFFSET: u64 = 16 * INDIRECT_WAVE as u64;
 /// The compute splat's dispatch over the draw's records.
-pub const SPLAT_OFFSET: u64 = WAVE_OFFSET + 16;
-pub const INDIRECT_BYTES: u64 = SPLAT_OFFSET + 16;
+pub const SPLAT_OFFSET: u64 = 16 * INDIRECT_SPLAT as u64;
+pub const INDIRECT_BYTES: u64 = 16 * INDIRECT_COMMANDS as u64;
 
 pub struct PhotonBindings<'a> {
     pub ubo: &'a Buffer,
@@ -65,30 +67,30 @@ pub struct PhotonBindings<'a> {
 }
 
 impl PhotonBindings<'_> {
-    fn binds(&self) -> [Bind<'_>; 21] {
-        [
-            Bind::Uniform(self.ubo),
-            Bind::Storage(self.state),
-            Bind::Storage(self.photons),
-            Bind::Storage(self.indirect),
-            Bind::Storage(self.coverage),
-            Bind::Sampled(self.front, self.sampler),
-            Bind::Sampled(self.front_aux, self.sampler),
-            Bind::Sampled(self.back, self.sampler),
-            Bind::Sampled(self.recv, self.sampler),
-            Bind::Storage(self.debug),
-            Bind::Storage(self.splats),
-            Bind::Storage(self.transport),
-            Bind::Storage(self.queues[0]),
-            Bind::Storage(self.queues[1]),
-            Bind::Storage(&self.bvh.pair_nodes),
-            Bind::Storage(&self.bvh.triangles),
-            Bind::Storage(&self.bvh.normals),
-            Bind::Storage(&self.bvh.instances),
-            Bind::Storage(&self.bvh.single_nodes),
-            Bind::Storage(self.flux_texels),
-            Bind::Storage(&self.bvh.threaded_nodes),
-        ]
+    fn binds(&self) -> [Bind<'_>; PB_COUNT as usize] {
+        crate::vk::pipeline::ordered([
+            (PB_FRAME, Bind::Uniform(self.ubo)),
+            (PB_STATE, Bind::Storage(self.state)),
+            (PB_PHOTONS, Bind::Storage(self.photons)),
+            (PB_INDIRECT, Bind::Storage(self.indirect)),
+            (PB_COVERAGE, Bind::Storage(self.coverage)),
+            (PB_FRONT, Bind::Sampled(self.front, self.sampler)),
+            (PB_FRONT_AUX, Bind::Sampled(self.front_aux, self.sampler)),
+            (PB_BACK, Bind::Sampled(self.back, self.sampler)),
+            (PB_RECEIVERS, Bind::Sampled(self.recv, self.sampler)),
+            (PB_DEBUG, Bind::Storage(self.debug)),
+            (PB_SPLATS, Bind::Storage(self.splats)),
+            (PB_TRANSPORT, Bind::Storage(self.transport)),
+            (PB_QUEUE0, Bind::Storage(self.queues[0])),
+            (PB_QUEUE1, Bind::Storage(self.queues[1])),
+            (PB_BVH_PAIR, Bind::Storage(&self.bvh.pair_nodes)),
+            (PB_BVH_TRIS, Bind::Storage(&self.bvh.triangles)),
+            (PB_BVH_NORMALS, Bind::Storage(&self.bvh.normals)),
+            (PB_BVH_INSTANCES, Bind::Storage(&self.bvh.instances)),
+            (PB_BVH_SINGLE, Bind::Storage(&self.bvh.single_nodes)),
+            (PB_FLUX_TEXELS, Bind::Storage(self.flux_texels)),
+            (PB_BVH_THREADED, Bind::Storage(&self.bvh.threaded_nodes)),
+        ])
     }
 }
 
@@ -148,7 +150,7 @@ impl PhotonPasses {
     /// `flux_format`: the caustic flux map's format (R32F where it can be blended).
     pub fn new(device: &Arc<Device>, flux_format: vk::Format) -> VkResult<Self> {
         let push = std::mem::size_of::<PhotonPush>() as u32;
-        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &LAYOUT, push);
+        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &kinds(&LAYOUT), push);
         // One traversal pipeline per metric (llvmpipe pays for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
         let variant = |metric: Metric, spv: [&[u32]; 5]| -> VkResult<Vec<(u32, Pipeline)>> {
@@ -196,7 +198,7 @@ impl PhotonPasses {
             &GraphicsDesc {
                 vertex: shaders::SPLAT_VERT.words(),
                 fragment: shaders::SPLAT_FRAG.words(),
-                binds: &LAYOUT,
+                binds: &kinds(&LAYOUT),
                 push_size: push,
                 vertex_attributes: &[],
                 vertex_stride: 0,

@@ -1,5 +1,5 @@
 //! `caustics view`: the windowed viewer. A winit window, an ash-window surface and a swapchain; every frame is the
-//! headless renderer's frame (src/frame.rs), whose beauty image is copied into the acquired swapchain image just
+//! headless renderer's frame (src/frame/), whose beauty image is copied into the acquired swapchain image just
 //! before the frame's last submit (present.rs).
 //!
 //! Frames in flight (`--frames-in-flight`; 2 on GPUs, 1 on CPU devices): the CPU records frame N+1 while the GPU
@@ -606,7 +606,7 @@ impl Viewer {
     }
 
     fn device(&self) -> &Arc<Device> {
-        &self.renderer.device()
+        self.renderer.device()
     }
 
     /// Zero extent, minimized, or (testing) a simulated minimize.

@@ -1,6 +1,6 @@
 //! The viewer's final target: the frame's `beauty` image (R8G8B8A8_UNORM, already tone-mapped and sRGB-encoded)
 //! copied into the acquired swapchain image, an optional copy of that image for a screenshot, and the transition
-//! to PRESENT_SRC. These commands are appended to the frame's last command buffer (frame.rs `Finish`).
+//! to PRESENT_SRC. These commands are appended to the frame's last command buffer (`frame::Finish`).
 //!
 //! The beauty bytes are sRGB-encoded already, so they must reach the swapchain image unchanged:
 //! - UNORM swapchain: one blit (it swizzles RGBA to BGRA where needed and does no sRGB conversion);

@@ -29,6 +29,31 @@ impl BindKind {
 }
 
 /// A resource bound at record time.
+/// Whether a binding list names its bindings 0, 1, 2, ... in order: the lists in src/passes/ pair each entry with its
+/// index constant (src/shader_consts.rs, the same macro the GLSL declares it with), and a const assertion holds
+/// the order, so that Rust and GLSL cannot drift.
+pub const fn bindings_in_order<T>(entries: &[(u32, T)]) -> bool {
+    let mut i = 0;
+    while i < entries.len() {
+        if entries[i].0 != i as u32 {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// The kinds of a binding list (see [`bindings_in_order`]).
+pub fn kinds<const N: usize>(entries: &[(u32, BindKind); N]) -> [BindKind; N] {
+    entries.map(|(_, k)| k)
+}
+
+/// The binds of a list in binding order, checked against its index constants.
+pub fn ordered<'a, const N: usize>(entries: [(u32, Bind<'a>); N]) -> [Bind<'a>; N] {
+    assert!(bindings_in_order(&entries), "a binding list out of its index order");
+    entries.map(|(_, b)| b)
+}
+
 pub enum Bind<'a> {
     Uniform(&'a Buffer),
     Storage(&'a Buffer),

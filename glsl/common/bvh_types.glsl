@@ -1,0 +1,18 @@
+// The scene BVH's structs (src/bvh.rs mirrors them), shared by the photon passes and the composite.
+#ifndef BVH_TYPES_GLSL
+#define BVH_TYPES_GLSL
+struct BvhInstance {
+    vec4 object_from_world[3];
+    vec4 world_from_object[3];
+    vec4 lo;        // world bounds; w: root node bits (pair layout)
+    vec4 hi;        // w: root node bits (single layout)
+    vec4 material;  // x: IOR (dielectric) or albedo; y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
+    vec4 pad;       // x: root node bits (threaded layout); yzw: a diffuse receiver's rgb albedo
+    vec4 ior_rgb;   // dielectric: IOR of the red, green and blue channels (docs/design.md "Color")
+    vec4 sigma_rgb; // dielectric: absorption coefficient per channel (1/m)
+};
+// Two node layouts (src/bvh.rs): "pair" holds both children's boxes (loK.w: child node or first triangle, hiK.w:
+// triangle count, 0 for an inner child); "single" one box per node (lo.w: first child or triangle, hi.w: count).
+struct BvhNode { vec4 lo0; vec4 hi0; vec4 lo1; vec4 hi1; };
+struct BvhNodeSingle { vec4 lo; vec4 hi; };
+#endif
