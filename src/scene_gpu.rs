@@ -1,7 +1,7 @@
 //! The scene's triangles on the GPU: one vertex buffer and one index buffer, receivers first, then refractors,
-//! for rasterization; and the scene BVH (src/bvh.rs) for exact transport.
+//! for rasterization; and the scene BVH (src/bvh.rs) for exact transport, built when a frame first needs it.
 
-use crate::bvh::{GpuInstance, SceneBvh};
+use crate::bvh::{BvhLayout, GpuInstance, SceneBvh};
 use crate::gpu_types::Vertex;
 use crate::scene::{Material, Scene};
 use crate::vk::{cmd::upload_buffer, Buffer, Device, Recorder, VkResult};
@@ -24,7 +24,9 @@ pub struct SceneBuffers {
     pub bvh: BvhBuffers,
 }
 
-/// The scene BVH in storage buffers: both node layouts, triangles, their vertex normals, and the instances.
+/// The scene BVH in storage buffers: the node layouts frames have traced with, triangles, their vertex normals,
+/// and the instances. Built on the host when the first exact-transport frame needs it (the two-interface model
+/// reads none of it); until then, and for the layouts no frame has used, each binding holds a one-element buffer.
 pub struct BvhBuffers {
     pub pair_nodes: Buffer,
     pub single_nodes: Buffer,
@@ -32,6 +34,10 @@ pub struct BvhBuffers {
     pub triangles: Buffer,
     pub normals: Buffer,
     pub instances: Buffer,
+    /// The host BVH once built (the layouts not uploaded yet come from it).
+    host: Option<SceneBvh>,
+    /// Which layouts are uploaded: pair, single, threaded.
+    uploaded: [bool; 3],
     /// Host build time of this BVH (ms), node counts and triangle count.
     pub build_ms: f64,
     pub pair_node_count: usize,
@@ -41,47 +47,109 @@ pub struct BvhBuffers {
     pub instance_count: usize,
 }
 
+/// Empty lists still need a buffer to bind: one zeroed element.
+fn nonempty<T: bytemuck::Pod + Default>(v: &[T]) -> Vec<T> {
+    if v.is_empty() {
+        vec![T::default()]
+    } else {
+        v.to_vec()
+    }
+}
+
+/// An instance whose bounds nothing enters (what an empty scene binds).
+fn no_instance() -> GpuInstance {
+    GpuInstance {
+        lo: [f32::INFINITY, f32::INFINITY, f32::INFINITY, 0.0],
+        hi: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, 0.0],
+        ..GpuInstance::default()
+    }
+}
+
 impl BvhBuffers {
-    pub fn new(device: &Arc<Device>, recorder: &mut Recorder, scene: &Scene) -> VkResult<Self> {
-        let bvh = SceneBvh::build(scene);
+    /// Placeholders: one element per binding, no BVH built.
+    pub fn placeholders(device: &Arc<Device>, recorder: &mut Recorder) -> VkResult<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        // Empty lists still need a buffer to bind: one zeroed element (an instance whose bounds nothing enters).
-        fn nonempty<T: bytemuck::Pod + Default>(v: &[T]) -> Vec<T> {
-            if v.is_empty() {
-                vec![T::default()]
-            } else {
-                v.to_vec()
-            }
-        }
-        let instances = if bvh.instances.is_empty() {
-            vec![GpuInstance {
-                lo: [f32::INFINITY, f32::INFINITY, f32::INFINITY, 0.0],
-                hi: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, 0.0],
-                ..GpuInstance::default()
-            }]
-        } else {
-            bvh.instances.clone()
-        };
+        let zeros = [[0u32; 4]; 4];
         Ok(BvhBuffers {
-            pair_nodes: upload_buffer(device, recorder, "bvh pair nodes", &nonempty(&bvh.pair_nodes), storage)?,
-            single_nodes: upload_buffer(device, recorder, "bvh single nodes", &nonempty(&bvh.single_nodes), storage)?,
-            threaded_nodes: upload_buffer(
-                device,
-                recorder,
-                "bvh threaded nodes",
-                &nonempty(&bvh.threaded_nodes),
-                storage,
-            )?,
-            threaded_node_count: bvh.threaded_nodes.len(),
-            triangles: upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?,
-            normals: upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?,
-            instances: upload_buffer(device, recorder, "bvh instances", &instances, storage)?,
-            build_ms: bvh.build_ms,
-            pair_node_count: bvh.pair_nodes.len(),
-            single_node_count: bvh.single_nodes.len(),
-            triangle_count: bvh.triangles.len(),
-            instance_count: bvh.instances.len(),
+            pair_nodes: upload_buffer(device, recorder, "bvh pair nodes (none)", &zeros, storage)?,
+            single_nodes: upload_buffer(device, recorder, "bvh single nodes (none)", &zeros, storage)?,
+            threaded_nodes: upload_buffer(device, recorder, "bvh threaded nodes (none)", &zeros, storage)?,
+            triangles: upload_buffer(device, recorder, "bvh triangles (none)", &zeros, storage)?,
+            normals: upload_buffer(device, recorder, "bvh normals (none)", &zeros, storage)?,
+            instances: upload_buffer(device, recorder, "bvh instances (none)", &[no_instance()], storage)?,
+            host: None,
+            uploaded: [false; 3],
+            build_ms: 0.0,
+            pair_node_count: 0,
+            single_node_count: 0,
+            threaded_node_count: 0,
+            triangle_count: 0,
+            instance_count: 0,
         })
+    }
+
+    /// Whether the BVH has been built.
+    pub fn is_built(&self) -> bool {
+        self.host.is_some()
+    }
+
+    /// Whether the BVH is built and `layout`'s nodes (with the pair layout's) are on the GPU.
+    pub fn has(&self, layout: BvhLayout) -> bool {
+        self.host.is_some() && self.uploaded[0] && self.uploaded[Self::slot(layout)]
+    }
+
+    fn slot(layout: BvhLayout) -> usize {
+        match layout {
+            BvhLayout::Pair | BvhLayout::Auto => 0,
+            BvhLayout::Single => 1,
+            BvhLayout::Threaded => 2,
+        }
+    }
+
+    /// Build the BVH if no frame has needed it yet, and upload the nodes of `layout` (and the pair layout, which
+    /// the eye view's glass tracing reads) if they are not on the GPU yet. The buffers it replaces must not be in
+    /// use by a frame in flight.
+    pub fn ensure(
+        &mut self,
+        device: &Arc<Device>,
+        recorder: &mut Recorder,
+        scene: &Scene,
+        layout: BvhLayout,
+    ) -> VkResult<()> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        if self.host.is_none() {
+            let bvh = SceneBvh::build(scene);
+            log::info!("scene BVH: {} triangles, built in {:.0} ms", bvh.triangles.len(), bvh.build_ms);
+            self.triangles = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?;
+            self.normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?;
+            let instances = if bvh.instances.is_empty() { vec![no_instance()] } else { bvh.instances.clone() };
+            self.instances = upload_buffer(device, recorder, "bvh instances", &instances, storage)?;
+            self.build_ms = bvh.build_ms;
+            self.pair_node_count = bvh.pair_nodes.len();
+            self.single_node_count = bvh.single_nodes.len();
+            self.threaded_node_count = bvh.threaded_nodes.len();
+            self.triangle_count = bvh.triangles.len();
+            self.instance_count = bvh.instances.len();
+            self.host = Some(bvh);
+        }
+        let bvh = self.host.as_ref().expect("built");
+        let mut wanted = [true, false, false];
+        wanted[Self::slot(layout)] = true;
+        if wanted[0] && !self.uploaded[0] {
+            self.pair_nodes = upload_buffer(device, recorder, "bvh pair nodes", &nonempty(&bvh.pair_nodes), storage)?;
+        }
+        if wanted[1] && !self.uploaded[1] {
+            self.single_nodes =
+                upload_buffer(device, recorder, "bvh single nodes", &nonempty(&bvh.single_nodes), storage)?;
+        }
+        if wanted[2] && !self.uploaded[2] {
+            self.threaded_nodes =
+                upload_buffer(device, recorder, "bvh threaded nodes", &nonempty(&bvh.threaded_nodes), storage)?;
+        }
+        for (u, w) in self.uploaded.iter_mut().zip(wanted) {
+            *u |= w;
+        }
+        Ok(())
     }
 }
 
@@ -126,7 +194,7 @@ impl SceneBuffers {
         let vertices =
             upload_buffer(device, recorder, "scene vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         let indices = upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER)?;
-        let bvh = BvhBuffers::new(device, recorder, scene)?;
+        let bvh = BvhBuffers::placeholders(device, recorder)?;
         Ok(SceneBuffers { vertices, indices, receivers, refractors, shared_ior: shared_ior(scene), bvh })
     }
 }

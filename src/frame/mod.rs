@@ -223,11 +223,11 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
     } else {
         rec.ts.mark(rec.cmd, "eye.receivers");
         for light in 0..plan.lights() {
-            ctx(light * nc).eye_receivers(rec);
+            ctx(light * nc).eye_receivers(rec)?;
         }
         rec.ts.mark(rec.cmd, "eye.refractors");
         c0.eye_refractors(rec);
-        c0.composite(rec);
+        c0.composite(rec)?;
     }
     rec.ts.mark(rec.cmd, "readback");
     let aov = c0.readback(rec, plan.aov);

@@ -153,10 +153,7 @@ impl Ctx<'_> {
         match self.s.method {
             Method::Dense => self.dense(rec),
             Method::Adaptive => match self.s.driven {
-                Driven::Gpu => {
-                    self.adaptive_gpu(rec, slots);
-                    Ok(())
-                }
+                Driven::Gpu => self.adaptive_gpu(rec, slots),
                 Driven::Cpu => self.adaptive_cpu(rec),
             },
         }?;
@@ -210,15 +207,15 @@ impl Ctx<'_> {
     /// Steps 4 and 5 for one batch: trace its emitted photons (compute, dispatched indirectly), then splat them.
     /// `commit`: adaptive traversal's last stats pass, which commits or splits the batch. Under two-interface
     /// transport it ran already; under exact transport it runs after the waves, which may abort the batch.
-    fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) {
+    fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) -> VkResult<()> {
         let t = self.t;
         let (b, ph) = (self.bindings(), &self.p.photons);
         self.traversal_step(rec);
         if self.s.transport == Transport::Exact {
-            self.exact_transport(rec, commit);
+            self.exact_transport(rec, commit)?;
         } else {
             rec.ts.mark(rec.cmd, "photon_trace");
-            ph.trace(rec.cmd, &b, self.debug());
+            ph.trace(rec.cmd, &b, self.debug())?;
         }
         let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
         rec.sync.buffer(&t.photon.splats, &[reader]);
@@ -227,9 +224,9 @@ impl Ctx<'_> {
         rec.flush(self.d);
         rec.ts.mark(rec.cmd, "splat");
         if self.compute_splat {
-            ph.splat_compute(rec.cmd, &b, self.tiled_splat);
+            ph.splat_compute(rec.cmd, &b, self.tiled_splat)
         } else {
-            ph.splat(rec.cmd, &b, &self.r.flux, clear);
+            ph.splat(rec.cmd, &b, &self.r.flux, clear)
         }
     }
 
@@ -249,7 +246,7 @@ impl Ctx<'_> {
     /// Exact transport of the batch's emitted photons, in waves (docs/design.md step 4): every wave is one
     /// vkCmdDispatchIndirect whose arguments the transport pass wrote from the previous wave's appends. The host
     /// records MAX_INTERACTIONS + 1 waves; those after the queue empties dispatch zero work groups.
-    fn exact_transport(&self, rec: &mut Rec, commit: bool) {
+    fn exact_transport(&self, rec: &mut Rec, commit: bool) -> VkResult<()> {
         use crate::passes::photons::transport_mode as tm;
         let (t, b, ph) = (self.t, self.bindings(), &self.p.photons);
         let adaptive = self.s.method == Method::Adaptive;
@@ -267,15 +264,15 @@ impl Ctx<'_> {
             rec.flush(self.d);
         };
         rec.ts.mark(rec.cmd, "transport_primary");
-        ph.transport(rec.cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort, 0);
+        ph.transport(rec.cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort, 0)?;
         for wave in 0..=MAX_INTERACTIONS {
             step(rec);
             if wave >= 1 {
                 rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
             }
-            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout);
+            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout)?;
             step(rec);
-            ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1);
+            ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;
         }
         step(rec);
         rec.ts.mark(rec.cmd, "stats");
@@ -283,7 +280,7 @@ impl Ctx<'_> {
             ph.stats(rec.cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg());
             step(rec);
         }
-        ph.transport(rec.cmd, &b, tm::COMMIT, may_abort, 0);
+        ph.transport(rec.cmd, &b, tm::COMMIT, may_abort, 0)
     }
 
     fn dense(&self, rec: &mut Rec) -> VkResult<()> {
@@ -302,11 +299,11 @@ impl Ctx<'_> {
             ph.init(rec.cmd, &b, init_mode::DENSE, self.s.traverse_wg);
             self.traversal_step(rec);
             rec.ts.mark(rec.cmd, "dense_emit");
-            ph.dense_emit(rec.cmd, &b, self.s.level, row0, rows.min(n - row0));
+            ph.dense_emit(rec.cmd, &b, self.s.level, row0, rows.min(n - row0))?;
             self.traversal_step(rec);
             rec.ts.mark(rec.cmd, "stats");
             ph.stats(rec.cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
-            self.trace_and_splat(rec, band == 0, false);
+            self.trace_and_splat(rec, band == 0, false)?;
             if band + 1 < bands {
                 self.after_splat(rec);
             }
@@ -315,7 +312,7 @@ impl Ctx<'_> {
     }
 
     /// GPU-driven adaptive traversal: a fixed command sequence per batch slot, every dispatch and draw indirect.
-    fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) {
+    fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) -> VkResult<()> {
         let b = self.bindings();
         let ph = &self.p.photons;
         let shape = self.traverse_shape();
@@ -330,18 +327,19 @@ impl Ctx<'_> {
             self.traversal_step(rec);
             for level in 0..=self.s.level {
                 rec.ts.mark(rec.cmd, TRAVERSE_LABELS[level as usize]);
-                ph.traverse_indirect(rec.cmd, &b, level, shape);
+                ph.traverse_indirect(rec.cmd, &b, level, shape)?;
                 self.traversal_step(rec);
                 rec.ts.mark(rec.cmd, "stats");
                 let mode = if level == self.s.level && !exact { stats_mode::COMMIT } else { stats_mode::LEVEL };
                 ph.stats(rec.cmd, &b, level, mode, wg);
                 self.traversal_step(rec);
             }
-            self.trace_and_splat(rec, slot == 0, exact);
+            self.trace_and_splat(rec, slot == 0, exact)?;
             if slot + 1 < slots {
                 self.after_splat(rec);
             }
         }
+        Ok(())
     }
 
     /// Copy the traversal state to the readback buffer, for the host after the submit.
@@ -392,7 +390,7 @@ impl Ctx<'_> {
                 self.traversal_step(rec);
                 rec.ts.mark(rec.cmd, TRAVERSE_LABELS[level as usize]);
                 if st.aborted == 0 {
-                    ph.traverse_direct(rec.cmd, &b, level, st.read_count, shape);
+                    ph.traverse_direct(rec.cmd, &b, level, st.read_count, shape)?;
                 }
                 self.traversal_step(rec);
                 rec.ts.mark(rec.cmd, "stats");
@@ -405,7 +403,7 @@ impl Ctx<'_> {
                     st = self.read_state()?;
                 }
             }
-            self.trace_and_splat(rec, first, self.s.transport == Transport::Exact);
+            self.trace_and_splat(rec, first, self.s.transport == Transport::Exact)?;
             self.after_splat(rec);
             first = false;
         }

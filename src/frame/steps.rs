@@ -9,7 +9,7 @@ use crate::passes::eye::{EyeGbuffer, EyeInputs};
 use crate::passes::geometry::GeometryTarget;
 use crate::settings::Transport;
 use crate::targets::{Targets, DEBUG_ROWS, PHOTON_GUARD};
-use crate::vk::{Access, Image};
+use crate::vk::{Access, Image, VkResult};
 use ash::vk;
 
 /// Where a sampled g-buffer is read: the photon passes (compute), the raster splat (vertex) and the eye view.
@@ -140,7 +140,7 @@ impl Ctx<'_> {
     /// Step 7a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
     /// each light's shading writes (the first) or adds to (the others) the radiance, and the caustics and direct
     /// AOVs when the frame reads one back, so the AOVs are the sums over lights.
-    pub(super) fn eye_receivers(&self, rec: &mut Rec) {
+    pub(super) fn eye_receivers(&self, rec: &mut Rec) -> VkResult<()> {
         let e = &self.t.eye;
         let first = self.light == 0;
         let out: &[&Image] = if self.eye_aovs { &[&e.radiance, &e.caustics, &e.direct] } else { &[&e.radiance] };
@@ -176,7 +176,7 @@ impl Ctx<'_> {
             nearest: self.nearest,
             linear: self.linear,
         };
-        self.p.eye.record_shade(rec.cmd, &inputs, &g, out, !first);
+        self.p.eye.record_shade(rec.cmd, &inputs, &g, out, !first)
     }
 
     /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.
@@ -216,7 +216,7 @@ impl Ctx<'_> {
     }
 
     /// Step 8: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
-    pub(super) fn composite(&self, rec: &mut Rec) {
+    pub(super) fn composite(&self, rec: &mut Rec) -> VkResult<()> {
         let e = &self.t.eye;
         rec.ts.mark(rec.cmd, "composite");
         rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
@@ -248,10 +248,11 @@ impl Ctx<'_> {
                 linear: self.linear,
                 exact: self.exact_eye(),
             },
-        );
+        )?;
         rec.sync.image(&e.beauty, &[Access::TransferSrc]);
         rec.sync.image(&e.hdr, &[Access::TransferSrc]);
         rec.flush(self.d);
+        Ok(())
     }
 
     /// Copy the requested AOV to the readback buffer, and make the buffer visible to the host.

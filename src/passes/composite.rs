@@ -6,21 +6,21 @@ use super::groups_2d;
 use crate::scene_gpu::BvhBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
-use crate::vk::pipeline::{kinds, ordered};
-use crate::vk::{Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
+use crate::vk::pipeline::{kinds, ordered, LazyPipeline};
+use crate::vk::{Bind, BindKind, Buffer, Device, Image, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
 pub struct CompositePass {
     device: Arc<Device>,
     /// The two-interface deferred refraction.
-    pipeline: Pipeline,
+    pipeline: LazyPipeline,
     /// The eye-ray tracer through the BVH (`--transport exact`).
-    exact: Pipeline,
+    exact: LazyPipeline,
     /// The same two with one eye sample per pixel (`--aa 1`, the viewer's previews): kernels without the
     /// averaging loop, which costs a CPU driver such as lavapipe even when it runs once.
-    single: Pipeline,
-    exact_single: Pipeline,
+    single: LazyPipeline,
+    exact_single: LazyPipeline,
 }
 
 pub struct CompositeInputs<'a> {
@@ -64,28 +64,23 @@ const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 impl CompositePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         let binds = kinds(&LAYOUT);
-        let pipeline = Pipeline::compute(device, "composite", shaders::COMPOSITE_COMP.words(), &binds, 0)?;
-        let exact = Pipeline::compute(device, "composite exact", shaders::COMPOSITE_COMP_EXACT.words(), &binds, 0)?;
-        let single =
-            Pipeline::compute(device, "composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words(), &binds, 0)?;
-        let exact_single = Pipeline::compute(
-            device,
-            "composite exact, one sample",
-            shaders::COMPOSITE_COMP_EXACT_SINGLE.words(),
-            &binds,
-            0,
-        )?;
+        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, 0);
+        let pipeline = lazy("composite", shaders::COMPOSITE_COMP.words());
+        let exact = lazy("composite exact", shaders::COMPOSITE_COMP_EXACT.words());
+        let single = lazy("composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words());
+        let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
         Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single })
     }
 
-    pub fn record(&self, cmd: vk::CommandBuffer, i: &CompositeInputs) {
+    pub fn record(&self, cmd: vk::CommandBuffer, i: &CompositeInputs) -> VkResult<()> {
         let single = i.radiance.extent.width == i.beauty.extent.width;
         let pipeline = match (i.exact, single) {
             (true, true) => &self.exact_single,
             (true, false) => &self.exact,
             (false, true) => &self.single,
             (false, false) => &self.pipeline,
-        };
+        }
+        .get()?;
         pipeline.bind(
             cmd,
             &ordered([
@@ -108,5 +103,6 @@ impl CompositePass {
         );
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
+        Ok(())
     }
 }

@@ -7,7 +7,7 @@ use crate::gpu_types::{GeometryPush, GpuView, Vertex};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
-use crate::vk::pipeline::kinds;
+use crate::vk::pipeline::{kinds, LazyPipeline};
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -20,7 +20,7 @@ pub struct EyePass {
     /// The receivers' eye-view g-buffer: normal and distance, albedo (and depth).
     gbuffer: Pipeline,
     /// Shading: [the radiance alone, the radiance and the caustics and direct AOVs].
-    shade: [Pipeline; 2],
+    shade: [LazyPipeline; 2],
 }
 
 pub struct EyeInputs<'a> {
@@ -89,14 +89,14 @@ impl EyePass {
         let binds = kinds(&SHADE_LAYOUT);
         let push = std::mem::size_of::<ShadePush>() as u32;
         let shade = [
-            Pipeline::compute(
+            LazyPipeline::compute(
                 device,
                 "eye shade",
                 shaders::EYE_SHADE_COMP.words(),
                 &binds[..EB_CAUSTICS as usize],
                 push,
-            )?,
-            Pipeline::compute(device, "eye shade (AOVs)", shaders::EYE_SHADE_COMP_AOVS.words(), &binds, push)?,
+            ),
+            LazyPipeline::compute(device, "eye shade (AOVs)", shaders::EYE_SHADE_COMP_AOVS.words(), &binds, push),
         ];
         Ok(EyePass { device: device.clone(), gbuffer, shade })
     }
@@ -119,8 +119,15 @@ impl EyePass {
 
     /// Shade the g-buffer under one light into `out`: the radiance, or the radiance, caustics and direct. `add`:
     /// add to what an earlier light's dispatch wrote instead of writing.
-    pub fn record_shade(&self, cmd: vk::CommandBuffer, i: &EyeInputs, g: &EyeGbuffer, out: &[&Image], add: bool) {
-        let pipeline = &self.shade[(out.len() > 1) as usize];
+    pub fn record_shade(
+        &self,
+        cmd: vk::CommandBuffer,
+        i: &EyeInputs,
+        g: &EyeGbuffer,
+        out: &[&Image],
+        add: bool,
+    ) -> VkResult<()> {
+        let pipeline = self.shade[(out.len() > 1) as usize].get()?;
         let mut binds = vec![
             (EB_FRAME, Bind::Uniform(i.ubo)),
             (EB_SHADOW, Bind::Sampled(i.shadow, i.nearest)),
@@ -137,5 +144,6 @@ impl EyePass {
         pipeline.push(cmd, &ShadePush { add: add as u32 });
         let (gx, gy) = groups_2d(out[0].extent.width, out[0].extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
+        Ok(())
     }
 }

@@ -8,6 +8,7 @@ use crate::gpu_types::PhotonPush;
 use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
 use crate::vk::pipeline::kinds;
+use crate::vk::pipeline::LazyPipeline;
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -120,21 +121,21 @@ pub struct PhotonPasses {
     /// Per metric (indexed by `Metric::code`), per work-group side: max-level (TRAVERSE_MAX_LEVEL: no metric
     /// code, the last level fused into the one before), max-error and flux-error (TRAVERSE_METRIC: that metric's
     /// code only).
-    traverse: [Vec<(u32, Pipeline)>; 3],
+    traverse: [Vec<(u32, LazyPipeline)>; 3],
     /// Max-error's and flux-error's 8x8 traversal with four lanes per candidate (TRAVERSE_COOP).
-    traverse_coop: [Pipeline; 2],
+    traverse_coop: [LazyPipeline; 2],
     stats: Pipeline,
-    dense_emit: Pipeline,
-    trace: Pipeline,
-    wave_pair: Pipeline,
-    wave_single: Pipeline,
-    wave_threaded: Pipeline,
-    transport: Pipeline,
-    splat: Pipeline,
+    dense_emit: LazyPipeline,
+    trace: LazyPipeline,
+    wave_pair: LazyPipeline,
+    wave_single: LazyPipeline,
+    wave_threaded: LazyPipeline,
+    transport: LazyPipeline,
+    splat: LazyPipeline,
     /// None when the device has no float atomics on buffers.
-    splat_compute: Option<Pipeline>,
+    splat_compute: Option<LazyPipeline>,
     /// The same with a work group's taps gathered in shared memory first (SPLAT_TILED).
-    splat_compute_tiled: Option<Pipeline>,
+    splat_compute_tiled: Option<LazyPipeline>,
 }
 
 /// How traversal runs: the work-group side its dispatches count candidates in
@@ -150,15 +151,13 @@ impl PhotonPasses {
     /// `flux_format`: the caustic flux map's format (R32F where it can be blended).
     pub fn new(device: &Arc<Device>, flux_format: vk::Format) -> VkResult<Self> {
         let push = std::mem::size_of::<PhotonPush>() as u32;
-        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &kinds(&LAYOUT), push);
+        let binds = kinds(&LAYOUT);
+        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &binds, push);
+        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
         // One traversal pipeline per metric (llvmpipe pays for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
-        let variant = |metric: Metric, spv: [&[u32]; 5]| -> VkResult<Vec<(u32, Pipeline)>> {
-            sides
-                .iter()
-                .zip(spv)
-                .map(|(&s, words)| Ok((s, compute(&format!("traverse {metric:?} {s}x{s}"), words)?)))
-                .collect()
+        let variant = |metric: Metric, spv: [&'static [u32]; 5]| -> Vec<(u32, LazyPipeline)> {
+            sides.iter().zip(spv).map(|(&s, words)| (s, lazy(&format!("traverse {metric:?} {s}x{s}"), words))).collect()
         };
         let traverse = [
             variant(
@@ -170,7 +169,7 @@ impl PhotonPasses {
                     shaders::TRAVERSE_COMP_MAX_LEVEL_WG8.words(),
                     shaders::TRAVERSE_COMP_MAX_LEVEL_WG16.words(),
                 ],
-            )?,
+            ),
             variant(
                 Metric::MaxError,
                 [
@@ -180,7 +179,7 @@ impl PhotonPasses {
                     shaders::TRAVERSE_COMP_MAX_ERROR_WG8.words(),
                     shaders::TRAVERSE_COMP_MAX_ERROR_WG16.words(),
                 ],
-            )?,
+            ),
             variant(
                 Metric::FluxError,
                 [
@@ -190,64 +189,62 @@ impl PhotonPasses {
                     shaders::TRAVERSE_COMP_FLUX_ERROR_WG8.words(),
                     shaders::TRAVERSE_COMP_FLUX_ERROR_WG16.words(),
                 ],
-            )?,
+            ),
         ];
-        let splat = Pipeline::graphics(
-            device,
-            "splat",
-            &GraphicsDesc {
-                vertex: shaders::SPLAT_VERT.words(),
-                fragment: shaders::SPLAT_FRAG.words(),
-                binds: &kinds(&LAYOUT),
-                push_size: push,
-                vertex_attributes: &[],
-                vertex_stride: 0,
-                topology: vk::PrimitiveTopology::POINT_LIST,
-                cull: vk::CullModeFlags::NONE,
-                depth: None,
-                colors: &[ColorTarget { format: flux_format, blend: Blend::Additive }],
-            },
-        )?;
+        let splat = {
+            let (device, binds) = (device.clone(), binds.to_vec());
+            LazyPipeline::new(move || {
+                Pipeline::graphics(
+                    &device,
+                    "splat",
+                    &GraphicsDesc {
+                        vertex: shaders::SPLAT_VERT.words(),
+                        fragment: shaders::SPLAT_FRAG.words(),
+                        binds: &binds,
+                        push_size: push,
+                        vertex_attributes: &[],
+                        vertex_stride: 0,
+                        topology: vk::PrimitiveTopology::POINT_LIST,
+                        cull: vk::CullModeFlags::NONE,
+                        depth: None,
+                        colors: &[ColorTarget { format: flux_format, blend: Blend::Additive }],
+                    },
+                )
+            })
+        };
         let traverse_coop = [
-            compute("traverse MaxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_MAX_ERROR_COOP.words())?,
-            compute("traverse FluxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_FLUX_ERROR_COOP.words())?,
+            lazy("traverse MaxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_MAX_ERROR_COOP.words()),
+            lazy("traverse FluxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_FLUX_ERROR_COOP.words()),
         ];
+        let atomics = device.info.float_atomic_add;
         Ok(PhotonPasses {
             device: device.clone(),
             init: compute("init", shaders::INIT_COMP.words())?,
             traverse,
             traverse_coop,
             stats: compute("stats", shaders::STATS_COMP.words())?,
-            dense_emit: compute("dense emit", shaders::DENSE_EMIT_COMP.words())?,
-            trace: compute("photon trace", shaders::TRACE_COMP.words())?,
-            wave_pair: compute("transport wave", shaders::WAVE_COMP.words())?,
-            wave_single: compute("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words())?,
-            wave_threaded: compute("transport wave (threaded BVH nodes)", shaders::WAVE_COMP_THREADED.words())?,
-            transport: compute("transport state", shaders::TRANSPORT_COMP.words())?,
-            splat_compute: if device.info.float_atomic_add {
-                Some(compute("compute splat", shaders::SPLAT_COMP.words())?)
-            } else {
-                None
-            },
-            splat_compute_tiled: if device.info.float_atomic_add {
-                Some(compute("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())?)
-            } else {
-                None
-            },
+            dense_emit: lazy("dense emit", shaders::DENSE_EMIT_COMP.words()),
+            trace: lazy("photon trace", shaders::TRACE_COMP.words()),
+            wave_pair: lazy("transport wave", shaders::WAVE_COMP.words()),
+            wave_single: lazy("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words()),
+            wave_threaded: lazy("transport wave (threaded BVH nodes)", shaders::WAVE_COMP_THREADED.words()),
+            transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
+            splat_compute: atomics.then(|| lazy("compute splat", shaders::SPLAT_COMP.words())),
+            splat_compute_tiled: atomics.then(|| lazy("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
             splat,
         })
     }
 
     /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built); `coop`: the
     /// cooperative checks' 8x8 pipeline of max-error or flux-error, whose groups take 4x4 candidates (`wg` is 4).
-    fn traverse_pipeline(&self, wg: u32, metric: Metric, coop: bool) -> &Pipeline {
+    fn traverse_pipeline(&self, wg: u32, metric: Metric, coop: bool) -> VkResult<&Pipeline> {
         match (coop, metric) {
-            (true, Metric::MaxError) => return &self.traverse_coop[0],
-            (true, Metric::FluxError) => return &self.traverse_coop[1],
+            (true, Metric::MaxError) => return self.traverse_coop[0].get(),
+            (true, Metric::FluxError) => return self.traverse_coop[1].get(),
             _ => {}
         }
         let list = &self.traverse[metric.code() as usize];
-        list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1)
+        list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1).get()
     }
 
     pub fn init(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, wg: u32) {
@@ -257,11 +254,18 @@ impl PhotonPasses {
     }
 
     /// One traversal level, launched with vkCmdDispatchIndirect from the GPU-written arguments.
-    pub fn traverse_indirect(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, shape: TraverseShape) {
-        let p = self.traverse_pipeline(shape.wg, shape.metric, shape.coop);
+    pub fn traverse_indirect(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        level: u32,
+        shape: TraverseShape,
+    ) -> VkResult<()> {
+        let p = self.traverse_pipeline(shape.wg, shape.metric, shape.coop)?;
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: shape.wg, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
+        Ok(())
     }
 
     /// One traversal level with host-computed work groups (the CPU-driven baseline).
@@ -272,16 +276,16 @@ impl PhotonPasses {
         level: u32,
         count: u32,
         shape: TraverseShape,
-    ) {
-        let (wg, p) = (shape.wg, self.traverse_pipeline(shape.wg, shape.metric, shape.coop));
+    ) -> VkResult<()> {
+        let (wg, p) = (shape.wg, self.traverse_pipeline(shape.wg, shape.metric, shape.coop)?);
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         let groups = count.div_ceil(wg * wg);
-        if groups == 0 {
-            return;
+        if groups > 0 {
+            let gx = groups.min(65535);
+            unsafe { self.device.cmd_dispatch(cmd, gx, groups.div_ceil(gx), 1) };
         }
-        let gx = groups.min(65535);
-        unsafe { self.device.cmd_dispatch(cmd, gx, groups.div_ceil(gx), 1) };
+        Ok(())
     }
 
     pub fn stats(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, mode: u32, wg: u32) {
@@ -291,63 +295,96 @@ impl PhotonPasses {
     }
 
     /// Emit every covered cell of rows [row0, row0 + rows) of the level's grid.
-    pub fn dense_emit(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, row0: u32, rows: u32) {
-        self.dense_emit.bind(cmd, &b.binds());
-        self.dense_emit.push(cmd, &PhotonPush { level, row0, rows, ..Default::default() });
+    pub fn dense_emit(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        level: u32,
+        row0: u32,
+        rows: u32,
+    ) -> VkResult<()> {
+        let p = self.dense_emit.get()?;
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush { level, row0, rows, ..Default::default() });
         let n = LEVEL0_RES << level;
         unsafe { self.device.cmd_dispatch(cmd, n.div_ceil(TILE_WG), rows.div_ceil(TILE_WG), 1) };
+        Ok(())
     }
 
     /// Trace the emitted photons into splat records, dispatched indirectly. `debug`: dump the traced photons of
     /// level `debug` or deeper into the debug buffer.
-    pub fn trace(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, debug: Option<u32>) {
-        self.trace.bind(cmd, &b.binds());
+    pub fn trace(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, debug: Option<u32>) -> VkResult<()> {
+        let p = self.trace.get()?;
+        p.bind(cmd, &b.binds());
         let push =
             PhotonPush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0), ..Default::default() };
-        self.trace.push(cmd, &push);
+        p.push(cmd, &push);
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, TRACE_OFFSET) };
+        Ok(())
     }
 
     /// Exact transport's bookkeeping (`transport_mode`); `may_abort`: the batch is split on overflow; `next_wave`:
     /// after a wave, the index of the wave it prepares (0 otherwise).
-    pub fn transport(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, may_abort: bool, next_wave: u32) {
-        self.transport.bind(cmd, &b.binds());
+    pub fn transport(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        mode: u32,
+        may_abort: bool,
+        next_wave: u32,
+    ) -> VkResult<()> {
+        let p = self.transport.get()?;
+        p.bind(cmd, &b.binds());
         let push = PhotonPush { mode, rows: may_abort as u32, level: next_wave, ..Default::default() };
-        self.transport.push(cmd, &push);
+        p.push(cmd, &push);
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
+        Ok(())
     }
 
     /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
-    pub fn wave(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, wave: u32, may_abort: bool, layout: BvhLayout) {
+    pub fn wave(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        wave: u32,
+        may_abort: bool,
+        layout: BvhLayout,
+    ) -> VkResult<()> {
         let p = match layout {
-            // `auto` is resolved with the settings (Settings::resolve_for_device); pair is its fallback.
+            // The settings resolve `auto`; pair is its fallback.
             BvhLayout::Pair | BvhLayout::Auto => &self.wave_pair,
             BvhLayout::Single => &self.wave_single,
             BvhLayout::Threaded => &self.wave_threaded,
-        };
+        }
+        .get()?;
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level: wave, mode: may_abort as u32, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
+        Ok(())
     }
 
     /// Splat the records into the flux texels with a compute pass dispatched indirectly (float atomics). Settings
     /// resolve `--splat` to raster on a device without them, so the pipeline exists whenever this is called.
-    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool) {
+    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool) -> VkResult<()> {
         let p = if tiled { &self.splat_compute_tiled } else { &self.splat_compute };
-        let Some(p) = p.as_ref() else { return };
+        let Some(p) = p.as_ref() else { return Ok(()) };
+        let p = p.get()?;
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush::default());
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
+        Ok(())
     }
 
     /// Splat the traced photons into the caustic flux map with vkCmdDrawIndirect.
-    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool) {
+    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool) -> VkResult<()> {
+        let p = self.splat.get()?;
         begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
-        self.splat.bind(cmd, &b.binds());
-        self.splat.push(cmd, &PhotonPush::default());
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush::default());
         unsafe {
             self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16);
             self.device.cmd_end_rendering(cmd);
         }
+        Ok(())
     }
 }

@@ -134,9 +134,17 @@ impl Renderer {
         check_transport(&scene, &config)?;
         check_lights(&scene)?;
         let mut recorder = Recorder::new(&device)?;
+        let t0 = Instant::now();
         let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
+        let t1 = Instant::now();
+        let passes = Passes::new(&device)?;
+        log::info!(
+            "renderer ready: scene buffers {:.0} ms, pipelines {:.0} ms",
+            (t1 - t0).as_secs_f64() * 1e3,
+            t1.elapsed().as_secs_f64() * 1e3
+        );
         Ok(Renderer {
-            passes: Passes::new(&device)?,
+            passes,
             nearest: Sampler::new(&device, vk::Filter::NEAREST)?,
             linear: Sampler::new(&device, vk::Filter::LINEAR)?,
             queue: FrameQueue::new(&device)?,
@@ -352,6 +360,12 @@ impl Renderer {
             _ => s.aa,
         };
         self.ensure_targets(&s, camera.width, camera.height, aa)?;
+        if s.transport == Transport::Exact && !self.scene_buffers.bvh.has(s.bvh_layout) {
+            // The waves and the eye view's glass trace the BVH: built, and this layout uploaded, once needed. The
+            // buffers it replaces are bound by the frames in flight.
+            self.finish_frames()?;
+            self.scene_buffers.bvh.ensure(&self.device, &mut self.recorder, &self.scene, s.bvh_layout)?;
+        }
         let nl = self.scene.lights.len();
         // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
         let nc = self.scene.color_channels();

@@ -390,3 +390,43 @@ impl Drop for Pipeline {
         }
     }
 }
+
+/// A pipeline built the first time a frame needs it: a renderer holds every variant it might run (traversal per
+/// metric and work-group side, the waves per BVH layout, the splats, the composites), and a frame runs a few.
+pub struct LazyPipeline {
+    cell: std::sync::OnceLock<Pipeline>,
+    make: Box<dyn Fn() -> VkResult<Pipeline> + Send + Sync>,
+}
+
+impl LazyPipeline {
+    pub fn new(make: impl Fn() -> VkResult<Pipeline> + Send + Sync + 'static) -> Self {
+        LazyPipeline { cell: std::sync::OnceLock::new(), make: Box::new(make) }
+    }
+
+    /// A compute pipeline of `spv`, with the binding kinds and push-constant size given.
+    pub fn compute(device: &Arc<Device>, name: &str, spv: &'static [u32], binds: &[BindKind], push: u32) -> Self {
+        let (device, name, binds) = (device.clone(), name.to_string(), binds.to_vec());
+        Self::new(move || Pipeline::compute(&device, &name, spv, &binds, push))
+    }
+
+    /// The pipeline, built now if no frame has needed it yet.
+    pub fn get(&self) -> VkResult<&Pipeline> {
+        if let Some(p) = self.cell.get() {
+            return Ok(p);
+        }
+        let p = (self.make)()?;
+        built_pipelines().fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Ok(self.cell.get_or_init(|| p))
+    }
+
+    /// Whether it was built.
+    pub fn is_built(&self) -> bool {
+        self.cell.get().is_some()
+    }
+}
+
+/// Pipelines built lazily in this process so far (start-up measurements).
+pub fn built_pipelines() -> &'static std::sync::atomic::AtomicUsize {
+    static BUILT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    &BUILT
+}
