@@ -93,8 +93,10 @@ const _: () = {
     assert!(size_of::<GpuTriangle>() == 48);
 };
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// The BVH node layout exact transport's waves trace.
 pub enum BvhLayout {
     /// The faster layout for the device, by the rule measured in docs/experiments.md ("BVH layouts"):
     /// single on GPUs, pair on CPU devices. The settings resolve it to the layout it picks, so the stats report
@@ -202,6 +204,7 @@ impl SceneBvh {
         bvh
     }
 
+    #[cfg(test)]
     /// Move instance `i` rigidly: `world_from_object` maps its BVH space (the scene's world space at build time)
     /// to world. Its world bounds become the transformed corners of its BVH-space box.
     pub fn set_transform(&mut self, i: usize, world_from_object: Mat4) {
@@ -328,14 +331,7 @@ impl SceneBvh {
         (pair_base, single_base)
     }
 
-    pub fn node_bytes(&self, layout: BvhLayout) -> usize {
-        match layout {
-            BvhLayout::Pair | BvhLayout::Auto => self.pair_nodes.len() * size_of::<PairNode>(),
-            BvhLayout::Single => self.single_nodes.len() * size_of::<SingleNode>(),
-            BvhLayout::Threaded => self.threaded_nodes.len() * size_of::<ThreadedNode>(),
-        }
-    }
-
+    #[cfg(test)]
     /// The GPU's closest-hit query in f32, on the host (tests check the flattened layouts against brute force):
     /// (t, instance, triangle) of the nearest hit with 0 < t < `tmax`.
     pub fn intersect(&self, layout: BvhLayout, o: Vec3, d: Vec3, tmax: f32) -> Option<(f32, u32, u32)> {
@@ -431,6 +427,7 @@ impl SceneBvh {
     }
 }
 
+#[cfg(test)]
 /// Ray/box slab test: the entry distance if the ray meets the box before `tmax`.
 fn slab(lo: Vec3, hi: Vec3, o: Vec3, inv_d: Vec3, tmax: f32) -> Option<f32> {
     let t0 = (lo - o) * inv_d;
@@ -440,6 +437,7 @@ fn slab(lo: Vec3, hi: Vec3, o: Vec3, inv_d: Vec3, tmax: f32) -> Option<f32> {
     (near <= far).then_some(near)
 }
 
+#[cfg(test)]
 /// The watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013) in f32, as bvh.glsl computes it.
 pub fn watertight(o: Vec3, d: Vec3, p: &[Vec3; 3]) -> Option<f32> {
     let a = d.abs();

@@ -3,15 +3,19 @@
 use crate::scene::SceneError;
 use crate::vk::VkError;
 
+/// The library's errors. [`AppError::exit_code`] maps them to the CLI's exit codes.
 #[derive(Debug, thiserror::Error)]
 pub enum AppError {
+    /// A scene that cannot be read (bad input).
     #[error(transparent)]
     Scene(#[from] SceneError),
     /// A bad argument or input file; the message names it.
     #[error("{0}")]
     BadInput(String),
+    /// A Vulkan call or requirement failed.
     #[error(transparent)]
     Vk(#[from] VkError),
+    /// A file could not be read or written.
     #[error("{0}")]
     Io(String),
     /// The command ran but its check failed (for example `compare` above a threshold).
@@ -20,6 +24,7 @@ pub enum AppError {
 }
 
 impl AppError {
+    /// 2 for bad input (an argument, a scene, an image), 1 for anything else.
     pub fn exit_code(&self) -> i32 {
         match self {
             AppError::Scene(_) | AppError::BadInput(_) => 2,
@@ -28,4 +33,5 @@ impl AppError {
     }
 }
 
+/// The result of a library operation.
 pub type AppResult<T> = Result<T, AppError>;

@@ -4,7 +4,7 @@ use crate::scene::view::{CameraView, LightView};
 use crate::scene::{LightKind, Projection};
 use crate::shaders::consts::*;
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use std::mem::{offset_of, size_of};
 
 /// `View` in types.glsl.
@@ -60,10 +60,6 @@ impl GpuView {
             extent: extent(c.width, c.height),
         }
     }
-
-    pub fn view_proj(&self) -> Mat4 {
-        Mat4::from_cols_array(&self.view_proj)
-    }
 }
 
 /// `FrameData` in types.glsl (a uniform buffer, std140).
@@ -105,9 +101,13 @@ pub struct FrameData {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq, Eq, serde::Serialize)]
 pub struct LevelCounters {
+    /// Cells of the level that were candidates.
     pub candidates: u32,
+    /// Candidates refined into their four children.
     pub refined: u32,
+    /// Photons emitted at the level.
     pub emitted: u32,
+    /// Candidates dropped (covering no refractor).
     pub dropped: u32,
     /// Max-error and flux-error: candidates refined without a check, predicted by their parent's.
     pub checks_skipped: u32,
@@ -120,25 +120,45 @@ pub struct LevelCounters {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct TraversalState {
+    /// Where the current level's candidates start in the photon buffer.
     pub read_offset: u32,
+    /// Candidates of the current level.
     pub read_count: u32,
+    /// Candidates appended for the next level.
     pub write_count: u32,
+    /// Photons emitted so far in the batch.
     pub emit_count: u32,
+    /// Photon-buffer entries in use.
     pub used: u32,
+    /// Photon-buffer entries in all.
     pub capacity: u32,
+    /// The level the current batch's tile starts at (MAX_LEVELS: no tile left).
     pub start_level: u32,
+    /// Whether the current batch overflowed and was aborted.
     pub aborted: u32,
+    /// Whether batching splits overflowing tiles (else their work is dropped and counted).
     pub batching: u32,
+    /// Tiles pending on the GPU's stack.
     pub stack_size: u32,
+    /// Batches committed this frame.
     pub batches_committed: u32,
+    /// Batches aborted (their tile split into four) this frame.
     pub batches_aborted: u32,
+    /// Entries dropped without batching.
     pub overflow_dropped: u32,
+    /// The most photon-buffer entries in use at once.
     pub peak_used: u32,
+    /// Photons emitted this frame.
     pub photons_total: u32,
+    /// Batch slots the frame used.
     pub slots_used: u32,
+    /// The current batch's tile: level, x, y, and a spare word.
     pub tile: [i32; 4],
+    /// The current batch's per-level counters.
     pub batch_levels: [LevelCounters; MAX_LEVELS as usize],
+    /// The frame's per-level counters.
     pub levels: [LevelCounters; MAX_LEVELS as usize],
+    /// The GPU's tile stack.
     pub stack: [[i32; 4]; TILE_STACK as usize],
 }
 
@@ -168,19 +188,33 @@ pub const ACCOUNT_TERMS: [&str; ACC_TERMS as usize] = [
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct TransportState {
+    /// Rays of the wave being traced (wave 0: the emitted photons).
     pub in_count: u32,
+    /// Rays appended for the next wave.
     pub out_count: u32,
+    /// Reservations of the next wave's queue (failed ones roll back).
     pub out_reserved: u32,
+    /// Splat records appended this batch.
     pub records: u32,
+    /// Reservations of splat records.
     pub records_reserved: u32,
+    /// Rays per queue.
     pub queue_capacity: u32,
+    /// Splat records per batch.
     pub record_capacity: u32,
+    /// Reservations that did not fit (this frame).
     pub overflows: u32,
+    /// Rays traced this frame.
     pub rays_traced: u32,
+    /// Splat records drawn this frame.
     pub records_total: u32,
+    /// Waves that traced at least one ray this frame.
     pub waves: u32,
+    /// The most specular interactions of a deposited path this frame.
     pub max_depth: u32,
+    /// The current batch's energy account (fixed point, `(lo, hi)` words per term).
     pub batch_account: [[u32; 2]; ACC_TERMS as usize],
+    /// The frame's energy account (fixed point, `(lo, hi)` words per term; see [`TransportState::account`]).
     pub account: [[u32; 2]; ACC_TERMS as usize],
     /// Rays each wave traced this frame, in pairs ([`TransportState::wave_rays`] flattens them: waves 0 to
     /// MAX_INTERACTIONS, then a pad), because bytemuck and Default stop at 32-element arrays.
@@ -303,8 +337,3 @@ const _: () = {
     assert!(size_of::<CoveragePush>() == 16);
     assert!(size_of::<Vertex>() == 48);
 };
-
-/// Photon cell encoding (`pack_cell` in types.glsl).
-pub fn pack_cell(level: u32, x: u32, y: u32, radius: u32) -> [u32; 2] {
-    [(x & 0xFF_FFFF) | (radius.min(255) << 24), (y & 0xFF_FFFF) | (level << 24)]
-}

@@ -8,16 +8,21 @@ use std::path::{Path, PathBuf};
 /// An RGB float image, row-major, row 0 at the top.
 #[derive(Clone, Debug)]
 pub struct RgbImage {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// Pixels, row-major from the top-left.
     pub data: Vec<[f32; 3]>,
 }
 
 impl RgbImage {
+    /// A black image.
     pub fn new(width: u32, height: u32) -> Self {
         RgbImage { width, height, data: vec![[0.0; 3]; (width * height) as usize] }
     }
 
+    /// The pixel at column `x`, row `y`.
     pub fn at(&self, x: u32, y: u32) -> [f32; 3] {
         self.data[(y * self.width + x) as usize]
     }
@@ -57,6 +62,7 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>
     }
 }
 
+/// Write `img` as a 32-bit float OpenEXR (through a temporary file, renamed: no half-written file).
 pub fn write_exr(path: &Path, img: &RgbImage) -> AppResult<()> {
     write_exr_meta(path, img, &ExrMeta::new())
 }
@@ -89,6 +95,7 @@ pub fn write_exr_meta(path: &Path, img: &RgbImage, meta: &ExrMeta) -> AppResult<
     })
 }
 
+/// Read an OpenEXR's RGB channels.
 pub fn read_exr(path: &Path) -> AppResult<RgbImage> {
     read_exr_meta(path).map(|(img, _)| img)
 }
@@ -135,6 +142,7 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> AppResult
     })
 }
 
+/// Read a PNG as (width, height, RGBA8 bytes).
 pub fn read_png(path: &Path) -> AppResult<(u32, u32, Vec<u8>)> {
     let img = image::open(path).map_err(|e| AppError::BadInput(format!("{}: cannot read PNG: {e}", path.display())))?;
     let rgba = img.to_rgba8();

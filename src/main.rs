@@ -1,5 +1,8 @@
 //! `caustics`: command-line entry. Parses arguments, dispatches to the library, maps errors to exit codes
-//! (2: bad input, 1: any other failure).
+#![recursion_limit = "256"]
+//! (2: bad input, 1: any other failure). The commands (src/app/) use only the library's public API.
+
+mod app;
 
 use caustics::error::AppResult;
 use clap::{Parser, Subcommand};
@@ -33,34 +36,34 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a frame headless and write an AOV (beauty PNG, caustics or direct EXR in W/m²).
-    Render(caustics::commands::RenderArgs),
+    Render(app::commands::RenderArgs),
     /// Render frames and print per-stage GPU timings (timestamp queries); takes the method options of render.
-    Profile(caustics::commands::ProfileArgs),
+    Profile(app::commands::ProfileArgs),
     /// Exact CPU photon tracer: ground truth for orthographic cameras.
-    Reference(caustics::reference::ReferenceArgs),
+    Reference(app::reference_cmd::ReferenceArgs),
     /// Speed against error: sweep methods and levels, time them, score them against the CPU reference.
-    Bench(caustics::bench::BenchArgs),
+    Bench(app::bench::BenchArgs),
     /// Compare two EXR images with the project's error metric.
-    Compare(caustics::metrics::CompareArgs),
+    Compare(app::compare::CompareArgs),
     /// Windowed viewer: orbit the camera, move the light, switch methods; live per-stage GPU timings.
-    View(caustics::viewer::ViewArgs),
+    View(app::viewer::ViewArgs),
     /// Stability over time: error and flicker against the CPU reference along a light orbit.
-    Temporal(caustics::temporal::TemporalArgs),
+    Temporal(app::temporal::TemporalArgs),
     /// Soak: many frames through one renderer with a moving light and changing settings (tools/soak).
     #[command(hide = true)]
-    Soak(caustics::soak::SoakArgs),
+    Soak(app::soak::SoakArgs),
 }
 
 fn run(cli: Cli) -> AppResult<()> {
     match cli.command {
-        Command::Render(a) => caustics::commands::run_render(&a),
-        Command::Profile(a) => caustics::commands::run_profile(&a),
-        Command::Reference(a) => caustics::reference::run(&a),
-        Command::Bench(a) => caustics::bench::run_bench(&a),
-        Command::Compare(a) => caustics::metrics::run_compare(&a),
-        Command::View(a) => caustics::viewer::run(&a),
-        Command::Soak(a) => caustics::soak::run_soak(&a),
-        Command::Temporal(a) => caustics::temporal::run_temporal(&a),
+        Command::Render(a) => app::commands::run_render(&a),
+        Command::Profile(a) => app::commands::run_profile(&a),
+        Command::Reference(a) => app::reference_cmd::run(&a),
+        Command::Bench(a) => app::bench::run_bench(&a),
+        Command::Compare(a) => app::compare::run_compare(&a),
+        Command::View(a) => app::viewer::run(&a),
+        Command::Soak(a) => app::soak::run_soak(&a),
+        Command::Temporal(a) => app::temporal::run_temporal(&a),
     }
 }
 
@@ -68,14 +71,9 @@ fn run(cli: Cli) -> AppResult<()> {
 /// default action: the process ends quietly, like any Unix filter.
 #[cfg(unix)]
 fn restore_sigpipe() {
-    extern "C" {
-        fn signal(signum: i32, handler: usize) -> usize;
-    }
-    const SIGPIPE: i32 = 13;
-    const SIG_DFL: usize = 0;
     // SAFETY: setting a signal disposition to its default at startup, before any thread exists.
     unsafe {
-        signal(SIGPIPE, SIG_DFL);
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

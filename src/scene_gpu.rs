@@ -162,14 +162,6 @@ fn refractor_ior(m: &Material) -> f32 {
     }
 }
 
-/// The IOR buffer's value when every refractor of the scene has the same one: the frame then passes it in its
-/// uniforms and draws no IOR buffer (in the light view that buffer cost a fifth of the front pass on an H200).
-pub fn shared_ior(scene: &Scene) -> Option<f32> {
-    let mut iors = scene.objects.iter().filter(|o| o.is_refractor()).map(|o| refractor_ior(&o.material));
-    let first = iors.next()?;
-    iors.all(|x| x == first).then_some(first)
-}
-
 impl SceneBuffers {
     pub fn new(device: &Arc<Device>, recorder: &mut Recorder, scene: &Scene) -> VkResult<Self> {
         let mut vertices = Vec::new();
@@ -195,6 +187,6 @@ impl SceneBuffers {
             upload_buffer(device, recorder, "scene vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
         let indices = upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER)?;
         let bvh = BvhBuffers::placeholders(device, recorder)?;
-        Ok(SceneBuffers { vertices, indices, receivers, refractors, shared_ior: shared_ior(scene), bvh })
+        Ok(SceneBuffers { vertices, indices, receivers, refractors, shared_ior: scene.shared_ior(), bvh })
     }
 }

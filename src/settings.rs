@@ -1,10 +1,13 @@
 //! Renderer settings: the method, its parameters, and the resolutions of the maps.
 
+pub use crate::bvh::BvhLayout;
 use crate::error::{AppError, AppResult};
 use crate::shaders::consts::*;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// Where photons come from.
 pub enum Method {
     /// One photon per covered cell of the 64·2^level grid.
     Dense,
@@ -12,8 +15,10 @@ pub enum Method {
     Adaptive,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// Adaptive traversal's stopping metric.
 pub enum Metric {
     /// Refine every covered cell down to the maximal level.
     MaxLevel,
@@ -44,8 +49,10 @@ impl Metric {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// Who writes adaptive traversal's dispatch arguments.
 pub enum Driven {
     /// Every indirect command is written by the GPU; no host readback inside a frame.
     Gpu,
@@ -53,8 +60,10 @@ pub enum Driven {
     Cpu,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// How light travels through the glass.
 pub enum Transport {
     /// Every glass path: rays through a BVH of the scene's triangles, in waves, with a deterministic Fresnel split.
     Exact,
@@ -66,12 +75,15 @@ pub enum Transport {
 /// Whether four invocations share each traversal candidate's checks (`--coop-checks`, glsl/traverse.comp
 /// TRAVERSE_COOP): under exact transport, max-error and flux-error trace a cell's four children's dominant paths in
 /// four lanes at once instead of one after another.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum CoopChecks {
     /// On for GPUs, off for CPU devices (docs/experiments.md, "Cooperative checks").
     Auto,
+    /// Four lanes a candidate.
     On,
+    /// One lane a candidate.
     Off,
 }
 
@@ -87,8 +99,10 @@ impl CoopChecks {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// Where a photon's splat radius comes from.
 pub enum Footprint {
     /// The splat radius follows the photon's cell: its side over a caustic-map texel.
     Cell,
@@ -107,8 +121,10 @@ impl Footprint {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
+/// How splat records reach the caustic flux map.
 pub enum Splat {
     /// Points drawn with vkCmdDrawIndirect and additive blending (the papers' design).
     Raster,
@@ -266,7 +282,9 @@ impl Default for Tuning {
 /// into the [`ResolvedSettings`] a device renders with.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Settings {
+    /// The user's choices.
     pub quality: Quality,
+    /// The tuning knobs.
     pub tuning: Tuning,
 }
 
@@ -275,41 +293,63 @@ pub struct Settings {
 /// and the GPU code read only this; it changes only through [`Settings::resolve`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ResolvedSettings {
+    /// See [`Quality::transport`].
     pub transport: Transport,
+    /// See [`Quality::method`].
     pub method: Method,
+    /// See [`Quality::metric`].
     pub metric: Metric,
+    /// The photon level (the device's default resolved).
     pub level: u32,
+    /// See [`Quality::target_error`].
     pub target_error: f32,
+    /// See [`Quality::caustic_res`].
     pub caustic_res: u32,
+    /// See [`Quality::aa`].
     pub aa: u32,
+    /// See [`Quality::exposure_ev`].
     pub exposure_ev: f32,
+    /// See [`Quality::sky`].
     pub sky: Option<f32>,
+    /// See [`Quality::eye_depth`].
     pub eye_depth: u32,
     /// Photon buffer size in MiB (the automatic budget resolved).
     pub photon_budget_mib: f64,
     /// The splat that runs (never `auto`).
     pub splat: Splat,
+    /// See [`Tuning::footprint`].
     pub footprint: Footprint,
+    /// See [`Tuning::flux_threshold`].
     pub flux_threshold: f32,
+    /// See [`Tuning::weak_branches`].
     pub weak_branches: f32,
     /// The weak-branch block side in cells of the maximal level: 2 or 4.
     pub weak_block: u32,
     /// The BVH layout the waves trace (never `auto`).
     pub bvh_layout: crate::bvh::BvhLayout,
+    /// See [`Tuning::driven`].
     pub driven: Driven,
+    /// See [`Tuning::gbuffer_res`].
     pub gbuffer_res: u32,
+    /// See [`Tuning::error_bound`].
     pub error_bound: f32,
     /// Flux-error's per-cell threshold: the tuning's `tau`, else the one the target error maps to.
     pub tau: f32,
     /// The first level max-error and flux-error check.
     pub check_level: u32,
+    /// See [`Tuning::traverse_wg`].
     pub traverse_wg: u32,
     /// On or off (never `auto`).
     pub coop_checks: CoopChecks,
+    /// See [`Tuning::batching`].
     pub batching: bool,
+    /// See [`Tuning::batch_slots`].
     pub batch_slots: u32,
+    /// See [`Tuning::shadow_bias`].
     pub shadow_bias: f32,
+    /// See [`Tuning::debug_photons`].
     pub debug_photons: u32,
+    /// See [`Tuning::debug_min_level`].
     pub debug_min_level: u32,
     /// Bytes one storage-buffer binding may span on the device (its maxStorageBufferRange, at most 2 GiB).
     pub binding_limit: u64,
@@ -325,7 +365,9 @@ impl Default for ResolvedSettings {
 /// What the automatic settings depend on: CPU devices (lavapipe) and GPUs differ in what runs fastest.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DeviceClass {
+    /// A CPU device (lavapipe).
     Cpu,
+    /// A GPU.
     Gpu,
 }
 
@@ -377,6 +419,7 @@ pub const MAX_EYE_DEPTH: u32 = 32;
 /// albedo under the light at its target): the sky lights a white floor to this fraction of the lit floor.
 pub const SKY_AUTO: f32 = 0.25;
 
+/// The traversal work-group sides `--traverse-wg` takes.
 pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
 /// The traversal work-group side built with cooperative checks (build.rs: `traverse.comp` `*_coop`).
 pub const COOP_WG: u32 = 8;

@@ -77,55 +77,103 @@ pub const RAY_VEC4S_DIFFERENTIAL: u32 = 5;
 pub const PHOTON_INDEX_BITS: u32 = 24;
 
 // Binding indices of the photon passes' shared layout (glsl/common/photon_bindings.glsl, src/passes/photons.rs).
+/// Binding: the frame uniforms.
 pub const PB_FRAME: u32 = 0;
+/// Binding: the traversal state.
 pub const PB_STATE: u32 = 1;
+/// Binding: the photon buffer.
 pub const PB_PHOTONS: u32 = 2;
+/// Binding: the indirect commands.
 pub const PB_INDIRECT: u32 = 3;
+/// Binding: the coverage pyramid.
 pub const PB_COVERAGE: u32 = 4;
+/// Binding: the refractors' front g-buffer.
 pub const PB_FRONT: u32 = 5;
+/// Binding: the front surface's IOR.
 pub const PB_FRONT_AUX: u32 = 6;
+/// Binding: the refractors' back g-buffer.
 pub const PB_BACK: u32 = 7;
+/// Binding: the receivers seen from the light.
 pub const PB_RECEIVERS: u32 = 8;
+/// Binding: the debug photon dump.
 pub const PB_DEBUG: u32 = 9;
+/// Binding: the splat records.
 pub const PB_SPLATS: u32 = 10;
+/// Binding: the transport state.
 pub const PB_TRANSPORT: u32 = 11;
+/// Binding: ray queue 0.
 pub const PB_QUEUE0: u32 = 12;
+/// Binding: ray queue 1.
 pub const PB_QUEUE1: u32 = 13;
+/// Binding: the BVH nodes (pair layout).
 pub const PB_BVH_PAIR: u32 = 14;
+/// Binding: the BVH triangles.
 pub const PB_BVH_TRIS: u32 = 15;
+/// Binding: the BVH vertex normals.
 pub const PB_BVH_NORMALS: u32 = 16;
+/// Binding: the BVH instances.
 pub const PB_BVH_INSTANCES: u32 = 17;
+/// Binding: the BVH nodes (single layout).
 pub const PB_BVH_SINGLE: u32 = 18;
+/// Binding: the flux map as texels (compute splat).
 pub const PB_FLUX_TEXELS: u32 = 19;
+/// Binding: the BVH nodes (threaded layout).
 pub const PB_BVH_THREADED: u32 = 20;
+/// Bindings of the layout.
 pub const PB_COUNT: u32 = 21;
 
 // Binding indices of the composite (glsl/composite.comp, src/passes/composite.rs).
+/// Binding: the frame uniforms.
 pub const CB_FRAME: u32 = 0;
+/// Binding: the receivers' radiance.
 pub const CB_RADIANCE: u32 = 1;
+/// Binding: the refractors' front seen from the eye.
 pub const CB_FRONT: u32 = 2;
+/// Binding: its IOR.
 pub const CB_FRONT_AUX: u32 = 3;
+/// Binding: the refractors' back seen from the eye.
 pub const CB_BACK: u32 = 4;
+/// Binding: the radiance with linear filtering.
 pub const CB_RADIANCE_LINEAR: u32 = 5;
+/// Binding: the beauty image (written).
 pub const CB_BEAUTY: u32 = 6;
+/// Binding: the linear beauty image (written).
 pub const CB_HDR: u32 = 7;
+/// Binding: the shadow map.
 pub const CB_SHADOW: u32 = 8;
+/// Binding: the caustic irradiance map.
 pub const CB_IRRADIANCE: u32 = 9;
+/// Binding: the receivers seen from the light.
 pub const CB_RECEIVERS: u32 = 10;
+/// Binding: the BVH nodes (pair layout).
 pub const CB_BVH_PAIR: u32 = 11;
+/// Binding: the BVH triangles.
 pub const CB_BVH_TRIS: u32 = 12;
+/// Binding: the BVH vertex normals.
 pub const CB_BVH_NORMALS: u32 = 13;
+/// Binding: the BVH instances.
 pub const CB_BVH_INSTANCES: u32 = 14;
+/// Bindings of the layout.
 pub const CB_COUNT: u32 = 15;
 
 // Binding indices of the eye view's shading (glsl/eye_shade.comp, src/passes/eye.rs).
+/// Binding: the frame uniforms.
 pub const EB_FRAME: u32 = 0;
+/// Binding: the shadow map.
 pub const EB_SHADOW: u32 = 1;
+/// Binding: the caustic irradiance map.
 pub const EB_IRRADIANCE: u32 = 2;
+/// Binding: the receivers seen from the light.
 pub const EB_RECEIVERS: u32 = 3;
+/// Binding: the receivers seen from the eye.
 pub const EB_EYE: u32 = 4;
+/// Binding: their albedo.
 pub const EB_ALBEDO: u32 = 5;
+/// Binding: the radiance (written).
 pub const EB_RADIANCE: u32 = 6;
+/// Binding: the caustics AOV (written).
 pub const EB_CAUSTICS: u32 = 7;
+/// Binding: the direct AOV (written).
 pub const EB_DIRECT: u32 = 8;
+/// Bindings of the layout.
 pub const EB_COUNT: u32 = 9;

@@ -8,12 +8,12 @@
 //! The CLI half runs the binary on random bad sizes and levels and expects exit code 2 with a message.
 
 mod common;
-use caustics::renderer::Views;
 use caustics::scene::{mesh, CameraView, Scene};
 use caustics::settings::{
     parse_size, DeviceClass, Driven, Method, Metric, Quality, ResolvedSettings, Settings, Transport, Tuning,
     MAX_BATCH_PHOTONS,
 };
+use caustics::Views;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use std::path::{Path, PathBuf};

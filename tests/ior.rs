@@ -29,9 +29,9 @@ fn two_spheres(dir: &Path, ior2: f32) -> PathBuf {
 fn the_ior_is_shared_only_when_every_refractor_agrees() {
     let dir = out_dir("ior_shared");
     let load = |p: &Path| Scene::load(p).unwrap();
-    assert_eq!(caustics::scene_gpu::shared_ior(&load(Path::new(&scene("sphere.toml")))), Some(1.5));
-    assert_eq!(caustics::scene_gpu::shared_ior(&load(&two_spheres(&dir, 1.5))), Some(1.5));
-    assert_eq!(caustics::scene_gpu::shared_ior(&load(&two_spheres(&dir, 1.33))), None);
+    assert_eq!(load(Path::new(&scene("sphere.toml"))).shared_ior(), Some(1.5));
+    assert_eq!(load(&two_spheres(&dir, 1.5)).shared_ior(), Some(1.5));
+    assert_eq!(load(&two_spheres(&dir, 1.33)).shared_ior(), None);
 }
 
 /// Measured on lavapipe (dense level 3, 256², 4M-photon reference): rel-L1 at 64² 3.1% (flux 1.0003) with IORs

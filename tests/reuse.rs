@@ -2,30 +2,38 @@
 //! frame's caustic map (only the eye and composite passes run); anything they depend on changing recomputes them.
 //! Runs the library in-process with validation (and synchronization validation) on.
 
-use caustics::commands::{to_rgb, SceneArgs, Session};
+mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
-use caustics::renderer::{Aov, FrameDesc, FrameReport};
 use caustics::scene::Material;
 use caustics::settings::{Method, Quality, Settings, Transport};
+use caustics::{Aov, AovData, FrameDesc, FrameReport, Renderer};
 
 const SPHERE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/sphere.toml");
 
-fn open(reuse: bool) -> Session {
-    std::env::set_var("CAUSTICS_VALIDATION", "1");
-    let args = SceneArgs { scene: Some(SPHERE.into()), camera: Some("top".into()), size: "128x128".into() };
+/// The sphere under exact transport, dense level 1 (the transport is named: these tests assert reuse, not the
+/// default configuration's numbers).
+fn open(device: &std::sync::Arc<caustics::gpu::Device>, reuse: bool) -> Renderer {
     let quality = Quality { transport: Transport::Exact, method: Method::Dense, level: Some(1), ..Quality::default() };
-    let settings = Settings { quality, ..Settings::default() };
-    let mut s = Session::open(&args, settings).expect("session");
-    s.renderer.set_reuse(reuse);
-    s
+    let mut r = common::renderer(device, SPHERE, Settings { quality, ..Settings::default() });
+    r.set_reuse(reuse);
+    r
 }
 
-fn frame(s: &mut Session, camera: &str) -> (FrameReport, RgbImage) {
-    let cam = s.renderer.scene().camera(Some(camera)).unwrap().clone();
-    let view = s.renderer.camera_view(&cam, 128, 128);
-    let (report, img) = s.renderer.render(&FrameDesc::new(&view, Some(Aov::Caustics))).expect("frame");
-    (report, to_rgb(&img.unwrap()).unwrap())
+fn rgb(img: AovData) -> RgbImage {
+    match img {
+        AovData::Float { width, height, rgba } => {
+            RgbImage { width, height, data: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() }
+        }
+        AovData::Rgba8 { .. } => panic!("the caustics AOV is float"),
+    }
+}
+
+fn frame(r: &mut Renderer, camera: &str) -> (FrameReport, RgbImage) {
+    let cam = r.scene().camera(Some(camera)).unwrap().clone();
+    let view = r.camera_view(&cam, 128, 128);
+    let f = r.render(&FrameDesc::new(&view, Some(Aov::Caustics))).expect("frame");
+    (f.report, rgb(f.image.unwrap()))
 }
 
 fn same(a: &RgbImage, b: &RgbImage, what: &str, tol: f64) {
@@ -36,7 +44,8 @@ fn same(a: &RgbImage, b: &RgbImage, what: &str, tol: f64) {
 
 #[test]
 fn camera_moves_reuse_and_changes_recompute() {
-    let mut s = open(true);
+    let (_gpu, device) = common::gpu();
+    let mut s = open(&device, true);
     let (r0, top0) = frame(&mut s, "top");
     assert!(!r0.reused);
     // Camera only: the caustic stages are not recorded.
@@ -49,18 +58,18 @@ fn camera_moves_reuse_and_changes_recompute() {
     same(&top2, &top0, "top after a camera round trip", 1e-6);
     // The reused main view equals a full recompute of it (measured 5.6e-8 to 1.1e-7: only the order of the splat's
     // float atomic additions differs).
-    let mut fresh = open(false);
+    let mut fresh = open(&device, false);
     let (rf, main_fresh) = frame(&mut fresh, "main");
     assert!(!rf.reused);
     same(&main1, &main_fresh, "main view, reused against recomputed", 1e-6);
 
     // The light moves: everything that depends on it runs again, and the image equals a fresh render.
-    let mut scene = s.renderer.scene().clone();
+    let mut scene = s.scene().clone();
     scene.lights[0].position.x += 0.1;
-    s.renderer.set_scene(scene.clone()).unwrap();
+    s.set_scene(scene.clone()).unwrap();
     let (r3, moved) = frame(&mut s, "top");
     assert!(!r3.reused, "a light change must recompute");
-    fresh.renderer.set_scene(scene.clone()).unwrap();
+    fresh.set_scene(scene.clone()).unwrap();
     let (_, moved_fresh) = frame(&mut fresh, "top");
     same(&moved, &moved_fresh, "moved light", 1e-6);
     let m = compare(&moved, &top0, 128, 2.0);
@@ -72,16 +81,16 @@ fn camera_moves_reuse_and_changes_recompute() {
             *ior = 1.6;
         }
     }
-    s.renderer.set_scene(scene).unwrap();
+    s.set_scene(scene).unwrap();
     assert!(!frame(&mut s, "top").0.reused, "an IOR change must recompute");
     assert!(frame(&mut s, "top").0.reused);
 
     // Settings: a new level recomputes.
-    let mut settings = s.renderer.settings().clone();
+    let mut settings = s.settings().clone();
     settings.quality.level = Some(2);
-    s.renderer.set_settings(settings).unwrap();
+    s.set_settings(settings).unwrap();
     assert!(!frame(&mut s, "top").0.reused, "a settings change must recompute");
-    assert_eq!(caustics::vk::validation_message_count(), 0, "validation messages");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
 
 /// Progressive refinement (the viewer's): frames below the chosen level are complete frames at their own level,
@@ -89,41 +98,43 @@ fn camera_moves_reuse_and_changes_recompute() {
 /// is within 0.2% of the level-2 frame's (exact transport conserves flux at every level).
 #[test]
 fn progressive_refinement_converges_to_render() {
-    let mut s = open(true);
-    let mut settings = s.renderer.settings().clone();
+    let (_gpu, device) = common::gpu();
+    let mut s = open(&device, true);
+    let mut settings = s.settings().clone();
     settings.quality.level = Some(2);
-    s.renderer.set_settings(settings).unwrap();
-    let cam = s.renderer.scene().camera(Some("top")).unwrap().clone();
-    let view = s.renderer.camera_view(&cam, 128, 128);
+    s.set_settings(settings).unwrap();
+    let cam = s.scene().camera(Some("top")).unwrap().clone();
+    let view = s.camera_view(&cam, 128, 128);
     let flux = |img: &RgbImage| img.data.iter().map(|p| p[0] as f64).sum::<f64>();
     let mut steps = Vec::new();
     for level in 0..=2 {
         let desc = FrameDesc { level: Some(level), ..FrameDesc::new(&view, Some(Aov::Caustics)) };
-        let (r, img) = s.renderer.render(&desc).unwrap();
+        let f = s.render(&desc).unwrap();
+        let (r, img) = (f.report, f.image);
         assert_eq!(r.level, level);
         assert!(!r.reused, "each refinement step recomputes");
-        steps.push(to_rgb(&img.unwrap()).unwrap());
+        steps.push(rgb(img.unwrap()));
     }
-    assert_eq!(s.renderer.config().level, 2, "the chosen level is kept");
-    let mut fresh = open(false);
-    let mut settings = fresh.renderer.settings().clone();
+    assert_eq!(s.config().level, 2, "the chosen level is kept");
+    let mut fresh = open(&device, false);
+    let mut settings = fresh.settings().clone();
     settings.quality.level = Some(2);
-    fresh.renderer.set_settings(settings).unwrap();
+    fresh.set_settings(settings).unwrap();
     let (_, final_fresh) = frame(&mut fresh, "top");
     same(&steps[2], &final_fresh, "refined against a fresh render", 1e-4);
     for (level, img) in steps.iter().enumerate() {
         let ratio = flux(img) / flux(&final_fresh);
         assert!((ratio - 1.0).abs() < 0.005, "level {level}: flux ratio {ratio}");
     }
-    assert_eq!(caustics::vk::validation_message_count(), 0, "validation messages");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
 
-fn beauty(s: &mut Session, camera: &str) -> (FrameReport, Vec<u8>) {
-    let cam = s.renderer.scene().camera(Some(camera)).unwrap().clone();
-    let view = s.renderer.camera_view(&cam, 128, 128);
-    let (report, img) = s.renderer.render(&FrameDesc::new(&view, Some(Aov::Beauty))).expect("frame");
-    match img.unwrap() {
-        caustics::renderer::AovData::Rgba8 { rgba, .. } => (report, rgba),
+fn beauty(r: &mut Renderer, camera: &str) -> (FrameReport, Vec<u8>) {
+    let cam = r.scene().camera(Some(camera)).unwrap().clone();
+    let view = r.camera_view(&cam, 128, 128);
+    let f = r.render(&FrameDesc::new(&view, Some(Aov::Beauty))).expect("frame");
+    match f.image.unwrap() {
+        AovData::Rgba8 { rgba, .. } => (f.report, rgba),
         _ => panic!("the beauty AOV is 8-bit"),
     }
 }
@@ -133,7 +144,8 @@ fn beauty(s: &mut Session, camera: &str) -> (FrameReport, Vec<u8>) {
 /// AOV the composite does not write (caustics) always runs the eye view.
 #[test]
 fn nothing_changed_reuses_the_eye_view() {
-    let mut s = open(true);
+    let (_gpu, device) = common::gpu();
+    let mut s = open(&device, true);
     let (r0, b0) = beauty(&mut s, "main");
     assert!(!r0.reused && !r0.eye_reused);
     let (r1, b1) = beauty(&mut s, "main");
@@ -146,16 +158,16 @@ fn nothing_changed_reuses_the_eye_view() {
     assert_ne!(b2, b0);
     let (r3, _) = beauty(&mut s, "main");
     assert!(!r3.eye_reused, "the eye view reused is only the last frame's");
-    let mut settings = s.renderer.settings().clone();
+    let mut settings = s.settings().clone();
     settings.quality.exposure_ev += 1.0;
-    s.renderer.set_settings(settings).unwrap();
+    s.set_settings(settings).unwrap();
     let (r4, b4) = beauty(&mut s, "main");
     assert!(r4.reused && !r4.eye_reused, "an exposure change re-runs the eye view, not the caustics");
     assert_ne!(b4, b0);
     let (r5, _) = frame(&mut s, "main");
     assert!(!r5.eye_reused, "the caustics AOV comes from the eye pass: it runs");
     // The profiler's sessions reuse nothing.
-    let mut off = open(false);
+    let mut off = open(&device, false);
     beauty(&mut off, "main");
     assert!(!beauty(&mut off, "main").0.eye_reused);
 }

@@ -37,9 +37,6 @@ use std::time::Instant;
 /// Stage label of the CPU-driven traversal's host round trips (GPU idle while the host reads and records).
 pub const HOST_ROUNDTRIP: &str = "host_roundtrip";
 
-/// Extra commands appended to the frame's last command buffer (the viewer's blit to the swapchain).
-pub type Finish<'a> = &'a mut dyn FnMut(&Device, vk::CommandBuffer, &Targets);
-
 /// What a frame records with, borrowed: the device, the pipelines, the scene on the GPU, the samplers and the
 /// targets, with the frame-in-flight slot whose uniforms and readback buffer it uses.
 pub(crate) struct FrameResources<'a> {

@@ -9,11 +9,15 @@ use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::Buffer;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// An output of a frame.
 pub enum Aov {
+    /// The tone-mapped beauty image (8-bit, sRGB-encoded), written as PNG.
     Beauty,
     /// The beauty image before exposure and tone mapping: linear radiance, W/(m²·sr) (written as EXR).
     BeautyHdr,
+    /// Caustic irradiance on the receivers, W/m² (RGB: the lights' colors).
     Caustics,
+    /// Direct irradiance on the receivers, W/m².
     Direct,
 }
 
@@ -40,6 +44,7 @@ pub struct LightReport {
     pub caustics: bool,
     /// Its traversal state and exact transport's account (kept from the last frame when reused).
     pub state: Option<TraversalState>,
+    /// Its exact transport's wave counts and energy account.
     pub transport: Option<TransportState>,
     /// GPU ms of its light-side stages (light view, coverage, photons, resolve); its eye shading is in `eye`.
     pub gpu_ms: f64,
@@ -62,6 +67,8 @@ pub struct FrameReport {
     pub frame_ms: f64,
     /// CPU time spent recording commands.
     pub record_ms: f64,
+    /// Pipeline barriers (`vkCmdPipelineBarrier2` calls) the frame's declared accesses needed.
+    pub barrier_batches: u64,
     /// Whether the caustic passes were recorded (the scene has a refractor inside the light).
     pub caustics: bool,
     /// Whether the records were splatted by the compute pass (else drawn as points).
@@ -78,9 +85,11 @@ pub struct FrameReport {
     pub eye_reused: bool,
     /// The light view of the photon grid (None without caustic passes).
     pub photon_view: Option<LightView>,
+    /// The first pass's traversal state (photons, batches, per-level counts).
     pub state: Option<TraversalState>,
     /// Exact transport's wave counts and energy account.
     pub transport: Option<TransportState>,
+    /// Host round trips inside the frame (0 when GPU-driven; the CPU-driven baseline reads each level back).
     pub host_readbacks: u32,
     /// Each pass (light-major; one per light, or three with color), in order (`state` and `transport` above are
     /// the first pass's).
@@ -95,9 +104,17 @@ pub struct FrameReport {
     pub guard_intact: Option<bool>,
 }
 
-/// Whether a frame traversed every tile (see [`Renderer::adapt_batch_slots`]).
+impl FrameReport {
+    /// Photons the frame emitted, summed over its lights (and color passes).
+    pub fn photons(&self) -> u64 {
+        self.lights.iter().filter_map(|l| l.state.map(|s| s.photons_total as u64)).sum()
+    }
+}
+
+/// Whether a frame traversed every tile (see [`crate::Renderer::adapt_batch_slots`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SlotVerdict {
+    /// Every tile was traversed.
     Complete,
     /// Tiles were left over; the next frame records more slots.
     Incomplete,
@@ -106,9 +123,26 @@ pub enum SlotVerdict {
 }
 
 /// A float or 8-bit image read back from the GPU.
+#[derive(Debug)]
 pub enum AovData {
-    Float { width: u32, height: u32, rgba: Vec<[f32; 4]> },
-    Rgba8 { width: u32, height: u32, rgba: Vec<u8> },
+    /// A float image (the caustics, direct and linear beauty AOVs), row-major from the top-left.
+    Float {
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+        /// Its pixels.
+        rgba: Vec<[f32; 4]>,
+    },
+    /// An 8-bit RGBA image (the tone-mapped beauty), row-major from the top-left.
+    Rgba8 {
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+        /// Its bytes, four per pixel.
+        rgba: Vec<u8>,
+    },
 }
 
 /// Each light's state from the readback buffer (lights that ran their caustic stages this frame).

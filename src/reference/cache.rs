@@ -34,7 +34,9 @@ impl Fnv {
     }
 }
 
-pub fn cache_dir() -> PathBuf {
+/// The cache directory the environment names: `CAUSTICS_CACHE_DIR`, else `$CARGO_TARGET_DIR/reference-cache`, else
+/// the crate's `target/reference-cache` (the library reads the environment only through this helper).
+pub fn cache_dir_from_env() -> PathBuf {
     if let Some(d) = std::env::var_os("CAUSTICS_CACHE_DIR") {
         return PathBuf::from(d);
     }
@@ -92,13 +94,8 @@ pub fn cache_key(scene_path: &Path, p: &RefParams) -> AppResult<String> {
     Ok(key)
 }
 
-/// The reference image for `scene_path` and `p`, from the cache in [`cache_dir`] when present, else traced and
-/// stored (with its stats JSON beside it). A cache entry that cannot be read is traced again.
-pub fn cached(scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
-    cached_in(&cache_dir(), scene_path, p)
-}
-
-/// [`cached`] with an explicit cache directory (created if missing).
+/// The reference for `scene_path` and `p` from the cache in `dir` (created if missing), traced and stored there
+/// the first time.
 pub fn cached_in(dir: &Path, scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
     let key = cache_key(scene_path, p)?;
     let exr = dir.join(format!("{key}.exr"));

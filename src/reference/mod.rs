@@ -3,7 +3,7 @@
 //! What it computes, per camera pixel of a receiver surface (docs/design.md, "Ground truth and error"):
 //! - Photons leave each light stratified: a jittered grid with exactly one photon per equal-area cell of the
 //!   cone's (cos θ, φ) parametrization, which is uniform in solid angle, so each photon carries Φ = I·Ω/N (before
-//!   the light color; image channel c carries Φ·color[c]). A directional light (intensity in W/m² across the beam)
+//!   the light color; image channel c carries Φ·color\[c\]). A directional light (intensity in W/m² across the beam)
 //!   samples a rectangle of its beam in the same way, Φ = E·A/N, starting in front of all geometry.
 //! - **Sub-cone sampling for `--aov caustics`.** A caustic photon must hit a refractor before anything else, so
 //!   only the cone around the light's axis to the refractors that bounds every refractor vertex is sampled (a
@@ -12,7 +12,7 @@
 //!   nothing. `--aov direct` samples the whole spot cone (or the beam rectangle over the whole scene). The stats'
 //!   direct flux under `--aov caustics` therefore covers only the sub-cone.
 //! - Every triangle of every object, in world space, in one BVH, with the GPU's barycentric-interpolated vertex
-//!   normals ([`geometry`]). Ray/triangle tests are watertight, in f64.
+//!   normals (the geometry module). Ray/triangle tests are watertight, in f64.
 //! - At a dielectric (exterior IOR 1.0): exact Snell refraction, exact unpolarized Fresnel, total internal
 //!   reflection, any number of interfaces. Reflect or refract is chosen by Russian roulette with probability F,
 //!   so a photon's flux never changes and the energy account closes exactly. Which side is inside comes from the
@@ -32,26 +32,24 @@
 //! - Determinism: each photon's random numbers are a function of (seed, light, photon index), photons are traced
 //!   in fixed chunks and reduced in chunk order, so a seed gives a bit-identical image for any thread count.
 
-pub mod cache;
+mod cache;
 mod geometry;
-pub mod optics;
-pub mod sampling;
+mod optics;
+mod sampling;
 mod tracer;
 
-pub use cache::{cache_dir, cache_key, cached, cached_in};
+pub use cache::{cache_dir_from_env, cache_key, cached_in};
 pub use tracer::Tally;
 
 use crate::error::{AppError, AppResult};
-use crate::image_io::{self, RgbImage};
+use crate::image_io::RgbImage;
 use crate::scene::{CameraView, LightKind, LightView, Projection, Scene};
-use crate::settings::parse_size;
 use geometry::Geometry;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use sampling::{frame, Emission, Strata};
 use serde::{Deserialize, Serialize};
 use std::fmt;
-use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Instant;
 use tracer::{Binner, LightSetup, Tracer};
@@ -66,15 +64,21 @@ const BATCH: usize = 64;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+/// Which light the reference bins.
 pub enum Aov {
+    /// Light that met at least one specular interaction before the receiver.
     Caustics,
+    /// Light that reached the receiver directly.
     Direct,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+/// Which caustic paths the reference keeps.
 pub enum Paths {
+    /// Every path.
     All,
+    /// Light refracted exactly twice, with no reflection (what the two-interface model computes).
     TwoRefractions,
 }
 
@@ -123,17 +127,22 @@ impl fmt::Display for Paths {
 pub struct RefParams {
     /// Camera name; `None` for the scene's first camera. Must be orthographic.
     pub camera: Option<String>,
+    /// Caustics or direct.
     pub aov: Aov,
+    /// Which paths.
     pub paths: Paths,
     /// Photons drawn per light.
     pub photons: u64,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Random seed (the same seed gives a bit-identical image on any number of threads).
     pub seed: u64,
     /// Worker threads; `None` for rayon's global pool. The image does not depend on it.
     pub threads: Option<usize>,
-    /// Show a progress bar on stderr (only drawn when stderr is a terminal).
-    pub progress: bool,
+    /// Called as photons are traced, with (photons traced so far, photons in all), for a progress display.
+    pub progress: Option<Progress>,
     /// When set, the output keeps a radial profile of the selected AOV's deposited flux around this point.
     pub radial_center: Option<Vec3>,
 }
@@ -149,7 +158,7 @@ impl Default for RefParams {
             height: 512,
             seed: 1,
             threads: None,
-            progress: false,
+            progress: None,
             radial_center: None,
         }
     }
@@ -158,6 +167,7 @@ impl Default for RefParams {
 /// How one light was sampled.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct LightInfo {
+    /// `spot`, `directional` or `point`.
     pub kind: String,
     /// "spot cone", "refractor sub-cone", "beam over refractors", "beam over scene", or "none".
     pub sampling: String,
@@ -165,9 +175,11 @@ pub struct LightInfo {
     pub half_angle_deg: Option<f64>,
     /// Solid angle (sr) of the sampled cone, or area (m²) of the sampled beam rectangle.
     pub measure: f64,
+    /// Photons drawn for it.
     pub photons: u64,
     /// Flux of each photon, W, before the light color.
     pub flux_per_photon: f64,
+    /// Its color.
     pub color: [f64; 3],
 }
 
@@ -175,60 +187,91 @@ pub struct LightInfo {
 /// escaped + cut_by_bounce_cap + filtered_by_paths + lost + absorbed`; `residual_rel` is the relative mismatch.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct EnergyAccount {
+    /// Flux emitted toward the scene, W.
     pub emitted: f64,
+    /// Deposited as caustics, W.
     pub deposited_caustics: f64,
+    /// Deposited as direct light, W.
     pub deposited_direct: f64,
+    /// Left the scene, W.
     pub escaped: f64,
+    /// Cut after the bounce cap, W.
     pub cut_by_bounce_cap: f64,
+    /// Left out by `--paths two-refractions`, W.
     pub filtered_by_paths: f64,
+    /// Numerical dead ends, W.
     pub lost: f64,
     /// Absorbed inside glass.
     #[serde(default)]
     pub absorbed: f64,
+    /// |emitted − every destination| / emitted.
     pub residual_rel: f64,
     /// Flux of the selected AOV binned into the image, and Σ E · pixel area over the image.
     pub aov_in_image: f64,
+    /// Σ E · pixel area over the image, W.
     pub image_integral: f64,
 }
 
 /// The flux-weighted radial distribution of the selected AOV's deposits around a center.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RadialStats {
+    /// The center.
     pub center: [f32; 3],
+    /// The AOV's flux deposited in all, W.
     pub flux: f64,
     /// Radii (m) within which 50% and 90% of that flux lands.
     pub r50: Option<f64>,
+    /// See `r50`.
     pub r90: Option<f64>,
 }
 
 /// The stats written by `--stats`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RefStats {
+    /// The scene file.
     pub scene: String,
+    /// The camera binned into.
     pub camera: String,
+    /// Caustics or direct.
     pub aov: Aov,
+    /// Which paths.
     pub paths: Paths,
+    /// Image width.
     pub width: u32,
+    /// Image height.
     pub height: u32,
+    /// Random seed.
     pub seed: u64,
+    /// Photons per light.
     pub photons_per_light: u64,
+    /// Worker threads.
     pub threads: usize,
+    /// Triangles traced.
     pub triangles: usize,
+    /// BVH build time, s.
     pub bvh_build_s: f64,
+    /// Tracing time, s.
     pub trace_s: f64,
+    /// Wall time, s.
     pub wall_s: f64,
     /// Photons drawn (all lights) per second of tracing.
     pub photons_per_s: f64,
+    /// Specular interactions a path may have.
     pub bounce_cap: u32,
+    /// Each light's sampling.
     pub lights: Vec<LightInfo>,
+    /// Where the flux went.
     pub energy_account: EnergyAccount,
+    /// Photon and event counts.
     pub counts: Tally,
+    /// The radial profile, when asked for.
     pub radial: Option<RadialStats>,
 }
 
 /// A log-binned, flux-weighted histogram of distances: 0.05% relative resolution from 1 µm to 100 m.
 #[derive(Clone, Debug)]
 pub struct RadialProfile {
+    /// The center of the profile.
     pub center: Vec3,
     bins: Vec<f64>,
     total: f64,
@@ -250,6 +293,7 @@ impl RadialProfile {
         self.total += flux;
     }
 
+    /// The profile's flux, W.
     pub fn total_flux(&self) -> f64 {
         self.total
     }
@@ -281,6 +325,7 @@ impl RadialProfile {
 pub struct RefOutput {
     /// RGB irradiance, W/m² (E · light color per channel).
     pub image: RgbImage,
+    /// Its statistics.
     pub stats: RefStats,
     /// Present when [`RefParams::radial_center`] was set.
     pub radial: Option<RadialProfile>,
@@ -421,18 +466,14 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
         .collect()
 }
 
-fn progress_bar(total: u64, show: bool) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !show || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
+/// A progress callback: (photons traced so far, photons in all). Called from the thread that reduces the chunks.
+#[derive(Clone)]
+pub struct Progress(pub std::sync::Arc<dyn Fn(u64, u64) + Send + Sync>);
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress")
     }
-    let bar = indicatif::ProgressBar::new(total);
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{bar:40} {human_pos}/{human_len} photons  {per_sec}  eta {eta}")
-    {
-        bar.set_style(style);
-    }
-    bar
 }
 
 struct Reduced {
@@ -447,20 +488,19 @@ fn run_chunks(
     chunks: &[(usize, u64, u64)],
     pixels: usize,
     radial: Option<Vec3>,
-    bar: &indicatif::ProgressBar,
+    progress: Option<&Progress>,
+    total: u64,
 ) -> Reduced {
     let mut tally = Tally::default();
     let mut image = vec![[0.0f64; 3]; pixels];
     let mut profile = radial.map(RadialProfile::new);
+    let mut done = 0u64;
     for batch in chunks.chunks(BATCH) {
-        let outs: Vec<_> = batch
-            .par_iter()
-            .map(|&(li, s, e)| {
-                let out = tracer.chunk(li, s, e);
-                bar.inc(e - s);
-                out
-            })
-            .collect();
+        let outs: Vec<_> = batch.par_iter().map(|&(li, s, e)| tracer.chunk(li, s, e)).collect();
+        done += batch.iter().map(|&(_, s, e)| e - s).sum::<u64>();
+        if let Some(p) = progress {
+            (p.0)(done, total);
+        }
         // Fixed-order reduction: chunk by chunk, deposit by deposit.
         for out in outs {
             tally.add(&out.tally);
@@ -509,7 +549,6 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
         .collect();
     let total: u64 = lights.iter().map(|l| l.photons).sum();
     let tracer = Tracer::new(scene, &geo, lights, Binner::new(view), p);
-    let bar = progress_bar(total, p.progress);
     let trace_start = Instant::now();
     let pixels = (p.width * p.height) as usize;
     let reduced = match p.threads {
@@ -517,10 +556,9 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
             .num_threads(n.max(1))
             .build()
             .map_err(|e| AppError::Failed(format!("cannot start {n} worker threads: {e}")))?
-            .install(|| run_chunks(&tracer, &chunks, pixels, p.radial_center, &bar)),
-        None => run_chunks(&tracer, &chunks, pixels, p.radial_center, &bar),
+            .install(|| run_chunks(&tracer, &chunks, pixels, p.radial_center, p.progress.as_ref(), total)),
+        None => run_chunks(&tracer, &chunks, pixels, p.radial_center, p.progress.as_ref(), total),
     };
-    bar.finish_and_clear();
     let trace_s = trace_start.elapsed().as_secs_f64();
     let image = RgbImage {
         width: p.width,
@@ -569,129 +607,4 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
         radial,
     };
     Ok(RefOutput { image, stats, radial: reduced.radial })
-}
-
-/// `caustics reference` arguments.
-#[derive(clap::Args, Debug, Clone)]
-pub struct ReferenceArgs {
-    /// Scene file (default: assets/scenes/sphere.toml).
-    #[arg(long)]
-    pub scene: Option<PathBuf>,
-    /// Camera name (must be orthographic; default: the scene's first camera).
-    #[arg(long)]
-    pub camera: Option<String>,
-    /// AOV to write: caustics or direct.
-    #[arg(long, default_value = "caustics")]
-    pub aov: String,
-    /// Which caustic paths to deposit: all, or two-refractions (refracted exactly twice, no reflection).
-    #[arg(long, default_value = "all")]
-    pub paths: String,
-    /// Number of photons per light.
-    #[arg(long, default_value_t = 4_000_000)]
-    pub photons: u64,
-    /// Output size WxH.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
-    /// Random seed: the same seed gives a bit-identical image on any number of threads.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Output image: 32-bit float OpenEXR, RGB = irradiance in W/m².
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Write stats JSON here: the energy account, photon counts, photons/s, wall time, threads, seed.
-    #[arg(long)]
-    pub stats: Option<PathBuf>,
-    /// Also report the radii holding 50% and 90% of the AOV's flux around this point, "x,y,z".
-    #[arg(long)]
-    pub radial_center: Option<String>,
-}
-
-fn parse_vec3(s: &str, flag: &str) -> AppResult<Vec3> {
-    let v: Vec<f32> =
-        s.split(',').map(|x| x.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| {
-            AppError::BadInput(format!("{flag}: expected three comma-separated numbers x,y,z, got `{s}`"))
-        })?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
-        _ => Err(AppError::BadInput(format!("{flag}: expected three finite numbers x,y,z, got `{s}`"))),
-    }
-}
-
-impl ReferenceArgs {
-    /// Validate the arguments into [`RefParams`] (bad values are [`AppError::BadInput`] naming the flag).
-    pub fn params(&self) -> AppResult<RefParams> {
-        let (width, height) = parse_size(&self.size, "--size")?;
-        if self.photons == 0 {
-            return Err(AppError::BadInput("--photons: must be at least 1".into()));
-        }
-        if self.threads == Some(0) {
-            return Err(AppError::BadInput("--threads: must be at least 1".into()));
-        }
-        Ok(RefParams {
-            camera: self.camera.clone(),
-            aov: self.aov.parse().map_err(AppError::BadInput)?,
-            paths: self.paths.parse().map_err(AppError::BadInput)?,
-            photons: self.photons,
-            width,
-            height,
-            seed: self.seed,
-            threads: self.threads,
-            progress: true,
-            radial_center: self.radial_center.as_deref().map(|s| parse_vec3(s, "--radial-center")).transpose()?,
-        })
-    }
-}
-
-fn check_output(path: &Path, flag: &str, ext: &str) -> AppResult<()> {
-    if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case(ext)) != Some(true) {
-        return Err(AppError::BadInput(format!("{flag}: {} must end in .{ext}", path.display())));
-    }
-    image_io::check_output_dir(path).map_err(|e| AppError::BadInput(format!("{flag}: {e}")))
-}
-
-/// `caustics reference`.
-pub fn run(args: &ReferenceArgs) -> AppResult<()> {
-    let params = args.params()?;
-    check_output(&args.out, "--out", "exr")?;
-    if let Some(s) = &args.stats {
-        check_output(s, "--stats", "json")?;
-    }
-    let scene_path = args.scene.clone().unwrap_or_else(crate::commands::default_scene);
-    let scene = Scene::load(&scene_path)?;
-    let out = trace(&scene, &params)?;
-    let mut meta = image_io::ExrMeta::new();
-    meta.insert("scene".into(), scene_path.display().to_string());
-    meta.insert("scene_hash".into(), image_io::file_hash(&scene_path));
-    meta.insert("camera".into(), out.stats.camera.clone());
-    meta.insert("camera_kind".into(), "orthographic".into());
-    meta.insert("aov".into(), args.aov.clone());
-    meta.insert("units".into(), "W/m^2".into());
-    meta.insert("transport".into(), "reference".into());
-    meta.insert("paths".into(), args.paths.clone());
-    meta.insert("photons".into(), args.photons.to_string());
-    meta.insert("seed".into(), args.seed.to_string());
-    meta.insert("level".into(), "none".into());
-    image_io::write_exr_meta(&args.out, &out.image, &meta)?;
-    if let Some(s) = &args.stats {
-        let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;
-        image_io::write_text(s, &json)?;
-    }
-    let st = &out.stats;
-    let a = &st.energy_account;
-    println!(
-        "{} {} ({}): {} photons/light, {:.3} s, {:.0} photons/s, {} threads",
-        st.scene, st.aov, st.paths, st.photons_per_light, st.wall_s, st.photons_per_s, st.threads
-    );
-    println!(
-        "flux W: emitted {:.6}, caustics {:.6}, direct {:.6}, escaped {:.6}, cut {:.6}, filtered {:.6}, lost {:.6}, absorbed {:.6} (residual {:.1e})",
-        a.emitted, a.deposited_caustics, a.deposited_direct, a.escaped, a.cut_by_bounce_cap, a.filtered_by_paths, a.lost, a.absorbed, a.residual_rel
-    );
-    println!("{} in image: {:.6} W (Σ E·pixel area = {:.6} W)", st.aov, a.aov_in_image, a.image_integral);
-    if let Some(r) = &st.radial {
-        println!("radial around {:?}: r50 = {:?} m, r90 = {:?} m", r.center, r.r50, r.r90);
-    }
-    Ok(())
 }

@@ -30,39 +30,59 @@ pub struct Tally {
     pub photons_traced: u64,
     /// Photons drawn from the sampled sub-cone but outside the spot cone: they carry nothing.
     pub photons_outside_cone: u64,
+    /// Photons that deposited caustics.
     pub photons_caustics: u64,
+    /// Photons that deposited direct light.
     pub photons_direct: u64,
+    /// Photons of the selected AOV binned into the image.
     pub photons_in_image: u64,
+    /// Photons that left the scene.
     pub photons_escaped: u64,
+    /// Photons cut after the bounce cap.
     pub photons_cut: u64,
+    /// Photons left out by the paths filter.
     pub photons_filtered: u64,
+    /// Photons lost to numerical dead ends.
     pub photons_lost: u64,
     #[serde(default)]
+    /// Photons absorbed inside glass.
     pub photons_absorbed: u64,
+    /// Flux emitted, W.
     pub flux_emitted: f64,
+    /// Flux deposited as caustics, W.
     pub flux_caustics: f64,
+    /// Flux deposited as direct light, W.
     pub flux_direct: f64,
     /// Flux of the selected AOV's photons binned into the image (visible to the camera, inside the frame).
     pub flux_in_image: f64,
     /// Σ E · pixel area over the image: `flux_in_image` weighted by |n · forward| of each receiver.
     pub image_flux: f64,
+    /// Flux that left the scene, W.
     pub flux_escaped: f64,
+    /// Flux cut after the bounce cap, W.
     pub flux_cut: f64,
+    /// Flux left out by the paths filter, W.
     pub flux_filtered: f64,
+    /// Flux lost to numerical dead ends, W.
     pub flux_lost: f64,
     /// Absorbed inside glass (Beer–Lambert).
     #[serde(default)]
     pub flux_absorbed: f64,
+    /// Refractions.
     pub refractions: u64,
+    /// Reflections (Fresnel and mirror).
     pub reflections: u64,
+    /// Total internal reflections.
     pub total_internal_reflections: u64,
     /// Interactions where the interpolated normal gave a direction on the wrong side of the geometric surface
     /// (or faced away from the ray), so the geometric normal was used instead.
     pub shading_normal_fallbacks: u64,
+    /// The most specular interactions of one path.
     pub max_specular_depth: u32,
 }
 
 impl Tally {
+    /// Add another tally's counts.
     pub fn add(&mut self, o: &Tally) {
         self.photons_traced += o.photons_traced;
         self.photons_outside_cone += o.photons_outside_cone;

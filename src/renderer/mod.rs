@@ -5,11 +5,13 @@
 
 mod keys;
 mod queue;
+mod scene_api;
 mod uniforms;
 mod views;
 
-pub use crate::frame::{Aov, AovData, FrameReport, LightReport, SlotVerdict};
+pub use crate::frame::{Aov, AovData, FrameReport, SlotVerdict};
 pub use queue::MAX_FRAMES_IN_FLIGHT;
+pub use scene_api::{InstanceId, MeshId};
 pub use views::Views;
 
 use crate::error::{AppError, AppResult};
@@ -27,7 +29,65 @@ use queue::{FrameQueue, Pending};
 use std::sync::Arc;
 use std::time::Instant;
 
-pub use crate::frame::Finish;
+/// Commands appended to a frame's last command buffer after its composite (the viewer's copy into the swapchain
+/// image), with the frame's output images, left as transfer sources.
+pub type Finish<'a> = &'a mut dyn FnMut(&Device, vk::CommandBuffer, &FrameOutput);
+
+/// A frame's output images on the GPU, as transfer sources once the frame's commands have run.
+pub struct FrameOutput<'a> {
+    /// The tone-mapped beauty image (R8G8B8A8_UNORM, sRGB-encoded values), at the output size.
+    pub beauty: &'a crate::vk::Image,
+    /// The linear radiance before exposure and tone mapping (R32G32B32A32_SFLOAT), W/(m²·sr).
+    pub hdr: &'a crate::vk::Image,
+}
+
+/// A completed frame: what it did, and the AOV it read back.
+#[derive(Debug)]
+pub struct Frame {
+    /// Timings, photon counts, the traversal and transport state.
+    pub report: FrameReport,
+    /// The AOV the frame description asked for (None when it asked for none).
+    pub image: Option<AovData>,
+}
+
+/// An image of the host's that [`Renderer::record`] copies the beauty image into: same size as the frame's output,
+/// created with `TRANSFER_DST` usage in a format that supports blits (`BLIT_DST`), in `old_layout` when the
+/// recorded commands start; it is left in `new_layout`. The renderer orders its copy after all earlier commands on
+/// the queue and before all later ones (`ALL_COMMANDS` on both sides).
+#[derive(Clone, Copy, Debug)]
+pub struct RecordTarget {
+    /// The host's image.
+    pub image: vk::Image,
+    /// Its size (the frame's output size).
+    pub extent: vk::Extent2D,
+    /// Its layout before the recorded commands.
+    pub old_layout: vk::ImageLayout,
+    /// Its layout after them.
+    pub new_layout: vk::ImageLayout,
+}
+
+/// A frame recorded into a host's command buffer ([`Renderer::record`]): pass it to [`Renderer::complete`] once
+/// the host's submission of that command buffer has finished.
+#[must_use = "a recorded frame must be completed (Renderer::complete) after the host's submission finishes"]
+#[derive(Debug)]
+pub struct RecordedFrame {
+    _private: (),
+}
+
+/// The scene BVH as the stats report it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BvhStats {
+    /// Whether it has been built (the first exact-transport frame builds it).
+    pub built: bool,
+    /// Host build time, ms.
+    pub build_ms: f64,
+    /// Triangles and instances in it.
+    pub triangles: usize,
+    /// Instances (one per object with triangles).
+    pub instances: usize,
+    /// Nodes of the layout the settings trace with.
+    pub nodes: usize,
+}
 
 /// One frame's inputs: the camera and output size, what to read back, and the viewer's per-frame choices.
 #[derive(Clone, Copy, Debug)]
@@ -49,6 +109,8 @@ impl<'a> FrameDesc<'a> {
     }
 }
 
+/// The renderer: it owns the pipelines, the scene on the GPU, the targets and the frames in flight, and renders
+/// frames from [`FrameDesc`]s (see the crate's documentation).
 pub struct Renderer {
     device: Arc<Device>,
     passes: Passes,
@@ -72,6 +134,10 @@ pub struct Renderer {
     reuse: bool,
     /// Bumped whenever the scene's geometry or materials change.
     scene_generation: u64,
+    /// The geometry or materials changed: the scene's buffers are rebuilt before the next frame.
+    geometry_dirty: bool,
+    /// The meshes (object space) and which mesh and transform each scene object is.
+    instances: scene_api::Instances,
     caches: Caches,
 }
 
@@ -129,6 +195,8 @@ fn check_lights(scene: &Scene) -> AppResult<()> {
 }
 
 impl Renderer {
+    /// A renderer on `device` for `scene`, with `settings` resolved for the device (bad settings or a scene the
+    /// transport cannot render are bad input).
     pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
         let config = settings.resolve(&device.info)?;
         check_transport(&scene, &config)?;
@@ -136,6 +204,7 @@ impl Renderer {
         let mut recorder = Recorder::new(&device)?;
         let t0 = Instant::now();
         let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
+        let scene_for_instances = scene.clone();
         let t1 = Instant::now();
         let passes = Passes::new(&device)?;
         log::info!(
@@ -159,11 +228,14 @@ impl Renderer {
             config,
             reuse: true,
             scene_generation: 0,
+            geometry_dirty: false,
+            instances: scene_api::Instances::of(&scene_for_instances),
             caches: Caches::default(),
             device,
         })
     }
 
+    /// The device it renders on.
     pub fn device(&self) -> &Arc<Device> {
         &self.device
     }
@@ -178,8 +250,9 @@ impl Renderer {
         &self.scene_buffers
     }
 
-    /// Replace the scene (after moving the light, changing an IOR, ...): re-uploads its triangles when they
-    /// changed. Lights and cameras are read every frame, so changing only them is free.
+    /// Replace the scene (after moving the light, changing an IOR, ...): its triangles are uploaded again before
+    /// the next frame when they changed. Lights and cameras are read every frame, so changing only them is free.
+    /// The scene's objects become its instances again, each its own mesh with the identity transform.
     pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
         check_transport(&scene, &self.config)?;
         check_lights(&scene)?;
@@ -188,9 +261,8 @@ impl Renderer {
                 a.material == b.material && a.mesh.positions == b.mesh.positions && a.mesh.indices == b.mesh.indices
             });
         if !same_geometry {
-            self.device.wait_idle()?;
-            self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &scene)?;
-            self.scene_generation += 1;
+            self.geometry_dirty = true;
+            self.instances = scene_api::Instances::of(&scene);
         }
         self.scene = scene;
         Ok(())
@@ -247,6 +319,7 @@ impl Renderer {
         self.reuse = reuse;
     }
 
+    /// The eye view of `camera` at `width`×`height`.
     pub fn camera_view(&self, camera: &Camera, width: u32, height: u32) -> CameraView {
         CameraView::new(camera, width, height, self.scene.bounds())
     }
@@ -264,26 +337,86 @@ impl Renderer {
         Ok(())
     }
 
+    /// Frames that may be in flight at once.
     pub fn frames_in_flight(&self) -> usize {
         self.queue.frames_in_flight()
     }
 
     /// Render one frame and wait for it: its report, and the AOV it read back.
-    pub fn render(&mut self, desc: &FrameDesc) -> AppResult<(FrameReport, Option<AovData>)> {
+    pub fn render(&mut self, desc: &FrameDesc) -> AppResult<Frame> {
         self.render_with(desc, None, &SubmitSync::default())
     }
 
     /// [`Renderer::render`], with commands appended to the frame's last command buffer (`finish`) and semaphores
     /// for its submission (`sync`).
-    pub fn render_with(
-        &mut self,
-        desc: &FrameDesc,
-        finish: Option<Finish>,
-        sync: &SubmitSync,
-    ) -> AppResult<(FrameReport, Option<AovData>)> {
+    pub fn render_with(&mut self, desc: &FrameDesc, finish: Option<Finish>, sync: &SubmitSync) -> AppResult<Frame> {
         self.finish_frames()?;
         self.submit(desc, finish, sync)?;
-        self.queue.wait_last(self.targets.as_ref(), &mut self.caches)
+        let (report, image) = self.queue.wait_last(self.targets.as_ref(), &mut self.caches)?;
+        Ok(Frame { report, image })
+    }
+
+    /// Record a frame into the host's command buffer `cmd` (begun, outside a render pass), and, when `target` is
+    /// given, copy its beauty image into the host's image. The host submits `cmd` to the device's queue (the one
+    /// it gave [`crate::gpu::Context::import`], or [`Device::queue`]), waits for it, and then passes the returned
+    /// token to [`Renderer::complete`], before the next frame is rendered or recorded. CPU-driven traversal
+    /// (`--driven cpu`) submits mid-frame and cannot be recorded this way.
+    pub fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        desc: &FrameDesc,
+        target: Option<&RecordTarget>,
+    ) -> AppResult<RecordedFrame> {
+        if self.queue.has_external() {
+            return Err(AppError::BadInput(
+                "a recorded frame has not been completed: call Renderer::complete after its submission finishes".into(),
+            ));
+        }
+        if self.config.driven == crate::settings::Driven::Cpu && self.config.method == crate::settings::Method::Adaptive
+        {
+            return Err(AppError::BadInput(
+                "CPU-driven traversal reads each level back mid-frame: it cannot record into a host's command buffer"
+                    .into(),
+            ));
+        }
+        self.finish_frames()?;
+        let mut copy = |d: &Device, cmd: vk::CommandBuffer, out: &FrameOutput| {
+            if let Some(t) = target {
+                copy_to_target(d, cmd, out.beauty, t);
+            }
+        };
+        self.record_into(Some(cmd), desc, Some(&mut copy), &SubmitSync::default())?;
+        Ok(RecordedFrame { _private: () })
+    }
+
+    /// Read back a frame recorded with [`Renderer::record`]. The host must have waited for the submission of the
+    /// command buffer it was recorded into.
+    pub fn complete(&mut self, frame: RecordedFrame) -> AppResult<Frame> {
+        let RecordedFrame { .. } = frame;
+        let (report, image) = self.queue.complete_external(self.targets.as_ref(), &mut self.caches)?;
+        Ok(Frame { report, image })
+    }
+
+    /// The scene BVH's statistics (built: once an exact-transport frame has run).
+    pub fn bvh_stats(&self) -> BvhStats {
+        let b = &self.scene_buffers.bvh;
+        BvhStats {
+            built: b.is_built(),
+            build_ms: b.build_ms,
+            triangles: b.triangle_count,
+            instances: b.instance_count,
+            nodes: match self.config.bvh_layout {
+                crate::bvh::BvhLayout::Pair | crate::bvh::BvhLayout::Auto => b.pair_node_count,
+                crate::bvh::BvhLayout::Single => b.single_node_count,
+                crate::bvh::BvhLayout::Threaded => b.threaded_node_count,
+            },
+        }
+    }
+
+    /// The index of refraction the light and eye views take from the uniforms when every refractor shares it
+    /// (None: they differ, and an IOR buffer is drawn).
+    pub fn shared_ior(&self) -> Option<f32> {
+        self.scene_buffers.shared_ior
     }
 
     /// The frame-in-flight slot the next frame takes. When every slot is in flight, this first waits for the
@@ -347,7 +480,38 @@ impl Renderer {
     /// [`Renderer::take_completed`], once a later frame needs its slot or [`Renderer::finish_frames`] is called.
     /// `finish` appends commands to its last command buffer and `sync` gives that submission its semaphores.
     pub fn submit(&mut self, desc: &FrameDesc, finish: Option<Finish>, sync: &SubmitSync) -> AppResult<()> {
+        if self.queue.has_external() {
+            return Err(AppError::BadInput(
+                "a recorded frame has not been completed: call Renderer::complete after its submission finishes".into(),
+            ));
+        }
+        self.record_into(None, desc, finish, sync)
+    }
+
+    /// Rebuild the scene's buffers when its geometry or materials changed (after the frames in flight that bind
+    /// them are done).
+    fn update_scene(&mut self) -> AppResult<()> {
+        if !self.geometry_dirty {
+            return Ok(());
+        }
+        self.finish_frames()?;
+        self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &self.scene)?;
+        self.scene_generation += 1;
+        self.geometry_dirty = false;
+        Ok(())
+    }
+
+    /// Record a frame into `host_cmd` (the host's command buffer; the host submits it) or into the next slot's own
+    /// command buffer, which is then submitted with `sync`.
+    fn record_into(
+        &mut self,
+        host_cmd: Option<vk::CommandBuffer>,
+        desc: &FrameDesc,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+    ) -> AppResult<()> {
         let start = Instant::now();
+        self.update_scene()?;
         let slot = self.next_slot()?;
         // The settings at this frame's level (progressive refinement renders below the chosen one).
         let mut s = self.config.clone();
@@ -430,9 +594,12 @@ impl Renderer {
             slot,
         };
         let frame_slot = &mut self.queue.slots[slot];
-        let cmd = frame_slot.recorder.begin()?;
+        let cmd = match host_cmd {
+            Some(cmd) => cmd,
+            None => frame_slot.recorder.begin()?,
+        };
         let mut rec = Rec {
-            recorder: Some(&mut frame_slot.recorder),
+            recorder: host_cmd.is_none().then_some(&mut frame_slot.recorder),
             ts: &mut frame_slot.timestamps,
             sync: &mut self.tracker,
             cmd,
@@ -440,6 +607,7 @@ impl Renderer {
             record_time: 0.0,
             mark: Instant::now(),
         };
+        let flushes = rec.sync.flushes();
         let recorded = crate::frame::record_frame(&res, &plan, &mut rec);
         let (lights_end, aov) = match recorded {
             Ok(r) => r,
@@ -451,19 +619,31 @@ impl Renderer {
             }
         };
         if let Some(f) = finish {
-            f(&self.device, rec.cmd, targets);
+            f(&self.device, rec.cmd, &FrameOutput { beauty: &targets.eye.beauty, hdr: &targets.eye.hdr });
         }
         rec.ts.mark(rec.cmd, "");
         rec.record_time += rec.mark.elapsed().as_secs_f64();
         let mut report = rec.report;
         report.record_ms = rec.record_time * 1e3;
-        frame_slot.recorder.submit_with(sync)?;
+        report.barrier_batches = rec.sync.flushes() - flushes;
+        if host_cmd.is_none() {
+            frame_slot.recorder.submit_with(sync)?;
+        }
         if !reused {
             // The maps this frame computes serve the next frames with the same inputs; its traversal and transport
             // state join them once it completes.
             self.caches.caustic = Some((key.clone(), report.lights.clone()));
         }
-        self.queue.push(Pending { slot, report, start, lights_end, aov, key, settings: s });
+        self.queue.push(Pending {
+            slot,
+            report,
+            start,
+            lights_end,
+            aov,
+            key,
+            settings: s,
+            external: host_cmd.is_some(),
+        });
         Ok(())
     }
 }
@@ -476,4 +656,60 @@ fn default_camera() -> Camera {
         target: glam::Vec3::ZERO,
         up: glam::Vec3::Y,
     }
+}
+
+/// Copy the beauty image (a transfer source) into the host's image, with its layout transitions.
+fn copy_to_target(d: &Device, cmd: vk::CommandBuffer, beauty: &crate::vk::Image, t: &RecordTarget) {
+    let range = vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 1,
+    };
+    let barrier = |old,
+                   new,
+                   src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+                   dst: (vk::PipelineStageFlags2, vk::AccessFlags2)| {
+        vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(src.0)
+            .src_access_mask(src.1)
+            .dst_stage_mask(dst.0)
+            .dst_access_mask(dst.1)
+            .old_layout(old)
+            .new_layout(new)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(t.image)
+            .subresource_range(range)
+    };
+    let all = (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE);
+    let transfer = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+    let to_dst = [barrier(t.old_layout, vk::ImageLayout::TRANSFER_DST_OPTIMAL, all, transfer)];
+    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst)) };
+    let layers = vk::ImageSubresourceLayers {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        mip_level: 0,
+        base_array_layer: 0,
+        layer_count: 1,
+    };
+    let corner = |e: vk::Extent2D| vk::Offset3D { x: e.width as i32, y: e.height as i32, z: 1 };
+    let blit = vk::ImageBlit::default()
+        .src_subresource(layers)
+        .src_offsets([vk::Offset3D::default(), corner(beauty.extent)])
+        .dst_subresource(layers)
+        .dst_offsets([vk::Offset3D::default(), corner(t.extent)]);
+    unsafe {
+        d.cmd_blit_image(
+            cmd,
+            beauty.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            t.image,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[blit],
+            vk::Filter::NEAREST,
+        )
+    };
+    let to_new = [barrier(vk::ImageLayout::TRANSFER_DST_OPTIMAL, t.new_layout, transfer, all)];
+    unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_new)) };
 }

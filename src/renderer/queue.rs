@@ -15,7 +15,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// The most frames that may be in flight at once.
-pub const MAX_FRAMES_IN_FLIGHT: usize = crate::vk::swapchain::MAX_FRAMES_IN_FLIGHT;
+pub const MAX_FRAMES_IN_FLIGHT: usize = 3;
 
 /// The per-frame resources of one frame in flight.
 pub(crate) struct FrameSlot {
@@ -42,6 +42,8 @@ pub(crate) struct Pending {
     pub key: super::keys::CausticKey,
     /// The settings it was recorded with (the readback layout and what to read depend on them).
     pub settings: ResolvedSettings,
+    /// Recorded into a host's command buffer: the host submits it and says when it completed (no fence here).
+    pub external: bool,
 }
 
 pub(crate) struct FrameQueue {
@@ -113,6 +115,22 @@ impl FrameQueue {
         self.complete(last, targets, caches)
     }
 
+    /// Whether a frame recorded into a host's command buffer has not been completed yet.
+    pub fn has_external(&self) -> bool {
+        self.pending.iter().any(|p| p.external)
+    }
+
+    /// Read back the frame recorded into a host's command buffer (the host has waited for its submission).
+    pub fn complete_external(
+        &mut self,
+        targets: Option<&Targets>,
+        caches: &mut Caches,
+    ) -> AppResult<(FrameReport, Option<AovData>)> {
+        let i = self.pending.iter().position(|p| p.external).expect("a recorded frame");
+        let p = self.pending.remove(i).expect("in range");
+        self.complete(p, targets, caches)
+    }
+
     /// The reports of the frames completed since the last call, oldest first.
     pub fn take_completed(&mut self) -> Vec<FrameReport> {
         std::mem::take(&mut self.completed)
@@ -131,7 +149,9 @@ impl FrameQueue {
         caches: &mut Caches,
     ) -> AppResult<(FrameReport, Option<AovData>)> {
         let FrameSlot { recorder, timestamps } = &mut self.slots[p.slot];
-        recorder.wait()?;
+        if !p.external {
+            recorder.wait()?;
+        }
         let mut report = p.report;
         report.frame_ms = p.start.elapsed().as_secs_f64() * 1e3;
         report.segments = timestamps.resolve()?;

@@ -13,6 +13,7 @@ pub struct Views {
     pub photon: Option<LightView>,
     /// Over the receivers: caustic map, receiver g-buffer and shadow map.
     pub receiver: LightView,
+    /// The eye camera.
     pub camera: CameraView,
 }
 

@@ -34,7 +34,7 @@ impl Cx {
         SceneError::Gltf { file: self.file.clone(), path: path.into(), message: message.into() }
     }
     fn warn(&self, path: &str, message: &str) {
-        eprintln!("warning: {}: {path}: {message}", self.file);
+        log::warn!("{}: {path}: {message}", self.file);
     }
 }
 

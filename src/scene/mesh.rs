@@ -4,17 +4,23 @@
 use glam::{Mat3, Mat4, Vec3};
 
 #[derive(Clone, Debug, Default)]
+/// Triangles: positions, one normal per position, and indices (three per triangle).
 pub struct Mesh {
+    /// Vertex positions.
     pub positions: Vec<Vec3>,
+    /// Vertex normals (unit length).
     pub normals: Vec<Vec3>,
+    /// Three indices per triangle, counter-clockwise seen from outside.
     pub indices: Vec<u32>,
 }
 
 impl Mesh {
+    /// Triangles.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
 
+    /// The mesh placed by `m` (normals by its inverse transpose; a mirroring `m` keeps the winding outward).
     pub fn transformed(mut self, m: Mat4) -> Mesh {
         let n = Mat3::from_mat4(m).inverse().transpose();
         let flip = Mat3::from_mat4(m).determinant() < 0.0;
@@ -33,6 +39,7 @@ impl Mesh {
         self
     }
 
+    /// Bounds of the positions.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -282,6 +289,7 @@ pub struct MeshReport {
 }
 
 impl MeshReport {
+    /// Whether every edge is shared by exactly two triangles.
     pub fn closed(&self) -> bool {
         self.boundary_edges == 0 && self.nonmanifold_edges == 0
     }

@@ -3,7 +3,7 @@
 //! Errors name the file, the line and the field (`sphere.toml:23: object[1] "glass".material.ior: ...`), and are
 //! reported by the CLI with exit code 2.
 
-pub mod gltf;
+mod gltf;
 pub mod mesh;
 mod schema;
 pub mod view;
@@ -16,24 +16,61 @@ pub use mesh::Mesh;
 pub use view::{CameraView, LightView, Window};
 
 #[derive(Debug, thiserror::Error)]
+/// A scene that cannot be read: the message names the file, and the line and field where there is one.
 pub enum SceneError {
+    /// The file cannot be read (or is not a scene file).
     #[error("{file}: {message}")]
-    Io { file: String, message: String },
+    Io {
+        /// The file.
+        file: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// The TOML does not parse.
     #[error("{file}:{line}:{column}: {message}")]
-    Syntax { file: String, line: usize, column: usize, message: String },
+    Syntax {
+        /// The file.
+        file: String,
+        /// The line (from 1).
+        line: usize,
+        /// The column (from 1).
+        column: usize,
+        /// The parser's message.
+        message: String,
+    },
+    /// A field has a bad value.
     #[error("{file}:{line}: {field}: {message}")]
-    Field { file: String, line: usize, field: String, message: String },
+    Field {
+        /// The file.
+        file: String,
+        /// The line (from 1).
+        line: usize,
+        /// The field's path (`object[1] "glass".material.ior`).
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
     /// A glTF file: `path` is the JSON path (`meshes[0].primitives[1].mode`).
     #[error("{file}: {path}: {message}")]
-    Gltf { file: String, path: String, message: String },
+    Gltf {
+        /// The file.
+        file: String,
+        /// The JSON path of what is wrong.
+        path: String,
+        /// What is wrong with it.
+        message: String,
+    },
 }
 
 /// The most lights a scene may have: each gets its own light view, photons, caustic map and shadow map.
 pub const MAX_LIGHTS: usize = 4;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What kind of light.
 pub enum LightKind {
+    /// A cone of uniform intensity (W/sr) of half-angle `cone`.
     Spot,
+    /// Parallel light of irradiance `intensity` (W/m², across the beam) along `target - position`.
     Directional,
     /// Isotropic: the same intensity in every direction. Its maps are one frustum from the light toward its
     /// target, so its receivers and glass must lie in front of the plane through it facing the target.
@@ -41,42 +78,61 @@ pub enum LightKind {
 }
 
 #[derive(Clone, Debug, PartialEq)]
+/// A light of the scene.
 pub struct Light {
+    /// Spot, directional or point.
     pub kind: LightKind,
+    /// Where it is (a directional light: where its beam starts).
     pub position: Vec3,
+    /// What it points at (its axis runs from `position` to `target`).
     pub target: Vec3,
     /// Cone half-angle in radians (spot lights).
     pub cone: f32,
     /// W/sr for spot lights, W/m² (perpendicular to the beam) for directional lights.
     pub intensity: f32,
+    /// RGB color multiplying its power per channel.
     pub color: Vec3,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// A camera's projection.
 pub enum Projection {
+    /// Parallel rays over a window `half_height` tall (m); the width follows the image's aspect ratio.
     Orthographic {
+        /// Half the window's height, m.
         half_height: f32,
     },
     /// Vertical field of view in radians.
     Perspective {
+        /// The vertical field of view, radians.
         fov: f32,
     },
 }
 
 #[derive(Clone, Debug, PartialEq)]
+/// A camera of the scene.
 pub struct Camera {
+    /// Its name (`--camera` picks it).
     pub name: String,
+    /// Orthographic or perspective.
     pub projection: Projection,
+    /// Where it is.
     pub position: Vec3,
+    /// What it looks at.
     pub target: Vec3,
+    /// Which way is up in its image.
     pub up: Vec3,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// What an object is made of.
 pub enum Material {
+    /// A diffuse receiver: it collects caustics and direct light.
     Diffuse {
+        /// Its RGB reflectance.
         albedo: Vec3,
     },
+    /// Glass (or any dielectric): light refracts and reflects by Fresnel, and is absorbed inside.
     Dielectric {
         /// Index of refraction at the green channel's wavelength (587.6 nm, the Fraunhofer d line).
         ior: f32,
@@ -90,9 +146,13 @@ pub enum Material {
 }
 
 #[derive(Clone, Debug)]
+/// An object of the scene: a mesh in world space and its material.
 pub struct Object {
+    /// Its name (messages name it).
     pub name: String,
+    /// Its material.
     pub material: Material,
+    /// Its triangles, in world space.
     pub mesh: Mesh,
 }
 
@@ -134,16 +194,22 @@ impl Object {
         matches!(self.material, Material::Dielectric { .. } | Material::Mirror)
     }
 
+    /// A perfect mirror.
     pub fn is_mirror(&self) -> bool {
         matches!(self.material, Material::Mirror)
     }
 }
 
 #[derive(Clone, Debug)]
+/// A scene: lights, cameras and objects, in world space (SI units: meters, W/sr, W/m²).
 pub struct Scene {
+    /// The file it came from (`<code>` for a scene built in code); messages name it.
     pub path: PathBuf,
+    /// 1 to [`MAX_LIGHTS`] lights.
     pub lights: Vec<Light>,
+    /// Its cameras (`render` and `reference` need one).
     pub cameras: Vec<Camera>,
+    /// Its objects.
     pub objects: Vec<Object>,
 }
 
@@ -175,6 +241,12 @@ fn finite3(v: [f32; 3]) -> bool {
 const FINITE: &str = "must be finite (within ±1e9)";
 
 impl Scene {
+    /// A scene built in code: its lights and cameras, and no objects yet (a renderer adds them as instances of
+    /// meshes: [`crate::Renderer::add_mesh`], [`crate::Renderer::add_instance`]). Messages name it `<code>`.
+    pub fn new(lights: Vec<Light>, cameras: Vec<Camera>) -> Scene {
+        Scene { path: PathBuf::from("<code>"), lights, cameras, objects: Vec::new() }
+    }
+
     /// Load a scene by its file type: TOML (`.toml`), or glTF 2.0 (`.gltf`, `.glb`). Any other file type is
     /// refused with the accepted ones named (an OBJ is a mesh: a TOML scene's `[[object]]` references it).
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
@@ -271,6 +343,7 @@ impl Scene {
         Ok(scene)
     }
 
+    /// The camera named `name`, or the first one; an error message lists the cameras there are.
     pub fn camera(&self, name: Option<&str>) -> Result<&Camera, String> {
         let names = || self.cameras.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ");
         match name {
@@ -281,10 +354,12 @@ impl Scene {
         }
     }
 
+    /// The specular objects (dielectrics and mirrors): they make caustics.
     pub fn refractors(&self) -> impl Iterator<Item = &Object> {
         self.objects.iter().filter(|o| o.is_refractor())
     }
 
+    /// The diffuse receivers.
     pub fn receivers(&self) -> impl Iterator<Item = &Object> {
         self.objects.iter().filter(|o| !o.is_refractor())
     }
@@ -306,6 +381,7 @@ impl Scene {
         }
     }
 
+    /// Whether any object is specular.
     pub fn has_refractors(&self) -> bool {
         self.refractors().next().is_some()
     }
@@ -320,6 +396,7 @@ impl Scene {
         }
     }
 
+    /// World-space bounds of every object.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.objects
             .iter()
@@ -329,6 +406,19 @@ impl Scene {
             })
     }
 
+    /// The index of refraction every refractor shares (a mirror counts as -1), or None when they differ or there
+    /// is none: the renderer then draws no IOR buffer and passes this one in its uniforms.
+    pub fn shared_ior(&self) -> Option<f32> {
+        let ior = |m: &Material| match *m {
+            Material::Dielectric { ior, .. } => ior,
+            _ => -1.0,
+        };
+        let mut iors = self.refractors().map(|o| ior(&o.material));
+        let first = iors.next()?;
+        iors.all(|x| x == first).then_some(first)
+    }
+
+    /// Triangles in all objects.
     pub fn triangle_count(&self) -> usize {
         self.objects.iter().map(|o| o.mesh.triangle_count()).sum()
     }
@@ -577,7 +667,7 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
                 // An open or non-manifold receiver is an ordinary surface; only glass needs a closed volume.
                 let topology = finding.starts_with("open") || finding.starts_with("non-");
                 if dielectric || !topology {
-                    eprintln!("warning: {}", cx.err(p.span(), f("path"), format!("{}: {finding}", full.display())));
+                    log::warn!("{}", cx.err(p.span(), f("path"), format!("{}: {finding}", full.display())));
                 }
             }
             mesh

@@ -13,20 +13,33 @@ use glam::{Mat4, Vec2, Vec3};
 /// A square window of the light's image plane: [x0, x0 + w] × [y0, y0 + w].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
+    /// Left edge.
     pub x0: f32,
+    /// Top edge.
     pub y0: f32,
+    /// Side.
     pub w: f32,
 }
 
 #[derive(Clone, Copy, Debug)]
+/// A light's view: its image plane at distance 1 and the window of it a map covers (a directional light's
+/// is parallel).
 pub struct LightView {
+    /// The light's kind.
     pub kind: LightKind,
+    /// The light's position.
     pub origin: Vec3,
+    /// The image plane's right axis.
     pub right: Vec3,
+    /// The image plane's down axis.
     pub down: Vec3,
+    /// The light's axis.
     pub forward: Vec3,
+    /// The window the map covers.
     pub window: Window,
+    /// Near plane distance.
     pub near: f32,
+    /// Far plane distance.
     pub far: f32,
     /// Cosine of the cone half-angle (spot); -1 for directional lights.
     pub cos_cone: f32,
@@ -71,6 +84,7 @@ impl LightView {
         }
     }
 
+    /// Where `p` lies on the image plane.
     pub fn uv(&self, p: Vec3) -> Vec2 {
         let (xy, _) = self.image_coords(p);
         (xy - Vec2::new(self.window.x0, self.window.y0)) / self.window.w
@@ -186,18 +200,28 @@ impl LightView {
 /// The eye camera for a given output size.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraView {
+    /// The camera's position.
     pub position: Vec3,
+    /// Its right axis.
     pub right: Vec3,
+    /// Its up axis.
     pub up: Vec3,
+    /// Its viewing direction.
     pub forward: Vec3,
+    /// Its projection.
     pub projection: Projection,
+    /// Output width in pixels.
     pub width: u32,
+    /// Output height in pixels.
     pub height: u32,
+    /// Near plane distance.
     pub near: f32,
+    /// Far plane distance.
     pub far: f32,
 }
 
 impl CameraView {
+    /// The view of `camera` at `width`×`height`, its depth range fitted to `bounds`.
     pub fn new(camera: &Camera, width: u32, height: u32, bounds: (Vec3, Vec3)) -> Self {
         let forward = (camera.target - camera.position).normalize();
         let right = forward.cross(camera.up).normalize();
@@ -217,6 +241,7 @@ impl CameraView {
         view
     }
 
+    /// Fit the near and far planes to `bounds`.
     pub fn fit_depth(&mut self, (lo, hi): (Vec3, Vec3)) {
         let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
         for i in 0..8 {
@@ -242,6 +267,7 @@ impl CameraView {
         }
     }
 
+    /// Width over height.
     pub fn aspect(&self) -> f32 {
         self.width as f32 / self.height as f32
     }
@@ -255,6 +281,7 @@ impl CameraView {
         Vec2::new(hh * self.aspect(), hh)
     }
 
+    /// The view-projection matrix (Vulkan clip space).
     pub fn view_proj(&self) -> Mat4 {
         let (r, u, f, p) = (self.right, self.up, self.forward, self.position);
         // Camera frame with +y down so that image row 0 is the top (Vulkan NDC).

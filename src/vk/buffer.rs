@@ -7,18 +7,23 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
+/// A buffer with its memory, freed when dropped.
 pub struct Buffer {
     device: Arc<Device>,
     /// Unique for the process's lifetime (a raw handle may be reused once destroyed): what
-    /// [`super::Tracker`] keys its history by.
+    /// the frame's barrier tracker keys its history by.
     pub id: u64,
+    /// The buffer.
     pub raw: vk::Buffer,
+    /// Its size in bytes.
     pub size: u64,
     allocation: Option<Allocation>,
+    /// Its name (in validation messages).
     pub name: String,
 }
 
 impl Buffer {
+    /// A buffer of `size` bytes with `usage`, in memory at `location`.
     pub fn new(
         device: &Arc<Device>,
         name: &str,

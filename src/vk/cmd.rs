@@ -13,7 +13,9 @@ pub const FENCE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(60
 /// Semaphores for a submission.
 #[derive(Default, Clone)]
 pub struct SubmitSync {
+    /// Semaphores the submission waits on, with the stages that wait.
     pub wait: Vec<(vk::Semaphore, vk::PipelineStageFlags2)>,
+    /// Semaphores it signals when done.
     pub signal: Vec<vk::Semaphore>,
 }
 

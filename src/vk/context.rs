@@ -42,14 +42,21 @@ impl ContextDesc {
     }
 }
 
+/// The Vulkan instance (with the validation layer's messenger when validation is on), or a host's.
 pub struct Instance {
+    /// The loader's entry points.
     pub entry: ash::Entry,
+    /// The instance.
     pub raw: ash::Instance,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    /// Whether the Khronos validation layer (with synchronization validation) is on.
     pub validation: bool,
+    /// Created here (destroyed with this), or a host's (left to it).
+    owned: bool,
 }
 
 impl Instance {
+    /// Create an instance as `desc` asks (validation, instance extensions).
     pub fn new(desc: &ContextDesc) -> VkResult<Arc<Self>> {
         let entry = unsafe { ash::Entry::load()? };
         let layers =
@@ -112,7 +119,7 @@ impl Instance {
         } else {
             None
         };
-        Ok(Arc::new(Instance { entry, raw, debug, validation: desc.validation }))
+        Ok(Arc::new(Instance { entry, raw, debug, validation: desc.validation, owned: true }))
     }
 }
 
@@ -122,7 +129,9 @@ impl Drop for Instance {
             if let Some((loader, messenger)) = self.debug.take() {
                 loader.destroy_debug_utils_messenger(messenger, None);
             }
-            self.raw.destroy_instance(None);
+            if self.owned {
+                self.raw.destroy_instance(None);
+            }
         }
     }
 }
@@ -130,13 +139,19 @@ impl Drop for Instance {
 /// Facts about the chosen physical device that the renderer needs.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {
+    /// The device's name.
     pub name: String,
+    /// The driver's name and version.
     pub driver: String,
+    /// Discrete, integrated, virtual GPU, or CPU.
     pub kind: vk::PhysicalDeviceType,
+    /// The Vulkan version it offers.
     pub api_version: u32,
+    /// Its limits.
     pub limits: vk::PhysicalDeviceLimits,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period: f32,
+    /// Valid bits of the queue's timestamps.
     pub timestamp_valid_bits: u32,
     /// VK_EXT_shader_atomic_float with shaderBufferFloat32AtomicAdd and shaderSharedFloat32AtomicAdd (the compute
     /// splats need them).
@@ -155,22 +170,34 @@ impl DeviceInfo {
 /// What [`Device::allocation_report`] returns.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AllocationTotals {
+    /// Live allocations.
     pub allocations: usize,
+    /// Bytes allocated.
     pub allocated_bytes: u64,
+    /// Bytes of the memory blocks behind them.
     pub capacity_bytes: u64,
 }
 
 /// The logical device, its one queue, and the allocator. Derefs to `ash::Device`.
 pub struct Device {
+    /// The instance it was created from.
     pub instance: Arc<Instance>,
     raw: ash::Device,
+    /// The physical device.
     pub physical: vk::PhysicalDevice,
+    /// What the renderer needs to know of it.
     pub info: DeviceInfo,
+    /// The queue every submission goes to (graphics and compute, with timestamps).
     pub queue: vk::Queue,
+    /// Its family.
     pub queue_family: u32,
+    /// VK_KHR_push_descriptor's entry points (every pass binds its resources with push descriptors).
     pub push_descriptor: ash::khr::push_descriptor::Device,
+    /// VK_EXT_debug_utils' device entry points, for object names, when the instance has the extension.
     pub debug_utils: Option<ash::ext::debug_utils::Device>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Created here (destroyed with this), or a host's (left to it).
+    owned: bool,
 }
 
 impl std::ops::Deref for Device {
@@ -184,6 +211,51 @@ struct Candidate {
     physical: vk::PhysicalDevice,
     info: DeviceInfo,
     queue_family: u32,
+}
+
+/// What the renderer needs to know of a physical device. `atomic_float_ext`: it offers
+/// VK_EXT_shader_atomic_float (its float-add features are then queried).
+fn describe(
+    raw: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    props: &vk::PhysicalDeviceProperties,
+    timestamp_valid_bits: u32,
+    atomic_float_ext: bool,
+) -> DeviceInfo {
+    let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let float_atomic_add = atomic_float_ext && {
+        let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut fa);
+        unsafe { raw.get_physical_device_features2(physical, &mut f2) };
+        fa.shader_buffer_float32_atomic_add != 0 && fa.shader_shared_float32_atomic_add != 0
+    };
+    let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+    unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
+    let driver = format!(
+        "{} {}",
+        driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+        driver_props.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+    );
+    let memory = unsafe { raw.get_physical_device_memory_properties(physical) };
+    let device_local_bytes = memory
+        .memory_heaps_as_slice()
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
+    DeviceInfo {
+        name,
+        driver: driver.trim().to_string(),
+        kind: props.device_type,
+        api_version: props.api_version,
+        limits: props.limits,
+        timestamp_period: props.limits.timestamp_period,
+        timestamp_valid_bits,
+        float_atomic_add,
+        device_local_bytes,
+    }
 }
 
 fn rank(kind: vk::PhysicalDeviceType) -> u32 {
@@ -249,43 +321,14 @@ impl Device {
                 log::info!("skipping {name}: no graphics+compute queue with timestamps");
                 continue;
             };
-            let float_atomic_add = has(ash::ext::shader_atomic_float::NAME) && {
-                let mut fa = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
-                let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut fa);
-                unsafe { raw.get_physical_device_features2(physical, &mut f2) };
-                fa.shader_buffer_float32_atomic_add != 0 && fa.shader_shared_float32_atomic_add != 0
-            };
-            let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
-            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
-            unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
-            let driver = format!(
-                "{} {}",
-                driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
-                driver_props.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
-            );
-            let memory = unsafe { raw.get_physical_device_memory_properties(physical) };
-            let device_local_bytes = memory
-                .memory_heaps_as_slice()
-                .iter()
-                .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-                .map(|h| h.size)
-                .max()
-                .unwrap_or(0);
-            out.push(Candidate {
+            let info = describe(
+                raw,
                 physical,
-                info: DeviceInfo {
-                    name,
-                    driver: driver.trim().to_string(),
-                    kind: props.device_type,
-                    api_version: props.api_version,
-                    limits: props.limits,
-                    timestamp_period: props.limits.timestamp_period,
-                    timestamp_valid_bits: families[family].timestamp_valid_bits,
-                    float_atomic_add,
-                    device_local_bytes,
-                },
-                queue_family: family as u32,
-            });
+                &props,
+                families[family].timestamp_valid_bits,
+                has(ash::ext::shader_atomic_float::NAME),
+            );
+            out.push(Candidate { physical, info, queue_family: family as u32 });
         }
         Ok(out)
     }
@@ -421,6 +464,7 @@ impl Device {
             push_descriptor,
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            owned: true,
         }))
     }
 
@@ -439,6 +483,7 @@ impl Device {
         }
     }
 
+    /// Wait until the device is idle.
     pub fn wait_idle(&self) -> VkResult<()> {
         unsafe { self.raw.device_wait_idle() }.check("vkDeviceWaitIdle")
     }
@@ -460,11 +505,14 @@ impl Drop for Device {
         unsafe {
             let _ = self.raw.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
-            self.raw.destroy_device(None);
+            if self.owned {
+                self.raw.destroy_device(None);
+            }
         }
     }
 }
 
+/// A device type in words.
 pub fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
     match kind {
         vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
@@ -475,15 +523,86 @@ pub fn kind_name(kind: vk::PhysicalDeviceType) -> &'static str {
     }
 }
 
-/// Instance plus device: what a headless renderer needs.
+/// Instance plus device: what a renderer needs.
 pub struct Context {
+    /// The device (it holds the instance).
     pub device: Arc<Device>,
 }
 
+/// A host's Vulkan objects for [`Context::import`]. The host keeps them alive while the context and every renderer
+/// on it live, and destroys them itself afterwards.
+///
+/// The device must have been created with Vulkan 1.3's `synchronization2` and `dynamicRendering`, the core
+/// `largePoints` feature (and, where the device offers them, `vertexPipelineStoresAndAtomics`,
+/// `fragmentStoresAndAtomics` and `shaderInt64`), and the `VK_KHR_push_descriptor` extension; with
+/// `VK_EXT_shader_atomic_float`'s `shaderBufferFloat32AtomicAdd` and `shaderSharedFloat32AtomicAdd` enabled too,
+/// the compute splats can run (say so with `float_atomic_add`). The queue must support graphics, compute and
+/// timestamps; every frame the renderer submits goes to it, and frames recorded into the host's command buffers
+/// must be submitted to it.
+pub struct Imported {
+    /// The loader's entry points.
+    pub entry: ash::Entry,
+    /// The host's instance.
+    pub instance: ash::Instance,
+    /// The physical device the host's device was created on.
+    pub physical: vk::PhysicalDevice,
+    /// The host's device.
+    pub device: ash::Device,
+    /// The queue the renderer submits to.
+    pub queue: vk::Queue,
+    /// Its family.
+    pub queue_family: u32,
+    /// Whether the float-atomic features above are enabled on the device.
+    pub float_atomic_add: bool,
+}
+
 impl Context {
+    /// Create an instance and a device (see [`ContextDesc`]) for headless rendering.
     pub fn headless(desc: &ContextDesc) -> VkResult<Self> {
         let instance = Instance::new(desc)?;
         let device = Device::new(instance, desc, None)?;
+        Ok(Context { device })
+    }
+
+    /// Wrap a host's instance, device and queue: the renderer allocates its own memory on the host's device and
+    /// submits to the host's queue, and leaves the host's objects alone when it is dropped.
+    pub fn import(host: Imported) -> VkResult<Self> {
+        let Imported { entry, instance, physical, device, queue, queue_family, float_atomic_add } = host;
+        let props = unsafe { instance.get_physical_device_properties(physical) };
+        if vk::api_version_major(props.api_version) == 1 && vk::api_version_minor(props.api_version) < 3 {
+            return Err(VkError::Unsupported("the imported device offers Vulkan 1.2 or older; 1.3 is required".into()));
+        }
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let bits = families.get(queue_family as usize).map(|f| f.timestamp_valid_bits).unwrap_or(0);
+        if bits == 0 {
+            return Err(VkError::Unsupported(format!("queue family {queue_family} has no timestamps")));
+        }
+        let mut info = describe(&instance, physical, &props, bits, float_atomic_add);
+        info.float_atomic_add = float_atomic_add && info.float_atomic_add;
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| VkError::Alloc { what: "allocator".into(), source })?;
+        let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        let instance = Arc::new(Instance { entry, raw: instance, debug: None, validation: false, owned: false });
+        log::info!("imported device: {} ({}), driver {}", info.name, kind_name(info.kind), info.driver);
+        let device = Arc::new(Device {
+            instance,
+            raw: device,
+            physical,
+            info,
+            queue,
+            queue_family,
+            push_descriptor,
+            debug_utils: None,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            owned: false,
+        });
         Ok(Context { device })
     }
 }

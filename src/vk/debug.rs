@@ -37,7 +37,10 @@ pub(crate) unsafe extern "system" fn messenger_callback(
     vk::FALSE
 }
 
-pub(crate) fn messenger_info() -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+/// A debug messenger that routes every validation message to `log` and counts the warnings and errors in
+/// [`validation_message_count`]: a host that creates its own instance chains it into its `VkInstanceCreateInfo`
+/// (and creates one with it) to have the renderer's tests and stats see its messages.
+pub fn messenger_info() -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
         .message_severity(
             vk::DebugUtilsMessageSeverityFlagsEXT::ERROR

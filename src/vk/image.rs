@@ -7,17 +7,24 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
+/// A 2D image with its memory and a view, freed when dropped.
 pub struct Image {
     device: Arc<Device>,
     /// Unique for the process's lifetime (a raw handle may be reused once destroyed): what
-    /// [`super::Tracker`] keys its history by.
+    /// the frame's barrier tracker keys its history by.
     pub id: u64,
+    /// The image.
     pub raw: vk::Image,
+    /// A view of it.
     pub view: vk::ImageView,
+    /// Its format.
     pub format: vk::Format,
+    /// Its size.
     pub extent: vk::Extent2D,
+    /// The aspect its view covers.
     pub aspect: vk::ImageAspectFlags,
     allocation: Option<Allocation>,
+    /// Its name (in validation messages).
     pub name: String,
 }
 
@@ -32,6 +39,7 @@ pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
 }
 
 impl Image {
+    /// A device-local image of `format` and `extent` with `usage`.
     pub fn new(
         device: &Arc<Device>,
         name: &str,
@@ -106,6 +114,7 @@ impl Image {
         })
     }
 
+    /// The subresource range of its one mip level and layer.
     pub fn range(&self) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange {
             aspect_mask: self.aspect,
@@ -132,10 +141,12 @@ impl Drop for Image {
 /// A sampler that frees itself.
 pub struct Sampler {
     device: Arc<Device>,
+    /// The sampler.
     pub raw: vk::Sampler,
 }
 
 impl Sampler {
+    /// A clamp-to-edge sampler with `filter`.
     pub fn new(device: &Arc<Device>, filter: vk::Filter) -> VkResult<Self> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)

@@ -9,7 +9,6 @@ pub mod error;
 pub mod image;
 pub mod pipeline;
 pub mod query;
-pub mod swapchain;
 pub mod sync;
 pub mod tracker;
 

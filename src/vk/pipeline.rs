@@ -68,9 +68,6 @@ pub enum Blend {
     None,
     /// dst += src: flux accumulation in the caustic map.
     Additive,
-    /// dst.rgb += src.rgb, dst.a kept: a further light's radiance added to the eye targets (alpha holds the eye
-    /// distance, which every light's pass writes alike).
-    AddRgb,
     /// Nothing written (an empty write mask): a depth-only draw inside a pass that has color targets.
     Masked,
 }
@@ -280,14 +277,6 @@ impl Pipeline {
                         .src_alpha_blend_factor(vk::BlendFactor::ONE)
                         .dst_alpha_blend_factor(vk::BlendFactor::ONE)
                         .alpha_blend_op(vk::BlendOp::ADD),
-                    Blend::AddRgb => b
-                        .blend_enable(true)
-                        .src_color_blend_factor(vk::BlendFactor::ONE)
-                        .dst_color_blend_factor(vk::BlendFactor::ONE)
-                        .color_blend_op(vk::BlendOp::ADD)
-                        .src_alpha_blend_factor(vk::BlendFactor::ZERO)
-                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                        .alpha_blend_op(vk::BlendOp::ADD),
                 }
             })
             .collect();
@@ -417,11 +406,6 @@ impl LazyPipeline {
         let p = (self.make)()?;
         built_pipelines().fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         Ok(self.cell.get_or_init(|| p))
-    }
-
-    /// Whether it was built.
-    pub fn is_built(&self) -> bool {
-        self.cell.get().is_some()
     }
 }
 

@@ -72,10 +72,6 @@ impl Timestamps {
         self.labels.len()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.labels.is_empty()
-    }
-
     pub fn overflowed(&self) -> bool {
         self.overflowed
     }

@@ -11,6 +11,7 @@ type Acc = vk::AccessFlags2;
 type Layout = vk::ImageLayout;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How a pass uses a resource: its stages, accesses and (for an image) layout.
 pub enum Access {
     /// First use in a frame: contents are discarded, but whatever earlier frames did with the resource on this
     /// queue must be finished (an execution and memory dependency on all prior commands).
@@ -35,13 +36,18 @@ pub enum Access {
     ColorAttachment,
     /// Depth attachment, tested and written.
     DepthAttachment,
+    /// Read by a transfer (copy, blit).
     TransferSrc,
+    /// Written by a transfer (copy, fill, clear).
     TransferDst,
+    /// Read by the host after the submission completed.
     HostRead,
+    /// Presented to a swapchain.
     Present,
 }
 
 impl Access {
+    /// The stages, accesses and image layout of this use.
     pub fn info(self) -> (Stage, Acc, Layout) {
         use Access::*;
         match self {
@@ -76,6 +82,7 @@ impl Access {
         }
     }
 
+    /// Whether this use writes.
     pub fn is_write(self) -> bool {
         matches!(
             self,
@@ -110,6 +117,7 @@ pub struct Barriers {
 }
 
 impl Barriers {
+    /// No barriers yet.
     pub fn new() -> Self {
         Self::default()
     }
@@ -119,6 +127,7 @@ impl Barriers {
         self.buffer_raw(buffer.raw, prev, next)
     }
 
+    /// [`Barriers::buffer`] on a raw buffer handle.
     pub fn buffer_raw(&mut self, buffer: vk::Buffer, prev: &[Access], next: &[Access]) -> &mut Self {
         let (ss, sa, _) = merge(prev);
         let (ds, da, _) = merge(next);
@@ -142,6 +151,7 @@ impl Barriers {
         self.image_raw(image.raw, image.range(), prev, next)
     }
 
+    /// [`Barriers::image`] on a raw image handle and range.
     pub fn image_raw(
         &mut self,
         image: vk::Image,
@@ -168,10 +178,12 @@ impl Barriers {
         self
     }
 
+    /// Whether no barrier was added.
     pub fn is_empty(&self) -> bool {
         self.buffers.is_empty() && self.images.is_empty()
     }
 
+    /// Record the barriers in one `vkCmdPipelineBarrier2` and clear them.
     pub fn flush(&mut self, device: &Device, cmd: vk::CommandBuffer) {
         if self.is_empty() {
             return;

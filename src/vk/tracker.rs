@@ -217,11 +217,6 @@ impl Tracker {
         self.flushes
     }
 
-    /// Whether declarations are waiting for a flush.
-    pub fn is_pending(&self) -> bool {
-        !self.buffers.is_empty() || !self.images.is_empty()
-    }
-
     /// Forget what is known of every resource's history (a frame's recording failed, so what the queue will run is
     /// not known): each one's next use waits for all earlier commands, and an image's contents are lost (its layout
     /// is unknown). Pending declarations are dropped.
@@ -265,10 +260,15 @@ mod tests {
         assert!(apply(&mut s, &[Access::ComputeRead], false).is_none(), "already visible");
         let n = apply(&mut s, &[Access::VertexRead], false).expect("a new stage");
         assert_eq!(n.2, Stage::VERTEX_SHADER);
-        // Write after reads: an execution dependency on both readers, no memory dependency.
+        // A write after those reads waits for both readers (and for the write they read).
         let n = apply(&mut s, &[Access::TransferDst], false).expect("write after read");
         assert_eq!(n.0, Stage::COMPUTE_SHADER | Stage::VERTEX_SHADER);
-        assert!(n.1.is_empty() && n.3.is_empty());
+        // A write after reads of data no tracked write made (uploaded before): an execution dependency only.
+        let mut s = State::default();
+        assert!(apply(&mut s, &[Access::ComputeRead], false).is_none(), "nothing to wait for");
+        let n = apply(&mut s, &[Access::TransferDst], false).expect("write after read");
+        assert_eq!(n.0, Stage::COMPUTE_SHADER);
+        assert!(n.1.is_empty() && n.3.is_empty(), "{n:?}");
     }
 
     #[test]

@@ -130,3 +130,31 @@ pub fn top_reference(
     let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
     caustics::reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
 }
+
+/// In-process GPU tests share one device per test binary (instance and device creation with validation cost about
+/// 0.3 s each): `gpu()` returns it with a lock held, because the renderers on it submit to its one queue, which
+/// Vulkan requires to be used from one thread at a time. Validation (with synchronization validation) is on.
+pub fn gpu() -> (std::sync::MutexGuard<'static, ()>, std::sync::Arc<caustics::gpu::Device>) {
+    use std::sync::{Mutex, OnceLock};
+    static LOCK: Mutex<()> = Mutex::new(());
+    static DEVICE: OnceLock<std::sync::Arc<caustics::gpu::Device>> = OnceLock::new();
+    // A test that failed while holding the lock poisons it; the device is still usable by the next test.
+    let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let device = DEVICE
+        .get_or_init(|| {
+            let desc = caustics::gpu::ContextDesc { validation: true, ..caustics::gpu::ContextDesc::from_env() };
+            caustics::gpu::Context::headless(&desc).expect("a Vulkan device (tools/setup installs lavapipe)").device
+        })
+        .clone();
+    (guard, device)
+}
+
+/// A renderer for `scene_path` on the shared device ([`gpu`]), with `settings`.
+pub fn renderer(
+    device: &std::sync::Arc<caustics::gpu::Device>,
+    scene_path: &str,
+    settings: caustics::settings::Settings,
+) -> caustics::Renderer {
+    let scene = caustics::scene::Scene::load(Path::new(scene_path)).expect("scene");
+    caustics::Renderer::new(device.clone(), scene, settings).expect("renderer")
+}

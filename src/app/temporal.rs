@@ -13,14 +13,14 @@
 //! mostly cancels in R_t − R_{t−1}; what remains sets the floor of the flicker column (compare the reference
 //! change at half the photons to see it).
 
-use crate::commands::{to_rgb, SceneArgs, Session};
-use crate::error::{AppError, AppResult};
-use crate::image_io::{self, RgbImage};
-use crate::metrics;
-use crate::reference::{self, Paths, RefParams};
-use crate::renderer::Aov;
-use crate::scene::{Projection, Scene};
-use crate::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
+use crate::app::commands::{to_rgb, SceneArgs, Session};
+use caustics::error::{AppError, AppResult};
+use caustics::image_io::{self, RgbImage};
+use caustics::metrics;
+use caustics::reference::{self, Paths, RefParams};
+use caustics::scene::{Projection, Scene};
+use caustics::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
+use caustics::Aov;
 use glam::{Quat, Vec3};
 use serde_json::json;
 use std::path::PathBuf;
@@ -48,7 +48,7 @@ pub struct TemporalArgs {
     pub transport: Transport,
     /// Exact transport: where the splat radius comes from (cell or differential).
     #[arg(long, value_enum, default_value_t = Tuning::default().footprint)]
-    pub footprint: crate::settings::Footprint,
+    pub footprint: caustics::settings::Footprint,
     /// Methods: dense, max-level, max-error, flux-error (comma-separated).
     #[arg(long, default_value = "dense,max-level,max-error", value_delimiter = ',')]
     pub methods: Vec<String>,
@@ -87,9 +87,9 @@ fn orbit(scene: &Scene, d: Vec3, deg: f32) -> Scene {
 /// The reference at one light position, cached next to the bench's references (the key adds the light's
 /// position to the scene file's).
 fn reference_at(scene_path: &std::path::Path, scene: &Scene, p: &RefParams) -> AppResult<RgbImage> {
-    let key = reference::cache::cache_key(scene_path, p)?;
+    let key = reference::cache_key(scene_path, p)?;
     let pos = scene.lights[0].position.to_array().map(f32::to_bits);
-    let dir = reference::cache::cache_dir();
+    let dir = reference::cache_dir_from_env();
     let file = dir.join(format!("{key}-light-{:08x}{:08x}{:08x}.exr", pos[0], pos[1], pos[2]));
     if let Ok(img) = image_io::read_exr(&file) {
         if img.width == p.width && img.height == p.height {
@@ -213,7 +213,7 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
             "frame_change": change, "gpu_ms_mean": gpu_ms,
         }));
     }
-    crate::commands::validation_verdict(&session)?;
+    crate::app::commands::validation_verdict(&session)?;
     let mut md = format!(
         "{} on {}, {} transport, {} frames, light orbit step {}°, 64² against the {} reference ({} photons); \
          the reference's own frame-to-frame change is {:.4}\n\n\

@@ -1,6 +1,6 @@
 //! The viewer's camera: the scene's camera, orbited around its target and zoomed.
 
-use crate::scene::{Camera, Projection};
+use caustics::scene::{Camera, Projection};
 use glam::Vec3;
 
 const MAX_PITCH: f32 = 89.0 * std::f32::consts::PI / 180.0;

@@ -13,7 +13,7 @@
 //! level and full quality completed (`converged_ms`).
 
 use super::controls::{Action, CONTROLS};
-use crate::error::{AppError, AppResult};
+use caustics::error::{AppError, AppResult};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::time::Instant;

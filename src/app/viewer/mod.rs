@@ -16,22 +16,21 @@ mod controls;
 mod orbit;
 mod present;
 mod script;
+pub mod swapchain;
 
-pub use controls::{help_markdown, help_text, Action, CONTROLS};
-pub use present::{Capture, CaptureSource};
+pub use controls::{help_markdown, help_text, Action};
+pub use present::Capture;
 
-use crate::commands::{default_scene, MethodArgs};
-use crate::error::{AppError, AppResult};
-use crate::image_io;
-use crate::profiler;
-use crate::renderer::{FrameDesc, FrameReport, Renderer, SlotVerdict};
-use crate::scene::{Camera, Light, Material, Projection, Scene};
-use crate::settings::{parse_size, Method, Metric, Quality, Settings};
-use crate::shaders::consts::*;
-use crate::targets::Targets;
-use crate::vk::swapchain::{self, Acquired, LiveCounts, Presented, Surface, Swapchain, SwapchainDesc};
-use crate::vk::{ContextDesc, Device, Instance, SubmitSync, VkError};
+use crate::app::commands::{default_scene, MethodArgs};
+use crate::app::profiler;
 use ash::vk;
+use caustics::consts::*;
+use caustics::error::{AppError, AppResult};
+use caustics::gpu::{ContextDesc, Device, Instance, SubmitSync, VkError};
+use caustics::image_io;
+use caustics::scene::{Camera, Light, Material, Projection, Scene};
+use caustics::settings::{parse_size, Method, Metric, Quality, Settings};
+use caustics::{FrameDesc, FrameOutput, FrameReport, Renderer, SlotVerdict};
 use glam::{Quat, Vec3};
 use orbit::Orbit;
 use present::Presenter;
@@ -42,6 +41,7 @@ use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use swapchain::{Acquired, LiveCounts, Presented, Surface, Swapchain, SwapchainDesc};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -280,7 +280,7 @@ impl App<'_> {
             image_io::write_png(p, c.width, c.height, &c.rgba)?;
             eprintln!("wrote {} ({}x{}, the last presented frame: #{})", p.display(), c.width, c.height, out.presented);
         }
-        let messages = crate::vk::validation_message_count();
+        let messages = caustics::gpu::validation_message_count();
         if let Some(p) = &self.args.stats {
             let mut stats = out.stats;
             stats["validation"] = json!({"enabled": out.validation, "messages": messages});
@@ -468,7 +468,7 @@ struct Viewer {
     /// Degrees the camera orbits every frame (--orbit-camera).
     orbit_step: f32,
     /// The camera of the last frame drawn (a change draws the next frame without supersampling).
-    last_camera: Option<crate::scene::Camera>,
+    last_camera: Option<caustics::scene::Camera>,
     /// The level rendered while interacting (adapted to keep those frames near `interactive_ms`).
     interactive_level: u32,
     /// GPU ms per frame the interactive level aims at.
@@ -686,7 +686,6 @@ impl Viewer {
             s
         };
         match action {
-            Orbit | Zoom | DragLight => {}
             LightLeft => self.input.light_keys.x -= 1.0,
             LightRight => self.input.light_keys.x += 1.0,
             LightDown => self.input.light_keys.y -= 1.0,
@@ -713,8 +712,8 @@ impl Viewer {
             }))?,
             Transport => {
                 let transport = match c.transport {
-                    crate::settings::Transport::Exact => crate::settings::Transport::TwoInterface,
-                    crate::settings::Transport::TwoInterface => crate::settings::Transport::Exact,
+                    caustics::settings::Transport::Exact => caustics::settings::Transport::TwoInterface,
+                    caustics::settings::Transport::TwoInterface => caustics::settings::Transport::Exact,
                 };
                 self.change_settings(with(&|q| q.transport = transport))?
             }
@@ -757,8 +756,8 @@ impl Viewer {
         };
         let ior = self.ior();
         let transport = match s.transport {
-            crate::settings::Transport::Exact => "exact",
-            crate::settings::Transport::TwoInterface => "two-interface",
+            caustics::settings::Transport::Exact => "exact",
+            caustics::settings::Transport::TwoInterface => "two-interface",
         };
         format!(
             "{transport} {method}, level {} ({}²), caustic map {}²{}",
@@ -953,8 +952,9 @@ impl Viewer {
             wait: vec![(sc.acquire_semaphores[slot], vk::PipelineStageFlags2::ALL_TRANSFER)],
             signal: vec![sc.render_done[index as usize]],
         };
-        let mut finish =
-            |_: &Device, cmd: vk::CommandBuffer, t: &Targets| presenter.record(cmd, &t.eye.beauty, sc, index, capture);
+        let mut finish = |_: &Device, cmd: vk::CommandBuffer, out: &FrameOutput| {
+            presenter.record(cmd, out.beauty, sc, index, capture)
+        };
         // Progressive refinement: an interactive level while the light or the glass changes, then one level more
         // per frame up to the chosen one (each frame complete and flux-correct at its level).
         let chosen = renderer.config().level;
@@ -1194,15 +1194,15 @@ impl Viewer {
         let st = last.and_then(|r| r.state);
         let light = &self.renderer.scene().lights[0];
         json!({
-            "device": {"name": info.name, "driver": info.driver, "kind": crate::vk::context::kind_name(info.kind)},
+            "device": {"name": info.name, "driver": info.driver, "kind": caustics::gpu::kind_name(info.kind)},
             "camera": self.camera_name,
             "camera_position": self.orbit.camera().position.to_array(),
             "light": {"position": light.position.to_array(), "target": light.target.to_array()},
             "ior": self.ior(),
             "method": s.method,
             "metric": if s.method == Method::Adaptive { json!(s.metric) } else { Value::Null },
-            "target_error": crate::commands::flux_error(s).then_some(s.target_error),
-            "tau": crate::commands::flux_error(s).then(|| s.tau()),
+            "target_error": crate::app::commands::flux_error(s).then_some(s.target_error),
+            "tau": crate::app::commands::flux_error(s).then(|| s.tau()),
             "level": s.level,
             "equivalent_resolution": LEVEL0_RES << s.level,
             "settings": s,

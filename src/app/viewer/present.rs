@@ -8,9 +8,9 @@
 //!   swapchain format's UNORM twin and a copy (bits unchanged: the formats are size-compatible) moves it into the
 //!   swapchain image.
 
-use crate::vk::swapchain::{is_bgra, is_srgb, unorm_twin, Swapchain};
-use crate::vk::{Access, Barriers, Buffer, Device, Image, VkError, VkResult};
+use crate::app::viewer::swapchain::{is_bgra, is_srgb, unorm_twin, Swapchain};
 use ash::vk;
+use caustics::gpu::{Access, Barriers, Buffer, Device, Image, VkError, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 

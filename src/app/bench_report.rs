@@ -9,12 +9,12 @@
 //! - `rays_traced`: rays the exact transport traced through the BVH in the last frame (every wave, every Fresnel
 //!   branch), null for two-interface;
 //! - `gpu_ms_median` (summed GPU stages of one frame) and `frame_ms_median` (wall time of one frame), over frames;
-//! - the metric against the reference (crate::metrics): `rel_l1_64`, `rel_l1_256`, `flux_ratio`, and
+//! - the metric against the reference (caustics::metrics): `rel_l1_64`, `rel_l1_256`, `flux_ratio`, and
 //!   `peak_offset_m` (docs/design.md reports all three; defaults to 0 when absent);
 //! - `extra`: anything else (per-stage times, overflow counts), free-form JSON, defaults to null.
 
-use crate::error::{AppError, AppResult};
-use crate::image_io;
+use caustics::error::{AppError, AppResult};
+use caustics::image_io;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Per-stage GPU timings over frames: summary statistics, a printed table, JSON, and a Chrome trace (opens in
 //! Perfetto or chrome://tracing).
 
-use crate::renderer::FrameReport;
+use caustics::FrameReport;
 use serde_json::{json, Value};
 
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]

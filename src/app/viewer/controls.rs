@@ -5,9 +5,6 @@ use winit::keyboard::{Key, NamedKey};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
-    Orbit,
-    Zoom,
-    DragLight,
     LightLeft,
     LightRight,
     LightAway,
@@ -37,10 +34,7 @@ impl Action {
     /// Actions that make sense to repeat while a key is held.
     pub fn repeats(self) -> bool {
         use Action::*;
-        matches!(
-            self,
-            LightLeft | LightRight | LightAway | LightNear | LightUp | LightDown | IorDown | IorUp | Zoom | Orbit
-        )
+        matches!(self, LightLeft | LightRight | LightAway | LightNear | LightUp | LightDown | IorDown | IorUp)
     }
 }
 

@@ -4,16 +4,16 @@
 //! frames of each point (median GPU ms from timestamp queries, median wall ms), and scores the last frame's
 //! caustics AOV against CPU references (src/reference, cached on disk) with the project's metric.
 
-use crate::bench_report::{self, BenchRow};
-use crate::commands::{to_rgb, SceneArgs, Session};
-use crate::error::{AppError, AppResult};
-use crate::image_io::{self, RgbImage};
-use crate::metrics;
-use crate::profiler::Summary;
-use crate::reference::{self, Paths, RefParams};
-use crate::renderer::{Aov, FrameReport};
-use crate::settings::{Driven, Method, Metric, Quality, Settings, Transport, Tuning, TRAVERSE_WG_SWEEP};
-use crate::shaders::consts::*;
+use crate::app::bench_report::{self, BenchRow};
+use crate::app::commands::{to_rgb, SceneArgs, Session};
+use crate::app::profiler::Summary;
+use caustics::consts::*;
+use caustics::error::{AppError, AppResult};
+use caustics::image_io::{self, RgbImage};
+use caustics::metrics;
+use caustics::reference::{self, Paths, RefParams};
+use caustics::settings::{Driven, Method, Metric, Quality, Settings, Transport, Tuning, TRAVERSE_WG_SWEEP};
+use caustics::{Aov, FrameReport};
 use serde_json::json;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -73,12 +73,12 @@ pub struct BenchArgs {
     /// The tuning knobs, as `render` takes them (the bench sweeps --driven and --traverse-wg itself).
     #[command(flatten)]
     #[serde(flatten)]
-    pub tuning: crate::commands::TuningArgs,
+    pub tuning: crate::app::commands::TuningArgs,
     /// Flux-error metric: the target errors to sweep (comma-separated, each in (0, 1]: the relative L1 at 64²
     /// that merging may add to max-level's image), each mapped to its per-cell threshold tau by the calibration
     /// table; with more than one, the rows' metric reads `flux-error@E`. When max-level runs too, each flux-error
     /// row's `extra` holds `added_rel_l1_64`: its rel-L1 at 64² against max-level's image at the same level.
-    #[arg(long, default_values_t = [crate::settings::DEFAULT_TARGET_ERROR], value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, default_values_t = [caustics::settings::DEFAULT_TARGET_ERROR], value_delimiter = ',', allow_negative_numbers = true)]
     pub target_errors: Vec<f32>,
     /// Photon budget (MiB); 0: automatic, as for render.
     #[arg(long, default_value_t = 0.0)]
@@ -199,7 +199,7 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
                     metric: Metric::MaxLevel,
                     driven: Driven::Gpu,
                     wg: TRAVERSE_WG,
-                    target_error: crate::settings::DEFAULT_TARGET_ERROR,
+                    target_error: caustics::settings::DEFAULT_TARGET_ERROR,
                     label: "dense".into(),
                 });
                 continue;
@@ -220,7 +220,7 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
                 .map(|&e| (e, if many { format!("flux-error@{e}") } else { metric.name().to_string() }))
                 .collect()
         } else {
-            vec![(crate::settings::DEFAULT_TARGET_ERROR, metric.name().to_string())]
+            vec![(caustics::settings::DEFAULT_TARGET_ERROR, metric.name().to_string())]
         };
         for (target_error, label) in &targets {
             for d in &driven {
@@ -279,12 +279,12 @@ fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: 
             width,
             height,
             seed,
-            progress: true,
+            progress: Some(crate::app::reference_cmd::progress_bar()),
             ..RefParams::default()
         };
         let t = Instant::now();
         eprintln!("reference {:?} for {}: {photons} photons, seed {seed} (cached once built)", paths, scene.display());
-        let img = reference::cached(scene, &p)?;
+        let img = reference::cached_in(&reference::cache_dir_from_env(), scene, &p)?;
         eprintln!("reference {:?} for {}: ready in {:.1} s", paths, scene.display(), t.elapsed().as_secs_f64());
         Ok::<_, AppError>(img)
     };
@@ -348,7 +348,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
     }
     let levels = parse_levels(&args.levels)?;
     let pts = points(args)?;
-    let scenes = if args.scenes.is_empty() { vec![crate::commands::default_scene()] } else { args.scenes.clone() };
+    let scenes = if args.scenes.is_empty() { vec![crate::app::commands::default_scene()] } else { args.scenes.clone() };
     let mut rows: Vec<BenchRow> = Vec::new();
     let mut device = String::new();
     for scene_path in &scenes {
@@ -449,7 +449,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                         },
                         "traverse_wg": p.wg,
                         "target_error": flux_error.then_some(p.target_error),
-                        "tau": flux_error.then(|| crate::calibration::tau_for_target_error(p.target_error)),
+                        "tau": flux_error.then(|| caustics::calibration::tau_for_target_error(p.target_error)),
                         "traverse_ms": stage_median(&frames, "traverse"),
                         "photon_trace_ms": stage_median(&frames, "photon_trace"),
                         "transport_ms": stage_median(&frames, "transport"),
@@ -457,7 +457,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                         "light_gbuffer_ms": stage_median(&frames, "light_gbuffer"),
                         "eye_ms": stage_median(&frames, "eye"),
                         "stats_ms": stage_median(&frames, "stats"),
-                        "host_roundtrip_ms": stage_median(&frames, crate::frame::HOST_ROUNDTRIP),
+                        "host_roundtrip_ms": stage_median(&frames, caustics::HOST_ROUNDTRIP),
                         "host_readbacks_per_frame": last.host_readbacks,
                         "batches": st.batches_committed,
                         "overflow_events": st.batches_aborted,
@@ -517,7 +517,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                 );
             }
         }
-        crate::commands::validation_verdict(&session)?;
+        crate::app::commands::validation_verdict(&session)?;
     }
     let doc = json!({"device": device, "args": args, "reference_photons": reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0)), "rows": rows});
     if let Some(p) = &args.json {

@@ -5,9 +5,9 @@
 //! destroyed in the right order. Every swapchain and its images are counted while they live ([`live_counts`]), so
 //! tests can prove that retired swapchains are destroyed.
 
-use super::context::{Device, Instance};
-use super::error::{Check, VkError, VkResult};
 use ash::vk;
+use caustics::gpu::{Check, VkError, VkResult};
+use caustics::gpu::{Device, Instance};
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 use std::ffi::CStr;
 use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};

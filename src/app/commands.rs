@@ -1,17 +1,17 @@
 //! The `render` and `profile` commands (the CLI edge: arguments in, files and stats out).
 
-use crate::bvh::BvhLayout;
-use crate::error::{AppError, AppResult};
-use crate::image_io::{self, RgbImage};
-use crate::profiler;
-use crate::renderer::{Aov, AovData, FrameDesc, FrameReport, Renderer, SlotVerdict};
-use crate::scene::{Camera, Projection, Scene};
-use crate::settings::{
+use crate::app::profiler;
+use caustics::consts::*;
+use caustics::error::{AppError, AppResult};
+use caustics::gpu::{Context, ContextDesc};
+use caustics::image_io::{self, RgbImage};
+use caustics::scene::{Camera, Projection, Scene};
+use caustics::settings::BvhLayout;
+use caustics::settings::{
     parse_size, CoopChecks, Driven, Footprint, Method, Metric, Quality, ResolvedSettings, Settings, Splat, Transport,
     Tuning, DEFAULT_TARGET_ERROR,
 };
-use crate::shaders::consts::*;
-use crate::vk::{self, Context, ContextDesc};
+use caustics::{Aov, AovData, Frame, FrameDesc, FrameReport, Renderer, SlotVerdict};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -339,7 +339,7 @@ impl Session {
         })
     }
 
-    pub fn device(&self) -> &Arc<vk::Device> {
+    pub fn device(&self) -> &Arc<caustics::gpu::Device> {
         self.renderer.device()
     }
 
@@ -373,7 +373,7 @@ impl Session {
     pub fn frame(&mut self, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
         let view = self.renderer.camera_view(&self.camera, self.width, self.height);
         loop {
-            let (report, img) = match self.slow_frame_s {
+            let Frame { report, image: img } = match self.slow_frame_s {
                 None => self.renderer.render(&FrameDesc::new(&view, aov))?,
                 Some(est) => {
                     let renderer = &mut self.renderer;
@@ -506,8 +506,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
     let summaries = profiler::stage_summaries(frames);
     let stage = |name: &str| summaries.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
     let mut v = json!({
-        "device": {"name": info.name, "driver": info.driver, "kind": crate::vk::context::kind_name(info.kind)},
-        "validation": {"enabled": session.validation, "messages": vk::validation_message_count()},
+        "device": {"name": info.name, "driver": info.driver, "kind": caustics::gpu::kind_name(info.kind)},
+        "validation": {"enabled": session.validation, "messages": caustics::gpu::validation_message_count()},
         "scene": session.scene_path.display().to_string(),
         "camera": session.camera.name,
         "size": [session.width, session.height],
@@ -711,7 +711,7 @@ pub fn camera_kind(c: &Camera) -> &'static str {
 
 /// Any validation message fails the command (after its outputs are written).
 pub fn validation_verdict(session: &Session) -> AppResult<()> {
-    let n = vk::validation_message_count();
+    let n = caustics::gpu::validation_message_count();
     if session.validation && n > 0 {
         return Err(AppError::Failed(format!("{n} Vulkan validation messages (see above)")));
     }

@@ -1,4 +1,4 @@
-//! `caustics soak` (hidden; `tools/soak` runs it): one [`Renderer`](crate::renderer::Renderer) renders N frames
+//! `caustics soak` (hidden; `tools/soak` runs it): one [`Renderer`](caustics::Renderer) renders N frames
 //! headless while the light orbits and the settings change every frame (transport, method, metric, level, index
 //! of refraction, output size), and checks that
 //!
@@ -18,13 +18,12 @@
 //! Frame i renders setting i mod S at light position ⌊i / S⌋ mod A, so all S settings see each light position
 //! in turn and the whole schedule repeats every S·A frames.
 
-use crate::commands::{to_rgb, SceneArgs, Session};
-use crate::error::{AppError, AppResult};
-use crate::image_io;
-use crate::renderer::Aov;
-use crate::scene::{LightKind, Material, Scene};
-use crate::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
-use crate::vk;
+use crate::app::commands::{to_rgb, SceneArgs, Session};
+use caustics::error::{AppError, AppResult};
+use caustics::image_io;
+use caustics::scene::{LightKind, Material, Scene};
+use caustics::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
+use caustics::Aov;
 use glam::{Quat, Vec3};
 use serde_json::json;
 use std::path::PathBuf;
@@ -266,7 +265,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
                 fail(format!("exact transport's energy account residual {residual:.2e}"));
             }
         }
-        let messages = vk::validation_message_count();
+        let messages = caustics::gpu::validation_message_count();
         if session.validation && messages > 0 {
             fail(format!("{messages} validation messages"));
             break;
@@ -338,7 +337,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
     let after = rss_points.len();
     let summary = json!({
         "device": session.device().info.name,
-        "validation": {"enabled": session.validation, "messages": vk::validation_message_count()},
+        "validation": {"enabled": session.validation, "messages": caustics::gpu::validation_message_count()},
         "scene": session.scene_path.display().to_string(),
         "frames": args.frames,
         "period_frames": period,
@@ -388,5 +387,5 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
     if !failures.is_empty() {
         return Err(AppError::Failed(format!("soak: {} failed checks (first: {})", failures.len(), failures[0])));
     }
-    crate::commands::validation_verdict(&session)
+    crate::app::commands::validation_verdict(&session)
 }

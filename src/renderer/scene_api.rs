@@ -1,0 +1,150 @@
+//! The scene in code: meshes in object space, instances of them with a transform and a material, and the lights.
+//! A scene loaded from a file is the same thing: each of its objects is a mesh with the identity transform.
+//!
+//! The renderer keeps the instances' world-space triangles in its [`Scene`] (what the light views, the reference
+//! tracer and the stats read). Moving an instance or changing its material rebuilds the scene's GPU buffers and
+//! its BVH before the next frame; the meshes' own data is kept, so a mesh is never read from its file again.
+
+use super::{check_transport, Renderer};
+use crate::error::{AppError, AppResult};
+use crate::scene::{mesh::MAX_COORDINATE, Material, Mesh, Object};
+use glam::Mat4;
+use std::sync::Arc;
+
+/// A mesh the renderer holds ([`Renderer::add_mesh`]; a loaded scene's objects have one each).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MeshId(u32);
+
+/// An instance of a mesh in the scene: one of the scene's objects, in their order ([`Renderer::add_instance`]
+/// appends one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct InstanceId(u32);
+
+impl InstanceId {
+    /// The instance that is the scene's object `index`.
+    pub fn from_index(index: usize) -> InstanceId {
+        InstanceId(index as u32)
+    }
+
+    /// Its index among the scene's objects.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// The meshes and, per scene object, which mesh and transform it is.
+pub(super) struct Instances {
+    meshes: Vec<Arc<Mesh>>,
+    /// (mesh, object → world transform), one per scene object, in order.
+    of_object: Vec<(MeshId, Mat4)>,
+}
+
+impl Instances {
+    /// A loaded scene: each object its own mesh (its world-space triangles) with the identity transform.
+    pub fn of(scene: &crate::scene::Scene) -> Instances {
+        let meshes: Vec<Arc<Mesh>> = scene.objects.iter().map(|o| Arc::new(o.mesh.clone())).collect();
+        let of_object = (0..meshes.len()).map(|i| (MeshId(i as u32), Mat4::IDENTITY)).collect();
+        Instances { meshes, of_object }
+    }
+}
+
+/// A mesh a renderer can draw: indices in range and a multiple of three, one normal per position, every coordinate
+/// finite and within ±1e9.
+fn check_mesh(mesh: &Mesh) -> AppResult<()> {
+    let bad = |m: String| Err(AppError::BadInput(format!("add_mesh: {m}")));
+    if mesh.indices.is_empty() || mesh.indices.len() % 3 != 0 {
+        return bad(format!("{} indices: must be a positive multiple of 3", mesh.indices.len()));
+    }
+    if mesh.normals.len() != mesh.positions.len() {
+        return bad(format!("{} normals for {} positions: one per position", mesh.normals.len(), mesh.positions.len()));
+    }
+    if let Some(i) = mesh.indices.iter().find(|&&i| i as usize >= mesh.positions.len()) {
+        return bad(format!("index {i} is past the {} positions", mesh.positions.len()));
+    }
+    if let Some(p) = mesh.positions.iter().find(|p| !(p.is_finite() && p.abs().max_element() <= MAX_COORDINATE)) {
+        return bad(format!("position {p}: must be finite and within ±1e9"));
+    }
+    if let Some(n) = mesh.normals.iter().find(|n| !n.is_finite()) {
+        return bad(format!("normal {n}: must be finite"));
+    }
+    Ok(())
+}
+
+fn check_transform(m: &Mat4) -> AppResult<()> {
+    let det = glam::Mat3::from_mat4(*m).determinant();
+    if !(m.is_finite() && det.is_finite() && det.abs() > 1e-12) {
+        return Err(AppError::BadInput(format!("transform {m}: must be finite and invertible")));
+    }
+    Ok(())
+}
+
+impl Renderer {
+    /// Add a mesh (object space) the scene can then instance any number of times.
+    pub fn add_mesh(&mut self, mesh: Mesh) -> AppResult<MeshId> {
+        check_mesh(&mesh)?;
+        self.instances.meshes.push(Arc::new(mesh));
+        Ok(MeshId(self.instances.meshes.len() as u32 - 1))
+    }
+
+    /// Add an instance of `mesh` to the scene: a new object named `name` with `material`, placed by `transform`
+    /// (object → world). Refused, with the scene unchanged, where the transport cannot render the material.
+    pub fn add_instance(
+        &mut self,
+        mesh: MeshId,
+        name: &str,
+        material: Material,
+        transform: Mat4,
+    ) -> AppResult<InstanceId> {
+        let m = self.mesh(mesh)?.clone();
+        check_transform(&transform)?;
+        self.scene.objects.push(Object { name: name.to_string(), material, mesh: (*m).clone().transformed(transform) });
+        if let Err(e) = check_transport(&self.scene, &self.config) {
+            self.scene.objects.pop();
+            return Err(e);
+        }
+        self.instances.of_object.push((mesh, transform));
+        self.geometry_dirty = true;
+        Ok(InstanceId(self.scene.objects.len() as u32 - 1))
+    }
+
+    /// Place instance `id` by `transform` (object → world, replacing its last one).
+    pub fn set_transform(&mut self, id: InstanceId, transform: Mat4) -> AppResult<()> {
+        check_transform(&transform)?;
+        let (mesh, _) = self.instance(id)?;
+        let m = self.mesh(mesh)?.clone();
+        self.scene.objects[id.index()].mesh = (*m).clone().transformed(transform);
+        self.instances.of_object[id.index()].1 = transform;
+        self.geometry_dirty = true;
+        Ok(())
+    }
+
+    /// Give instance `id` another material. Refused, with the material unchanged, where the transport cannot
+    /// render it (a mirror or absorbing or dispersive glass under the two-interface model).
+    pub fn set_material(&mut self, id: InstanceId, material: Material) -> AppResult<()> {
+        self.instance(id)?;
+        let old = std::mem::replace(&mut self.scene.objects[id.index()].material, material);
+        if let Err(e) = check_transport(&self.scene, &self.config) {
+            self.scene.objects[id.index()].material = old;
+            return Err(e);
+        }
+        self.geometry_dirty = true;
+        Ok(())
+    }
+
+    /// The transform instance `id` was placed with (the identity for a loaded scene's objects).
+    pub fn transform(&self, id: InstanceId) -> AppResult<Mat4> {
+        Ok(self.instance(id)?.1)
+    }
+
+    fn instance(&self, id: InstanceId) -> AppResult<(MeshId, Mat4)> {
+        self.instances.of_object.get(id.index()).copied().ok_or_else(|| {
+            AppError::BadInput(format!("instance {}: the scene has {} objects", id.0, self.scene.objects.len()))
+        })
+    }
+
+    fn mesh(&self, id: MeshId) -> AppResult<&Arc<Mesh>> {
+        self.instances.meshes.get(id.0 as usize).ok_or_else(|| {
+            AppError::BadInput(format!("mesh {}: {} meshes were added", id.0, self.instances.meshes.len()))
+        })
+    }
+}

@@ -1,0 +1,50 @@
+//! The examples run on lavapipe with validation (and synchronization validation) on: `headless` writes its EXR and
+//! PNG; `embed` records a frame into a Vulkan device and command buffer it created itself (the import path) and
+//! checks that its image is byte for byte the one `Renderer::render` gives. `cargo test` builds the examples; this
+//! runs them.
+
+mod common;
+use std::path::PathBuf;
+use std::process::Command;
+
+/// target/<profile>/examples/<name>, next to this test's own target/<profile>/deps/.
+fn example(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("the test's path");
+    let profile = exe.parent().and_then(|deps| deps.parent()).expect("target/<profile>");
+    let path = profile.join("examples").join(name);
+    assert!(path.is_file(), "{} is not built (cargo test builds the examples)", path.display());
+    path
+}
+
+fn run(name: &str, args: &[&str]) -> String {
+    let out = Command::new(example(name))
+        .args(args)
+        .env("CAUSTICS_VALIDATION", "1")
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("run the example");
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "example {name} failed ({:?}):\n{text}", out.status.code());
+    assert!(!text.contains("validation messages"), "{text}");
+    text
+}
+
+#[test]
+fn headless_example_writes_its_images() {
+    let dir = common::out_dir("example_headless");
+    let scene = common::scene("bunny.toml");
+    let text = run("headless", &[&scene, dir.to_str().unwrap()]);
+    let exr = caustics::image_io::read_exr(&dir.join("caustics.exr")).expect("the caustics EXR");
+    assert_eq!((exr.width, exr.height), (256, 256));
+    let sum: f64 = exr.data.iter().map(|p| p[0] as f64).sum();
+    assert!(sum > 0.0, "a caustic on the floor: {text}");
+    let (w, h, rgba) = caustics::image_io::read_png(&dir.join("beauty.png")).expect("the beauty PNG");
+    assert_eq!((w, h, rgba.len()), (480, 360, 4 * 480 * 360));
+    assert!(text.contains("caustics reused: true"), "the beauty frame reuses the caustic maps:\n{text}");
+}
+
+#[test]
+fn embed_example_matches_render() {
+    let text = run("embed", &[&common::scene("sphere.toml")]);
+    assert!(text.contains(" 0 of 76800 bytes differ from Renderer::render"), "{text}");
+}
