@@ -10,6 +10,9 @@ layout(set = 0, binding = 1) uniform sampler2D t_flux;
 layout(set = 0, binding = 2) uniform usampler2D t_recv;
 layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
 
+// add: add to the irradiance already there (a frame's remaining batches) instead of writing it.
+layout(push_constant) uniform ResolvePush { uint add; } pc;
+
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
 void main() {
@@ -36,10 +39,11 @@ void main() {
     // and blue passes keep what the earlier ones wrote.
     uint c = u_frame.transport.w & 0xffu;
     if (c != 0u) {
-        vec4 prev = c == 1u ? vec4(0.0) : imageLoad(o_irradiance, p);
-        prev[c - 1u] = e[c - 1u];
+        vec4 prev = c == 1u && pc.add == 0u ? vec4(0.0) : imageLoad(o_irradiance, p);
+        prev[c - 1u] = e[c - 1u] + (pc.add != 0u ? prev[c - 1u] : 0.0);
         imageStore(o_irradiance, p, prev);
         return;
     }
-    imageStore(o_irradiance, p, vec4(e, 0.0));
+    vec4 prev = pc.add != 0u ? imageLoad(o_irradiance, p) : vec4(0.0);
+    imageStore(o_irradiance, p, vec4(prev.rgb + e, 0.0));
 }

@@ -270,7 +270,14 @@ impl Targets {
         let bytes = Self::readback_layout(s, 16 * width as u64 * height as u64).total;
         (0..slots.max(1))
             .map(|_| {
-                Buffer::new(device, "readback", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
+                Buffer::new(
+                    device,
+                    "readback",
+                    bytes,
+                    // A continuation restores its passes' states from the frame before.
+                    vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+                    MemoryLocation::GpuToCpu,
+                )
             })
             .collect()
     }

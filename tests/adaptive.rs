@@ -116,6 +116,31 @@ fn tiny_budget_batches_to_the_same_image() {
     assert!(m.rel_l1 <= 1e-4, "rel-L1 {}", m.rel_l1);
 }
 
+/// A frame whose batch slots run out keeps the batches it committed and traces the remaining tiles in a further
+/// submission (a continuation), instead of being rendered again: two batch slots a submission and a tiny budget
+/// force several, and the image, the photons and the rays traced equal the one-batch frame's (the rays are the
+/// whole frame's: a discarded first attempt would show fewer), with one host round trip per continuation.
+#[test]
+fn a_frame_out_of_batch_slots_is_finished_not_rendered_again() {
+    let dir = out_dir("continuation");
+    let base = ["--transport", "exact", "--level", "3"];
+    let (one, oi) = caustics_aov(&dir, "one", SPHERE, &base);
+    let (cont, ci) =
+        caustics_aov(&dir, "cont", SPHERE, &[&base[..], &["--photon-budget", "0.25", "--batch-slots", "2"]].concat());
+    assert_eq!(one["continuations"], 0);
+    let n = cont["continuations"].as_u64().unwrap();
+    assert!(n >= 2, "continuations {n}");
+    assert_eq!(cont["host_readbacks_per_frame"].as_u64(), Some(n), "one round trip per continuation");
+    assert_eq!(cont["unfinished_tiles"], 0);
+    assert_eq!(one["photons_splatted"], cont["photons_splatted"]);
+    assert_eq!(one["exact_transport"]["rays_traced"], cont["exact_transport"]["rays_traced"]);
+    assert_eq!(one["levels"], cont["levels"], "the per-level counts accumulate across the submissions");
+    let residual = cont["exact_transport"]["energy"]["residual"].as_f64().unwrap();
+    assert!(residual <= 1e-6, "the energy account closes across the submissions: {residual}");
+    let m = compare(&ci, &oi, 64, 2.0);
+    assert!(m.rel_l1 <= 1e-4 && (m.flux_ratio - 1.0).abs() <= 1e-5, "{m:?}");
+}
+
 /// With batching off, an overflowing traversal drops work, counts it, and writes nothing past the buffer (a
 /// canary after the capacity survives).
 #[test]

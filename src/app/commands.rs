@@ -11,7 +11,7 @@ use caustics::settings::{
     parse_size, CoopChecks, Driven, Footprint, Method, Metric, Quality, ResolvedSettings, Settings, Splat, Transport,
     Tuning, DEFAULT_TARGET_ERROR,
 };
-use caustics::{Aov, AovData, Frame, FrameDesc, FrameReport, Renderer, SlotVerdict};
+use caustics::{Aov, AovData, Frame, FrameDesc, FrameReport, Renderer};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -369,34 +369,25 @@ impl Session {
         }
     }
 
-    /// Render one frame; with GPU-driven batching, re-render with more slots until no tile is left pending.
+    /// Render one frame (a frame whose batch slots run out is finished in further submissions, not rendered
+    /// again: see `Renderer::render`).
     pub fn frame(&mut self, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
         let view = self.renderer.camera_view(&self.camera, self.width, self.height);
-        loop {
-            let Frame { report, image: img } = match self.slow_frame_s {
-                None => self.renderer.render(&FrameDesc::new(&view, aov))?,
-                Some(est) => {
-                    let renderer = &mut self.renderer;
-                    with_progress(est, || renderer.render(&FrameDesc::new(&view, aov)))?
-                }
-            };
-            match self.renderer.adapt_batch_slots(&report) {
-                SlotVerdict::Complete => return Ok((report, img)),
-                SlotVerdict::OutOfSlots => {
-                    eprintln!(
-                        "warning: {} tiles were not traversed: the photon budget needs more than {MAX_BATCHES} batches (raise --photon-budget)",
-                        report.unfinished_tiles
-                    );
-                    return Ok((report, img));
-                }
-                SlotVerdict::Incomplete => eprintln!(
-                    "batching: {} tiles pending after {} batch slots; rendering again with {}",
-                    report.unfinished_tiles,
-                    report.batch_slots,
-                    self.renderer.slots_hint()
-                ),
+        let Frame { report, image } = match self.slow_frame_s {
+            None => self.renderer.render(&FrameDesc::new(&view, aov))?,
+            Some(est) => {
+                let renderer = &mut self.renderer;
+                with_progress(est, || renderer.render(&FrameDesc::new(&view, aov)))?
             }
+        };
+        if report.unfinished_tiles > 0 {
+            log::warn!(
+                "{} tiles of the photon quadtree were not traced: the photon budget needs more than {MAX_BATCHES} \
+                 batches (raise --photon-budget)",
+                report.unfinished_tiles
+            );
         }
+        Ok((report, image))
     }
 
     pub fn pixel_area(&self) -> Option<f64> {
@@ -523,6 +514,8 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "caustic_passes": last.caustics,
         "photons_splatted": photons,
         "host_readbacks_per_frame": last.host_readbacks,
+        "continuations": last.continuations,
+        "barrier_batches": last.barrier_batches,
         "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
         "photon_buffer_capacity_bytes": 8 * s.photon_capacity() as u64,
         "levels": level_rows(&last, s.level),
@@ -677,7 +670,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     eprintln!(
         "{}: {} photons, GPU {:.2} ms, frame {:.1} ms on {}",
         args.out.display(),
-        last.state.map(|s| s.photons_total).unwrap_or(0),
+        last.photons(),
         last.gpu_ms,
         last.frame_ms,
         session.device().info.name

@@ -72,6 +72,20 @@ pub(crate) struct FramePlan<'a> {
     pub aov: Option<Aov>,
     /// GPU-driven batching: the batch slots to record.
     pub batch_slots: u32,
+    /// The rest of an earlier frame's batches: that frame ran out of batch slots with tiles left on the GPU's stack.
+    pub continuation: Option<Continuation<'a>>,
+}
+
+/// A frame that finishes the batches of the frame before it: the passes it names restore their traversal and
+/// transport state from that frame's readback buffer (the stack of tiles left, the counts and the energy account
+/// so far), trace the remaining tiles into a cleared flux map, and add its irradiance to the pass's map; the other
+/// passes' maps are kept as they are.
+#[derive(Clone, Copy, Debug)]
+pub struct Continuation<'a> {
+    /// Per pass: whether it continues.
+    pub passes: &'a [bool],
+    /// The frame-in-flight slot whose readback buffer holds the earlier frame's states.
+    pub from_slot: usize,
 }
 
 impl FramePlan<'_> {
@@ -186,7 +200,17 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         let first_segment = rec.ts.len();
         let caustics = plan.caustics[c.light];
         let first_channel = c.channel == 0;
-        if plan.reused {
+        if let Some(cont) = plan.continuation {
+            if cont.passes[pass] {
+                c.light_gbuffers(rec, caustics, first_channel);
+                c.coverage(rec);
+                c.photons(rec, plan.batch_slots, Some(cont.from_slot))?;
+                c.resolve(rec, true);
+                c.copy_light_state(rec);
+            } else if first_channel {
+                c.reuse_caustics(rec);
+            }
+        } else if plan.reused {
             if first_channel {
                 c.reuse_caustics(rec);
             }
@@ -194,8 +218,8 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
             c.light_gbuffers(rec, caustics, first_channel);
             if caustics {
                 c.coverage(rec);
-                c.photons(rec, plan.batch_slots)?;
-                c.resolve(rec);
+                c.photons(rec, plan.batch_slots, None)?;
+                c.resolve(rec, false);
                 c.copy_light_state(rec);
             } else if first_channel {
                 c.clear_irradiance(rec);

@@ -2,13 +2,14 @@
 //! (exact transport's waves, or the two-interface trace) and splatted into the caustic flux map.
 
 use super::{Ctx, Rec};
-use crate::gpu_types::TraversalState;
+use crate::gpu_types::{TransportState, TraversalState};
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape};
 use crate::settings::{Driven, Method, Transport};
 use crate::shaders::consts::*;
-use crate::targets::{CANARY, PHOTON_GUARD};
+use crate::targets::{Targets, CANARY, PHOTON_GUARD};
 use crate::vk::{Access, VkResult};
 use ash::vk;
+use std::mem::size_of;
 
 /// Exact transport's waves after the first, as sub-stages of `transport_bounces` (index: wave - 1), so that a
 /// profile shows where the bounces' time goes: the early waves carry most rays, the late ones a long tail.
@@ -106,8 +107,9 @@ impl Ctx<'_> {
     }
 
     /// Step 3: photons, in batches; each batch's photons are traced (step 4) and splatted (step 5) into the
-    /// caustic flux map.
-    pub(super) fn photons(&self, rec: &mut Rec, slots: u32) -> VkResult<()> {
+    /// caustic flux map. `continue_from`: the slot whose readback buffer holds this pass's state from the frame
+    /// before, whose remaining tiles these batches trace (see [`super::Continuation`]).
+    pub(super) fn photons(&self, rec: &mut Rec, slots: u32, continue_from: Option<usize>) -> VkResult<()> {
         let (t, d) = (self.t, self.d);
         rec.ts.mark(rec.cmd, "photon_init");
         let debug = self.s.debug_photons > 0;
@@ -119,17 +121,45 @@ impl Ctx<'_> {
         } else {
             rec.sync.discard(&self.r.flux, &[Access::ColorAttachment]);
         }
+        let from = continue_from.map(|slot| &t.readbacks[slot]);
+        if let Some(from) = from {
+            rec.sync.buffer(from, &[Access::TransferSrc]);
+        }
         rec.flush(d);
         let cmd = rec.cmd;
         unsafe {
             if self.compute_splat {
                 d.cmd_fill_buffer(cmd, self.r.flux_texels.raw, 0, vk::WHOLE_SIZE, 0);
             }
-            d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
-            d.cmd_fill_buffer(cmd, t.photon.transport.raw, 0, vk::WHOLE_SIZE, 0);
+            match from {
+                // The state the frame before left: its stack of tiles, its counts and its energy account.
+                Some(from) => {
+                    let layout = Targets::readback_layout(self.s, 16 * t.width as u64 * t.height as u64);
+                    let i = self.pass as u64;
+                    let (state, transport) = (size_of::<TraversalState>() as u64, size_of::<TransportState>() as u64);
+                    let copy = |dst: &crate::vk::Buffer, at: u64, size: u64| {
+                        let region = vk::BufferCopy { src_offset: at, dst_offset: 0, size };
+                        d.cmd_copy_buffer(cmd, from.raw, dst.raw, &[region]);
+                    };
+                    copy(&t.photon.state, layout.state + i * state, state);
+                    copy(&t.photon.transport, layout.transport + i * transport, transport);
+                }
+                None => {
+                    d.cmd_fill_buffer(cmd, t.photon.state.raw, 0, vk::WHOLE_SIZE, 0);
+                    d.cmd_fill_buffer(cmd, t.photon.transport.raw, 0, vk::WHOLE_SIZE, 0);
+                }
+            }
             // Header (count, capacity) and rows: disjoint ranges, so the two transfers need no barrier between them.
-            d.cmd_update_buffer(cmd, t.photon.debug.raw, 0, bytemuck::bytes_of(&[0u32, self.s.debug_photons, 0, 0]));
-            d.cmd_fill_buffer(cmd, t.photon.debug.raw, 16, vk::WHOLE_SIZE, 0);
+            // A continuation appends to the dump the frame before left (tests dump the photons of one light).
+            if from.is_none() {
+                d.cmd_update_buffer(
+                    cmd,
+                    t.photon.debug.raw,
+                    0,
+                    bytemuck::bytes_of(&[0u32, self.s.debug_photons, 0, 0]),
+                );
+                d.cmd_fill_buffer(cmd, t.photon.debug.raw, 16, vk::WHOLE_SIZE, 0);
+            }
             if debug {
                 // Canary after the capacity: a shader writing past its photon budget would overwrite it.
                 let cap = 8 * t.photon.capacity as u64;
@@ -153,7 +183,7 @@ impl Ctx<'_> {
         match self.s.method {
             Method::Dense => self.dense(rec),
             Method::Adaptive => match self.s.driven {
-                Driven::Gpu => self.adaptive_gpu(rec, slots),
+                Driven::Gpu => self.adaptive_gpu(rec, slots, continue_from.is_none()),
                 Driven::Cpu => self.adaptive_cpu(rec),
             },
         }?;
@@ -312,14 +342,17 @@ impl Ctx<'_> {
     }
 
     /// GPU-driven adaptive traversal: a fixed command sequence per batch slot, every dispatch and draw indirect.
-    fn adaptive_gpu(&self, rec: &mut Rec, slots: u32) -> VkResult<()> {
+    /// `fresh`: the frame's first batches (else a continuation's, from the restored stack of tiles).
+    fn adaptive_gpu(&self, rec: &mut Rec, slots: u32, fresh: bool) -> VkResult<()> {
         let b = self.bindings();
         let ph = &self.p.photons;
         let shape = self.traverse_shape();
         let wg = shape.wg;
         let exact = self.s.transport == Transport::Exact;
-        ph.init(rec.cmd, &b, init_mode::FRAME, wg);
-        self.traversal_step(rec);
+        if fresh {
+            ph.init(rec.cmd, &b, init_mode::FRAME, wg);
+            self.traversal_step(rec);
+        }
         rec.report.batch_slots = slots;
         for slot in 0..slots {
             rec.ts.mark(rec.cmd, "photon_init");

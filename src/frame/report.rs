@@ -69,6 +69,8 @@ pub struct FrameReport {
     pub record_ms: f64,
     /// Pipeline barriers (`vkCmdPipelineBarrier2` calls) the frame's declared accesses needed.
     pub barrier_batches: u64,
+    /// Further submissions that traced the tiles the first one's batch slots left (see [`crate::Renderer::render`]).
+    pub continuations: u32,
     /// Whether the caustic passes were recorded (the scene has a refractor inside the light).
     pub caustics: bool,
     /// Whether the records were splatted by the compute pass (else drawn as points).
@@ -105,6 +107,46 @@ pub struct FrameReport {
 }
 
 impl FrameReport {
+    /// Take in a continuation of this frame (`passes`: the passes it continued): their states, their times and
+    /// its stages. The continued passes' states are cumulative (restored, then continued).
+    pub(crate) fn absorb(&mut self, next: FrameReport, passes: &[bool]) {
+        for ((l, n), &p) in self.lights.iter_mut().zip(&next.lights).zip(passes) {
+            if p {
+                l.state = n.state;
+                l.transport = n.transport;
+                l.gpu_ms += n.gpu_ms;
+            }
+        }
+        self.state = self.lights.first().and_then(|l| l.state);
+        self.transport = self.lights.first().and_then(|l| l.transport);
+        let merge = |into: &mut Vec<(&'static str, f64)>, from: &[(&'static str, f64)]| {
+            for &(label, ms) in from {
+                match into.iter_mut().find(|(l, _)| *l == label) {
+                    Some(e) => e.1 += ms,
+                    None => into.push((label, ms)),
+                }
+            }
+        };
+        merge(&mut self.stages, &next.stages);
+        merge(&mut self.substages, &next.substages);
+        let end = self.segments.last().map_or(0.0, |&(_, at, ms)| at + ms);
+        self.segments.extend(next.segments.iter().map(|&(l, at, ms)| (l, end + at, ms)));
+        self.gpu_ms += next.gpu_ms;
+        self.record_ms += next.record_ms;
+        self.barrier_batches += next.barrier_batches;
+        // The host waited for the first submission and read its states back before recording the next.
+        self.host_readbacks += 1 + next.host_readbacks;
+        self.batch_slots += next.batch_slots;
+        self.unfinished_tiles = next.unfinished_tiles;
+        self.continuations += 1 + next.continuations;
+        self.eye_reused = false;
+        // The debug dump grows across the submissions: the last one's holds every row.
+        if next.guard_intact.is_some() {
+            self.debug_rows = next.debug_rows;
+            self.guard_intact = next.guard_intact;
+        }
+    }
+
     /// Photons the frame emitted, summed over its lights (and color passes).
     pub fn photons(&self) -> u64 {
         self.lights.iter().filter_map(|l| l.state.map(|s| s.photons_total as u64)).sum()
@@ -169,8 +211,8 @@ pub(crate) fn read_results(
             l.transport = Some(readback.read::<TransportState>(at, 1)?[0]);
         }
     }
-    if let Some(st) = report.lights[0].state {
-        report.unfinished_tiles = if s.method == Method::Adaptive { st.stack_size } else { 0 };
+    if s.method == Method::Adaptive {
+        report.unfinished_tiles = report.lights.iter().filter_map(|l| l.state.map(|st| st.stack_size)).sum();
     }
     if report.lights[0].caustics && s.debug_photons > 0 {
         let header = readback.read::<[u32; 4]>(layout.debug, 1)?[0];

@@ -102,11 +102,11 @@ impl Ctx<'_> {
         self.p.coverage.record(rec.cmd, &inputs);
     }
 
-    /// Step 6: caustic flux → irradiance.
-    pub(super) fn resolve(&self, rec: &mut Rec) {
+    /// Step 6: caustic flux → irradiance. `add`: add to the map (a continuation's remaining batches).
+    pub(super) fn resolve(&self, rec: &mut Rec, add: bool) {
         rec.ts.mark(rec.cmd, "resolve");
         // A light's later color passes write their channel and keep the earlier ones.
-        if self.channel == 0 {
+        if self.channel == 0 && !add {
             rec.sync.discard(&self.r.irradiance, &[Access::ComputeWrite]);
         } else {
             rec.sync.image(&self.r.irradiance, &[Access::ComputeWrite]);
@@ -114,7 +114,7 @@ impl Ctx<'_> {
         rec.sync.image(&self.r.flux, &[Access::ComputeSampled]);
         rec.sync.image(&self.r.geo, &[Access::ComputeSampled]);
         rec.flush(self.d);
-        self.p.resolve.record(rec.cmd, self.ubo, &self.r.flux, &self.r.geo, &self.r.irradiance, self.nearest);
+        self.p.resolve.record(rec.cmd, self.ubo, &self.r.flux, &self.r.geo, &self.r.irradiance, self.nearest, add);
         rec.sync.image(&self.r.irradiance, &EYE_READ);
         rec.flush(self.d);
     }

@@ -139,6 +139,14 @@ pub struct Renderer {
     /// The meshes (object space) and which mesh and transform each scene object is.
     instances: scene_api::Instances,
     caches: Caches,
+    /// The frame-in-flight slot of the last frame recorded (a continuation reads its states from there).
+    last_slot: usize,
+}
+
+/// Which passes of the last frame a continuation finishes, and the slot holding their states.
+struct ContinuationPlan {
+    passes: Vec<bool>,
+    from_slot: usize,
 }
 
 impl Drop for Renderer {
@@ -231,6 +239,7 @@ impl Renderer {
             geometry_dirty: false,
             instances: scene_api::Instances::of(&scene_for_instances),
             caches: Caches::default(),
+            last_slot: 0,
             device,
         })
     }
@@ -342,17 +351,40 @@ impl Renderer {
         self.queue.frames_in_flight()
     }
 
-    /// Render one frame and wait for it: its report, and the AOV it read back.
+    /// Render one frame and wait for it: its report, and the AOV it read back. A frame whose GPU-driven batches
+    /// run out of batch slots with tiles of the photon quadtree left is not rendered again: the batches it
+    /// committed stay in its maps, and further submissions trace the remaining tiles and add their light (each
+    /// one host round trip, counted in the report's `host_readbacks` and `continuations`).
     pub fn render(&mut self, desc: &FrameDesc) -> AppResult<Frame> {
-        self.render_with(desc, None, &SubmitSync::default())
-    }
-
-    /// [`Renderer::render`], with commands appended to the frame's last command buffer (`finish`) and semaphores
-    /// for its submission (`sync`).
-    pub fn render_with(&mut self, desc: &FrameDesc, finish: Option<Finish>, sync: &SubmitSync) -> AppResult<Frame> {
+        let start = Instant::now();
         self.finish_frames()?;
-        self.submit(desc, finish, sync)?;
-        let (report, image) = self.queue.wait_last(self.targets.as_ref(), &mut self.caches)?;
+        self.submit(desc, None, &SubmitSync::default())?;
+        let (mut report, mut image) = self.queue.wait_last(self.targets.as_ref(), &mut self.caches)?;
+        loop {
+            let pending: Vec<bool> =
+                report.lights.iter().map(|l| l.caustics && l.state.is_some_and(|s| s.stack_size > 0)).collect();
+            // Each slot commits a batch or splits a tile into four smaller ones, so the tiles run out; the frame's
+            // slots in all stay within MAX_BATCHES.
+            if !pending.contains(&true) || report.batch_slots >= crate::shaders::consts::MAX_BATCHES {
+                break;
+            }
+            // More slots next time: the ones this frame needed, with a margin.
+            self.queue.adapt_batch_slots(&report, &mut self.caches);
+            let tiles: u32 = report.lights.iter().filter_map(|l| l.state.map(|s| s.stack_size)).sum();
+            log::info!(
+                "the photon buffer held {} batches of this frame; tracing its {tiles} remaining tiles in another \
+                 submission (a larger --photon-budget avoids it)",
+                report.batch_slots
+            );
+            let from_slot = self.last_slot;
+            let plan = ContinuationPlan { passes: pending.clone(), from_slot };
+            self.record_into(None, desc, None, &SubmitSync::default(), Some(&plan))?;
+            let (next, next_image) = self.queue.wait_last(self.targets.as_ref(), &mut self.caches)?;
+            report.absorb(next, &pending);
+            image = next_image;
+        }
+        report.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.queue.adapt_batch_slots(&report, &mut self.caches);
         Ok(Frame { report, image })
     }
 
@@ -385,7 +417,7 @@ impl Renderer {
                 copy_to_target(d, cmd, out.beauty, t);
             }
         };
-        self.record_into(Some(cmd), desc, Some(&mut copy), &SubmitSync::default())?;
+        self.record_into(Some(cmd), desc, Some(&mut copy), &SubmitSync::default(), None)?;
         Ok(RecordedFrame { _private: () })
     }
 
@@ -485,7 +517,7 @@ impl Renderer {
                 "a recorded frame has not been completed: call Renderer::complete after its submission finishes".into(),
             ));
         }
-        self.record_into(None, desc, finish, sync)
+        self.record_into(None, desc, finish, sync, None)
     }
 
     /// Rebuild the scene's buffers when its geometry or materials changed (after the frames in flight that bind
@@ -509,10 +541,12 @@ impl Renderer {
         desc: &FrameDesc,
         finish: Option<Finish>,
         sync: &SubmitSync,
+        continuation: Option<&ContinuationPlan>,
     ) -> AppResult<()> {
         let start = Instant::now();
         self.update_scene()?;
         let slot = self.next_slot()?;
+        self.last_slot = slot;
         // The settings at this frame's level (progressive refinement renders below the chosen one).
         let mut s = self.config.clone();
         s.level = desc.level.map_or(s.level, |l| l.min(s.level));
@@ -539,7 +573,8 @@ impl Renderer {
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
         let key = CausticKey::new(&self.scene.lights, self.scene_generation, &s, self.targets_key);
-        let reused = self.reuse && self.caches.caustic.as_ref().is_some_and(|(k, _)| *k == key);
+        let reused =
+            continuation.is_none() && self.reuse && self.caches.caustic.as_ref().is_some_and(|(k, _)| *k == key);
         let targets = self.targets.as_mut().expect("targets");
         let channel = |c: usize| if nc == 1 { 0 } else { c as u32 + 1 };
         let data: Vec<_> = (0..nl * nc)
@@ -583,6 +618,8 @@ impl Renderer {
             preview: desc.preview,
             aov: desc.aov,
             batch_slots: self.queue.batch_slots(&s, targets.photon.capacity),
+            continuation: continuation
+                .map(|c| crate::frame::Continuation { passes: &c.passes, from_slot: c.from_slot }),
         };
         let res = FrameResources {
             device: &self.device,
