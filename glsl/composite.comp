@@ -47,8 +47,10 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 const float EYE_THRESHOLD = 0.05;
 const int EYE_STACK = 8;
 
-// Radiance along the eye ray ro + t rd (which reaches glass first), through every interface.
-vec3 trace_glass(vec3 ro, vec3 rd) {
+// Radiance along the eye ray ro + t rd (which reaches glass first), through every interface, with the IORs of
+// channel c (0: the d line, for glass that does not disperse). Absorption inside the glass is per channel
+// (Beer–Lambert with the red, green and blue coefficients), so the colors of absorbing glass show in every trace.
+vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     uint cap = uint(u_frame.eye.y);
     vec3 so[EYE_STACK], sd[EYE_STACK], sw[EYE_STACK];
     uint sn[EYE_STACK];
@@ -77,13 +79,13 @@ vec3 trace_glass(vec3 ro, vec3 rd) {
             L += w * albedo / RECV_PI * e;
             continue;
         }
-        // The segment that reached an exit from the inside ran through the glass: Beer–Lambert.
-        if (dot(d, ng) > 0.0 && I.material.z > 0.0) w *= exp(-I.material.z * hit.t);
+        // The segment that reached an exit from the inside ran through the glass: Beer–Lambert, per channel.
+        if (dot(d, ng) > 0.0) w *= exp(-I.sigma_rgb.xyz * hit.t);
         if (depth >= cap) {
             L += w * environment(d);
             continue;
         }
-        Split s = split_interface(d, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
+        Split s = split_interface(d, p, ng, ns, inst_ior_in(hit.inst, c), inst_is_mirror(hit.inst));
         if (!s.ok) continue;
         vec3 wr = w * s.F, wt = w * (1.0 - s.F);
         if (s.F < 1.0) {
@@ -155,7 +157,11 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
     vec4 front = geo_fetch(t_front, q);
     if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
 #ifdef EXACT_EYE
-        return trace_glass(ro, rd);
+        // Dispersive glass (FrameData.eye.z): each channel follows its own IOR's path.
+        if (u_frame.eye.z > 0.5) {
+            return vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
+        }
+        return trace_glass(ro, rd, 0u);
 #else
         return shade_glass(cam, ro, rd, front, FRONT_IOR(texelFetch(t_front_aux, q, 0).x));
 #endif

@@ -89,7 +89,8 @@ pub struct FrameData {
     pub transport: [u32; 4],
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
-    /// x: the environment's sky radiance, W/(m²·sr) (0: off); y: eye-ray depth cap (interfaces).
+    /// x: the environment's sky radiance, W/(m²·sr) (0: off); y: eye-ray depth cap (interfaces); z: 1 when some
+    /// glass disperses (the eye view traces each color channel with its own IOR).
     pub eye: [f32; 4],
     /// x: the index of refraction every refractor shares (-1: all mirrors), 0 when they differ: then the light
     /// and eye views draw it per texel into their IOR buffers; y: exact transport's weak-branch fraction (0: off);

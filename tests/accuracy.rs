@@ -2,8 +2,9 @@
 //! (src/metrics.rs): box-filtered rel-L1, flux ratio. Numbers in comments were measured on lavapipe with the
 //! same settings (`caustics bench --methods dense --levels 3-4 --reference-photons 4000000` and the like).
 //!
-//! The GPU methods model light refracted exactly twice (front surface in, back surface out), so their natural
-//! reference is `--paths two-refractions`; the gap to the all-paths reference is the light they cannot
+//! These tests name the papers' two-interface model (`--transport two-interface`; exact transport, the default, is
+//! tested in tests/exact.rs). It models light refracted exactly twice (front surface in, back surface out), so its
+//! natural reference is `--paths two-refractions`; the gap to the all-paths reference is the light they cannot
 //! represent (internal reflections, more interfaces, single interfaces), and the tests state it.
 
 mod common;
@@ -20,7 +21,7 @@ fn reference_image(scene: &str, paths: Paths, photons: u64) -> RgbImage {
 }
 
 fn gpu(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {
-    let mut args = vec!["--camera", "top", "--aov", "caustics", "--size", "256x256"];
+    let mut args = vec!["--transport", "two-interface", "--camera", "top", "--aov", "caustics", "--size", "256x256"];
     args.extend_from_slice(extra);
     let (s, out) = render(dir, name, scene, &args);
     (s, caustics::image_io::read_exr(&out).unwrap())
@@ -120,7 +121,7 @@ fn hard_cases_are_finite_bounded_and_close_to_reference() {
             &dir,
             &format!("{}-direct", c.scene),
             &path,
-            &["--camera", "top", "--aov", "direct", "--size", "256x256"],
+            &["--transport", "two-interface", "--camera", "top", "--aov", "direct", "--size", "256x256"],
         );
         let (_, _, direct) = read_plane(&dout);
         assert!(img.data.iter().flatten().all(|v| v.is_finite()), "{}: non-finite caustics", c.scene);

@@ -28,7 +28,8 @@ fn adaptive_max_level_matches_dense() {
     let dir = out_dir("adaptive_matches_dense");
     for level in ["1", "2", "3"] {
         let (d, di) = caustics_aov(&dir, &format!("dense{level}"), SPHERE, &["--method", "dense", "--level", level]);
-        let (a, ai) = caustics_aov(&dir, &format!("adapt{level}"), SPHERE, &["--method", "adaptive", "--level", level]);
+        let extra = ["--method", "adaptive", "--metric", "max-level", "--level", level];
+        let (a, ai) = caustics_aov(&dir, &format!("adapt{level}"), SPHERE, &extra);
         assert_eq!(d["photons_splatted"], a["photons_splatted"], "level {level}: photon counts");
         let m = compare(&ai, &di, 64, 2.0);
         // Same photons, same splats: only the order of the float additions differs (measured rel-L1 < 1e-6).
@@ -163,7 +164,8 @@ fn overflow_without_batching_is_counted_and_bounded() {
 
 /// Level 12 (a 262,144² grid) runs, and deep photons sit exactly where integer addressing puts them: the cell
 /// center computed on the GPU equals the Rust value bit for bit, and the landing point equals an analytic
-/// trace through the slab's two parallel interfaces.
+/// trace through the slab's two parallel interfaces. It names the two-interface model: its trace writes the
+/// debug dump of photons that the positions are read from.
 #[test]
 fn deep_levels_have_exact_positions() {
     let dir = out_dir("deep_levels");
@@ -173,6 +175,8 @@ fn deep_levels_have_exact_positions() {
         "deep",
         &slab,
         &[
+            "--transport",
+            "two-interface",
             "--camera",
             "top",
             "--aov",

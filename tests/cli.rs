@@ -277,7 +277,7 @@ fn render_and_reference_write_exr_metadata_and_compare_checks_it() {
     assert_eq!(m["camera_kind"], "orthographic");
     assert_eq!(m["aov"], "caustics");
     assert_eq!(m["units"], "W/m^2");
-    assert_eq!(m["transport"], "two-interface");
+    assert_eq!(m["transport"], "exact", "the default transport");
     assert_eq!(m["level"], "1");
     assert_eq!(m["scene_hash"].len(), 16);
     let (_, r) = caustics::image_io::read_exr_meta(&reference).unwrap();

@@ -120,7 +120,8 @@ fn spawn_view(dir: &Path, name: &str, display: Option<&str>, args: &[&str]) -> (
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustics"));
     cmd.arg("view")
         .args(args)
-        // The viewer tests check the two-interface frame (see common::pin_transport).
+        // The viewer tests name the two-interface model unless they name a transport: they check presentation,
+        // input and frames in flight, and its frames cost a fraction of exact transport's on lavapipe.
         .args(if args.iter().any(|a| a.starts_with("--transport")) {
             &[][..]
         } else {
@@ -211,6 +212,8 @@ fn ring_mean(w: usize, h: usize, y: &[f64], lo: f64, hi: f64) -> f64 {
 fn headless(dir: &Path, size: &str) -> PathBuf {
     let out = dir.join("headless.png");
     let mut args = vec!["render", "--scene", SPHERE, "--camera", "top", "--size", size, "--out", out.to_str().unwrap()];
+    // The same transport as the viewer's (spawn_view names two-interface).
+    args.extend_from_slice(&["--transport", "two-interface"]);
     args.extend_from_slice(FAST);
     ok(&args);
     out

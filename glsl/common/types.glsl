@@ -32,7 +32,7 @@ struct FrameData {
                          // 0-7 the color channel of this pass (0: one gray pass; 1, 2, 3: red, green, blue),
                          // bit 8 differential footprints
     uvec4 pyramid[MAX_PYRAMID_MIPS / 4];  // start of each coverage mip in the coverage buffer
-    vec4 eye;            // x: sky radiance (W/m^2/sr; 0: off); y: eye-ray depth cap (interfaces)
+    vec4 eye;            // x: sky radiance (W/m^2/sr; 0: off); y: eye-ray depth cap (interfaces); z: 1 when glass disperses
     vec4 material;       // x: the IOR every refractor shares (-1: mirrors), 0 if they differ (then: IOR buffers);
                          // y: exact transport's weak-branch fraction (0: off; wave.comp); z: the weak-branch
                          // block side in cells (2 or 4)

@@ -21,7 +21,7 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug, Clone, serde::Serialize)]
 pub struct BenchArgs {
-    /// Scene files (repeat the flag for several; default: the sphere scene).
+    /// Scene files, TOML or glTF 2.0 (repeat the flag for several; default: the sphere scene).
     #[arg(long = "scene")]
     pub scenes: Vec<PathBuf>,
     /// Orthographic camera the AOV and the reference are binned into.

@@ -27,7 +27,7 @@ pub fn default_scene() -> PathBuf {
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Scene file (TOML). Default: assets/scenes/sphere.toml.
+    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/sphere.toml.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Camera name (default: the scene's first camera).
@@ -48,10 +48,12 @@ pub struct QualityArgs {
     /// Photon source: dense grid, or adaptive traversal of the photon quadtree.
     #[arg(long, value_enum, default_value_t = Quality::default().method)]
     pub method: Method,
-    /// Adaptive stopping metric [default: max-level] (adaptive only; dense warns that it ignores it).
+    /// Adaptive stopping metric [default: flux-error, the fastest to each error in the bench's sweeps]
+    /// (adaptive only; dense warns that it ignores it).
     #[arg(long, value_enum)]
     pub metric: Option<Metric>,
-    /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive) [default: 5].
+    /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive) [default: 5 on a
+    /// GPU, 4 on a CPU device].
     #[arg(long, allow_negative_numbers = true, value_parser = level_arg)]
     pub level: Option<u32>,
     /// Flux-error metric: the target error, the relative L1 at 64² that merging cells may add to max-level's
@@ -266,10 +268,11 @@ pub struct RenderArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub method: MethodArgs,
-    /// Output: beauty (PNG), caustics or direct (EXR, W/m²).
+    /// Output: beauty (the tone-mapped image as .png, or its linear radiance in W/(m²·sr) as .exr), caustics or
+    /// direct (irradiance in W/m², .exr).
     #[arg(long, default_value = "beauty")]
     pub aov: String,
-    /// Output file (.png for beauty, .exr for caustics and direct).
+    /// Output file: .png or .exr for beauty, .exr for caustics and direct.
     #[arg(long)]
     pub out: PathBuf,
     /// Write stats JSON here.
@@ -290,12 +293,12 @@ pub struct ProfileArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub method: MethodArgs,
-    /// Frames to time.
-    #[arg(long, default_value_t = 20)]
-    pub frames: u32,
-    /// Untimed frames first (the first submit JIT-compiles shaders on lavapipe).
-    #[arg(long, default_value_t = 1)]
-    pub warmup: u32,
+    /// Frames to time [default: 20 on a GPU, 3 on a CPU device].
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// Untimed frames first (the first submit JIT-compiles shaders on lavapipe) [default: 1].
+    #[arg(long)]
+    pub warmup: Option<u32>,
     /// Print JSON instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -312,12 +315,17 @@ pub struct Session {
     pub height: u32,
     pub renderer: Renderer,
     pub validation: bool,
-    /// When set (see [`Session::warn_if_slow`]), [`Session::frame`] prints the elapsed time every few seconds.
+    /// When set (see [`Session::plan`]), [`Session::frame`] prints the elapsed time every few seconds against it.
     pub slow_frame_s: Option<f64>,
 }
 
 /// Frames estimated to take longer than this (seconds) get a warning and a progress line.
 pub const SLOW_FRAME_S: f64 = 5.0;
+
+/// Frames `profile` times by default: 20 on a GPU, 3 on a CPU device (about a minute at its default level).
+pub const PROFILE_FRAMES_GPU: u32 = 20;
+/// See [`PROFILE_FRAMES_GPU`].
+pub const PROFILE_FRAMES_CPU: u32 = 3;
 
 impl Session {
     pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
@@ -343,6 +351,33 @@ impl Session {
         self.renderer.device()
     }
 
+    /// One line on what the device chose where the user left the choice to it: the level (and with it the method,
+    /// metric and transport the frame runs), and why.
+    pub fn announce_defaults(&self) {
+        if self.renderer.settings().quality.level.is_some() {
+            return;
+        }
+        let c = self.renderer.config();
+        let info = &self.device().info;
+        let method = match c.method {
+            Method::Dense => "dense".to_string(),
+            Method::Adaptive => format!("adaptive {}", c.metric.name()),
+        };
+        let transport = match c.transport {
+            Transport::Exact => "exact",
+            Transport::TwoInterface => "two-interface",
+        };
+        let (class, other) =
+            if info.is_cpu() { ("a CPU device", "5 on a GPU") } else { ("a GPU", "4 on a CPU device") };
+        eprintln!(
+            "{}: level {} ({}² photon grid), {method}, {transport} transport: the default level for {class} ({other}); \
+             --level changes it",
+            info.name,
+            c.level,
+            LEVEL0_RES << c.level
+        );
+    }
+
     /// A rough upper bound of one frame's time in seconds, from its photon count: every cell of the level's grid
     /// (dense and adaptive max-level emit at most that many) times a per-photon cost measured on lavapipe
     /// (about 0.25 µs per photon for two-interface, 6 µs for exact transport, whose photons
@@ -352,23 +387,33 @@ impl Session {
         frame_estimate_s(self.renderer.config(), self.device().info.is_cpu())
     }
 
-    /// Warn when a frame is estimated to take longer than [`SLOW_FRAME_S`], and turn on progress lines.
-    pub fn warn_if_slow(&mut self) {
-        if let Some(est) = self.estimate_frame_s().filter(|&t| t > SLOW_FRAME_S) {
-            let s = self.renderer.config();
+    /// Estimate a frame of `aov` on this device (probe frames, `Renderer::estimate`) where it may be slow: on CPU
+    /// devices, and wherever the photon count alone says it may take over [`SLOW_FRAME_S`]. A frame estimated
+    /// over it gets a line saying so and progress lines while it renders. Returns the estimate, in seconds of
+    /// wall time, when one was made.
+    pub fn plan(&mut self, aov: Option<Aov>) -> AppResult<Option<f64>> {
+        let cpu = self.device().info.is_cpu();
+        if !cpu && !self.estimate_frame_s().is_some_and(|t| t > SLOW_FRAME_S) {
+            return Ok(None);
+        }
+        let view = self.renderer.camera_view(&self.camera, self.width, self.height);
+        let e = self.renderer.estimate(&FrameDesc::new(&view, aov))?;
+        let est = e.wall_seconds();
+        if est > SLOW_FRAME_S {
+            let c = self.renderer.config();
             eprintln!(
-                "warning: level {} emits up to {} photons ({}²); a frame may take up to about {:.0} s on {}; \
-                 a lower --level (or --method adaptive --metric max-error) is faster",
-                s.level,
-                ((LEVEL0_RES as u64) << s.level).pow(2),
-                (LEVEL0_RES as u64) << s.level,
-                est,
-                self.device().info.name
+                "a frame should take about {est:.0} s on {} (level {}: {:.1} s for the photons and maps, {:.1} s \
+                 for the eye view; measured by {:.1} s of smaller frames); a lower --level is faster",
+                self.device().info.name,
+                c.level,
+                e.light_seconds,
+                e.eye_seconds,
+                e.probe_seconds
             );
             self.slow_frame_s = Some(est);
         }
+        Ok(Some(est))
     }
-
     /// Render one frame (a frame whose batch slots run out is finished in further submissions, not rendered
     /// again: see `Renderer::render`).
     pub fn frame(&mut self, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
@@ -377,7 +422,10 @@ impl Session {
             None => self.renderer.render(&FrameDesc::new(&view, aov))?,
             Some(est) => {
                 let renderer = &mut self.renderer;
-                with_progress(est, || renderer.render(&FrameDesc::new(&view, aov)))?
+                let frame = with_progress(est, || renderer.render(&FrameDesc::new(&view, aov)))?;
+                // The next frame's progress goes by this one's measured time.
+                self.slow_frame_s = Some(frame.report.frame_ms * 1e-3);
+                frame
             }
         };
         if report.unfinished_tiles > 0 {
@@ -437,7 +485,8 @@ pub fn frame_estimate_s(s: &ResolvedSettings, cpu: bool) -> Option<f64> {
     Some(cells * per_photon_us * 1e-6 / if cpu { 1.0 } else { 100.0 })
 }
 
-/// Run `work`, printing the elapsed time every 5 s against the estimate `est` seconds.
+/// Run `work`, printing the elapsed time every 5 s against the estimate `est` seconds (a frame is one submission
+/// with no host readback inside it, so the host sees its work only when it is done).
 fn with_progress<T>(est: f64, work: impl FnOnce() -> T) -> T {
     let (done, wait) = std::sync::mpsc::channel::<()>();
     std::thread::scope(|scope| {
@@ -446,7 +495,7 @@ fn with_progress<T>(est: f64, work: impl FnOnce() -> T) -> T {
             while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
                 wait.recv_timeout(std::time::Duration::from_secs(5))
             {
-                eprintln!("rendering: {:.0} s elapsed (estimated at most {est:.0} s)", start.elapsed().as_secs_f64());
+                eprintln!("rendering: {:.0} s of about {est:.0} s", start.elapsed().as_secs_f64());
             }
         });
         let out = work();
@@ -633,7 +682,8 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
     session.renderer.set_reuse(!args.no_reuse);
-    session.warn_if_slow();
+    session.announce_defaults();
+    session.plan(Some(aov))?;
     let mut reports = Vec::new();
     let mut image = None;
     for i in 0..args.frames {
@@ -729,7 +779,7 @@ fn debug_photons_json(rows: &[[u32; 4]], n: usize) -> Value {
 }
 
 pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
-    if args.frames == 0 {
+    if args.frames == Some(0) {
         return Err(AppError::BadInput("--frames must be at least 1".into()));
     }
     if let Some(p) = &args.trace {
@@ -739,15 +789,28 @@ pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
     let mut session = Session::open(&args.scene, settings)?;
     // The profiler times every stage: nothing is reused.
     session.renderer.set_reuse(false);
-    session.warn_if_slow();
-    for _ in 0..args.warmup {
+    session.announce_defaults();
+    // A CPU device profiles fewer frames unless told (lavapipe at level 5 took 35 minutes for the 21 frames a GPU
+    // profiles in a second).
+    let cpu = session.device().info.is_cpu();
+    let frames = args.frames.unwrap_or(if cpu { PROFILE_FRAMES_CPU } else { PROFILE_FRAMES_GPU });
+    let warmup = args.warmup.unwrap_or(1);
+    let per_frame = session.plan(None)?;
+    eprintln!(
+        "profile: {warmup} warm-up and {frames} timed frames at level {} on {}{} (--frames, --warmup and --level \
+         change it)",
+        session.renderer.config().level,
+        session.device().info.name,
+        per_frame.map(|t| format!(", about {:.0} s", t * (frames + warmup) as f64)).unwrap_or_default()
+    );
+    for _ in 0..warmup {
         session.frame(None)?;
     }
     let mut reports = Vec::new();
-    for i in 0..args.frames {
+    for i in 0..frames {
         let (r, _) = session.frame(None)?;
         if !args.json && (i + 1) % 10 == 0 {
-            eprintln!("profiled {}/{} frames", i + 1, args.frames);
+            eprintln!("profiled {}/{} frames", i + 1, frames);
         }
         reports.push(r);
     }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// `caustics reference` arguments.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ReferenceArgs {
-    /// Scene file (default: assets/scenes/sphere.toml).
+    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb) (default: assets/scenes/sphere.toml).
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Camera name (must be orthographic; default: the scene's first camera).

@@ -3,6 +3,7 @@
 //! what the last frame's maps can serve) and hands the recording to [`crate::frame::record_frame`], which sees only
 //! what it borrows.
 
+mod estimate;
 mod keys;
 mod queue;
 mod scene_api;
@@ -10,6 +11,7 @@ mod uniforms;
 mod views;
 
 pub use crate::frame::{Aov, AovData, FrameReport, SlotVerdict};
+pub use estimate::FrameEstimate;
 pub use queue::MAX_FRAMES_IN_FLIGHT;
 pub use scene_api::{InstanceId, MeshId};
 pub use views::Views;

@@ -219,13 +219,22 @@ impl FrameQueue {
         self.slots_hint = 0;
     }
 
+    /// Put back an adapted slot count (probe frames at other levels leave the frame's own).
+    pub fn restore_slots_hint(&mut self, hint: u32) {
+        self.slots_hint = hint;
+    }
+
     /// The adapted slot count (0 before any frame needed more than one).
     pub fn slots_hint(&self) -> u32 {
         self.slots_hint
     }
 
     /// Batch slots to record for GPU-driven adaptive traversal: one when the worst case (every cell of the photon
-    /// window covered) fits the photon buffer, else an estimate refined from frame to frame.
+    /// window covered) fits the photon buffer; else the adapted count of the frames before, or, before any, the
+    /// most a frame can need: each slot commits a tile's batch or splits it into four, and a tile `d` splits deep
+    /// covers 4^-d of the grid, so once its worst case fits no tile splits further, and the slots are at most
+    /// the tiles of the splits above that depth plus the tiles at it. A frame that still runs out is finished by
+    /// continuations ([`crate::Renderer::render`]).
     pub fn batch_slots(&self, s: &ResolvedSettings, capacity: u32) -> u32 {
         if s.batch_slots > 0 {
             return s.batch_slots;
@@ -239,13 +248,19 @@ impl FrameQueue {
         let l = s.level as i32;
         let photons = cells0 * 4f64.powi(l);
         let worst = cells0 * (4f64.powi(l + 1) - 1.0) / 3.0 + photons;
-        let need = (worst / capacity as f64).max(photons / s.batch_photons(capacity) as f64);
-        if need <= 1.0 {
+        let need =
+            |tiles: f64| (worst / tiles / capacity as f64).max(photons / tiles / s.batch_photons(capacity) as f64);
+        if need(1.0) <= 1.0 {
             return 1;
         }
         if self.slots_hint > 0 {
             return self.slots_hint;
         }
-        (need.ceil() as u32).clamp(2, 64)
+        let mut depth = 0;
+        while need(4f64.powi(depth)) > 1.0 && depth < 6 + l {
+            depth += 1;
+        }
+        let splits = (4f64.powi(depth) - 1.0) / 3.0;
+        ((splits + 4f64.powi(depth)) as u32).clamp(2, MAX_BATCHES)
     }
 }

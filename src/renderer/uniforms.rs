@@ -78,7 +78,8 @@ pub(crate) fn frame_data(
         pyramid,
         // The environment's light is added once: by the first light's eye shading (and the composite, which reads
         // the first pass's uniforms).
-        eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, 0.0, 0.0],
+        // z: some glass disperses, so the eye view traces each channel with its own IOR.
+        eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, scene.disperses() as u32 as f32, 0.0],
         material: [scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block as f32, 0.0],
     }
 }

@@ -418,6 +418,11 @@ impl Scene {
         iors.all(|x| x == first).then_some(first)
     }
 
+    /// Whether some glass disperses (an Abbe number): its channels take different paths.
+    pub fn disperses(&self) -> bool {
+        self.objects.iter().any(|o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0))
+    }
+
     /// Triangles in all objects.
     pub fn triangle_count(&self) -> usize {
         self.objects.iter().map(|o| o.mesh.triangle_count()).sum()

@@ -138,7 +138,7 @@ impl Drop for Recorder {
 }
 
 /// Copy `data` into a device-local buffer through a staging buffer (works whether or not device memory is
-/// host-visible).
+/// host-visible). Empty data gives a buffer of the minimum size.
 pub fn upload_buffer<T: bytemuck::Pod>(
     device: &Arc<Device>,
     recorder: &mut Recorder,
@@ -147,6 +147,10 @@ pub fn upload_buffer<T: bytemuck::Pod>(
     usage: vk::BufferUsageFlags,
 ) -> VkResult<Buffer> {
     let bytes = std::mem::size_of_val(data) as u64;
+    if bytes == 0 {
+        // Nothing to copy (a scene with no objects yet): a buffer of the minimum size, to bind.
+        return Buffer::new(device, name, 4, usage, gpu_allocator::MemoryLocation::GpuOnly);
+    }
     let staging = Buffer::with_data(device, &format!("{name} (staging)"), data, vk::BufferUsageFlags::TRANSFER_SRC)?;
     let dst = Buffer::new(
         device,

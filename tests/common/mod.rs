@@ -20,30 +20,20 @@ pub fn out_dir(test: &str) -> PathBuf {
     dir
 }
 
-/// Run `caustics` with the Khronos validation layer and synchronization validation enabled.
+/// Run `caustics` with the Khronos validation layer and synchronization validation enabled. A test runs the
+/// default configuration (exact transport, adaptive flux-error, the device's level) unless it names another: the
+/// tests of the papers' two-interface model name `--transport two-interface`.
 pub fn caustics(args: &[&str]) -> Output {
     caustics_env(args, &[])
 }
 
 pub fn caustics_env(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustics"));
-    cmd.args(args).args(pin_transport(args)).env("CAUSTICS_VALIDATION", "1").env("RUST_LOG", "warn");
+    cmd.args(args).env("CAUSTICS_VALIDATION", "1").env("RUST_LOG", "warn");
     for (k, v) in env {
         cmd.env(k, v);
     }
     cmd.output().expect("run caustics")
-}
-
-/// The default transport is exact (every glass path). The tests written for the papers' two-interface model
-/// assert its numbers, so a render, profile or view that names no transport is pinned to it; tests/exact.rs
-/// names exact explicitly.
-pub fn pin_transport(args: &[&str]) -> Vec<&'static str> {
-    let renders = matches!(args.first(), Some(&"render") | Some(&"profile") | Some(&"view"));
-    if renders && !args.iter().any(|a| a.starts_with("--transport")) {
-        vec!["--transport", "two-interface"]
-    } else {
-        vec![]
-    }
 }
 
 /// Run and require success; returns stderr.
@@ -140,6 +130,9 @@ pub fn gpu() -> (std::sync::MutexGuard<'static, ()>, std::sync::Arc<caustics::gp
     static DEVICE: OnceLock<std::sync::Arc<caustics::gpu::Device>> = OnceLock::new();
     // A test that failed while holding the lock poisons it; the device is still usable by the next test.
     let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // Validation messages (and the library's warnings) on stderr, shown with a failing test's output.
+    let _ =
+        env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).is_test(true).try_init();
     let device = DEVICE
         .get_or_init(|| {
             let desc = caustics::gpu::ContextDesc { validation: true, ..caustics::gpu::ContextDesc::from_env() };

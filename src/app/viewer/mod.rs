@@ -70,7 +70,7 @@ const ANIMATION_TILT_DEG: f32 = 25.0;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct ViewArgs {
-    /// Scene file (TOML). Default: assets/scenes/sphere.toml.
+    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/sphere.toml.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Camera name (default: the scene's first perspective camera, else its first camera).

@@ -1,0 +1,54 @@
+//! Frame estimates hold: `Renderer::estimate` (probe frames at lower levels and a quarter of the output's side)
+//! against the frame it estimates, on lavapipe, for scenes with one light and one pass, several lights, color
+//! passes, both transports, dense and adaptive. A band, not a timing test: the estimate must lie within a factor
+//! of 2 of the frame's wall time, whatever the machine's speed (both run on it, one after the other, alone in
+//! this test binary). Measured on the 2-core CI machine kind: ratios 0.8 to 1.3.
+
+mod common;
+use caustics::settings::{Method, Metric, Quality, Settings, Transport};
+use caustics::FrameDesc;
+
+#[test]
+fn estimates_are_within_a_factor_of_two_of_the_frame() {
+    let (_gpu, device) = common::gpu();
+    let cases: [(&str, Transport, Method, u32, &str); 5] = [
+        ("sphere.toml", Transport::Exact, Method::Adaptive, 3, "main"),
+        ("sphere.toml", Transport::TwoInterface, Method::Dense, 4, "main"),
+        ("bunny.toml", Transport::Exact, Method::Adaptive, 3, "main"),
+        ("two_lights.toml", Transport::Exact, Method::Adaptive, 3, "top"),
+        ("gallery.gltf", Transport::Exact, Method::Adaptive, 2, "main"),
+    ];
+    for (name, transport, method, level, camera) in cases {
+        let quality =
+            Quality { transport, method, metric: Metric::FluxError, level: Some(level), ..Quality::default() };
+        let mut r = common::renderer(&device, &common::scene(name), Settings { quality, ..Settings::default() });
+        let cam = r.scene().camera(Some(camera)).unwrap().clone();
+        let view = r.camera_view(&cam, 256, 192);
+        let desc = FrameDesc::new(&view, None);
+        let e = r.estimate(&desc).expect("estimate");
+        let f = r.render(&desc).expect("frame");
+        let actual = f.report.frame_ms * 1e-3;
+        let ratio = e.wall_seconds() / actual;
+        eprintln!(
+            "{name} {transport:?} {method:?} level {level}: estimated {:.2} s (light {:.2}, eye {:.2}, record {:.2}, \
+             {:.0} photons; probes {:.2} s), took {actual:.2} s ({} photons): ratio {ratio:.2}",
+            e.wall_seconds(),
+            e.light_seconds,
+            e.eye_seconds,
+            e.record_seconds,
+            e.photons,
+            e.probe_seconds,
+            f.report.photons()
+        );
+        assert!((0.5..=2.0).contains(&ratio), "{name}: estimated {:.2} s, took {actual:.2} s", e.wall_seconds());
+        // The probes cost a fraction of a slow frame (the one a user is told about).
+        if actual > 2.0 {
+            assert!(
+                e.probe_seconds < 0.5 * actual,
+                "{name}: probes {:.2} s for a {actual:.2} s frame",
+                e.probe_seconds
+            );
+        }
+    }
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
+}
