@@ -402,13 +402,9 @@ impl Session {
         if est > SLOW_FRAME_S {
             let c = self.renderer.config();
             eprintln!(
-                "a frame should take about {est:.0} s on {} (level {}: {:.1} s for the photons and maps, {:.1} s \
-                 for the eye view; measured by {:.1} s of smaller frames); a lower --level is faster",
-                self.device().info.name,
-                c.level,
-                e.light_seconds,
-                e.eye_seconds,
-                e.probe_seconds
+                "a frame should take about {est:.0} s here (level {}: {:.1} s for the photons and maps, {:.1} s \
+                 for the eye view, timed on {:.1} s of smaller frames); a lower --level is faster",
+                c.level, e.light_seconds, e.eye_seconds, e.probe_seconds
             );
             self.slow_frame_s = Some(est);
         }
@@ -428,6 +424,14 @@ impl Session {
                 frame
             }
         };
+        if report.continuations > 0 {
+            eprintln!(
+                "the photon buffer filled before the frame was done: {} more submission{} traced the tiles left, \
+                 keeping the photons already traced (a larger --photon-budget does it in one)",
+                report.continuations,
+                if report.continuations == 1 { "" } else { "s" }
+            );
+        }
         if report.unfinished_tiles > 0 {
             log::warn!(
                 "{} tiles of the photon quadtree were not traced: the photon budget needs more than {MAX_BATCHES} \
