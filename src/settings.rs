@@ -219,8 +219,8 @@ pub struct Tuning {
     /// Exact transport: a Fresnel child below this fraction of its photon's flux is cut (and accounted).
     pub flux_threshold: f32,
     /// Exact transport: a Fresnel branch below this fraction of its photon's flux is traced once per block of
-    /// sibling photons ([`ResolvedSettings::weak_block`]), by one of them carrying the block's share with a splat as wide as
-    /// the block (0: off).
+    /// sibling photons ([`ResolvedSettings::weak_block`]), by one of them carrying the block's share with a splat
+    /// as wide as the block (0: off).
     pub weak_branches: f32,
     /// The side of a weak-branch block in cells of the maximal level: 2 or 4, 0 for automatic (4).
     pub weak_block: u32,

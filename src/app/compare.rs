@@ -60,29 +60,14 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     let (a, meta_a) = image_io::read_exr_meta(&args.a)?;
     let (b, meta_b) = image_io::read_exr_meta(&args.b)?;
     check_pair(&args.a, &a, &meta_a, &args.b, &b, &meta_b)?;
+    let sizes =
+        format!("{} is {}x{}, {} is {}x{}", args.a.display(), a.width, a.height, args.b.display(), b.width, b.height);
     let (ra, rb) = (a.width as f64 / a.height as f64, b.width as f64 / b.height as f64);
     if ((ra - rb) / rb).abs() > 1e-3 {
-        return Err(AppError::BadInput(format!(
-            "{} is {}x{} but {} is {}x{}: the aspect ratios differ",
-            args.a.display(),
-            a.width,
-            a.height,
-            args.b.display(),
-            b.width,
-            b.height
-        )));
+        return Err(AppError::BadInput(format!("{sizes}: the aspect ratios differ")));
     }
     if (a.width, a.height) != (b.width, b.height) {
-        log::warn!(
-            "{} is {}x{} and {} is {}x{}: both are box-filtered to the comparison sizes, which only go up to the \
-             smaller image",
-            args.a.display(),
-            a.width,
-            a.height,
-            args.b.display(),
-            b.width,
-            b.height
-        );
+        log::warn!("{sizes}: both are box-filtered to the comparison sizes, which only go up to the smaller image");
     }
     // Only the resolutions both images can carry: filtering an image up to a finer grid than its own pixels would
     // measure the filter, not the images (a 64² pair "compared at 256²" reads many times its real error).
@@ -90,13 +75,7 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     let res = args.res.unwrap_or(64.min(carried));
     if res > carried {
         return Err(AppError::BadInput(format!(
-            "--res {res}: above what the images carry ({carried} columns; {} is {}x{}, {} is {}x{})",
-            args.a.display(),
-            a.width,
-            a.height,
-            args.b.display(),
-            b.width,
-            b.height
+            "--res {res}: above what the images carry ({carried} columns; {sizes})"
         )));
     }
     let m64 = (carried >= 64).then(|| compare(&a, &b, 64, args.extent));
