@@ -133,12 +133,18 @@ impl Barriers {
         let (ds, da, _) = merge(next);
         // Read-after-read needs no barrier; write-after-read needs only an execution dependency.
         let src_access = if prev.iter().any(|a| a.is_write()) { sa } else { Acc::NONE };
+        self.push_buffer(buffer, (ss, src_access), (ds, da))
+    }
+
+    /// A barrier on the whole of `buffer` from `src` (stages, accesses) to `dst`; with no source access it is an
+    /// execution dependency only.
+    pub(crate) fn push_buffer(&mut self, buffer: vk::Buffer, src: (Stage, Acc), dst: (Stage, Acc)) -> &mut Self {
         self.buffers.push(
             vk::BufferMemoryBarrier2::default()
-                .src_stage_mask(ss)
-                .src_access_mask(src_access)
-                .dst_stage_mask(ds)
-                .dst_access_mask(if src_access.is_empty() { Acc::NONE } else { da })
+                .src_stage_mask(src.0)
+                .src_access_mask(src.1)
+                .dst_stage_mask(dst.0)
+                .dst_access_mask(if src.1.is_empty() { Acc::NONE } else { dst.1 })
                 .buffer(buffer)
                 .offset(0)
                 .size(vk::WHOLE_SIZE),
@@ -162,14 +168,25 @@ impl Barriers {
         let (ss, sa, old) = merge(prev);
         let (ds, da, new) = merge(next);
         let src_access = if prev.iter().any(|a| a.is_write()) { sa } else { Acc::NONE };
+        self.push_image(image, range, (ss, src_access, old), (ds, da, new))
+    }
+
+    /// A barrier on `range` of `image` from `src` (stages, accesses, layout) to `dst`.
+    pub(crate) fn push_image(
+        &mut self,
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+        src: (Stage, Acc, Layout),
+        dst: (Stage, Acc, Layout),
+    ) -> &mut Self {
         self.images.push(
             vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(ss)
-                .src_access_mask(src_access)
-                .dst_stage_mask(ds)
-                .dst_access_mask(da)
-                .old_layout(old)
-                .new_layout(new)
+                .src_stage_mask(src.0)
+                .src_access_mask(src.1)
+                .dst_stage_mask(dst.0)
+                .dst_access_mask(dst.1)
+                .old_layout(src.2)
+                .new_layout(dst.2)
                 .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .image(image)
@@ -191,6 +208,11 @@ impl Barriers {
         let dep =
             vk::DependencyInfo::default().buffer_memory_barriers(&self.buffers).image_memory_barriers(&self.images);
         unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
+        self.clear();
+    }
+
+    /// Drop the barriers added.
+    pub(crate) fn clear(&mut self) {
         self.buffers.clear();
         self.images.clear();
     }

@@ -20,7 +20,7 @@
 use super::buffer::Buffer;
 use super::context::Device;
 use super::image::Image;
-use super::sync::Access;
+use super::sync::{Access, Barriers};
 use ash::vk;
 use std::collections::HashMap;
 
@@ -137,8 +137,7 @@ fn writes() -> Acc {
 #[derive(Default)]
 pub struct Tracker {
     states: HashMap<u64, State>,
-    buffers: Vec<vk::BufferMemoryBarrier2<'static>>,
-    images: Vec<vk::ImageMemoryBarrier2<'static>>,
+    pending: Barriers,
     /// Barriers flushed so far (each `vkCmdPipelineBarrier2` call counts once).
     flushes: u64,
 }
@@ -153,16 +152,7 @@ impl Tracker {
         let u = union(accesses);
         let state = self.states.entry(buffer.id).or_default();
         if let Some((ss, sa, ds, da, _)) = state.apply(&u, false, false) {
-            self.buffers.push(
-                vk::BufferMemoryBarrier2::default()
-                    .src_stage_mask(ss)
-                    .src_access_mask(sa)
-                    .dst_stage_mask(ds)
-                    .dst_access_mask(if sa.is_empty() { Acc::NONE } else { da })
-                    .buffer(buffer.raw)
-                    .offset(0)
-                    .size(vk::WHOLE_SIZE),
-            );
+            self.pending.push_buffer(buffer.raw, (ss, sa), (ds, da));
         }
         self
     }
@@ -182,33 +172,17 @@ impl Tracker {
         let u = union(accesses);
         let state = self.states.entry(image.id).or_default();
         if let Some((ss, sa, ds, da, old)) = state.apply(&u, true, discard) {
-            self.images.push(
-                vk::ImageMemoryBarrier2::default()
-                    .src_stage_mask(ss)
-                    .src_access_mask(sa)
-                    .dst_stage_mask(ds)
-                    .dst_access_mask(da)
-                    .old_layout(old)
-                    .new_layout(u.layout)
-                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .image(image.raw)
-                    .subresource_range(image.range()),
-            );
+            self.pending.push_image(image.raw, image.range(), (ss, sa, old), (ds, da, u.layout));
         }
         self
     }
 
     /// Record the declared barriers in one `vkCmdPipelineBarrier2` (nothing when none is needed).
     pub fn flush(&mut self, device: &Device, cmd: vk::CommandBuffer) {
-        if self.buffers.is_empty() && self.images.is_empty() {
+        if self.pending.is_empty() {
             return;
         }
-        let dep =
-            vk::DependencyInfo::default().buffer_memory_barriers(&self.buffers).image_memory_barriers(&self.images);
-        unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
-        self.buffers.clear();
-        self.images.clear();
+        self.pending.flush(device, cmd);
         self.flushes += 1;
     }
 
@@ -228,16 +202,14 @@ impl Tracker {
                 ..State::default()
             };
         }
-        self.buffers.clear();
-        self.images.clear();
+        self.pending.clear();
     }
 
     /// Drop every resource's history: the tracked resources were destroyed after the device went idle, and those
     /// that replace them have none.
     pub fn clear(&mut self) {
         self.states.clear();
-        self.buffers.clear();
-        self.images.clear();
+        self.pending.clear();
     }
 }
 
