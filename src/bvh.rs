@@ -1,9 +1,10 @@
 //! The scene's triangles as a two-level BVH for exact photon transport on the GPU (glsl/common/bvh.glsl).
 //!
-//! Each scene object is one instance: a bottom-level BVH over its triangles (built on the host with obvhs' PLOC
-//! builder, then flattened) and an affine transform from world space into the BVH's space. Moving a rigid object
-//! only rewrites its transform; the BVH is rebuilt only when the triangles change. The few instances of a scene are
-//! tested linearly against their world-space bounds, so there is no top-level tree to rebuild.
+//! Each scene object is one instance: a bottom-level BVH over its mesh's triangles in object space (one per
+//! distinct mesh, built on the host with obvhs' PLOC builder, then flattened) and an affine transform from world
+//! space into the mesh's space. Moving a rigid object only rewrites its instance (the frame's scene update writes
+//! it on the GPU); a bottom-level BVH is built only when a mesh is new. The few instances of a scene are tested
+//! linearly against their world-space bounds, so there is no top-level tree to rebuild.
 //!
 //! Node layout ("pair", after Aila and Laine 2009): an inner node holds both children's boxes, so one node fetch
 //! tests two boxes and the traversal descends into the nearer child. A child is either another inner node or a
@@ -16,7 +17,7 @@
 //! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
 
-use crate::scene::{Material, Scene};
+use crate::scene::{Material, Mesh};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec3A};
 use obvhs::triangle::Triangle;
@@ -129,85 +130,149 @@ pub struct SceneBvh {
     pub pair_nodes: Vec<PairNode>,
     pub single_nodes: Vec<SingleNode>,
     pub threaded_nodes: Vec<ThreadedNode>,
+    /// One per scene object with triangles, in order.
     pub instances: Vec<GpuInstance>,
+    /// Per scene object: its instance (None: it has no triangle).
+    object_instance: Vec<Option<usize>>,
     pub triangles: Vec<GpuTriangle>,
     /// Per-vertex normals of each triangle (same order as `triangles`).
     pub normals: Vec<GpuTriangle>,
     /// Each instance's bounds in its BVH space.
     local_bounds: Vec<(Vec3, Vec3)>,
+    /// Bottom-level BVHs built (one per distinct mesh).
+    pub blas_builds: usize,
     pub build_ms: f64,
+}
+
+/// A mesh's bottom-level BVH: its roots in the three layouts (pair, single, threaded) and its object-space bounds.
+#[derive(Clone, Copy)]
+struct Blas {
+    roots: [u32; 3],
+    lo: Vec3,
+    hi: Vec3,
+}
+
+/// One scene object as the BVH sees it: which of the meshes it instances, where, and of what.
+pub struct BvhObject<'a> {
+    /// Index into the meshes passed to [`SceneBvh::build`].
+    pub mesh: usize,
+    /// Object → world.
+    pub transform: Mat4,
+    pub material: &'a Material,
 }
 
 fn row(m: &Mat4, r: usize) -> [f32; 4] {
     m.row(r).to_array()
 }
 
+/// A mesh's triangles with a nonzero, finite area and their vertex normals (degenerate ones are dropped, as in the
+/// CPU reference).
+fn valid_triangles(m: &Mesh) -> (Vec<[Vec3; 3]>, Vec<[Vec3; 3]>) {
+    let mut tris = Vec::new();
+    let mut nrms = Vec::new();
+    for t in m.indices.chunks_exact(3) {
+        let p = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+        let ng = (p[1] - p[0]).cross(p[2] - p[0]);
+        if !(ng.length() > 0.0 && ng.is_finite()) {
+            continue;
+        }
+        let n = [0, 1, 2].map(|k| m.normals.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO));
+        tris.push(p);
+        nrms.push(n);
+    }
+    (tris, nrms)
+}
+
+/// An instance's material words (`BvhInstance.material`, `.pad.yzw`, `.ior_rgb`, `.sigma_rgb`).
+fn material_words(m: &Material) -> ([f32; 4], [f32; 3], [f32; 4], [f32; 4]) {
+    let (ior_rgb, sigma_rgb) = match *m {
+        Material::Dielectric { absorption, .. } => {
+            let n = m.ior_rgb();
+            ([n[0], n[1], n[2], 0.0], [absorption.x, absorption.y, absorption.z, 0.0])
+        }
+        _ => ([0.0; 4], [0.0; 4]),
+    };
+    let material = match *m {
+        // The gray pass: the d-line IOR and the channels' mean absorption.
+        Material::Dielectric { ior, absorption, .. } => {
+            [ior, 1.0, (absorption.x + absorption.y + absorption.z) / 3.0, 0.0]
+        }
+        Material::Mirror => [0.0, 2.0, 0.0, 0.0],
+        Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
+    };
+    let albedo = match *m {
+        Material::Diffuse { albedo } => albedo.to_array(),
+        _ => [0.0; 3],
+    };
+    (material, albedo, ior_rgb, sigma_rgb)
+}
+
 impl SceneBvh {
-    /// Build one BVH per object. Objects hold world-space triangles, so each instance starts with the identity
-    /// transform; [`SceneBvh::set_transform`] moves one without a rebuild.
-    pub fn build(scene: &Scene) -> SceneBvh {
+    /// Build one bottom-level BVH per distinct mesh the objects instance (in its object space), and one instance
+    /// per object with its transform and material. [`SceneBvh::set_transform`] moves an object without a rebuild.
+    pub fn build(meshes: &[&Mesh], objects: &[BvhObject]) -> SceneBvh {
         let start = Instant::now();
         let mut bvh = SceneBvh::default();
-        for obj in &scene.objects {
-            let m = &obj.mesh;
-            let mut tris = Vec::new();
-            let mut nrms = Vec::new();
-            for t in m.indices.chunks_exact(3) {
-                let p = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
-                let ng = (p[1] - p[0]).cross(p[2] - p[0]);
-                if !(ng.length() > 0.0 && ng.is_finite()) {
-                    continue;
+        // Per mesh, once built: its roots and object-space bounds, or None when it has no valid triangle.
+        let mut blas: Vec<Option<Option<Blas>>> = vec![None; meshes.len()];
+        for obj in objects {
+            let built = *blas[obj.mesh].get_or_insert_with(|| {
+                let (tris, nrms) = valid_triangles(meshes[obj.mesh]);
+                if tris.is_empty() {
+                    return None;
                 }
-                let n = [0, 1, 2].map(|k| m.normals.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO));
-                tris.push(p);
-                nrms.push(n);
-            }
-            if tris.is_empty() {
+                let threaded_root = bvh.threaded_nodes.len() as u32;
+                let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
+                bvh.blas_builds += 1;
+                let (lo, hi) = tris
+                    .iter()
+                    .flatten()
+                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+                Some(Blas { roots: [pair_root, single_root, threaded_root], lo, hi })
+            });
+            // An object with no triangle has no instance.
+            let Some(b) = built else {
+                bvh.object_instance.push(None);
                 continue;
-            }
-            let threaded_root = bvh.threaded_nodes.len() as u32;
-            let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
-            let (lo, hi) =
-                tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
-            let (ior_rgb, sigma_rgb) = match obj.material {
-                Material::Dielectric { absorption, .. } => {
-                    let n = obj.material.ior_rgb();
-                    ([n[0], n[1], n[2], 0.0], [absorption.x, absorption.y, absorption.z, 0.0])
-                }
-                _ => ([0.0; 4], [0.0; 4]),
             };
-            let material = match obj.material {
-                // The gray pass: the d-line IOR and the channels' mean absorption.
-                Material::Dielectric { ior, absorption, .. } => {
-                    [ior, 1.0, (absorption.x + absorption.y + absorption.z) / 3.0, 0.0]
-                }
-                Material::Mirror => [0.0, 2.0, 0.0, 0.0],
-                Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
-            };
-            let albedo = match obj.material {
-                Material::Diffuse { albedo } => albedo,
-                _ => Vec3::ZERO,
-            };
+            let (material, albedo, ior_rgb, sigma_rgb) = material_words(obj.material);
             bvh.instances.push(GpuInstance {
-                object_from_world: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
-                world_from_object: [row(&Mat4::IDENTITY, 0), row(&Mat4::IDENTITY, 1), row(&Mat4::IDENTITY, 2)],
-                lo: [lo.x, lo.y, lo.z, f32::from_bits(pair_root)],
-                hi: [hi.x, hi.y, hi.z, f32::from_bits(single_root)],
+                lo: [0.0, 0.0, 0.0, f32::from_bits(b.roots[0])],
+                hi: [0.0, 0.0, 0.0, f32::from_bits(b.roots[1])],
                 material,
-                pad: [f32::from_bits(threaded_root), albedo.x, albedo.y, albedo.z],
+                pad: [f32::from_bits(b.roots[2]), albedo[0], albedo[1], albedo[2]],
                 ior_rgb,
                 sigma_rgb,
+                ..GpuInstance::default()
             });
-            bvh.local_bounds.push((lo, hi));
+            bvh.local_bounds.push((b.lo, b.hi));
+            bvh.object_instance.push(Some(bvh.instances.len() - 1));
+            bvh.set_transform(bvh.object_instance.len() - 1, obj.transform);
         }
         bvh.build_ms = start.elapsed().as_secs_f64() * 1e3;
         bvh
     }
 
     #[cfg(test)]
-    /// Move instance `i` rigidly: `world_from_object` maps its BVH space (the scene's world space at build time)
-    /// to world. Its world bounds become the transformed corners of its BVH-space box.
-    pub fn set_transform(&mut self, i: usize, world_from_object: Mat4) {
+    /// [`SceneBvh::build`] for a scene's objects as they are: each its own mesh with the identity transform.
+    pub fn of_scene(scene: &crate::scene::Scene) -> SceneBvh {
+        let meshes: Vec<&Mesh> = scene.objects.iter().map(|o| &o.mesh).collect();
+        let objects: Vec<BvhObject> = scene
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| BvhObject { mesh: i, transform: Mat4::IDENTITY, material: &o.material })
+            .collect();
+        SceneBvh::build(&meshes, &objects)
+    }
+
+    /// Move object `object` rigidly: `world_from_object` maps its BVH space (its mesh's object space) to world. Its
+    /// instance's world bounds become the transformed corners of its BVH-space box (the identity keeps them
+    /// exact). An object with no triangle has no instance to move.
+    pub fn set_transform(&mut self, object: usize, world_from_object: Mat4) {
+        let Some(i) = self.object_instance[object] else {
+            return;
+        };
         let (llo, lhi) = self.local_bounds[i];
         let (wlo, whi) = (0..8)
             .map(|k| Vec3::new([llo.x, lhi.x][k & 1], [llo.y, lhi.y][(k >> 1) & 1], [llo.z, lhi.z][k >> 2]))
@@ -475,6 +540,7 @@ pub fn watertight(o: Vec3, d: Vec3, p: &[Vec3; 3]) -> Option<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     fn brute(bvh: &SceneBvh, o: Vec3, d: Vec3) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
@@ -494,7 +560,7 @@ mod tests {
     fn layouts_match_brute_force() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/bunny.toml");
         let scene = Scene::load(&path).expect("scene");
-        let bvh = SceneBvh::build(&scene);
+        let bvh = SceneBvh::of_scene(&scene);
         assert_eq!(bvh.instances.len(), scene.objects.len());
         let mut hits = 0;
         let mut state = 12345u32;
@@ -523,7 +589,7 @@ mod tests {
     fn moved_instance_is_hit() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml");
         let scene = Scene::load(&path).expect("scene");
-        let mut bvh = SceneBvh::build(&scene);
+        let mut bvh = SceneBvh::of_scene(&scene);
         let glass = scene.objects.iter().position(|o| o.is_refractor()).unwrap();
         let down = Vec3::NEG_Y;
         let before = bvh.intersect(BvhLayout::Pair, Vec3::new(0.0, 2.0, 0.0), down, f32::INFINITY).unwrap();

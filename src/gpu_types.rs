@@ -295,6 +295,38 @@ impl GeometryPush {
     }
 }
 
+/// Push constants of scene_update.comp: one object's transform and its ranges in the scene's buffers.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SceneUpdatePush {
+    /// Rows of world_from_object's 3x4 affine part.
+    pub rows: [[f32; 4]; 3],
+    /// Rows of the inverse transpose of its 3x3 part; `nrows[0][3]` is 1 when it mirrors.
+    pub nrows: [[f32; 4]; 3],
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub first_index: u32,
+    pub index_count: u32,
+}
+
+impl SceneUpdatePush {
+    /// Object `range` placed by `world_from_object`.
+    pub fn new(world_from_object: glam::Mat4, range: &crate::scene_gpu::ObjectRange) -> Self {
+        let m3 = glam::Mat3::from_mat4(world_from_object);
+        let n = m3.inverse().transpose();
+        let mut nrows = [0, 1, 2].map(|r| n.row(r).extend(0.0).to_array());
+        nrows[0][3] = if m3.determinant() < 0.0 { 1.0 } else { 0.0 };
+        SceneUpdatePush {
+            rows: [0, 1, 2].map(|r| world_from_object.row(r).to_array()),
+            nrows,
+            first_vertex: range.first_vertex,
+            vertex_count: range.vertex_count,
+            first_index: range.first_index,
+            index_count: range.index_count,
+        }
+    }
+}
+
 /// Push constants of coverage.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -316,6 +348,8 @@ pub struct Vertex {
 
 const _: () = {
     assert!(size_of::<GpuView>() == 160);
+    // Within the 128 bytes of push constants every device has.
+    assert!(size_of::<SceneUpdatePush>() == 112);
     assert!(size_of::<FrameData>() == 672);
     assert!(offset_of!(FrameData, eye) == 640);
     assert!(size_of::<TransportState>() == 48 + 2 * 12 * 8 + 4 * 34);

@@ -56,7 +56,7 @@ mod targets;
 mod vk;
 
 pub use error::{AppError as Error, AppResult as Result};
-pub use frame::{Aov, AovData, FrameReport, LightReport, SlotVerdict, HOST_ROUNDTRIP};
+pub use frame::{Aov, AovData, FrameReport, LightReport, SceneUpdateReport, SlotVerdict, HOST_ROUNDTRIP};
 pub use gpu_types::{LevelCounters, TransportState, TraversalState, ACCOUNT_TERMS};
 pub use renderer::{
     BvhStats, Finish, Frame, FrameDesc, FrameEstimate, FrameOutput, InstanceId, MeshId, RecordTarget, RecordedFrame,

@@ -1,12 +1,33 @@
-//! The scene's triangles on the GPU: one vertex buffer and one index buffer, receivers first, then refractors,
-//! for rasterization; and the scene BVH (src/bvh.rs) for exact transport, built when a frame first needs it.
+//! The scene's triangles on the GPU: one vertex buffer and one index buffer in world space, receivers first, then
+//! refractors, for rasterization, with the same vertices and indices in each object's own space, from which the
+//! frame's scene update (src/passes/scene_update.rs) places a moved object; and the scene BVH (src/bvh.rs) for
+//! exact transport, built when a frame first needs it.
 
-use crate::bvh::{BvhLayout, GpuInstance, SceneBvh};
+use crate::bvh::{BvhLayout, BvhObject, GpuInstance, SceneBvh};
 use crate::gpu_types::Vertex;
-use crate::scene::{Material, Scene};
+use crate::scene::{Material, Mesh, Scene};
 use crate::vk::{cmd::upload_buffer, Buffer, Device, Recorder, VkResult};
 use ash::vk;
+use glam::Mat4;
 use std::sync::Arc;
+
+/// The scene's objects as meshes and instances: per object (in the scene's order), the mesh it instances, in
+/// object space, and its transform (object → world). A scene loaded from a file has one mesh per object, its
+/// world-space triangles, with the identity.
+pub(crate) struct SceneInstances<'a> {
+    pub meshes: &'a [Arc<Mesh>],
+    /// (index into `meshes`, transform), one per scene object.
+    pub objects: &'a [(usize, Mat4)],
+}
+
+/// One object's vertices and indices in the scene's buffers.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ObjectRange {
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub first_index: u32,
+    pub index_count: u32,
+}
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DrawRange {
@@ -15,8 +36,14 @@ pub struct DrawRange {
 }
 
 pub struct SceneBuffers {
+    /// World space: what the rasterizer draws (the scene update rewrites a moved object's).
     pub vertices: Buffer,
     pub indices: Buffer,
+    /// The same in each object's own space (what the scene update transforms).
+    pub object_vertices: Buffer,
+    pub object_indices: Buffer,
+    /// Per scene object, in order: its range in both.
+    pub objects: Vec<ObjectRange>,
     pub receivers: DrawRange,
     pub refractors: DrawRange,
     /// The IOR every refractor's vertices carry, when they all carry the same ([`shared_ior`]).
@@ -38,8 +65,9 @@ pub struct BvhBuffers {
     host: Option<SceneBvh>,
     /// Which layouts are uploaded: pair, single, threaded.
     uploaded: [bool; 3],
-    /// Host build time of this BVH (ms), node counts and triangle count.
+    /// Host build time of this BVH (ms), the bottom-level BVHs built, node counts and triangle count.
     pub build_ms: f64,
+    pub blas_builds: usize,
     pub pair_node_count: usize,
     pub single_node_count: usize,
     pub threaded_node_count: usize,
@@ -80,6 +108,7 @@ impl BvhBuffers {
             host: None,
             uploaded: [false; 3],
             build_ms: 0.0,
+            blas_builds: 0,
             pair_node_count: 0,
             single_node_count: 0,
             threaded_node_count: 0,
@@ -109,22 +138,31 @@ impl BvhBuffers {
     /// Build the BVH if no frame has needed it yet, and upload the nodes of `layout` (and the pair layout, which
     /// the eye view's glass tracing reads) if they are not on the GPU yet. The buffers it replaces must not be in
     /// use by a frame in flight.
-    pub fn ensure(
+    pub(crate) fn ensure(
         &mut self,
         device: &Arc<Device>,
         recorder: &mut Recorder,
         scene: &Scene,
+        instances: &SceneInstances,
         layout: BvhLayout,
     ) -> VkResult<()> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         if self.host.is_none() {
-            let bvh = SceneBvh::build(scene);
+            let meshes: Vec<&Mesh> = instances.meshes.iter().map(|m| &**m).collect();
+            let objects: Vec<BvhObject> = instances
+                .objects
+                .iter()
+                .zip(&scene.objects)
+                .map(|(&(mesh, transform), o)| BvhObject { mesh, transform, material: &o.material })
+                .collect();
+            let bvh = SceneBvh::build(&meshes, &objects);
             log::info!("scene BVH: {} triangles, built in {:.0} ms", bvh.triangles.len(), bvh.build_ms);
             self.triangles = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?;
             self.normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?;
             let instances = if bvh.instances.is_empty() { vec![no_instance()] } else { bvh.instances.clone() };
             self.instances = upload_buffer(device, recorder, "bvh instances", &instances, storage)?;
             self.build_ms = bvh.build_ms;
+            self.blas_builds += bvh.blas_builds;
             self.pair_node_count = bvh.pair_nodes.len();
             self.single_node_count = bvh.single_nodes.len();
             self.threaded_node_count = bvh.threaded_nodes.len();
@@ -153,6 +191,25 @@ impl BvhBuffers {
     }
 }
 
+impl BvhBuffers {
+    /// Move object `i` (once the BVH is built): its instance record on the host, which the frame's scene update
+    /// then writes to the GPU. Returns whether there is a BVH to update.
+    pub(crate) fn set_transform(&mut self, i: usize, world_from_object: Mat4) -> bool {
+        match self.host.as_mut() {
+            Some(bvh) => {
+                bvh.set_transform(i, world_from_object);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The instance records as the GPU buffer holds them (None before the BVH is built).
+    pub(crate) fn instance_records(&self) -> Option<&[GpuInstance]> {
+        self.host.as_ref().filter(|b| !b.instances.is_empty()).map(|b| &b.instances[..])
+    }
+}
+
 /// A refractor's gray index of refraction as the light and eye views' IOR buffers hold it. A negative IOR marks a
 /// mirror for the eye view's deferred shading (composite.comp).
 fn refractor_ior(m: &Material) -> f32 {
@@ -163,30 +220,70 @@ fn refractor_ior(m: &Material) -> f32 {
 }
 
 impl SceneBuffers {
-    pub fn new(device: &Arc<Device>, recorder: &mut Recorder, scene: &Scene) -> VkResult<Self> {
+    pub(crate) fn new(
+        device: &Arc<Device>,
+        recorder: &mut Recorder,
+        scene: &Scene,
+        instances: &SceneInstances,
+    ) -> VkResult<Self> {
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
+        let mut object_vertices = Vec::new();
+        let mut object_indices = Vec::new();
+        let mut objects = vec![ObjectRange::default(); scene.objects.len()];
         let mut push = |refractors: bool| {
             let start = indices.len() as u32;
-            for o in scene.objects.iter().filter(|o| o.is_refractor() == refractors) {
+            for (i, o) in scene.objects.iter().enumerate().filter(|(_, o)| o.is_refractor() == refractors) {
                 let base = vertices.len() as u32;
                 let material = match o.material {
                     Material::Diffuse { albedo } => [albedo.x, albedo.y, albedo.z, 0.0],
                     _ => [refractor_ior(&o.material), 0.0, 0.0, 1.0],
                 };
-                for (p, n) in o.mesh.positions.iter().zip(&o.mesh.normals) {
-                    vertices.push(Vertex { position: [p.x, p.y, p.z, 1.0], normal: [n.x, n.y, n.z, 0.0], material });
-                }
+                let vertex = |p: &glam::Vec3, n: &glam::Vec3| Vertex {
+                    position: [p.x, p.y, p.z, 1.0],
+                    normal: [n.x, n.y, n.z, 0.0],
+                    material,
+                };
+                objects[i] = ObjectRange {
+                    first_vertex: base,
+                    vertex_count: o.mesh.positions.len() as u32,
+                    first_index: indices.len() as u32,
+                    index_count: o.mesh.indices.len() as u32,
+                };
+                vertices.extend(o.mesh.positions.iter().zip(&o.mesh.normals).map(|(p, n)| vertex(p, n)));
                 indices.extend(o.mesh.indices.iter().map(|i| i + base));
+                let local = &instances.meshes[instances.objects[i].0];
+                object_vertices.extend(local.positions.iter().zip(&local.normals).map(|(p, n)| vertex(p, n)));
+                object_indices.extend(local.indices.iter().map(|i| i + base));
             }
             DrawRange { first_index: start, index_count: indices.len() as u32 - start }
         };
         let receivers = push(false);
         let refractors = push(true);
-        let vertices =
-            upload_buffer(device, recorder, "scene vertices", &vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?;
-        let indices = upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER)?;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let vertices = upload_buffer(
+            device,
+            recorder,
+            "scene vertices",
+            &vertices,
+            vk::BufferUsageFlags::VERTEX_BUFFER | storage,
+        )?;
+        let indices =
+            upload_buffer(device, recorder, "scene indices", &indices, vk::BufferUsageFlags::INDEX_BUFFER | storage)?;
+        let object_vertices =
+            upload_buffer(device, recorder, "scene vertices (object space)", &object_vertices, storage)?;
+        let object_indices = upload_buffer(device, recorder, "scene indices (object space)", &object_indices, storage)?;
         let bvh = BvhBuffers::placeholders(device, recorder)?;
-        Ok(SceneBuffers { vertices, indices, receivers, refractors, shared_ior: scene.shared_ior(), bvh })
+        Ok(SceneBuffers {
+            vertices,
+            indices,
+            object_vertices,
+            object_indices,
+            objects,
+            receivers,
+            refractors,
+            shared_ior: scene.shared_ior(),
+            bvh,
+        })
     }
 }

@@ -470,3 +470,110 @@ fn gallery_gltf_matches_reference() {
     assert!((m.flux_ratio - 1.0).abs() < 0.01, "flux ratio {}", m.flux_ratio);
     assert!(m.rel_l1 < 0.045, "rel-L1 {}", m.rel_l1);
 }
+
+/// `doc` and `bin` with one more accessor holding `data` (floats, `kind` SCALAR / VEC3 / VEC4); its index.
+fn add_accessor(doc: &mut Value, bin: &mut Vec<u8>, data: &[f32], kind: &str) -> usize {
+    let views = doc["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * data.len()}));
+    let view = views.len() - 1;
+    bin.extend_from_slice(bytemuck::cast_slice(data));
+    let per = match kind {
+        "SCALAR" => 1,
+        "VEC3" => 3,
+        _ => 4,
+    };
+    let mut acc = json!({"bufferView": view, "componentType": 5126, "count": data.len() / per, "type": kind});
+    if kind == "SCALAR" {
+        let (lo, hi) = data.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        acc["min"] = json!([lo]);
+        acc["max"] = json!([hi]);
+    }
+    let accessors = doc["accessors"].as_array_mut().unwrap();
+    accessors.push(acc);
+    let index = accessors.len() - 1;
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    index
+}
+
+/// The glTF twin with its glass node animated: a linear translation, a step rotation and a cubic-spline scale.
+fn animated_gltf() -> (Value, Vec<u8>) {
+    let (mut doc, mut bin) = gltf_scene();
+    let times = add_accessor(&mut doc, &mut bin, &[0.0, 1.0], "SCALAR");
+    let moves = add_accessor(&mut doc, &mut bin, &[0.0, 0.5, 0.0, 0.3, 0.6, 0.0], "VEC3");
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let turns = add_accessor(&mut doc, &mut bin, &[0.0, 0.0, 0.0, 1.0, 0.0, h, 0.0, h], "VEC4");
+    // (in tangent, value, out tangent) per keyframe: zero tangents, from scale 1 to 2.
+    let scales = add_accessor(
+        &mut doc,
+        &mut bin,
+        &[0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0, 2.0, 2.0, 0.0, 0.0, 0.0],
+        "VEC3",
+    );
+    doc["animations"] = json!([{
+        "channels": [
+            {"sampler": 0, "target": {"node": 1, "path": "translation"}},
+            {"sampler": 1, "target": {"node": 1, "path": "rotation"}},
+            {"sampler": 2, "target": {"node": 1, "path": "scale"}}
+        ],
+        "samplers": [
+            {"input": times, "output": moves, "interpolation": "LINEAR"},
+            {"input": times, "output": turns, "interpolation": "STEP"},
+            {"input": times, "output": scales, "interpolation": "CUBICSPLINE"}
+        ]
+    }]);
+    (doc, bin)
+}
+
+/// Node animation channels place the glass as the glTF interpolations say: linear translation, step rotation,
+/// and a cubic Hermite scale (with zero tangents, 1 + smoothstep at half time: 1.5), looping; the renderer and the
+/// reference evaluate the same placement (Scene::set_time).
+#[test]
+fn gltf_animation_places_the_glass() {
+    let dir = out_dir("gltf_animation");
+    let (doc, bin) = animated_gltf();
+    let path = write(&dir, "animated.gltf", embedded(doc, &bin));
+    let scene = Scene::load(&path).unwrap();
+    assert!(scene.is_animated() && scene.duration() == 1.0);
+    let glass = |s: &Scene| s.objects.iter().find(|o| o.name == "glass").unwrap().mesh.bounds();
+    let (lo, hi) = glass(&scene);
+    assert!(close((lo + hi) * 0.5, Vec3::new(0.0, 0.5, 0.0)) && close(hi - lo, Vec3::splat(0.4)), "{lo} {hi}");
+    let half = scene.at_time(0.5);
+    let (lo, hi) = glass(&half);
+    // At 0.5 s: translated halfway and scaled 1.5.
+    assert!(close((lo + hi) * 0.5, Vec3::new(0.15, 0.55, 0.0)), "{lo} {hi}");
+    assert!(close(hi - lo, Vec3::splat(0.6)), "{lo} {hi}");
+    // Looping: 1.5 s is 0.5 s.
+    assert_eq!(glass(&scene.at_time(1.5)), (lo, hi));
+    let o = half.objects.iter().find(|o| o.name == "glass").unwrap();
+    let a = &o.animation.as_ref().unwrap().animation;
+    // The step rotation holds its first keyframe (no turn) until the second, which the 1 s loop starts over at.
+    assert!(a.transform_at(0.99).transform_vector3(Vec3::Z).x.abs() < 1e-5, "no turn before the second keyframe");
+}
+
+#[test]
+fn bad_gltf_animations_exit_2() {
+    let dir = out_dir("gltf_animation_bad");
+    let (doc, bin) = animated_gltf();
+    let mut d = doc.clone();
+    d["animations"][0]["channels"][0]["target"]["node"] = json!(9);
+    expect_bad(
+        &dir,
+        "missing_node.gltf",
+        embedded(d, &bin),
+        &["animations[0].channels[0].target.node", "index out of bounds"],
+    );
+    // Times that do not increase.
+    let (mut d, mut b) = gltf_scene();
+    let times = add_accessor(&mut d, &mut b, &[1.0, 0.5], "SCALAR");
+    let moves = add_accessor(&mut d, &mut b, &[0.0, 0.5, 0.0, 0.3, 0.6, 0.0], "VEC3");
+    d["animations"] = json!([{"channels": [{"sampler": 0, "target": {"node": 1, "path": "translation"}}],
+                              "samplers": [{"input": times, "output": moves}]}]);
+    expect_bad(&dir, "times.gltf", embedded(d, &b), &["animations[0].samplers[0].input", "must increase"]);
+    // A NaN value.
+    let (mut d, mut b) = gltf_scene();
+    let times = add_accessor(&mut d, &mut b, &[0.0, 1.0], "SCALAR");
+    let moves = add_accessor(&mut d, &mut b, &[0.0, f32::NAN, 0.0, 0.3, 0.6, 0.0], "VEC3");
+    d["animations"] = json!([{"channels": [{"sampler": 0, "target": {"node": 1, "path": "translation"}}],
+                              "samplers": [{"input": times, "output": moves}]}]);
+    expect_bad(&dir, "nan.gltf", embedded(d, &b), &["animations[0].samplers[0].output", "finite"]);
+}

@@ -180,8 +180,9 @@ void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
     vec3 p0 = bvh_tris[3u * hit.tri].xyz, p1 = bvh_tris[3u * hit.tri + 1u].xyz, p2 = bvh_tris[3u * hit.tri + 2u].xyz;
     vec3 n = bvh_normal_rows[3u * hit.tri].xyz * hit.bary.x + bvh_normal_rows[3u * hit.tri + 1u].xyz * hit.bary.y
         + bvh_normal_rows[3u * hit.tri + 2u].xyz * hit.bary.z;
-    // Normals transform with the inverse transpose: the transpose of object_from_world's 3x3 part.
-    mat3 m = transpose(mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz));
+    // Normals transform with the inverse transpose: the transpose of object_from_world's 3x3 part (whose rows are
+    // the columns GLSL's mat3 constructor takes).
+    mat3 m = mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz);
     ng = normalize(m * cross(p1 - p0, p2 - p0));
     float len = length(n);
     ns = len > 0.0 && !isnan(len) && !isinf(len) ? normalize(m * n) : ng;
@@ -205,7 +206,7 @@ vec3 bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dp) {
     float b1 = dot(dp, cross(e2, n)) / nn, b2 = dot(dp, cross(n, e1)) / nn;
     vec3 n0 = bvh_normal_rows[3u * hit.tri].xyz, n1 = bvh_normal_rows[3u * hit.tri + 1u].xyz;
     vec3 n2 = bvh_normal_rows[3u * hit.tri + 2u].xyz;
-    mat3 m = transpose(mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz));
+    mat3 m = mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz);
     float len = length(m * (n0 * hit.bary.x + n1 * hit.bary.y + n2 * hit.bary.z));
     if (!(len > 0.0) || isinf(len)) return vec3(0.0);
     vec3 dm = m * ((n1 - n0) * b1 + (n2 - n0) * b2);

@@ -352,8 +352,12 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
     let mut rows: Vec<BenchRow> = Vec::new();
     let mut device = String::new();
     for scene_path in &scenes {
-        let scene_args =
-            SceneArgs { scene: Some(scene_path.clone()), camera: Some(args.camera.clone()), size: args.size.clone() };
+        let scene_args = SceneArgs {
+            scene: Some(scene_path.clone()),
+            camera: Some(args.camera.clone()),
+            size: args.size.clone(),
+            time: 0.0,
+        };
         let base = Settings {
             quality: Quality {
                 caustic_res: args.caustic_res,

@@ -36,6 +36,9 @@ pub struct SceneArgs {
     /// Output size WxH.
     #[arg(long, default_value = "512x512")]
     pub size: String,
+    /// Scene time in seconds: animated objects stand where their keyframes place them then.
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f32,
 }
 
 /// The quality options of `render`, `profile` and `view`: what is rendered and how finely.
@@ -285,6 +288,13 @@ pub struct RenderArgs {
     /// reuses the last frame's caustic map and runs only the eye and composite passes).
     #[arg(long)]
     pub no_reuse: bool,
+    /// Render an animation of N frames, from --time on at --fps frames per second, each written to --out with its
+    /// run of `#` replaced by the frame's number (frame_####.png: frame_0000.png, ...).
+    #[arg(long, value_name = "N")]
+    pub sequence: Option<u32>,
+    /// Frames per second of --sequence.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -331,7 +341,11 @@ impl Session {
     pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
         let (width, height) = parse_size(&args.size, "--size")?;
         let path = args.scene.clone().unwrap_or_else(default_scene);
-        let scene = Scene::load(&path)?;
+        let mut scene = Scene::load(&path)?;
+        if !args.time.is_finite() {
+            return Err(AppError::BadInput(format!("--time {}: must be finite", args.time)));
+        }
+        scene.set_time(args.time);
         let camera = scene.camera(args.camera.as_deref()).map_err(AppError::BadInput)?.clone();
         let desc = ContextDesc::from_env();
         let ctx = Context::headless(&desc)?;
@@ -567,6 +581,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "caustic_passes": last.caustics,
         "photons_splatted": photons,
         "host_readbacks_per_frame": last.host_readbacks,
+        "scene_update": scene_update_json(frames),
         "continuations": last.continuations,
         "barrier_batches": last.barrier_batches,
         "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
@@ -645,6 +660,28 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
     v
 }
 
+/// The scene updates of the frames: the last frame's, and every frame's summed (`render --frames` with a moving
+/// object counts every move).
+fn scene_update_json(frames: &[caustics::FrameReport]) -> Value {
+    let row = |u: &caustics::SceneUpdateReport| {
+        json!({
+            "moved_objects": u.moved_objects,
+            "instance_bytes": u.instance_bytes,
+            "blas_builds": u.blas_builds,
+            "blas_refits": u.blas_refits,
+            "rebuilt": u.rebuilt,
+            "blocking_submits": u.blocking_submits,
+            "wait_idles": u.wait_idles,
+        })
+    };
+    let mut all = caustics::SceneUpdateReport::default();
+    for f in frames {
+        all.add(&f.scene);
+    }
+    let last = frames.last().map(|f| f.scene).unwrap_or_default();
+    json!({"last_frame": row(&last), "all_frames": row(&all)})
+}
+
 /// One row per pass (per light, or per light and color channel when some glass needs color): the light's kind
 /// and power, the channel, whether its caustic stages ran, its photons, the GPU ms of its light-side stages in the
 /// last frame and, under exact transport, its energy account.
@@ -683,34 +720,48 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
     if args.frames == 0 {
         return Err(AppError::BadInput("--frames must be at least 1".into()));
     }
+    if let Some(n) = args.sequence {
+        check_sequence(args, n)?;
+    }
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings)?;
     session.renderer.set_reuse(!args.no_reuse);
     session.announce_defaults();
     session.plan(Some(aov))?;
     let mut reports = Vec::new();
-    let mut image = None;
-    for i in 0..args.frames {
-        let (report, img) = session.frame(Some(aov))?;
-        if args.frames > 1 {
-            eprintln!("frame {}/{}: {:.1} ms GPU, {:.1} ms wall", i + 1, args.frames, report.gpu_ms, report.frame_ms);
-        }
-        reports.push(report);
-        image = img;
-    }
-    let image = image.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
     let mut extra = serde_json::Map::new();
     extra.insert("aov".into(), json!(args.aov));
-    match &image {
-        AovData::Rgba8 { width, height, rgba } => image_io::write_png(&args.out, *width, *height, rgba)?,
-        AovData::Float { .. } => {
-            let rgb = to_rgb(&image).expect("float image");
-            if let (Some(area), false) = (session.pixel_area(), aov == Aov::BeautyHdr) {
-                let flux: f64 = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
-                extra.insert("aov_flux_w".into(), json!(flux));
-            }
-            image_io::write_exr_meta(&args.out, &rgb, &exr_meta(&session, &args.aov))?;
+    if let Some(n) = args.sequence {
+        let bar = sequence_bar(n);
+        for k in 0..n {
+            let t = args.scene.time + k as f32 / args.fps;
+            session.renderer.set_time(t)?;
+            let (report, img) = session.frame(Some(aov))?;
+            let image = img.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
+            write_aov(&session, args, aov, &image, &sequence_path(&args.out, k), &mut extra)?;
+            reports.push(report);
+            bar.inc(1);
         }
+        bar.finish_and_clear();
+        extra.insert("sequence".into(), json!({"frames": n, "fps": args.fps, "start_s": args.scene.time}));
+    } else {
+        let mut image = None;
+        for i in 0..args.frames {
+            let (report, img) = session.frame(Some(aov))?;
+            if args.frames > 1 {
+                eprintln!(
+                    "frame {}/{}: {:.1} ms GPU, {:.1} ms wall",
+                    i + 1,
+                    args.frames,
+                    report.gpu_ms,
+                    report.frame_ms
+                );
+            }
+            reports.push(report);
+            image = img;
+        }
+        let image = image.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
+        write_aov(&session, args, aov, &image, &args.out, &mut extra)?;
     }
     if let Some(last) = reports.last().filter(|r| r.guard_intact.is_some()) {
         extra.insert("debug_photons".into(), debug_photons_json(&last.debug_rows, last.debug_rows.len()));
@@ -721,15 +772,98 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
         image_io::write_text(p, &serde_json::to_string_pretty(&stats).unwrap_or_default())?;
     }
     let last = reports.last().expect("a frame");
+    let written = match args.sequence {
+        Some(n) => format!("{} ({n} frames)", args.out.display()),
+        None => args.out.display().to_string(),
+    };
     eprintln!(
-        "{}: {} photons, GPU {:.2} ms, frame {:.1} ms on {}",
-        args.out.display(),
+        "{written}: {} photons, GPU {:.2} ms, frame {:.1} ms on {}",
         last.photons(),
         last.gpu_ms,
         last.frame_ms,
         session.device().info.name
     );
     validation_verdict(&session)
+}
+
+/// Write a frame's AOV to `path` (PNG or EXR with its metadata); a caustics or direct AOV's flux goes in `extra`.
+fn write_aov(
+    session: &Session,
+    args: &RenderArgs,
+    aov: Aov,
+    image: &AovData,
+    path: &Path,
+    extra: &mut serde_json::Map<String, Value>,
+) -> AppResult<()> {
+    match image {
+        AovData::Rgba8 { width, height, rgba } => image_io::write_png(path, *width, *height, rgba),
+        AovData::Float { .. } => {
+            let rgb = to_rgb(image).expect("float image");
+            if let (Some(area), false) = (session.pixel_area(), aov == Aov::BeautyHdr) {
+                let flux: f64 = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
+                extra.insert("aov_flux_w".into(), json!(flux));
+            }
+            image_io::write_exr_meta(path, &rgb, &exr_meta(session, &args.aov))
+        }
+    }
+}
+
+/// `--sequence N`: at least one frame, a positive frame rate, no `--frames`, and an output name with a run of `#`
+/// long enough for the frame numbers.
+fn check_sequence(args: &RenderArgs, n: u32) -> AppResult<()> {
+    if n == 0 {
+        return Err(AppError::BadInput("--sequence must be at least 1 frame".into()));
+    }
+    if !(args.fps.is_finite() && args.fps > 0.0) {
+        return Err(AppError::BadInput(format!("--fps {}: must be a positive number of frames per second", args.fps)));
+    }
+    if args.frames != 1 {
+        return Err(AppError::BadInput(
+            "--frames repeats one time's frame; --sequence renders frames at successive times: give one of them".into(),
+        ));
+    }
+    let name = args.out.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let run = hash_run(name).map_or(0, |(a, b)| b - a);
+    let digits = (n - 1).max(1).ilog10() as usize + 1;
+    if run < digits {
+        return Err(AppError::BadInput(format!(
+            "--out {}: a sequence's file name needs a run of at least {digits} `#` for the frame number (for example \
+             frame_{}.png)",
+            args.out.display(),
+            "#".repeat(digits.max(4))
+        )));
+    }
+    Ok(())
+}
+
+/// The last run of `#` in a file name: (start, end) byte offsets.
+fn hash_run(name: &str) -> Option<(usize, usize)> {
+    let end = name.rfind('#')? + 1;
+    let start = name[..end].trim_end_matches('#').len();
+    Some((start, end))
+}
+
+/// Frame `k` of a sequence written to `out`: its file name's last run of `#` replaced by `k`, zero-padded to the
+/// run's length.
+pub fn sequence_path(out: &Path, k: u32) -> PathBuf {
+    let name = out.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    match hash_run(name) {
+        Some((a, b)) => out.with_file_name(format!("{}{:0width$}{}", &name[..a], k, &name[b..], width = b - a)),
+        None => out.to_path_buf(),
+    }
+}
+
+/// A progress bar for a sequence's frames on stderr (drawn only when stderr is a terminal).
+fn sequence_bar(n: u32) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(n as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} frame {pos}/{len}  {per_sec}  eta {eta}") {
+        bar.set_style(style);
+    }
+    bar
 }
 
 /// The EXR header metadata of a rendered AOV (docs/design.md, "CLI contract").
@@ -745,6 +879,7 @@ fn exr_meta(session: &Session, aov: &str) -> image_io::ExrMeta {
     m.insert("transport".into(), json!(s.transport).as_str().unwrap_or_default().into());
     m.insert("method".into(), json!(s.method).as_str().unwrap_or_default().into());
     m.insert("level".into(), s.level.to_string());
+    m.insert("time".into(), session.renderer.time().to_string());
     m
 }
 

@@ -41,6 +41,10 @@ pub struct ReferenceArgs {
     /// Write stats JSON here: the energy account, photon counts, photons/s, wall time, threads, seed.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Scene time in seconds: animated objects stand where their keyframes place them then (as `render --time`
+    /// places them).
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f32,
     /// Also report the radii holding 50% and 90% of the AOV's flux around this point, "x,y,z".
     #[arg(long)]
     pub radial_center: Option<String>,
@@ -78,6 +82,7 @@ impl ReferenceArgs {
             threads: self.threads,
             progress: Some(progress_bar()),
             radial_center: self.radial_center.as_deref().map(|s| parse_vec3(s, "--radial-center")).transpose()?,
+            time: self.time,
         })
     }
 }
@@ -111,6 +116,7 @@ pub fn run(args: &ReferenceArgs) -> AppResult<()> {
     meta.insert("photons".into(), args.photons.to_string());
     meta.insert("seed".into(), args.seed.to_string());
     meta.insert("level".into(), "none".into());
+    meta.insert("time".into(), args.time.to_string());
     image_io::write_exr_meta(&args.out, &out.image, &meta)?;
     if let Some(s) = &args.stats {
         let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;

@@ -1,7 +1,8 @@
 //! One frame as data flow: [`record_frame`] records the pipeline's steps in order over resources it borrows, and
 //! never sees the renderer. Each step declares how it uses its images and buffers to the frame's
 //! [`Tracker`](crate::vk::Tracker), which emits the barriers (no step names what came before it). The steps are
-//! those of docs/design.md "Pipeline", with the same numbers:
+//! those of docs/design.md "Pipeline", with the same numbers, after the scene update (when objects moved since the
+//! last frame: their world-space vertices placed from object space, and the BVH's instance records written):
 //!
 //! 1. light-view g-buffers: refractor front and back (photon view), receivers with the shadow map as their depth
 //!    (receiver view)
@@ -31,7 +32,7 @@ use crate::settings::{ResolvedSettings, Splat};
 use crate::targets::{ReceiverTargets, Targets};
 use crate::vk::{Access, Buffer, Device, Recorder, Sampler, Timestamps, Tracker, VkResult};
 use ash::vk;
-pub use report::{Aov, AovData, FrameReport, LightReport, SlotVerdict};
+pub use report::{Aov, AovData, FrameReport, LightReport, SceneUpdateReport, SlotVerdict};
 use std::time::Instant;
 
 /// Stage label of the CPU-driven traversal's host round trips (GPU idle while the host reads and records).
@@ -49,8 +50,20 @@ pub(crate) struct FrameResources<'a> {
     pub slot: usize,
 }
 
+/// The objects that moved since the last frame: the scene update (before step 1) places their vertices and writes the
+/// BVH's instance records.
+#[derive(Default)]
+pub(crate) struct SceneUpdate {
+    /// Per moved object: its transform and ranges in the scene's buffers.
+    pub moves: Vec<crate::gpu_types::SceneUpdatePush>,
+    /// Every instance record, when the BVH is built and an object moved.
+    pub instances: Option<Vec<crate::bvh::GpuInstance>>,
+}
+
 /// What a frame records: the decisions made before recording (by the renderer, from its inputs).
 pub(crate) struct FramePlan<'a> {
+    /// The scene update: the objects that moved.
+    pub scene_update: &'a SceneUpdate,
     /// The settings at this frame's level.
     pub settings: &'a ResolvedSettings,
     /// The uniforms of each pass (light-major: one per light and color channel), already written to the slot's
@@ -158,6 +171,36 @@ struct Ctx<'a> {
     eye_aovs: bool,
 }
 
+/// The scene update, before step 1: place the moved objects' vertices in world space (compute), and write the BVH's instance records
+/// (transfer). The rasterizer's vertex and index reads and the traversals' reads of the instances, later in this
+/// frame and the next, are declared here: nothing else in the frame writes them.
+fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResult<()> {
+    if up.moves.is_empty() && up.instances.is_none() {
+        return Ok(());
+    }
+    let (d, sb) = (res.device, res.scene);
+    rec.ts.mark(rec.cmd, "scene_update");
+    if !up.moves.is_empty() {
+        rec.sync.buffer(&sb.object_vertices, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.object_indices, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
+        rec.sync.buffer(&sb.indices, &[Access::ComputeWrite]);
+        rec.flush(d);
+        let update = &res.passes.scene_update;
+        update.place(rec.cmd, (&sb.object_vertices, &sb.object_indices), (&sb.vertices, &sb.indices), &up.moves)?;
+        rec.sync.buffer(&sb.vertices, &[Access::VertexInput]);
+        rec.sync.buffer(&sb.indices, &[Access::IndexInput]);
+    }
+    if let Some(records) = &up.instances {
+        rec.sync.buffer(&sb.bvh.instances, &[Access::TransferDst]);
+        rec.flush(d);
+        res.passes.scene_update.write(rec.cmd, &sb.bvh.instances, records);
+        rec.sync.buffer(&sb.bvh.instances, &[Access::ComputeRead]);
+    }
+    rec.flush(d);
+    Ok(())
+}
+
 /// Record one frame into `rec`: the steps in order, every barrier from the declared accesses. Returns the index of
 /// the frame's first eye-view interval (the per-light sums of GPU time stop there) and the AOV its readback holds.
 pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec) -> VkResult<(usize, Option<Aov>)> {
@@ -193,6 +236,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
     rec.report.level = s.level;
     rec.report.preview = plan.preview;
     rec.ts.reset(rec.cmd);
+    scene_update(res, plan.scene_update, rec)?;
     // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
     rec.sync.buffer(readback, &[Access::TransferDst]);
     for pass in 0..plan.lights() * nc {

@@ -52,6 +52,39 @@ pub struct LightReport {
     pub first_segment: usize,
 }
 
+/// A frame's scene update: the objects it moved on the GPU, and what the host did to the scene's buffers before it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneUpdateReport {
+    /// Objects whose vertices the frame's scene update placed (rigid moves since the last frame).
+    pub moved_objects: u32,
+    /// Bytes of BVH instance records the frame's commands wrote (its transforms and world bounds).
+    pub instance_bytes: u64,
+    /// Bottom-level BVHs built for this frame (on the host: a new mesh, or the BVH's first frame).
+    pub blas_builds: u32,
+    /// Bottom-level BVHs refit for this frame (none: rigid motion needs no refit).
+    pub blas_refits: u32,
+    /// The scene's buffers were rebuilt and uploaded before this frame (an object or a material was added or
+    /// changed, or a new scene was set).
+    pub rebuilt: bool,
+    /// Uploads and other submissions the host waited for while preparing this frame.
+    pub blocking_submits: u64,
+    /// `vkDeviceWaitIdle` calls while preparing this frame.
+    pub wait_idles: u64,
+}
+
+impl SceneUpdateReport {
+    /// Count `next`'s work in with this one's (a frame's further submissions; several frames' totals).
+    pub fn add(&mut self, next: &SceneUpdateReport) {
+        self.moved_objects += next.moved_objects;
+        self.instance_bytes += next.instance_bytes;
+        self.blas_builds += next.blas_builds;
+        self.blas_refits += next.blas_refits;
+        self.rebuilt |= next.rebuilt;
+        self.blocking_submits += next.blocking_submits;
+        self.wait_idles += next.wait_idles;
+    }
+}
+
 /// What one frame did, read back after it completed.
 #[derive(Clone, Debug, Default)]
 pub struct FrameReport {
@@ -93,6 +126,8 @@ pub struct FrameReport {
     pub transport: Option<TransportState>,
     /// Host round trips inside the frame (0 when GPU-driven; the CPU-driven baseline reads each level back).
     pub host_readbacks: u32,
+    /// What changed in the scene before this frame, and what it cost the host.
+    pub scene: SceneUpdateReport,
     /// Each pass (light-major; one per light, or three with color), in order (`state` and `transport` above are
     /// the first pass's).
     pub lights: Vec<LightReport>,
@@ -140,6 +175,7 @@ impl FrameReport {
         self.unfinished_tiles = next.unfinished_tiles;
         self.continuations += 1 + next.continuations;
         self.eye_reused = false;
+        self.scene.add(&next.scene);
         // The debug dump grows across the submissions: the last one's holds every row.
         if next.guard_intact.is_some() {
             self.debug_rows = next.debug_rows;

@@ -7,6 +7,7 @@ pub mod eye;
 pub mod geometry;
 pub mod photons;
 pub mod resolve;
+pub mod scene_update;
 
 use crate::vk::{Device, VkResult};
 use std::sync::Arc;
@@ -26,6 +27,7 @@ pub struct Passes {
     pub resolve: resolve::ResolvePass,
     pub eye: eye::EyePass,
     pub composite: composite::CompositePass,
+    pub scene_update: scene_update::SceneUpdatePass,
 }
 
 /// The caustic flux map holds one channel (the light's color is applied in the resolve): R32F where the device
@@ -49,6 +51,7 @@ impl Passes {
             resolve: resolve::ResolvePass::new(device)?,
             eye: eye::EyePass::new(device)?,
             composite: composite::CompositePass::new(device)?,
+            scene_update: scene_update::SceneUpdatePass::new(device),
         })
     }
 }

@@ -79,8 +79,8 @@ pub fn cache_key(scene_path: &Path, p: &RefParams) -> AppResult<String> {
         parts.push(read(&mesh)?);
     }
     let params = format!(
-        "camera={:?} aov={} paths={} photons={} size={}x{} seed={}",
-        p.camera, p.aov, p.paths, p.photons, p.width, p.height, p.seed
+        "camera={:?} aov={} paths={} photons={} size={}x{} seed={} time={}",
+        p.camera, p.aov, p.paths, p.photons, p.width, p.height, p.seed, p.time
     );
     parts.push(params.into_bytes());
     let mut key = String::new();

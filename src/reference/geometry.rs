@@ -209,12 +209,9 @@ mod tests {
         // A unit square at y = 0.3 and rays straight up whose x and z components are −0.0 or +0.0.
         let mut mesh = crate::scene::mesh::plane(1.0, 1.0);
         mesh = mesh.transformed(glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.3, 0.0)));
-        let obj = crate::scene::Object {
-            name: "p".into(),
-            material: crate::scene::Material::Diffuse { albedo: glam::Vec3::ONE },
-            mesh,
-        };
-        let scene = Scene { path: "t".into(), lights: vec![], cameras: vec![], objects: vec![obj] };
+        let obj = crate::scene::Object::new("p", crate::scene::Material::Diffuse { albedo: glam::Vec3::ONE }, mesh);
+        let mut scene = Scene::new(vec![], vec![]);
+        scene.objects.push(obj);
         let g = Geometry::new(&scene);
         for d in [DVec3::new(-0.0, 1.0, -0.0), DVec3::new(0.0, 1.0, -0.0), DVec3::Y, -DVec3::NEG_Y] {
             let h = g.intersect(DVec3::new(0.1, 0.0, 0.2), d, 1.0, None, Filter::All);

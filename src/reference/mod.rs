@@ -145,6 +145,8 @@ pub struct RefParams {
     pub progress: Option<Progress>,
     /// When set, the output keeps a radial profile of the selected AOV's deposited flux around this point.
     pub radial_center: Option<Vec3>,
+    /// The scene's time, s: its animated objects are placed where they stand then (as the renderer places them).
+    pub time: f32,
 }
 
 impl Default for RefParams {
@@ -160,6 +162,7 @@ impl Default for RefParams {
             threads: None,
             progress: None,
             radial_center: None,
+            time: 0.0,
         }
     }
 }
@@ -535,6 +538,16 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
     if p.width == 0 || p.height == 0 {
         return Err(AppError::BadInput("--size: width and height must be at least 1".into()));
     }
+    if !p.time.is_finite() {
+        return Err(AppError::BadInput(format!("--time {}: must be finite", p.time)));
+    }
+    let timed;
+    let scene = if scene.is_animated() && scene.time != p.time {
+        timed = scene.at_time(p.time);
+        &timed
+    } else {
+        scene
+    };
     let camera = orthographic_camera(scene, p.camera.as_deref())?;
     let view = CameraView::new(camera, p.width, p.height, scene.bounds());
     let geo = Geometry::new(scene);

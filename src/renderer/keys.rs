@@ -34,20 +34,29 @@ impl TargetsKey {
     }
 }
 
-/// What the caustic stages depend on: the lights, the geometry and materials (by generation), the settings that
+/// What the caustic stages depend on: the lights, the geometry and materials (by generation), the objects'
+/// transforms, the settings that
 /// touch them (not the eye view's own: supersampling, sky, eye-ray depth, exposure) and the light-side targets.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct CausticKey {
     pub lights: Vec<Light>,
     pub scene_generation: u64,
+    /// Every object's transform (moving one needs no new generation).
+    pub transforms: Vec<glam::Mat4>,
     pub settings: ResolvedSettings,
     pub targets: Option<TargetsKey>,
 }
 
 impl CausticKey {
-    pub fn new(lights: &[Light], scene_generation: u64, s: &ResolvedSettings, targets: Option<TargetsKey>) -> Self {
+    pub fn new(
+        lights: &[Light],
+        scene_generation: u64,
+        transforms: Vec<glam::Mat4>,
+        s: &ResolvedSettings,
+        targets: Option<TargetsKey>,
+    ) -> Self {
         let settings = ResolvedSettings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..s.clone() };
-        CausticKey { lights: lights.to_vec(), scene_generation, settings, targets }
+        CausticKey { lights: lights.to_vec(), scene_generation, transforms, settings, targets }
     }
 }
 

@@ -17,7 +17,7 @@ pub use scene_api::{InstanceId, MeshId};
 pub use views::Views;
 
 use crate::error::{AppError, AppResult};
-use crate::frame::{FramePlan, FrameResources, Rec};
+use crate::frame::{FramePlan, FrameResources, Rec, SceneUpdate};
 use crate::passes::Passes;
 use crate::scene::view::CameraView;
 use crate::scene::{Camera, Material, Scene, MAX_LIGHTS};
@@ -213,8 +213,8 @@ impl Renderer {
         check_lights(&scene)?;
         let mut recorder = Recorder::new(&device)?;
         let t0 = Instant::now();
-        let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene)?;
-        let scene_for_instances = scene.clone();
+        let instances = scene_api::Instances::of(&scene);
+        let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene, &instances.view())?;
         let t1 = Instant::now();
         let passes = Passes::new(&device)?;
         log::info!(
@@ -239,7 +239,7 @@ impl Renderer {
             reuse: true,
             scene_generation: 0,
             geometry_dirty: false,
-            instances: scene_api::Instances::of(&scene_for_instances),
+            instances,
             caches: Caches::default(),
             last_slot: 0,
             device,
@@ -523,16 +523,38 @@ impl Renderer {
     }
 
     /// Rebuild the scene's buffers when its geometry or materials changed (after the frames in flight that bind
-    /// them are done).
-    fn update_scene(&mut self) -> AppResult<()> {
+    /// them are done). Returns whether it did.
+    fn update_scene(&mut self) -> AppResult<bool> {
         if !self.geometry_dirty {
-            return Ok(());
+            return Ok(false);
         }
         self.finish_frames()?;
-        self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &self.scene)?;
+        self.scene_buffers = SceneBuffers::new(&self.device, &mut self.recorder, &self.scene, &self.instances.view())?;
+        // The new buffers hold every object where it is now.
+        self.instances.clear_moved();
         self.scene_generation += 1;
         self.geometry_dirty = false;
-        Ok(())
+        Ok(true)
+    }
+
+    /// The scene update of this frame: the objects moved since the last one, placed on the GPU, and the BVH's
+    /// instance records (its host copy moved with them) when it is built.
+    fn take_scene_update(&mut self) -> SceneUpdate {
+        let moved = self.instances.take_moved();
+        let mut up = SceneUpdate::default();
+        if moved.is_empty() {
+            return up;
+        }
+        let sb = &mut self.scene_buffers;
+        let mut bvh_moved = false;
+        for &(i, transform) in &moved {
+            up.moves.push(crate::gpu_types::SceneUpdatePush::new(transform, &sb.objects[i]));
+            bvh_moved |= sb.bvh.set_transform(i, transform);
+        }
+        if bvh_moved {
+            up.instances = sb.bvh.instance_records().map(|r| r.to_vec());
+        }
+        up
     }
 
     /// Record a frame into `host_cmd` (the host's command buffer; the host submits it) or into the next slot's own
@@ -546,7 +568,9 @@ impl Renderer {
         continuation: Option<&ContinuationPlan>,
     ) -> AppResult<()> {
         let start = Instant::now();
-        self.update_scene()?;
+        let (idles, submits, builds) =
+            (self.device.wait_idle_count(), self.recorder.blocking_submits, self.scene_buffers.bvh.blas_builds);
+        let rebuilt = self.update_scene()?;
         let slot = self.next_slot()?;
         self.last_slot = slot;
         // The settings at this frame's level (progressive refinement renders below the chosen one).
@@ -564,8 +588,21 @@ impl Renderer {
             // The waves and the eye view's glass trace the BVH: built, and this layout uploaded, once needed. The
             // buffers it replaces are bound by the frames in flight.
             self.finish_frames()?;
-            self.scene_buffers.bvh.ensure(&self.device, &mut self.recorder, &self.scene, s.bvh_layout)?;
+            let instances = self.instances.view();
+            self.scene_buffers.bvh.ensure(&self.device, &mut self.recorder, &self.scene, &instances, s.bvh_layout)?;
         }
+        let scene_update = self.take_scene_update();
+        // A rebuilt scene's BVH counts from zero.
+        let builds = if rebuilt { 0 } else { builds };
+        let scene_report = crate::frame::SceneUpdateReport {
+            moved_objects: scene_update.moves.len() as u32,
+            instance_bytes: scene_update.instances.as_ref().map_or(0, |r| std::mem::size_of_val(&r[..]) as u64),
+            blas_builds: (self.scene_buffers.bvh.blas_builds - builds) as u32,
+            blas_refits: 0,
+            rebuilt,
+            blocking_submits: self.recorder.blocking_submits - submits,
+            wait_idles: self.device.wait_idle_count() - idles,
+        };
         let nl = self.scene.lights.len();
         // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
         let nc = self.scene.color_channels();
@@ -574,7 +611,13 @@ impl Renderer {
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
-        let key = CausticKey::new(&self.scene.lights, self.scene_generation, &s, self.targets_key);
+        let key = CausticKey::new(
+            &self.scene.lights,
+            self.scene_generation,
+            self.instances.transforms(),
+            &s,
+            self.targets_key,
+        );
         let reused =
             continuation.is_none() && self.reuse && self.caches.caustic.as_ref().is_some_and(|(k, _)| *k == key);
         let targets = self.targets.as_mut().expect("targets");
@@ -610,6 +653,7 @@ impl Renderer {
         let targets = &*targets;
         let caustics: Vec<bool> = views.iter().map(|v| v.photon.is_some()).collect();
         let plan = FramePlan {
+            scene_update: &scene_update,
             settings: &s,
             data: &data,
             caustics: &caustics,
@@ -654,6 +698,8 @@ impl Renderer {
                 // What the queue will run of this frame is not known: forget what the tracker and caches knew.
                 rec.sync.forget();
                 self.caches.clear();
+                // Nor whether the scene update ran: the scene's buffers are rebuilt before the next frame.
+                self.geometry_dirty = true;
                 return Err(e.into());
             }
         };
@@ -663,6 +709,7 @@ impl Renderer {
         rec.ts.mark(rec.cmd, "");
         rec.record_time += rec.mark.elapsed().as_secs_f64();
         let mut report = rec.report;
+        report.scene = scene_report;
         report.record_ms = rec.record_time * 1e3;
         report.barrier_batches = rec.sync.flushes() - flushes;
         if host_cmd.is_none() {

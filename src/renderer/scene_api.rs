@@ -2,12 +2,15 @@
 //! A scene loaded from a file is the same thing: each of its objects is a mesh with the identity transform.
 //!
 //! The renderer keeps the instances' world-space triangles in its [`Scene`] (what the light views, the reference
-//! tracer and the stats read). Moving an instance or changing its material rebuilds the scene's GPU buffers and
-//! its BVH before the next frame; the meshes' own data is kept, so a mesh is never read from its file again.
+//! tracer and the stats read). Moving an instance rebuilds nothing: the next frame's scene update places its
+//! vertices on the GPU from the object-space copy and writes its BVH instance record, without a wait. Adding an
+//! instance or changing a material rebuilds the scene's GPU buffers (and its BVH, once a frame needs it) before the
+//! next frame; the meshes' own data is kept, so a mesh is never read from its file again.
 
 use super::{check_transport, Renderer};
 use crate::error::{AppError, AppResult};
 use crate::scene::{mesh::MAX_COORDINATE, Material, Mesh, Object};
+use crate::scene_gpu::SceneInstances;
 use glam::Mat4;
 use std::sync::Arc;
 
@@ -35,16 +38,46 @@ impl InstanceId {
 /// The meshes and, per scene object, which mesh and transform it is.
 pub(super) struct Instances {
     meshes: Vec<Arc<Mesh>>,
-    /// (mesh, object → world transform), one per scene object, in order.
-    of_object: Vec<(MeshId, Mat4)>,
+    /// (mesh index, object → world transform), one per scene object, in order.
+    of_object: Vec<(usize, Mat4)>,
+    /// Objects moved since the last frame recorded (its scene update places them), in index order.
+    moved: std::collections::BTreeSet<usize>,
 }
 
 impl Instances {
     /// A loaded scene: each object its own mesh (its world-space triangles) with the identity transform.
+    /// An animated object's mesh is its object-space mesh, placed where it stands at the scene's time.
     pub fn of(scene: &crate::scene::Scene) -> Instances {
-        let meshes: Vec<Arc<Mesh>> = scene.objects.iter().map(|o| Arc::new(o.mesh.clone())).collect();
-        let of_object = (0..meshes.len()).map(|i| (MeshId(i as u32), Mat4::IDENTITY)).collect();
-        Instances { meshes, of_object }
+        let (meshes, transforms): (Vec<Arc<Mesh>>, Vec<Mat4>) = scene
+            .objects
+            .iter()
+            .map(|o| match &o.animation {
+                Some(a) => (Arc::new(a.mesh.clone()), a.animation.transform_at(scene.time)),
+                None => (Arc::new(o.mesh.clone()), Mat4::IDENTITY),
+            })
+            .unzip();
+        let of_object = transforms.into_iter().enumerate().collect();
+        Instances { meshes, of_object, moved: Default::default() }
+    }
+
+    /// The view the scene's GPU buffers are built from.
+    pub fn view(&self) -> SceneInstances<'_> {
+        SceneInstances { meshes: &self.meshes, objects: &self.of_object }
+    }
+
+    /// Every object's transform, in order (what the caustic maps depend on besides the meshes).
+    pub fn transforms(&self) -> Vec<Mat4> {
+        self.of_object.iter().map(|&(_, m)| m).collect()
+    }
+
+    /// The objects moved since the last call, with their transforms.
+    pub fn take_moved(&mut self) -> Vec<(usize, Mat4)> {
+        std::mem::take(&mut self.moved).into_iter().map(|i| (i, self.of_object[i].1)).collect()
+    }
+
+    /// Forget the moves (the scene's buffers were rebuilt from the current transforms).
+    pub fn clear_moved(&mut self) {
+        self.moved.clear();
     }
 }
 
@@ -97,24 +130,25 @@ impl Renderer {
     ) -> AppResult<InstanceId> {
         let m = self.mesh(mesh)?.clone();
         check_transform(&transform)?;
-        self.scene.objects.push(Object { name: name.to_string(), material, mesh: (*m).clone().transformed(transform) });
+        self.scene.objects.push(Object::new(name, material, (*m).clone().transformed(transform)));
         if let Err(e) = check_transport(&self.scene, &self.config) {
             self.scene.objects.pop();
             return Err(e);
         }
-        self.instances.of_object.push((mesh, transform));
+        self.instances.of_object.push((mesh.0 as usize, transform));
         self.geometry_dirty = true;
         Ok(InstanceId(self.scene.objects.len() as u32 - 1))
     }
 
-    /// Place instance `id` by `transform` (object → world, replacing its last one).
+    /// Place instance `id` by `transform` (object → world, replacing its last one). Nothing is rebuilt and nothing
+    /// waits: the next frame's scene update moves it on the GPU (its report's `scene` counts what that cost).
     pub fn set_transform(&mut self, id: InstanceId, transform: Mat4) -> AppResult<()> {
         check_transform(&transform)?;
         let (mesh, _) = self.instance(id)?;
         let m = self.mesh(mesh)?.clone();
         self.scene.objects[id.index()].mesh = (*m).clone().transformed(transform);
         self.instances.of_object[id.index()].1 = transform;
-        self.geometry_dirty = true;
+        self.instances.moved.insert(id.index());
         Ok(())
     }
 
@@ -131,13 +165,38 @@ impl Renderer {
         Ok(())
     }
 
+    /// Move the scene's animated objects to where they stand at time `t` (s), as [`Renderer::set_transform`]
+    /// would: the next frame's scene update places them on the GPU. Objects that do not animate stay where they
+    /// are (an animated object moved by `set_transform` goes back on its animation here).
+    pub fn set_time(&mut self, t: f32) -> AppResult<()> {
+        if !t.is_finite() {
+            return Err(AppError::BadInput(format!("time {t}: must be finite")));
+        }
+        for i in 0..self.scene.objects.len() {
+            let Some(a) = self.scene.objects[i].animation.clone() else { continue };
+            let m = a.animation.transform_at(t);
+            if m != self.instances.of_object[i].1 {
+                self.set_transform(InstanceId::from_index(i), m).map_err(|e| {
+                    AppError::BadInput(format!("object `{}` at {t} s: {e}", self.scene.objects[i].name))
+                })?;
+            }
+        }
+        self.scene.time = t;
+        Ok(())
+    }
+
+    /// The time (s) the animated objects stand at.
+    pub fn time(&self) -> f32 {
+        self.scene.time
+    }
+
     /// The transform instance `id` was placed with (the identity for a loaded scene's objects).
     pub fn transform(&self, id: InstanceId) -> AppResult<Mat4> {
         Ok(self.instance(id)?.1)
     }
 
     fn instance(&self, id: InstanceId) -> AppResult<(MeshId, Mat4)> {
-        self.instances.of_object.get(id.index()).copied().ok_or_else(|| {
+        self.instances.of_object.get(id.index()).map(|&(m, t)| (MeshId(m as u32), t)).ok_or_else(|| {
             AppError::BadInput(format!("instance {}: the scene has {} objects", id.0, self.scene.objects.len()))
         })
     }

@@ -5,8 +5,9 @@
 //! the CLI reports it with exit code 2. The file is validated before use and accessors are bounds-checked here,
 //! so a corrupt file is an error, never a panic.
 
+use super::animation::{Animation, Interpolation, Repeat, Track};
 use super::{Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError, MAX_LIGHTS};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Quat, Vec3};
 use gltf::json::validation::{Error as VError, Validate};
 use std::path::Path;
 
@@ -98,6 +99,17 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
     if let Some((p, e)) = problems.into_iter().next() {
         return Err(cx.err(p, e.to_string().to_lowercase()));
     }
+    // The crate leaves animation targets unchecked (and would panic on one out of range).
+    for (a, anim) in root.animations.iter().enumerate() {
+        for (c, ch) in anim.channels.iter().enumerate() {
+            if ch.target.node.value() >= root.nodes.len() {
+                return Err(cx.err(
+                    format!("animations[{a}].channels[{c}].target.node"),
+                    format!("index out of bounds: the file has {} nodes", root.nodes.len()),
+                ));
+            }
+        }
+    }
 
     let buffers = load_buffers(&cx, &document, blob, path)?;
 
@@ -121,10 +133,13 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
         }
     };
 
-    let mut out = Scene { path: path.to_path_buf(), lights: Vec::new(), cameras: Vec::new(), objects: Vec::new() };
+    let mut out = Scene::new(Vec::new(), Vec::new());
+    out.path = path.to_path_buf();
     let mut visiting = vec![false; document.nodes().len()];
+    let tracks = animations(&cx, &document, &buffers)?;
+    let g = Globals { buffers: &buffers, materials: &materials, default_material, tracks: &tracks };
     for n in roots {
-        visit(&cx, &n, Mat4::IDENTITY, &buffers, &materials, default_material, &mut visiting, &mut out)?;
+        visit(&cx, &n, Mat4::IDENTITY, &g, &mut visiting, &mut out)?;
     }
     if out.lights.is_empty() {
         return Err(cx.err(
@@ -311,16 +326,130 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
 }
 
 #[allow(clippy::too_many_arguments)]
+/// What every node's visit reads: the buffers, the materials and the animation tracks.
+struct Globals<'a> {
+    buffers: &'a [Vec<u8>],
+    materials: &'a [Material],
+    default_material: Material,
+    /// Per node: its animation tracks (translation, rotation, scale), from the file's first animation.
+    tracks: &'a [NodeTracks],
+}
+
+/// A node's animated components.
+#[derive(Clone, Default)]
+struct NodeTracks {
+    translation: Option<Track<Vec3>>,
+    rotation: Option<Track<Quat>>,
+    scale: Option<Track<Vec3>>,
+}
+
+/// The file's first animation, per node (each node its own tracks). Times must be finite and increase, values be
+/// finite, and a cubic-spline sampler hold three values (in tangent, value, out tangent) per keyframe. Morph-target
+/// weights are not supported (a warning), nor further animations (a warning: only the first plays).
+fn animations(cx: &Cx, document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<Vec<NodeTracks>, SceneError> {
+    let mut tracks = vec![NodeTracks::default(); document.nodes().len()];
+    let mut all = document.animations();
+    let Some(anim) = all.next() else { return Ok(tracks) };
+    if all.next().is_some() {
+        cx.warn("animations", "the file has several animations: only the first (animations[0]) plays");
+    }
+    for ch in anim.channels() {
+        let at = format!("animations[{}].channels[{}]", anim.index(), ch.index());
+        let s_at = format!("animations[{}].samplers[{}]", anim.index(), ch.sampler().index());
+        let reader = ch.reader(|b: gltf::Buffer| buffers.get(b.index()).map(|d| d.as_slice()));
+        let times: Vec<f32> =
+            reader.read_inputs().ok_or_else(|| cx.err(format!("{s_at}.input"), "cannot be read"))?.collect();
+        if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
+            return Err(cx.err(format!("{s_at}.input"), "keyframe times must be finite, and there must be one"));
+        }
+        if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(cx.err(
+                format!("{s_at}.input"),
+                format!("keyframe times must increase: {} s follows {} s", times[k + 1], times[k]),
+            ));
+        }
+        use gltf::animation::util::ReadOutputs;
+        use gltf::animation::Interpolation as GI;
+        let interpolation = match ch.sampler().interpolation() {
+            GI::Linear => Interpolation::Linear,
+            GI::Step => Interpolation::Step,
+            GI::CubicSpline => Interpolation::Cubic,
+        };
+        let per_key = if interpolation == Interpolation::Cubic { 3 } else { 1 };
+        let outputs = reader.read_outputs().ok_or_else(|| cx.err(format!("{s_at}.output"), "cannot be read"))?;
+        let node = ch.target().node().index();
+        let count_err = |n: usize| {
+            cx.err(
+                format!("{s_at}.output"),
+                format!(
+                    "{n} values for {} keyframes (a {:?} sampler needs {per_key} each)",
+                    times.len(),
+                    interpolation
+                ),
+            )
+        };
+        // (in tangent, value, out tangent) per keyframe for cubic splines; the values alone otherwise.
+        fn split<T: Copy>(v: Vec<T>, per_key: usize) -> (Vec<T>, Vec<(T, T)>) {
+            if per_key == 1 {
+                return (v, Vec::new());
+            }
+            let values = v.chunks_exact(3).map(|c| c[1]).collect();
+            let tangents = v.chunks_exact(3).map(|c| (c[0], c[2])).collect();
+            (values, tangents)
+        }
+        match outputs {
+            ReadOutputs::Translations(it) | ReadOutputs::Scales(it) => {
+                let scale = matches!(ch.target().property(), gltf::animation::Property::Scale);
+                let v: Vec<Vec3> = it.map(Vec3::from).collect();
+                if v.len() != times.len() * per_key {
+                    return Err(count_err(v.len()));
+                }
+                let (values, tangents) = split(v, per_key);
+                let bad = |x: &Vec3| !x.is_finite();
+                if values.iter().any(bad)
+                    || tangents.iter().any(|(a, b)| bad(a) || bad(b))
+                    || (scale && values.iter().any(|x| x.abs().min_element() < 1e-9))
+                {
+                    return Err(cx.err(format!("{s_at}.output"), "values must be finite (and scales non-zero)"));
+                }
+                let track = Track { times, values, tangents, interpolation };
+                if scale {
+                    tracks[node].scale = Some(track);
+                } else {
+                    tracks[node].translation = Some(track);
+                }
+            }
+            ReadOutputs::Rotations(r) => {
+                let v: Vec<Quat> = r.into_f32().map(Quat::from_array).collect();
+                if v.len() != times.len() * per_key {
+                    return Err(count_err(v.len()));
+                }
+                if v.iter().any(|q| !q.is_finite() || (per_key == 1 && q.length() < 1e-6)) {
+                    return Err(cx.err(format!("{s_at}.output"), "rotations must be finite, non-zero quaternions"));
+                }
+                let (values, tangents) = split(v, per_key);
+                let values = values.into_iter().map(|q| q.normalize()).collect();
+                tracks[node].rotation = Some(Track { times, values, tangents, interpolation });
+            }
+            ReadOutputs::MorphTargetWeights(_) => {
+                cx.warn(&at, "morph-target weights are not supported; the mesh keeps its base shape");
+            }
+        }
+    }
+    Ok(tracks)
+}
+
 fn visit(
     cx: &Cx,
     node: &gltf::Node,
     parent: Mat4,
-    buffers: &[Vec<u8>],
-    materials: &[Material],
-    default_material: Material,
+    g: &Globals,
     visiting: &mut Vec<bool>,
     out: &mut Scene,
 ) -> Result<(), SceneError> {
+    let (buffers, materials, default_material) = (g.buffers, g.materials, g.default_material);
+    let tracks = &g.tracks[node.index()];
+    let animated = tracks.translation.is_some() || tracks.rotation.is_some() || tracks.scale.is_some();
     let at = format!("nodes[{}]", node.index());
     if visiting.iter().filter(|&&v| v).count() >= MAX_DEPTH {
         return Err(cx.err(at, format!("the node hierarchy is deeper than {MAX_DEPTH} levels")));
@@ -355,7 +484,8 @@ fn visit(
                 cx.warn(&p_at, &format!("mesh \"{base_name}\" has no triangles and is skipped"));
                 continue;
             }
-            let mut m = m.transformed(world);
+            // An animated node's mesh stays in its own space, placed by its animation at the scene's time.
+            let mut m = if animated { m } else { m.transformed(world) };
             if m.positions.iter().any(|v| !v.is_finite()) {
                 return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
             }
@@ -373,8 +503,26 @@ fn visit(
                     cx.warn(&p_at, &format!("mesh \"{base_name}\": {finding}"));
                 }
             }
-            out.objects.push(Object { name, material, mesh: m });
+            if animated {
+                let (scale, rotation, translation) = node.transform().decomposed();
+                let animation = Animation {
+                    translation: tracks.translation.clone(),
+                    rotation: tracks.rotation.clone(),
+                    scale: tracks.scale.clone(),
+                    rest: (Vec3::from(translation), Quat::from_array(rotation).normalize(), Vec3::from(scale)),
+                    parent,
+                    repeat: Repeat::Loop,
+                };
+                let placed = m.clone().transformed(animation.transform_at(0.0));
+                let anim = std::sync::Arc::new(super::ObjectAnimation { mesh: m, animation });
+                out.objects.push(Object { animation: Some(anim), ..Object::new(name, material, placed) });
+            } else {
+                out.objects.push(Object::new(name, material, m));
+            }
         }
+    }
+    if animated && node.children().len() > 0 {
+        cx.warn(&at, "the node is animated; its children keep their rest placement (only a node's own meshes move)");
     }
 
     if let Some(cam) = node.camera() {
@@ -451,7 +599,7 @@ fn visit(
     }
 
     for c in node.children() {
-        visit(cx, &c, world, buffers, materials, default_material, visiting, out)?;
+        visit(cx, &c, world, g, visiting, out)?;
     }
     visiting[node.index()] = false;
     Ok(())

@@ -3,12 +3,13 @@
 //! Errors name the file, the line and the field (`sphere.toml:23: object[1] "glass".material.ior: ...`), and are
 //! reported by the CLI with exit code 2.
 
+pub mod animation;
 mod gltf;
 pub mod mesh;
 mod schema;
 pub mod view;
 
-use glam::{EulerRot, Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec3};
 use schema::*;
 use std::path::{Path, PathBuf};
 
@@ -152,8 +153,26 @@ pub struct Object {
     pub name: String,
     /// Its material.
     pub material: Material,
-    /// Its triangles, in world space.
+    /// Its triangles, in world space (at the scene's `time` when it animates).
     pub mesh: Mesh,
+    /// Where it moves over time (None: it stands still).
+    pub animation: Option<std::sync::Arc<ObjectAnimation>>,
+}
+
+/// An animated object: its mesh in object space, and its transform over time.
+#[derive(Debug)]
+pub struct ObjectAnimation {
+    /// The mesh, in object space.
+    pub mesh: Mesh,
+    /// Object → world, as a function of time.
+    pub animation: animation::Animation,
+}
+
+impl Object {
+    /// A still object.
+    pub fn new(name: impl Into<String>, material: Material, mesh: Mesh) -> Object {
+        Object { name: name.into(), material, mesh, animation: None }
+    }
 }
 
 /// Wavelengths (nm) that the red, green and blue channels trace when a scene needs color: the Fraunhofer C, d and
@@ -211,6 +230,8 @@ pub struct Scene {
     pub cameras: Vec<Camera>,
     /// Its objects.
     pub objects: Vec<Object>,
+    /// The time (s) its animated objects stand at (0 as loaded).
+    pub time: f32,
 }
 
 struct Ctx<'a> {
@@ -244,7 +265,34 @@ impl Scene {
     /// A scene built in code: its lights and cameras, and no objects yet (a renderer adds them as instances of
     /// meshes: [`crate::Renderer::add_mesh`], [`crate::Renderer::add_instance`]). Messages name it `<code>`.
     pub fn new(lights: Vec<Light>, cameras: Vec<Camera>) -> Scene {
-        Scene { path: PathBuf::from("<code>"), lights, cameras, objects: Vec::new() }
+        Scene { path: PathBuf::from("<code>"), lights, cameras, objects: Vec::new(), time: 0.0 }
+    }
+
+    /// Whether any object animates.
+    pub fn is_animated(&self) -> bool {
+        self.objects.iter().any(|o| o.animation.is_some())
+    }
+
+    /// The longest animation's duration (s; 0 for a still scene).
+    pub fn duration(&self) -> f32 {
+        self.objects.iter().filter_map(|o| o.animation.as_ref()).map(|a| a.animation.duration()).fold(0.0, f32::max)
+    }
+
+    /// Place every animated object where it stands at time `t` (s).
+    pub fn set_time(&mut self, t: f32) {
+        for o in &mut self.objects {
+            if let Some(a) = &o.animation {
+                o.mesh = a.mesh.clone().transformed(a.animation.transform_at(t));
+            }
+        }
+        self.time = t;
+    }
+
+    /// The scene at time `t` (s).
+    pub fn at_time(&self, t: f32) -> Scene {
+        let mut s = self.clone();
+        s.set_time(t);
+        s
     }
 
     /// Load a scene by its file type: TOML (`.toml`), or glTF 2.0 (`.gltf`, `.glb`). Any other file type is
@@ -329,7 +377,7 @@ impl Scene {
         if objects.is_empty() {
             return Err(cx.err(0..0, "object", "the scene needs at least one [[object]]"));
         }
-        let mut scene = Scene { path: path.to_path_buf(), lights, cameras, objects };
+        let mut scene = Scene { path: path.to_path_buf(), lights, cameras, objects, time: 0.0 };
         scene.aim_point_lights();
         for (i, l) in scene.lights.iter().enumerate() {
             if (l.target - l.position).length() < 1e-6 {
@@ -404,6 +452,44 @@ impl Scene {
             .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), (a, b)| {
                 (lo.min(a), hi.max(b))
             })
+    }
+
+    /// The object a ray `origin + t·dir` (t > 0) hits first, with its t, among those `filter` accepts (the
+    /// viewer picks the glass under the cursor with it; brute force over the triangles of the objects whose
+    /// bounds the ray enters).
+    pub fn pick(&self, origin: Vec3, dir: Vec3, filter: impl Fn(&Object) -> bool) -> Option<(usize, f32)> {
+        let mut best: Option<(usize, f32)> = None;
+        for (i, o) in self.objects.iter().enumerate().filter(|(_, o)| filter(o)) {
+            let (lo, hi) = o.mesh.bounds();
+            let inv = dir.recip();
+            let (a, b) = ((lo - origin) * inv, (hi - origin) * inv);
+            let (near, far) = (a.min(b).max_element().max(0.0), a.max(b).min_element());
+            // (NaN bounds enter nothing.)
+            let enters = matches!(near.partial_cmp(&far), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal));
+            if !enters || best.is_some_and(|(_, t)| near > t) {
+                continue;
+            }
+            let m = &o.mesh;
+            for tri in m.indices.chunks_exact(3) {
+                let [p0, p1, p2] = [0, 1, 2].map(|k| m.positions[tri[k] as usize]);
+                // Möller-Trumbore.
+                let (e1, e2) = (p1 - p0, p2 - p0);
+                let q = dir.cross(e2);
+                let det = e1.dot(q);
+                if det.abs() < 1e-12 {
+                    continue;
+                }
+                let s = origin - p0;
+                let u = s.dot(q) / det;
+                let r = s.cross(e1);
+                let v = dir.dot(r) / det;
+                let t = e2.dot(r) / det;
+                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && best.map_or(true, |(_, b)| t < b) {
+                    best = Some((i, t));
+                }
+            }
+        }
+        best
     }
 
     /// The index of refraction every refractor shares (a mirror counts as -1), or None when they differ or there
@@ -593,6 +679,113 @@ fn positive_size(cx: &Ctx, field: String, v: &S<toml::Value>, n: usize) -> Resul
     Ok(if n == 2 { Vec3::new(vals[0], 0.0, vals[1]) } else { Vec3::new(vals[0], vals[1], vals[2]) })
 }
 
+/// An object's `[[object.keyframe]]` tables as its animation (None without any), each keyframe's missing
+/// components taken from the object's own `translate`, `rotate_deg` and `scale` (`rest`).
+fn keyframes(
+    cx: &Ctx,
+    d: &ObjectDef,
+    f: &dyn Fn(&str) -> String,
+    rest: (Vec3, Quat, Vec3),
+) -> Result<Option<animation::Animation>, SceneError> {
+    use animation::{Animation, Interpolation, Repeat, Track};
+    if d.keyframe.is_empty() {
+        for (field, span) in [
+            ("interpolation", d.interpolation.as_ref().map(|v| v.span())),
+            ("repeat", d.repeat.as_ref().map(|v| v.span())),
+        ] {
+            if let Some(span) = span {
+                return Err(cx.err(span, f(field), format!("`{field}` needs keyframes ([[object.keyframe]])")));
+            }
+        }
+        return Ok(None);
+    }
+    let interpolation = match d.interpolation.as_ref() {
+        None => Interpolation::Linear,
+        Some(v) => match v.get_ref().as_str() {
+            "linear" => Interpolation::Linear,
+            "step" => Interpolation::Step,
+            other => {
+                return Err(cx.err(
+                    v.span(),
+                    f("interpolation"),
+                    format!("unknown interpolation `{other}` (expected \"linear\" or \"step\")"),
+                ))
+            }
+        },
+    };
+    let repeat = match d.repeat.as_ref() {
+        None => Repeat::Clamp,
+        Some(v) => match v.get_ref().as_str() {
+            "clamp" => Repeat::Clamp,
+            "loop" => Repeat::Loop,
+            other => {
+                return Err(cx.err(
+                    v.span(),
+                    f("repeat"),
+                    format!("unknown repeat `{other}` (expected \"clamp\" or \"loop\")"),
+                ))
+            }
+        },
+    };
+    let (mut times, mut tr, mut rot, mut sc): (Vec<f32>, Vec<Vec3>, Vec<Quat>, Vec<Vec3>) = Default::default();
+    for (k, key) in d.keyframe.iter().enumerate() {
+        let key = key.get_ref();
+        let kf = |field: &str| f(&format!("keyframe[{k}].{field}"));
+        let t = *key.time.get_ref();
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(cx.err(key.time.span(), kf("time"), format!("must be finite and >= 0 s (got {t})")));
+        }
+        if let Some(&last) = times.last() {
+            if t <= last {
+                return Err(cx.err(
+                    key.time.span(),
+                    kf("time"),
+                    format!("keyframe times must increase: {t} s follows {last} s"),
+                ));
+            }
+        }
+        let translate = match &key.translate {
+            Some(v) if !finite3(*v.get_ref()) => return Err(cx.err(v.span(), kf("translate"), FINITE)),
+            Some(v) => Vec3::from(*v.get_ref()),
+            None => rest.0,
+        };
+        let rotate = match &key.rotate_deg {
+            Some(v) if !finite3(*v.get_ref()) => return Err(cx.err(v.span(), kf("rotate_deg"), FINITE)),
+            Some(v) => animation::euler_deg(Vec3::from(*v.get_ref())),
+            None => rest.1,
+        };
+        let scale = match &key.scale {
+            Some(v) => {
+                let x = Vec3::from(v.get_ref().to_array());
+                if !x.is_finite() || x.abs().min_element() < 1e-9 {
+                    return Err(cx.err(v.span(), kf("scale"), "must be finite and non-zero"));
+                }
+                x
+            }
+            None => rest.2,
+        };
+        if let Some(&last) = sc.last() {
+            // Between keyframes the scale is interpolated: through zero, the object would collapse.
+            if (scale * last).min_element() < 0.0 {
+                let span = key.scale.as_ref().map_or(key.time.span(), |v| v.span());
+                return Err(cx.err(span, kf("scale"), "each component must keep its sign from keyframe to keyframe"));
+            }
+        }
+        times.push(t);
+        tr.push(translate);
+        rot.push(rotate);
+        sc.push(scale);
+    }
+    Ok(Some(Animation {
+        translation: Some(Track::new(times.clone(), tr, interpolation)),
+        rotation: Some(Track::new(times.clone(), rot, interpolation)),
+        scale: Some(Track::new(times, sc, interpolation)),
+        rest,
+        parent: Mat4::IDENTITY,
+        repeat,
+    }))
+}
+
 fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
     let d = o.get_ref();
     let name = d.name.get_ref().clone();
@@ -701,8 +894,25 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
     };
     if d.translate.is_some() || d.rotate_deg.is_some() || d.scale.is_some() {
         // Scale, then rotate about x, then y, then z, then translate.
-        let q = Quat::from_euler(EulerRot::ZYX, rotate.z.to_radians(), rotate.y.to_radians(), rotate.x.to_radians());
-        transform = Mat4::from_scale_rotation_translation(scale, q, translate);
+        transform = Mat4::from_scale_rotation_translation(scale, animation::euler_deg(rotate), translate);
+    }
+    let animation = keyframes(cx, d, &f, (translate, animation::euler_deg(rotate), scale))?;
+    let animation = animation.map(|a| {
+        transform = a.transform_at(0.0);
+        std::sync::Arc::new(ObjectAnimation { mesh: mesh.clone(), animation: a })
+    });
+    if let Some(a) = &animation {
+        // Every keyframe's placement lands within the coordinates' range (interpolation stays between them).
+        for (k, key) in d.keyframe.iter().enumerate() {
+            let m = a.animation.transform_at(*key.get_ref().time.get_ref());
+            if let Some(p) = a.mesh.positions.iter().map(|p| m.transform_point3(*p)).find(|p| !finite3(p.to_array())) {
+                return Err(cx.err(
+                    key.span(),
+                    f(&format!("keyframe[{k}]")),
+                    format!("a vertex lands at {p} in world space; coordinates must be finite (within ±1e9 m)"),
+                ));
+            }
+        }
     }
     let mesh = if transform == Mat4::IDENTITY { mesh } else { mesh.transformed(transform) };
     if let Some(p) = mesh.positions.iter().find(|p| !finite3(p.to_array())) {
@@ -814,7 +1024,7 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             ))
         }
     };
-    Ok(Object { name, material, mesh })
+    Ok(Object { name, material, mesh, animation })
 }
 
 #[cfg(test)]

@@ -71,6 +71,20 @@ pub struct ObjectDef {
     pub rotate_deg: Option<S<[f32; 3]>>,
     pub scale: Option<S<ScalarOr3>>,
     pub material: S<MaterialDef>,
+    /// `[[object.keyframe]]`: the object's placement over time.
+    #[serde(default)]
+    pub keyframe: Vec<S<KeyframeDef>>,
+    pub interpolation: Option<S<String>>,
+    pub repeat: Option<S<String>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeDef {
+    pub time: S<f32>,
+    pub translate: Option<S<[f32; 3]>>,
+    pub rotate_deg: Option<S<[f32; 3]>>,
+    pub scale: Option<S<ScalarOr3>>,
 }
 
 #[derive(Deserialize, Debug)]

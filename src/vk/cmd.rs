@@ -27,6 +27,8 @@ pub struct Recorder {
     pub cmd: vk::CommandBuffer,
     fence: vk::Fence,
     pending: bool,
+    /// Submissions the host waited for ([`Recorder::submit_and_wait`]: uploads, CPU-driven round trips).
+    pub blocking_submits: u64,
 }
 
 impl Recorder {
@@ -53,7 +55,7 @@ impl Recorder {
                 return Err(super::VkError::Call { call: "vkCreateFence", result: e });
             }
         };
-        Ok(Recorder { device: device.clone(), pool, cmd, fence, pending: false })
+        Ok(Recorder { device: device.clone(), pool, cmd, fence, pending: false, blocking_submits: 0 })
     }
 
     pub fn begin(&mut self) -> VkResult<vk::CommandBuffer> {
@@ -120,6 +122,7 @@ impl Recorder {
     }
 
     pub fn submit_and_wait(&mut self) -> VkResult<()> {
+        self.blocking_submits += 1;
         self.submit()?;
         self.wait()
     }

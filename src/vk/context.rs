@@ -198,6 +198,8 @@ pub struct Device {
     allocator: ManuallyDrop<Mutex<Allocator>>,
     /// Created here (destroyed with this), or a host's (left to it).
     owned: bool,
+    /// vkDeviceWaitIdle calls made through [`Device::wait_idle`] (the stats count the stalls a frame caused).
+    wait_idles: std::sync::atomic::AtomicU64,
 }
 
 impl std::ops::Deref for Device {
@@ -465,6 +467,7 @@ impl Device {
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             owned: true,
+            wait_idles: Default::default(),
         }))
     }
 
@@ -485,7 +488,13 @@ impl Device {
 
     /// Wait until the device is idle.
     pub fn wait_idle(&self) -> VkResult<()> {
+        self.wait_idles.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         unsafe { self.raw.device_wait_idle() }.check("vkDeviceWaitIdle")
+    }
+
+    /// How many times [`Device::wait_idle`] has been called.
+    pub fn wait_idle_count(&self) -> u64 {
+        self.wait_idles.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Give an object a name in validation messages and debuggers.
@@ -602,6 +611,7 @@ impl Context {
             debug_utils: None,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             owned: false,
+            wait_idles: Default::default(),
         });
         Ok(Context { device })
     }

@@ -24,6 +24,10 @@ pub enum Access {
     ComputeSampled,
     /// Indirect dispatch/draw arguments.
     IndirectRead,
+    /// Vertex buffer read by the input assembler.
+    VertexInput,
+    /// Index buffer read by the input assembler.
+    IndexInput,
     /// Storage buffer read in a vertex shader.
     VertexRead,
     /// Storage buffer written (atomics) in a vertex shader.
@@ -58,6 +62,8 @@ impl Access {
             }
             ComputeSampled => (Stage::COMPUTE_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
             IndirectRead => (Stage::DRAW_INDIRECT, Acc::INDIRECT_COMMAND_READ, Layout::UNDEFINED),
+            VertexInput => (Stage::VERTEX_ATTRIBUTE_INPUT, Acc::VERTEX_ATTRIBUTE_READ, Layout::UNDEFINED),
+            IndexInput => (Stage::INDEX_INPUT, Acc::INDEX_READ, Layout::UNDEFINED),
             VertexRead => (Stage::VERTEX_SHADER, Acc::SHADER_STORAGE_READ, Layout::GENERAL),
             VertexWrite => {
                 (Stage::VERTEX_SHADER, Acc::SHADER_STORAGE_WRITE | Acc::SHADER_STORAGE_READ, Layout::GENERAL)

@@ -22,6 +22,7 @@ pub enum Action {
     AdaptiveMaxError,
     Transport,
     Animate,
+    PlayScene,
     Screenshot,
     Profile,
     Trace,
@@ -49,6 +50,11 @@ pub const CONTROLS: &[Control] = &[
     Control { input: "left drag", help: "orbit the camera around its target", keys: &[] },
     Control { input: "scroll", help: "zoom", keys: &[] },
     Control { input: "right drag", help: "move the light in the horizontal plane (relative to the view)", keys: &[] },
+    Control {
+        input: "Shift + left drag",
+        help: "move the glass object under the cursor in the horizontal plane (relative to the view)",
+        keys: &[],
+    },
     Control {
         input: "← → ↑ ↓",
         help: "move the light left, right, away, closer (relative to the view)",
@@ -94,6 +100,11 @@ pub const CONTROLS: &[Control] = &[
         help: "animate the light (orbit the vertical axis through its target) / pause",
         keys: &[("Space", Action::Animate)],
     },
+    Control {
+        input: "A",
+        help: "play / pause the scene's animation (its keyframed objects; the light's is Space)",
+        keys: &[("a", Action::PlayScene)],
+    },
     Control { input: "S", help: "save a screenshot (PNG, name printed)", keys: &[("s", Action::Screenshot)] },
     Control {
         input: "P",
@@ -105,7 +116,7 @@ pub const CONTROLS: &[Control] = &[
         help: "write a Chrome trace of the last 120 frames (name printed)",
         keys: &[("t", Action::Trace)],
     },
-    Control { input: "R", help: "reset the camera and the light", keys: &[("r", Action::Reset)] },
+    Control { input: "R", help: "reset the camera, the light and the glass", keys: &[("r", Action::Reset)] },
     Control { input: "H", help: "print these controls", keys: &[("h", Action::Help)] },
     Control { input: "Esc Q", help: "quit", keys: &[("Escape", Action::Quit), ("q", Action::Quit)] },
 ];

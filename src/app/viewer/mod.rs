@@ -392,6 +392,12 @@ struct Input {
     light_drag: (f32, f32),
     /// Light key steps: right, up, away.
     light_keys: Vec3,
+    /// Shift is held.
+    shift: bool,
+    /// A Shift + left press at this cursor position: pick the glass under it.
+    pick: Option<(f64, f64)>,
+    /// Glass drag in pixels (x right, y down).
+    glass_drag: (f32, f32),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -461,6 +467,15 @@ struct Viewer {
     orbit: Orbit,
     input: Input,
     animate: bool,
+    /// The scene's animation plays (A pauses it), at `scene_time` seconds.
+    scene_playing: bool,
+    scene_time: f32,
+    /// Per object: how far the user dragged it (Shift + left drag), on top of its own placement.
+    offsets: Vec<Vec3>,
+    /// Each still object's placement before any drag.
+    placements: Vec<glam::Mat4>,
+    /// The object being dragged.
+    grab: Option<usize>,
     /// Progressive refinement: on unless --no-progressive.
     progressive: bool,
     /// The light or the glass changed since the last frame.
@@ -534,6 +549,8 @@ impl Viewer {
             .first()
             .cloned()
             .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
+        let placements: Vec<glam::Mat4> = scene.objects.iter().map(|_| glam::Mat4::IDENTITY).collect();
+        let (scene_playing, scene_time) = (scene.is_animated(), scene.time);
         let mut renderer = Renderer::new(device.clone(), scene, settings)?;
         let cpu_device = device.info.is_cpu();
         renderer.set_frames_in_flight(args.frames_in_flight.unwrap_or(if cpu_device { 1 } else { 2 }) as usize)?;
@@ -565,6 +582,11 @@ impl Viewer {
             orbit: Orbit::new(&camera),
             input: Input::default(),
             animate: false,
+            scene_playing,
+            scene_time,
+            offsets: vec![Vec3::ZERO; placements.len()],
+            placements,
+            grab: None,
             progressive: !args.no_progressive,
             interacting: false,
             orbit_step: args.orbit_camera,
@@ -641,10 +663,16 @@ impl Viewer {
                     }
                 }
             }
+            WindowEvent::ModifiersChanged(m) => self.input.shift = m.state().shift_key(),
             WindowEvent::MouseInput { state, button, .. } => {
                 let down = state == ElementState::Pressed;
                 match button {
-                    MouseButton::Left => self.input.left = down,
+                    MouseButton::Left => {
+                        self.input.left = down;
+                        if down && self.input.shift {
+                            self.input.pick = self.input.cursor;
+                        }
+                    }
                     MouseButton::Right => self.input.right = down,
                     _ => {}
                 }
@@ -652,7 +680,10 @@ impl Viewer {
             WindowEvent::CursorMoved { position, .. } => {
                 if let Some((x, y)) = self.input.cursor {
                     let (dx, dy) = ((position.x - x) as f32, (position.y - y) as f32);
-                    if self.input.left {
+                    if self.input.left && self.grab.is_some() {
+                        self.input.glass_drag.0 += dx;
+                        self.input.glass_drag.1 += dy;
+                    } else if self.input.left && self.input.pick.is_none() {
                         self.input.orbit.0 += dx;
                         self.input.orbit.1 += dy;
                     }
@@ -718,6 +749,15 @@ impl Viewer {
                 self.change_settings(with(&|q| q.transport = transport))?
             }
             Animate => self.toggle_animation(),
+            PlayScene => {
+                if !self.renderer.scene().is_animated() {
+                    eprintln!("the scene has no animated object (keyframes in TOML, animations in glTF)");
+                } else {
+                    self.scene_playing = !self.scene_playing;
+                    let state = if self.scene_playing { "playing" } else { "paused" };
+                    eprintln!("scene animation {state} at {:.2} s", self.scene_time);
+                }
+            }
             Screenshot => self.screenshot_request = true,
             Profile => {
                 let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
@@ -738,7 +778,16 @@ impl Viewer {
                 self.orbit.reset();
                 let light = self.initial_light.clone();
                 self.set_light(light);
-                eprintln!("camera and light reset");
+                if self.offsets.iter().any(|o| *o != Vec3::ZERO) {
+                    self.offsets.iter_mut().for_each(|o| *o = Vec3::ZERO);
+                    for (i, m) in self.placements.clone().into_iter().enumerate() {
+                        if let Err(e) = self.renderer.set_transform(caustics::InstanceId::from_index(i), m) {
+                            eprintln!("not moved back: {e}");
+                        }
+                    }
+                    self.place_objects();
+                }
+                eprintln!("camera, light and glass reset");
             }
             Help => print!("{}", help_text()),
             Quit => self.quit = true,
@@ -823,6 +872,27 @@ impl Viewer {
         eprintln!("light animation on: one turn in {ANIMATION_PERIOD_S} s around the vertical axis through its target");
     }
 
+    /// Place the objects at the scene's time, each dragged by its offset (the next frame's scene update moves them
+    /// on the GPU).
+    fn place_objects(&mut self) {
+        if let Err(e) = self.renderer.set_time(self.scene_time) {
+            eprintln!("animation paused: {e}");
+            self.scene_playing = false;
+        }
+        for (i, &offset) in self.offsets.iter().enumerate() {
+            if offset == Vec3::ZERO {
+                continue;
+            }
+            let o = &self.renderer.scene().objects[i];
+            let base = o.animation.as_ref().map_or(self.placements[i], |a| a.animation.transform_at(self.scene_time));
+            let m = glam::Mat4::from_translation(offset) * base;
+            if let Err(e) = self.renderer.set_transform(caustics::InstanceId::from_index(i), m) {
+                eprintln!("not moved: {e}");
+            }
+        }
+        self.interacting = true;
+    }
+
     /// Move the light if every refractor stays in front of it (else the frame could not be rendered).
     fn set_light(&mut self, light: Light) -> bool {
         match self.renderer.set_light(0, light) {
@@ -837,7 +907,13 @@ impl Viewer {
     /// Apply the input gathered since the last frame and advance the light's animation.
     fn apply_input(&mut self, dt: f32, extent: vk::Extent2D) {
         let input = std::mem::take(&mut self.input);
-        self.input = Input { left: input.left, right: input.right, cursor: input.cursor, ..Input::default() };
+        self.input = Input {
+            left: input.left,
+            right: input.right,
+            cursor: input.cursor,
+            shift: input.shift,
+            ..Input::default()
+        };
         self.orbit.rotate(input.orbit.0 * 0.005, input.orbit.1 * 0.005);
         if self.orbit_step != 0.0 {
             // Scripted camera orbit (--orbit-camera): a fixed step per frame, for repeatable frame-time runs.
@@ -857,6 +933,32 @@ impl Viewer {
         let offset = right * (input.light_keys.x * step + input.light_drag.0 * per_pixel)
             + away * (input.light_keys.z * step - input.light_drag.1 * per_pixel)
             + Vec3::Y * input.light_keys.y * step;
+        if let Some((x, y)) = input.pick {
+            let (o, d) = view.ray(glam::Vec2::new(x as f32, y as f32));
+            self.grab = self.renderer.scene().pick(o, d, |o| o.is_refractor()).map(|(i, _)| i);
+            match self.grab {
+                Some(i) => eprintln!("moving `{}` (Shift + drag)", self.renderer.scene().objects[i].name),
+                None => eprintln!("no glass under the cursor"),
+            }
+        }
+        if !input.left {
+            self.grab = None;
+        }
+        let mut moved = false;
+        if let Some(i) = self.grab {
+            let drag = right * input.glass_drag.0 * per_pixel - away * input.glass_drag.1 * per_pixel;
+            if drag != Vec3::ZERO {
+                self.offsets[i] += drag;
+                moved = true;
+            }
+        }
+        if self.scene_playing {
+            self.scene_time += dt;
+            moved = true;
+        }
+        if moved {
+            self.place_objects();
+        }
         let mut light = self.renderer.scene().lights[0].clone();
         light.position += offset;
         if self.animate {
