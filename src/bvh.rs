@@ -87,7 +87,40 @@ pub struct GpuTriangle {
     pub p: [[f32; 4]; 3],
 }
 
+/// One node of a deforming mesh's tree for the GPU refit (`RefitNode` in glsl/refit.comp): its parent and children
+/// (indices into the refit nodes; `EMPTY` for none), its triangles (a leaf: `tri_count` > 0), and where its box
+/// goes in each layout (the single and threaded node, and the pair node's slot as `node << 1 | slot`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct RefitNode {
+    pub parent: u32,
+    pub left: u32,
+    pub right: u32,
+    pub first_tri: u32,
+    pub tri_count: u32,
+    pub single: u32,
+    pub threaded: u32,
+    pub pair: u32,
+}
+
+/// A deforming mesh's part of the refit arrays and of the triangles.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RefitMesh {
+    /// Its leaves: `refit_leaves[first_leaf..first_leaf + leaf_count]`.
+    pub first_leaf: u32,
+    pub leaf_count: u32,
+    /// Its first node in the refit arrays.
+    pub first_node: u32,
+    /// Its triangles in the BVH's triangles (leaf order) and, at rest, in `rest_tris`.
+    pub first_tri: u32,
+    pub rest_first: u32,
+    pub tri_count: u32,
+    /// The most parent links from a leaf to the root.
+    pub depth: u32,
+}
+
 const _: () = {
+    assert!(size_of::<RefitNode>() == 32);
     assert!(size_of::<PairNode>() == 64);
     assert!(size_of::<SingleNode>() == 32);
     assert!(size_of::<GpuInstance>() == 192);
@@ -141,6 +174,14 @@ pub struct SceneBvh {
     local_bounds: Vec<(Vec3, Vec3)>,
     /// Bottom-level BVHs built (one per distinct mesh).
     pub blas_builds: usize,
+    /// The deforming meshes' trees, for the GPU refit: nodes, leaves (node indices), and their triangles at rest
+    /// (positions and vertex normals, in leaf order).
+    pub refit_nodes: Vec<RefitNode>,
+    pub refit_leaves: Vec<u32>,
+    pub rest_tris: Vec<GpuTriangle>,
+    pub rest_normals: Vec<GpuTriangle>,
+    /// Per mesh passed to [`SceneBvh::build`]: its refit data when it deforms.
+    pub refit_meshes: Vec<Option<RefitMesh>>,
     pub build_ms: f64,
 }
 
@@ -210,9 +251,11 @@ fn material_words(m: &Material) -> ([f32; 4], [f32; 3], [f32; 4], [f32; 4]) {
 impl SceneBvh {
     /// Build one bottom-level BVH per distinct mesh the objects instance (in its object space), and one instance
     /// per object with its transform and material. [`SceneBvh::set_transform`] moves an object without a rebuild.
-    pub fn build(meshes: &[&Mesh], objects: &[BvhObject]) -> SceneBvh {
+    /// A mesh with `deforming[m]` bounds (the box it stays in, in object space, whatever its vertices do) is built
+    /// at rest with the data the GPU refit needs, and its instances carry those bounds.
+    pub fn build(meshes: &[&Mesh], objects: &[BvhObject], deforming: &[Option<(Vec3, Vec3)>]) -> SceneBvh {
         let start = Instant::now();
-        let mut bvh = SceneBvh::default();
+        let mut bvh = SceneBvh { refit_meshes: vec![None; meshes.len()], ..SceneBvh::default() };
         // Per mesh, once built: its roots and object-space bounds, or None when it has no valid triangle.
         let mut blas: Vec<Option<Option<Blas>>> = vec![None; meshes.len()];
         for obj in objects {
@@ -222,12 +265,12 @@ impl SceneBvh {
                     return None;
                 }
                 let threaded_root = bvh.threaded_nodes.len() as u32;
-                let (pair_root, single_root) = bvh.add_blas(&tris, &nrms);
+                let deform = deforming.get(obj.mesh).copied().flatten();
+                let (pair_root, single_root) = bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh));
                 bvh.blas_builds += 1;
-                let (lo, hi) = tris
-                    .iter()
-                    .flatten()
-                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+                let (lo, hi) = deform.unwrap_or_else(|| {
+                    tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)))
+                });
                 Some(Blas { roots: [pair_root, single_root, threaded_root], lo, hi })
             });
             // An object with no triangle has no instance.
@@ -263,7 +306,7 @@ impl SceneBvh {
             .enumerate()
             .map(|(i, o)| BvhObject { mesh: i, transform: Mat4::IDENTITY, material: &o.material })
             .collect();
-        SceneBvh::build(&meshes, &objects)
+        SceneBvh::build(&meshes, &objects, &[])
     }
 
     /// Move object `object` rigidly: `world_from_object` maps its BVH space (its mesh's object space) to world. Its
@@ -287,7 +330,9 @@ impl SceneBvh {
     }
 
     /// Build one bottom-level BVH, append its nodes (both layouts) and its triangles; return the roots.
-    fn add_blas(&mut self, tris: &[[Vec3; 3]], nrms: &[[Vec3; 3]]) -> (u32, u32) {
+    /// Add one bottom-level BVH (all three layouts) over `tris`; with `refit` (the mesh's index), also its refit
+    /// nodes and rest triangles. Returns the pair and single roots.
+    fn add_blas(&mut self, tris: &[[Vec3; 3]], nrms: &[[Vec3; 3]], refit: Option<usize>) -> (u32, u32) {
         let boxes: Vec<Triangle> = tris
             .iter()
             .map(|t| Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) })
@@ -353,6 +398,11 @@ impl SceneBvh {
 
         // Pair layout: inner nodes only, depth first (the nearer-first traversal then walks mostly forward).
         let pair_base = self.pair_nodes.len() as u32;
+        // Where each node's box sits in the pair layout: its parent's slot (node << 1 | slot).
+        let mut pair_slot = vec![EMPTY; nodes.len()];
+        if let Some(mesh) = refit {
+            self.add_refit(mesh, &b2, tri_base, single_base, threaded_base, &pos);
+        }
         let child = |k: usize| -> ([f32; 4], [f32; 4], Option<usize>) {
             let n = &nodes[k];
             let (lo, hi) = aabb(k);
@@ -368,6 +418,8 @@ impl SceneBvh {
             let empty_lo = [f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::from_bits(EMPTY)];
             let empty_hi = [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, f32::from_bits(0)];
             self.pair_nodes.push(PairNode { lo0, hi0, lo1: empty_lo, hi1: empty_hi });
+            pair_slot[0] = pair_base << 1;
+            self.set_pair_slots(refit, &pair_slot);
             return (pair_base, single_base);
         }
         let mut stack = vec![(0usize, None::<(usize, usize)>)];
@@ -386,6 +438,8 @@ impl SceneBvh {
             let (lo0, hi0, in0) = child(f);
             let (lo1, hi1, in1) = child(f + 1);
             self.pair_nodes.push(PairNode { lo0, hi0, lo1, hi1 });
+            pair_slot[f] = (me as u32) << 1;
+            pair_slot[f + 1] = (me as u32) << 1 | 1;
             if let Some(c) = in1 {
                 stack.push((c, Some((me, 1))));
             }
@@ -393,7 +447,78 @@ impl SceneBvh {
                 stack.push((c, Some((me, 0))));
             }
         }
+        self.set_pair_slots(refit, &pair_slot);
         (pair_base, single_base)
+    }
+
+    /// The refit nodes of the BVH just added (obvhs' `b2`), with its rest triangles (the ones just pushed).
+    fn add_refit(
+        &mut self,
+        mesh: usize,
+        b2: &obvhs::bvh2::Bvh2,
+        tri_base: u32,
+        single_base: u32,
+        threaded_base: u32,
+        pos: &[u32],
+    ) {
+        let first_node = self.refit_nodes.len() as u32;
+        let first_leaf = self.refit_leaves.len() as u32;
+        let mut parent = vec![EMPTY; b2.nodes.len()];
+        for (k, n) in b2.nodes.iter().enumerate() {
+            if n.prim_count == 0 {
+                parent[n.first_index as usize] = k as u32;
+                parent[n.first_index as usize + 1] = k as u32;
+            }
+        }
+        let abs = |k: u32| if k == EMPTY { EMPTY } else { first_node + k };
+        for (k, n) in b2.nodes.iter().enumerate() {
+            let leaf = n.prim_count > 0;
+            if leaf {
+                self.refit_leaves.push(first_node + k as u32);
+            }
+            self.refit_nodes.push(RefitNode {
+                parent: abs(parent[k]),
+                left: if leaf { EMPTY } else { first_node + n.first_index },
+                right: if leaf { EMPTY } else { first_node + n.first_index + 1 },
+                first_tri: if leaf { tri_base + n.first_index } else { 0 },
+                tri_count: n.prim_count,
+                single: single_base + k as u32,
+                threaded: threaded_base + pos[k],
+                pair: EMPTY,
+            });
+        }
+        let tri_count = self.triangles.len() as u32 - tri_base;
+        let rest_first = self.rest_tris.len() as u32;
+        self.rest_tris.extend_from_slice(&self.triangles[tri_base as usize..]);
+        self.rest_normals.extend_from_slice(&self.normals[tri_base as usize..]);
+        let mut depth = vec![0u32; b2.nodes.len()];
+        let mut stack = vec![0usize];
+        while let Some(k) = stack.pop() {
+            let n = &b2.nodes[k];
+            if n.prim_count == 0 {
+                for c in [n.first_index as usize, n.first_index as usize + 1] {
+                    depth[c] = depth[k] + 1;
+                    stack.push(c);
+                }
+            }
+        }
+        self.refit_meshes[mesh] = Some(RefitMesh {
+            depth: depth.iter().copied().max().unwrap_or(0),
+            first_leaf,
+            leaf_count: self.refit_leaves.len() as u32 - first_leaf,
+            first_node,
+            first_tri: tri_base,
+            rest_first,
+            tri_count,
+        });
+    }
+
+    /// Record each node's pair-layout slot in the refit nodes of mesh `refit` (just added).
+    fn set_pair_slots(&mut self, refit: Option<usize>, pair_slot: &[u32]) {
+        let Some(r) = refit.and_then(|m| self.refit_meshes[m]) else { return };
+        for (k, &slot) in pair_slot.iter().enumerate() {
+            self.refit_nodes[r.first_node as usize + k].pair = slot;
+        }
     }
 
     #[cfg(test)]
@@ -585,6 +710,92 @@ mod tests {
     }
 
     /// A moved instance is hit where it moved to, without a rebuild.
+    /// Surface-area-heuristic cost of a single-layout tree (traversal and triangle tests weighted 1), relative to
+    /// its root's area: the expected node and triangle tests of a ray that enters the root.
+    fn sah(nodes: &[SingleNode], boxes: &[(Vec3, Vec3)]) -> f64 {
+        let area = |(lo, hi): (Vec3, Vec3)| {
+            let e = (hi - lo).max(Vec3::ZERO);
+            2.0 * (e.x * e.y + e.y * e.z + e.z * e.x) as f64
+        };
+        let root = area(boxes[0]);
+        nodes.iter().zip(boxes).map(|(n, &b)| area(b) * (n.hi[3].to_bits().max(1) as f64)).sum::<f64>() / root
+    }
+
+    fn single_boxes(nodes: &[SingleNode]) -> Vec<(Vec3, Vec3)> {
+        nodes.iter().map(|n| (Vec3::from_slice(&n.lo[..3]), Vec3::from_slice(&n.hi[..3]))).collect()
+    }
+
+    /// The refit rule, measured: the pool's water (64² cells) built once at rest and refit for 20 s of its
+    /// animation at 30 fps, against a tree built afresh over the displaced surface every second. Its cost (SAH) is
+    /// what a ray pays; the rebuild threshold it must stay under is docs/design.md's (1.25×).
+    #[test]
+    fn refit_water_stays_near_a_fresh_build() {
+        use crate::scene::water::{Water, Wave};
+        let wave = |a: f32, l: f32, deg: f32, c: f32| Wave {
+            amplitude: a,
+            wavelength: l,
+            direction: glam::Vec2::new(deg.to_radians().cos(), deg.to_radians().sin()),
+            speed: c,
+        };
+        let w = Water {
+            size: glam::Vec2::splat(1.96),
+            depth: 0.42,
+            grid: 64,
+            waves: vec![wave(0.012, 0.7, 0.0, 0.35), wave(0.007, 0.41, 65.0, 0.28), wave(0.004, 0.23, 140.0, 0.22)],
+        };
+        let rest = w.rest_mesh();
+        let m = Material::Dielectric { ior: 1.33, absorption: Vec3::ZERO, abbe: 0.0 };
+        let object = [BvhObject { mesh: 0, transform: Mat4::IDENTITY, material: &m }];
+        let built = SceneBvh::build(&[&rest], &object, &[Some(w.bounds())]);
+        let r = built.refit_meshes[0].expect("refit data");
+        let (mut worst, mut sum, mut samples) = (0.0f64, 0.0, 0);
+        for frame in 0..600 {
+            let t = frame as f32 / 30.0;
+            // Displace the rest triangles and refit bottom-up (children before parents: the reverse of a
+            // depth-first order from the root).
+            let tris: Vec<[Vec3; 3]> = built.rest_tris[r.rest_first as usize..(r.rest_first + r.tri_count) as usize]
+                .iter()
+                .map(|g| g.p.map(|p| w.displace(Vec3::from_slice(&p[..3]), Vec3::Y, t).0))
+                .collect();
+            let nodes = &built.refit_nodes[r.first_node as usize..];
+            let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); nodes.len()];
+            let mut order = vec![0usize];
+            let mut k = 0;
+            while k < order.len() {
+                let n = nodes[order[k]];
+                if n.tri_count == 0 {
+                    order.push((n.left - r.first_node) as usize);
+                    order.push((n.right - r.first_node) as usize);
+                }
+                k += 1;
+            }
+            for &k in order.iter().rev() {
+                let n = nodes[k];
+                boxes[k] = if n.tri_count > 0 {
+                    let ts =
+                        &tris[(n.first_tri - r.first_tri) as usize..(n.first_tri - r.first_tri + n.tri_count) as usize];
+                    ts.iter().flatten().fold(boxes[k], |(a, b), p| (a.min(*p), b.max(*p)))
+                } else {
+                    let (a, b) = (boxes[(n.left - r.first_node) as usize], boxes[(n.right - r.first_node) as usize]);
+                    (a.0.min(b.0), a.1.max(b.1))
+                };
+            }
+            if frame % 30 != 0 {
+                continue;
+            }
+            let refit = sah(&built.single_nodes, &boxes);
+            let displaced = w.displaced(&rest, t);
+            let fresh = SceneBvh::build(&[&displaced], &object, &[]);
+            let rebuilt = sah(&fresh.single_nodes, &single_boxes(&fresh.single_nodes));
+            let ratio = refit / rebuilt;
+            worst = worst.max(ratio);
+            sum += ratio;
+            samples += 1;
+        }
+        eprintln!("refit SAH / fresh build SAH over 20 s: mean {:.3}, worst {worst:.3}", sum / samples as f64);
+        assert!(worst < 1.25, "the refit tree degraded past the rebuild threshold: {worst:.3}");
+    }
+
     #[test]
     fn moved_instance_is_hit() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml");

@@ -327,6 +327,75 @@ impl SceneUpdatePush {
     }
 }
 
+/// Push constants of water.comp: one water object's displacement (mode 0: its raster vertices to world space;
+/// mode 1: its BVH triangles, in object space).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct WaterPush {
+    /// Rows of world_from_object's 3x4 affine part (mode 0).
+    pub rows: [[f32; 4]; 3],
+    /// Rows of the inverse transpose of its 3x3 part (mode 0).
+    pub nrows: [[f32; 4]; 3],
+    /// The scene's time, s.
+    pub time: f32,
+    pub mode: u32,
+    pub first_wave: u32,
+    pub wave_count: u32,
+    /// First vertex (mode 0) or rest triangle (mode 1) read, first vertex or BVH triangle written, and how many.
+    pub src: u32,
+    pub dst: u32,
+    pub count: u32,
+}
+
+impl WaterPush {
+    /// The raster vertices of object `range` placed by `world_from_object`, at `time`, with waves `waves`.
+    pub fn raster(
+        world_from_object: glam::Mat4,
+        range: &crate::scene_gpu::ObjectRange,
+        time: f32,
+        waves: (u32, u32),
+    ) -> Self {
+        let place = SceneUpdatePush::new(world_from_object, range);
+        WaterPush {
+            rows: place.rows,
+            nrows: place.nrows,
+            time,
+            mode: 0,
+            first_wave: waves.0,
+            wave_count: waves.1,
+            src: range.first_vertex,
+            dst: range.first_vertex,
+            count: range.vertex_count,
+        }
+    }
+
+    /// The BVH triangles of a deforming mesh (`r`), at `time`, with waves `waves`.
+    pub fn bvh(r: &crate::bvh::RefitMesh, time: f32, waves: (u32, u32)) -> Self {
+        WaterPush {
+            time,
+            mode: 1,
+            first_wave: waves.0,
+            wave_count: waves.1,
+            src: r.rest_first,
+            dst: r.first_tri,
+            count: r.tri_count,
+            ..WaterPush::default()
+        }
+    }
+}
+
+/// Push constants of refit.comp: one deforming mesh's leaves, and the layouts on the GPU (1 pair, 2 single,
+/// 4 threaded).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct RefitPush {
+    pub first_leaf: u32,
+    pub leaf_count: u32,
+    pub layouts: u32,
+    /// The most parent links from one of its leaves to its root.
+    pub depth: u32,
+}
+
 /// Push constants of coverage.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -350,6 +419,8 @@ const _: () = {
     assert!(size_of::<GpuView>() == 160);
     // Within the 128 bytes of push constants every device has.
     assert!(size_of::<SceneUpdatePush>() == 112);
+    assert!(size_of::<WaterPush>() == 124);
+    assert!(size_of::<RefitPush>() == 16);
     assert!(size_of::<FrameData>() == 672);
     assert!(offset_of!(FrameData, eye) == 640);
     assert!(size_of::<TransportState>() == 48 + 2 * 12 * 8 + 4 * 34);

@@ -18,6 +18,8 @@ pub(crate) struct SceneInstances<'a> {
     pub meshes: &'a [Arc<Mesh>],
     /// (index into `meshes`, transform), one per scene object.
     pub objects: &'a [(usize, Mat4)],
+    /// Per mesh: the object-space box a deforming mesh (water) stays in (its BVH is refit on the GPU).
+    pub deforming: &'a [Option<(glam::Vec3, glam::Vec3)>],
 }
 
 /// One object's vertices and indices in the scene's buffers.
@@ -49,6 +51,10 @@ pub struct SceneBuffers {
     /// The IOR every refractor's vertices carry, when they all carry the same ([`shared_ior`]).
     pub shared_ior: Option<f32>,
     pub bvh: BvhBuffers,
+    /// Every water object's waves, two vec4 each: (direction x, direction z, k, ω) and (amplitude, 0, 0, 0).
+    pub waves: Buffer,
+    /// Per scene object: its waves in `waves` (first, count) when it is water.
+    pub waters: Vec<Option<(u32, u32)>>,
 }
 
 /// The scene BVH in storage buffers: the node layouts frames have traced with, triangles, their vertex normals,
@@ -61,6 +67,17 @@ pub struct BvhBuffers {
     pub triangles: Buffer,
     pub normals: Buffer,
     pub instances: Buffer,
+    /// The deforming meshes' refit nodes, leaves, box scratch (two vec4 per node), arrival counters (one per
+    /// node), and triangles at rest (positions, vertex normals).
+    pub refit_nodes: Buffer,
+    pub refit_leaves: Buffer,
+    pub refit_boxes: Buffer,
+    pub refit_counters: Buffer,
+    pub rest_tris: Buffer,
+    pub rest_normals: Buffer,
+    /// The deforming meshes' triangles and boxes on the GPU are the rest ones (just built or a layout just
+    /// uploaded from the host copy): the next frame displaces and refits them whatever moved.
+    pub stale_deform: bool,
     /// The host BVH once built (the layouts not uploaded yet come from it).
     host: Option<SceneBvh>,
     /// Which layouts are uploaded: pair, single, threaded.
@@ -97,6 +114,7 @@ impl BvhBuffers {
     /// Placeholders: one element per binding, no BVH built.
     pub fn placeholders(device: &Arc<Device>, recorder: &mut Recorder) -> VkResult<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let transfer_storage = storage | vk::BufferUsageFlags::TRANSFER_DST;
         let zeros = [[0u32; 4]; 4];
         Ok(BvhBuffers {
             pair_nodes: upload_buffer(device, recorder, "bvh pair nodes (none)", &zeros, storage)?,
@@ -105,6 +123,13 @@ impl BvhBuffers {
             triangles: upload_buffer(device, recorder, "bvh triangles (none)", &zeros, storage)?,
             normals: upload_buffer(device, recorder, "bvh normals (none)", &zeros, storage)?,
             instances: upload_buffer(device, recorder, "bvh instances (none)", &[no_instance()], storage)?,
+            refit_nodes: upload_buffer(device, recorder, "refit nodes (none)", &zeros, storage)?,
+            refit_leaves: upload_buffer(device, recorder, "refit leaves (none)", &zeros, storage)?,
+            refit_boxes: upload_buffer(device, recorder, "refit boxes (none)", &zeros, storage)?,
+            refit_counters: upload_buffer(device, recorder, "refit counters (none)", &zeros, transfer_storage)?,
+            rest_tris: upload_buffer(device, recorder, "rest triangles (none)", &zeros, storage)?,
+            rest_normals: upload_buffer(device, recorder, "rest normals (none)", &zeros, storage)?,
+            stale_deform: false,
             host: None,
             uploaded: [false; 3],
             build_ms: 0.0,
@@ -146,7 +171,8 @@ impl BvhBuffers {
         instances: &SceneInstances,
         layout: BvhLayout,
     ) -> VkResult<()> {
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        // (Transfer source: tests read the refit BVH back.)
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         if self.host.is_none() {
             let meshes: Vec<&Mesh> = instances.meshes.iter().map(|m| &**m).collect();
             let objects: Vec<BvhObject> = instances
@@ -155,12 +181,24 @@ impl BvhBuffers {
                 .zip(&scene.objects)
                 .map(|(&(mesh, transform), o)| BvhObject { mesh, transform, material: &o.material })
                 .collect();
-            let bvh = SceneBvh::build(&meshes, &objects);
+            let bvh = SceneBvh::build(&meshes, &objects, instances.deforming);
             log::info!("scene BVH: {} triangles, built in {:.0} ms", bvh.triangles.len(), bvh.build_ms);
             self.triangles = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?;
             self.normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?;
             let instances = if bvh.instances.is_empty() { vec![no_instance()] } else { bvh.instances.clone() };
             self.instances = upload_buffer(device, recorder, "bvh instances", &instances, storage)?;
+            if !bvh.refit_nodes.is_empty() {
+                let n = bvh.refit_nodes.len();
+                self.refit_nodes = upload_buffer(device, recorder, "refit nodes", &bvh.refit_nodes, storage)?;
+                self.refit_leaves = upload_buffer(device, recorder, "refit leaves", &bvh.refit_leaves, storage)?;
+                let boxes = vec![[0f32; 4]; 2 * n];
+                self.refit_boxes = upload_buffer(device, recorder, "refit boxes", &boxes, storage)?;
+                let counters = vec![0u32; n];
+                let usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
+                self.refit_counters = upload_buffer(device, recorder, "refit counters", &counters, usage)?;
+                self.rest_tris = upload_buffer(device, recorder, "rest triangles", &bvh.rest_tris, storage)?;
+                self.rest_normals = upload_buffer(device, recorder, "rest normals", &bvh.rest_normals, storage)?;
+            }
             self.build_ms = bvh.build_ms;
             self.blas_builds += bvh.blas_builds;
             self.pair_node_count = bvh.pair_nodes.len();
@@ -184,8 +222,13 @@ impl BvhBuffers {
             self.threaded_nodes =
                 upload_buffer(device, recorder, "bvh threaded nodes", &nonempty(&bvh.threaded_nodes), storage)?;
         }
+        let new_layout = self.uploaded.iter().zip(wanted).any(|(&u, w)| w && !u);
         for (u, w) in self.uploaded.iter_mut().zip(wanted) {
             *u |= w;
+        }
+        // Uploaded from the host copy, a deforming mesh's boxes and triangles are its rest ones.
+        if new_layout && !bvh.refit_nodes.is_empty() {
+            self.stale_deform = true;
         }
         Ok(())
     }
@@ -202,6 +245,41 @@ impl BvhBuffers {
             }
             None => false,
         }
+    }
+
+    #[cfg(test)]
+    /// The host copy (rest boxes for deforming meshes).
+    pub(crate) fn host(&self) -> Option<&SceneBvh> {
+        self.host.as_ref()
+    }
+
+    #[cfg(test)]
+    /// The BVH as the GPU holds it now (after the frames that wrote it have completed): the host copy with the
+    /// GPU's nodes of every uploaded layout, triangles, normals and instances.
+    pub(crate) fn download(&self, device: &Arc<Device>, recorder: &mut Recorder) -> VkResult<Option<SceneBvh>> {
+        use crate::vk::cmd::download_buffer;
+        let Some(host) = &self.host else { return Ok(None) };
+        let mut b = host.clone();
+        b.triangles = download_buffer(device, recorder, &self.triangles, b.triangles.len())?;
+        b.normals = download_buffer(device, recorder, &self.normals, b.normals.len())?;
+        b.instances = download_buffer(device, recorder, &self.instances, b.instances.len())?;
+        if self.uploaded[0] {
+            b.pair_nodes = download_buffer(device, recorder, &self.pair_nodes, b.pair_nodes.len())?;
+        }
+        if self.uploaded[1] {
+            b.single_nodes = download_buffer(device, recorder, &self.single_nodes, b.single_nodes.len())?;
+        }
+        Ok(Some(b))
+    }
+
+    /// Mesh `mesh`'s refit data, when it deforms and the BVH is built.
+    pub(crate) fn refit_mesh(&self, mesh: usize) -> Option<crate::bvh::RefitMesh> {
+        self.host.as_ref().and_then(|b| b.refit_meshes.get(mesh).copied().flatten())
+    }
+
+    /// The layouts on the GPU, as the refit's mask: 1 pair, 2 single, 4 threaded.
+    pub(crate) fn layout_mask(&self) -> u32 {
+        self.uploaded.iter().enumerate().filter(|(_, &u)| u).map(|(k, _)| 1u32 << k).sum()
     }
 
     /// The instance records as the GPU buffer holds them (None before the BVH is built).
@@ -274,7 +352,25 @@ impl SceneBuffers {
             upload_buffer(device, recorder, "scene vertices (object space)", &object_vertices, storage)?;
         let object_indices = upload_buffer(device, recorder, "scene indices (object space)", &object_indices, storage)?;
         let bvh = BvhBuffers::placeholders(device, recorder)?;
+        let mut waves: Vec<[f32; 4]> = Vec::new();
+        let waters = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let w = o.animation.as_ref()?.water.as_ref()?;
+                let first = waves.len() as u32 / 2;
+                for wave in &w.waves {
+                    let k = std::f32::consts::TAU / wave.wavelength;
+                    waves.push([wave.direction.x, wave.direction.y, k, k * wave.speed]);
+                    waves.push([wave.amplitude, 0.0, 0.0, 0.0]);
+                }
+                Some((first, w.waves.len() as u32))
+            })
+            .collect();
+        let waves = upload_buffer(device, recorder, "water waves", &nonempty(&waves), storage)?;
         Ok(SceneBuffers {
+            waves,
+            waters,
             vertices,
             indices,
             object_vertices,

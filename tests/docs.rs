@@ -47,6 +47,10 @@ fn parser_keys(section: &str) -> BTreeSet<String> {
         "[[object]]" => BASE.replacen("size = [2.0, 2.0]", &format!("size = [2.0, 2.0]\n{probe}"), 1),
         "material" => BASE.replacen("{ kind = \"diffuse\" }", "{ kind = \"diffuse\", zz_probe = 1 }", 1),
         "[[object.keyframe]]" => format!("{BASE}\n[[object.keyframe]]\ntime = 0.0\n{probe}\n"),
+        "waves" => format!(
+            "{BASE}\n[[object]]\nname = \"w\"\nshape = \"water\"\nsize = 1.0\nmaterial = {{ kind = \"diffuse\" }}\n\
+             waves = [{{ amplitude = 0.01, wavelength = 0.5, {probe} }}]\n"
+        ),
         s => panic!("unknown section {s}"),
     };
     let e = Scene::parse(&text, Path::new("probe.toml")).unwrap_err().to_string();
@@ -75,7 +79,10 @@ fn doc_keys() -> Vec<(String, BTreeSet<String>)> {
 fn scenes_md_matches_the_parser() {
     let docs = doc_keys();
     let sections: Vec<&str> = docs.iter().map(|(s, _)| s.as_str()).collect();
-    assert_eq!(sections, ["Top level", "[[light]]", "[[camera]]", "[[object]]", "[[object.keyframe]]", "material"]);
+    assert_eq!(
+        sections,
+        ["Top level", "[[light]]", "[[camera]]", "[[object]]", "[[object.keyframe]]", "waves", "material"]
+    );
     for (section, keys) in &docs {
         let parser = parser_keys(section);
         let undocumented: Vec<_> = parser.difference(keys).collect();

@@ -542,3 +542,28 @@ fn two_frames_in_flight_through_mixed_interaction() {
         }
     }
 }
+
+/// The pool's water plays in the viewer: every frame after the first displaces it (on the GPU; no BVH is built,
+/// none is needed by two-interface previews), and a scripted `A` pauses it.
+#[test]
+fn the_pool_animates_and_pauses() {
+    let dir = out_dir("viewer_pool");
+    let x = Xvfb::start();
+    let pool = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/pool.toml");
+    let mut args = vec!["--scene", pool, "--size", "160x120", "--frames", "8"];
+    args.extend_from_slice(FAST);
+    let s = view_ok(&dir, "pool", &x.display, &args);
+    assert_eq!(s["frames_presented"], 8);
+    assert_eq!(s["scene_playing"], true);
+    assert!(s["scene_time_s"].as_f64().unwrap() > 0.0, "{}", s["scene_time_s"]);
+    assert_eq!(s["scene_update"]["deformed_objects"], 7, "{}", s["scene_update"]);
+    assert_eq!(s["scene_update"]["blas_builds"], 0);
+    // Paused by a key on the first frame: nothing moves after it.
+    let script = dir.join("pause.txt");
+    std::fs::write(&script, "1 key a\n7 still\n").unwrap();
+    let mut args = vec!["--scene", pool, "--size", "160x120", "--script", script.to_str().unwrap()];
+    args.extend_from_slice(FAST);
+    let s = view_ok(&dir, "pool_paused", &x.display, &args);
+    assert_eq!(s["scene_playing"], false);
+    assert!(s["scene_update"]["deformed_objects"].as_u64().unwrap() <= 1, "{}", s["scene_update"]);
+}

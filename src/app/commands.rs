@@ -669,6 +669,7 @@ fn scene_update_json(frames: &[caustics::FrameReport]) -> Value {
             "instance_bytes": u.instance_bytes,
             "blas_builds": u.blas_builds,
             "blas_refits": u.blas_refits,
+            "deformed_objects": u.deformed_objects,
             "rebuilt": u.rebuilt,
             "blocking_submits": u.blocking_submits,
             "wait_idles": u.wait_idles,

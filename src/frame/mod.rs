@@ -58,6 +58,21 @@ pub(crate) struct SceneUpdate {
     pub moves: Vec<crate::gpu_types::SceneUpdatePush>,
     /// Every instance record, when the BVH is built and an object moved.
     pub instances: Option<Vec<crate::bvh::GpuInstance>>,
+    /// Water displaced to the frame's time: raster vertices (after `moves`), and BVH triangles.
+    pub water_vertices: Vec<crate::gpu_types::WaterPush>,
+    pub water_triangles: Vec<crate::gpu_types::WaterPush>,
+    /// The deforming meshes' BVHs to refit (after their triangles).
+    pub refits: Vec<crate::gpu_types::RefitPush>,
+}
+
+impl SceneUpdate {
+    fn is_empty(&self) -> bool {
+        self.moves.is_empty()
+            && self.instances.is_none()
+            && self.water_vertices.is_empty()
+            && self.water_triangles.is_empty()
+            && self.refits.is_empty()
+    }
 }
 
 /// What a frame records: the decisions made before recording (by the renderer, from its inputs).
@@ -175,27 +190,62 @@ struct Ctx<'a> {
 /// (transfer). The rasterizer's vertex and index reads and the traversals' reads of the instances, later in this
 /// frame and the next, are declared here: nothing else in the frame writes them.
 fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResult<()> {
-    if up.moves.is_empty() && up.instances.is_none() {
+    if up.is_empty() {
         return Ok(());
     }
-    let (d, sb) = (res.device, res.scene);
-    rec.ts.mark(rec.cmd, "scene_update");
-    if !up.moves.is_empty() {
+    let (d, sb, update) = (res.device, res.scene, &res.passes.scene_update);
+    rec.ts.mark(rec.cmd, "scene_update.vertices");
+    if !up.moves.is_empty() || !up.water_vertices.is_empty() {
         rec.sync.buffer(&sb.object_vertices, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.object_indices, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
         rec.sync.buffer(&sb.indices, &[Access::ComputeWrite]);
         rec.flush(d);
-        let update = &res.passes.scene_update;
-        update.place(rec.cmd, (&sb.object_vertices, &sb.object_indices), (&sb.vertices, &sb.indices), &up.moves)?;
+        if !up.moves.is_empty() {
+            update.place(rec.cmd, (&sb.object_vertices, &sb.object_indices), (&sb.vertices, &sb.indices), &up.moves)?;
+        }
+        if !up.water_vertices.is_empty() {
+            // A moved water object's vertices were just placed at rest: the displacement overwrites them.
+            rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
+            rec.flush(d);
+            update.water_vertices(rec.cmd, sb, &up.water_vertices)?;
+        }
         rec.sync.buffer(&sb.vertices, &[Access::VertexInput]);
         rec.sync.buffer(&sb.indices, &[Access::IndexInput]);
     }
     if let Some(records) = &up.instances {
+        rec.ts.mark(rec.cmd, "scene_update.instances");
         rec.sync.buffer(&sb.bvh.instances, &[Access::TransferDst]);
         rec.flush(d);
-        res.passes.scene_update.write(rec.cmd, &sb.bvh.instances, records);
+        update.write(rec.cmd, &sb.bvh.instances, records);
         rec.sync.buffer(&sb.bvh.instances, &[Access::ComputeRead]);
+    }
+    if !up.water_triangles.is_empty() || !up.refits.is_empty() {
+        let b = &sb.bvh;
+        rec.sync.buffer(&b.rest_tris, &[Access::ComputeRead]);
+        rec.sync.buffer(&b.rest_normals, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
+        rec.sync.buffer(&b.triangles, &[Access::ComputeWrite]);
+        rec.sync.buffer(&b.normals, &[Access::ComputeWrite]);
+        rec.sync.buffer(&b.refit_counters, &[Access::TransferDst]);
+        rec.flush(d);
+        rec.ts.mark(rec.cmd, "scene_update.triangles");
+        update.water_triangles(rec.cmd, sb, &up.water_triangles)?;
+        unsafe { d.cmd_fill_buffer(rec.cmd, b.refit_counters.raw, 0, vk::WHOLE_SIZE, 0) };
+        rec.sync.buffer(&b.triangles, &[Access::ComputeRead]);
+        rec.sync.buffer(&b.normals, &[Access::ComputeRead]);
+        for buf in [&b.refit_counters, &b.refit_boxes, &b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
+            rec.sync.buffer(buf, &[Access::ComputeWrite]);
+        }
+        rec.sync.buffer(&b.refit_nodes, &[Access::ComputeRead]);
+        rec.sync.buffer(&b.refit_leaves, &[Access::ComputeRead]);
+        rec.flush(d);
+        rec.ts.mark(rec.cmd, "scene_update.refit");
+        update.refit(rec.cmd, sb, &up.refits)?;
+        for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
+            rec.sync.buffer(buf, &[Access::ComputeRead]);
+        }
     }
     rec.flush(d);
     Ok(())

@@ -61,8 +61,10 @@ pub struct SceneUpdateReport {
     pub instance_bytes: u64,
     /// Bottom-level BVHs built for this frame (on the host: a new mesh, or the BVH's first frame).
     pub blas_builds: u32,
-    /// Bottom-level BVHs refit for this frame (none: rigid motion needs no refit).
+    /// Bottom-level BVHs refit on the GPU in this frame (deforming meshes; rigid motion needs none).
     pub blas_refits: u32,
+    /// Water objects the frame displaced to its time.
+    pub deformed_objects: u32,
     /// The scene's buffers were rebuilt and uploaded before this frame (an object or a material was added or
     /// changed, or a new scene was set).
     pub rebuilt: bool,
@@ -79,6 +81,7 @@ impl SceneUpdateReport {
         self.instance_bytes += next.instance_bytes;
         self.blas_builds += next.blas_builds;
         self.blas_refits += next.blas_refits;
+        self.deformed_objects += next.deformed_objects;
         self.rebuilt |= next.rebuilt;
         self.blocking_submits += next.blocking_submits;
         self.wait_idles += next.wait_idles;

@@ -1,10 +1,13 @@
-//! The scene update: a frame's first step when objects moved since the last frame. Each moved object's vertices
-//! and triangles are placed in the world-space buffers the rasterizer draws (one dispatch of scene_update.comp per
-//! object, from its object-space copies), and the BVH's instance records, which carry the transforms exact
-//! transport and the eye view's glass trace read, are written from the host's copy in the command buffer. Nothing
-//! is rebuilt, nothing waits: the frame's barriers order the writes after the last frame's reads.
+//! The scene update: a frame's first step when objects moved or water changed since the last frame. Each moved
+//! object's vertices and triangles are placed in the world-space buffers the rasterizer draws (one dispatch of
+//! scene_update.comp per object, from its object-space copies), the BVH's instance records, which carry the
+//! transforms exact transport and the eye view's glass trace read, are written from the host's copy in the command
+//! buffer, and each water object is displaced to the frame's time (water.comp: its raster vertices, and its BVH
+//! triangles) and its bottom-level BVH refit bottom-up (refit.comp). Nothing is rebuilt, nothing waits: the
+//! frame's barriers order the writes after the last frame's reads.
 
-use crate::gpu_types::SceneUpdatePush;
+use crate::gpu_types::{RefitPush, SceneUpdatePush, WaterPush};
+use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::LINEAR_WG;
 use crate::vk::pipeline::LazyPipeline;
@@ -14,7 +17,10 @@ use std::sync::Arc;
 
 pub struct SceneUpdatePass {
     device: Arc<Device>,
-    pipeline: LazyPipeline,
+    place: LazyPipeline,
+    water: LazyPipeline,
+    water_bvh: LazyPipeline,
+    refit: LazyPipeline,
 }
 
 /// The largest vkCmdUpdateBuffer.
@@ -22,10 +28,46 @@ const UPDATE_CHUNK: usize = 65536;
 
 impl SceneUpdatePass {
     pub fn new(device: &Arc<Device>) -> Self {
-        let binds = [BindKind::Storage; 4];
-        let push = std::mem::size_of::<SceneUpdatePush>() as u32;
-        let pipeline = LazyPipeline::compute(device, "scene update", shaders::SCENE_UPDATE_COMP.words(), &binds, push);
-        SceneUpdatePass { device: device.clone(), pipeline }
+        let size = |n: usize| n as u32;
+        let place = LazyPipeline::compute(
+            device,
+            "scene update",
+            shaders::SCENE_UPDATE_COMP.words(),
+            &[BindKind::Storage; 4],
+            size(std::mem::size_of::<SceneUpdatePush>()),
+        );
+        let water = LazyPipeline::compute(
+            device,
+            "water",
+            shaders::WATER_COMP.words(),
+            &[BindKind::Storage; 3],
+            size(std::mem::size_of::<WaterPush>()),
+        );
+        let water_bvh = LazyPipeline::compute(
+            device,
+            "water (BVH triangles)",
+            shaders::WATER_COMP_BVH.words(),
+            &[BindKind::Storage; 5],
+            size(std::mem::size_of::<WaterPush>()),
+        );
+        let refit = LazyPipeline::compute(
+            device,
+            "refit",
+            shaders::REFIT_COMP.words(),
+            &[BindKind::Storage; 8],
+            size(std::mem::size_of::<RefitPush>()),
+        );
+        SceneUpdatePass { device: device.clone(), place, water, water_bvh, refit }
+    }
+
+    /// Dispatch `groups` work groups of LINEAR_WG in rows (lavapipe caps a dimension at 65535 groups).
+    fn dispatch(&self, cmd: vk::CommandBuffer, items: u32) {
+        let groups = items.div_ceil(LINEAR_WG);
+        if groups == 0 {
+            return;
+        }
+        let x = groups.min(65535);
+        unsafe { self.device.cmd_dispatch(cmd, x, groups.div_ceil(x), 1) };
     }
 
     /// Place each object of `moves` (its push constants) from `object` space into `world` space (vertex buffer,
@@ -37,20 +79,71 @@ impl SceneUpdatePass {
         world: (&Buffer, &Buffer),
         moves: &[SceneUpdatePush],
     ) -> VkResult<()> {
-        let pipeline = self.pipeline.get()?;
+        let pipeline = self.place.get()?;
         pipeline.bind(
             cmd,
             &[Bind::Storage(object.0), Bind::Storage(world.0), Bind::Storage(object.1), Bind::Storage(world.1)],
         );
         for m in moves {
-            let groups = m.vertex_count.max(m.index_count / 3).div_ceil(LINEAR_WG);
-            if groups == 0 {
-                continue;
-            }
-            // Lavapipe caps a dimension at 65535 groups: the rest go in rows.
-            let x = groups.min(65535);
             pipeline.push(cmd, m);
-            unsafe { self.device.cmd_dispatch(cmd, x, groups.div_ceil(x), 1) };
+            self.dispatch(cmd, m.vertex_count.max(m.index_count / 3));
+        }
+        Ok(())
+    }
+
+    /// Displace water's raster vertices (each job one object, to world space).
+    pub fn water_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
+        let pipeline = self.water.get()?;
+        pipeline
+            .bind(cmd, &[Bind::Storage(&sb.waves), Bind::Storage(&sb.object_vertices), Bind::Storage(&sb.vertices)]);
+        for j in jobs {
+            pipeline.push(cmd, j);
+            self.dispatch(cmd, j.count);
+        }
+        Ok(())
+    }
+
+    /// Displace water's BVH triangles (each job one deforming mesh, in object space).
+    pub fn water_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
+        let pipeline = self.water_bvh.get()?;
+        let b = &sb.bvh;
+        pipeline.bind(
+            cmd,
+            &[
+                Bind::Storage(&sb.waves),
+                Bind::Storage(&b.rest_tris),
+                Bind::Storage(&b.rest_normals),
+                Bind::Storage(&b.triangles),
+                Bind::Storage(&b.normals),
+            ],
+        );
+        for j in jobs {
+            pipeline.push(cmd, j);
+            self.dispatch(cmd, j.count);
+        }
+        Ok(())
+    }
+
+    /// Refit each deforming mesh's bottom-level BVH (its arrival counters zeroed before).
+    pub fn refit(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[RefitPush]) -> VkResult<()> {
+        let pipeline = self.refit.get()?;
+        let b = &sb.bvh;
+        pipeline.bind(
+            cmd,
+            &[
+                Bind::Storage(&b.refit_nodes),
+                Bind::Storage(&b.refit_leaves),
+                Bind::Storage(&b.refit_boxes),
+                Bind::Storage(&b.refit_counters),
+                Bind::Storage(&b.triangles),
+                Bind::Storage(&b.pair_nodes),
+                Bind::Storage(&b.single_nodes),
+                Bind::Storage(&b.threaded_nodes),
+            ],
+        );
+        for j in jobs {
+            pipeline.push(cmd, j);
+            self.dispatch(cmd, j.leaf_count);
         }
         Ok(())
     }

@@ -6,6 +6,8 @@
 mod estimate;
 mod keys;
 mod queue;
+#[cfg(test)]
+mod refit_tests;
 mod scene_api;
 mod uniforms;
 mod views;
@@ -541,18 +543,45 @@ impl Renderer {
     /// instance records (its host copy moved with them) when it is built.
     fn take_scene_update(&mut self) -> SceneUpdate {
         let moved = self.instances.take_moved();
-        let mut up = SceneUpdate::default();
-        if moved.is_empty() {
-            return up;
-        }
+        let mut deformed: std::collections::BTreeSet<usize> = self.instances.take_deformed().into_iter().collect();
         let sb = &mut self.scene_buffers;
+        let mut up = SceneUpdate::default();
         let mut bvh_moved = false;
         for &(i, transform) in &moved {
             up.moves.push(crate::gpu_types::SceneUpdatePush::new(transform, &sb.objects[i]));
             bvh_moved |= sb.bvh.set_transform(i, transform);
+            // A moved water object is placed at rest: displace it again.
+            if sb.waters[i].is_some() {
+                deformed.insert(i);
+            }
         }
         if bvh_moved {
             up.instances = sb.bvh.instance_records().map(|r| r.to_vec());
+        }
+        let time = self.scene.time;
+        for &i in &deformed {
+            if let Some(waves) = sb.waters[i] {
+                let transform = self.instances.transforms()[i];
+                up.water_vertices.push(crate::gpu_types::WaterPush::raster(transform, &sb.objects[i], time, waves));
+            }
+        }
+        // The BVH's triangles and boxes: the displaced ones' (each deforming mesh once), or every one's when the
+        // GPU holds their rest state (just built, or a layout just uploaded).
+        let stale = std::mem::take(&mut sb.bvh.stale_deform);
+        let mut refit_meshes = std::collections::BTreeSet::new();
+        for i in 0..sb.waters.len() {
+            let Some(waves) = sb.waters[i] else { continue };
+            let mesh = self.instances.mesh_of(i);
+            let Some(r) = sb.bvh.refit_mesh(mesh) else { continue };
+            if (stale || deformed.contains(&i)) && refit_meshes.insert(mesh) {
+                up.water_triangles.push(crate::gpu_types::WaterPush::bvh(&r, time, waves));
+                up.refits.push(crate::gpu_types::RefitPush {
+                    first_leaf: r.first_leaf,
+                    leaf_count: r.leaf_count,
+                    layouts: sb.bvh.layout_mask(),
+                    depth: r.depth,
+                });
+            }
         }
         up
     }
@@ -598,7 +627,8 @@ impl Renderer {
             moved_objects: scene_update.moves.len() as u32,
             instance_bytes: scene_update.instances.as_ref().map_or(0, |r| std::mem::size_of_val(&r[..]) as u64),
             blas_builds: (self.scene_buffers.bvh.blas_builds - builds) as u32,
-            blas_refits: 0,
+            blas_refits: scene_update.refits.len() as u32,
+            deformed_objects: scene_update.water_vertices.len() as u32,
             rebuilt,
             blocking_submits: self.recorder.blocking_submits - submits,
             wait_idles: self.device.wait_idle_count() - idles,
@@ -611,10 +641,12 @@ impl Renderer {
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
+        // Water changes with the scene's time; rigid motion is in the transforms.
+        let deform_time = self.scene_buffers.waters.iter().any(|w| w.is_some()).then_some(self.scene.time.to_bits());
         let key = CausticKey::new(
             &self.scene.lights,
             self.scene_generation,
-            self.instances.transforms(),
+            (self.instances.transforms(), deform_time),
             &s,
             self.targets_key,
         );

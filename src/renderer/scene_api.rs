@@ -42,6 +42,10 @@ pub(super) struct Instances {
     of_object: Vec<(usize, Mat4)>,
     /// Objects moved since the last frame recorded (its scene update places them), in index order.
     moved: std::collections::BTreeSet<usize>,
+    /// Per mesh: the object-space box a deforming mesh (water) stays in.
+    deforming: Vec<Option<(glam::Vec3, glam::Vec3)>>,
+    /// Water objects whose time changed since the last frame recorded (its scene update displaces them).
+    deformed: std::collections::BTreeSet<usize>,
 }
 
 impl Instances {
@@ -52,17 +56,22 @@ impl Instances {
             .objects
             .iter()
             .map(|o| match &o.animation {
-                Some(a) => (Arc::new(a.mesh.clone()), a.animation.transform_at(scene.time)),
+                Some(a) => (Arc::new(a.mesh.clone()), a.transform_at(scene.time)),
                 None => (Arc::new(o.mesh.clone()), Mat4::IDENTITY),
             })
             .unzip();
         let of_object = transforms.into_iter().enumerate().collect();
-        Instances { meshes, of_object, moved: Default::default() }
+        let deforming = scene
+            .objects
+            .iter()
+            .map(|o| o.animation.as_ref().and_then(|a| a.water.as_ref()).map(|w| w.bounds()))
+            .collect();
+        Instances { meshes, of_object, moved: Default::default(), deforming, deformed: Default::default() }
     }
 
     /// The view the scene's GPU buffers are built from.
     pub fn view(&self) -> SceneInstances<'_> {
-        SceneInstances { meshes: &self.meshes, objects: &self.of_object }
+        SceneInstances { meshes: &self.meshes, objects: &self.of_object, deforming: &self.deforming }
     }
 
     /// Every object's transform, in order (what the caustic maps depend on besides the meshes).
@@ -75,9 +84,26 @@ impl Instances {
         std::mem::take(&mut self.moved).into_iter().map(|i| (i, self.of_object[i].1)).collect()
     }
 
-    /// Forget the moves (the scene's buffers were rebuilt from the current transforms).
+    /// The water objects displaced since the last call.
+    pub fn take_deformed(&mut self) -> Vec<usize> {
+        std::mem::take(&mut self.deformed).into_iter().collect()
+    }
+
+    #[cfg(test)]
+    /// Mesh `m`.
+    pub fn mesh_at(&self, m: usize) -> &Arc<Mesh> {
+        &self.meshes[m]
+    }
+
+    /// The mesh object `i` instances.
+    pub fn mesh_of(&self, i: usize) -> usize {
+        self.of_object[i].0
+    }
+
+    /// Forget the moves and deformations (the scene's buffers were rebuilt from the current scene).
     pub fn clear_moved(&mut self) {
         self.moved.clear();
+        self.deformed.clear();
     }
 }
 
@@ -116,6 +142,7 @@ impl Renderer {
     pub fn add_mesh(&mut self, mesh: Mesh) -> AppResult<MeshId> {
         check_mesh(&mesh)?;
         self.instances.meshes.push(Arc::new(mesh));
+        self.instances.deforming.push(None);
         Ok(MeshId(self.instances.meshes.len() as u32 - 1))
     }
 
@@ -146,7 +173,12 @@ impl Renderer {
         check_transform(&transform)?;
         let (mesh, _) = self.instance(id)?;
         let m = self.mesh(mesh)?.clone();
-        self.scene.objects[id.index()].mesh = (*m).clone().transformed(transform);
+        let o = &mut self.scene.objects[id.index()];
+        // Water stays displaced to the scene's time.
+        o.mesh = match o.animation.as_ref().and_then(|a| a.water.as_ref()) {
+            Some(w) => w.displaced(&m, self.scene.time).transformed(transform),
+            None => (*m).clone().transformed(transform),
+        };
         self.instances.of_object[id.index()].1 = transform;
         self.instances.moved.insert(id.index());
         Ok(())
@@ -172,16 +204,24 @@ impl Renderer {
         if !t.is_finite() {
             return Err(AppError::BadInput(format!("time {t}: must be finite")));
         }
+        let old = std::mem::replace(&mut self.scene.time, t);
         for i in 0..self.scene.objects.len() {
             let Some(a) = self.scene.objects[i].animation.clone() else { continue };
-            let m = a.animation.transform_at(t);
-            if m != self.instances.of_object[i].1 {
+            let m = a.transform_at(t);
+            let current = self.instances.of_object[i].1;
+            if let (Some(w), true) = (&a.water, t != old) {
+                // Displaced on the GPU by the next frame; the host copy follows (views, bounds, the reference).
+                self.instances.deformed.insert(i);
+                if m == current {
+                    self.scene.objects[i].mesh = w.displaced(&a.mesh, t).transformed(current);
+                }
+            }
+            if m != current {
                 self.set_transform(InstanceId::from_index(i), m).map_err(|e| {
                     AppError::BadInput(format!("object `{}` at {t} s: {e}", self.scene.objects[i].name))
                 })?;
             }
         }
-        self.scene.time = t;
         Ok(())
     }
 

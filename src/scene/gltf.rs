@@ -514,7 +514,12 @@ fn visit(
                     repeat: Repeat::Loop,
                 };
                 let placed = m.clone().transformed(animation.transform_at(0.0));
-                let anim = std::sync::Arc::new(super::ObjectAnimation { mesh: m, animation });
+                let anim = std::sync::Arc::new(super::ObjectAnimation {
+                    mesh: m,
+                    animation: Some(animation),
+                    placement: Mat4::IDENTITY,
+                    water: None,
+                });
                 out.objects.push(Object { animation: Some(anim), ..Object::new(name, material, placed) });
             } else {
                 out.objects.push(Object::new(name, material, m));

@@ -8,6 +8,7 @@ mod gltf;
 pub mod mesh;
 mod schema;
 pub mod view;
+pub mod water;
 
 use glam::{Mat4, Quat, Vec3};
 use schema::*;
@@ -155,17 +156,43 @@ pub struct Object {
     pub material: Material,
     /// Its triangles, in world space (at the scene's `time` when it animates).
     pub mesh: Mesh,
-    /// Where it moves over time (None: it stands still).
+    /// Where it moves or how it deforms over time (None: it stands still).
     pub animation: Option<std::sync::Arc<ObjectAnimation>>,
 }
 
-/// An animated object: its mesh in object space, and its transform over time.
+/// An object that changes over time: its mesh in object space, its placement (keyframed, or fixed), and for water
+/// its waves.
 #[derive(Debug)]
 pub struct ObjectAnimation {
-    /// The mesh, in object space.
+    /// The mesh, in object space (water: at rest).
     pub mesh: Mesh,
-    /// Object → world, as a function of time.
-    pub animation: animation::Animation,
+    /// Object → world as a function of time (None: `placement`).
+    pub animation: Option<animation::Animation>,
+    /// Object → world when it has no keyframes.
+    pub placement: Mat4,
+    /// Its waves, when it is water.
+    pub water: Option<water::Water>,
+}
+
+impl ObjectAnimation {
+    /// Object → world at time `t`.
+    pub fn transform_at(&self, t: f32) -> Mat4 {
+        self.animation.as_ref().map_or(self.placement, |a| a.transform_at(t))
+    }
+
+    /// Its triangles in world space at time `t`.
+    pub fn mesh_at(&self, t: f32) -> Mesh {
+        let local = match &self.water {
+            Some(w) => w.displaced(&self.mesh, t),
+            None => self.mesh.clone(),
+        };
+        local.transformed(self.transform_at(t))
+    }
+
+    /// Its keyframes' duration (0 without keyframes).
+    pub fn duration(&self) -> f32 {
+        self.animation.as_ref().map_or(0.0, |a| a.duration())
+    }
 }
 
 impl Object {
@@ -275,14 +302,14 @@ impl Scene {
 
     /// The longest animation's duration (s; 0 for a still scene).
     pub fn duration(&self) -> f32 {
-        self.objects.iter().filter_map(|o| o.animation.as_ref()).map(|a| a.animation.duration()).fold(0.0, f32::max)
+        self.objects.iter().filter_map(|o| o.animation.as_ref()).map(|a| a.duration()).fold(0.0, f32::max)
     }
 
     /// Place every animated object where it stands at time `t` (s).
     pub fn set_time(&mut self, t: f32) {
         for o in &mut self.objects {
             if let Some(a) = &o.animation {
-                o.mesh = a.mesh.clone().transformed(a.animation.transform_at(t));
+                o.mesh = a.mesh_at(t);
             }
         }
         self.time = t;
@@ -679,6 +706,80 @@ fn positive_size(cx: &Ctx, field: String, v: &S<toml::Value>, n: usize) -> Resul
     Ok(if n == 2 { Vec3::new(vals[0], 0.0, vals[1]) } else { Vec3::new(vals[0], vals[1], vals[2]) })
 }
 
+/// A water object's block and waves (docs/scenes.md, "waves").
+fn water_def(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<water::Water, SceneError> {
+    let d = o.get_ref();
+    let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "water needs `size = [x, z]`"))?;
+    let size = positive_size(cx, f("size"), s, 2)?;
+    let depth = match &d.depth {
+        Some(v) if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) => {
+            return Err(cx.err(v.span(), f("depth"), format!("must be > 0 m (got {})", v.get_ref())))
+        }
+        Some(v) => *v.get_ref(),
+        None => 0.3,
+    };
+    let grid = match &d.grid {
+        Some(v) => {
+            let g = *v.get_ref();
+            if !(1..=water::MAX_GRID as i64).contains(&g) {
+                return Err(cx.err(
+                    v.span(),
+                    f("grid"),
+                    format!("must lie in 1..={} cells per side (got {g})", water::MAX_GRID),
+                ));
+            }
+            g as u32
+        }
+        None => 64,
+    };
+    if d.waves.len() > water::MAX_WAVES {
+        return Err(cx.err(
+            d.waves[water::MAX_WAVES].span(),
+            f(&format!("waves[{}]", water::MAX_WAVES)),
+            format!("at most {} waves", water::MAX_WAVES),
+        ));
+    }
+    let mut waves = Vec::new();
+    for (k, w) in d.waves.iter().enumerate() {
+        let wf = |field: &str| f(&format!("waves[{k}].{field}"));
+        let w = w.get_ref();
+        let a = *w.amplitude.get_ref();
+        if !(a.is_finite() && a >= 0.0) {
+            return Err(cx.err(w.amplitude.span(), wf("amplitude"), format!("must be finite and >= 0 m (got {a})")));
+        }
+        let l = *w.wavelength.get_ref();
+        if !(l.is_finite() && l > 0.0) {
+            return Err(cx.err(w.wavelength.span(), wf("wavelength"), format!("must be > 0 m (got {l})")));
+        }
+        let dir = match &w.direction_deg {
+            Some(v) if !v.get_ref().is_finite() => return Err(cx.err(v.span(), wf("direction_deg"), FINITE)),
+            Some(v) => v.get_ref().to_radians(),
+            None => 0.0,
+        };
+        let speed = match &w.speed {
+            Some(v) if !v.get_ref().is_finite() => return Err(cx.err(v.span(), wf("speed"), FINITE)),
+            Some(v) => *v.get_ref(),
+            None => water::Wave::deep_water_speed(l),
+        };
+        waves.push(water::Wave {
+            amplitude: a,
+            wavelength: l,
+            direction: glam::Vec2::new(dir.cos(), dir.sin()),
+            speed,
+        });
+    }
+    let w = water::Water { size: glam::Vec2::new(size.x, size.z), depth, grid, waves };
+    if w.max_height() >= depth {
+        let span = d.waves.first().map_or(o.span(), |v| v.span());
+        return Err(cx.err(
+            span,
+            f("waves"),
+            format!("the amplitudes add up to {} m: they must stay below the depth, {depth} m", w.max_height()),
+        ));
+    }
+    Ok(w)
+}
+
 /// An object's `[[object.keyframe]]` tables as its animation (None without any), each keyframe's missing
 /// components taken from the object's own `translate`, `rotate_deg` and `scale` (`rest`).
 fn keyframes(
@@ -800,19 +901,23 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
         "sphere" => &["radius", "subdivisions"],
         "cube" => &["size"],
         "mesh" => &["path"],
+        "water" => &["size", "depth", "grid", "waves"],
         other => {
             return Err(cx.err(
                 d.shape.span(),
                 f("shape"),
-                format!("unknown shape `{other}` (expected plane, sphere, cube or mesh)"),
+                format!("unknown shape `{other}` (expected plane, sphere, cube, mesh or water)"),
             ))
         }
     };
-    let present: [(&str, Option<std::ops::Range<usize>>); 4] = [
+    let present: [(&str, Option<std::ops::Range<usize>>); 7] = [
         ("size", d.size.as_ref().map(|v| v.span())),
         ("radius", d.radius.as_ref().map(|v| v.span())),
         ("subdivisions", d.subdivisions.as_ref().map(|v| v.span())),
         ("path", d.path.as_ref().map(|v| v.span())),
+        ("depth", d.depth.as_ref().map(|v| v.span())),
+        ("grid", d.grid.as_ref().map(|v| v.span())),
+        ("waves", d.waves.first().map(|v| v.span())),
     ];
     for (field, span) in present {
         if let Some(span) = span {
@@ -821,7 +926,9 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             }
         }
     }
+    let water = if shape == "water" { Some(water_def(cx, o, &f)?) } else { None };
     let mesh = match shape {
+        "water" => water.as_ref().expect("water").rest_mesh(),
         "plane" => {
             let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a plane needs `size = [x, z]`"))?;
             let v = positive_size(cx, f("size"), s, 2)?;
@@ -896,15 +1003,20 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
         // Scale, then rotate about x, then y, then z, then translate.
         transform = Mat4::from_scale_rotation_translation(scale, animation::euler_deg(rotate), translate);
     }
-    let animation = keyframes(cx, d, &f, (translate, animation::euler_deg(rotate), scale))?;
-    let animation = animation.map(|a| {
-        transform = a.transform_at(0.0);
-        std::sync::Arc::new(ObjectAnimation { mesh: mesh.clone(), animation: a })
+    let keyed = keyframes(cx, d, &f, (translate, animation::euler_deg(rotate), scale))?;
+    let animation = (keyed.is_some() || water.is_some()).then(|| {
+        std::sync::Arc::new(ObjectAnimation {
+            mesh: mesh.clone(),
+            animation: keyed,
+            placement: transform,
+            water: water.clone(),
+        })
     });
     if let Some(a) = &animation {
+        transform = a.transform_at(0.0);
         // Every keyframe's placement lands within the coordinates' range (interpolation stays between them).
         for (k, key) in d.keyframe.iter().enumerate() {
-            let m = a.animation.transform_at(*key.get_ref().time.get_ref());
+            let m = a.transform_at(*key.get_ref().time.get_ref());
             if let Some(p) = a.mesh.positions.iter().map(|p| m.transform_point3(*p)).find(|p| !finite3(p.to_array())) {
                 return Err(cx.err(
                     key.span(),
@@ -914,7 +1026,11 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             }
         }
     }
-    let mesh = if transform == Mat4::IDENTITY { mesh } else { mesh.transformed(transform) };
+    let mesh = match &animation {
+        Some(a) => a.mesh_at(0.0),
+        None if transform == Mat4::IDENTITY => mesh,
+        None => mesh.transformed(transform),
+    };
     if let Some(p) = mesh.positions.iter().find(|p| !finite3(p.to_array())) {
         let (field, span) = match (&d.scale, &d.translate) {
             (Some(s), _) => ("scale", s.span()),

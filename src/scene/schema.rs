@@ -67,6 +67,10 @@ pub struct ObjectDef {
     pub radius: Option<S<f32>>,
     pub subdivisions: Option<S<i64>>,
     pub path: Option<S<String>>,
+    pub depth: Option<S<f32>>,
+    pub grid: Option<S<i64>>,
+    #[serde(default)]
+    pub waves: Vec<S<WaveDef>>,
     pub translate: Option<S<[f32; 3]>>,
     pub rotate_deg: Option<S<[f32; 3]>>,
     pub scale: Option<S<ScalarOr3>>,
@@ -76,6 +80,15 @@ pub struct ObjectDef {
     pub keyframe: Vec<S<KeyframeDef>>,
     pub interpolation: Option<S<String>>,
     pub repeat: Option<S<String>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct WaveDef {
+    pub amplitude: S<f32>,
+    pub wavelength: S<f32>,
+    pub direction_deg: Option<S<f32>>,
+    pub speed: Option<S<f32>>,
 }
 
 #[derive(Deserialize, Debug)]

@@ -140,6 +140,43 @@ impl Drop for Recorder {
     }
 }
 
+#[cfg(test)]
+/// `count` elements from the start of `src` (a transfer source), through a host-visible buffer, once every
+/// earlier submission's writes are done.
+pub fn download_buffer<T: bytemuck::Pod>(
+    device: &Arc<Device>,
+    recorder: &mut Recorder,
+    src: &Buffer,
+    count: usize,
+) -> VkResult<Vec<T>> {
+    let bytes = (count * std::mem::size_of::<T>()) as u64;
+    let dst = Buffer::new(
+        device,
+        &format!("{} (download)", src.name),
+        bytes,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuToCpu,
+    )?;
+    let cmd = recorder.begin()?;
+    let all = vk::MemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ);
+    let to_host = vk::MemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ);
+    unsafe {
+        device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[all]));
+        device.cmd_copy_buffer(cmd, src.raw, dst.raw, &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }]);
+        device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[to_host]));
+    }
+    recorder.submit_and_wait()?;
+    dst.read(0, count)
+}
+
 /// Copy `data` into a device-local buffer through a staging buffer (works whether or not device memory is
 /// host-visible). Empty data gives a buffer of the minimum size.
 pub fn upload_buffer<T: bytemuck::Pod>(

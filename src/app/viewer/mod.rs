@@ -884,7 +884,7 @@ impl Viewer {
                 continue;
             }
             let o = &self.renderer.scene().objects[i];
-            let base = o.animation.as_ref().map_or(self.placements[i], |a| a.animation.transform_at(self.scene_time));
+            let base = o.animation.as_ref().map_or(self.placements[i], |a| a.transform_at(self.scene_time));
             let m = glam::Mat4::from_translation(offset) * base;
             if let Err(e) = self.renderer.set_transform(caustics::InstanceId::from_index(i), m) {
                 eprintln!("not moved: {e}");
@@ -1328,6 +1328,15 @@ impl Viewer {
             },
             "photons_splatted": st.map(|x| x.photons_total).unwrap_or(0),
             "host_readbacks_per_frame": last.map(|r| r.host_readbacks).unwrap_or(0),
+            // The scene's animation: where it stands, whether it plays, and what the frames moved and displaced.
+            "scene_time_s": self.scene_time,
+            "scene_playing": self.scene_playing,
+            "scene_update": {
+                "moved_objects": frames.iter().map(|f| f.scene.moved_objects as u64).sum::<u64>(),
+                "deformed_objects": frames.iter().map(|f| f.scene.deformed_objects as u64).sum::<u64>(),
+                "blas_builds": frames.iter().map(|f| f.scene.blas_builds as u64).sum::<u64>(),
+                "wait_idles": frames.iter().map(|f| f.scene.wait_idles).sum::<u64>(),
+            },
             "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
             "profiled_frames": frames.len(),
             "gpu_ms": profiler::gpu_json(&summaries),

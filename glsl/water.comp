@@ -1,0 +1,76 @@
+#version 460
+// Water (src/scene/water.rs, which runs the same formula on the host): displace a water object's vertices to
+// the frame's time. The plain build writes its raster vertices in world space (from the object-space rest
+// copies, through the instance's transform); the WATER_BVH build writes its BVH triangles and vertex normals in
+// object space (from their rest copies, in leaf order), which the refit (refit.comp) then bounds. A vertex at y = 0 rises to
+//   h = sum_i a_i sin(k_i (d_i . (x, z)) - w_i t),
+// and where its rest normal is +y (the surface, not the walls' top edges) its normal becomes
+// normalize(-dh/dx, 1, -dh/dz).
+layout(local_size_x = LINEAR_WG) in;
+
+// Two per wave: (direction x, direction z, k, omega), (amplitude, 0, 0, 0).
+layout(std430, set = 0, binding = 0) readonly buffer Waves { vec4 waves[]; };
+#ifdef WATER_BVH
+layout(std430, set = 0, binding = 1) readonly buffer RestTris { vec4 rest_tris[]; };
+layout(std430, set = 0, binding = 2) readonly buffer RestNormals { vec4 rest_normals[]; };
+layout(std430, set = 0, binding = 3) writeonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
+#else
+struct Vertex { vec4 position; vec4 normal; vec4 material; };
+layout(std430, set = 0, binding = 1) readonly buffer ObjectVertices { Vertex object_vertices[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer WorldVertices { Vertex world_vertices[]; };
+#endif
+
+layout(push_constant) uniform Push {
+    vec4 rows[3];    // world_from_object, rows of its 3x4 affine part (mode 0)
+    vec4 nrows[3];   // rows of the inverse transpose of its 3x3 part (mode 0)
+    float time;
+    uint mode;       // 0: raster vertices (the plain build), 1: BVH triangles (WATER_BVH)
+    uint first_wave;
+    uint wave_count;
+    uint src;        // first vertex (mode 0) or rest triangle (mode 1)
+    uint dst;        // first vertex (mode 0) or BVH triangle (mode 1)
+    uint count;      // vertices or triangles
+} pc;
+
+void displace(inout vec3 p, inout vec3 n) {
+    if (p.y != 0.0) return;
+    float h = 0.0;
+    vec2 g = vec2(0.0);
+    for (uint w = 0u; w < pc.wave_count; w++) {
+        vec4 a = waves[2u * (pc.first_wave + w)];
+        float amp = waves[2u * (pc.first_wave + w) + 1u].x;
+        float phase = a.z * (a.x * p.x + a.y * p.z) - a.w * pc.time;
+        h += amp * sin(phase);
+        g += a.xy * (amp * a.z * cos(phase));
+    }
+    p.y = h;
+    if (n == vec3(0.0, 1.0, 0.0)) n = normalize(vec3(-g.x, 1.0, -g.y));
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * LINEAR_WG;
+    if (i >= pc.count) return;
+#ifndef WATER_BVH
+    {
+        Vertex v = object_vertices[pc.src + i];
+        vec3 p = v.position.xyz, n = v.normal.xyz;
+        displace(p, n);
+        vec4 q = vec4(p, 1.0);
+        v.position.xyz = vec3(dot(pc.rows[0], q), dot(pc.rows[1], q), dot(pc.rows[2], q));
+        vec3 m = vec3(dot(pc.nrows[0].xyz, n), dot(pc.nrows[1].xyz, n), dot(pc.nrows[2].xyz, n));
+        float len = length(m);
+        v.normal.xyz = len > 0.0 && !isinf(len) ? m / len : vec3(0.0);
+        world_vertices[pc.dst + i] = v;
+    }
+#else
+    {
+        for (uint c = 0u; c < 3u; c++) {
+            vec3 p = rest_tris[3u * (pc.src + i) + c].xyz, n = rest_normals[3u * (pc.src + i) + c].xyz;
+            displace(p, n);
+            bvh_tris[3u * (pc.dst + i) + c] = vec4(p, 0.0);
+            bvh_normals[3u * (pc.dst + i) + c] = vec4(n, 0.0);
+        }
+    }
+#endif
+}
