@@ -48,59 +48,64 @@ fn reference_at(scene: &str, time: f32, photons: u64) -> RgbImage {
     caustics::reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
 }
 
-/// The glass at t = 0, 0.37 and 1.2 s (moving, squashed and turned between its keyframes) against the CPU
-/// reference placed by the same keyframes: one renderer moved by `set_time` from frame to frame.
-#[test]
-fn keyframed_glass_matches_the_reference_at_its_times() {
+/// One frame at each of `TIMES` (one renderer stepped by `set_time`, dense level `level`, 64² from the top
+/// camera over `extent` m) against the CPU reference at the same time (2M photons): per time, the metrics, the
+/// frame's report, and the rel-L1 of its caustic against the previous time's (None for the first).
+fn against_reference(
+    path: &str,
+    level: u32,
+    extent: f32,
+) -> Vec<(caustics::metrics::Metrics, FrameReport, Option<f64>)> {
     let (_gpu, device) = common::gpu();
-    let scene = Scene::load(Path::new(MOVING)).unwrap();
-    assert!(scene.is_animated() && scene.duration() == 2.0);
-    let mut r = Renderer::new(device.clone(), scene, settings(4)).unwrap();
+    let scene = Scene::load(Path::new(path)).unwrap();
+    let mut r = Renderer::new(device.clone(), scene, settings(level)).unwrap();
     let mut last: Option<RgbImage> = None;
-    for t in [0.0, 0.37, 1.2] {
+    let mut out = Vec::new();
+    for t in TIMES {
         r.set_time(t).unwrap();
         let (img, report) = caustics(&mut r, 64);
-        let reference = reference_at(MOVING, t, 2_000_000);
-        let m = compare(&img, &reference, 64, 2.0);
-        eprintln!("t = {t} s: rel_l1 {:.4}, flux ratio {:.4}, scene {:?}", m.rel_l1, m.flux_ratio, report.scene);
-        // Measured rel-L1 0.017, 0.014, 0.021 and flux ratios 1.0054, 0.9987, 0.9987 (dense level 4 against 2M
-        // reference photons at 64²).
-        assert!(m.rel_l1 < 0.04 && (m.flux_ratio - 1.0).abs() < 0.012, "t = {t} s: {m:?}");
-        if let Some(prev) = &last {
-            // The caustic moved with the glass.
-            assert!(compare(&img, prev, 64, 2.0).rel_l1 > 0.5, "t = {t} s: the caustic did not move");
-            assert_eq!(report.scene.blas_builds, 0, "t = {t} s: a rigid move rebuilds no BVH");
-        }
+        let m = compare(&img, &reference_at(path, t, 2_000_000), 64, extent);
+        eprintln!("{path} at {t} s: rel_l1 {:.4}, flux ratio {:.4}, scene {:?}", m.rel_l1, m.flux_ratio, report.scene);
+        let change = last.as_ref().map(|prev| compare(&img, prev, 64, extent).rel_l1);
+        out.push((m, report, change));
         last = Some(img);
     }
     assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
+    out
 }
 
-/// The pool's water at t = 0, 0.37 and 1.2 s (displaced and its BVH refit on the GPU, one renderer stepped by
-/// `set_time`) against the CPU reference displacing the same waves at the same times.
+const TIMES: [f32; 3] = [0.0, 0.37, 1.2];
+
+/// The glass at t = 0, 0.37 and 1.2 s (moving, squashed and turned between its keyframes) against the CPU
+/// reference placed by the same keyframes.
+#[test]
+fn keyframed_glass_matches_the_reference_at_its_times() {
+    let scene = Scene::load(Path::new(MOVING)).unwrap();
+    assert!(scene.is_animated() && scene.duration() == 2.0);
+    for (t, (m, report, change)) in TIMES.into_iter().zip(against_reference(MOVING, 4, 2.0)) {
+        // Measured rel-L1 0.017, 0.014, 0.021 and flux ratios 1.0054, 0.9987, 0.9987 (dense level 4).
+        assert!(m.rel_l1 < 0.04 && (m.flux_ratio - 1.0).abs() < 0.012, "t = {t} s: {m:?}");
+        if let Some(change) = change {
+            assert!(change > 0.5, "t = {t} s: the caustic did not move with the glass ({change})");
+            assert_eq!(report.scene.blas_builds, 0, "t = {t} s: a rigid move rebuilds no BVH");
+        }
+    }
+}
+
+/// The pool's water at t = 0, 0.37 and 1.2 s (displaced and its BVH refit on the GPU) against the CPU reference
+/// displacing the same waves at the same times.
 #[test]
 fn water_matches_the_reference_at_its_times() {
-    let (_gpu, device) = common::gpu();
-    let scene = Scene::load(Path::new(POOL)).unwrap();
-    let mut r = Renderer::new(device.clone(), scene, settings(3)).unwrap();
-    let mut last: Option<RgbImage> = None;
-    for t in [0.0, 0.37, 1.2] {
-        r.set_time(t).unwrap();
-        let (img, report) = caustics(&mut r, 64);
-        let reference = reference_at(POOL, t, 2_000_000);
-        let m = compare(&img, &reference, 64, 2.2);
-        eprintln!("t = {t} s: rel_l1 {:.4}, flux ratio {:.4}, scene {:?}", m.rel_l1, m.flux_ratio, report.scene);
-        // Measured rel-L1 0.069, 0.079, 0.053 and flux ratios 1.011, 1.012, 1.012 (dense level 3 against 2M
-        // reference photons at 64²; the floor and walls seen from above).
+    for (t, (m, report, change)) in TIMES.into_iter().zip(against_reference(POOL, 3, 2.2)) {
+        // Measured rel-L1 0.069, 0.079, 0.053 and flux ratios 1.011, 1.012, 1.012 (dense level 3; the floor and
+        // walls seen from above).
         assert!(m.rel_l1 < 0.12 && (m.flux_ratio - 1.0).abs() < 0.02, "t = {t} s: {m:?}");
-        if let Some(prev) = &last {
-            assert!(compare(&img, prev, 64, 2.2).rel_l1 > 0.05, "t = {t} s: the caustic did not change");
+        if let Some(change) = change {
+            assert!(change > 0.05, "t = {t} s: the caustic did not change ({change})");
             assert_eq!((report.scene.blas_builds, report.scene.blas_refits), (0, 1), "t = {t} s: {:?}", report.scene);
             assert_eq!(report.scene.deformed_objects, 1);
         }
-        last = Some(img);
     }
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
 
 /// 60 frames of each animation at 30 fps (the keyframed glass; the pool's water): every frame closes its energy

@@ -561,7 +561,7 @@ impl Renderer {
         let time = self.scene.time;
         for &i in &deformed {
             if let Some(waves) = sb.waters[i] {
-                let transform = self.instances.transforms()[i];
+                let transform = self.instances.transform_of(i);
                 up.water_vertices.push(crate::gpu_types::WaterPush::raster(transform, &sb.objects[i], time, waves));
             }
         }

@@ -95,6 +95,11 @@ impl Instances {
         &self.meshes[m]
     }
 
+    /// Object `i`'s transform.
+    pub fn transform_of(&self, i: usize) -> Mat4 {
+        self.of_object[i].1
+    }
+
     /// The mesh object `i` instances.
     pub fn mesh_of(&self, i: usize) -> usize {
         self.of_object[i].0
