@@ -5,10 +5,10 @@
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
-use caustics::reference::{Aov as RefAov, Paths, RefParams};
+use caustics::reference::{Aov as RefAov, Paths};
 use caustics::scene::Scene;
 use caustics::settings::{Method, Quality, Settings, Transport};
-use caustics::{Aov, AovData, FrameDesc, FrameReport, Renderer};
+use caustics::{FrameReport, Renderer};
 use std::path::Path;
 
 const MOVING: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/moving_glass.toml");
@@ -20,32 +20,8 @@ fn settings(level: u32) -> Settings {
     Settings { quality, ..Settings::default() }
 }
 
-/// The caustics AOV from the top camera at `side`², with the frame's report.
-fn caustics(r: &mut Renderer, side: u32) -> (RgbImage, FrameReport) {
-    let top = r.scene().camera(Some("top")).unwrap().clone();
-    let view = r.camera_view(&top, side, side);
-    let frame = r.render(&FrameDesc::new(&view, Some(Aov::Caustics))).expect("frame");
-    match frame.image {
-        Some(AovData::Float { width, height, rgba }) => {
-            (RgbImage { width, height, data: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() }, frame.report)
-        }
-        _ => panic!("a float AOV"),
-    }
-}
-
 fn reference_at(scene: &str, time: f32, photons: u64) -> RgbImage {
-    let p = RefParams {
-        camera: Some("top".into()),
-        aov: RefAov::Caustics,
-        paths: Paths::All,
-        photons,
-        width: 64,
-        height: 64,
-        time,
-        ..RefParams::default()
-    };
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
-    caustics::reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+    common::top_reference_at(scene, RefAov::Caustics, Paths::All, photons, 64, time)
 }
 
 /// One frame at each of `TIMES` (one renderer stepped by `set_time`, dense level `level`, 64² from the top
@@ -63,7 +39,7 @@ fn against_reference(
     let mut out = Vec::new();
     for t in TIMES {
         r.set_time(t).unwrap();
-        let (img, report) = caustics(&mut r, 64);
+        let (img, report) = common::top_caustics(&mut r, 64);
         let m = compare(&img, &reference_at(path, t, 2_000_000), 64, extent);
         eprintln!("{path} at {t} s: rel_l1 {:.4}, flux ratio {:.4}, scene {:?}", m.rel_l1, m.flux_ratio, report.scene);
         let change = last.as_ref().map(|prev| compare(&img, prev, 64, extent).rel_l1);
@@ -117,11 +93,11 @@ fn every_frame_of_an_animation_is_sound() {
     for (path, moved, deformed) in [(MOVING, 1, 0), (POOL, 0, 1)] {
         let scene = Scene::load(Path::new(path)).unwrap();
         let mut r = Renderer::new(device.clone(), scene, settings(2)).unwrap();
-        let _ = caustics(&mut r, 32);
+        let _ = common::top_caustics(&mut r, 32);
         for k in 1..=60 {
             let t = k as f32 / 30.0;
             r.set_time(t).unwrap();
-            let (img, report) = caustics(&mut r, 32);
+            let (img, report) = common::top_caustics(&mut r, 32);
             let tr = report.transport.expect("exact transport's account");
             let residual = tr.residual();
             assert!(residual <= 1e-6, "{path} frame {k} (t = {t} s): energy residual {residual}");
@@ -143,35 +119,21 @@ fn render_writes_a_sequence() {
     let dir = common::out_dir("animation_sequence");
     let out = dir.join("frame_###.exr");
     let stats = dir.join("stats.json");
-    common::ok(&[
-        "render",
-        "--scene",
-        MOVING,
-        "--camera",
-        "top",
-        "--size",
-        "32x32",
-        "--aov",
-        "caustics",
-        "--level",
-        "2",
-        "--sequence",
-        "3",
-        "--fps",
-        "2",
-        "--time",
-        "0.25",
-        "--out",
-        out.to_str().unwrap(),
-        "--stats",
-        stats.to_str().unwrap(),
-    ]);
+    // The top camera's caustics at 32², level 2, with `extra`.
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--scene", MOVING, "--camera", "top", "--size", "32x32", "--aov", "caustics"];
+        args.extend(["--level", "2"]);
+        args.extend_from_slice(extra);
+        common::ok(&args)
+    };
+    let (out, stats) = (out.to_str().unwrap(), stats.to_str().unwrap());
+    render(&["--sequence", "3", "--fps", "2", "--time", "0.25", "--out", out, "--stats", stats]);
     let frames: Vec<RgbImage> = (0..3)
         .map(|k| caustics::image_io::read_exr(&dir.join(format!("frame_{k:03}.exr"))).expect("a frame of the sequence"))
         .collect();
     assert!(!dir.join("frame_003.exr").exists());
     assert!(compare(&frames[0], &frames[1], 32, 2.0).rel_l1 > 0.3, "the glass moves from frame to frame");
-    let s = common::read_json(&stats);
+    let s = common::read_json(Path::new(stats));
     assert_eq!(s["frames"], 3);
     assert_eq!(s["sequence"]["frames"], 3);
     assert_eq!(s["scene_update"]["all_frames"]["moved_objects"], 2, "frames 1 and 2 move the glass");
@@ -183,23 +145,7 @@ fn render_writes_a_sequence() {
     common::assert_validation_clean(&s);
     // The last frame is at 0.25 + 2/2 = 1.25 s, as `render --time 1.25` renders it.
     let single = dir.join("single.exr");
-    common::ok(&[
-        "render",
-        "--scene",
-        MOVING,
-        "--camera",
-        "top",
-        "--size",
-        "32x32",
-        "--aov",
-        "caustics",
-        "--level",
-        "2",
-        "--time",
-        "1.25",
-        "--out",
-        single.to_str().unwrap(),
-    ]);
+    render(&["--time", "1.25", "--out", single.to_str().unwrap()]);
     let m = compare(&caustics::image_io::read_exr(&single).unwrap(), &frames[2], 32, 2.0);
     // Measured below 1e-6 (the same placement; one is moved there by the scene update, the other loaded there).
     assert!(m.rel_l1 < 1e-4, "{m:?}");
@@ -209,6 +155,24 @@ fn render_writes_a_sequence() {
 #[test]
 fn bad_keyframes_are_refused() {
     let dir = common::out_dir("animation_bad");
+    // `base` with its first `from` replaced by `to`, rendered: exit 2, a message naming the file, the line of `to`'s
+    // last line and every one of `needles`, and no output.
+    let refused = |name: &str, base: &str, from: &str, to: &str, needles: &[&str]| {
+        assert!(base.contains(from), "{name}: the scene has `{from}`");
+        let text = base.replacen(from, to, 1);
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, &text).unwrap();
+        let out = dir.join(format!("{name}.exr"));
+        let o = common::caustics(&["render", "--scene", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        let line = text.lines().position(|l| l.contains(to.lines().last().unwrap())).unwrap() + 1;
+        assert!(
+            err.contains(&format!("{name}.toml:{line}")) && needles.iter().all(|n| err.contains(n)),
+            "{name}: the message names the file, line {line} and {needles:?}: {err}"
+        );
+        common::assert_no_output(&out);
+    };
     let text = std::fs::read_to_string(MOVING).unwrap();
     let cases: [(&str, &str, &str, &str); 5] = [
         ("decreasing", "time = 2.0", "time = 0.5", "keyframe[2].time"),
@@ -218,36 +182,12 @@ fn bad_keyframes_are_refused() {
         ("flip", "scale = [1.25, 0.75, 1.0]", "scale = [-1.25, 0.75, 1.0]", "keyframe[1].scale"),
     ];
     for (name, from, to, field) in cases {
-        assert!(text.contains(from), "{name}: the scene has `{from}`");
-        let path = dir.join(format!("{name}.toml"));
-        std::fs::write(&path, text.replacen(from, to, 1)).unwrap();
-        let out = dir.join(format!("{name}.exr"));
-        let o = common::caustics(&["render", "--scene", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
-        let line = text.replacen(from, to, 1).lines().position(|l| l.contains(to.lines().last().unwrap())).unwrap() + 1;
-        assert!(
-            err.contains(&format!("{name}.toml:{line}")) && err.contains(field),
-            "{name}: the message names the file, line {line} and `{field}`: {err}"
-        );
-        common::assert_no_output(&out);
+        refused(name, &text, from, to, &[field]);
     }
     // A water grid of 0 cells, or over 4096 a side.
     let pool = std::fs::read_to_string(POOL).unwrap();
-    for (name, grid) in [("grid0", "0"), ("grid4097", "4097")] {
-        let path = dir.join(format!("{name}.toml"));
-        let text = pool.replacen("grid = 128", &format!("grid = {grid}"), 1);
-        std::fs::write(&path, &text).unwrap();
-        let out = dir.join(format!("{name}.exr"));
-        let o = common::caustics(&["render", "--scene", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        let line = text.lines().position(|l| l.starts_with("grid = ")).unwrap() + 1;
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
-        assert!(
-            err.contains(&format!("{name}.toml:{line}")) && err.contains("grid") && err.contains("1..=4096"),
-            "{err}"
-        );
-        common::assert_no_output(&out);
+    for (name, grid) in [("grid0", "grid = 0"), ("grid4097", "grid = 4097")] {
+        refused(name, &pool, "grid = 128", grid, &["grid", "1..=4096"]);
     }
     let bad_out = dir.join("short_#.exr");
     let o = common::caustics(&["render", "--scene", MOVING, "--sequence", "12", "--out", bad_out.to_str().unwrap()]);

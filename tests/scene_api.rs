@@ -9,7 +9,7 @@ use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
 use caustics::scene::{mesh, Material, Mesh, Scene};
 use caustics::settings::{Method, Quality, Settings, Transport};
-use caustics::{Aov, AovData, FrameDesc, FrameReport, InstanceId, Renderer, SceneUpdateReport};
+use caustics::{FrameDesc, InstanceId, Renderer, SceneUpdateReport};
 use glam::{Mat4, Vec3};
 use std::path::Path;
 
@@ -19,20 +19,7 @@ fn settings() -> Settings {
 }
 
 fn caustics(r: &mut Renderer) -> RgbImage {
-    caustics_frame(r).0
-}
-
-/// The caustics AOV from the top camera at 128², with the frame's report.
-fn caustics_frame(r: &mut Renderer) -> (RgbImage, FrameReport) {
-    let top = r.scene().camera(Some("top")).unwrap().clone();
-    let view = r.camera_view(&top, 128, 128);
-    let frame = r.render(&FrameDesc::new(&view, Some(Aov::Caustics))).expect("frame");
-    match frame.image {
-        Some(AovData::Float { width, height, rgba }) => {
-            (RgbImage { width, height, data: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() }, frame.report)
-        }
-        _ => panic!("a float AOV"),
-    }
+    common::top_caustics(r, 128).0
 }
 
 /// The sphere scene's file with the glass moved to `at` and given `ior`.
@@ -156,7 +143,7 @@ fn a_moved_instance_renders_as_placed_and_rebuilds_nothing() {
     let dir = common::out_dir("scene_api_moves");
     let still = Mat4::from_translation(Vec3::new(0.0, 0.5, 0.0));
     let (mut r, glass) = built_scene(&device, settings(), still);
-    let (_, first) = caustics_frame(&mut r);
+    let (_, first) = common::top_caustics(&mut r, 128);
     assert!(
         first.scene.rebuilt && first.scene.blas_builds == 2,
         "the first frame builds both meshes' BVHs: {:?}",
@@ -171,7 +158,7 @@ fn a_moved_instance_renders_as_placed_and_rebuilds_nothing() {
         translate: Vec3::new(0.15, 0.55, -0.1),
     };
     r.set_transform(glass, tilted.matrix()).unwrap();
-    let (moved, report) = caustics_frame(&mut r);
+    let (moved, report) = common::top_caustics(&mut r, 128);
     // Both objects' BvhInstance records (192 bytes each, glsl/common/bvh_types.glsl).
     let instance_bytes = 2 * 192;
     let expected =
@@ -186,7 +173,7 @@ fn a_moved_instance_renders_as_placed_and_rebuilds_nothing() {
     close(&moved, &from_file, 3e-3, "exact transport, tilted mirrored ellipsoid against its file");
 
     // A still frame after it reuses the maps and updates nothing.
-    let (_, again) = caustics_frame(&mut r);
+    let (_, again) = common::top_caustics(&mut r, 128);
     assert!(again.reused && again.scene == SceneUpdateReport::default(), "{:?}", again.scene);
 
     // The two-interface model rasterizes the placed vertices (front and back faces).
@@ -194,10 +181,10 @@ fn a_moved_instance_renders_as_placed_and_rebuilds_nothing() {
     two.quality.transport = Transport::TwoInterface;
     r.set_settings(two.clone()).unwrap();
     // (The new transport's targets are allocated, after a wait_idle, by the frame that first renders it.)
-    let _ = caustics_frame(&mut r);
+    let _ = common::top_caustics(&mut r, 128);
     let turned = Placement { rotate_deg: Vec3::new(-20.0, 0.0, 40.0), ..tilted };
     r.set_transform(glass, turned.matrix()).unwrap();
-    let (moved, report) = caustics_frame(&mut r);
+    let (moved, report) = common::top_caustics(&mut r, 128);
     // (The BVH the exact frames built is kept up to date too.)
     assert_eq!(report.scene, expected);
     let file = placed_file(&dir, "turned", &turned.toml(), 1.5);
@@ -225,7 +212,7 @@ fn a_moved_instance_renders_as_placed_and_rebuilds_nothing() {
         assert_eq!((rep.host_readbacks, rep.scene.blas_builds), (0, 0));
     }
     r.set_frames_in_flight(1).unwrap();
-    let (last, _) = caustics_frame(&mut r);
+    let (last, _) = common::top_caustics(&mut r, 128);
     let file = file_scene(&dir, [0.2, 0.5, 0.0], 1.5);
     // Measured 2.1e-5: a translation traced in the mesh's space.
     close(&last, &caustics(&mut common::renderer(&device, &file, settings())), 1e-4, "after frames in flight");

@@ -176,17 +176,22 @@ impl Renderer {
     /// waits: the next frame's scene update moves it on the GPU (its report's `scene` counts what that cost).
     pub fn set_transform(&mut self, id: InstanceId, transform: Mat4) -> AppResult<()> {
         check_transform(&transform)?;
-        let (mesh, _) = self.instance(id)?;
-        let m = self.mesh(mesh)?.clone();
-        let o = &mut self.scene.objects[id.index()];
-        // Water stays displaced to the scene's time.
+        self.instance(id)?;
+        self.place_host(id.index(), transform);
+        self.instances.of_object[id.index()].1 = transform;
+        self.instances.moved.insert(id.index());
+        Ok(())
+    }
+
+    /// The host copy of object `i` (its world-space triangles) placed by `transform`: its mesh, displaced to the
+    /// scene's time when it is water.
+    fn place_host(&mut self, i: usize, transform: Mat4) {
+        let m = self.instances.meshes[self.instances.of_object[i].0].clone();
+        let o = &mut self.scene.objects[i];
         o.mesh = match o.animation.as_ref().and_then(|a| a.water.as_ref()) {
             Some(w) => w.displaced(&m, self.scene.time).transformed(transform),
             None => (*m).clone().transformed(transform),
         };
-        self.instances.of_object[id.index()].1 = transform;
-        self.instances.moved.insert(id.index());
-        Ok(())
     }
 
     /// Give instance `id` another material. Refused, with the material unchanged, where the transport cannot
@@ -214,11 +219,11 @@ impl Renderer {
             let Some(a) = self.scene.objects[i].animation.clone() else { continue };
             let m = a.transform_at(t);
             let current = self.instances.of_object[i].1;
-            if let (Some(w), true) = (&a.water, t != old) {
+            if a.water.is_some() && t != old {
                 // Displaced on the GPU by the next frame; the host copy follows (views, bounds, the reference).
                 self.instances.deformed.insert(i);
                 if m == current {
-                    self.scene.objects[i].mesh = w.displaced(&a.mesh, t).transformed(current);
+                    self.place_host(i, current);
                 }
             }
             if m != current {

@@ -108,6 +108,18 @@ pub fn top_reference(
     photons: u64,
     side: u32,
 ) -> caustics::image_io::RgbImage {
+    top_reference_at(scene, aov, paths, photons, side, 0.0)
+}
+
+/// [`top_reference`] with the scene's animated objects placed at `time` s.
+pub fn top_reference_at(
+    scene: &str,
+    aov: caustics::reference::Aov,
+    paths: caustics::reference::Paths,
+    photons: u64,
+    side: u32,
+    time: f32,
+) -> caustics::image_io::RgbImage {
     let p = caustics::reference::RefParams {
         camera: Some("top".into()),
         aov,
@@ -115,10 +127,25 @@ pub fn top_reference(
         photons,
         width: side,
         height: side,
+        time,
         ..caustics::reference::RefParams::default()
     };
     let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("reference-cache");
     caustics::reference::cached_in(&cache, Path::new(scene), &p).expect("reference")
+}
+
+/// The caustics AOV of an in-process renderer from its scene's `top` camera at `side`², with the frame's report.
+pub fn top_caustics(r: &mut caustics::Renderer, side: u32) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
+    let top = r.scene().camera(Some("top")).expect("a top camera").clone();
+    let view = r.camera_view(&top, side, side);
+    let frame = r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Caustics))).expect("frame");
+    match frame.image {
+        Some(caustics::AovData::Float { width, height, rgba }) => {
+            let data = rgba.iter().map(|p| [p[0], p[1], p[2]]).collect();
+            (caustics::image_io::RgbImage { width, height, data }, frame.report)
+        }
+        _ => panic!("a float AOV"),
+    }
 }
 
 /// In-process GPU tests share one device per test binary (instance and device creation with validation cost about

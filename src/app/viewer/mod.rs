@@ -1282,6 +1282,8 @@ impl Viewer {
     /// The stats JSON (before teardown).
     fn stats(&self) -> Value {
         let frames: Vec<FrameReport> = self.ring.iter().cloned().collect();
+        let mut updates = caustics::SceneUpdateReport::default();
+        frames.iter().for_each(|f| updates.add(&f.scene));
         let summaries = profiler::stage_summaries(&frames);
         let stage = |name: &str| summaries.iter().find(|(l, _)| l == name).map(|(_, v)| *v).unwrap_or_default();
         let intervals: Vec<f64> = self.intervals.iter().copied().collect();
@@ -1332,10 +1334,10 @@ impl Viewer {
             "scene_time_s": self.scene_time,
             "scene_playing": self.scene_playing,
             "scene_update": {
-                "moved_objects": frames.iter().map(|f| f.scene.moved_objects as u64).sum::<u64>(),
-                "deformed_objects": frames.iter().map(|f| f.scene.deformed_objects as u64).sum::<u64>(),
-                "blas_builds": frames.iter().map(|f| f.scene.blas_builds as u64).sum::<u64>(),
-                "wait_idles": frames.iter().map(|f| f.scene.wait_idles).sum::<u64>(),
+                "moved_objects": updates.moved_objects,
+                "deformed_objects": updates.deformed_objects,
+                "blas_builds": updates.blas_builds,
+                "wait_idles": updates.wait_idles,
             },
             "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
             "profiled_frames": frames.len(),
