@@ -24,6 +24,16 @@ layout(set = 0, binding = CB_HDR, rgba32f) uniform writeonly image2D o_hdr;  // 
 layout(set = 0, binding = CB_SHADOW) uniform sampler2D t_shadow;        // light depth of all objects
 layout(set = 0, binding = CB_IRRADIANCE) uniform sampler2D t_irradiance;    // caustic irradiance, W/m^2 (linear filtering)
 layout(set = 0, binding = CB_RECEIVERS) uniform usampler2D t_recv;        // receivers from the light: normal, distance
+layout(set = 0, binding = CB_ENV) uniform sampler2D t_env;                 // the environment map
+layout(set = 0, binding = CB_ENV_IRRADIANCE) uniform sampler2D t_env_irr;  // its irradiance map
+layout(set = 0, binding = CB_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_textures;  // receivers' albedo textures
+// Exact transport: the glass's radiance per eye sample, summed over the lights by the GLASS_PASS dispatches (one
+// per light, each with that light's uniforms and maps); the composite reads it.
+layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
+
+layout(push_constant) uniform Push {
+    uint add;  // GLASS_PASS: 0 for the first light (write), 1 for a further one (add)
+} pc;
 
 #include "common/receiver.glsl"
 
@@ -48,20 +58,29 @@ const float EYE_THRESHOLD = 0.05;
 const int EYE_STACK = 8;
 
 // Radiance along the eye ray ro + t rd (which reaches glass first), through every interface, with the IORs of
-// channel c (0: the d line, for glass that does not disperse). Absorption inside the glass is per channel
-// (Beer–Lambert with the red, green and blue coefficients), so the colors of absorbing glass show in every trace.
+// channel c (0: the d line, for glass that does not disperse), under this dispatch's light (and the environment
+// with the first light's uniforms). Absorption inside the glass is per channel (Beer–Lambert with the red, green
+// and blue coefficients), so the colors of absorbing glass show in every trace. A receiver reached through the
+// glass takes its caustic irradiance averaged over the pixel's footprint there: the pixel's width at the distance
+// the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
 vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     uint cap = uint(u_frame.eye.y);
+    View cam = u_frame.camera;
+    // A pixel's width at unit distance (perspective) or its width (orthographic).
+    float pixel = cam.window.z * cam.extent.z;
+    bool ortho = view_is_ortho(cam);
     vec3 so[EYE_STACK], sd[EYE_STACK], sw[EYE_STACK];
     uint sn[EYE_STACK];
+    float sl[EYE_STACK];
     int sp = 0;
-    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u;
+    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u; sl[0] = 0.0;
     sp = 1;
     vec3 L = vec3(0.0);
     while (sp > 0) {
         sp--;
         vec3 o = so[sp], d = sd[sp], w = sw[sp];
         uint depth = sn[sp];
+        float run = sl[sp];
         SceneHit hit;
         if (!bvh_closest(o, d, 1.0 / 0.0, hit)) {
             L += w * environment(d);
@@ -73,9 +92,25 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         BvhInstance I = bvh_instances[hit.inst];
         if (!inst_is_dielectric(hit.inst)) {
             vec3 albedo = I.pad.yzw;
+            if (I.material.w > 0.5) {
+                // A textured receiver: its uv (packed in the triangle's and the normals' w) through the instance's
+                // uv transform; the finest mip (no screen-space derivative reaches through the glass).
+                uint t = hit.tri;
+                vec3 b = hit.bary;
+                vec2 uv = vec2(dot(vec3(bvh_tris[3u * t].w, bvh_tris[3u * t + 1u].w, bvh_tris[3u * t + 2u].w), b),
+                               dot(vec3(bvh_normal_rows[3u * t].w, bvh_normal_rows[3u * t + 1u].w,
+                                        bvh_normal_rows[3u * t + 2u].w), b));
+                uv = vec2(dot(I.ior_rgb.xyz, vec3(uv, 1.0)), dot(I.sigma_rgb.xyz, vec3(uv, 1.0)));
+                albedo *= textureLod(t_albedo_textures, vec3(uv, I.material.w - 1.0), 0.0).rgb;
+            }
             vec3 n_eye = dot(ns, d) > 0.0 ? -ns : ns;
-            vec3 e = direct_irradiance(p, ns) + caustic_irradiance(p, vec2(0.0), vec2(0.0))
-                + environment_irradiance(n_eye);
+            float width = pixel * (ortho ? 1.0 : run + hit.t);
+            vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+            vec3 t2 = cross(ns, t1);
+            View lv = u_frame.receiver_view;
+            vec2 uv = view_uv(lv, p);
+            vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
+            vec3 e = direct_irradiance(p, ns) + caustic_irradiance(p, dx, dy) + environment_irradiance(n_eye);
             L += w * albedo / RECV_PI * e;
             continue;
         }
@@ -91,6 +126,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         if (s.F < 1.0) {
             if (max(wt.r, max(wt.g, wt.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
                 so[sp] = s.p_refr; sd[sp] = normalize(s.refr); sw[sp] = wt; sn[sp] = depth + 1u;
+                sl[sp] = run + hit.t;
                 sp++;
             } else {
                 L += wt * environment(normalize(s.refr));
@@ -98,6 +134,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         }
         if (max(wr.r, max(wr.g, wr.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
             so[sp] = s.p_refl; sd[sp] = normalize(s.refl); sw[sp] = wr; sn[sp] = depth + 1u;
+            sl[sp] = run + hit.t;
             sp++;
         } else {
             L += wr * environment(normalize(s.refl));
@@ -157,11 +194,8 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
     vec4 front = geo_fetch(t_front, q);
     if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
 #ifdef EXACT_EYE
-        // Dispersive glass (FrameData.eye.z): each channel follows its own IOR's path.
-        if (u_frame.eye.z > 0.5) {
-            return vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
-        }
-        return trace_glass(ro, rd, 0u);
+        // Traced by the glass passes, every light's added.
+        return imageLoad(o_glass, q).rgb;
 #else
         return shade_glass(cam, ro, rd, front, FRONT_IOR(texelFetch(t_front_aux, q, 0).x));
 #endif
@@ -170,6 +204,30 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
     return environment(rd);
 }
 
+#ifdef GLASS_PASS
+// One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under this light.
+void main() {
+    View cam = u_frame.camera;
+    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+    if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
+    vec4 rad = texelFetch(t_radiance, q, 0);
+    vec4 front = geo_fetch(t_front, q);
+    vec4 L = vec4(0.0);
+    if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
+        vec3 ro, rd;
+        view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+        // Dispersive glass (FrameData.eye.z): each channel follows its own IOR's path.
+        if (u_frame.eye.z > 0.5) {
+            L.rgb = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
+        } else {
+            L.rgb = trace_glass(ro, rd, 0u);
+        }
+        L.a = 1.0;
+    }
+    if (pc.add != 0u) L.rgb += imageLoad(o_glass, q).rgb;
+    imageStore(o_glass, q, L);
+}
+#else
 void main() {
     View cam = u_frame.camera;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -196,3 +254,4 @@ void main() {
     imageStore(o_hdr, p, vec4(sum * k, 1.0));
 #endif
 }
+#endif

@@ -12,7 +12,11 @@ layout(location = 1) in vec3 v_normal;
 layout(location = 2) flat in float v_param;
 #endif
 #ifdef WITH_ALBEDO
-layout(location = 2) flat in vec3 v_albedo;
+layout(location = 2) flat in vec4 v_albedo;
+layout(location = 3) in vec2 v_uv;
+// The receivers' albedo textures, one per layer (linear reflectance, decoded from sRGB on the host), trilinear
+// and repeating: albedo(uv) = factor x texture(uv), the texture's mip chosen by the uv's screen-space derivatives.
+layout(set = 0, binding = 0) uniform sampler2DArray t_albedo_textures;
 #endif
 
 layout(location = 0) out uvec2 o_geo;  // normal (interpolated, as the reference sees it), distance: common/gbuffer.glsl
@@ -32,6 +36,8 @@ void main() {
     o_aux = v_param;
 #endif
 #ifdef WITH_ALBEDO
-    o_albedo = vec4(v_albedo, 1.0);
+    vec3 albedo = v_albedo.rgb;
+    if (v_albedo.w >= 0.0) albedo *= texture(t_albedo_textures, vec3(v_uv, v_albedo.w)).rgb;
+    o_albedo = vec4(albedo, 1.0);
 #endif
 }

@@ -1,9 +1,10 @@
 #version 460
 // Rasterize scene triangles into a view's g-buffer (light-view refractor front/back, receivers from the light,
 // shadow depth, eye-view refractor front/back). The distance written is along the view ray (see view.glsl).
-layout(location = 0) in vec4 a_position;  // xyz
-layout(location = 1) in vec4 a_normal;    // xyz
-layout(location = 2) in vec4 a_material;  // x: index of refraction (dielectric) or albedo r; w: kind
+layout(location = 0) in vec4 a_position;  // xyz; w: texture u
+layout(location = 1) in vec4 a_normal;    // xyz; w: texture v
+layout(location = 2) in vec4 a_material;  // x: index of refraction (dielectric) or albedo r; w: kind (a receiver:
+                                          // -(albedo texture layer + 1), 0 for none)
 
 layout(push_constant) uniform Push {
     mat4 view_proj;
@@ -21,7 +22,8 @@ layout(location = 1) out vec3 v_normal;
 layout(location = 2) flat out float v_param;
 #endif
 #ifdef WITH_ALBEDO
-layout(location = 2) flat out vec3 v_albedo;
+layout(location = 2) flat out vec4 v_albedo;  // rgb: albedo factor; w: texture layer (-1: none)
+layout(location = 3) out vec2 v_uv;
 #endif
 
 void main() {
@@ -33,7 +35,8 @@ void main() {
     v_param = a_material.x;
 #endif
 #ifdef WITH_ALBEDO
-    v_albedo = a_material.rgb;
+    v_albedo = vec4(a_material.rgb, -a_material.w - 1.0);
+    v_uv = vec2(a_position.w, a_normal.w);
 #endif
     gl_Position = pc.view_proj * vec4(a_position.xyz, 1.0);
 }

@@ -19,7 +19,7 @@
 
 use crate::scene::{Material, Mesh};
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3, Vec3A};
+use glam::{Mat4, Vec3, Vec3A, Vec4};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use std::mem::size_of;
@@ -69,18 +69,21 @@ pub struct GpuInstance {
     /// `hi.w`: root node index bits in the single layout.
     pub hi: [f32; 4],
     /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
-    /// coefficient inside a dielectric (1/m); w: unused.
+    /// coefficient inside a dielectric (1/m); w: a receiver's albedo texture layer + 1 (0: none).
     pub material: [f32; 4],
     /// x: root node index bits in the threaded layout; y, z, w: a diffuse receiver's rgb albedo (the eye-view
     /// ray tracer shades with it).
     pub pad: [f32; 4],
-    /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); w unused.
+    /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); a textured receiver: its uv
+    /// transform's first row. w unused.
     pub ior_rgb: [f32; 4],
-    /// Dielectric: absorption coefficient per channel (1/m); w unused.
+    /// Dielectric: absorption coefficient per channel (1/m); a textured receiver: its uv transform's second row.
+    /// w unused.
     pub sigma_rgb: [f32; 4],
 }
 
-/// Three vertices (`w` unused) of one triangle, in its instance's BVH space.
+/// Three vertices of one triangle, in its instance's BVH space. In the triangles `w` holds each corner's texture
+/// u, in their vertex normals its v (0 for a mesh without texture coordinates).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuTriangle {
@@ -208,7 +211,8 @@ fn row(m: &Mat4, r: usize) -> [f32; 4] {
 
 /// A mesh's triangles with a nonzero, finite area and their vertex normals (degenerate ones are dropped, as in the
 /// CPU reference).
-fn valid_triangles(m: &Mesh) -> (Vec<[Vec3; 3]>, Vec<[Vec3; 3]>) {
+/// With the texture coordinates packed in `w`: corner positions carry u, their normals v (see [`GpuTriangle`]).
+fn valid_triangles(m: &Mesh) -> (Vec<[Vec4; 3]>, Vec<[Vec4; 3]>) {
     let mut tris = Vec::new();
     let mut nrms = Vec::new();
     for t in m.indices.chunks_exact(3) {
@@ -217,8 +221,9 @@ fn valid_triangles(m: &Mesh) -> (Vec<[Vec3; 3]>, Vec<[Vec3; 3]>) {
         if !(ng.length() > 0.0 && ng.is_finite()) {
             continue;
         }
-        let n = [0, 1, 2].map(|k| m.normals.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO));
-        tris.push(p);
+        let uv = [0, 1, 2].map(|k| m.uvs.get(t[k] as usize).copied().unwrap_or(glam::Vec2::ZERO));
+        let n = [0, 1, 2].map(|k| m.normals.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO).extend(uv[k].y));
+        tris.push([0, 1, 2].map(|k| p[k].extend(uv[k].x)));
         nrms.push(n);
     }
     (tris, nrms)
@@ -239,11 +244,22 @@ fn material_words(m: &Material) -> ([f32; 4], [f32; 3], [f32; 4], [f32; 4]) {
             [ior, 1.0, (absorption.x + absorption.y + absorption.z) / 3.0, 0.0]
         }
         Material::Mirror => [0.0, 2.0, 0.0, 0.0],
-        Material::Diffuse { albedo } => [albedo.max_element(), 0.0, 0.0, 0.0],
+        // w: the albedo texture's layer + 1 (0: none).
+        Material::Diffuse { albedo, map } => {
+            [albedo.max_element(), 0.0, 0.0, map.map_or(0.0, |m| m.texture as f32 + 1.0)]
+        }
     };
     let albedo = match *m {
-        Material::Diffuse { albedo } => albedo.to_array(),
+        Material::Diffuse { albedo, .. } => albedo.to_array(),
         _ => [0.0; 3],
+    };
+    // A textured receiver's uv transform rows, in the words a dielectric's IORs and absorption take.
+    let (ior_rgb, sigma_rgb) = match *m {
+        Material::Diffuse { map: Some(map), .. } => {
+            let [a, b] = map.uv_transform;
+            ([a[0], a[1], a[2], 0.0], [b[0], b[1], b[2], 0.0])
+        }
+        _ => (ior_rgb, sigma_rgb),
     };
     (material, albedo, ior_rgb, sigma_rgb)
 }
@@ -269,7 +285,9 @@ impl SceneBvh {
                 let (pair_root, single_root) = bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh));
                 bvh.blas_builds += 1;
                 let (lo, hi) = deform.unwrap_or_else(|| {
-                    tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)))
+                    tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| {
+                        (a.min(p.truncate()), b.max(p.truncate()))
+                    })
                 });
                 Some(Blas { roots: [pair_root, single_root, threaded_root], lo, hi })
             });
@@ -332,10 +350,14 @@ impl SceneBvh {
     /// Build one bottom-level BVH, append its nodes (both layouts) and its triangles; return the roots.
     /// Add one bottom-level BVH (all three layouts) over `tris`; with `refit` (the mesh's index), also its refit
     /// nodes and rest triangles. Returns the pair and single roots.
-    fn add_blas(&mut self, tris: &[[Vec3; 3]], nrms: &[[Vec3; 3]], refit: Option<usize>) -> (u32, u32) {
+    fn add_blas(&mut self, tris: &[[Vec4; 3]], nrms: &[[Vec4; 3]], refit: Option<usize>) -> (u32, u32) {
         let boxes: Vec<Triangle> = tris
             .iter()
-            .map(|t| Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) })
+            .map(|t| Triangle {
+                v0: Vec3A::from(t[0].truncate()),
+                v1: Vec3A::from(t[1].truncate()),
+                v2: Vec3A::from(t[2].truncate()),
+            })
             .collect();
         let params = BvhBuildParams { max_prims_per_leaf: MAX_LEAF_TRIS, ..BvhBuildParams::medium_build() };
         let b2 = obvhs::bvh2::builder::build_bvh2_from_tris(&boxes, params, &mut std::time::Duration::default());
@@ -343,8 +365,8 @@ impl SceneBvh {
         let tri_base = self.triangles.len() as u32;
         for &i in &b2.primitive_indices {
             let (t, n) = (&tris[i as usize], &nrms[i as usize]);
-            self.triangles.push(GpuTriangle { p: t.map(|p| p.extend(0.0).to_array()) });
-            self.normals.push(GpuTriangle { p: n.map(|p| p.extend(0.0).to_array()) });
+            self.triangles.push(GpuTriangle { p: t.map(|p| p.to_array()) });
+            self.normals.push(GpuTriangle { p: n.map(|p| p.to_array()) });
         }
         let nodes = &b2.nodes;
         let aabb = |k: usize| {

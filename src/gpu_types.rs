@@ -410,8 +410,11 @@ pub struct CoveragePush {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Vertex {
+    /// xyz; w: the texture coordinate u (after the material's uv transform).
     pub position: [f32; 4],
+    /// xyz; w: the texture coordinate v.
     pub normal: [f32; 4],
+    /// A receiver: rgb albedo (factor), w -(albedo texture layer + 1) or 0; a refractor: x IOR, w 1.
     pub material: [f32; 4],
 }
 

@@ -6,7 +6,7 @@
 use crate::bvh::{BvhLayout, BvhObject, GpuInstance, SceneBvh};
 use crate::gpu_types::Vertex;
 use crate::scene::{Material, Mesh, Scene};
-use crate::vk::{cmd::upload_buffer, Buffer, Device, Recorder, VkResult};
+use crate::vk::{cmd::upload_buffer, cmd::upload_image, Buffer, Device, Image, Recorder, Sampler, VkResult};
 use ash::vk;
 use glam::Mat4;
 use std::sync::Arc;
@@ -55,6 +55,106 @@ pub struct SceneBuffers {
     pub waves: Buffer,
     /// Per scene object: its waves in `waves` (first, count) when it is water.
     pub waters: Vec<Option<(u32, u32)>>,
+    /// The albedo textures and the environment.
+    pub images: SceneImages,
+}
+
+/// The scene's sampled images, uploaded once and never written again (so no frame declares them to the
+/// tracker): the receivers' albedo textures as the layers of one array, and the environment map with its
+/// irradiance map.
+pub struct SceneImages {
+    /// Layer i: the scene's texture i, resized to a common square size with its full mip chain (16-bit linear
+    /// reflectance; a white texel when the scene has none).
+    pub albedo: Image,
+    /// The environment's radiance (map units, RGBA32F; one black texel for the procedural sky).
+    pub environment: Image,
+    /// Its irradiance per normal direction, same layout (docs/design.md "Environment").
+    pub environment_irradiance: Image,
+    /// Trilinear, repeating (the albedo textures).
+    pub repeat: Sampler,
+    /// Bilinear, wrapping in longitude, clamped in latitude (the environment maps).
+    pub equirect: Sampler,
+}
+
+impl SceneImages {
+    fn new(device: &Arc<Device>, recorder: &mut Recorder, scene: &Scene) -> VkResult<Self> {
+        use crate::scene::texture::MAX_TEXTURE_SIZE;
+        let side = scene.textures.iter().map(|t| t.width.max(t.height)).max().unwrap_or(1).min(MAX_TEXTURE_SIZE);
+        let mut levels: Vec<Vec<[u16; 4]>> = Vec::new();
+        for t in &scene.textures {
+            for (l, mip) in t.mip_chain(side).into_iter().enumerate() {
+                if levels.len() <= l {
+                    levels.push(Vec::new());
+                }
+                levels[l].extend(mip);
+            }
+        }
+        if levels.is_empty() {
+            levels.push(vec![[u16::MAX; 4]]);
+        }
+        let extent = vk::Extent2D { width: side, height: side };
+        let layers = scene.textures.len().max(1) as u32;
+        let albedo = upload_image(
+            device,
+            recorder,
+            "albedo textures",
+            vk::Format::R16G16B16A16_UNORM,
+            extent,
+            Some(layers),
+            &levels,
+        )?;
+        let rgba = |t: &[[f32; 3]]| t.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect::<Vec<[f32; 4]>>();
+        let f32x4 = vk::Format::R32G32B32A32_SFLOAT;
+        let (environment, environment_irradiance) = match &scene.environment {
+            Some(e) => {
+                let m = &e.map;
+                let irr = m.irradiance_map();
+                let w = crate::scene::environment::IRRADIANCE_WIDTH;
+                (
+                    upload_image(
+                        device,
+                        recorder,
+                        "environment",
+                        f32x4,
+                        vk::Extent2D { width: m.width, height: m.height },
+                        None,
+                        &[rgba(&m.texels)],
+                    )?,
+                    upload_image(
+                        device,
+                        recorder,
+                        "environment irradiance",
+                        f32x4,
+                        vk::Extent2D { width: w, height: w / 2 },
+                        None,
+                        &[rgba(irr)],
+                    )?,
+                )
+            }
+            None => {
+                let one = vk::Extent2D { width: 1, height: 1 };
+                (
+                    upload_image(device, recorder, "environment (none)", f32x4, one, None, &[vec![[0.0f32; 4]]])?,
+                    upload_image(
+                        device,
+                        recorder,
+                        "environment irradiance (none)",
+                        f32x4,
+                        one,
+                        None,
+                        &[vec![[0.0f32; 4]]],
+                    )?,
+                )
+            }
+        };
+        Ok(SceneImages {
+            albedo,
+            environment,
+            environment_irradiance,
+            repeat: Sampler::repeating(device, true)?,
+            equirect: Sampler::repeating(device, false)?,
+        })
+    }
 }
 
 /// The scene BVH in storage buffers: the node layouts frames have traced with, triangles, their vertex normals,
@@ -313,25 +413,44 @@ impl SceneBuffers {
             let start = indices.len() as u32;
             for (i, o) in scene.objects.iter().enumerate().filter(|(_, o)| o.is_refractor() == refractors) {
                 let base = vertices.len() as u32;
-                let material = match o.material {
-                    Material::Diffuse { albedo } => [albedo.x, albedo.y, albedo.z, 0.0],
-                    _ => [refractor_ior(&o.material), 0.0, 0.0, 1.0],
+                // A receiver's w: -(its albedo texture's layer + 1), 0 for none; a refractor's 1.
+                let (material, map) = match o.material {
+                    Material::Diffuse { albedo, map } => {
+                        ([albedo.x, albedo.y, albedo.z, map.map_or(0.0, |m| -(m.texture as f32) - 1.0)], map)
+                    }
+                    _ => ([refractor_ior(&o.material), 0.0, 0.0, 1.0], None),
                 };
-                let vertex = |p: &glam::Vec3, n: &glam::Vec3| Vertex {
-                    position: [p.x, p.y, p.z, 1.0],
-                    normal: [n.x, n.y, n.z, 0.0],
-                    material,
+                // The texture coordinates, through the material's uv transform, in the position's and the
+                // normal's w.
+                let vertex = |p: &glam::Vec3, n: &glam::Vec3, uv: glam::Vec2| {
+                    let uv = map.map_or(uv, |m| m.apply(uv));
+                    Vertex { position: [p.x, p.y, p.z, uv.x], normal: [n.x, n.y, n.z, uv.y], material }
                 };
+                let uv = |m: &Mesh, k: usize| m.uvs.get(k).copied().unwrap_or(glam::Vec2::ZERO);
                 objects[i] = ObjectRange {
                     first_vertex: base,
                     vertex_count: o.mesh.positions.len() as u32,
                     first_index: indices.len() as u32,
                     index_count: o.mesh.indices.len() as u32,
                 };
-                vertices.extend(o.mesh.positions.iter().zip(&o.mesh.normals).map(|(p, n)| vertex(p, n)));
+                vertices.extend(
+                    o.mesh
+                        .positions
+                        .iter()
+                        .zip(&o.mesh.normals)
+                        .enumerate()
+                        .map(|(k, (p, n))| vertex(p, n, uv(&o.mesh, k))),
+                );
                 indices.extend(o.mesh.indices.iter().map(|i| i + base));
                 let local = &instances.meshes[instances.objects[i].0];
-                object_vertices.extend(local.positions.iter().zip(&local.normals).map(|(p, n)| vertex(p, n)));
+                object_vertices.extend(
+                    local
+                        .positions
+                        .iter()
+                        .zip(&local.normals)
+                        .enumerate()
+                        .map(|(k, (p, n))| vertex(p, n, uv(local, k))),
+                );
                 object_indices.extend(local.indices.iter().map(|i| i + base));
             }
             DrawRange { first_index: start, index_count: indices.len() as u32 - start }
@@ -368,7 +487,9 @@ impl SceneBuffers {
             })
             .collect();
         let waves = upload_buffer(device, recorder, "water waves", &nonempty(&waves), storage)?;
+        let images = SceneImages::new(device, recorder, scene)?;
         Ok(SceneBuffers {
+            images,
             waves,
             waters,
             vertices,

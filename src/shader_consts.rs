@@ -153,8 +153,16 @@ pub const CB_BVH_TRIS: u32 = 12;
 pub const CB_BVH_NORMALS: u32 = 13;
 /// Binding: the BVH instances.
 pub const CB_BVH_INSTANCES: u32 = 14;
+/// Binding: the receivers' albedo textures (an array).
+pub const CB_ALBEDO_TEXTURES: u32 = 15;
+/// Binding: the environment map.
+pub const CB_ENV: u32 = 16;
+/// Binding: the environment's irradiance map.
+pub const CB_ENV_IRRADIANCE: u32 = 17;
+/// Binding: the glass's radiance per eye sample, summed over the lights (exact transport).
+pub const CB_GLASS: u32 = 18;
 /// Bindings of the layout.
-pub const CB_COUNT: u32 = 15;
+pub const CB_COUNT: u32 = 19;
 
 // Binding indices of the eye view's shading (glsl/eye_shade.comp, src/passes/eye.rs).
 /// Binding: the frame uniforms.
@@ -169,11 +177,15 @@ pub const EB_RECEIVERS: u32 = 3;
 pub const EB_EYE: u32 = 4;
 /// Binding: their albedo.
 pub const EB_ALBEDO: u32 = 5;
+/// Binding: the environment map.
+pub const EB_ENV: u32 = 6;
+/// Binding: the environment's irradiance map.
+pub const EB_ENV_IRRADIANCE: u32 = 7;
 /// Binding: the radiance (written).
-pub const EB_RADIANCE: u32 = 6;
+pub const EB_RADIANCE: u32 = 8;
 /// Binding: the caustics AOV (written).
-pub const EB_CAUSTICS: u32 = 7;
+pub const EB_CAUSTICS: u32 = 9;
 /// Binding: the direct AOV (written).
-pub const EB_DIRECT: u32 = 8;
+pub const EB_DIRECT: u32 = 10;
 /// Bindings of the layout.
-pub const EB_COUNT: u32 = 9;
+pub const EB_COUNT: u32 = 11;

@@ -55,6 +55,9 @@ pub struct EyeTargets {
     pub beauty: Image,
     /// The beauty image's linear radiance (before exposure and tone mapping).
     pub hdr: Image,
+    /// Exact transport: the glass's radiance per eye sample, each light's added in turn (a: 1 where glass is in
+    /// front).
+    pub glass: Image,
 }
 
 impl EyeTargets {
@@ -79,6 +82,7 @@ impl EyeTargets {
             refr_depth: img("eye refractor depth", DEPTH_FORMAT, U::DEPTH_STENCIL_ATTACHMENT)?,
             beauty: out("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
             hdr: out("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
+            glass: img("eye glass radiance", HDR_FORMAT, U::STORAGE)?,
         })
     }
 }

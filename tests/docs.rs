@@ -51,6 +51,7 @@ fn parser_keys(section: &str) -> BTreeSet<String> {
             "{BASE}\n[[object]]\nname = \"w\"\nshape = \"water\"\nsize = 1.0\nmaterial = {{ kind = \"diffuse\" }}\n\
              waves = [{{ amplitude = 0.01, wavelength = 0.5, {probe} }}]\n"
         ),
+        "[environment]" => format!("{BASE}\n[environment]\npath = \"x.hdr\"\n{probe}\n"),
         s => panic!("unknown section {s}"),
     };
     let e = Scene::parse(&text, Path::new("probe.toml")).unwrap_err().to_string();
@@ -81,7 +82,16 @@ fn scenes_md_matches_the_parser() {
     let sections: Vec<&str> = docs.iter().map(|(s, _)| s.as_str()).collect();
     assert_eq!(
         sections,
-        ["Top level", "[[light]]", "[[camera]]", "[[object]]", "[[object.keyframe]]", "waves", "material"]
+        [
+            "Top level",
+            "[[light]]",
+            "[[camera]]",
+            "[[object]]",
+            "[[object.keyframe]]",
+            "waves",
+            "material",
+            "[environment]"
+        ]
     );
     for (section, keys) in &docs {
         let parser = parser_keys(section);

@@ -77,6 +77,8 @@ fn exact_matches_all_paths_reference() {
         // footprints follow the cell size, so the ring caustic is sampled coarsely (9.3% at 64², 86% at 256²).
         // The flux is right (0.016337 W against the reference's 0.016358 W).
         Case { scene: "mirror_sphere.toml", rel_l1: 0.0933, ratio: 0.9988 },
+        // A curved receiver: the ball's caustic in a diffuse bowl (a lathe), whose sides tilt by up to 50°.
+        Case { scene: "bowl.toml", rel_l1: 0.0078, ratio: 0.9989 },
     ];
     let dir = out_dir("exact_reference");
     for c in &cases {

@@ -48,3 +48,19 @@ fn embed_example_matches_render() {
     let text = run("embed", &[&common::scene("sphere.toml")]);
     assert!(text.contains(" 0 of 76800 bytes differ from Renderer::render"), "{text}");
 }
+
+/// The shipped environment map is the `sky` example's output, byte for byte (so it can be made again, and its
+/// license is the project's own); a smaller one loads as a valid 2:1 map.
+#[test]
+fn sky_example_writes_the_shipped_map() {
+    let dir = common::out_dir("example_sky");
+    let out = dir.join("sky.hdr");
+    run("sky", &[out.to_str().unwrap()]);
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/environments/sky.hdr");
+    assert!(std::fs::read(&out).unwrap() == std::fs::read(&shipped).unwrap(), "assets/environments/sky.hdr is stale");
+    let small = dir.join("small.hdr");
+    run("sky", &[small.to_str().unwrap(), "64"]);
+    let map = caustics::scene::EnvironmentMap::load(&small).expect("load");
+    assert_eq!((map.width, map.height), (64, 32));
+    assert!(map.irradiance(glam::Vec3::Y).min_element() > 0.0);
+}

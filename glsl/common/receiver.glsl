@@ -2,7 +2,8 @@
 // tracer (glsl/composite.comp): direct irradiance from the light through a filtered shadow map, caustic
 // irradiance from the light-space caustic map, and the environment (docs/design.md "Eye view").
 // Needs u_frame and the samplers t_shadow (light depth of all objects), t_irradiance (caustic irradiance, linear
-// filtering) and t_recv (receivers from the light: normal, distance).
+// filtering), t_recv (receivers from the light: normal, distance), t_env (the environment map) and t_env_irr (its
+// irradiance map).
 #ifndef RECEIVER_GLSL
 #define RECEIVER_GLSL
 #include "common/types.glsl"
@@ -87,20 +88,37 @@ vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
     return e / float(nx * ny);
 }
 
-// The environment (docs/design.md "Environment"): a sky of radiance L_sky * SKY_TINT over the upper hemisphere
-// and a ground of L_sky * GROUND_TINT below, with L_sky = eye.x in W/(m^2 sr) (0: off). Seen directly, in
-// reflections and through glass, with a soft horizon (±3°) for looks.
+// The environment (docs/design.md "Environment"), seen directly, in reflections and through glass. With a map
+// (eye.w = 1): its equirectangular radiance times eye.x (W/(m^2 sr) per map unit). Without: a sky of radiance
+// L_sky * SKY_TINT over the upper hemisphere and a ground of L_sky * GROUND_TINT below, with L_sky = eye.x in
+// W/(m^2 sr) (0: off), with a soft horizon (±3°) for looks.
 const vec3 SKY_TINT = vec3(0.85, 0.95, 1.20);
 const vec3 GROUND_TINT = vec3(0.30, 0.28, 0.25);
 
+// The map's texture coordinates of unit direction d (src/scene/environment.rs): u = 0.5 + atan(x, -z) / 2pi,
+// v = acos(y) / pi.
+vec2 equirect_uv(vec3 d) {
+    return vec2(0.5 + atan(d.x, -d.z) * (0.5 / RECV_PI), acos(clamp(d.y, -1.0, 1.0)) / RECV_PI);
+}
+
 vec3 environment(vec3 d) {
+    if (u_frame.eye.w > 0.5) return u_frame.eye.x * textureLod(t_env, equirect_uv(d), 0.0).rgb;
     float up = clamp(d.y, -1.0, 1.0);
     return u_frame.eye.x * mix(GROUND_TINT, SKY_TINT, smoothstep(-0.05, 0.05, up));
 }
 
-// Irradiance (W/m^2) of the environment on an unoccluded plane with unit normal n, exact for the two hemispheres
-// (the horizon band aside): a uniform upper hemisphere seen from a plane tilted by a gives pi L (1 + cos a) / 2.
+// Irradiance (W/m^2) of the environment on an unoccluded plane with unit normal n. With a map: its irradiance
+// map (the cosine-weighted integral over the map for each texel's normal, interpolated bilinearly). Without: exact
+// for the two hemispheres (the horizon band aside): a uniform upper hemisphere seen from a plane tilted by a
+// gives pi L (1 + cos a) / 2.
 vec3 environment_irradiance(vec3 n) {
+    if (u_frame.eye.w > 0.5) {
+        // The irradiance map's rows run from pole to pole (src/scene/environment.rs): row j at v = j / (h - 1).
+        vec2 uv = equirect_uv(n);
+        float h = float(textureSize(t_env_irr, 0).y);
+        uv.y = (uv.y * (h - 1.0) + 0.5) / h;
+        return u_frame.eye.x * textureLod(t_env_irr, uv, 0.0).rgb;
+    }
     float c = clamp(n.y, -1.0, 1.0);
     return RECV_PI * u_frame.eye.x * (SKY_TINT * (1.0 + c) + GROUND_TINT * (1.0 - c)) * 0.5;
 }

@@ -357,6 +357,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
             camera: Some(args.camera.clone()),
             size: args.size.clone(),
             time: 0.0,
+            environment: None,
         };
         let base = Settings {
             quality: Quality {

@@ -39,6 +39,20 @@ pub struct SceneArgs {
     /// Scene time in seconds: animated objects stand where their keyframes place them then.
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// An equirectangular environment map (.hdr or .exr, 2:1) in place of the scene's: what the glass reflects
+    /// and refracts, and light on the receivers (its texel values in W/(m²·sr), scaled by --sky).
+    #[arg(long)]
+    pub environment: Option<PathBuf>,
+}
+
+/// `--environment PATH` on a loaded scene: the map replaces the scene's own (intensity 1; `--sky` scales it).
+pub fn apply_environment(scene: &mut Scene, path: Option<&std::path::Path>) -> AppResult<()> {
+    if let Some(p) = path {
+        let map =
+            caustics::scene::EnvironmentMap::load(p).map_err(|e| AppError::BadInput(format!("--environment: {e}")))?;
+        scene.environment = Some(caustics::scene::Environment { map: std::sync::Arc::new(map), intensity: 1.0 });
+    }
+    Ok(())
 }
 
 /// The quality options of `render`, `profile` and `view`: what is rendered and how finely.
@@ -342,6 +356,7 @@ impl Session {
         let (width, height) = parse_size(&args.size, "--size")?;
         let path = args.scene.clone().unwrap_or_else(default_scene);
         let mut scene = Scene::load(&path)?;
+        apply_environment(&mut scene, args.environment.as_deref())?;
         if !args.time.is_finite() {
             return Err(AppError::BadInput(format!("--time {}: must be finite", args.time)));
         }

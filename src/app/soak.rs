@@ -176,8 +176,13 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         quality: Quality { caustic_res: args.map_res, ..Quality::default() },
         tuning: Tuning { gbuffer_res: args.map_res, ..Tuning::default() },
     };
-    let scene_args =
-        SceneArgs { scene: args.scene.clone(), camera: Some(args.camera.clone()), size: "64x64".into(), time: 0.0 };
+    let scene_args = SceneArgs {
+        scene: args.scene.clone(),
+        camera: Some(args.camera.clone()),
+        size: "64x64".into(),
+        time: 0.0,
+        environment: None,
+    };
     let mut session = Session::open(&scene_args, base.clone())?;
     if session.pixel_area().is_none() {
         return Err(AppError::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));

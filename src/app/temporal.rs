@@ -136,8 +136,13 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
         },
         tuning: Tuning { footprint: args.footprint, gbuffer_res: args.map_res, ..Tuning::default() },
     };
-    let scene_args =
-        SceneArgs { scene: args.scene.clone(), camera: Some(args.camera.clone()), size: args.size.clone(), time: 0.0 };
+    let scene_args = SceneArgs {
+        scene: args.scene.clone(),
+        camera: Some(args.camera.clone()),
+        size: args.size.clone(),
+        time: 0.0,
+        environment: None,
+    };
     let mut session = Session::open(&scene_args, base.clone())?;
     let half_height = match session.camera.projection {
         Projection::Orthographic { half_height } => half_height,

@@ -342,6 +342,11 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         }
         rec.ts.mark(rec.cmd, "eye.refractors");
         c0.eye_refractors(rec);
+        if c0.exact_eye() {
+            for light in 0..plan.lights() {
+                ctx(light * nc).eye_glass(rec)?;
+            }
+        }
         c0.composite(rec)?;
     }
     rec.ts.mark(rec.cmd, "readback");

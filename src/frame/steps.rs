@@ -175,6 +175,7 @@ impl Ctx<'_> {
             recv: &self.r.geo,
             nearest: self.nearest,
             linear: self.linear,
+            images: &self.sb.images,
         };
         self.p.eye.record_shade(rec.cmd, &inputs, &g, out, !first)
     }
@@ -211,14 +212,65 @@ impl Ctx<'_> {
 
     /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts
     /// through the eye's front and back buffers.
-    fn exact_eye(&self) -> bool {
+    pub(super) fn exact_eye(&self) -> bool {
         self.s.transport == Transport::Exact && !self.preview
     }
 
-    /// Step 8: the glass (eye rays through the BVH, or deferred refraction), supersample resolve, tone mapping.
+    fn composite_inputs(&self) -> CompositeInputs<'_> {
+        let e = &self.t.eye;
+        CompositeInputs {
+            ubo: self.ubo,
+            radiance: &e.radiance,
+            front: &e.front,
+            front_aux: &e.front_aux,
+            back: &e.back,
+            beauty: &e.beauty,
+            hdr: &e.hdr,
+            shadow: &self.r.shadow,
+            irradiance: &self.r.irradiance,
+            recv: &self.r.geo,
+            bvh: &self.sb.bvh,
+            images: &self.sb.images,
+            nearest: self.nearest,
+            linear: self.linear,
+            glass: &e.glass,
+            exact: self.exact_eye(),
+        }
+    }
+
+    /// Step 7c, exact transport: the glass under this light. Each eye sample that meets glass first is traced
+    /// through it (every interface, Fresnel-split) to the receivers, which are shaded with this light's shadow and
+    /// caustic maps (the environment with the first light's), and its radiance written (the first light) or added
+    /// (the others) into the glass image, so that the glass shows every light.
+    pub(super) fn eye_glass(&self, rec: &mut Rec) -> VkResult<()> {
+        let e = &self.t.eye;
+        let first = self.light == 0;
+        if first {
+            rec.ts.mark(rec.cmd, "eye.glass");
+            rec.sync.discard(&e.glass, &[Access::ComputeWrite]);
+        } else {
+            rec.sync.image(&e.glass, &[Access::ComputeWrite]);
+        }
+        rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
+        for img in [&e.front, &e.front_aux, &e.back] {
+            rec.sync.image(img, &[Access::ComputeSampled]);
+        }
+        rec.sync.image(&self.r.shadow, &EYE_READ);
+        rec.sync.image(&self.r.irradiance, &EYE_READ);
+        rec.sync.image(&self.r.geo, &SAMPLED);
+        // The glass pipeline's layout holds the beauty images; it writes neither.
+        rec.sync.image(&e.beauty, &[Access::ComputeWrite]);
+        rec.sync.image(&e.hdr, &[Access::ComputeWrite]);
+        rec.flush(self.d);
+        self.p.composite.record_glass(rec.cmd, &self.composite_inputs(), !first)
+    }
+
+    /// Step 8: the glass (read from the glass passes under exact transport; else deferred refraction), supersample
+    /// resolve, tone mapping.
     pub(super) fn composite(&self, rec: &mut Rec) -> VkResult<()> {
         let e = &self.t.eye;
         rec.ts.mark(rec.cmd, "composite");
+        rec.sync.image(&e.glass, &[Access::ComputeRead]);
         rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
         // The exact composite binds the refractors' IOR and back buffers but reads neither (nor draws them).
         for img in [&e.front, &e.front_aux, &e.back] {
@@ -230,25 +282,7 @@ impl Ctx<'_> {
         rec.sync.image(&self.r.irradiance, &EYE_READ);
         rec.sync.image(&self.r.geo, &SAMPLED);
         rec.flush(self.d);
-        self.p.composite.record(
-            rec.cmd,
-            &CompositeInputs {
-                ubo: self.ubo,
-                radiance: &e.radiance,
-                front: &e.front,
-                front_aux: &e.front_aux,
-                back: &e.back,
-                beauty: &e.beauty,
-                hdr: &e.hdr,
-                shadow: &self.r.shadow,
-                irradiance: &self.r.irradiance,
-                recv: &self.r.geo,
-                bvh: &self.sb.bvh,
-                nearest: self.nearest,
-                linear: self.linear,
-                exact: self.exact_eye(),
-            },
-        )?;
+        self.p.composite.record(rec.cmd, &self.composite_inputs())?;
         rec.sync.image(&e.beauty, &[Access::TransferSrc]);
         rec.sync.image(&e.hdr, &[Access::TransferSrc]);
         rec.flush(self.d);

@@ -21,7 +21,18 @@ pub struct CompositePass {
     /// averaging loop, which costs a CPU driver such as lavapipe even when it runs once.
     single: LazyPipeline,
     exact_single: LazyPipeline,
+    /// Exact transport, once per light before the composite: the glass's radiance per eye sample under that
+    /// light (the environment with the first), written or added into the glass image.
+    glass: LazyPipeline,
 }
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CompositePush {
+    /// The glass pass: 0 for the first light (write), 1 for a further one (add).
+    add: u32,
+}
+const _: () = assert!(std::mem::size_of::<CompositePush>() == 4);
 
 pub struct CompositeInputs<'a> {
     pub ubo: &'a Buffer,
@@ -35,8 +46,11 @@ pub struct CompositeInputs<'a> {
     pub irradiance: &'a Image,
     pub recv: &'a Image,
     pub bvh: &'a BvhBuffers,
+    pub images: &'a crate::scene_gpu::SceneImages,
     pub nearest: &'a Sampler,
     pub linear: &'a Sampler,
+    /// The glass's radiance per eye sample (exact transport: the glass passes write it, the composite reads it).
+    pub glass: &'a Image,
     /// Trace the glass through the BVH.
     pub exact: bool,
 }
@@ -58,18 +72,35 @@ const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
     (CB_BVH_TRIS, BindKind::Storage),
     (CB_BVH_NORMALS, BindKind::Storage),
     (CB_BVH_INSTANCES, BindKind::Storage),
+    (CB_ALBEDO_TEXTURES, BindKind::Sampled),
+    (CB_ENV, BindKind::Sampled),
+    (CB_ENV_IRRADIANCE, BindKind::Sampled),
+    (CB_GLASS, BindKind::StorageImage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
 impl CompositePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         let binds = kinds(&LAYOUT);
-        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, 0);
+        let push = std::mem::size_of::<CompositePush>() as u32;
+        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
         let pipeline = lazy("composite", shaders::COMPOSITE_COMP.words());
         let exact = lazy("composite exact", shaders::COMPOSITE_COMP_EXACT.words());
         let single = lazy("composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words());
         let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
-        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single })
+        let glass = lazy("eye glass", shaders::COMPOSITE_COMP_GLASS.words());
+        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass })
+    }
+
+    /// Exact transport: the glass's radiance under the light `i` belongs to, per eye sample, into `i.glass`
+    /// (`add`: onto what the earlier lights wrote).
+    pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
+        let pipeline = self.glass.get()?;
+        self.bind(cmd, pipeline, i);
+        pipeline.push(cmd, &CompositePush { add: add as u32 });
+        let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
+        unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
+        Ok(())
     }
 
     pub fn record(&self, cmd: vk::CommandBuffer, i: &CompositeInputs) -> VkResult<()> {
@@ -81,6 +112,14 @@ impl CompositePass {
             (false, false) => &self.pipeline,
         }
         .get()?;
+        self.bind(cmd, pipeline, i);
+        pipeline.push(cmd, &CompositePush { add: 0 });
+        let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
+        unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
+        Ok(())
+    }
+
+    fn bind(&self, cmd: vk::CommandBuffer, pipeline: &crate::vk::Pipeline, i: &CompositeInputs) {
         pipeline.bind(
             cmd,
             &ordered([
@@ -99,10 +138,11 @@ impl CompositePass {
                 (CB_BVH_TRIS, Bind::Storage(&i.bvh.triangles)),
                 (CB_BVH_NORMALS, Bind::Storage(&i.bvh.normals)),
                 (CB_BVH_INSTANCES, Bind::Storage(&i.bvh.instances)),
+                (CB_ALBEDO_TEXTURES, Bind::Sampled(&i.images.albedo, &i.images.repeat)),
+                (CB_ENV, Bind::Sampled(&i.images.environment, &i.images.equirect)),
+                (CB_ENV_IRRADIANCE, Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect)),
+                (CB_GLASS, Bind::StorageImage(i.glass)),
             ]),
         );
-        let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
-        unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
-        Ok(())
     }
 }

@@ -12,8 +12,9 @@ use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc
 use ash::vk;
 use std::sync::Arc;
 
-/// The receivers' albedo in the eye g-buffer (albedos lie in [0, 1]).
-pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// The receivers' albedo in the eye g-buffer (albedos lie in [0, 1]). 16 bits a channel: an albedo (a texture's
+/// texel, decoded from sRGB, or a material's factor) comes back within 8e-6, and dark ones keep their precision.
+pub const ALBEDO_FORMAT: vk::Format = vk::Format::R16G16B16A16_UNORM;
 
 pub struct EyePass {
     device: Arc<Device>,
@@ -30,6 +31,7 @@ pub struct EyeInputs<'a> {
     pub recv: &'a Image,
     pub nearest: &'a Sampler,
     pub linear: &'a Sampler,
+    pub images: &'a crate::scene_gpu::SceneImages,
 }
 
 /// The eye g-buffer of the receivers.
@@ -46,8 +48,8 @@ struct ShadePush {
 }
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 4);
 
-/// The eye shading's bindings (glsl/eye_shade.comp declares each with the same constant); without the AOVs, the
-/// first seven.
+/// The eye shading's bindings (glsl/eye_shade.comp declares each with the same constant); without the AOVs, all
+/// but the last two.
 const SHADE_LAYOUT: [(u32, BindKind); EB_COUNT as usize] = [
     (EB_FRAME, BindKind::Uniform),
     (EB_SHADOW, BindKind::Sampled),
@@ -55,6 +57,8 @@ const SHADE_LAYOUT: [(u32, BindKind); EB_COUNT as usize] = [
     (EB_RECEIVERS, BindKind::Sampled),
     (EB_EYE, BindKind::Sampled),
     (EB_ALBEDO, BindKind::Sampled),
+    (EB_ENV, BindKind::Sampled),
+    (EB_ENV_IRRADIANCE, BindKind::Sampled),
     (EB_RADIANCE, BindKind::StorageImage),
     (EB_CAUSTICS, BindKind::StorageImage),
     (EB_DIRECT, BindKind::StorageImage),
@@ -69,7 +73,7 @@ impl EyePass {
             &GraphicsDesc {
                 vertex: shaders::GEOMETRY_VERT_ALBEDO.words(),
                 fragment: shaders::GEOMETRY_FRAG_ALBEDO.words(),
-                binds: &[],
+                binds: &[BindKind::Sampled],
                 push_size: std::mem::size_of::<GeometryPush>() as u32,
                 vertex_attributes: &[
                     (vk::Format::R32G32B32A32_SFLOAT, 0),
@@ -105,7 +109,8 @@ impl EyePass {
     pub fn record_gbuffer(&self, cmd: vk::CommandBuffer, scene: &SceneBuffers, camera: &GpuView, g: &EyeGbuffer) {
         let d = &self.device;
         begin_rendering(d, cmd, g.depth.extent, &[g.geo, g.albedo], true, Some(g.depth));
-        self.gbuffer.bind(cmd, &[]);
+        let images = &scene.images;
+        self.gbuffer.bind(cmd, &[Bind::Sampled(&images.albedo, &images.repeat)]);
         self.gbuffer.push(cmd, &GeometryPush::from_view(camera));
         unsafe {
             d.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
@@ -135,6 +140,8 @@ impl EyePass {
             (EB_RECEIVERS, Bind::Sampled(i.recv, i.nearest)),
             (EB_EYE, Bind::Sampled(g.geo, i.nearest)),
             (EB_ALBEDO, Bind::Sampled(g.albedo, i.nearest)),
+            (EB_ENV, Bind::Sampled(&i.images.environment, &i.images.equirect)),
+            (EB_ENV_IRRADIANCE, Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect)),
         ];
         binds
             .extend(out.iter().zip([EB_RADIANCE, EB_CAUSTICS, EB_DIRECT]).map(|(img, b)| (b, Bind::StorageImage(img))));

@@ -209,7 +209,7 @@ mod tests {
         // A unit square at y = 0.3 and rays straight up whose x and z components are −0.0 or +0.0.
         let mut mesh = crate::scene::mesh::plane(1.0, 1.0);
         mesh = mesh.transformed(glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.3, 0.0)));
-        let obj = crate::scene::Object::new("p", crate::scene::Material::Diffuse { albedo: glam::Vec3::ONE }, mesh);
+        let obj = crate::scene::Object::new("p", crate::scene::Material::diffuse(glam::Vec3::ONE), mesh);
         let mut scene = Scene::new(vec![], vec![]);
         scene.objects.push(obj);
         let g = Geometry::new(&scene);

@@ -89,7 +89,6 @@ impl Instances {
         std::mem::take(&mut self.deformed).into_iter().collect()
     }
 
-    #[cfg(test)]
     /// Mesh `m`.
     pub fn mesh_at(&self, m: usize) -> &Arc<Mesh> {
         &self.meshes[m]
@@ -142,7 +141,47 @@ fn check_transform(m: &Mat4) -> AppResult<()> {
     Ok(())
 }
 
+/// A textured material's texture must be one the scene holds, and its mesh must carry texture coordinates.
+fn check_map(scene: &crate::scene::Scene, material: &Material, mesh: &Mesh) -> AppResult<()> {
+    if let Material::Diffuse { map: Some(m), .. } = material {
+        if m.texture >= scene.textures.len() {
+            return Err(AppError::BadInput(format!(
+                "albedo texture {} does not exist (the scene has {}; Renderer::add_texture adds one)",
+                m.texture,
+                scene.textures.len()
+            )));
+        }
+        if mesh.uvs.len() != mesh.positions.len() {
+            return Err(AppError::BadInput("a textured material needs a mesh with texture coordinates".into()));
+        }
+        if !m.uv_transform.iter().flatten().all(|x| x.is_finite()) {
+            return Err(AppError::BadInput("the uv transform must be finite".into()));
+        }
+    }
+    Ok(())
+}
+
 impl Renderer {
+    /// Add an albedo texture; a diffuse material names it by the index returned ([`crate::scene::AlbedoMap`]).
+    /// The textures are uploaded again before the next frame.
+    pub fn add_texture(&mut self, texture: crate::scene::Texture) -> AppResult<usize> {
+        if texture.width == 0
+            || texture.height == 0
+            || texture.texels.len() != (texture.width * texture.height) as usize
+        {
+            return Err(AppError::BadInput(format!(
+                "texture `{}`: {}x{} with {} texels",
+                texture.name,
+                texture.width,
+                texture.height,
+                texture.texels.len()
+            )));
+        }
+        self.scene.textures.push(Arc::new(texture));
+        self.geometry_dirty = true;
+        Ok(self.scene.textures.len() - 1)
+    }
+
     /// Add a mesh (object space) the scene can then instance any number of times.
     pub fn add_mesh(&mut self, mesh: Mesh) -> AppResult<MeshId> {
         check_mesh(&mesh)?;
@@ -162,6 +201,7 @@ impl Renderer {
     ) -> AppResult<InstanceId> {
         let m = self.mesh(mesh)?.clone();
         check_transform(&transform)?;
+        check_map(&self.scene, &material, &m)?;
         self.scene.objects.push(Object::new(name, material, (*m).clone().transformed(transform)));
         if let Err(e) = check_transport(&self.scene, &self.config) {
             self.scene.objects.pop();
@@ -198,6 +238,7 @@ impl Renderer {
     /// render it (a mirror or absorbing or dispersive glass under the two-interface model).
     pub fn set_material(&mut self, id: InstanceId, material: Material) -> AppResult<()> {
         self.instance(id)?;
+        check_map(&self.scene, &material, self.instances.mesh_at(self.instances.mesh_of(id.index())))?;
         let old = std::mem::replace(&mut self.scene.objects[id.index()].material, material);
         if let Err(e) = check_transport(&self.scene, &self.config) {
             self.scene.objects[id.index()].material = old;

@@ -38,7 +38,7 @@ pub(crate) fn frame_data(
     let albedo = scene
         .receivers()
         .map(|o| match o.material {
-            Material::Diffuse { albedo } => albedo.max_element(),
+            Material::Diffuse { albedo, .. } => albedo.max_element(),
             _ => 0.0,
         })
         .fold(0.0f32, f32::max)
@@ -49,7 +49,11 @@ pub(crate) fn frame_data(
         pyramid[m / 4][m % 4] = *off;
     }
     let photon_view = views.photon.unwrap_or(views.receiver);
-    let sky = s.sky.unwrap_or(crate::settings::SKY_AUTO * l_ref);
+    // With a map, the radiance per map unit: `--sky` when given, else the scene's intensity.
+    let sky = match &scene.environment {
+        Some(e) => s.sky.unwrap_or(e.intensity),
+        None => s.sky.unwrap_or(crate::settings::SKY_AUTO * l_ref),
+    };
     // The eye buffers hold `aa`×`aa` samples per output pixel: the same image plane, a finer grid.
     let mut camera = GpuView::from_camera(&views.camera);
     let aa = targets.aa as f32;
@@ -79,7 +83,12 @@ pub(crate) fn frame_data(
         // The environment's light is added once: by the first light's eye shading (and the composite, which reads
         // the first pass's uniforms).
         // z: some glass disperses, so the eye view traces each channel with its own IOR.
-        eye: [if index == 0 { sky } else { 0.0 }, s.eye_depth as f32, scene.disperses() as u32 as f32, 0.0],
+        eye: [
+            if index == 0 { sky } else { 0.0 },
+            s.eye_depth as f32,
+            scene.disperses() as u32 as f32,
+            scene.environment.is_some() as u32 as f32,
+        ],
         material: [scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block as f32, 0.0],
     }
 }

@@ -6,7 +6,9 @@
 //! so a corrupt file is an error, never a panic.
 
 use super::animation::{Animation, Interpolation, Repeat, Track};
-use super::{Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError, MAX_LIGHTS};
+use super::{
+    AlbedoMap, Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError, Texture, MAX_LIGHTS,
+};
 use glam::{Mat4, Quat, Vec3};
 use gltf::json::validation::{Error as VError, Validate};
 use std::path::Path;
@@ -21,6 +23,7 @@ const SUPPORTED: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_volume",
     "KHR_materials_dispersion",
+    "KHR_texture_transform",
 ];
 
 /// The deepest node hierarchy accepted (the traversal is recursive).
@@ -113,10 +116,17 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
 
     let buffers = load_buffers(&cx, &document, blob, path)?;
 
-    // Materials, converted once (and warned about once).
-    let materials = document.materials().map(|m| material(&cx, &m)).collect::<Result<Vec<_>, _>>()?;
+    // Materials, converted once (and warned about once), with the textures their base colors name; per material,
+    // the TEXCOORD set its texture reads.
+    let mut textures = Textures::default();
+    let (materials, tex_coords): (Vec<Material>, Vec<Option<u32>>) = document
+        .materials()
+        .map(|m| material(&cx, &m, &buffers, path, &mut textures))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
     // The glTF default material: white, metallic 1, roughness 1 → diffuse white.
-    let default_material = Material::Diffuse { albedo: Vec3::ONE };
+    let default_material = Material::diffuse(Vec3::ONE);
 
     let scene = document.default_scene().or_else(|| document.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
@@ -135,9 +145,16 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
 
     let mut out = Scene::new(Vec::new(), Vec::new());
     out.path = path.to_path_buf();
+    out.textures = textures.list;
     let mut visiting = vec![false; document.nodes().len()];
     let tracks = animations(&cx, &document, &buffers)?;
-    let g = Globals { buffers: &buffers, materials: &materials, default_material, tracks: &tracks };
+    let g = Globals {
+        buffers: &buffers,
+        materials: &materials,
+        tex_coords: &tex_coords,
+        default_material,
+        tracks: &tracks,
+    };
     for n in roots {
         visit(&cx, &n, Mat4::IDENTITY, &g, &mut visiting, &mut out)?;
     }
@@ -260,7 +277,90 @@ fn base64_decode(s: &str) -> Option<Vec<u8>> {
     Some(out)
 }
 
-fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
+/// The images the materials' base colors have named, each decoded once: (image index → scene texture).
+#[derive(Default)]
+struct Textures {
+    list: Vec<std::sync::Arc<Texture>>,
+    by_image: std::collections::HashMap<usize, usize>,
+}
+
+/// Decode glTF image `img` (a data URI, a file beside the glTF, or a bufferView) as an albedo texture.
+fn image(cx: &Cx, img: &gltf::image::Image, buffers: &[Vec<u8>], path: &Path) -> Result<Texture, SceneError> {
+    let at = format!("images[{}]", img.index());
+    let (bytes, name) = match img.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buf = &buffers[view.buffer().index()];
+            let bytes = view
+                .offset()
+                .checked_add(view.length())
+                .and_then(|end| buf.get(view.offset()..end))
+                .ok_or_else(|| cx.err(format!("{at}.bufferView"), "the bufferView lies outside its buffer"))?;
+            (bytes.to_vec(), format!("{} {at}", cx.file))
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            if let Some(rest) = uri.strip_prefix("data:") {
+                let (_, payload) = rest
+                    .split_once(";base64,")
+                    .ok_or_else(|| cx.err(format!("{at}.uri"), "a data URI must be base64 (`data:...;base64,`)"))?;
+                let bytes = base64_decode(payload)
+                    .ok_or_else(|| cx.err(format!("{at}.uri"), "the data URI is not valid base64"))?;
+                (bytes, format!("{} {at}", cx.file))
+            } else {
+                let full = path.parent().unwrap_or(Path::new("")).join(percent_decode(uri));
+                let bytes = std::fs::read(&full)
+                    .map_err(|e| cx.err(format!("{at}.uri"), format!("cannot read {}: {e}", full.display())))?;
+                (bytes, full.display().to_string())
+            }
+        }
+    };
+    Texture::decode(&name, &bytes).map_err(|e| cx.err(at, e))
+}
+
+/// A base color texture's albedo map and the TEXCOORD set it reads: its image, and KHR_texture_transform's
+/// offset, rotation and scale (uv' = T · R · S · uv) with its texCoord override.
+fn base_color_map(
+    cx: &Cx,
+    at: &str,
+    info: &gltf::texture::Info,
+    buffers: &[Vec<u8>],
+    path: &Path,
+    textures: &mut Textures,
+) -> Result<(AlbedoMap, u32), SceneError> {
+    let img = info.texture().source();
+    let k = match textures.by_image.get(&img.index()) {
+        Some(&k) => k,
+        None => {
+            textures.list.push(std::sync::Arc::new(image(cx, &img, buffers, path)?));
+            textures.by_image.insert(img.index(), textures.list.len() - 1);
+            textures.list.len() - 1
+        }
+    };
+    let mut map = AlbedoMap::new(k);
+    let mut set = info.tex_coord();
+    if let Some(t) = info.texture_transform() {
+        let (o, r, s) = (t.offset(), t.rotation(), t.scale());
+        if !(o.iter().chain(s.iter()).all(|x| x.is_finite()) && r.is_finite()) {
+            return Err(cx.err(
+                format!("{at}.pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform"),
+                "offset, rotation and scale must be finite",
+            ));
+        }
+        let (c, sn) = (r.cos(), r.sin());
+        map.uv_transform = [[c * s[0], sn * s[1], o[0]], [-sn * s[0], c * s[1], o[1]]];
+        if let Some(tc) = t.tex_coord() {
+            set = tc;
+        }
+    }
+    Ok((map, set))
+}
+
+fn material(
+    cx: &Cx,
+    m: &gltf::Material,
+    buffers: &[Vec<u8>],
+    path: &Path,
+    textures: &mut Textures,
+) -> Result<(Material, Option<u32>), SceneError> {
     let i = m.index().unwrap_or(0);
     let at = format!("materials[{i}]");
     let label = match m.name() {
@@ -312,17 +412,24 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
                 }
             }
         }
-        return Ok(Material::Dielectric { ior, absorption, abbe });
+        return Ok((Material::Dielectric { ior, absorption, abbe }, None));
     }
     if pbr.metallic_factor() == 1.0 && pbr.roughness_factor() == 0.0 {
-        return Ok(Material::Mirror);
+        return Ok((Material::Mirror, None));
     }
     let c = pbr.base_color_factor();
     let albedo = Vec3::new(c[0], c[1], c[2]);
     if !albedo.is_finite() {
         return Err(cx.err(format!("{at}.pbrMetallicRoughness.baseColorFactor"), "must be finite"));
     }
-    Ok(Material::Diffuse { albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE) })
+    let albedo = albedo.clamp(Vec3::ZERO, Vec3::ONE);
+    match pbr.base_color_texture() {
+        Some(info) => {
+            let (map, set) = base_color_map(cx, &at, &info, buffers, path, textures)?;
+            Ok((Material::Diffuse { albedo, map: Some(map) }, Some(set)))
+        }
+        None => Ok((Material::diffuse(albedo), None)),
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -330,6 +437,8 @@ fn material(cx: &Cx, m: &gltf::Material) -> Result<Material, SceneError> {
 struct Globals<'a> {
     buffers: &'a [Vec<u8>],
     materials: &'a [Material],
+    /// Per material: the TEXCOORD set its base color texture reads (None: untextured).
+    tex_coords: &'a [Option<u32>],
     default_material: Material,
     /// Per node: its animation tracks (translation, rotation, scale), from the file's first animation.
     tracks: &'a [NodeTracks],
@@ -493,6 +602,21 @@ fn visit(
                 Some(i) => materials[i],
                 None => default_material,
             };
+            // A textured material reads its TEXCOORD set (the texture coordinates are not transformed with the
+            // node).
+            if let Some(set) = p.material().index().and_then(|i| g.tex_coords[i]) {
+                let a = p.get(&gltf::Semantic::TexCoords(set)).ok_or_else(|| {
+                    cx.err(
+                        format!("{p_at}.attributes"),
+                        format!("its material's base color texture reads TEXCOORD_{set}, which the primitive lacks"),
+                    )
+                })?;
+                let uvs = read_uvs(cx, &a, &format!("{p_at}.attributes.TEXCOORD_{set}"), buffers)?;
+                if uvs.len() != m.positions.len() {
+                    return Err(cx.err(format!("{p_at}.attributes.TEXCOORD_{set}"), "needs one uv per position"));
+                }
+                m.uvs = uvs;
+            }
             // The same repairs as an OBJ mesh's (docs/cli.md, "Input checks"): an open or non-manifold receiver
             // is an ordinary surface, so only glass hears about its topology.
             let report = super::mesh::sanitize(&mut m, computed_normals);
@@ -633,7 +757,7 @@ fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Res
             cx.err(format!("{at}.indices"), format!("index {bad} is out of range ({} vertices)", positions.len()))
         );
     }
-    let mut mesh = Mesh { positions, normals: Vec::new(), indices };
+    let mut mesh = Mesh { positions, normals: Vec::new(), indices, uvs: Vec::new() };
     match p.get(&gltf::Semantic::Normals) {
         Some(n) => {
             let normals = read_vec3(cx, &n, &format!("{at}.attributes.NORMAL"), buffers)?;
@@ -694,6 +818,36 @@ fn read_vec3(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Resu
     }
     let f = |b: &[u8], k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
     Ok(elements(cx, a, at, buffers)?.into_iter().map(|b| Vec3::new(f(b, 0), f(b, 1), f(b, 2))).collect())
+}
+
+/// TEXCOORD data: VEC2 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT; finite.
+fn read_uvs(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<glam::Vec2>, SceneError> {
+    use gltf::accessor::{DataType, Dimensions};
+    let bad = || {
+        cx.err(
+            format!("{at} (accessors[{}])", a.index()),
+            format!(
+                "must be VEC2 of FLOAT, or of normalized unsigned bytes or shorts (got {:?} of {:?})",
+                a.dimensions(),
+                a.data_type()
+            ),
+        )
+    };
+    if a.dimensions() != Dimensions::Vec2 {
+        return Err(bad());
+    }
+    let read: fn(&[u8], usize) -> f32 = match (a.data_type(), a.normalized()) {
+        (DataType::F32, false) => |b, k| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]),
+        (DataType::U8, true) => |b, k| b[k] as f32 / 255.0,
+        (DataType::U16, true) => |b, k| u16::from_le_bytes([b[2 * k], b[2 * k + 1]]) as f32 / 65535.0,
+        _ => return Err(bad()),
+    };
+    let uvs: Vec<glam::Vec2> =
+        elements(cx, a, at, buffers)?.into_iter().map(|b| glam::Vec2::new(read(b, 0), read(b, 1))).collect();
+    if uvs.iter().any(|uv| !uv.is_finite()) {
+        return Err(cx.err(at.to_string(), "texture coordinates must be finite"));
+    }
+    Ok(uvs)
 }
 
 fn read_indices(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<u32>, SceneError> {

@@ -1,7 +1,7 @@
 //! Triangle meshes: procedural shapes (plane, icosphere, cube) and OBJ files, in world space.
 //! The GPU rasterizer and the CPU reference see exactly these triangles and these per-vertex normals.
 
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 #[derive(Clone, Debug, Default)]
 /// Triangles: positions, one normal per position, and indices (three per triangle).
@@ -12,6 +12,8 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Three indices per triangle, counter-clockwise seen from outside.
     pub indices: Vec<u32>,
+    /// Texture coordinates, one per position, or none (src/scene/texture.rs has their convention).
+    pub uvs: Vec<Vec2>,
 }
 
 impl Mesh {
@@ -72,6 +74,8 @@ pub fn plane(sx: f32, sz: f32) -> Mesh {
         positions: vec![Vec3::new(-x, 0.0, -z), Vec3::new(-x, 0.0, z), Vec3::new(x, 0.0, z), Vec3::new(x, 0.0, -z)],
         normals: vec![Vec3::Y; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
+        // u along +x, v along +z: seen from above with -z up, the image stands upright.
+        uvs: vec![Vec2::new(0.0, 0.0), Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0)],
     }
 }
 
@@ -93,6 +97,8 @@ pub fn cube(size: Vec3) -> Mesh {
         for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
             m.positions.push((n + u * su + v * sv) * h);
             m.normals.push(n);
+            // Each face holds the whole texture.
+            m.uvs.push(Vec2::new((su + 1.0) * 0.5, (1.0 - sv) * 0.5));
         }
         m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
     }
@@ -163,10 +169,42 @@ pub fn icosphere(radius: f32, subdivisions: u32) -> Mesh {
         }
         tris = next;
     }
-    Mesh {
+    let mesh = Mesh {
         positions: verts.iter().map(|v| *v * radius).collect(),
         normals: verts,
         indices: tris.into_iter().flatten().collect(),
+        uvs: Vec::new(),
+    };
+    mesh
+}
+
+/// Latitude-longitude texture coordinates about the y axis (u = longitude / 2π from -z, v = colatitude / π),
+/// with the vertices on the seam duplicated so that no triangle's u wraps across the whole texture. For a textured
+/// sphere only: the duplicates split the mesh along the seam (glass needs its closed topology).
+pub fn spherical_uvs(m: &mut Mesh) {
+    let uv_of = |n: Vec3| {
+        let u = 0.5 + n.x.atan2(-n.z) / std::f32::consts::TAU;
+        Vec2::new(u, n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI)
+    };
+    m.uvs = m.normals.iter().map(|n| uv_of(*n)).collect();
+    let mut wrapped = std::collections::HashMap::new();
+    for t in 0..m.indices.len() / 3 {
+        let tri = [m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]];
+        let us = tri.map(|i| m.uvs[i as usize].x);
+        if us.iter().cloned().fold(f32::MIN, f32::max) - us.iter().cloned().fold(f32::MAX, f32::min) <= 0.5 {
+            continue;
+        }
+        for (k, &i) in tri.iter().enumerate() {
+            if us[k] < 0.5 {
+                let j = *wrapped.entry(i).or_insert_with(|| {
+                    m.positions.push(m.positions[i as usize]);
+                    m.normals.push(m.normals[i as usize]);
+                    m.uvs.push(m.uvs[i as usize] + Vec2::X);
+                    (m.positions.len() - 1) as u32
+                });
+                m.indices[3 * t + k] = j;
+            }
+        }
     }
 }
 
@@ -226,7 +264,12 @@ fn load_obj_bytes(bytes: &[u8]) -> Result<(Mesh, MeshReport), String> {
             .map_err(|e| e.to_string())?;
     let mut mesh = Mesh::default();
     let mut all_normals = true;
+    let all_uvs = models.iter().all(|m| m.mesh.texcoords.len() * 3 == m.mesh.positions.len() * 2);
     for m in &models {
+        if all_uvs {
+            // OBJ's v runs up the image; ours runs down.
+            mesh.uvs.extend(m.mesh.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])));
+        }
         let base = mesh.positions.len() as u32;
         let p = &m.mesh.positions;
         if p.len() % 3 != 0 {
@@ -478,6 +521,125 @@ pub fn sanitize(mesh: &mut Mesh, normals_from_winding: bool) -> MeshReport {
     report
 }
 
+/// The sides of a room, by the direction its wall faces away from the inside.
+pub const ROOM_SIDES: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
+
+/// The inside of an axis-aligned box `size` wide, its floor centered at the origin (y from 0 to `size.y`), facing
+/// inward, with the sides in `open` (of [`ROOM_SIDES`]: "-y" is the floor, "+y" the ceiling) left out. Each wall
+/// holds the whole texture, upright seen from inside.
+pub fn room(size: Vec3, open: &[&str]) -> Mesh {
+    let h = size * 0.5;
+    let c = Vec3::new(0.0, h.y, 0.0);
+    let mut m = Mesh::default();
+    // Each side: its name, its inward normal, and the directions of texture u (right) and v (down) seen from
+    // inside (the floor's as the plane's: u along +x, v along +z).
+    let sides = [
+        ("+x", Vec3::NEG_X, Vec3::Z, Vec3::NEG_Y),
+        ("-x", Vec3::X, Vec3::NEG_Z, Vec3::NEG_Y),
+        ("+y", Vec3::NEG_Y, Vec3::X, Vec3::Z),
+        ("-y", Vec3::Y, Vec3::X, Vec3::Z),
+        ("+z", Vec3::NEG_Z, Vec3::NEG_X, Vec3::NEG_Y),
+        ("-z", Vec3::Z, Vec3::X, Vec3::NEG_Y),
+    ];
+    for (name, n, u, v) in sides {
+        if open.contains(&name) {
+            continue;
+        }
+        let base = m.positions.len() as u32;
+        for (su, sv) in [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            m.positions.push(c - n * h + (u * su + v * sv) * h);
+            m.normals.push(n);
+            m.uvs.push(Vec2::new((su + 1.0) * 0.5, (sv + 1.0) * 0.5));
+        }
+        // Wind each face counter-clockwise seen from its normal's side.
+        let (a, b) = (
+            m.positions[base as usize + 1] - m.positions[base as usize],
+            m.positions[base as usize + 2] - m.positions[base as usize],
+        );
+        if a.cross(b).dot(n) > 0.0 {
+            m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        } else {
+            m.indices.extend_from_slice(&[base, base + 2, base + 1, base, base + 3, base + 2]);
+        }
+    }
+    m
+}
+
+/// Joints of a lathe profile sharper than this (between the two segments' directions) keep a crease: each side
+/// has its own normals there.
+const CREASE_DEG: f32 = 40.0;
+
+/// A surface of revolution about the y axis: `profile` is a polyline of (radius, height) points, revolved in
+/// `segments` steps. The surface faces to the right of the profile's direction in the (r, y) plane: a profile
+/// that climbs the outside of a glass faces out, one that runs down the inside of a bowl faces in and up. Normals
+/// are smooth along the profile except at creases (over 40°) and exact around the axis; u runs around (from -z,
+/// as the sphere's), v along the profile. A closed profile (first point = last) makes a closed surface, and one
+/// that starts and ends on the axis (r = 0) a solid.
+pub fn lathe(profile: &[Vec2], segments: u32) -> Mesh {
+    let mut m = Mesh::default();
+    let n = profile.len();
+    if n < 2 {
+        return m;
+    }
+    let closed = (profile[0] - profile[n - 1]).length() < 1e-6;
+    let seg_dir: Vec<Vec2> = (0..n - 1).map(|i| (profile[i + 1] - profile[i]).normalize_or_zero()).collect();
+    let seg_normal = |i: usize| Vec2::new(seg_dir[i].y, -seg_dir[i].x);
+    let smooth = |a: usize, b: usize| seg_dir[a].dot(seg_dir[b]) >= CREASE_DEG.to_radians().cos();
+    // The normal at each end of segment i: averaged with the neighbor's across a smooth joint.
+    let end_normal = |i: usize, start: bool| -> Vec2 {
+        let other = match (start, closed) {
+            (true, _) if i > 0 => Some(i - 1),
+            (true, true) => Some(n - 2),
+            (false, _) if i + 2 < n => Some(i + 1),
+            (false, true) => Some(0),
+            _ => None,
+        };
+        match other {
+            Some(o) if o != i && smooth(i, o) => (seg_normal(i) + seg_normal(o)).normalize_or_zero(),
+            _ => seg_normal(i),
+        }
+    };
+    let length: f32 = (0..n - 1).map(|i| (profile[i + 1] - profile[i]).length()).sum::<f32>().max(1e-12);
+    let mut along = 0.0f32;
+    let segments = segments.max(3);
+    for i in 0..n - 1 {
+        let (p0, p1) = (profile[i], profile[i + 1]);
+        let (n0, n1) = (end_normal(i, true), end_normal(i, false));
+        let (v0, v1) = (along / length, (along + (p1 - p0).length()) / length);
+        along += (p1 - p0).length();
+        let base = m.positions.len() as u32;
+        for k in 0..=segments {
+            let a = k as f32 / segments as f32 * std::f32::consts::TAU;
+            // Around from -z through +x, as the sphere's u.
+            let (s, c) = a.sin_cos();
+            let dir = Vec3::new(s, 0.0, -c);
+            for (p, nn, v) in [(p0, n0, v0), (p1, n1, v1)] {
+                m.positions.push(dir * p.x + Vec3::Y * p.y);
+                m.normals.push((dir * nn.x + Vec3::Y * nn.y).normalize_or_zero());
+                m.uvs.push(Vec2::new(k as f32 / segments as f32, v));
+            }
+        }
+        for k in 0..segments {
+            let (a0, a1, b0, b1) = (base + 2 * k, base + 2 * k + 1, base + 2 * k + 2, base + 2 * k + 3);
+            for t in [[a0, b0, b1], [a0, b1, a1]] {
+                let [p, q, r] = t.map(|x| m.positions[x as usize]);
+                let ng = (q - p).cross(r - p);
+                if ng.length() <= 1e-12 {
+                    continue; // a triangle collapsed on the axis
+                }
+                // Counter-clockwise seen from the side the profile faces.
+                let want = m.normals[t[0] as usize] + m.normals[t[1] as usize] + m.normals[t[2] as usize];
+                if ng.dot(want) >= 0.0 {
+                    m.indices.extend_from_slice(&t);
+                } else {
+                    m.indices.extend_from_slice(&[t[0], t[2], t[1]]);
+                }
+            }
+        }
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -540,5 +702,53 @@ mod tests {
             let (a, b, c) = (m.positions[t[0] as usize], m.positions[t[1] as usize], m.positions[t[2] as usize]);
             assert!((b - a).cross(c - a).y > 0.0);
         }
+    }
+
+    /// A room's walls face inward and enclose its size: each face's winding agrees with its normal, the open side
+    /// is absent, and every vertex lies on the box.
+    #[test]
+    fn room_faces_inward() {
+        let m = room(Vec3::new(4.0, 2.0, 3.0), &["+z"]);
+        assert_eq!(m.triangle_count(), 10);
+        for t in m.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+            let n = m.normals[t[0] as usize];
+            assert!((b - a).cross(c - a).normalize().dot(n) > 0.999, "winding against the normal");
+            // Inward: the room's center lies on the normal's side.
+            assert!((Vec3::new(0.0, 1.0, 0.0) - a).dot(n) > 0.0);
+        }
+        let (lo, hi) = m.bounds();
+        assert_eq!((lo, hi), (Vec3::new(-2.0, 0.0, -1.5), Vec3::new(2.0, 2.0, 1.5)));
+        assert!(m.normals.iter().all(|n| *n != Vec3::NEG_Z), "the +z wall is open");
+    }
+
+    /// A lathe of a closed cylinder profile (axis, bottom rim, top rim, axis) is a solid: its triangles' signed
+    /// volume is the cylinder's, its normals point out, and its sides are smooth while the rims keep their creases.
+    #[test]
+    fn lathe_makes_a_closed_solid() {
+        let (r, h) = (0.5f32, 2.0f32);
+        let profile = [Vec2::new(0.0, 0.0), Vec2::new(r, 0.0), Vec2::new(r, h), Vec2::new(0.0, h)];
+        let m = lathe(&profile, 256);
+        let volume: f64 = m
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize].as_dvec3());
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        let want = std::f64::consts::PI * (r * r * h) as f64;
+        // A 256-gon holds (256/2π) sin(2π/256) of the circle's area.
+        assert!((volume / want - 1.0).abs() < 2e-4, "volume {volume} vs {want}");
+        for (p, n) in m.positions.iter().zip(&m.normals) {
+            if p.y > 1e-4 && p.y < h - 1e-4 {
+                assert!(
+                    (n.y.abs()) < 1e-5 && (Vec2::new(p.x, p.z).normalize().dot(Vec2::new(n.x, n.z)) - 1.0).abs() < 1e-4
+                );
+            }
+        }
+        // Caps face down and up, the sides out (the rim is a 90° crease: no averaged normal there).
+        assert!(m.normals.iter().all(|n| n.y.abs() > 0.9999 || n.y.abs() < 1e-5));
+        assert!(m.uvs.len() == m.positions.len());
     }
 }

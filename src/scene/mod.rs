@@ -4,9 +4,11 @@
 //! reported by the CLI with exit code 2.
 
 pub mod animation;
+pub mod environment;
 mod gltf;
 pub mod mesh;
 mod schema;
+pub mod texture;
 pub mod view;
 pub mod water;
 
@@ -14,7 +16,9 @@ use glam::{Mat4, Quat, Vec3};
 use schema::*;
 use std::path::{Path, PathBuf};
 
+pub use environment::{Environment, EnvironmentMap};
 pub use mesh::Mesh;
+pub use texture::{AlbedoMap, Texture};
 pub use view::{CameraView, LightView, Window};
 
 #[derive(Debug, thiserror::Error)]
@@ -131,8 +135,10 @@ pub struct Camera {
 pub enum Material {
     /// A diffuse receiver: it collects caustics and direct light.
     Diffuse {
-        /// Its RGB reflectance.
+        /// Its RGB reflectance (with a texture: the factor its texels are multiplied by).
         albedo: Vec3,
+        /// Its albedo texture, if any: albedo(uv) = albedo × texture(uv).
+        map: Option<AlbedoMap>,
     },
     /// Glass (or any dielectric): light refracts and reflects by Fresnel, and is absorbed inside.
     Dielectric {
@@ -207,6 +213,11 @@ impl Object {
 pub const CHANNEL_NM: [f32; 3] = [656.3, 587.6, 486.1];
 
 impl Material {
+    /// An untextured diffuse receiver of albedo `albedo`.
+    pub fn diffuse(albedo: Vec3) -> Material {
+        Material::Diffuse { albedo, map: None }
+    }
+
     /// Index of refraction per color channel: n at the C, d and F lines from n_d and the Abbe number
     /// V_d = (n_d − 1) / (n_F − n_C), with Cauchy's n(λ) = A + B/λ² through n_d. Without dispersion, n_d thrice.
     pub fn ior_rgb(&self) -> [f32; 3] {
@@ -259,6 +270,10 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The time (s) its animated objects stand at (0 as loaded).
     pub time: f32,
+    /// The albedo textures its materials name ([`AlbedoMap::texture`] indexes them).
+    pub textures: Vec<std::sync::Arc<Texture>>,
+    /// Its environment map (None: the procedural sky).
+    pub environment: Option<Environment>,
 }
 
 struct Ctx<'a> {
@@ -292,7 +307,15 @@ impl Scene {
     /// A scene built in code: its lights and cameras, and no objects yet (a renderer adds them as instances of
     /// meshes: [`crate::Renderer::add_mesh`], [`crate::Renderer::add_instance`]). Messages name it `<code>`.
     pub fn new(lights: Vec<Light>, cameras: Vec<Camera>) -> Scene {
-        Scene { path: PathBuf::from("<code>"), lights, cameras, objects: Vec::new(), time: 0.0 }
+        Scene {
+            path: PathBuf::from("<code>"),
+            lights,
+            cameras,
+            objects: Vec::new(),
+            time: 0.0,
+            textures: Vec::new(),
+            environment: None,
+        }
     }
 
     /// Whether any object animates.
@@ -390,8 +413,9 @@ impl Scene {
             cameras.push(cam);
         }
         let mut objects = Vec::new();
+        let mut textures = Textures::default();
         for (i, o) in file.object.iter().enumerate() {
-            let obj = object(&cx, i, o)?;
+            let obj = object(&cx, i, o, &mut textures)?;
             if objects.iter().any(|x: &Object| x.name == obj.name) {
                 return Err(cx.err(
                     o.get_ref().name.span(),
@@ -404,7 +428,19 @@ impl Scene {
         if objects.is_empty() {
             return Err(cx.err(0..0, "object", "the scene needs at least one [[object]]"));
         }
-        let mut scene = Scene { path: path.to_path_buf(), lights, cameras, objects, time: 0.0 };
+        let environment = match &file.environment {
+            Some(e) => Some(environment_def(&cx, e)?),
+            None => None,
+        };
+        let mut scene = Scene {
+            path: path.to_path_buf(),
+            lights,
+            cameras,
+            objects,
+            time: 0.0,
+            textures: textures.list,
+            environment,
+        };
         scene.aim_point_lights();
         for (i, l) in scene.lights.iter().enumerate() {
             if (l.target - l.position).length() < 1e-6 {
@@ -887,7 +923,111 @@ fn keyframes(
     }))
 }
 
-fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
+fn environment_def(cx: &Ctx, e: &S<EnvironmentDef>) -> Result<Environment, SceneError> {
+    let d = e.get_ref();
+    let full = cx.dir.join(d.path.get_ref());
+    let map = EnvironmentMap::load(&full).map_err(|m| cx.err(d.path.span(), "environment.path", m))?;
+    let intensity = match &d.intensity {
+        Some(i) => {
+            let v = *i.get_ref();
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(cx.err(i.span(), "environment.intensity", format!("must be finite and >= 0 (got {v})")));
+            }
+            v
+        }
+        None => 1.0,
+    };
+    Ok(Environment { map: std::sync::Arc::new(map), intensity })
+}
+
+/// The textures a scene file's materials have named so far, each file (or checker) loaded once.
+#[derive(Default)]
+struct Textures {
+    list: Vec<std::sync::Arc<Texture>>,
+    by_key: std::collections::HashMap<String, usize>,
+}
+
+impl Textures {
+    fn get_or(&mut self, key: String, make: impl FnOnce() -> Result<Texture, String>) -> Result<usize, String> {
+        if let Some(&i) = self.by_key.get(&key) {
+            return Ok(i);
+        }
+        self.list.push(std::sync::Arc::new(make()?));
+        self.by_key.insert(key, self.list.len() - 1);
+        Ok(self.list.len() - 1)
+    }
+}
+
+/// A diffuse material's albedo map from `albedo_texture` or `checker`, and `uv_scale` (None: neither given), and
+/// the albedo factor it multiplies (`albedo` is the checker's first color, and the texture's factor, default 1).
+fn albedo_map(
+    cx: &Ctx,
+    m: &MaterialDef,
+    mf: &dyn Fn(&str) -> String,
+    textures: &mut Textures,
+    albedo: Option<Vec3>,
+) -> Result<Option<(AlbedoMap, Vec3)>, SceneError> {
+    let in_unit = |a: &S<ScalarOr3>, field: &str| {
+        let v = Vec3::from(a.get_ref().to_array());
+        if !v.is_finite() || v.min_element() < 0.0 || v.max_element() > 1.0 {
+            return Err(cx.err(a.span(), mf(field), "must lie in [0, 1]"));
+        }
+        Ok(v)
+    };
+    let map = match (&m.albedo_texture, &m.checker) {
+        (Some(_), Some(c)) => {
+            return Err(cx.err(c.span(), mf("checker"), "give `albedo_texture` or `checker`, not both"));
+        }
+        (Some(p), None) => {
+            let full = cx.dir.join(p.get_ref());
+            let key = format!("file:{}", full.display());
+            let i = textures
+                .get_or(key, || {
+                    if !full.is_file() {
+                        return Err(format!("texture file not found: {}", full.display()));
+                    }
+                    Texture::load(&full)
+                })
+                .map_err(|e| cx.err(p.span(), mf("albedo_texture"), e))?;
+            (AlbedoMap::new(i), albedo.unwrap_or(Vec3::ONE))
+        }
+        (None, Some(c)) => {
+            let squares = *c.get_ref().squares.get_ref();
+            if !(1..=128).contains(&squares) {
+                return Err(cx.err(c.get_ref().squares.span(), mf("checker.squares"), "must lie in 1..=128"));
+            }
+            let a = albedo.unwrap_or(Vec3::splat(0.8));
+            let b = in_unit(&c.get_ref().albedo, "checker.albedo")?;
+            let key = format!("checker:{squares}:{a}:{b}");
+            let i = textures
+                .get_or(key, || Ok(Texture::checker(a, b, squares as u32)))
+                .map_err(|e| cx.err(c.span(), mf("checker"), e))?;
+            (AlbedoMap::new(i), Vec3::ONE)
+        }
+        (None, None) => {
+            if let Some(s) = &m.uv_scale {
+                return Err(cx.err(s.span(), mf("uv_scale"), "`uv_scale` needs `albedo_texture` or `checker`"));
+            }
+            return Ok(None);
+        }
+    };
+    let scale = match &m.uv_scale {
+        Some(s) => {
+            let v = match *s.get_ref() {
+                ScalarOr2::Scalar(x) => glam::Vec2::splat(x),
+                ScalarOr2::Vec2(v) => glam::Vec2::from(v),
+            };
+            if !(v.is_finite() && v.abs().min_element() > 0.0) {
+                return Err(cx.err(s.span(), mf("uv_scale"), "must be finite and non-zero"));
+            }
+            v
+        }
+        None => glam::Vec2::ONE,
+    };
+    Ok(Some((map.0.scaled(scale), map.1)))
+}
+
+fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>, textures: &mut Textures) -> Result<Object, SceneError> {
     let d = o.get_ref();
     let name = d.name.get_ref().clone();
     let f = |field: &str| format!("object[{i}] \"{name}\".{field}");
@@ -902,15 +1042,20 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
         "cube" => &["size"],
         "mesh" => &["path"],
         "water" => &["size", "depth", "grid", "waves"],
+        "room" => &["size", "open"],
+        "lathe" => &["profile", "segments"],
         other => {
             return Err(cx.err(
                 d.shape.span(),
                 f("shape"),
-                format!("unknown shape `{other}` (expected plane, sphere, cube, mesh or water)"),
+                format!("unknown shape `{other}` (expected plane, sphere, cube, room, lathe, mesh or water)"),
             ))
         }
     };
-    let present: [(&str, Option<std::ops::Range<usize>>); 7] = [
+    let present: [(&str, Option<std::ops::Range<usize>>); 10] = [
+        ("open", d.open.as_ref().map(|v| v.span())),
+        ("profile", d.profile.as_ref().map(|v| v.span())),
+        ("segments", d.segments.as_ref().map(|v| v.span())),
         ("size", d.size.as_ref().map(|v| v.span())),
         ("radius", d.radius.as_ref().map(|v| v.span())),
         ("subdivisions", d.subdivisions.as_ref().map(|v| v.span())),
@@ -938,6 +1083,64 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
             let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a cube needs `size`"))?;
             mesh::cube(positive_size(cx, f("size"), s, 3)?)
         }
+        "room" => {
+            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a room needs `size = [x, y, z]`"))?;
+            let size = positive_size(cx, f("size"), s, 3)?;
+            let open: Vec<&str> = match &d.open {
+                Some(v) => {
+                    for side in v.get_ref() {
+                        if !mesh::ROOM_SIDES.contains(&side.as_str()) {
+                            return Err(cx.err(
+                                v.span(),
+                                f("open"),
+                                format!("unknown side `{side}` (expected some of {})", mesh::ROOM_SIDES.join(", ")),
+                            ));
+                        }
+                    }
+                    v.get_ref().iter().map(|x| x.as_str()).collect()
+                }
+                None => vec!["+z"],
+            };
+            if open.len() == 6 {
+                return Err(cx.err(d.open.as_ref().map_or(o.span(), |v| v.span()), f("open"), "a room needs a side"));
+            }
+            mesh::room(size, &open)
+        }
+        "lathe" => {
+            let p = d
+                .profile
+                .as_ref()
+                .ok_or_else(|| cx.err(o.span(), f("profile"), "a lathe needs `profile = [[radius, height], ...]`"))?;
+            let pts: Vec<glam::Vec2> = p.get_ref().iter().map(|q| glam::Vec2::from(*q)).collect();
+            if pts.len() < 2 {
+                return Err(cx.err(p.span(), f("profile"), "needs at least two points"));
+            }
+            if let Some(q) = pts.iter().find(|q| !(q.is_finite() && q.x >= 0.0 && q.abs().max_element() <= 1e6)) {
+                return Err(cx.err(
+                    p.span(),
+                    f("profile"),
+                    format!("point {q}: radii must be >= 0 and coordinates finite (within ±1e6 m)"),
+                ));
+            }
+            if pts.windows(2).any(|w| (w[1] - w[0]).length() < 1e-7) {
+                return Err(cx.err(p.span(), f("profile"), "two consecutive points coincide"));
+            }
+            let segments = match &d.segments {
+                Some(s) => {
+                    let v = *s.get_ref();
+                    if !(3..=4096).contains(&v) {
+                        return Err(cx.err(s.span(), f("segments"), format!("must lie in 3..=4096 (got {v})")));
+                    }
+                    v as u32
+                }
+                None => 96,
+            };
+            let m = mesh::lathe(&pts, segments);
+            if m.indices.is_empty() {
+                return Err(cx.err(p.span(), f("profile"), "the profile sweeps no area (every point on the axis?)"));
+            }
+            m
+        }
         "sphere" => {
             let r = d.radius.as_ref().ok_or_else(|| cx.err(o.span(), f("radius"), "a sphere needs `radius`"))?;
             let radius = *r.get_ref();
@@ -958,7 +1161,12 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
                 }
                 None => 6,
             };
-            mesh::icosphere(radius, subdivisions)
+            let mut m = mesh::icosphere(radius, subdivisions);
+            let mat = d.material.get_ref();
+            if mat.albedo_texture.is_some() || mat.checker.is_some() {
+                mesh::spherical_uvs(&mut m);
+            }
+            m
         }
         _ => {
             let p = d.path.as_ref().ok_or_else(|| cx.err(o.span(), f("path"), "a mesh needs `path`"))?;
@@ -1049,6 +1257,16 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
     }
     let m = d.material.get_ref();
     let mf = |field: &str| f(&format!("material.{field}"));
+    if m.kind.get_ref() != "diffuse" {
+        let texture_fields = [
+            ("albedo_texture", m.albedo_texture.as_ref().map(|x| x.span())),
+            ("checker", m.checker.as_ref().map(|x| x.span())),
+            ("uv_scale", m.uv_scale.as_ref().map(|x| x.span())),
+        ];
+        if let Some((field, Some(span))) = texture_fields.into_iter().find(|(_, s)| s.is_some()) {
+            return Err(cx.err(span, mf(field), format!("only a diffuse material has `{field}`")));
+        }
+    }
     let material = match m.kind.get_ref().as_str() {
         "diffuse" => {
             if let Some(x) = &m.absorption {
@@ -1066,11 +1284,24 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>) -> Result<Object, SceneError> {
                     if !v.is_finite() || v.min_element() < 0.0 || v.max_element() > 1.0 {
                         return Err(cx.err(a.span(), mf("albedo"), "must lie in [0, 1]"));
                     }
-                    v
+                    Some(v)
                 }
-                None => Vec3::splat(0.8),
+                None => None,
             };
-            Material::Diffuse { albedo }
+            match albedo_map(cx, m, &mf, textures, albedo)? {
+                Some((map, albedo)) => {
+                    if mesh.uvs.len() != mesh.positions.len() {
+                        let span = m.albedo_texture.as_ref().map_or_else(|| o.span(), |t| t.span());
+                        return Err(cx.err(
+                            span,
+                            mf("albedo_texture"),
+                            "the mesh has no texture coordinates (an OBJ needs `vt` on every vertex)",
+                        ));
+                    }
+                    Material::Diffuse { albedo, map: Some(map) }
+                }
+                None => Material::Diffuse { albedo: albedo.unwrap_or(Vec3::splat(0.8)), map: None },
+            }
         }
         "dielectric" => {
             if let Some(x) = &m.albedo {

@@ -15,6 +15,16 @@ pub struct SceneFile {
     pub camera: Vec<S<CameraDef>>,
     #[serde(default)]
     pub object: Vec<S<ObjectDef>>,
+    pub environment: Option<S<EnvironmentDef>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentDef {
+    /// An equirectangular `.hdr` or `.exr`, relative to the scene file.
+    pub path: S<String>,
+    /// W/(m²·sr) per unit of the map (default 1).
+    pub intensity: Option<S<f32>>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -71,6 +81,12 @@ pub struct ObjectDef {
     pub grid: Option<S<i64>>,
     #[serde(default)]
     pub waves: Vec<S<WaveDef>>,
+    /// A room's sides left out.
+    pub open: Option<S<Vec<String>>>,
+    /// A lathe's profile: (radius, height) points.
+    pub profile: Option<S<Vec<[f32; 2]>>>,
+    /// A lathe's steps around the axis.
+    pub segments: Option<S<i64>>,
     pub translate: Option<S<[f32; 3]>>,
     pub rotate_deg: Option<S<[f32; 3]>>,
     pub scale: Option<S<ScalarOr3>>,
@@ -108,4 +124,27 @@ pub struct MaterialDef {
     pub ior: Option<S<f32>>,
     pub absorption: Option<S<ScalarOr3>>,
     pub abbe: Option<S<f32>>,
+    /// A diffuse material's albedo image (PNG or JPEG, sRGB), relative to the scene file.
+    pub albedo_texture: Option<S<String>>,
+    /// A diffuse material's procedural checkerboard: `albedo` and this one's `albedo` alternate.
+    pub checker: Option<S<CheckerDef>>,
+    /// How many times the texture repeats across the mesh's uv [0, 1]: a number or [u, v].
+    pub uv_scale: Option<S<ScalarOr2>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CheckerDef {
+    /// Squares per side of uv [0, 1].
+    pub squares: S<i64>,
+    /// The second squares' albedo.
+    pub albedo: S<ScalarOr3>,
+}
+
+/// A number or a 2-vector (uv scale).
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(untagged)]
+pub enum ScalarOr2 {
+    Scalar(f32),
+    Vec2([f32; 2]),
 }

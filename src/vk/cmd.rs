@@ -211,3 +211,74 @@ pub fn upload_buffer<T: bytemuck::Pod>(
     recorder.submit_and_wait()?;
     Ok(dst)
 }
+
+/// A sampled image made from host texels: `levels[l]` holds mip level `l` of every layer, layer after layer, each
+/// `max(width >> l, 1)` × `max(height >> l, 1)` texels of `T` (one texel of `format`). It is left in
+/// SHADER_READ_ONLY_OPTIMAL, its upload ordered before every later command on the queue (no frame declares it
+/// to the tracker: nothing writes it again).
+#[allow(clippy::too_many_arguments)]
+pub fn upload_image<T: bytemuck::Pod>(
+    device: &Arc<Device>,
+    recorder: &mut Recorder,
+    name: &str,
+    format: vk::Format,
+    extent: vk::Extent2D,
+    layers: Option<u32>,
+    levels: &[Vec<T>],
+) -> VkResult<super::Image> {
+    let image = super::Image::with_levels(
+        device,
+        name,
+        format,
+        extent,
+        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        levels.len() as u32,
+        layers,
+    )?;
+    let flat: Vec<T> = levels.iter().flatten().copied().collect();
+    let staging = Buffer::with_data(device, &format!("{name} (staging)"), &flat, vk::BufferUsageFlags::TRANSFER_SRC)?;
+    let mut regions = Vec::new();
+    let mut offset = 0u64;
+    for (l, level) in levels.iter().enumerate() {
+        let (w, h) = ((extent.width >> l).max(1), (extent.height >> l).max(1));
+        assert_eq!(level.len() as u64, (w * h * image.layers) as u64, "mip {l} of `{name}` has the wrong size");
+        regions.push(
+            vk::BufferImageCopy::default()
+                .buffer_offset(offset)
+                .image_subresource(vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: l as u32,
+                    base_array_layer: 0,
+                    layer_count: image.layers,
+                })
+                .image_extent(vk::Extent3D { width: w, height: h, depth: 1 }),
+        );
+        offset += std::mem::size_of_val(level.as_slice()) as u64;
+    }
+    let cmd = recorder.begin()?;
+    let to_dst = vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::NONE)
+        .src_access_mask(vk::AccessFlags2::NONE)
+        .dst_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .old_layout(vk::ImageLayout::UNDEFINED)
+        .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+        .image(image.raw)
+        .subresource_range(image.range());
+    let to_read = vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER)
+        .dst_access_mask(vk::AccessFlags2::SHADER_SAMPLED_READ)
+        .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+        .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+        .image(image.raw)
+        .subresource_range(image.range());
+    unsafe {
+        device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&[to_dst]));
+        device.cmd_copy_buffer_to_image(cmd, staging.raw, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &regions);
+        device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&[to_read]));
+    }
+    recorder.submit_and_wait()?;
+    Ok(image)
+}

@@ -23,6 +23,10 @@ pub struct Image {
     pub extent: vk::Extent2D,
     /// The aspect its view covers.
     pub aspect: vk::ImageAspectFlags,
+    /// Its mip levels.
+    pub levels: u32,
+    /// Its array layers (a layered image's view is a 2D array).
+    pub layers: u32,
     allocation: Option<Allocation>,
     /// Its name (in validation messages).
     pub name: String,
@@ -47,12 +51,30 @@ impl Image {
         extent: vk::Extent2D,
         usage: vk::ImageUsageFlags,
     ) -> VkResult<Self> {
+        Image::with_levels(device, name, format, extent, usage, 1, None)
+    }
+
+    /// A device-local image with `levels` mip levels and, with `layers`, that many array layers and a 2D-array
+    /// view (a sampler2DArray's), else one layer and a 2D view.
+    pub fn with_levels(
+        device: &Arc<Device>,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        usage: vk::ImageUsageFlags,
+        levels: u32,
+        layers: Option<u32>,
+    ) -> VkResult<Self> {
+        let (layer_count, view_type) = match layers {
+            Some(n) => (n.max(1), vk::ImageViewType::TYPE_2D_ARRAY),
+            None => (1, vk::ImageViewType::TYPE_2D),
+        };
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
             .extent(vk::Extent3D { width: extent.width.max(1), height: extent.height.max(1), depth: 1 })
-            .mip_levels(1)
-            .array_layers(1)
+            .mip_levels(levels)
+            .array_layers(layer_count)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
@@ -79,17 +101,16 @@ impl Image {
         let bound = unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
             .check("vkBindImageMemory");
         let view = bound.and_then(|_| {
-            let view_info = vk::ImageViewCreateInfo::default()
-                .image(raw)
-                .view_type(vk::ImageViewType::TYPE_2D)
-                .format(format)
-                .subresource_range(vk::ImageSubresourceRange {
-                    aspect_mask: aspect,
-                    base_mip_level: 0,
-                    level_count: 1,
-                    base_array_layer: 0,
-                    layer_count: 1,
-                });
+            let view_info =
+                vk::ImageViewCreateInfo::default().image(raw).view_type(view_type).format(format).subresource_range(
+                    vk::ImageSubresourceRange {
+                        aspect_mask: aspect,
+                        base_mip_level: 0,
+                        level_count: levels,
+                        base_array_layer: 0,
+                        layer_count,
+                    },
+                );
             unsafe { device.create_image_view(&view_info, None) }.check("vkCreateImageView")
         });
         let view = match view {
@@ -109,19 +130,21 @@ impl Image {
             format,
             extent,
             aspect,
+            levels,
+            layers: layer_count,
             allocation: Some(allocation),
             name: name.to_string(),
         })
     }
 
-    /// The subresource range of its one mip level and layer.
+    /// The subresource range of all its mip levels and layers.
     pub fn range(&self) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange {
             aspect_mask: self.aspect,
             base_mip_level: 0,
-            level_count: 1,
+            level_count: self.levels,
             base_array_layer: 0,
-            layer_count: 1,
+            layer_count: self.layers,
         }
     }
 }
@@ -156,6 +179,24 @@ impl Sampler {
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
+        let raw = unsafe { device.create_sampler(&info, None) }.check("vkCreateSampler")?;
+        Ok(Sampler { device: device.clone(), raw })
+    }
+}
+
+impl Sampler {
+    /// A trilinear sampler over all mips that repeats in u and, with `repeat_v`, in v (else clamps v): albedo
+    /// textures repeat in both; an equirectangular environment map wraps in longitude only.
+    pub fn repeating(device: &Arc<Device>, repeat_v: bool) -> VkResult<Self> {
+        let v = if repeat_v { vk::SamplerAddressMode::REPEAT } else { vk::SamplerAddressMode::CLAMP_TO_EDGE };
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(v)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(vk::LOD_CLAMP_NONE);
         let raw = unsafe { device.create_sampler(&info, None) }.check("vkCreateSampler")?;
         Ok(Sampler { device: device.clone(), raw })
     }

@@ -178,3 +178,32 @@ pub fn renderer(
     let scene = caustics::scene::Scene::load(Path::new(scene_path)).expect("scene");
     caustics::Renderer::new(device.clone(), scene, settings).expect("renderer")
 }
+
+/// The block texture of the texture tests: 64 × 64 texels in 4 × 4 blocks of 16, block (i, j) (column i from the
+/// left, row j from the top) of linear albedo (0.1 + 0.8 i/3, 0.1 + 0.8 j/3, 0.5) before its 8-bit sRGB encoding:
+/// no two blocks alike, and no symmetry that a flipped or transposed uv would keep.
+pub fn write_block_texture(path: &Path) {
+    let enc = caustics::scene::texture::linear_to_srgb;
+    let mut rgba = Vec::new();
+    for y in 0..64u32 {
+        for x in 0..64u32 {
+            let (i, j) = (x / 16, y / 16);
+            let c = [0.1 + 0.8 * i as f32 / 3.0, 0.1 + 0.8 * j as f32 / 3.0, 0.5];
+            rgba.extend([enc(c[0]), enc(c[1]), enc(c[2]), 255]);
+        }
+    }
+    caustics::image_io::write_png(path, 64, 64, &rgba).expect("write the block texture");
+}
+
+/// The block texture's linear albedo at texture coordinates `uv` (repeating), and whether `uv` lies at least
+/// `margin` (a fraction of a block) inside its block, where filtering sees that block's color alone.
+pub fn block_albedo(uv: glam::Vec2, margin: f32) -> (glam::Vec3, bool) {
+    let dec = caustics::scene::texture::srgb_to_linear;
+    let enc = caustics::scene::texture::linear_to_srgb;
+    let f = (uv - uv.floor()) * 4.0;
+    let (i, j) = (f.x.floor().min(3.0), f.y.floor().min(3.0));
+    let inside = [f.x - i, f.y - j].iter().all(|t| *t >= margin && *t <= 1.0 - margin);
+    // As the GPU holds it: decoded, to the nearest of 16 bits' steps.
+    let c = [0.1 + 0.8 * i / 3.0, 0.1 + 0.8 * j / 3.0, 0.5].map(|v| (dec(enc(v)) * 65535.0 + 0.5).floor() / 65535.0);
+    (glam::Vec3::from(c), inside)
+}

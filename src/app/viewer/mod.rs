@@ -73,6 +73,9 @@ pub struct ViewArgs {
     /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/sphere.toml.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// An equirectangular environment map (.hdr or .exr) in place of the scene's (as `render --environment`).
+    #[arg(long)]
+    pub environment: Option<PathBuf>,
     /// Camera name (default: the scene's first perspective camera, else its first camera).
     #[arg(long)]
     pub camera: Option<String>,
@@ -172,7 +175,8 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     }
     let script = args.script.as_deref().map(Script::load).transpose()?;
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
-    let scene = Scene::load(&scene_path)?;
+    let mut scene = Scene::load(&scene_path)?;
+    crate::app::commands::apply_environment(&mut scene, args.environment.as_deref())?;
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let event_loop = EventLoop::new().map_err(|e| {
         AppError::Failed(format!(
