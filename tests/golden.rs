@@ -155,3 +155,20 @@ fn golden_bunny() {
 fn golden_tilted_cube() {
     golden_case("tilted_cube", &scene("tilted_cube.toml"));
 }
+
+/// The gallery's scenes (README): textured receivers in a room with the sky seen in two lathed glasses; the
+/// prism's rainbow on a wall; the bunny in the environment map.
+#[test]
+fn golden_table() {
+    golden_case("table", &scene("table.toml"));
+}
+
+#[test]
+fn golden_rainbow() {
+    golden_case("rainbow", &scene("rainbow.toml"));
+}
+
+#[test]
+fn golden_bunny_sky() {
+    golden_case("bunny_sky", &scene("bunny_sky.toml"));
+}
