@@ -138,25 +138,27 @@ impl EnvironmentMap {
     /// Irradiance (map units × W/m² per W/(m²·sr)) on an unoccluded surface with unit normal `n`: the integral
     /// of L cos over the hemisphere, summed over every texel (at its center direction).
     pub fn irradiance(&self, n: Vec3) -> Vec3 {
-        let n = n.as_dvec3();
-        let mut e = DVec3::ZERO;
+        irradiance_of(&self.weighted_texels(), n)
+    }
+
+    /// Each texel's center direction and its radiance times its solid angle (what [`irradiance_of`] sums).
+    fn weighted_texels(&self) -> Vec<(DVec3, DVec3)> {
+        let mut out = Vec::with_capacity(self.texels.len());
         for y in 0..self.height {
             let dw = self.texel_solid_angle(y);
             for x in 0..self.width {
-                let d =
-                    direction(Vec2::new((x as f32 + 0.5) / self.width as f32, (y as f32 + 0.5) / self.height as f32));
-                let c = n.dot(d.as_dvec3());
-                if c > 0.0 {
-                    e += Vec3::from(self.texels[(y * self.width + x) as usize]).as_dvec3() * (c * dw);
-                }
+                let uv = Vec2::new((x as f32 + 0.5) / self.width as f32, (y as f32 + 0.5) / self.height as f32);
+                let l = Vec3::from(self.texels[(y * self.width + x) as usize]).as_dvec3();
+                out.push((direction(uv).as_dvec3(), l * dw));
             }
         }
-        e.as_vec3()
+        out
     }
 
     /// The irradiance map: [`IRRADIANCE_WIDTH`] × half that, the irradiance for each texel's normal (column i
     /// at u = (i + 0.5) / width, row j at v = j / (height - 1): see [`IRRADIANCE_WIDTH`]), integrated over the map
-    /// box-filtered to 256 wide; computed once per map (about 0.3 s on two cores).
+    /// box-filtered to 256 wide; computed once per map (0.18 s for the shipped 1024 × 512 map on two cores, its
+    /// box filter included).
     pub fn irradiance_map(&self) -> &[[f32; 3]] {
         self.irradiance.get_or_init(|| self.compute_irradiance_map())
     }
@@ -165,12 +167,13 @@ impl EnvironmentMap {
         use rayon::prelude::*;
         let src =
             if self.width > IRRADIANCE_SOURCE_WIDTH { self.downsampled(IRRADIANCE_SOURCE_WIDTH) } else { self.clone() };
+        let texels = src.weighted_texels();
         let (w, h) = (IRRADIANCE_WIDTH, IRRADIANCE_WIDTH / 2);
         (0..w * h)
             .into_par_iter()
             .map(|i| {
                 let uv = Vec2::new(((i % w) as f32 + 0.5) / w as f32, (i / w) as f32 / (h - 1) as f32);
-                src.irradiance(direction(uv)).to_array()
+                irradiance_of(&texels, direction(uv)).to_array()
             })
             .collect()
     }
@@ -196,6 +199,19 @@ impl EnvironmentMap {
             .collect();
         EnvironmentMap { name: "procedural sky".into(), width: w, height: h, texels, irradiance: Default::default() }
     }
+}
+
+/// Σ L dΩ cos⁺ over `texels` (direction, radiance × solid angle) for the unit normal `n`.
+fn irradiance_of(texels: &[(DVec3, DVec3)], n: Vec3) -> Vec3 {
+    let n = n.as_dvec3();
+    let mut e = DVec3::ZERO;
+    for (d, l) in texels {
+        let c = n.dot(*d);
+        if c > 0.0 {
+            e += *l * c;
+        }
+    }
+    e.as_vec3()
 }
 
 /// The procedural sky's radiance in direction `d` (unit).
