@@ -63,6 +63,23 @@ fn floor_at(x: u32, y: u32) -> (Vec2, Vec2) {
     (p, uv * Vec2::new(2.0, 1.0))
 }
 
+/// The floor pixels the texture tests check: those the top camera sees directly (outside the sphere's disk,
+/// with a margin) and well inside a block of the texture (a sixth of a block, 2.7 pixels, from its edges, where
+/// filtering sees one color), with their uv (through the uv scale) and the block's albedo.
+fn checked_floor() -> Vec<(u32, u32, Vec2, Vec3)> {
+    let mut out = Vec::new();
+    for y in 0..128 {
+        for x in 0..128 {
+            let (p, uv) = floor_at(x, y);
+            let (albedo, inside) = block_albedo(uv, 1.0 / 6.0);
+            if p.length() >= 0.4 && inside {
+                out.push((x, y, uv, albedo));
+            }
+        }
+    }
+    out
+}
+
 /// On every floor pixel the top camera sees directly (outside the sphere's disk, with a margin) and well inside a
 /// block of the texture (a sixth of a block, 2.7 pixels, from its edges, where filtering sees one color), the
 /// linear beauty is albedo(uv)·(E_direct + E_caustics)/π, the albedo the texel the uv transform puts there.
@@ -80,34 +97,19 @@ fn textured_floor_beauty_is_albedo_times_irradiance() {
     let caustics = top(&dir, "caustics", &scene, "caustics", &off);
     let (mut n, mut worst, mut lit) = (0, 0.0f64, 0);
     let mut blocks = std::collections::HashSet::new();
-    for y in 0..128 {
-        for x in 0..128 {
-            let (p, uv) = floor_at(x, y);
-            let (albedo, inside) = block_albedo(uv, 1.0 / 6.0);
-            if p.length() < 0.4 || !inside {
-                continue;
-            }
-            let i = (y * 128 + x) as usize;
-            for c in 0..3 {
-                let e = direct.data[i][c] as f64 + caustics.data[i][c] as f64;
-                let want = albedo[c] as f64 / std::f64::consts::PI * e;
-                let got = beauty.data[i][c] as f64;
-                let err = (got - want).abs() / want.max(1e-6);
-                worst = worst.max(err);
-                if err > 1e-4 && std::env::var("DBG").is_ok() {
-                    eprintln!(
-                        "DBG ({x},{y}) c{c} implied albedo {} want {} uv {uv}",
-                        got / e * std::f64::consts::PI,
-                        albedo[c]
-                    );
-                    continue;
-                }
-                assert!(err <= 1e-4, "pixel ({x}, {y}) channel {c}: beauty {got}, albedo(uv) E/pi {want}");
-            }
-            lit += (direct.data[i][0] > 0.0) as usize;
-            blocks.insert(((uv.x * 4.0).floor() as i32 % 4, (uv.y * 4.0).floor() as i32));
-            n += 1;
+    for (x, y, uv, albedo) in checked_floor() {
+        let i = (y * 128 + x) as usize;
+        for c in 0..3 {
+            let e = direct.data[i][c] as f64 + caustics.data[i][c] as f64;
+            let want = albedo[c] as f64 / std::f64::consts::PI * e;
+            let got = beauty.data[i][c] as f64;
+            let err = (got - want).abs() / want.max(1e-6);
+            worst = worst.max(err);
+            assert!(err <= 1e-4, "pixel ({x}, {y}) channel {c}: beauty {got}, albedo(uv) E/pi {want}");
         }
+        lit += (direct.data[i][0] > 0.0) as usize;
+        blocks.insert(((uv.x * 4.0).floor() as i32 % 4, (uv.y * 4.0).floor() as i32));
+        n += 1;
     }
     eprintln!("{n} floor pixels ({lit} lit), worst relative error {worst:.2e}, {} blocks seen", blocks.len());
     assert!(n > 5000 && lit > 2000, "{n} floor pixels checked, {lit} lit");
@@ -149,33 +151,16 @@ fn environment_map_lights_the_receivers_by_its_irradiance() {
         diff / total
     );
     let (mut n, mut worst) = (0, 0.0f64);
-    for y in 0..128 {
-        for x in 0..128 {
-            let (p, uv) = floor_at(x, y);
-            let (albedo, inside) = block_albedo(uv, 1.0 / 6.0);
-            if p.length() < 0.4 || !inside {
-                continue;
-            }
-            let i = (y * 128 + x) as usize;
-            for c in 0..3 {
-                let a = albedo[c] as f64 / std::f64::consts::PI;
-                let e_env = beauty.data[i][c] as f64 / a - direct.data[i][c] as f64 - caustics.data[i][c] as f64;
-                let err = (e_env - want_e[c] as f64).abs() / want_e[c] as f64;
-                worst = worst.max(err);
-                if std::env::var("DBG").is_ok() {
-                    if x % 16 == 3 && y % 16 == 5 && c == 0 {
-                        eprintln!(
-                            "DBG ({x},{y}) E_env {e_env} want {} table {}",
-                            want_e[c],
-                            map.irradiance_map()[0][0] * intensity
-                        );
-                    }
-                    continue;
-                }
-                assert!(err <= 0.01, "pixel ({x}, {y}) channel {c}: E_env {e_env} W/m², the map's {}", want_e[c]);
-            }
-            n += 1;
+    for (x, y, _, albedo) in checked_floor() {
+        let i = (y * 128 + x) as usize;
+        for c in 0..3 {
+            let a = albedo[c] as f64 / std::f64::consts::PI;
+            let e_env = beauty.data[i][c] as f64 / a - direct.data[i][c] as f64 - caustics.data[i][c] as f64;
+            let err = (e_env - want_e[c] as f64).abs() / want_e[c] as f64;
+            worst = worst.max(err);
+            assert!(err <= 0.01, "pixel ({x}, {y}) channel {c}: E_env {e_env} W/m², the map's {}", want_e[c]);
         }
+        n += 1;
     }
     eprintln!("{n} floor pixels: E_env {want_e} W/m², worst relative error {worst:.2e}");
     assert!(n > 5000);
