@@ -92,19 +92,31 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         BvhInstance I = bvh_instances[hit.inst];
         if (!inst_is_dielectric(hit.inst)) {
             vec3 albedo = I.pad.yzw;
+            float width = pixel * (ortho ? 1.0 : run + hit.t);
             if (I.material.w > 0.5) {
                 // A textured receiver: its uv (packed in the triangle's and the normals' w) through the instance's
-                // uv transform; the finest mip (no screen-space derivative reaches through the glass).
+                // uv transform, read at the mip the pixel's footprint there spans: its width times the texels per
+                // meter of this triangle (the square root of its uv area over its world area, in texels).
                 uint t = hit.tri;
                 vec3 b = hit.bary;
-                vec2 uv = vec2(dot(vec3(bvh_tris[3u * t].w, bvh_tris[3u * t + 1u].w, bvh_tris[3u * t + 2u].w), b),
-                               dot(vec3(bvh_normal_rows[3u * t].w, bvh_normal_rows[3u * t + 1u].w,
-                                        bvh_normal_rows[3u * t + 2u].w), b));
-                uv = vec2(dot(I.ior_rgb.xyz, vec3(uv, 1.0)), dot(I.sigma_rgb.xyz, vec3(uv, 1.0)));
-                albedo *= textureLod(t_albedo_textures, vec3(uv, I.material.w - 1.0), 0.0).rgb;
+                vec2 u0 = vec2(bvh_tris[3u * t].w, bvh_normal_rows[3u * t].w);
+                vec2 u1 = vec2(bvh_tris[3u * t + 1u].w, bvh_normal_rows[3u * t + 1u].w);
+                vec2 u2 = vec2(bvh_tris[3u * t + 2u].w, bvh_normal_rows[3u * t + 2u].w);
+                mat2 m = mat2(I.ior_rgb.x, I.sigma_rgb.x, I.ior_rgb.y, I.sigma_rgb.y);
+                vec2 uv = m * (u0 * b.x + u1 * b.y + u2 * b.z) + vec2(I.ior_rgb.z, I.sigma_rgb.z);
+                vec2 e1 = m * (u1 - u0), e2 = m * (u2 - u0);
+                vec3 q0 = bvh_tris[3u * t].xyz;
+                vec3 w1 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
+                                    bvh_tris[3u * t + 1u].xyz - q0, 0.0);
+                vec3 w2 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
+                                    bvh_tris[3u * t + 2u].xyz - q0, 0.0);
+                float uv_area = abs(e1.x * e2.y - e1.y * e2.x);
+                float world_area = length(cross(w1, w2));
+                float texels = sqrt(uv_area / max(world_area, 1e-30)) * float(textureSize(t_albedo_textures, 0).x);
+                float lod = log2(max(width * texels, 1e-6));
+                albedo *= textureLod(t_albedo_textures, vec3(uv, I.material.w - 1.0), lod).rgb;
             }
             vec3 n_eye = dot(ns, d) > 0.0 ? -ns : ns;
-            float width = pixel * (ortho ? 1.0 : run + hit.t);
             vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
             vec3 t2 = cross(ns, t1);
             View lv = u_frame.receiver_view;
