@@ -141,7 +141,8 @@ fn beauty(r: &mut Renderer, camera: &str) -> (FrameReport, Vec<u8>) {
 
 /// A frame in which nothing changed at all records neither the caustic stages nor the eye view: it presents the
 /// last beauty image again, byte for byte. A camera move re-runs the eye view only; an exposure change too; an
-/// AOV the composite does not write (caustics) always runs the eye view.
+/// AOV the composite does not write (caustics) always runs the eye view's receivers, and records no glass pass
+/// and no composite.
 #[test]
 fn nothing_changed_reuses_the_eye_view() {
     let (_gpu, device) = common::gpu();
@@ -166,6 +167,12 @@ fn nothing_changed_reuses_the_eye_view() {
     assert_ne!(b4, b0);
     let (r5, _) = frame(&mut s, "main");
     assert!(!r5.eye_reused, "the caustics AOV comes from the eye pass: it runs");
+    // It needs no glass and no beauty: neither the glass passes nor the composite are recorded, so the next beauty
+    // frame composites again, the same bytes as the last beauty frame's.
+    assert!(!r5.substages.iter().any(|(l, _)| *l == "eye.glass"), "{:?}", r5.substages);
+    let (r6, b6) = beauty(&mut s, "main");
+    assert!(r6.reused && !r6.eye_reused, "after a caustics frame the eye view runs again");
+    assert_eq!(b6, b4, "the beauty the last beauty frame showed");
     // The profiler's sessions reuse nothing.
     let mut off = open(&device, false);
     beauty(&mut off, "main");

@@ -117,6 +117,12 @@ pub struct Continuation<'a> {
 }
 
 impl FramePlan<'_> {
+    /// Whether the frame composites the beauty image: every frame but one that reads back the caustics or direct
+    /// AOV.
+    pub fn beauty(&self) -> bool {
+        !matches!(self.aov, Some(Aov::Caustics) | Some(Aov::Direct))
+    }
+
     fn lights(&self) -> usize {
         self.caustics.len()
     }
@@ -341,13 +347,20 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
             ctx(light * nc).eye_receivers(rec)?;
         }
         rec.ts.mark(rec.cmd, "eye.refractors");
-        c0.eye_refractors(rec);
-        if c0.exact_eye() {
-            for light in 0..plan.lights() {
-                ctx(light * nc).eye_glass(rec)?;
+        // A frame that reads back the caustics or direct AOV (the receivers' shading writes them) needs neither
+        // the glass nor the beauty: its refractor buffers, glass passes and composite are not recorded (their
+        // timestamps mark empty stages), and the renderer lets no later frame reuse its eye view.
+        if plan.beauty() {
+            c0.eye_refractors(rec);
+            if c0.exact_eye() {
+                for light in 0..plan.lights() {
+                    ctx(light * nc).eye_glass(rec)?;
+                }
             }
+            c0.composite(rec)?;
+        } else {
+            rec.ts.mark(rec.cmd, "composite");
         }
-        c0.composite(rec)?;
     }
     rec.ts.mark(rec.cmd, "readback");
     let aov = c0.readback(rec, plan.aov);

@@ -675,10 +675,10 @@ impl Renderer {
             preview: desc.preview,
             targets_generation: self.targets_generation,
         };
-        let eye_reused = reused
-            && matches!(desc.aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr))
-            && self.caches.eye.as_ref() == Some(&eye_key);
-        self.caches.eye = Some(eye_key);
+        let beauty = matches!(desc.aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr));
+        let eye_reused = reused && beauty && self.caches.eye.as_ref() == Some(&eye_key);
+        // A caustics or direct AOV frame composites no beauty (src/frame/mod.rs): no later frame reuses its eye.
+        self.caches.eye = beauty.then_some(eye_key);
         for (ubo, d) in targets.ubos[slot].iter_mut().zip(&data) {
             ubo.write(0, std::slice::from_ref(d))?;
         }
