@@ -27,13 +27,27 @@ layout(set = 0, binding = CB_RECEIVERS) uniform usampler2D t_recv;        // rec
 layout(set = 0, binding = CB_ENV) uniform sampler2D t_env;                 // the environment map
 layout(set = 0, binding = CB_ENV_IRRADIANCE) uniform sampler2D t_env_irr;  // its irradiance map
 layout(set = 0, binding = CB_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_textures;  // receivers' albedo textures
-// Exact transport: the glass's radiance per eye sample, summed over the lights by the GLASS_PASS dispatches (one
-// per light, each with that light's uniforms and maps); the composite reads it.
+// Exact transport: the glass's radiance per eye sample under every light, written by the GLASS_PASS dispatch; the
+// composite reads it.
 layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
 
 layout(push_constant) uniform Push {
-    uint add;  // GLASS_PASS: 0 for the first light (write), 1 for a further one (add)
+    uint lights;  // GLASS_PASS: the lights whose maps are bound (the first's at CB_FRAME, CB_SHADOW, ...)
+    uint add;     // GLASS_PASS: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights)
 } pc;
+
+#ifdef GLASS_PASS
+// The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
+// environment comes with u_frame: a later pass's first light carries none.)
+layout(std140, set = 0, binding = CB_LIGHT1) uniform Light1 { FrameData u_light1; };
+layout(set = 0, binding = CB_SHADOW1) uniform sampler2D t_shadow1;
+layout(set = 0, binding = CB_IRRADIANCE1) uniform sampler2D t_irradiance1;
+layout(set = 0, binding = CB_RECEIVERS1) uniform usampler2D t_recv1;
+layout(std140, set = 0, binding = CB_LIGHT2) uniform Light2 { FrameData u_light2; };
+layout(set = 0, binding = CB_SHADOW2) uniform sampler2D t_shadow2;
+layout(set = 0, binding = CB_IRRADIANCE2) uniform sampler2D t_irradiance2;
+layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
+#endif
 
 #include "common/receiver.glsl"
 
@@ -51,15 +65,38 @@ uint bvh_instance_count() { return uint(bvh_instances.length()); }
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
-#ifdef EXACT_EYE
+#ifdef GLASS_PASS
+// Direct and caustic irradiance at receiver point p (shading normal ns) from one light, its caustics averaged
+// over the pixel's footprint: the square of side `width` on the tangent plane (axes t1, t2), in its caustic map.
+vec3 light_irradiance(View lv, vec3 power, float bias, sampler2D shadow, sampler2D irr, usampler2D recv, vec3 p,
+                      vec3 ns, vec3 t1, vec3 t2, float width) {
+    vec2 uv = view_uv(lv, p);
+    vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
+    return direct_irradiance_in(lv, power, bias, shadow, p, ns) + caustic_irradiance_in(lv, irr, recv, p, dx, dy);
+}
+
+// The same summed over the pass's lights (pc.lights of them).
+vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
+    vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow,
+                              t_irradiance, t_recv, p, ns, t1, t2, width);
+    if (pc.lights > 1u) {
+        e += light_irradiance(u_light1.receiver_view, u_light1.light_power.rgb, u_light1.params.y, t_shadow1,
+                              t_irradiance1, t_recv1, p, ns, t1, t2, width);
+    }
+    if (pc.lights > 2u) {
+        e += light_irradiance(u_light2.receiver_view, u_light2.light_power.rgb, u_light2.params.y, t_shadow2,
+                              t_irradiance2, t_recv2, p, ns, t1, t2, width);
+    }
+    return e;
+}
+
 // A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance
 // in its direction instead (so that nothing turns black where the tree is cut).
 const float EYE_THRESHOLD = 0.05;
 const int EYE_STACK = 8;
 
 // Radiance along the eye ray ro + t rd (which reaches glass first), through every interface, with the IORs of
-// channel c (0: the d line, for glass that does not disperse), under this dispatch's light (and the environment
-// with the first light's uniforms). Absorption inside the glass is per channel (Beer–Lambert with the red, green
+// channel c (0: the d line, for glass that does not disperse), under every light and the environment. Absorption inside the glass is per channel (Beer–Lambert with the red, green
 // and blue coefficients), so the colors of absorbing glass show in every trace. A receiver reached through the
 // glass takes its caustic irradiance averaged over the pixel's footprint there: the pixel's width at the distance
 // the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
@@ -119,10 +156,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             vec3 n_eye = dot(ns, d) > 0.0 ? -ns : ns;
             vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
             vec3 t2 = cross(ns, t1);
-            View lv = u_frame.receiver_view;
-            vec2 uv = view_uv(lv, p);
-            vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
-            vec3 e = direct_irradiance(p, ns) + caustic_irradiance(p, dx, dy) + environment_irradiance(n_eye);
+            vec3 e = lights_irradiance(p, ns, t1, t2, width) + environment_irradiance(n_eye);
             L += w * albedo / RECV_PI * e;
             continue;
         }
@@ -217,7 +251,7 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
 }
 
 #ifdef GLASS_PASS
-// One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under this light.
+// One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under every light.
 void main() {
     View cam = u_frame.camera;
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);

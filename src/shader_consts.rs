@@ -159,10 +159,31 @@ pub const CB_ALBEDO_TEXTURES: u32 = 15;
 pub const CB_ENV: u32 = 16;
 /// Binding: the environment's irradiance map.
 pub const CB_ENV_IRRADIANCE: u32 = 17;
-/// Binding: the glass's radiance per eye sample, summed over the lights (exact transport).
+/// Binding: the glass's radiance per eye sample, under every light (exact transport).
 pub const CB_GLASS: u32 = 18;
+/// Bindings: the glass pass's second light (its uniforms, shadow map, caustic map, receivers), then its third,
+/// four bindings further (its first light's are CB_FRAME, CB_SHADOW, CB_IRRADIANCE and CB_RECEIVERS). Three lights
+/// a pass: lavapipe (Mesa 22.3) crashes on a layout of 31 push descriptors with a fourth; a fourth light takes a
+/// second pass.
+pub const CB_LIGHT1: u32 = 19;
+/// See [`CB_LIGHT1`].
+pub const CB_SHADOW1: u32 = 20;
+/// See [`CB_LIGHT1`].
+pub const CB_IRRADIANCE1: u32 = 21;
+/// See [`CB_LIGHT1`].
+pub const CB_RECEIVERS1: u32 = 22;
+/// See [`CB_LIGHT1`].
+pub const CB_LIGHT2: u32 = 23;
+/// See [`CB_LIGHT1`].
+pub const CB_SHADOW2: u32 = 24;
+/// See [`CB_LIGHT1`].
+pub const CB_IRRADIANCE2: u32 = 25;
+/// See [`CB_LIGHT1`].
+pub const CB_RECEIVERS2: u32 = 26;
 /// Bindings of the layout.
-pub const CB_COUNT: u32 = 19;
+pub const CB_COUNT: u32 = 27;
+/// Lights one glass pass shades with.
+pub const GLASS_LIGHTS: u32 = 3;
 
 // Binding indices of the eye view's shading (glsl/eye_shade.comp, src/passes/eye.rs).
 /// Binding: the frame uniforms.

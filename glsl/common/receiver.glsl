@@ -21,7 +21,7 @@ float linear_depth(View v, float z) {
 // Percentage-closer filtering: a 4x4 grid of shadow-map texels with bilinear weights over a 3x3-texel tent (the
 // 2x2 bilinear PCF, box-filtered over 3x3 positions a texel apart), so that a shadow edge is a smooth ramp about
 // three texels wide instead of a staircase of texels.
-float lit_fraction(View v, vec3 p, vec3 n) {
+float lit_fraction_in(View v, sampler2D shadow, float bias_texels, vec3 p, vec3 n) {
     vec3 img = view_image(v, p);
     vec2 uv = (img.xy - v.window.xy) / v.window.zw;
     if (!uv_inside_strict(uv)) return 1.0;
@@ -29,8 +29,8 @@ float lit_fraction(View v, vec3 p, vec3 n) {
     vec3 l = -view_dir_to(v, p);
     float cos_t = clamp(abs(dot(n, l)), 0.05, 1.0);
     // The tent reaches 2 texels out: the bias grows with it along the slope.
-    float bias = u_frame.params.y * texel * (1.0 + 2.0 * sqrt(1.0 - cos_t * cos_t) / cos_t);
-    ivec2 size = textureSize(t_shadow, 0);
+    float bias = bias_texels * texel * (1.0 + 2.0 * sqrt(1.0 - cos_t * cos_t) / cos_t);
+    ivec2 size = textureSize(shadow, 0);
     vec2 st = uv * vec2(size) - 0.5;
     ivec2 i0 = ivec2(floor(st)) - 1;
     vec2 f = st - floor(st);
@@ -40,52 +40,63 @@ float lit_fraction(View v, vec3 p, vec3 n) {
     float lit = 0.0;
     for (int j = 0; j < 4; j++) {
         for (int i = 0; i < 4; i++) {
-            float z = texelFetch(t_shadow, clamp(i0 + ivec2(i, j), ivec2(0), size - 1), 0).x;
+            float z = texelFetch(shadow, clamp(i0 + ivec2(i, j), ivec2(0), size - 1), 0).x;
             lit += wx[i] * wy[j] * (img.z - bias <= linear_depth(v, z) ? 1.0 : 0.0);
         }
     }
     return lit;
 }
 
-// Direct irradiance (W/m^2) from the light at p with normal n, shadowed.
-vec3 direct_irradiance(vec3 p, vec3 n) {
-    View lv = u_frame.receiver_view;
+// Direct irradiance (W/m^2) at p with normal n from a light with view lv and power (W/sr, or W/m^2 across a
+// directional beam), shadowed by its shadow map.
+vec3 direct_irradiance_in(View lv, vec3 power, float bias_texels, sampler2D shadow, vec3 p, vec3 n) {
     vec3 img = view_image(lv, p);
     vec3 l = -view_dir_to(lv, p);
     float cos_s = dot(n, l);
     if (!(cos_s > 0.0 && view_in_cone(lv, img.xy) && img.z > 0.0)) return vec3(0.0);
     float d2 = view_is_ortho(lv) ? 1.0 : dot(p - lv.origin.xyz, p - lv.origin.xyz);
-    return u_frame.light_power.rgb * cos_s / d2 * lit_fraction(lv, p, n);
+    return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, p, n);
 }
 
-// Is p the receiver surface the light sees (so that the caustic map holds its irradiance)? Returns its uv.
-bool caustic_visible(vec3 p, out vec2 uv) {
-    View lv = u_frame.receiver_view;
+// Is p the receiver surface the light of view lv sees (its receivers' g-buffer recv), so that its caustic map
+// holds p's irradiance? Returns its uv.
+bool caustic_visible_in(View lv, usampler2D recv, vec3 p, out vec2 uv) {
     uv = view_uv(lv, p);
     if (!uv_inside_strict(uv)) return false;
-    ivec2 size = textureSize(t_recv, 0);
-    float r_dist = geo_dist(t_recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1));
+    ivec2 size = textureSize(recv, 0);
+    float r_dist = geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1));
     float d = view_dist(lv, p);
     float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
     return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
 }
 
-// Caustic irradiance (W/m^2) averaged over a footprint in the caustic map spanned by the uv offsets dx, dy (up to
-// 8x8 bilinear taps), so that a caustic sharper than the footprint keeps its flux.
-vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
+// Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) averaged over a footprint in
+// its caustic map spanned by the uv offsets dx, dy (up to 8x8 bilinear taps), so that a caustic sharper than the
+// footprint keeps its flux.
+vec3 caustic_irradiance_in(View lv, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
     vec2 uv;
-    if (!caustic_visible(p, uv)) return vec3(0.0);
-    vec2 size = vec2(textureSize(t_irradiance, 0));
+    if (!caustic_visible_in(lv, recv, p, uv)) return vec3(0.0);
+    vec2 size = vec2(textureSize(irr, 0));
     int nx = int(clamp(ceil(length(dx * size)), 1.0, 8.0));
     int ny = int(clamp(ceil(length(dy * size)), 1.0, 8.0));
     vec3 e = vec3(0.0);
     for (int j = 0; j < ny; j++) {
         for (int i = 0; i < nx; i++) {
             vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
-            e += textureLod(t_irradiance, uv + o.x * dx + o.y * dy, 0.0).rgb;
+            e += textureLod(irr, uv + o.x * dx + o.y * dy, 0.0).rgb;
         }
     }
     return e / float(nx * ny);
+}
+
+// The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
+float lit_fraction(View v, vec3 p, vec3 n) { return lit_fraction_in(v, t_shadow, u_frame.params.y, p, n); }
+vec3 direct_irradiance(vec3 p, vec3 n) {
+    return direct_irradiance_in(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow, p, n);
+}
+bool caustic_visible(vec3 p, out vec2 uv) { return caustic_visible_in(u_frame.receiver_view, t_recv, p, uv); }
+vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
+    return caustic_irradiance_in(u_frame.receiver_view, t_irradiance, t_recv, p, dx, dy);
 }
 
 // The environment (docs/design.md "Environment"), seen directly, in reflections and through glass. With a map

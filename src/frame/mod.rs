@@ -25,6 +25,7 @@ pub mod report;
 mod steps;
 
 use crate::gpu_types::FrameData;
+use crate::passes::composite::LightMaps;
 use crate::passes::Passes;
 use crate::scene::view::LightView;
 use crate::scene_gpu::SceneBuffers;
@@ -353,8 +354,18 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         if plan.beauty() {
             c0.eye_refractors(rec);
             if c0.exact_eye() {
-                for light in 0..plan.lights() {
-                    ctx(light * nc).eye_glass(rec)?;
+                // One glass pass for up to GLASS_LIGHTS lights (a fourth adds a pass): the trace runs once per
+                // pass, each receiver it reaches shaded with the pass's lights.
+                let lights: Vec<usize> = (0..plan.lights()).collect();
+                for (k, group) in lights.chunks(crate::shaders::consts::GLASS_LIGHTS as usize).enumerate() {
+                    let more: Vec<LightMaps> = group[1..]
+                        .iter()
+                        .map(|&l| {
+                            let c = ctx(l * nc);
+                            LightMaps { ubo: c.ubo, shadow: &c.r.shadow, irradiance: &c.r.irradiance, recv: &c.r.geo }
+                        })
+                        .collect();
+                    ctx(group[0] * nc).eye_glass(rec, &more, k > 0)?;
                 }
             }
             c0.composite(rec)?;

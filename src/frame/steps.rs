@@ -3,7 +3,7 @@
 
 use super::{Aov, Ctx, Rec};
 use crate::gpu_types::{TransportState, TraversalState};
-use crate::passes::composite::CompositeInputs;
+use crate::passes::composite::{CompositeInputs, LightMaps};
 use crate::passes::coverage::CoverageInputs;
 use crate::passes::eye::{EyeGbuffer, EyeInputs};
 use crate::passes::geometry::GeometryTarget;
@@ -216,7 +216,7 @@ impl Ctx<'_> {
         self.s.transport == Transport::Exact && !self.preview
     }
 
-    fn composite_inputs(&self) -> CompositeInputs<'_> {
+    fn composite_inputs<'b>(&'b self, more_lights: &'b [LightMaps<'b>]) -> CompositeInputs<'b> {
         let e = &self.t.eye;
         CompositeInputs {
             ubo: self.ubo,
@@ -234,35 +234,39 @@ impl Ctx<'_> {
             nearest: self.nearest,
             linear: self.linear,
             glass: &e.glass,
+            more_lights,
             exact: self.exact_eye(),
         }
     }
 
-    /// Step 7c, exact transport: the glass under this light. Each eye sample that meets glass first is traced
-    /// through it (every interface, Fresnel-split) to the receivers, which are shaded with this light's shadow and
-    /// caustic maps (the environment with the first light's), and its radiance written (the first light) or added
-    /// (the others) into the glass image, so that the glass shows every light.
-    pub(super) fn eye_glass(&self, rec: &mut Rec) -> VkResult<()> {
+    /// Step 7c, exact transport: the glass under this light and `more_lights` (at most two more). Each eye
+    /// sample that meets glass first is traced through it (every interface, Fresnel-split) to the receivers, each
+    /// shaded with these lights' shadow and caustic maps (and the environment, with the first light's uniforms),
+    /// and its radiance written (`add` false) or added into the glass image.
+    pub(super) fn eye_glass(&self, rec: &mut Rec, more_lights: &[LightMaps], add: bool) -> VkResult<()> {
         let e = &self.t.eye;
-        let first = self.light == 0;
-        if first {
+        if add {
+            rec.sync.image(&e.glass, &[Access::ComputeWrite]);
+        } else {
             rec.ts.mark(rec.cmd, "eye.glass");
             rec.sync.discard(&e.glass, &[Access::ComputeWrite]);
-        } else {
-            rec.sync.image(&e.glass, &[Access::ComputeWrite]);
         }
         rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
         for img in [&e.front, &e.front_aux, &e.back] {
             rec.sync.image(img, &[Access::ComputeSampled]);
         }
-        rec.sync.image(&self.r.shadow, &EYE_READ);
-        rec.sync.image(&self.r.irradiance, &EYE_READ);
-        rec.sync.image(&self.r.geo, &SAMPLED);
+        for (shadow, irradiance, recv) in std::iter::once((&self.r.shadow, &self.r.irradiance, &self.r.geo))
+            .chain(more_lights.iter().map(|l| (l.shadow, l.irradiance, l.recv)))
+        {
+            rec.sync.image(shadow, &EYE_READ);
+            rec.sync.image(irradiance, &EYE_READ);
+            rec.sync.image(recv, &SAMPLED);
+        }
         // The glass pipeline's layout holds the beauty images; it writes neither.
         rec.sync.image(&e.beauty, &[Access::ComputeWrite]);
         rec.sync.image(&e.hdr, &[Access::ComputeWrite]);
         rec.flush(self.d);
-        self.p.composite.record_glass(rec.cmd, &self.composite_inputs(), !first)
+        self.p.composite.record_glass(rec.cmd, &self.composite_inputs(more_lights), add)
     }
 
     /// Step 8: the glass (read from the glass passes under exact transport; else deferred refraction), supersample
@@ -282,7 +286,7 @@ impl Ctx<'_> {
         rec.sync.image(&self.r.irradiance, &EYE_READ);
         rec.sync.image(&self.r.geo, &SAMPLED);
         rec.flush(self.d);
-        self.p.composite.record(rec.cmd, &self.composite_inputs())?;
+        self.p.composite.record(rec.cmd, &self.composite_inputs(&[]))?;
         rec.sync.image(&e.beauty, &[Access::TransferSrc]);
         rec.sync.image(&e.hdr, &[Access::TransferSrc]);
         rec.flush(self.d);

@@ -21,18 +21,29 @@ pub struct CompositePass {
     /// averaging loop, which costs a CPU driver such as lavapipe even when it runs once.
     single: LazyPipeline,
     exact_single: LazyPipeline,
-    /// Exact transport, once per light before the composite: the glass's radiance per eye sample under that
-    /// light (the environment with the first), written or added into the glass image.
+    /// Exact transport, before the composite: the glass's radiance per eye sample under every light and the
+    /// environment, into the glass image.
     glass: LazyPipeline,
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct CompositePush {
-    /// The glass pass: 0 for the first light (write), 1 for a further one (add).
+    /// The glass pass: how many lights' maps are bound.
+    lights: u32,
+    /// The glass pass: add to what an earlier pass wrote.
     add: u32,
 }
-const _: () = assert!(std::mem::size_of::<CompositePush>() == 4);
+const _: () = assert!(std::mem::size_of::<CompositePush>() == 8);
+
+/// One light's uniforms and maps, as the glass pass reads them.
+#[derive(Clone, Copy)]
+pub struct LightMaps<'a> {
+    pub ubo: &'a Buffer,
+    pub shadow: &'a Image,
+    pub irradiance: &'a Image,
+    pub recv: &'a Image,
+}
 
 pub struct CompositeInputs<'a> {
     pub ubo: &'a Buffer,
@@ -49,8 +60,10 @@ pub struct CompositeInputs<'a> {
     pub images: &'a crate::scene_gpu::SceneImages,
     pub nearest: &'a Sampler,
     pub linear: &'a Sampler,
-    /// The glass's radiance per eye sample (exact transport: the glass passes write it, the composite reads it).
+    /// The glass's radiance per eye sample (exact transport: the glass pass writes it, the composite reads it).
     pub glass: &'a Image,
+    /// The glass pass's second and third lights' maps (its first is `ubo`, `shadow`, `irradiance`, `recv`).
+    pub more_lights: &'a [LightMaps<'a>],
     /// Trace the glass through the BVH.
     pub exact: bool,
 }
@@ -76,6 +89,14 @@ const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
     (CB_ENV, BindKind::Sampled),
     (CB_ENV_IRRADIANCE, BindKind::Sampled),
     (CB_GLASS, BindKind::StorageImage),
+    (CB_LIGHT1, BindKind::Uniform),
+    (CB_SHADOW1, BindKind::Sampled),
+    (CB_IRRADIANCE1, BindKind::Sampled),
+    (CB_RECEIVERS1, BindKind::Sampled),
+    (CB_LIGHT2, BindKind::Uniform),
+    (CB_SHADOW2, BindKind::Sampled),
+    (CB_IRRADIANCE2, BindKind::Sampled),
+    (CB_RECEIVERS2, BindKind::Sampled),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
@@ -92,12 +113,13 @@ impl CompositePass {
         Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass })
     }
 
-    /// Exact transport: the glass's radiance under the light `i` belongs to, per eye sample, into `i.glass`
-    /// (`add`: onto what the earlier lights wrote).
+    /// Exact transport: the glass's radiance per eye sample under the lights of `i` (at most [`GLASS_LIGHTS`]),
+    /// into `i.glass`; `add`: onto what an earlier pass wrote.
     pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
+        assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
         let pipeline = self.glass.get()?;
         self.bind(cmd, pipeline, i);
-        pipeline.push(cmd, &CompositePush { add: add as u32 });
+        pipeline.push(cmd, &CompositePush { lights: 1 + i.more_lights.len() as u32, add: add as u32 });
         let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
@@ -113,13 +135,17 @@ impl CompositePass {
         }
         .get()?;
         self.bind(cmd, pipeline, i);
-        pipeline.push(cmd, &CompositePush { add: 0 });
+        pipeline.push(cmd, &CompositePush { lights: 1, add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
     }
 
     fn bind(&self, cmd: vk::CommandBuffer, pipeline: &crate::vk::Pipeline, i: &CompositeInputs) {
+        // Lights the scene lacks bind the first light's maps (the shader reads only `lights` of them).
+        let first = LightMaps { ubo: i.ubo, shadow: i.shadow, irradiance: i.irradiance, recv: i.recv };
+        let l = |k: usize| i.more_lights.get(k).copied().unwrap_or(first);
+        let (l1, l2) = (l(0), l(1));
         pipeline.bind(
             cmd,
             &ordered([
@@ -142,6 +168,14 @@ impl CompositePass {
                 (CB_ENV, Bind::Sampled(&i.images.environment, &i.images.equirect)),
                 (CB_ENV_IRRADIANCE, Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect)),
                 (CB_GLASS, Bind::StorageImage(i.glass)),
+                (CB_LIGHT1, Bind::Uniform(l1.ubo)),
+                (CB_SHADOW1, Bind::Sampled(l1.shadow, i.nearest)),
+                (CB_IRRADIANCE1, Bind::Sampled(l1.irradiance, i.linear)),
+                (CB_RECEIVERS1, Bind::Sampled(l1.recv, i.nearest)),
+                (CB_LIGHT2, Bind::Uniform(l2.ubo)),
+                (CB_SHADOW2, Bind::Sampled(l2.shadow, i.nearest)),
+                (CB_IRRADIANCE2, Bind::Sampled(l2.irradiance, i.linear)),
+                (CB_RECEIVERS2, Bind::Sampled(l2.recv, i.nearest)),
             ]),
         );
     }
