@@ -3,11 +3,13 @@
 // Each output pixel averages AA x AA samples of the eye buffers (rendered AA times larger per side, AA =
 // camera extent / beauty width): the linear radiance into the HDR image, and the tone-mapped values (before the
 // sRGB encoding) into the beauty image.
-// On glass, with EXACT_EYE (`--transport exact`): the eye ray is traced through the scene BVH, splitting at every
+// On glass, with EXACT_EYE (`--transport exact`): the glass pass's radiance (variant GLASS_PASS, dispatched before
+// the composite at the eye buffers' resolution): the eye ray traced through the scene BVH, splitting at every
 // dielectric interface into its reflected and refracted branches (Fresnel, total internal reflection, mirrors,
 // Beer–Lambert absorption inside the glass) down to the depth cap; a branch ends on a diffuse receiver (shaded
-// with its direct light, caustic irradiance and the environment's light) or in the environment. Without it: the
-// papers' deferred refraction through two surfaces (Wyman & Nichols sec. 3.1), in the eye g-buffers.
+// with every bound light's direct light and caustic irradiance, and the environment's light) or in the
+// environment. Without it: the papers' deferred refraction through two surfaces (Wyman & Nichols sec. 3.1), in
+// the eye g-buffers.
 #include "common/types.glsl"
 #include "common/view.glsl"
 #include "common/optics.glsl"
