@@ -53,7 +53,8 @@ layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
 
 #include "common/receiver.glsl"
 
-#ifdef EXACT_EYE
+#ifdef GLASS_PASS
+// Only the glass pass traces: the exact composite reads its image.
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
@@ -242,7 +243,7 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
     vec4 front = geo_fetch(t_front, q);
     if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
 #ifdef EXACT_EYE
-        // Traced by the glass passes, every light's added.
+        // Traced by the glass pass, under every light.
         return imageLoad(o_glass, q).rgb;
 #else
         return shade_glass(cam, ro, rd, front, FRONT_IOR(texelFetch(t_front_aux, q, 0).x));

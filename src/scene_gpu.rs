@@ -103,50 +103,20 @@ impl SceneImages {
             Some(layers),
             &levels,
         )?;
-        let rgba = |t: &[[f32; 3]]| t.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect::<Vec<[f32; 4]>>();
-        let f32x4 = vk::Format::R32G32B32A32_SFLOAT;
-        let (environment, environment_irradiance) = match &scene.environment {
-            Some(e) => {
-                let m = &e.map;
-                let irr = m.irradiance_map();
-                let w = crate::scene::environment::IRRADIANCE_WIDTH;
-                (
-                    upload_image(
-                        device,
-                        recorder,
-                        "environment",
-                        f32x4,
-                        vk::Extent2D { width: m.width, height: m.height },
-                        None,
-                        &[rgba(&m.texels)],
-                    )?,
-                    upload_image(
-                        device,
-                        recorder,
-                        "environment irradiance",
-                        f32x4,
-                        vk::Extent2D { width: w, height: w / 2 },
-                        None,
-                        &[rgba(irr)],
-                    )?,
-                )
-            }
-            None => {
-                let one = vk::Extent2D { width: 1, height: 1 };
-                (
-                    upload_image(device, recorder, "environment (none)", f32x4, one, None, &[vec![[0.0f32; 4]]])?,
-                    upload_image(
-                        device,
-                        recorder,
-                        "environment irradiance (none)",
-                        f32x4,
-                        one,
-                        None,
-                        &[vec![[0.0f32; 4]]],
-                    )?,
-                )
-            }
+        // The environment map and its irradiance map (one black texel each for the procedural sky).
+        let black = [[0.0f32; 3]];
+        let w = crate::scene::environment::IRRADIANCE_WIDTH;
+        let (map, map_size, irr, irr_size) = match &scene.environment {
+            Some(e) => (&e.map.texels[..], (e.map.width, e.map.height), e.map.irradiance_map(), (w, w / 2)),
+            None => (&black[..], (1, 1), &black[..], (1, 1)),
         };
+        let mut equirect = |name: &str, (width, height): (u32, u32), texels: &[[f32; 3]]| {
+            let rgba: Vec<[f32; 4]> = texels.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect();
+            let f32x4 = vk::Format::R32G32B32A32_SFLOAT;
+            upload_image(device, recorder, name, f32x4, vk::Extent2D { width, height }, None, &[rgba])
+        };
+        let environment = equirect("environment", map_size, map)?;
+        let environment_irradiance = equirect("environment irradiance", irr_size, irr)?;
         Ok(SceneImages {
             albedo,
             environment,

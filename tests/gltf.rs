@@ -358,16 +358,7 @@ fn gltf_base_color_texture_renders_like_toml() {
         "--sky",
         "0.02",
     ];
-    let beauty = |scene: &Path, name: &str| {
-        let out = dir.join(format!("{name}.exr"));
-        let stats = dir.join(format!("{name}.json"));
-        let mut a = vec!["render", "--scene", scene.to_str().unwrap(), "--out", out.to_str().unwrap()];
-        a.extend_from_slice(&["--stats", stats.to_str().unwrap()]);
-        a.extend_from_slice(&args);
-        ok(&a);
-        assert_validation_clean(&read_json(&stats));
-        caustics::image_io::read_exr(&out).expect("exr")
-    };
+    let beauty = |scene: &Path, name: &str| render_exr(&dir, name, scene.to_str().unwrap(), &args);
     let (bg, bt) = (beauty(&g, "gltf"), beauty(&t, "toml"));
     let (mut worst, mut diff, mut total) = (0.0f64, 0.0f64, 0.0f64);
     for (a, b) in bg.data.iter().zip(&bt.data) {

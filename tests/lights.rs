@@ -107,28 +107,13 @@ fn glass_shows_every_light() {
     let singles = [one_light(&dir, 0), one_light(&dir, 1)];
     let args =
         ["--camera", "main", "--size", "96x96", "--level", "2", "--transport", "exact", "--aa", "1", "--sky", "0"];
-    let beauty = |scene: &str, name: &str| {
-        let out = dir.join(format!("{name}.exr"));
-        let stats = dir.join(format!("{name}.json"));
-        let mut a =
-            vec!["render", "--scene", scene, "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
-        a.extend_from_slice(&args);
-        ok(&a);
-        assert_validation_clean(&read_json(&stats));
-        read_exr(&out).unwrap()
-    };
+    let beauty = |scene: &str, name: &str| render_exr(&dir, name, scene, &args);
     let both = beauty(TWO, "both");
     let parts = [beauty(singles[0].to_str().unwrap(), "l0"), beauty(singles[1].to_str().unwrap(), "l1")];
     let total = sum(&parts[0], &parts[1]);
     let e = rel_l1(&both, &total);
     // The glass pixels: lit, but with no receiver seen directly (the direct AOV is zero there).
-    let direct = {
-        let out = dir.join("direct.exr");
-        let mut a = vec!["render", "--scene", TWO, "--out", out.to_str().unwrap(), "--aov", "direct"];
-        a.extend_from_slice(&args);
-        ok(&a);
-        read_exr(&out).unwrap()
-    };
+    let direct = render_exr(&dir, "direct", TWO, &[&args[..], &["--aov", "direct"]].concat());
     let glass: Vec<usize> =
         (0..both.data.len()).filter(|&i| direct.data[i] == [0.0; 3] && both.data[i][0] > 0.0).collect();
     let sub = |img: &RgbImage| RgbImage {

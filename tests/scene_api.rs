@@ -220,18 +220,6 @@ fn a_moved_instance_renders_as_placed_and_rebuilds_nothing() {
     assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
 
-/// The linear beauty from the `top` camera at 128², one sample a pixel, with the sky off.
-fn top_beauty(r: &mut Renderer) -> RgbImage {
-    let top = r.scene().camera(Some("top")).unwrap().clone();
-    let view = r.camera_view(&top, 128, 128);
-    match r.render(&FrameDesc::new(&view, Some(caustics::Aov::BeautyHdr))).unwrap().image {
-        Some(caustics::AovData::Float { width, height, rgba }) => {
-            RgbImage { width, height, data: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() }
-        }
-        _ => panic!("a float AOV"),
-    }
-}
-
 /// Textures in code: `add_texture` and a material naming it render as the same checker in a scene file; a material
 /// naming a texture the scene lacks, or on a mesh without texture coordinates, is refused with the scene unchanged.
 #[test]
@@ -252,7 +240,7 @@ fn textures_added_in_code_render_as_in_the_file() {
     assert!(r.add_instance(loose, "no uv", textured, Mat4::IDENTITY).is_err(), "a mesh without uv");
     assert_eq!(r.scene().objects.len(), 2);
     r.set_material(floor, textured).unwrap();
-    let built = top_beauty(&mut r);
+    let built = common::top_aov(&mut r, 128, caustics::Aov::BeautyHdr).0;
     let text = std::fs::read_to_string(common::SPHERE).unwrap().replace(
         r#"material = { kind = "diffuse", albedo = 0.8 }"#,
         r#"material = { kind = "diffuse", albedo = 0.8, checker = { squares = 8, albedo = 0.2 } }"#,
@@ -260,7 +248,7 @@ fn textures_added_in_code_render_as_in_the_file() {
     let path = dir.join("checker.toml");
     std::fs::write(&path, text).unwrap();
     let mut loaded = common::renderer(&device, path.to_str().unwrap(), s);
-    let file = top_beauty(&mut loaded);
+    let file = common::top_aov(&mut loaded, 128, caustics::Aov::BeautyHdr).0;
     let m = compare(&built, &file, 128, 2.0);
     eprintln!("texture in code against the file: {m:?}");
     assert!(m.rel_l1 <= 1e-5, "{m:?}");

@@ -90,11 +90,9 @@ vec3 caustic_irradiance_in(View lv, sampler2D irr, usampler2D recv, vec3 p, vec2
 }
 
 // The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
-float lit_fraction(View v, vec3 p, vec3 n) { return lit_fraction_in(v, t_shadow, u_frame.params.y, p, n); }
 vec3 direct_irradiance(vec3 p, vec3 n) {
     return direct_irradiance_in(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow, p, n);
 }
-bool caustic_visible(vec3 p, out vec2 uv) { return caustic_visible_in(u_frame.receiver_view, t_recv, p, uv); }
 vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
     return caustic_irradiance_in(u_frame.receiver_view, t_irradiance, t_recv, p, dx, dy);
 }

@@ -70,6 +70,18 @@ pub fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_jso
     (s, out)
 }
 
+/// `render` of `scene` with extra args into `dir/NAME.exr` (validation checked): the EXR's image, the linear
+/// beauty unless the args name another AOV.
+pub fn render_exr(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> caustics::image_io::RgbImage {
+    let out = dir.join(format!("{name}.exr"));
+    let stats = dir.join(format!("{name}.json"));
+    let mut args = vec!["render", "--scene", scene, "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    ok(&args);
+    assert_validation_clean(&read_json(&stats));
+    caustics::image_io::read_exr(&out).expect("read EXR")
+}
+
 /// The caustics AOV of the `top` camera at 256² under exact transport, with extra args: stats and image.
 pub fn exact(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, caustics::image_io::RgbImage) {
     let mut args = vec!["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "256x256"];
@@ -136,9 +148,19 @@ pub fn top_reference_at(
 
 /// The caustics AOV of an in-process renderer from its scene's `top` camera at `side`², with the frame's report.
 pub fn top_caustics(r: &mut caustics::Renderer, side: u32) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
+    top_aov(r, side, caustics::Aov::Caustics)
+}
+
+/// A float AOV (caustics, direct, linear beauty) of an in-process renderer from its scene's `top` camera at
+/// `side`², with the frame's report.
+pub fn top_aov(
+    r: &mut caustics::Renderer,
+    side: u32,
+    aov: caustics::Aov,
+) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
     let top = r.scene().camera(Some("top")).expect("a top camera").clone();
     let view = r.camera_view(&top, side, side);
-    let frame = r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Caustics))).expect("frame");
+    let frame = r.render(&caustics::FrameDesc::new(&view, Some(aov))).expect("frame");
     match frame.image {
         Some(caustics::AovData::Float { width, height, rgba }) => {
             let data = rgba.iter().map(|p| [p[0], p[1], p[2]]).collect();
