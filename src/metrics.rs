@@ -143,6 +143,105 @@ pub fn compare(a: &RgbImage, reference: &RgbImage, res: u32, extent_m: f32) -> M
     Metrics { res: ow as u32, rel_l1: ratio(l1, 0.0), flux_ratio: ratio(sum, 1.0), peak_offset_m, sum, sum_ref }
 }
 
+/// The side of the tiles [`periodic_share`] takes the spectrum of, pixels of the comparison grid.
+pub const PERIODIC_TILE: usize = 32;
+
+/// How periodic the residual E − E_ref is at `res`² (a power of two, at least [`PERIODIC_TILE`]), docs/design.md
+/// "Ground truth and error". The residual is cut into [`PERIODIC_TILE`]² tiles; each is windowed (Hann) and
+/// Fourier transformed, and its periodic share is the part of its power above the lowest frequencies (two cycles
+/// per tile and up) that lies in its strongest 2% of frequency bins. The result is the mean of the tiles' shares
+/// weighted by their residual power. Within a tile a fringe pattern (the moiré of splats narrower than their
+/// photons' spacing, whose period drifts slowly across the image) is nearly one frequency, so its power sits in a
+/// few bins; noise spreads it over all of them (white noise: about 0.13).
+pub fn periodic_share(a: &RgbImage, reference: &RgbImage, res: u32) -> f64 {
+    assert!(res.is_power_of_two() && res as usize >= PERIODIC_TILE, "periodic_share needs a power-of-two res");
+    let n = res as usize;
+    let fa = box_filter(&luminance_plane(a), a.width as usize, a.height as usize, n, n);
+    let fb = box_filter(&luminance_plane(reference), reference.width as usize, reference.height as usize, n, n);
+    let t = PERIODIC_TILE;
+    let hann: Vec<f64> =
+        (0..t).map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * (i as f64 + 0.5) / t as f64).cos()).collect();
+    let freq = |k: usize| if k <= t / 2 { k as f64 } else { k as f64 - t as f64 };
+    let (mut weighted, mut total) = (0.0, 0.0);
+    let (mut r, mut c) = (vec![0.0; t], vec![0.0; t]);
+    for ty in 0..n / t {
+        for tx in 0..n / t {
+            let mut re: Vec<f64> = (0..t * t)
+                .map(|i| {
+                    let (x, y) = (tx * t + i % t, ty * t + i / t);
+                    (fa[y * n + x] - fb[y * n + x]) * hann[i % t] * hann[i / t]
+                })
+                .collect();
+            let mut im = vec![0.0; t * t];
+            for pass in 0..2 {
+                for line in 0..t {
+                    let at = |k: usize| if pass == 0 { line * t + k } else { k * t + line };
+                    for k in 0..t {
+                        r[k] = re[at(k)];
+                        c[k] = im[at(k)];
+                    }
+                    fft(&mut r, &mut c);
+                    for k in 0..t {
+                        re[at(k)] = r[k];
+                        im[at(k)] = c[k];
+                    }
+                }
+            }
+            let mut power: Vec<f64> = (0..t * t)
+                .filter(|&i| freq(i % t).hypot(freq(i / t)) >= 2.0)
+                .map(|i| re[i] * re[i] + im[i] * im[i])
+                .collect();
+            let sum: f64 = power.iter().sum();
+            if sum.is_nan() || sum <= 0.0 {
+                continue;
+            }
+            power.sort_by(|x, y| y.total_cmp(x));
+            let top = (power.len() * 2).div_ceil(100);
+            weighted += power[..top].iter().sum::<f64>();
+            total += sum;
+        }
+    }
+    if total > 0.0 {
+        weighted / total
+    } else {
+        0.0
+    }
+}
+
+/// In-place radix-2 FFT of (re, im), whose length is a power of two.
+fn fft(re: &mut [f64], im: &mut [f64]) {
+    let n = re.len();
+    let mut j = 0;
+    for i in 1..n {
+        let mut bit = n >> 1;
+        while j & bit != 0 {
+            j ^= bit;
+            bit >>= 1;
+        }
+        j |= bit;
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
+    }
+    let mut len = 2;
+    while len <= n {
+        let ang = -std::f64::consts::TAU / len as f64;
+        for start in (0..n).step_by(len) {
+            for k in 0..len / 2 {
+                let (wr, wi) = ((ang * k as f64).cos(), (ang * k as f64).sin());
+                let (a, b) = (start + k, start + k + len / 2);
+                let (xr, xi) = (re[b] * wr - im[b] * wi, re[b] * wi + im[b] * wr);
+                re[b] = re[a] - xr;
+                im[b] = im[a] - xi;
+                re[a] += xr;
+                im[a] += xi;
+            }
+        }
+        len <<= 1;
+    }
+}
+
 /// What makes a comparison meaningless is refused (bad input, exit 2): a reference that is all zero or not
 /// finite (every image would score perfectly, or every metric be NaN), a non-finite image under test, and a pair
 /// whose metadata names different cameras, camera kinds or AOVs. Other metadata differences are warned about.

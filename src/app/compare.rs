@@ -44,6 +44,8 @@ pub struct CompareReport {
     /// Null where the images are narrower than 64 (or 256) pixels: a comparison finer than the images is not made.
     pub rel_l1_64: Option<f64>,
     pub rel_l1_256: Option<f64>,
+    /// How periodic the residual is at 256² (`metrics::periodic_share`; null for images narrower than 256).
+    pub periodic_share_256: Option<f64>,
     /// The metrics at `--res`, on which the thresholds act.
     pub at_res: Metrics,
     pub extent_m: f32,
@@ -80,6 +82,7 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     }
     let m64 = (carried >= 64).then(|| compare(&a, &b, 64, args.extent));
     let m256 = (carried >= 256).then(|| compare(&a, &b, 256, args.extent));
+    let periodic = (carried >= 256).then(|| caustics::metrics::periodic_share(&a, &b, 256));
     let m = compare(&a, &b, res, args.extent);
     let mut failures = Vec::new();
     // A NaN fails every threshold.
@@ -106,6 +109,7 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
             b: args.b.display().to_string(),
             rel_l1_64: m64.map(|m| m.rel_l1),
             rel_l1_256: m256.map(|m| m.rel_l1),
+            periodic_share_256: periodic,
             at_res: m,
             extent_m: args.extent,
             failures: failures.clone(),
@@ -117,6 +121,9 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
                 Some(m) => println!("{label} {:.6}", m.rel_l1),
                 None => println!("{label} – (finer than the images: {carried} columns)"),
             }
+        }
+        if let Some(p) = periodic {
+            println!("periodic share of the residual (256²): {p:.4}");
         }
         if ![64, 256].contains(&m.res) {
             println!("rel-L1 ({}²): {:.6}", m.res, m.rel_l1);
