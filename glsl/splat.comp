@@ -1,17 +1,24 @@
 #version 460
 // Compute splat (docs/design.md step 5, `--splat compute`), dispatched indirectly over the records the draw would
 // draw: the same separable integer-radius tent (radii rx, ry) as splat.frag, evaluated at the same texel centers, each tap added
-// to the flux map with a float atomic. The weights of a record sum to exactly 1 over the texel lattice, so flux is
-// conserved as by the point draw; only the order of the float additions differs. As with points, a record whose
-// center lies outside the map is dropped (a point primitive is clipped by its vertex).
+// to the flux map with a float atomic. The weights of a record sum to exactly 1 over the map's texels (at an edge
+// they are renormalized over the taps on the map, splat_edge_norm), so flux is conserved as by the point draw; only
+// the order of the float additions differs. As with points, a record whose center lies outside the map is dropped
+// (a point primitive is clipped by its vertex).
 //
 // SPLAT_TILED (the default variant): contention control. Neighbouring records come from neighbouring cells, so a
 // work group's records mostly land in a small window of the map, and where light focuses many land on the same
 // texels. The group first adds its taps into a SPLAT_TILE² window in shared memory (placed over the group's
 // footprint, or centred on its first record when the footprint is wider), then adds each touched window texel to
 // the map with one global atomic. Taps outside the window go straight to the map.
+//
+// Under differential footprints a tent wider than SPLAT_FINE_RADIUS goes to a coarse level of the flux texels
+// instead (glsl/common/splat_levels.glsl), at most SPLAT_FINE_RADIUS wide there, with its weights normalized to
+// sum to 1; splat_collapse.comp adds the levels back into the map. So a record costs at most about (2
+// SPLAT_FINE_RADIUS + 1)² taps, where a 64-texel tent took 129².
 #extension GL_EXT_shader_atomic_float : require
 #include "common/photon_bindings.glsl"
+#include "common/splat_levels.glsl"
 
 layout(local_size_x = LINEAR_WG) in;
 
@@ -20,6 +27,38 @@ shared float s_tile[SPLAT_TILE * SPLAT_TILE];
 shared int s_lo_x, s_lo_y, s_hi_x, s_hi_y;
 shared ivec2 s_first;
 #endif
+
+// The coarse level a record of radii r splats at: the first where both are at most SPLAT_FINE_RADIUS texels (the
+// coarsest if none), or 0 for a record splatted as it is.
+uint splat_level(vec2 r, ivec2 size) {
+    if ((u_frame.transport.w & 0x100u) == 0u) return 0u;
+    float w = max(r.x, r.y);
+    uint top = splat_levels(size), m = 0u;
+    while (m < top && w > float(SPLAT_FINE_RADIUS << m)) m++;
+    return m;
+}
+
+// A tent of radii r (texels of level 0) centred at c, at coarse level m: radii r / 2^m (at least 1), its weights
+// over the level's texels normalized to sum to 1 (radii that are not integers do not sum to it by themselves, and
+// at an edge the taps off the map are given back to the ones on it, as at level 0).
+void splat_coarse(vec2 c0, float flux, vec2 r, ivec2 size, uint m) {
+    float k = exp2(-float(m));
+    vec2 c = c0 * k, rm = max(r * k, vec2(1.0));
+    ivec2 n = size >> m;
+    vec2 sum = vec2(tent_sum(c.x, rm.x, n.x), tent_sum(c.y, rm.y, n.y));
+    if (!(sum.x > 0.0 && sum.y > 0.0)) return;
+    float f = flux / (sum.x * sum.y);
+    uint base = splat_level_offset(size, m);
+    ivec2 lo = max(ivec2(ceil(c - rm - 0.5)), ivec2(0)), hi = min(ivec2(floor(c + rm - 0.5)), n - 1);
+    for (int y = lo.y; y <= hi.y; y++) {
+        float wy = max(0.0, 1.0 - abs(float(y) + 0.5 - c.y) / rm.y);
+        if (wy == 0.0) continue;
+        for (int x = lo.x; x <= hi.x; x++) {
+            float wx = max(0.0, 1.0 - abs(float(x) + 0.5 - c.x) / rm.x);
+            if (wx != 0.0) atomicAdd(flux_texels[base + uint(y * n.x + x)], f * (wx * wy));
+        }
+    }
+}
 
 void main() {
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + gl_LocalInvocationIndex;
@@ -31,9 +70,18 @@ void main() {
         valid = s.w > 0.0 && s.x >= 0.0 && s.y >= 0.0 && s.x <= float(size.x) && s.y <= float(size.y);
     }
     vec2 r = splat_radii(s.w);
+    if (valid) {
+        uint m = splat_level(r, size);
+        if (m > 0u) {
+            splat_coarse(s.xy, s.z, r, size, m);
+            valid = false;  // splatted: the level-0 taps (and the tiled window) leave it out
+        }
+    }
     // Texel centers p + 0.5 with |p + 0.5 - c| < r on each axis.
     ivec2 lo = ivec2(0), hi = ivec2(-1);
+    float flux = 0.0;
     if (valid) {
+        flux = s.z * splat_edge_norm(s.xy, r, size);
         lo = max(ivec2(ceil(s.xy - r - 0.5)), ivec2(0));
         hi = min(ivec2(floor(s.xy + r - 0.5)), size - 1);
     }
@@ -68,7 +116,7 @@ void main() {
         for (int x = lo.x; x <= hi.x; x++) {
             float wx = max(0.0, 1.0 - abs(float(x) + 0.5 - s.x) / r.x) / r.x;
             if (wx == 0.0) continue;
-            float v = s.z * (wx * wy);
+            float v = flux * (wx * wy);
 #ifdef SPLAT_TILED
             ivec2 q = ivec2(x, y) - org;
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(SPLAT_TILE)))) {

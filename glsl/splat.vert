@@ -17,6 +17,8 @@ void main() {
         gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the point is discarded
         gl_PointSize = 1.0;
     }
-    v_flux = s.z;
-    v_splat = vec4(s.xy, s.w > 0.0 ? splat_radii(s.w) : vec2(1.0));
+    vec2 r = s.w > 0.0 ? splat_radii(s.w) : vec2(1.0);
+    // At an edge the fragments that the map clips away are given back to the ones on it.
+    v_flux = s.w > 0.0 ? s.z * splat_edge_norm(s.xy, r, ivec2(size)) : 0.0;
+    v_splat = vec4(s.xy, r);
 }

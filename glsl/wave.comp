@@ -28,8 +28,7 @@ shared bool s_rays_ok;
 shared bool s_recs_ok;
 
 // A ray is RAY_VEC4S_CELL vec4s, (origin, throughput), (direction, bits(meta)), or with differential footprints
-// RAY_VEC4S_DIFFERENTIAL, the two and
-// (dP/dx, dP/dy.x), (dP/dy.yz, dD/dx.xy), (dD/dx.z, dD/dy).
+// RAY_VEC4S_DIFFERENTIAL, the two and the packed differentials (diff_pack, glsl/common/transport.glsl).
 void queue_put(uint q, uint k, vec4 v) {
     if (q == 0u) {
         queue0[k] = v;
@@ -38,15 +37,11 @@ void queue_put(uint q, uint k, vec4 v) {
     }
 }
 
-void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, RayDiff r) {
+void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, RayDiff r, float side) {
     uint b = stride * k;
     queue_put(q, b, vec4(o, w));
     queue_put(q, b + 1u, vec4(d, uintBitsToFloat(meta)));
-    if (stride > RAY_VEC4S_CELL) {
-        queue_put(q, b + 2u, vec4(r.dpx, r.dpy.x));
-        queue_put(q, b + 3u, vec4(r.dpy.yz, r.ddx.xy));
-        queue_put(q, b + 4u, vec4(r.ddx.z, r.ddy));
-    }
+    if (stride > RAY_VEC4S_CELL) queue_put(q, b + 2u, diff_pack(r, d, side));
 }
 
 vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
@@ -162,6 +157,7 @@ void main() {
     bool one_event = false;
     vec4 record = vec4(0.0);
     float phi = 0.0;  // the photon's flux / intensity
+    float ray_side = 1.0;  // the photon's cell side: the scale of its packed differentials
     uint ray_slot = 0u, rec_slot = 0u;
     bool live = i < tstate.in_count && !(can_abort && state.aborted != 0u);
     if (live) {
@@ -185,14 +181,6 @@ void main() {
             uint qi = wave & 1u;
             vec4 a = queue_get(qi, stride * i);
             vec4 b = queue_get(qi, stride * i + 1u);
-            if (diff) {
-                vec4 e = queue_get(qi, stride * i + 2u), f = queue_get(qi, stride * i + 3u);
-                vec4 g = queue_get(qi, stride * i + 4u);
-                rdf.dpx = e.xyz;
-                rdf.dpy = vec3(e.w, f.xy);
-                rdf.ddx = vec3(f.zw, g.x);
-                rdf.ddy = g.yzw;
-            }
             ro = a.xyz;
             w = a.w;
             rd = b.xyz;
@@ -203,6 +191,8 @@ void main() {
             cell = photons[pidx];
             phi = cell_measure(cell_level(cell), cell_xy(cell));
         }
+        if (diff) ray_side = cell_side(cell_level(cell));
+        if (diff && wave > 0u) rdf = diff_unpack(queue_get(wave & 1u, stride * i + 2u), rd, ray_side);
         float flux = phi * w;
         SceneHit hit;
         if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) {
@@ -264,8 +254,7 @@ void main() {
                     // derivative where the branch used it.
                     vec3 dnx = vec3(0.0), dny = vec3(0.0);
                     if (diff && (s.k_refl != 0.0 || s.k_refr != 0.0)) {
-                        dnx = bvh_shading_dn(hit, ns, rdf.dpx);
-                        dny = bvh_shading_dn(hit, ns, rdf.dpy);
+                        bvh_shading_dn(hit, ns, rdf.dpx, rdf.dpy, dnx, dny);
                     }
                     if (wr > 0.0) {
                         if (wr < cut) {
@@ -353,7 +342,7 @@ void main() {
     barrier();
     uint q = (wave + 1u) & 1u;
     if (s_rays_ok) {
-        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c]);
+        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c], ray_side);
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
     // One invocation per term sums the work group's shares and adds them in fixed point.

@@ -106,8 +106,9 @@ impl CoopChecks {
 pub enum Footprint {
     /// The splat radius follows the photon's cell: its side over a caustic-map texel.
     Cell,
-    /// Exact transport: the radius per map axis comes from where the cell lands, by ray differentials (Igehy
-    /// 1999) carried through every interface; the ray queues grow from 32 to 80 bytes a ray.
+    /// Exact transport (the default): the radius per map axis comes from where the cell lands, by ray
+    /// differentials (Igehy 1999) carried through every interface, packed into 16 more bytes a ray (48 instead of
+    /// 32); the compute splats put the wide tents this gives on coarse levels of the flux texels.
     Differential,
 }
 
@@ -257,7 +258,7 @@ impl Default for Tuning {
     fn default() -> Self {
         Tuning {
             splat: Splat::Auto,
-            footprint: Footprint::Cell,
+            footprint: Footprint::Differential,
             flux_threshold: 1e-3,
             weak_branches: 0.05,
             weak_block: 0,
@@ -560,7 +561,8 @@ impl Settings {
             eye_depth: q.eye_depth,
             photon_budget_mib,
             splat,
-            footprint: t.footprint,
+            // The two-interface trace always sizes its splats by the cell.
+            footprint: if q.transport == Transport::TwoInterface { Footprint::Cell } else { t.footprint },
             flux_threshold: t.flux_threshold,
             weak_branches: t.weak_branches,
             weak_block: if t.weak_block == 0 { 4 } else { t.weak_block },
@@ -644,7 +646,7 @@ impl ResolvedSettings {
         (((self.photon_budget() * 1024.0 * 1024.0) / 8.0).floor().max(8.0) as u32).min(max)
     }
 
-    /// Exact transport: rays per queue (32 bytes each, 80 with ray differentials; two queues; each within one
+    /// Exact transport: rays per queue (32 bytes each, 48 with ray differentials; two queues; each within one
     /// binding) and splat records per batch (one per photon-buffer entry, as for the two-interface trace).
     /// Two-interface: none.
     pub fn ray_queue_capacity(&self) -> u32 {

@@ -15,6 +15,11 @@ pub const TILE_WG: u32 = 8;
 pub const MAX_SPLAT_RADIUS: u32 = 64;
 /// Side of the shared-memory window in which the tiled compute splat gathers a work group's taps.
 pub const SPLAT_TILE: u32 = 32;
+/// Differential footprints, compute splats: a tent wider than this many texels (either radius) is splatted at the
+/// coarse level of the flux texels where it is at most this wide, so that its taps stay few whatever its width.
+pub const SPLAT_FINE_RADIUS: u32 = 4;
+/// Coarse levels of the flux texels (each half the one before a side): radii up to SPLAT_FINE_RADIUS·2^SPLAT_LEVELS.
+pub const SPLAT_LEVELS: u32 = 4;
 /// Mip levels kept in the coverage pyramid (covers refractor g-buffers up to 64·2^(MAX_PYRAMID_MIPS-1)).
 pub const MAX_PYRAMID_MIPS: u32 = 12;
 /// Largest number of photon batches recorded per frame.
@@ -70,8 +75,9 @@ pub const INDIRECT_COMMANDS: u32 = MAX_LEVELS + 4;
 // Exact transport's rays.
 /// vec4s per ray with the cell footprint: (origin, throughput), (direction, bits(meta)).
 pub const RAY_VEC4S_CELL: u32 = 2;
-/// vec4s per ray with ray differentials: three more, (dP/dx, dP/dy.x), (dP/dy.yz, dD/dx.xy), (dD/dx.z, dD/dy).
-pub const RAY_VEC4S_DIFFERENTIAL: u32 = 5;
+/// vec4s per ray with ray differentials: one more, dP/dx, dP/dy, dD/dx and dD/dy across the ray as half-float pairs
+/// (`diff_pack`, glsl/common/transport.glsl).
+pub const RAY_VEC4S_DIFFERENTIAL: u32 = 3;
 /// A ray's meta word holds its photon's index (counted from the photon buffer's top) in this many low bits, and
 /// its interactions above them: a batch holds at most 2^PHOTON_INDEX_BITS photons.
 pub const PHOTON_INDEX_BITS: u32 = 24;

@@ -162,7 +162,7 @@ impl Targets {
                 flux_texels: Buffer::new(
                     device,
                     "caustic flux texels",
-                    4 * (s.caustic_res as u64).pow(2),
+                    4 * splat_texels(s.caustic_res),
                     vk::BufferUsageFlags::STORAGE_BUFFER
                         | vk::BufferUsageFlags::TRANSFER_SRC
                         | vk::BufferUsageFlags::TRANSFER_DST,
@@ -317,4 +317,15 @@ pub struct ReadbackLayout {
     pub guard: u64,
     pub aov: u64,
     pub total: u64,
+}
+
+/// The coarse levels of a `res`² map's flux texels (glsl/common/splat_levels.glsl): as many halvings as `res`
+/// allows, at most SPLAT_LEVELS.
+pub fn splat_levels(res: u32) -> u32 {
+    crate::shaders::consts::SPLAT_LEVELS.min(res.trailing_zeros())
+}
+
+/// Texels of a `res`² map's flux texels with their coarse levels.
+pub fn splat_texels(res: u32) -> u64 {
+    (0..=splat_levels(res)).map(|m| ((res >> m) as u64).pow(2)).sum()
 }

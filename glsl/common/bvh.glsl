@@ -188,11 +188,12 @@ void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
     ns = len > 0.0 && !isnan(len) && !isinf(len) ? normalize(m * n) : ng;
 }
 
-// Derivative of the world-space shading normal `ns` (as bvh_normals computes it) along a world offset dp in the
-// triangle's plane (ray differentials): the barycentric gradients of the world-space triangle (b1 = dp.(e2 x n)/|n|^2,
+// Derivatives of the world-space shading normal `ns` (as bvh_normals computes it) along two world offsets dpx, dpy in
+// the triangle's plane (ray differentials): the barycentric gradients of the world-space triangle (b1 = dp.(e2 x n)/|n|^2,
 // b2 = dp.(n x e1)/|n|^2 with n = e1 x e2), the vertex normals' differences through the normal matrix, and the
 // derivative of the normalization, (dm - ns (ns.dm)) / |m|.
-vec3 bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dp) {
+void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out vec3 dny) {
+    dnx = dny = vec3(0.0);
     BvhInstance I = bvh_instances[hit.inst];
     vec3 q0 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
                         bvh_tris[3u * hit.tri].xyz, 1.0);
@@ -202,16 +203,20 @@ vec3 bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dp) {
                         bvh_tris[3u * hit.tri + 2u].xyz, 1.0);
     vec3 e1 = q1 - q0, e2 = q2 - q0, n = cross(e1, e2);
     float nn = dot(n, n);
-    if (!(nn > 0.0)) return vec3(0.0);
-    float b1 = dot(dp, cross(e2, n)) / nn, b2 = dot(dp, cross(n, e1)) / nn;
+    if (!(nn > 0.0)) return;
+    vec3 g1 = cross(e2, n) / nn, g2 = cross(n, e1) / nn;
     vec3 n0 = bvh_normal_rows[3u * hit.tri].xyz, n1 = bvh_normal_rows[3u * hit.tri + 1u].xyz;
     vec3 n2 = bvh_normal_rows[3u * hit.tri + 2u].xyz;
     mat3 m = mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz);
     float len = length(m * (n0 * hit.bary.x + n1 * hit.bary.y + n2 * hit.bary.z));
-    if (!(len > 0.0) || isinf(len)) return vec3(0.0);
-    vec3 dm = m * ((n1 - n0) * b1 + (n2 - n0) * b2);
-    vec3 dn = (dm - ns * dot(ns, dm)) / len;
-    return any(isnan(dn)) || any(isinf(dn)) ? vec3(0.0) : dn;
+    if (!(len > 0.0) || isinf(len)) return;
+    vec3 d1 = m * (n1 - n0), d2 = m * (n2 - n0);
+    vec3 dm = d1 * dot(dpx, g1) + d2 * dot(dpx, g2);
+    dnx = (dm - ns * dot(ns, dm)) / len;
+    dm = d1 * dot(dpy, g1) + d2 * dot(dpy, g2);
+    dny = (dm - ns * dot(ns, dm)) / len;
+    if (any(isnan(dnx)) || any(isinf(dnx))) dnx = vec3(0.0);
+    if (any(isnan(dny)) || any(isinf(dny))) dny = vec3(0.0);
 }
 
 // World-space hit point from the barycentric weights (more precise than ro + t*rd far from the origin).

@@ -34,6 +34,22 @@ vec2 splat_radii(float w) {
     uint rx = r & 0xFFFFu, ry = r >> 16;
     return vec2(float(rx), float(ry == 0u ? rx : ry));
 }
+// The sum over the texel centers x + 0.5 of a map n texels wide (0 <= x < n) of the tent max(0, 1 - |x + 0.5 - c|
+// / r): exactly r for an integer r whose tent lies inside the map, less where it reaches past an edge.
+float tent_sum(float c, float r, int n) {
+    int lo = max(int(ceil(c - r - 0.5)), 0), hi = min(int(floor(c + r - 0.5)), n - 1);
+    float s = 0.0;
+    for (int x = lo; x <= hi; x++) s += max(0.0, 1.0 - abs(float(x) + 0.5 - c) / r);
+    return s;
+}
+// The factor that makes the on-map weights of a splat of integer radii r centred at c (texels) sum to exactly 1:
+// 1 for a tent inside the map; at an edge the taps that would fall off it are given back to the ones on it, so a
+// record whose center lands on the map deposits all its flux there, however wide its tent.
+float splat_edge_norm(vec2 c, vec2 r, ivec2 size) {
+    if (all(greaterThanEqual(c - r, vec2(0.0))) && all(lessThanEqual(c + r, vec2(size)))) return 1.0;
+    float on_map = tent_sum(c.x, r.x, size.x) * tent_sum(c.y, r.y, size.y);
+    return on_map > 0.0 ? (r.x * r.y) / on_map : 0.0;
+}
 
 // Exact transport (src/bvh.rs, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.
 // A ray is two vec4: origin and throughput (relative to its photon's flux); direction and bits(photon index |

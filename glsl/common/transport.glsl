@@ -47,6 +47,52 @@ RayDiff cell_ray_diff(uint level, uvec2 xy, vec3 rd) {
     return r;
 }
 
+// A ray's differentials in a queue: four half-float pairs. Only the parts across the ray's unit direction D are
+// kept, in an orthonormal basis around D (Duff et al., JCGT 2017), so rebuilt exactly from D's stored bits:
+// - dP's part along D does not matter, as the next transfer's dt absorbs it (dP + a D gives the same dP');
+// - dD's part along D is zero for a unit direction (and a reflection or refraction maps it onto the child's own
+//   direction, which the transfer absorbs again).
+// They are scaled by the photon's cell side first, so that the halves hold O(1) values (a cell's own spread at
+// unit distance), and clamped to the half range; a value past it or a NaN makes footprint_radii fall back to
+// the cell radius.
+void diff_basis(vec3 d, out vec3 b1, out vec3 b2) {
+    float sgn = d.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sgn + d.z), b = d.x * d.y * a;
+    b1 = vec3(1.0 + sgn * d.x * d.x * a, sgn * b, -sgn * d.x);
+    b2 = vec3(b, sgn + d.y * d.y * a, -d.y);
+}
+
+uint diff_pack2(vec3 v, vec3 b1, vec3 b2, float k) {
+    vec2 c = clamp(vec2(dot(v, b1), dot(v, b2)) * k, vec2(-65504.0), vec2(65504.0));
+    return packHalf2x16(c);
+}
+
+vec3 diff_unpack2(uint u, vec3 b1, vec3 b2, float k) {
+    vec2 c = unpackHalf2x16(u) * k;
+    return c.x * b1 + c.y * b2;
+}
+
+// The packed differentials of a ray of unit direction d whose photon's cell has side `side`.
+vec4 diff_pack(RayDiff r, vec3 d, float side) {
+    vec3 b1, b2;
+    diff_basis(d, b1, b2);
+    float k = 1.0 / side;
+    return uintBitsToFloat(uvec4(diff_pack2(r.dpx, b1, b2, k), diff_pack2(r.dpy, b1, b2, k),
+                                 diff_pack2(r.ddx, b1, b2, k), diff_pack2(r.ddy, b1, b2, k)));
+}
+
+RayDiff diff_unpack(vec4 v, vec3 d, float side) {
+    vec3 b1, b2;
+    diff_basis(d, b1, b2);
+    uvec4 u = floatBitsToUint(v);
+    RayDiff r;
+    r.dpx = diff_unpack2(u.x, b1, b2, side);
+    r.dpy = diff_unpack2(u.y, b1, b2, side);
+    r.ddx = diff_unpack2(u.z, b1, b2, side);
+    r.ddy = diff_unpack2(u.w, b1, b2, side);
+    return r;
+}
+
 // Transfer to a hit at distance t on a surface of normal n (Igehy eq. 10-12): dP' = dP + t dD + dt D with
 // dt = -(dP + t dD).n / (D.n), so that dP' lies in the surface's tangent plane.
 void diff_transfer(inout RayDiff r, vec3 rd, float t, vec3 n) {
@@ -99,7 +145,7 @@ vec2 view_px_diff(View v, vec3 p, vec3 dp) {
 uint footprint_radii(vec2 mx, vec2 my, uint r_cell) {
     vec2 ext = abs(mx) + abs(my);
     float lo = max(1.0, floor(float(r_cell) / 4.0));
-    float hi = min(8.0 * float(r_cell), float(MAX_SPLAT_RADIUS));
+    float hi = min(16.0 * float(r_cell), float(MAX_SPLAT_RADIUS));
     if (any(isnan(ext)) || any(isinf(ext))) ext = vec2(float(r_cell));
     uvec2 r = uvec2(clamp(round(ext), vec2(lo), vec2(hi)));
     return r.x | (r.y << 16);

@@ -188,7 +188,25 @@ impl Ctx<'_> {
             },
         }?;
         if self.compute_splat {
+            self.collapse_splat_levels(rec)?;
             self.copy_flux_texels(rec);
+        }
+        Ok(())
+    }
+
+    /// Differential footprints: the compute splat put its wide tents in the flux texels' coarse levels; add each
+    /// into the one below it, coarsest first (glsl/splat_collapse.comp). Timed with the splat.
+    fn collapse_splat_levels(&self, rec: &mut Rec) -> VkResult<()> {
+        if self.s.footprint != crate::settings::Footprint::Differential {
+            return Ok(());
+        }
+        let res = self.s.caustic_res;
+        rec.ts.mark(rec.cmd, "splat");
+        let b = self.bindings();
+        for level in (1..=crate::targets::splat_levels(res)).rev() {
+            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeRead, Access::ComputeWrite]);
+            rec.flush(self.d);
+            self.p.photons.splat_collapse(rec.cmd, &b, level, res)?;
         }
         Ok(())
     }

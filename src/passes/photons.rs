@@ -136,6 +136,8 @@ pub struct PhotonPasses {
     splat_compute: Option<LazyPipeline>,
     /// The same with a work group's taps gathered in shared memory first (SPLAT_TILED).
     splat_compute_tiled: Option<LazyPipeline>,
+    /// Adds a coarse level of the flux texels into the one below it (glsl/splat_collapse.comp).
+    splat_collapse: LazyPipeline,
 }
 
 /// How traversal runs: the work-group side its dispatches count candidates in
@@ -231,6 +233,7 @@ impl PhotonPasses {
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
             splat_compute: atomics.then(|| lazy("compute splat", shaders::SPLAT_COMP.words())),
             splat_compute_tiled: atomics.then(|| lazy("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
+            splat_collapse: lazy("splat levels collapse", shaders::SPLAT_COLLAPSE_COMP.words()),
             splat,
         })
     }
@@ -372,6 +375,16 @@ impl PhotonPasses {
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush::default());
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
+        Ok(())
+    }
+
+    /// Add coarse level `level` of the flux texels of a `res`² map into the level below it.
+    pub fn splat_collapse(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, res: u32) -> VkResult<()> {
+        let p = self.splat_collapse.get()?;
+        p.bind(cmd, &b.binds());
+        p.push(cmd, &PhotonPush { level, ..Default::default() });
+        let groups = (res >> (level - 1)).div_ceil(TILE_WG);
+        unsafe { self.device.cmd_dispatch(cmd, groups, groups, 1) };
         Ok(())
     }
 
