@@ -20,9 +20,13 @@
 use crate::scene::{Material, Mesh};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec3A, Vec4};
+use obvhs::bvh2::Bvh2;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
+use std::borrow::Cow;
+use std::collections::HashMap;
 use std::mem::size_of;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Leaves hold at most this many triangles (obvhs collapses small subtrees into leaves up to this size).
@@ -265,11 +269,51 @@ fn material_words(m: &Material) -> ([f32; 4], [f32; 3], [f32; 4], [f32; 4]) {
 }
 
 impl SceneBvh {
-    /// Build one bottom-level BVH per distinct mesh the objects instance (in its object space), and one instance
-    /// per object with its transform and material. [`SceneBvh::set_transform`] moves an object without a rebuild.
-    /// A mesh with `deforming[m]` bounds (the box it stays in, in object space, whatever its vertices do) is built
-    /// at rest with the data the GPU refit needs, and its instances carry those bounds.
+    /// [`SceneBvh::build_cached`] without a cache: every mesh's tree is built.
+    #[cfg(test)]
     pub fn build(meshes: &[&Mesh], objects: &[BvhObject], deforming: &[Option<(Vec3, Vec3)>]) -> SceneBvh {
+        Self::build_with(meshes, objects, deforming, &mut |_, tris| Cow::Owned(build_tree(tris)))
+    }
+
+    /// One bottom-level BVH per distinct mesh the objects instance (in its object space), and one instance per
+    /// object with its transform and material. [`SceneBvh::set_transform`] moves an object without a rebuild. A
+    /// mesh with `deforming[m]` bounds (the box it stays in, in object space, whatever its vertices do) is built at
+    /// rest with the data the GPU refit needs, and its instances carry those bounds. Each mesh's tree comes from
+    /// `cache` when it holds one; the trees built are kept there, and `blas_builds` counts only those.
+    pub fn build_cached(
+        meshes: &[Arc<Mesh>],
+        objects: &[BvhObject],
+        deforming: &[Option<(Vec3, Vec3)>],
+        cache: &mut BlasCache,
+    ) -> SceneBvh {
+        let start = Instant::now();
+        let refs: Vec<&Mesh> = meshes.iter().map(|m| &**m).collect();
+        let mut built = 0;
+        for (m, mesh) in meshes.iter().enumerate() {
+            // Only the instanced meshes with triangles are built; the rest are never asked for.
+            if objects.iter().any(|o| o.mesh == m) && !cache.trees.contains_key(&BlasCache::key(mesh)) {
+                let (tris, _) = valid_triangles(mesh);
+                if !tris.is_empty() {
+                    cache.trees.insert(BlasCache::key(mesh), (mesh.clone(), build_tree(&tris)));
+                    built += 1;
+                }
+            }
+        }
+        let trees = &cache.trees;
+        let mut bvh = Self::build_with(&refs, objects, deforming, &mut |m, _| {
+            Cow::Borrowed(&trees[&BlasCache::key(&meshes[m])].1)
+        });
+        bvh.blas_builds = built;
+        bvh.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        bvh
+    }
+
+    fn build_with<'t>(
+        meshes: &[&Mesh],
+        objects: &[BvhObject],
+        deforming: &[Option<(Vec3, Vec3)>],
+        tree: &mut TreeFor<'_, 't>,
+    ) -> SceneBvh {
         let start = Instant::now();
         let mut bvh = SceneBvh { refit_meshes: vec![None; meshes.len()], ..SceneBvh::default() };
         // Per mesh, once built: its roots and object-space bounds, or None when it has no valid triangle.
@@ -282,7 +326,8 @@ impl SceneBvh {
                 }
                 let threaded_root = bvh.threaded_nodes.len() as u32;
                 let deform = deforming.get(obj.mesh).copied().flatten();
-                let (pair_root, single_root) = bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh));
+                let b2 = tree(obj.mesh, &tris);
+                let (pair_root, single_root) = bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh), &b2);
                 bvh.blas_builds += 1;
                 let (lo, hi) = deform.unwrap_or_else(|| {
                     tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| {
@@ -347,29 +392,10 @@ impl SceneBvh {
         inst.hi = [whi.x, whi.y, whi.z, inst.hi[3]];
     }
 
-    /// Build one bottom-level BVH, append its nodes (both layouts) and its triangles; return the roots.
-    /// Add one bottom-level BVH (all three layouts) over `tris`; with `refit` (the mesh's index), also its refit
-    /// nodes and rest triangles. Returns the pair and single roots.
-    fn add_blas(&mut self, tris: &[[Vec4; 3]], nrms: &[[Vec4; 3]], refit: Option<usize>) -> (u32, u32) {
-        let boxes: Vec<Triangle> = tris
-            .iter()
-            .map(|t| Triangle {
-                v0: Vec3A::from(t[0].truncate()),
-                v1: Vec3A::from(t[1].truncate()),
-                v2: Vec3A::from(t[2].truncate()),
-            })
-            .collect();
-        // obvhs' medium build (PLOC) with reinsertion over every node, before and after the collapse to leaves:
-        // a tree 1–16% cheaper by the surface-area heuristic (the bunny 6.5%), whose frames trace 5–16% faster on lavapipe
-        // (docs/experiments.md, "BVH build quality"), for a build 4–7× longer (the bunny's 3,674 triangles:
-        // 6 ms instead of 1.3 ms).
-        let params = BvhBuildParams {
-            max_prims_per_leaf: MAX_LEAF_TRIS,
-            reinsertion_batch_ratio: 1.0,
-            post_collapse_reinsertion_batch_ratio_multiplier: 1.0,
-            ..BvhBuildParams::medium_build()
-        };
-        let b2 = obvhs::bvh2::builder::build_bvh2_from_tris(&boxes, params, &mut std::time::Duration::default());
+    /// Add one bottom-level BVH over `tris` from its tree `b2` (all three layouts, and the triangles in leaf
+    /// order); with `refit` (the mesh's index), also its refit nodes and rest triangles. Returns the pair and
+    /// single roots.
+    fn add_blas(&mut self, tris: &[[Vec4; 3]], nrms: &[[Vec4; 3]], refit: Option<usize>, b2: &Bvh2) -> (u32, u32) {
         // No spatial splits: the primitive list is a permutation, so leaves index the reordered triangles directly.
         let tri_base = self.triangles.len() as u32;
         for &i in &b2.primitive_indices {
@@ -432,7 +458,7 @@ impl SceneBvh {
         // Where each node's box sits in the pair layout: its parent's slot (node << 1 | slot).
         let mut pair_slot = vec![EMPTY; nodes.len()];
         if let Some(mesh) = refit {
-            self.add_refit(mesh, &b2, tri_base, single_base, threaded_base, &pos);
+            self.add_refit(mesh, b2, tri_base, single_base, threaded_base, &pos);
         }
         let child = |k: usize| -> ([f32; 4], [f32; 4], Option<usize>) {
             let n = &nodes[k];
@@ -648,6 +674,52 @@ impl SceneBvh {
     }
 }
 
+/// Where [`SceneBvh::build`] gets mesh `m`'s tree over its valid triangles: built, or borrowed from a cache.
+type TreeFor<'a, 't> = dyn FnMut(usize, &[[Vec4; 3]]) -> Cow<'t, Bvh2> + 'a;
+
+/// A mesh's tree over its valid triangles. obvhs' medium build (PLOC) with reinsertion over every node, before and
+/// after the collapse to leaves: a tree 1–16% cheaper by the surface-area heuristic (the bunny 6.5%), whose frames
+/// trace 5–16% faster on lavapipe (docs/experiments.md, "BVH build quality"), for a build 4–7× longer (the bunny's
+/// 3,674 triangles: 6 ms instead of 1.3 ms).
+fn build_tree(tris: &[[Vec4; 3]]) -> Bvh2 {
+    let boxes: Vec<Triangle> = tris
+        .iter()
+        .map(|t| Triangle {
+            v0: Vec3A::from(t[0].truncate()),
+            v1: Vec3A::from(t[1].truncate()),
+            v2: Vec3A::from(t[2].truncate()),
+        })
+        .collect();
+    let params = BvhBuildParams {
+        max_prims_per_leaf: MAX_LEAF_TRIS,
+        reinsertion_batch_ratio: 1.0,
+        post_collapse_reinsertion_batch_ratio_multiplier: 1.0,
+        ..BvhBuildParams::medium_build()
+    };
+    obvhs::bvh2::builder::build_bvh2_from_tris(&boxes, params, &mut std::time::Duration::default())
+}
+
+/// The meshes' trees already built, so that building the scene's BVH again (an object added, a material changed)
+/// builds only the meshes it has not built before. A mesh is keyed by its address; the entry holds the mesh's
+/// `Arc`, so no other mesh can take that address while the entry lives. [`BlasCache::retain`] drops the meshes a
+/// scene no longer instances.
+#[derive(Default)]
+pub struct BlasCache {
+    trees: HashMap<usize, (Arc<Mesh>, Bvh2)>,
+}
+
+impl BlasCache {
+    fn key(mesh: &Arc<Mesh>) -> usize {
+        Arc::as_ptr(mesh) as usize
+    }
+
+    /// Keep only the trees of these meshes.
+    pub fn retain(&mut self, meshes: &[Arc<Mesh>]) {
+        let live: std::collections::HashSet<usize> = meshes.iter().map(Self::key).collect();
+        self.trees.retain(|k, _| live.contains(k));
+    }
+}
+
 #[cfg(test)]
 /// Ray/box slab test: the entry distance if the ray meets the box before `tmax`.
 fn slab(lo: Vec3, hi: Vec3, o: Vec3, inv_d: Vec3, tmax: f32) -> Option<f32> {
@@ -825,6 +897,41 @@ mod tests {
         }
         eprintln!("refit SAH / fresh build SAH over 20 s: mean {:.3}, worst {worst:.3}", sum / samples as f64);
         assert!(worst < 1.25, "the refit tree degraded past the rebuild threshold: {worst:.3}");
+    }
+
+    /// Building the scene again takes the trees it has built from the cache: the same nodes, no build; a new mesh
+    /// is the only one built; a mesh no longer instanced leaves the cache.
+    #[test]
+    fn cached_trees_are_not_built_again() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml");
+        let scene = Scene::load(&path).expect("scene");
+        let mut meshes: Vec<Arc<Mesh>> = scene.objects.iter().map(|o| Arc::new(o.mesh.clone())).collect();
+        let objects = |n: usize| -> Vec<BvhObject> {
+            (0..n)
+                .map(|i| BvhObject { mesh: i, transform: Mat4::IDENTITY, material: &scene.objects[i % 2].material })
+                .collect()
+        };
+        let mut cache = BlasCache::default();
+        let first = SceneBvh::build_cached(&meshes, &objects(2), &[], &mut cache);
+        assert_eq!((first.blas_builds, cache.trees.len()), (2, 2));
+        let again = SceneBvh::build_cached(&meshes, &objects(2), &[], &mut cache);
+        assert_eq!(again.blas_builds, 0, "both trees come from the cache");
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&again.pair_nodes), bytemuck::cast_slice::<_, u8>(&first.pair_nodes));
+        assert_eq!(
+            bytemuck::cast_slice::<_, u8>(&again.threaded_nodes),
+            bytemuck::cast_slice::<_, u8>(&first.threaded_nodes)
+        );
+        let fresh = SceneBvh::build(&meshes.iter().map(|m| &**m).collect::<Vec<_>>(), &objects(2), &[]);
+        assert_eq!(
+            bytemuck::cast_slice::<_, u8>(&fresh.single_nodes),
+            bytemuck::cast_slice::<_, u8>(&first.single_nodes)
+        );
+        meshes.push(Arc::new(scene.objects[1].mesh.clone()));
+        let added = SceneBvh::build_cached(&meshes, &objects(3), &[], &mut cache);
+        assert_eq!((added.blas_builds, cache.trees.len()), (1, 3), "only the added mesh is built");
+        meshes.remove(0);
+        cache.retain(&meshes);
+        assert_eq!(cache.trees.len(), 2, "the dropped mesh's tree leaves the cache");
     }
 
     #[test]

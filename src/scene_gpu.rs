@@ -240,18 +240,19 @@ impl BvhBuffers {
         scene: &Scene,
         instances: &SceneInstances,
         layout: BvhLayout,
+        cache: &mut crate::bvh::BlasCache,
     ) -> VkResult<()> {
         // (Transfer source: tests read the refit BVH back.)
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         if self.host.is_none() {
-            let meshes: Vec<&Mesh> = instances.meshes.iter().map(|m| &**m).collect();
             let objects: Vec<BvhObject> = instances
                 .objects
                 .iter()
                 .zip(&scene.objects)
                 .map(|(&(mesh, transform), o)| BvhObject { mesh, transform, material: &o.material })
                 .collect();
-            let bvh = SceneBvh::build(&meshes, &objects, instances.deforming);
+            cache.retain(instances.meshes);
+            let bvh = SceneBvh::build_cached(instances.meshes, &objects, instances.deforming, cache);
             log::info!("scene BVH: {} triangles, built in {:.0} ms", bvh.triangles.len(), bvh.build_ms);
             self.triangles = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?;
             self.normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?;

@@ -90,9 +90,10 @@ fn a_scene_built_in_code_renders_as_its_file_and_moves_as_edited() {
     let m = compare(&moved, &built, 64, 2.0);
     assert!(m.rel_l1 > 0.5 && m.peak_offset_m > 0.15, "the caustic moves with the glass: {m:?}");
 
-    // Another material, the same way.
+    // Another material, the same way. The scene's buffers and BVH are rebuilt, from both meshes' kept trees.
     r.set_material(glass, Material::Dielectric { ior: 1.33, absorption: Vec3::ZERO, abbe: 0.0 }).unwrap();
-    let water = caustics(&mut r);
+    let (water, report) = common::top_caustics(&mut r, 128);
+    assert!(report.scene.rebuilt && report.scene.blas_builds == 0, "a new material: {:?}", report.scene);
     let mut edited = common::renderer(&device, &file_scene(&dir, [0.2, 0.5, 0.0], 1.33), settings());
     same(&water, &caustics(&mut edited), "IOR 1.33 against the edited file");
 

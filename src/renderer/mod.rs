@@ -120,6 +120,8 @@ pub struct Renderer {
     passes: Passes,
     scene: Scene,
     scene_buffers: SceneBuffers,
+    /// The meshes' BVH trees, kept across rebuilds of the scene's buffers: adding an object builds only its mesh's.
+    blas_cache: crate::bvh::BlasCache,
     nearest: Sampler,
     linear: Sampler,
     /// One-off uploads (scene buffers).
@@ -231,6 +233,7 @@ impl Renderer {
             queue: FrameQueue::new(&device)?,
             recorder,
             scene_buffers,
+            blas_cache: crate::bvh::BlasCache::default(),
             scene,
             targets: None,
             targets_key: None,
@@ -618,7 +621,14 @@ impl Renderer {
             // buffers it replaces are bound by the frames in flight.
             self.finish_frames()?;
             let instances = self.instances.view();
-            self.scene_buffers.bvh.ensure(&self.device, &mut self.recorder, &self.scene, &instances, s.bvh_layout)?;
+            self.scene_buffers.bvh.ensure(
+                &self.device,
+                &mut self.recorder,
+                &self.scene,
+                &instances,
+                s.bvh_layout,
+                &mut self.blas_cache,
+            )?;
         }
         let scene_update = self.take_scene_update();
         // A rebuilt scene's BVH counts from zero.
