@@ -44,6 +44,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("traverse.comp", "max_level_wg16", &[("TRAVERSE_WG_SIDE", "16"), ("TRAVERSE_MAX_LEVEL", "1")]),
     ("wave.comp", "single", &[("BVH_LAYOUT_SINGLE", "1")]),
     ("wave.comp", "threaded", &[("BVH_LAYOUT_THREADED", "1")]),
+    ("wave.comp", "wide", &[("BVH_LAYOUT_WIDE", "1")]),
     ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
     ("geometry.frag", "albedo", &[("WITH_ALBEDO", "1")]),
@@ -53,6 +54,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("composite.comp", "single", &[("SINGLE_SAMPLE", "1")]),
     ("composite.comp", "exact_single", &[("EXACT_EYE", "1"), ("SINGLE_SAMPLE", "1")]),
     ("composite.comp", "glass", &[("EXACT_EYE", "1"), ("GLASS_PASS", "1")]),
+    ("composite.comp", "glass_wide", &[("EXACT_EYE", "1"), ("GLASS_PASS", "1"), ("BVH_LAYOUT_WIDE", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),
 ];

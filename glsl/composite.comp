@@ -61,6 +61,10 @@ layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bv
 layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
 layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 uint bvh_instance_count() { return uint(bvh_instances.length()); }
+#ifdef BVH_LAYOUT_WIDE
+layout(std430, set = 0, binding = CB_BVH_WIDE) readonly buffer BvhNodesWide { BvhNodeWide bvh_nodes_wide[]; };
+layout(std430, set = 0, binding = CB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uint bvh_wide_prims[]; };
+#endif
 #include "common/bvh.glsl"
 #define GRAY_MATERIALS
 #include "common/interface.glsl"

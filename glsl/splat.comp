@@ -51,10 +51,10 @@ void splat_coarse(vec2 c0, float flux, vec2 r, ivec2 size, uint m) {
     uint base = splat_level_offset(size, m);
     ivec2 lo = max(ivec2(ceil(c - rm - 0.5)), ivec2(0)), hi = min(ivec2(floor(c + rm - 0.5)), n - 1);
     for (int y = lo.y; y <= hi.y; y++) {
-        float wy = max(0.0, 1.0 - abs(float(y) + 0.5 - c.y) / rm.y);
+        float wy = tent(y, c.y, rm.y);
         if (wy == 0.0) continue;
         for (int x = lo.x; x <= hi.x; x++) {
-            float wx = max(0.0, 1.0 - abs(float(x) + 0.5 - c.x) / rm.x);
+            float wx = tent(x, c.x, rm.x);
             if (wx != 0.0) atomicAdd(flux_texels[base + uint(y * n.x + x)], f * (wx * wy));
         }
     }
@@ -111,10 +111,10 @@ void main() {
     ivec2 wlo = max(org, glo), whi = min(org + SPLAT_TILE - 1, ghi);
 #endif
     for (int y = lo.y; y <= hi.y; y++) {
-        float wy = max(0.0, 1.0 - abs(float(y) + 0.5 - s.y) / r.y) / r.y;
+        float wy = tent(y, s.y, r.y) / r.y;
         if (wy == 0.0) continue;
         for (int x = lo.x; x <= hi.x; x++) {
-            float wx = max(0.0, 1.0 - abs(float(x) + 0.5 - s.x) / r.x) / r.x;
+            float wx = tent(x, s.x, r.x) / r.x;
             if (wx == 0.0) continue;
             float v = flux * (wx * wy);
 #ifdef SPLAT_TILED

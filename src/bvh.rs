@@ -10,9 +10,14 @@
 //! tests two boxes and the traversal descends into the nearer child. A child is either another inner node or a
 //! leaf of up to [`MAX_LEAF_TRIS`] consecutive triangles. Two other layouts are built beside it: "single", one box
 //! per node as obvhs keeps it, and "threaded", one box per node in depth-first order with escape links for a
-//! stackless walk. All three are uploaded; `--bvh-layout` picks the one the waves trace (`auto`: single on GPUs,
-//! pair on CPU devices, the faster on each in docs/experiments.md, "BVH layouts"), and the traversal checks and
-//! the eye composite walk the pair layout.
+//! stackless walk. A fourth, "wide", collapses the tree into compressed 8-wide nodes (Ylitie, Karras and Laine
+//! 2017): one 80-byte node holds eight children's boxes quantized to a byte per plane, and the walk visits the
+//! children nearest first in the ray's octant order. The layouts are uploaded as frames need them;
+//! `--bvh-layout` picks the one the waves trace (`auto`: single on GPUs, wide on CPU devices, the faster on each
+//! in docs/experiments.md, "BVH layouts"). The eye view's glass pass walks the wide layout where the waves do and
+//! the pair layout otherwise; the traversal checks walk the pair layout.
+//! A deforming mesh has no wide nodes (the GPU refit rewrites only the binary layouts' boxes): the wide walk
+//! takes its instances' pair nodes.
 //!
 //! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
@@ -60,6 +65,22 @@ pub struct SingleNode {
 /// `lo.w`: escape index bits (`EMPTY`: done); `hi.w`: count << 29 | first triangle (count 0: inner node).
 pub type ThreadedNode = SingleNode;
 
+/// "wide" layout: a compressed 8-wide node (Ylitie, Karras and Laine 2017, as obvhs converts a binary tree to it),
+/// 80 bytes. Mirrors `BvhNodeWide` in glsl/common/bvh_types.glsl:
+/// - words 0-2: the node box's low corner `p`; word 3: the per-axis scale exponents `e` (bytes 0-2: a child plane
+///   is `p + 2^(e - 127) * q`) and the mask of inner children (byte 3);
+/// - word 4: the first inner child (the inner children are consecutive nodes); word 5: the first of its leaves'
+///   triangles in the wide triangle list (`SceneBvh::wide_prims`);
+/// - words 6-7: a meta byte per child slot (0: empty; an inner child: `0b001_11sss`, 24 + its slot; a leaf:
+///   its triangle count in unary in the top three bits, its first triangle's offset below);
+/// - words 8-19: the children's quantized planes, a byte per child: low x (8-9), high x (10-11), low y (12-13),
+///   high y (14-15), low z (16-17), high z (18-19), children 0-3 in the first word of each pair.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct WideNode {
+    pub words: [u32; 20],
+}
+
 /// One instance (`BvhInstance` in bvh.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -79,7 +100,8 @@ pub struct GpuInstance {
     /// ray tracer shades with it).
     pub pad: [f32; 4],
     /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); a textured receiver: its uv
-    /// transform's first row. w unused.
+    /// transform's first row. w: root node index bits in the wide layout (`EMPTY`: a deforming mesh, whose
+    /// instances the wide variant walks in the pair layout, which the refit keeps).
     pub ior_rgb: [f32; 4],
     /// Dielectric: absorption coefficient per channel (1/m); a textured receiver: its uv transform's second row.
     /// w unused.
@@ -132,6 +154,7 @@ const _: () = {
     assert!(size_of::<SingleNode>() == 32);
     assert!(size_of::<GpuInstance>() == 192);
     assert!(size_of::<GpuTriangle>() == 48);
+    assert!(size_of::<WideNode>() == 80);
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -140,7 +163,7 @@ const _: () = {
 /// The BVH node layout exact transport's waves trace.
 pub enum BvhLayout {
     /// The faster layout for the device, by the rule measured in docs/experiments.md ("BVH layouts"):
-    /// single on GPUs, pair on CPU devices. The settings resolve it to the layout it picks, so the stats report
+    /// single on GPUs, wide on CPU devices. The settings resolve it to the layout it picks, so the stats report
     /// that.
     Auto,
     /// Both children's boxes in the parent (64-byte nodes).
@@ -149,15 +172,19 @@ pub enum BvhLayout {
     Single,
     /// One box per node in depth-first order with escape links: a stackless traversal (32-byte nodes).
     Threaded,
+    /// Compressed 8-wide nodes (80 bytes) with children's boxes quantized to 8 bits a plane (Ylitie, Karras and
+    /// Laine 2017), walked in the ray's octant order.
+    Wide,
 }
 
 impl BvhLayout {
     /// The layout a device traces with: `auto` follows the measured rule. On the H200 the single-box layout's
     /// bounce waves are 10-15% faster than the pair layout's (frame: 8-10% faster at level 5, sphere and bunny);
-    /// on lavapipe the pair layout is about 20% faster.
+    /// the wide layout has not been timed on a GPU yet. On lavapipe the pair layout is about 20% faster than the
+    /// single one, and the wide layout's bounce waves are about 20% faster than the pair layout's.
     pub fn resolve(self, class: crate::settings::DeviceClass) -> BvhLayout {
         match self {
-            BvhLayout::Auto if class == crate::settings::DeviceClass::Cpu => BvhLayout::Pair,
+            BvhLayout::Auto if class == crate::settings::DeviceClass::Cpu => BvhLayout::Wide,
             BvhLayout::Auto => BvhLayout::Single,
             l => l,
         }
@@ -170,6 +197,10 @@ pub struct SceneBvh {
     pub pair_nodes: Vec<PairNode>,
     pub single_nodes: Vec<SingleNode>,
     pub threaded_nodes: Vec<ThreadedNode>,
+    pub wide_nodes: Vec<WideNode>,
+    /// The wide layout's triangle list: each entry the index of a triangle in `triangles` (the wide nodes' leaves
+    /// are runs of this list, in an order of their own).
+    pub wide_prims: Vec<u32>,
     /// One per scene object with triangles, in order.
     pub instances: Vec<GpuInstance>,
     /// Per scene object: its instance (None: it has no triangle).
@@ -192,10 +223,11 @@ pub struct SceneBvh {
     pub build_ms: f64,
 }
 
-/// A mesh's bottom-level BVH: its roots in the three layouts (pair, single, threaded) and its object-space bounds.
+/// A mesh's bottom-level BVH: its roots in the four layouts (pair, single, threaded, wide) and its object-space
+/// bounds.
 #[derive(Clone, Copy)]
 struct Blas {
-    roots: [u32; 3],
+    roots: [u32; 4],
     lo: Vec3,
     hi: Vec3,
 }
@@ -327,21 +359,23 @@ impl SceneBvh {
                 let threaded_root = bvh.threaded_nodes.len() as u32;
                 let deform = deforming.get(obj.mesh).copied().flatten();
                 let b2 = tree(obj.mesh, &tris);
-                let (pair_root, single_root) = bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh), &b2);
+                let (pair_root, single_root, wide_root) =
+                    bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh), &b2);
                 bvh.blas_builds += 1;
                 let (lo, hi) = deform.unwrap_or_else(|| {
                     tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| {
                         (a.min(p.truncate()), b.max(p.truncate()))
                     })
                 });
-                Some(Blas { roots: [pair_root, single_root, threaded_root], lo, hi })
+                Some(Blas { roots: [pair_root, single_root, threaded_root, wide_root], lo, hi })
             });
             // An object with no triangle has no instance.
             let Some(b) = built else {
                 bvh.object_instance.push(None);
                 continue;
             };
-            let (material, albedo, ior_rgb, sigma_rgb) = material_words(obj.material);
+            let (material, albedo, mut ior_rgb, sigma_rgb) = material_words(obj.material);
+            ior_rgb[3] = f32::from_bits(b.roots[3]);
             bvh.instances.push(GpuInstance {
                 lo: [0.0, 0.0, 0.0, f32::from_bits(b.roots[0])],
                 hi: [0.0, 0.0, 0.0, f32::from_bits(b.roots[1])],
@@ -392,10 +426,10 @@ impl SceneBvh {
         inst.hi = [whi.x, whi.y, whi.z, inst.hi[3]];
     }
 
-    /// Add one bottom-level BVH over `tris` from its tree `b2` (all three layouts, and the triangles in leaf
-    /// order); with `refit` (the mesh's index), also its refit nodes and rest triangles. Returns the pair and
-    /// single roots.
-    fn add_blas(&mut self, tris: &[[Vec4; 3]], nrms: &[[Vec4; 3]], refit: Option<usize>, b2: &Bvh2) -> (u32, u32) {
+    /// Add one bottom-level BVH over `tris` from its tree `b2` (all four layouts, and the triangles in leaf
+    /// order); with `refit` (the mesh's index), also its refit nodes and rest triangles, and no wide nodes (the
+    /// refit does not requantize them). Returns the pair, single and wide roots (wide: `EMPTY` when none).
+    fn add_blas(&mut self, tris: &[[Vec4; 3]], nrms: &[[Vec4; 3]], refit: Option<usize>, b2: &Bvh2) -> (u32, u32, u32) {
         // No spatial splits: the primitive list is a permutation, so leaves index the reordered triangles directly.
         let tri_base = self.triangles.len() as u32;
         for &i in &b2.primitive_indices {
@@ -409,6 +443,8 @@ impl SceneBvh {
             (Vec3::from(a.min), Vec3::from(a.max))
         };
         let b4 = |v: Vec3, w: u32| [v.x, v.y, v.z, f32::from_bits(w)];
+
+        let wide_root = if refit.is_some() { EMPTY } else { self.add_wide(tris, b2, tri_base) };
 
         // Single layout: copy obvhs' nodes (children already adjacent), in the same order.
         let single_base = self.single_nodes.len() as u32;
@@ -477,7 +513,7 @@ impl SceneBvh {
             self.pair_nodes.push(PairNode { lo0, hi0, lo1: empty_lo, hi1: empty_hi });
             pair_slot[0] = pair_base << 1;
             self.set_pair_slots(refit, &pair_slot);
-            return (pair_base, single_base);
+            return (pair_base, single_base, wide_root);
         }
         let mut stack = vec![(0usize, None::<(usize, usize)>)];
         while let Some((k, parent)) = stack.pop() {
@@ -505,7 +541,46 @@ impl SceneBvh {
             }
         }
         self.set_pair_slots(refit, &pair_slot);
-        (pair_base, single_base)
+        (pair_base, single_base, wide_root)
+    }
+
+    /// The wide layout of tree `b2` (whose triangles start at `tri_base`): its leaves split into one-triangle
+    /// leaves, then collapsed by obvhs' cost-driven conversion into 8-wide nodes with leaves of up to three
+    /// triangles, children ordered for the octant walk. Returns its root.
+    fn add_wide(&mut self, tris: &[[Vec4; 3]], b2: &Bvh2, tri_base: u32) -> u32 {
+        let cw = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&unit_leaves(b2, tris), 3, true, false);
+        // Leaf order: where each of the mesh's triangles sits in `triangles`.
+        let mut slot_of = vec![0u32; tris.len()];
+        for (s, &i) in b2.primitive_indices.iter().enumerate() {
+            slot_of[i as usize] = tri_base + s as u32;
+        }
+        let (node_base, prim_base) = (self.wide_nodes.len() as u32, self.wide_prims.len() as u32);
+        self.wide_prims.extend(cw.primitive_indices.iter().map(|&i| slot_of[i as usize]));
+        let pack = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        for n in &cw.nodes {
+            let mut w = [0u32; 20];
+            w[0] = n.p.x.to_bits();
+            w[1] = n.p.y.to_bits();
+            w[2] = n.p.z.to_bits();
+            w[3] = u32::from_le_bytes([n.e[0], n.e[1], n.e[2], n.imask]);
+            w[4] = node_base + n.child_base_idx;
+            w[5] = prim_base + n.primitive_base_idx;
+            let planes = [
+                &n.child_meta,
+                &n.child_min_x,
+                &n.child_max_x,
+                &n.child_min_y,
+                &n.child_max_y,
+                &n.child_min_z,
+                &n.child_max_z,
+            ];
+            for (k, bytes) in planes.iter().enumerate() {
+                w[6 + 2 * k] = pack(&bytes[..4]);
+                w[7 + 2 * k] = pack(&bytes[4..]);
+            }
+            self.wide_nodes.push(WideNode { words: w });
+        }
+        node_base
     }
 
     /// The refit nodes of the BVH just added (obvhs' `b2`), with its rest triangles (the ones just pushed).
@@ -597,6 +672,7 @@ impl SceneBvh {
                 BvhLayout::Pair | BvhLayout::Auto => inst.lo[3],
                 BvhLayout::Single => inst.hi[3],
                 BvhLayout::Threaded => inst.pad[0],
+                BvhLayout::Wide => inst.ior_rgb[3],
             }
             .to_bits();
             let mut visit = |first: u32, count: u32, t_best: &mut f32| {
@@ -652,6 +728,35 @@ impl SceneBvh {
                         }
                     }
                 }
+                BvhLayout::Wide => {
+                    while let Some(n) = stack.pop() {
+                        let w = &self.wide_nodes[n as usize].words;
+                        let p = Vec3::new(f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2]));
+                        let e = Vec3::from_array([0, 8, 16].map(|s| f32::from_bits(((w[3] >> s) & 0xFF) << 23)));
+                        let imask = w[3] >> 24;
+                        let byte = |word: usize, c: usize| (w[word + c / 4] >> (8 * (c % 4))) & 0xFF;
+                        for c in 0..8 {
+                            let meta = byte(6, c);
+                            if meta == 0 {
+                                continue;
+                            }
+                            let q = |k: usize| byte(8 + 2 * k, c) as f32;
+                            let l = p + e * Vec3::new(q(0), q(2), q(4));
+                            let h = p + e * Vec3::new(q(1), q(3), q(5));
+                            if slab(l, h, lo_, inv, t_best).is_none() {
+                                continue;
+                            }
+                            if imask & (1 << c) != 0 {
+                                stack.push(w[4] + (imask & ((1 << c) - 1)).count_ones());
+                            } else {
+                                let first = w[5] + (meta & 0x1F);
+                                for k in first..first + (meta >> 5).count_ones() {
+                                    visit(self.wide_prims[k as usize], 1, &mut t_best);
+                                }
+                            }
+                        }
+                    }
+                }
                 BvhLayout::Single => {
                     while let Some(n) = stack.pop() {
                         let node = &self.single_nodes[n as usize];
@@ -672,6 +777,63 @@ impl SceneBvh {
         }
         best
     }
+}
+
+/// `b2` with each leaf split into one-triangle leaves (a balanced subtree over the leaf's triangles, in their
+/// order), the tree obvhs' wide conversion takes. The triangle order is kept.
+fn unit_leaves(b2: &Bvh2, tris: &[[Vec4; 3]]) -> Bvh2 {
+    use obvhs::{aabb::Aabb, bvh2::node::Bvh2Node};
+    let tri_box = |slot: u32| {
+        let t = &tris[b2.primitive_indices[slot as usize] as usize];
+        let mut a = Aabb::empty();
+        for p in t {
+            a.extend(Vec3A::from(p.truncate()));
+        }
+        a
+    };
+    // What a new node stands for: an old node, or a run of one old leaf's triangles.
+    enum Part {
+        Node(usize),
+        Run(u32, u32),
+    }
+    let mut nodes = vec![Bvh2Node::default()];
+    let mut todo = vec![(0usize, Part::Node(0))];
+    while let Some((at, part)) = todo.pop() {
+        let (aabb, children) = match part {
+            Part::Node(k) => {
+                let n = &b2.nodes[k];
+                let inner = n.prim_count == 0;
+                let f = n.first_index;
+                let kids = match (inner, n.prim_count) {
+                    (true, _) => Some([Part::Node(f as usize), Part::Node(f as usize + 1)]),
+                    (false, 1) => None,
+                    (false, c) => Some([Part::Run(f, c / 2), Part::Run(f + c / 2, c - c / 2)]),
+                };
+                if kids.is_none() {
+                    nodes[at] = Bvh2Node::new(n.aabb, 1, f);
+                    continue;
+                }
+                (n.aabb, kids)
+            }
+            Part::Run(first, 1) => {
+                nodes[at] = Bvh2Node::new(tri_box(first), 1, first);
+                continue;
+            }
+            Part::Run(first, count) => {
+                let aabb = (first..first + count).map(tri_box).fold(Aabb::empty(), |a, b| a.union(&b));
+                (aabb, Some([Part::Run(first, count / 2), Part::Run(first + count / 2, count - count / 2)]))
+            }
+        };
+        let first = nodes.len();
+        nodes.push(Bvh2Node::default());
+        nodes.push(Bvh2Node::default());
+        nodes[at] = Bvh2Node::new(aabb, 0, first as u32);
+        if let Some([a, b]) = children {
+            todo.push((first, a));
+            todo.push((first + 1, b));
+        }
+    }
+    Bvh2 { nodes, primitive_indices: b2.primitive_indices.clone(), ..Bvh2::default() }
 }
 
 /// Where [`SceneBvh::build`] gets mesh `m`'s tree over its valid triangles: built, or borrowed from a cache.
@@ -803,7 +965,7 @@ mod tests {
             let target = Vec3::new(0.6 * (rnd() - 0.5), 0.25 + 0.5 * rnd(), 0.6 * (rnd() - 0.5));
             let d = (target - o).normalize();
             let want = brute(&bvh, o, d);
-            for layout in [BvhLayout::Pair, BvhLayout::Single, BvhLayout::Threaded] {
+            for layout in [BvhLayout::Pair, BvhLayout::Single, BvhLayout::Threaded, BvhLayout::Wide] {
                 let got = bvh.intersect(layout, o, d, f32::INFINITY);
                 assert_eq!(got.map(|(t, _, tri)| (t, tri)), want, "{layout:?} ray {o} {d}");
             }

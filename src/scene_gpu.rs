@@ -134,6 +134,9 @@ pub struct BvhBuffers {
     pub pair_nodes: Buffer,
     pub single_nodes: Buffer,
     pub threaded_nodes: Buffer,
+    /// The wide layout's nodes and its triangle list (indices into `triangles`).
+    pub wide_nodes: Buffer,
+    pub wide_prims: Buffer,
     pub triangles: Buffer,
     pub normals: Buffer,
     pub instances: Buffer,
@@ -150,14 +153,15 @@ pub struct BvhBuffers {
     pub stale_deform: bool,
     /// The host BVH once built (the layouts not uploaded yet come from it).
     host: Option<SceneBvh>,
-    /// Which layouts are uploaded: pair, single, threaded.
-    uploaded: [bool; 3],
+    /// Which layouts are uploaded: pair, single, threaded, wide.
+    uploaded: [bool; 4],
     /// Host build time of this BVH (ms), the bottom-level BVHs built, node counts and triangle count.
     pub build_ms: f64,
     pub blas_builds: usize,
     pub pair_node_count: usize,
     pub single_node_count: usize,
     pub threaded_node_count: usize,
+    pub wide_node_count: usize,
     pub triangle_count: usize,
     pub instance_count: usize,
 }
@@ -190,6 +194,8 @@ impl BvhBuffers {
             pair_nodes: upload_buffer(device, recorder, "bvh pair nodes (none)", &zeros, storage)?,
             single_nodes: upload_buffer(device, recorder, "bvh single nodes (none)", &zeros, storage)?,
             threaded_nodes: upload_buffer(device, recorder, "bvh threaded nodes (none)", &zeros, storage)?,
+            wide_nodes: upload_buffer(device, recorder, "bvh wide nodes (none)", &[[0u32; 20]], storage)?,
+            wide_prims: upload_buffer(device, recorder, "bvh wide triangles (none)", &zeros, storage)?,
             triangles: upload_buffer(device, recorder, "bvh triangles (none)", &zeros, storage)?,
             normals: upload_buffer(device, recorder, "bvh normals (none)", &zeros, storage)?,
             instances: upload_buffer(device, recorder, "bvh instances (none)", &[no_instance()], storage)?,
@@ -201,12 +207,13 @@ impl BvhBuffers {
             rest_normals: upload_buffer(device, recorder, "rest normals (none)", &zeros, storage)?,
             stale_deform: false,
             host: None,
-            uploaded: [false; 3],
+            uploaded: [false; 4],
             build_ms: 0.0,
             blas_builds: 0,
             pair_node_count: 0,
             single_node_count: 0,
             threaded_node_count: 0,
+            wide_node_count: 0,
             triangle_count: 0,
             instance_count: 0,
         })
@@ -227,6 +234,17 @@ impl BvhBuffers {
             BvhLayout::Pair | BvhLayout::Auto => 0,
             BvhLayout::Single => 1,
             BvhLayout::Threaded => 2,
+            BvhLayout::Wide => 3,
+        }
+    }
+
+    /// The node count of `layout` (the pair layout's for `auto`).
+    pub fn node_count(&self, layout: BvhLayout) -> usize {
+        match layout {
+            BvhLayout::Pair | BvhLayout::Auto => self.pair_node_count,
+            BvhLayout::Single => self.single_node_count,
+            BvhLayout::Threaded => self.threaded_node_count,
+            BvhLayout::Wide => self.wide_node_count,
         }
     }
 
@@ -275,12 +293,13 @@ impl BvhBuffers {
             self.pair_node_count = bvh.pair_nodes.len();
             self.single_node_count = bvh.single_nodes.len();
             self.threaded_node_count = bvh.threaded_nodes.len();
+            self.wide_node_count = bvh.wide_nodes.len();
             self.triangle_count = bvh.triangles.len();
             self.instance_count = bvh.instances.len();
             self.host = Some(bvh);
         }
         let bvh = self.host.as_ref().expect("built");
-        let mut wanted = [true, false, false];
+        let mut wanted = [true, false, false, false];
         wanted[Self::slot(layout)] = true;
         if wanted[0] && !self.uploaded[0] {
             self.pair_nodes = upload_buffer(device, recorder, "bvh pair nodes", &nonempty(&bvh.pair_nodes), storage)?;
@@ -292,6 +311,11 @@ impl BvhBuffers {
         if wanted[2] && !self.uploaded[2] {
             self.threaded_nodes =
                 upload_buffer(device, recorder, "bvh threaded nodes", &nonempty(&bvh.threaded_nodes), storage)?;
+        }
+        if wanted[3] && !self.uploaded[3] {
+            self.wide_nodes = upload_buffer(device, recorder, "bvh wide nodes", &nonempty(&bvh.wide_nodes), storage)?;
+            self.wide_prims =
+                upload_buffer(device, recorder, "bvh wide triangles", &nonempty(&bvh.wide_prims), storage)?;
         }
         let new_layout = self.uploaded.iter().zip(wanted).any(|(&u, w)| w && !u);
         for (u, w) in self.uploaded.iter_mut().zip(wanted) {
@@ -348,9 +372,10 @@ impl BvhBuffers {
         self.host.as_ref().and_then(|b| b.refit_meshes.get(mesh).copied().flatten())
     }
 
-    /// The layouts on the GPU, as the refit's mask: 1 pair, 2 single, 4 threaded.
+    /// The layouts on the GPU the refit writes, as its mask: 1 pair, 2 single, 4 threaded (the wide layout has
+    /// no deforming mesh's nodes).
     pub(crate) fn layout_mask(&self) -> u32 {
-        self.uploaded.iter().enumerate().filter(|(_, &u)| u).map(|(k, _)| 1u32 << k).sum()
+        self.uploaded[..3].iter().enumerate().filter(|(_, &u)| u).map(|(k, _)| 1u32 << k).sum()
     }
 
     /// The instance records as the GPU buffer holds them (None before the BVH is built).

@@ -125,8 +125,12 @@ pub const PB_BVH_SINGLE: u32 = 18;
 pub const PB_FLUX_TEXELS: u32 = 19;
 /// Binding: the BVH nodes (threaded layout).
 pub const PB_BVH_THREADED: u32 = 20;
+/// Binding: the BVH nodes (wide layout).
+pub const PB_BVH_WIDE: u32 = 21;
+/// Binding: the wide layout's triangle list.
+pub const PB_BVH_WIDE_PRIMS: u32 = 22;
 /// Bindings of the layout.
-pub const PB_COUNT: u32 = 21;
+pub const PB_COUNT: u32 = 23;
 
 // Binding indices of the composite (glsl/composite.comp, src/passes/composite.rs).
 /// Binding: the frame uniforms.
@@ -186,8 +190,12 @@ pub const CB_SHADOW2: u32 = 24;
 pub const CB_IRRADIANCE2: u32 = 25;
 /// See [`CB_LIGHT1`].
 pub const CB_RECEIVERS2: u32 = 26;
+/// Binding: the BVH nodes (wide layout; the glass pass traces it where the waves do).
+pub const CB_BVH_WIDE: u32 = 27;
+/// Binding: the wide layout's triangle list.
+pub const CB_BVH_WIDE_PRIMS: u32 = 28;
 /// Bindings of the layout.
-pub const CB_COUNT: u32 = 27;
+pub const CB_COUNT: u32 = 29;
 /// Lights one glass pass shades with.
 pub const GLASS_LIGHTS: u32 = 3;
 

@@ -3,8 +3,10 @@
 //! passes, both transports, dense and adaptive. A band, not a timing test: the estimate must lie within a factor
 //! of 2 of the frame's wall time, whatever the machine's speed (both run on it, one after the other, alone in
 //! this test binary). Measured on the 2-core CI machine kind: ratios 0.7 to 1.5, and probes costing 0.3 of the
-//! several-second frame. A two-interface frame under a second is mostly fixed cost, which the small probes'
-//! noise hides (its estimate measured 0.26 to 1.7 at levels 4 and 5): that case is a level-6 frame (3-4 s).
+//! several-second frame; with a small frame first to compile the pipelines, on a machine of the kind 3× slower,
+//! ratios 0.86 to 1.07 and probes 0.08 to 0.27 of the frames over 4 s. A two-interface frame under a second is
+//! mostly fixed cost, which the small probes' noise hides (its estimate measured 0.26 to 1.7 at levels 4 and 5):
+//! that case is a level-6 frame (3-4 s).
 
 mod common;
 use caustics::settings::{Method, Metric, Quality, Settings, Transport};
@@ -29,6 +31,11 @@ fn estimates_are_within_a_factor_of_two_of_the_frame() {
         let cam = r.scene().camera(Some(camera)).unwrap().clone();
         let view = r.camera_view(&cam, 256, 192);
         let desc = FrameDesc::new(&view, None);
+        // A small frame first compiles the pipelines, a cost paid once per renderer whatever is rendered (on a
+        // slower machine of the CI kind it alone came to 17 s, four times a 4 s frame); the probes' own cost is
+        // what the band below holds.
+        let small = r.camera_view(&cam, 64, 48);
+        r.render(&FrameDesc::new(&small, None)).expect("warm-up frame");
         let e = r.estimate(&desc).expect("estimate");
         let f = r.render(&desc).expect("frame");
         let actual = f.report.frame_ms * 1e-3;

@@ -159,34 +159,48 @@ fn candidates_do_not_count_against_a_batchs_photons() {
     assert!(peak > 229_376 && peak <= 917_504, "peak entries {peak}: photons and candidates past a quarter");
 }
 
-/// The three BVH node layouts (`--bvh-layout`) find the same closest hits: on the bunny at dense level 2 (256²)
-/// they trace the same rays to the same account, and their images differ only in the order of float additions
-/// (measured on lavapipe: rel-L1 2.4e-8 single and 2.5e-8 threaded against pair at 256², caustic flux equal to
-/// 1e-8). GPUs run the single layout by default (`auto`), which no other lavapipe test traces; lavapipe resolves
-/// `auto` to pair.
+/// The four BVH node layouts (`--bvh-layout`) find the same closest hits: at dense level 2 (256²) on the
+/// sphere, the bunny, the tilted cube, the mirror sphere and the pool (its water deforming) they trace the same rays to the same account, and
+/// their images differ only in the order of float additions (measured on lavapipe against pair at 256²: rel-L1
+/// at most 3.7e-8 single and threaded (bunny), 8.6e-8 wide (the sphere; the rest 4e-9 to 3.5e-8); caustic flux
+/// equal to 1e-8). GPUs run the single layout by
+/// default (`auto`), which no other lavapipe test traces; lavapipe resolves `auto` to wide.
 #[test]
 fn bvh_layouts_trace_the_same_paths() {
     let dir = out_dir("exact_bvh_layouts");
-    let run = |layout: &str| {
-        let args = ["--method", "dense", "--level", "2", "--bvh-layout", layout];
-        exact(&dir, layout, BUNNY, &args)
-    };
-    let (auto, _) = run("auto");
-    assert_eq!(auto["exact_transport"]["bvh"]["layout"], "pair", "auto on a CPU device");
-    assert_eq!(auto["settings"]["bvh_layout"], "pair", "the settings report the resolved layout");
-    let (pair, pair_img) = run("pair");
-    for layout in ["single", "threaded"] {
-        let (s, img) = run(layout);
-        assert_sound(layout, &s, &img);
-        assert_eq!(s["exact_transport"]["bvh"]["layout"], layout);
-        let rays = &s["exact_transport"]["rays_traced"];
-        assert_eq!(rays, &pair["exact_transport"]["rays_traced"], "{layout}: rays traced");
-        assert_eq!(s["photons_splatted"], pair["photons_splatted"], "{layout}: photons");
-        let (a, b) = (energy(&pair, "caustics"), energy(&s, "caustics"));
-        assert!((a / b - 1.0).abs() < 1e-6, "{layout}: caustic flux {b} W against pair's {a} W");
-        let m = compare(&img, &pair_img, 256, 2.0);
-        eprintln!("{layout}: rel-L1 {:.2e}, caustics {b} W (pair {a} W), {rays} rays", m.rel_l1);
-        assert!(m.rel_l1 <= 1e-6, "{layout}: rel-L1 {} against pair", m.rel_l1);
+    let scenes = [
+        ("sphere", SPHERE.to_string()),
+        ("bunny", BUNNY.to_string()),
+        ("tilted_cube", scene("tilted_cube.toml")),
+        ("mirror_sphere", scene("mirror_sphere.toml")),
+        // Its water deforms: the wide walk takes the water's pair nodes, which the refit keeps.
+        ("pool", scene("pool.toml")),
+    ];
+    for (name, path) in &scenes {
+        let run = |layout: &str| {
+            let args = ["--method", "dense", "--level", "2", "--time", "0.7", "--bvh-layout", layout];
+            exact(&dir, &format!("{name}_{layout}"), path, &args)
+        };
+        if *name == "bunny" {
+            let (auto, _) = run("auto");
+            assert_eq!(auto["exact_transport"]["bvh"]["layout"], "wide", "auto on a CPU device");
+            assert_eq!(auto["settings"]["bvh_layout"], "wide", "the settings report the resolved layout");
+        }
+        let (pair, pair_img) = run("pair");
+        let layouts: &[&str] = if *name == "bunny" { &["single", "threaded", "wide"] } else { &["wide"] };
+        for &layout in layouts {
+            let (s, img) = run(layout);
+            assert_sound(layout, &s, &img);
+            assert_eq!(s["exact_transport"]["bvh"]["layout"], layout);
+            let rays = &s["exact_transport"]["rays_traced"];
+            assert_eq!(rays, &pair["exact_transport"]["rays_traced"], "{name} {layout}: rays traced");
+            assert_eq!(s["photons_splatted"], pair["photons_splatted"], "{name} {layout}: photons");
+            let (a, b) = (energy(&pair, "caustics"), energy(&s, "caustics"));
+            assert!((a / b - 1.0).abs() < 1e-6, "{name} {layout}: caustic flux {b} W against pair's {a} W");
+            let m = compare(&img, &pair_img, 256, 2.0);
+            eprintln!("{name} {layout}: rel-L1 {:.2e}, caustics {b} W (pair {a} W), {rays} rays", m.rel_l1);
+            assert!(m.rel_l1 <= 1e-6, "{name} {layout}: rel-L1 {} against pair", m.rel_l1);
+        }
     }
 }
 

@@ -2,8 +2,9 @@
 // linearly against their world bounds, the ray is moved into each instance's BVH space, and its bottom-level tree
 // is walked with a short stack. Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013), as the
 // CPU reference does (there in f64): a ray cannot slip between two triangles that share an edge.
-// Needs photon_bindings (bindings 14-18, 20). BVH_LAYOUT_SINGLE selects the one-box-per-node layout,
-// BVH_LAYOUT_THREADED the stackless one with escape links; the default is the pair layout.
+// Needs photon_bindings (bindings 14-18, 20-22). BVH_LAYOUT_SINGLE selects the one-box-per-node layout,
+// BVH_LAYOUT_THREADED the stackless one with escape links, BVH_LAYOUT_WIDE the compressed 8-wide one; the default
+// is the pair layout.
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
@@ -80,6 +81,175 @@ void bvh_leaf(Shear sh, vec3 o, uint first, uint count, uint inst, inout SceneHi
     }
 }
 
+// The walks of one instance's bottom-level tree, in its BVH space (o, d, inv = 1/d, the watertight shear sh):
+// each lowers hit.t to its closest hit.
+
+// Pair layout: both children's boxes in the parent; leaves tested as met, inner children visited nearer first.
+void bvh_walk_pair(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout SceneHit hit, inout bool found) {
+    uint stack[BVH_STACK];
+    uint sp = 0u;
+    uint node = root;
+    while (true) {
+        BvhNode n = bvh_nodes[node];
+        float t0 = bvh_slab(n.lo0.xyz, n.hi0.xyz, o, inv, hit.t);
+        float t1 = bvh_slab(n.lo1.xyz, n.hi1.xyz, o, inv, hit.t);
+        uint i0 = floatBitsToUint(n.lo0.w), c0 = floatBitsToUint(n.hi0.w);
+        uint i1 = floatBitsToUint(n.lo1.w), c1 = floatBitsToUint(n.hi1.w);
+        if (i1 == BVH_EMPTY) t1 = 1.0 / 0.0;
+        if (!isinf(t0) && c0 > 0u) { bvh_leaf(sh, o, i0, c0, ii, hit, found); t0 = 1.0 / 0.0; }
+        if (!isinf(t1) && c1 > 0u) { bvh_leaf(sh, o, i1, c1, ii, hit, found); t1 = 1.0 / 0.0; }
+        // hit.t may have shrunk: a child entered beyond it is skipped.
+        if (t0 > hit.t) t0 = 1.0 / 0.0;
+        if (t1 > hit.t) t1 = 1.0 / 0.0;
+        bool go0 = !isinf(t0), go1 = !isinf(t1);
+        if (go0 && go1) {
+            uint near = t0 <= t1 ? i0 : i1, far = t0 <= t1 ? i1 : i0;
+            if (sp < BVH_STACK) stack[sp++] = far;
+            node = near;
+        } else if (go0) {
+            node = i0;
+        } else if (go1) {
+            node = i1;
+        } else {
+            if (sp == 0u) break;
+            node = stack[--sp];
+        }
+    }
+}
+
+#if defined(BVH_LAYOUT_THREADED)
+// Threaded layout, stackless: a hit inner node continues at its first child (the next node), a miss or a
+// finished leaf at its escape link.
+void bvh_walk_threaded(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout SceneHit hit, inout bool found) {
+    uint n = root;
+    while (n != BVH_EMPTY) {
+        BvhNodeSingle nd = bvh_nodes_threaded[n];
+        uint escape = floatBitsToUint(nd.lo.w);
+        if (!isinf(bvh_slab(nd.lo.xyz, nd.hi.xyz, o, inv, hit.t))) {
+            uint info = floatBitsToUint(nd.hi.w);
+            uint count = info >> 29;
+            if (count > 0u) {
+                bvh_leaf(sh, o, info & 0x1FFFFFFFu, count, ii, hit, found);
+                n = escape;
+            } else {
+                n = n + 1u;
+            }
+        } else {
+            n = escape;
+        }
+    }
+}
+#endif
+
+#if defined(BVH_LAYOUT_SINGLE)
+// Single layout: one box per node, children adjacent; the nearer child is pushed last, so it is visited first
+// and shrinks hit.t for the other.
+void bvh_walk_single(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout SceneHit hit, inout bool found) {
+    uint stack[BVH_STACK];
+    uint sp = 0u;
+    stack[sp++] = root;
+    while (sp > 0u) {
+        BvhNodeSingle n = bvh_nodes_single[stack[--sp]];
+        if (isinf(bvh_slab(n.lo.xyz, n.hi.xyz, o, inv, hit.t))) continue;
+        uint first = floatBitsToUint(n.lo.w), count = floatBitsToUint(n.hi.w);
+        if (count > 0u) {
+            bvh_leaf(sh, o, first, count, ii, hit, found);
+        } else if (sp + 2u <= BVH_STACK) {
+            BvhNodeSingle c0 = bvh_nodes_single[first], c1 = bvh_nodes_single[first + 1u];
+            float t0 = bvh_slab(c0.lo.xyz, c0.hi.xyz, o, inv, hit.t);
+            float t1 = bvh_slab(c1.lo.xyz, c1.hi.xyz, o, inv, hit.t);
+            if (t0 <= t1) {
+                if (!isinf(t1)) stack[sp++] = first + 1u;
+                if (!isinf(t0)) stack[sp++] = first;
+            } else {
+                if (!isinf(t0)) stack[sp++] = first;
+                stack[sp++] = first + 1u;
+            }
+        }
+    }
+}
+#endif
+
+#if defined(BVH_LAYOUT_WIDE)
+const uint BVH_WIDE_STACK = 32u;
+
+// The children of wide node n that the ray enters before tmax, as the hit mask of Ylitie, Karras and Laine
+// (2017): an inner child sets bit 24 + (slot ^ oct) (so the highest set bit is the child nearest in the ray's
+// octant order), a leaf its triangles' bits (offsets from the node's first triangle-list entry) in the low 24.
+// inv is the ray's inverse direction kept finite, oct the octant code (0-7, one bit set per positive axis).
+uint bvh_wide_hits(BvhNodeWide n, vec3 o, vec3 inv, uint oct, float tmax) {
+    vec3 e = uintBitsToFloat((uvec3(n.w0.w, n.w0.w >> 8, n.w0.w >> 16) & 0xFFu) << 23);
+    // A plane q of a child sits at p + e q, the ray there at t = q s + b.
+    vec3 s = e * inv, b = (uintBitsToFloat(n.w0.xyz) - o) * inv;
+    // The near planes: the low ones along an axis the ray goes up, the high ones where it goes down.
+    bvec3 down = lessThan(inv, vec3(0.0));
+    uvec2 nx = down.x ? n.w2.zw : n.w2.xy, fx = down.x ? n.w2.xy : n.w2.zw;
+    uvec2 ny = down.y ? n.w3.zw : n.w3.xy, fy = down.y ? n.w3.xy : n.w3.zw;
+    uvec2 nz = down.z ? n.w4.zw : n.w4.xy, fz = down.z ? n.w4.xy : n.w4.zw;
+    uint hits = 0u;
+    for (uint c = 0u; c < 8u; c++) {
+        uint word = c >> 2, shift = 8u * (c & 3u);
+        uint meta = (n.w1[2u + word] >> shift) & 0xFFu;
+        if (meta == 0u) continue;
+        vec3 qn = vec3((uvec3(nx[word], ny[word], nz[word]) >> shift) & 0xFFu);
+        vec3 qf = vec3((uvec3(fx[word], fy[word], fz[word]) >> shift) & 0xFFu);
+        vec3 tn = qn * s + b, tf = qf * s + b;
+        float near = max(max(tn.x, tn.y), max(tn.z, 0.0));
+        float far = min(min(tf.x, tf.y), min(tf.z, tmax));
+        if (near <= far) {
+            // An inner child's meta is 0b001_11sss (24 + its slot): bits 3 and 4 are both set only there.
+            bool inner = (meta & (meta << 1) & 0x10u) != 0u;
+            uint index = inner ? ((meta ^ oct) & 0x1Fu) : (meta & 0x1Fu);
+            hits |= ((meta >> 5) & 7u) << index;
+        }
+    }
+    return hits;
+}
+
+// Wide layout: a stack of node groups (the first inner child of a node, and the mask of its children still to
+// visit in the high byte with the inner-child mask in the low byte); the nearest child in octant order first, and
+// a node's leaf triangles tested before its inner children are entered.
+void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit hit, inout bool found) {
+    vec3 inv = 1.0 / vec3(abs(d.x) > 1e-30 ? d.x : (d.x < 0.0 ? -1e-30 : 1e-30),
+                          abs(d.y) > 1e-30 ? d.y : (d.y < 0.0 ? -1e-30 : 1e-30),
+                          abs(d.z) > 1e-30 ? d.z : (d.z < 0.0 ? -1e-30 : 1e-30));
+    uint oct = (inv.x < 0.0 ? 0u : 4u) | (inv.y < 0.0 ? 0u : 2u) | (inv.z < 0.0 ? 0u : 1u);
+    uvec2 stack[BVH_WIDE_STACK];
+    uint sp = 0u;
+    // The root as the only inner child of a virtual parent.
+    uvec2 group = uvec2(root, 0x80000000u);
+    uvec2 tris = uvec2(0u);
+    while (true) {
+        while (tris.y != 0u) {
+            uint k = uint(findMSB(tris.y));
+            tris.y &= ~(1u << k);
+            bvh_leaf(sh, o, bvh_wide_prims[tris.x + k], 1u, ii, hit, found);
+        }
+        if ((group.y & 0xFF000000u) != 0u) {
+            uint mask = group.y;
+            uint bit = uint(findMSB(mask));
+            group.y &= ~(1u << bit);
+            if ((group.y & 0xFF000000u) != 0u) {
+                if (sp < BVH_WIDE_STACK) stack[sp++] = group;
+            }
+            // The child's slot, and its rank among the node's inner children (which are stored in slot order).
+            uint slot = (bit - 24u) ^ oct;
+            uint child = group.x + bitCount(mask & ~(0xFFFFFFFFu << slot));
+            BvhNodeWide n = bvh_nodes_wide[child];
+            uint hits = bvh_wide_hits(n, o, inv, oct, hit.t);
+            group = uvec2(n.w1.x, (hits & 0xFF000000u) | (n.w0.w >> 24));
+            tris = uvec2(n.w1.y, hits & 0x00FFFFFFu);
+        } else {
+            group = uvec2(0u);
+        }
+        if (tris.y == 0u && (group.y & 0xFF000000u) == 0u) {
+            if (sp == 0u) break;
+            group = stack[--sp];
+        }
+    }
+}
+#endif
+
 // Closest hit along ro + t*rd (0 < t < tmax) over every instance.
 bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
     hit.t = tmax;
@@ -88,86 +258,26 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
     hit.bary = vec3(0.0);
     bool found = false;
     vec3 inv_wd = 1.0 / rd;
-    uint stack[BVH_STACK];
     for (uint ii = 0u; ii < bvh_instance_count(); ii++) {
         BvhInstance I = bvh_instances[ii];
         if (isinf(bvh_slab(I.lo.xyz, I.hi.xyz, ro, inv_wd, hit.t))) continue;
         vec3 o = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], ro, 1.0);
         vec3 d = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], rd, 0.0);
-        vec3 inv = 1.0 / d;
         Shear sh = bvh_shear(d);
-        uint sp = 0u;
 #if defined(BVH_LAYOUT_THREADED)
-        // Stackless: a hit inner node continues at its first child (the next node), a miss or a finished leaf at
-        // its escape link.
-        uint n = floatBitsToUint(I.pad.x);
-        while (n != BVH_EMPTY) {
-            BvhNodeSingle nd = bvh_nodes_threaded[n];
-            uint escape = floatBitsToUint(nd.lo.w);
-            if (!isinf(bvh_slab(nd.lo.xyz, nd.hi.xyz, o, inv, hit.t))) {
-                uint info = floatBitsToUint(nd.hi.w);
-                uint count = info >> 29;
-                if (count > 0u) {
-                    bvh_leaf(sh, o, info & 0x1FFFFFFFu, count, ii, hit, found);
-                    n = escape;
-                } else {
-                    n = n + 1u;
-                }
-            } else {
-                n = escape;
-            }
-        }
+        bvh_walk_threaded(floatBitsToUint(I.pad.x), ii, o, 1.0 / d, sh, hit, found);
 #elif defined(BVH_LAYOUT_SINGLE)
-        stack[sp++] = floatBitsToUint(I.hi.w);
-        while (sp > 0u) {
-            BvhNodeSingle n = bvh_nodes_single[stack[--sp]];
-            if (isinf(bvh_slab(n.lo.xyz, n.hi.xyz, o, inv, hit.t))) continue;
-            uint first = floatBitsToUint(n.lo.w), count = floatBitsToUint(n.hi.w);
-            if (count > 0u) {
-                bvh_leaf(sh, o, first, count, ii, hit, found);
-            } else if (sp + 2u <= BVH_STACK) {
-                // Nearer child on top, so it is visited first and shrinks hit.t for the other.
-                BvhNodeSingle c0 = bvh_nodes_single[first], c1 = bvh_nodes_single[first + 1u];
-                float t0 = bvh_slab(c0.lo.xyz, c0.hi.xyz, o, inv, hit.t);
-                float t1 = bvh_slab(c1.lo.xyz, c1.hi.xyz, o, inv, hit.t);
-                if (t0 <= t1) {
-                    if (!isinf(t1)) stack[sp++] = first + 1u;
-                    if (!isinf(t0)) stack[sp++] = first;
-                } else {
-                    if (!isinf(t0)) stack[sp++] = first;
-                    stack[sp++] = first + 1u;
-                }
-            }
+        bvh_walk_single(floatBitsToUint(I.hi.w), ii, o, 1.0 / d, sh, hit, found);
+#elif defined(BVH_LAYOUT_WIDE)
+        // A deforming mesh has no wide nodes (the refit keeps only the binary layouts): its pair nodes instead.
+        uint wide_root = floatBitsToUint(I.ior_rgb.w);
+        if (wide_root != BVH_EMPTY) {
+            bvh_walk_wide(wide_root, ii, o, d, sh, hit, found);
+        } else {
+            bvh_walk_pair(floatBitsToUint(I.lo.w), ii, o, 1.0 / d, sh, hit, found);
         }
 #else
-        uint node = floatBitsToUint(I.lo.w);
-        while (true) {
-            BvhNode n = bvh_nodes[node];
-            float t0 = bvh_slab(n.lo0.xyz, n.hi0.xyz, o, inv, hit.t);
-            float t1 = bvh_slab(n.lo1.xyz, n.hi1.xyz, o, inv, hit.t);
-            uint i0 = floatBitsToUint(n.lo0.w), c0 = floatBitsToUint(n.hi0.w);
-            uint i1 = floatBitsToUint(n.lo1.w), c1 = floatBitsToUint(n.hi1.w);
-            if (i1 == BVH_EMPTY) t1 = 1.0 / 0.0;
-            // Leaves are tested right away; inner children are visited nearer first.
-            if (!isinf(t0) && c0 > 0u) { bvh_leaf(sh, o, i0, c0, ii, hit, found); t0 = 1.0 / 0.0; }
-            if (!isinf(t1) && c1 > 0u) { bvh_leaf(sh, o, i1, c1, ii, hit, found); t1 = 1.0 / 0.0; }
-            // hit.t may have shrunk: a child entered beyond it is skipped.
-            if (t0 > hit.t) t0 = 1.0 / 0.0;
-            if (t1 > hit.t) t1 = 1.0 / 0.0;
-            bool go0 = !isinf(t0), go1 = !isinf(t1);
-            if (go0 && go1) {
-                uint near = t0 <= t1 ? i0 : i1, far = t0 <= t1 ? i1 : i0;
-                if (sp < BVH_STACK) stack[sp++] = far;
-                node = near;
-            } else if (go0) {
-                node = i0;
-            } else if (go1) {
-                node = i1;
-            } else {
-                if (sp == 0u) break;
-                node = stack[--sp];
-            }
-        }
+        bvh_walk_pair(floatBitsToUint(I.lo.w), ii, o, 1.0 / d, sh, hit, found);
 #endif
     }
     return found;

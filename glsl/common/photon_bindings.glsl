@@ -34,12 +34,17 @@ vec2 splat_radii(float w) {
     uint rx = r & 0xFFFFu, ry = r >> 16;
     return vec2(float(rx), float(ry == 0u ? rx : ry));
 }
-// The sum over the texel centers x + 0.5 of a map n texels wide (0 <= x < n) of the tent max(0, 1 - |x + 0.5 - c|
-// / r): exactly r for an integer r whose tent lies inside the map, less where it reaches past an edge.
+// The weight of texel x (its center x + 0.5) in a tent of radius r centred at c, before normalization (splat.frag
+// weighs its fragments the same way).
+float tent(int x, float c, float r) {
+    return max(0.0, 1.0 - abs(float(x) + 0.5 - c) / r);
+}
+// The sum over the texel centers of a map n texels wide (0 <= x < n) of tent(x, c, r): exactly r for an integer r
+// whose tent lies inside the map, less where it reaches past an edge.
 float tent_sum(float c, float r, int n) {
     int lo = max(int(ceil(c - r - 0.5)), 0), hi = min(int(floor(c + r - 0.5)), n - 1);
     float s = 0.0;
-    for (int x = lo; x <= hi; x++) s += max(0.0, 1.0 - abs(float(x) + 0.5 - c) / r);
+    for (int x = lo; x <= hi; x++) s += tent(x, c, r);
     return s;
 }
 // The factor that makes the on-map weights of a splat of integer radii r centred at c (texels) sum to exactly 1:
@@ -70,6 +75,9 @@ uint bvh_instance_count() { return uint(bvh_instances.length()); }
 layout(std430, set = 0, binding = PB_FLUX_TEXELS) buffer FluxBuf { float flux_texels[]; };
 // The threaded layout (src/bvh.rs): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
 layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { BvhNodeSingle bvh_nodes_threaded[]; };
+// The wide layout (src/bvh.rs): compressed 8-wide nodes, and its triangle list (indices into bvh_tris' triangles).
+layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhNodesWide { BvhNodeWide bvh_nodes_wide[]; };
+layout(std430, set = 0, binding = PB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uint bvh_wide_prims[]; };
 
 // Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
 // groups (lavapipe's limit).

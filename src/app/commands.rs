@@ -128,7 +128,8 @@ pub struct TuningArgs {
     #[arg(long, default_value_t = 0, allow_negative_numbers = true, help_heading = "Tuning")]
     pub weak_block: u32,
     /// Exact transport: BVH node layout (pair: both children's boxes in the parent; single: one box per node;
-    /// threaded: stackless; auto: single on GPUs, pair on CPU devices, the faster on each).
+    /// threaded: stackless; wide: compressed 8-wide nodes; auto: single on GPUs, wide on CPU devices, the faster on
+    /// each).
     #[arg(long, value_enum, default_value_t = BvhLayout::Auto, help_heading = "Tuning")]
     pub bvh_layout: BvhLayout,
     /// Side of the light-view refractor g-buffers (power of two).
@@ -649,11 +650,7 @@ fn transport_json(session: &Session, report: &FrameReport) -> Value {
             "build_ms": bvh.build_ms,
             "triangles": bvh.triangle_count,
             "instances": bvh.instance_count,
-            "nodes": match r.config().bvh_layout {
-                BvhLayout::Pair | BvhLayout::Auto => bvh.pair_node_count,
-                BvhLayout::Single => bvh.single_node_count,
-                BvhLayout::Threaded => bvh.threaded_node_count,
-            },
+            "nodes": bvh.node_count(r.config().bvh_layout),
         },
         "flux_threshold": r.config().flux_threshold,
         "weak_branches": r.config().weak_branches,

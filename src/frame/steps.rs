@@ -236,6 +236,7 @@ impl Ctx<'_> {
             glass: &e.glass,
             more_lights,
             exact: self.exact_eye(),
+            wide: self.s.bvh_layout == crate::bvh::BvhLayout::Wide,
         }
     }
 

@@ -24,6 +24,8 @@ pub struct CompositePass {
     /// Exact transport, before the composite: the glass's radiance per eye sample under every light and the
     /// environment, into the glass image.
     glass: LazyPipeline,
+    /// The glass pass walking the wide layout (where the waves trace it; the others walk the pair layout).
+    glass_wide: LazyPipeline,
 }
 
 #[repr(C)]
@@ -66,6 +68,8 @@ pub struct CompositeInputs<'a> {
     pub more_lights: &'a [LightMaps<'a>],
     /// Trace the glass through the BVH.
     pub exact: bool,
+    /// Trace it through the wide layout (uploaded: the waves trace it), else the pair layout.
+    pub wide: bool,
 }
 
 /// The composite's bindings (glsl/composite.comp declares each with the same constant).
@@ -97,6 +101,8 @@ const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
     (CB_SHADOW2, BindKind::Sampled),
     (CB_IRRADIANCE2, BindKind::Sampled),
     (CB_RECEIVERS2, BindKind::Sampled),
+    (CB_BVH_WIDE, BindKind::Storage),
+    (CB_BVH_WIDE_PRIMS, BindKind::Storage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
@@ -110,14 +116,15 @@ impl CompositePass {
         let single = lazy("composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words());
         let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
         let glass = lazy("eye glass", shaders::COMPOSITE_COMP_GLASS.words());
-        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass })
+        let glass_wide = lazy("eye glass (wide BVH nodes)", shaders::COMPOSITE_COMP_GLASS_WIDE.words());
+        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass, glass_wide })
     }
 
     /// Exact transport: the glass's radiance per eye sample under the lights of `i` (at most [`GLASS_LIGHTS`]),
     /// into `i.glass`; `add`: onto what an earlier pass wrote.
     pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
         assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
-        let pipeline = self.glass.get()?;
+        let pipeline = if i.wide { &self.glass_wide } else { &self.glass }.get()?;
         self.bind(cmd, pipeline, i);
         pipeline.push(cmd, &CompositePush { lights: 1 + i.more_lights.len() as u32, add: add as u32 });
         let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
@@ -176,6 +183,8 @@ impl CompositePass {
                 (CB_SHADOW2, Bind::Sampled(l2.shadow, i.nearest)),
                 (CB_IRRADIANCE2, Bind::Sampled(l2.irradiance, i.linear)),
                 (CB_RECEIVERS2, Bind::Sampled(l2.recv, i.nearest)),
+                (CB_BVH_WIDE, Bind::Storage(&i.bvh.wide_nodes)),
+                (CB_BVH_WIDE_PRIMS, Bind::Storage(&i.bvh.wide_prims)),
             ]),
         );
     }

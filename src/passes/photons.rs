@@ -36,6 +36,8 @@ const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
     (PB_BVH_SINGLE, BindKind::Storage),
     (PB_FLUX_TEXELS, BindKind::Storage),
     (PB_BVH_THREADED, BindKind::Storage),
+    (PB_BVH_WIDE, BindKind::Storage),
+    (PB_BVH_WIDE_PRIMS, BindKind::Storage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
@@ -91,6 +93,8 @@ impl PhotonBindings<'_> {
             (PB_BVH_SINGLE, Bind::Storage(&self.bvh.single_nodes)),
             (PB_FLUX_TEXELS, Bind::Storage(self.flux_texels)),
             (PB_BVH_THREADED, Bind::Storage(&self.bvh.threaded_nodes)),
+            (PB_BVH_WIDE, Bind::Storage(&self.bvh.wide_nodes)),
+            (PB_BVH_WIDE_PRIMS, Bind::Storage(&self.bvh.wide_prims)),
         ])
     }
 }
@@ -130,6 +134,7 @@ pub struct PhotonPasses {
     wave_pair: LazyPipeline,
     wave_single: LazyPipeline,
     wave_threaded: LazyPipeline,
+    wave_wide: LazyPipeline,
     transport: LazyPipeline,
     splat: LazyPipeline,
     /// None when the device has no float atomics on buffers.
@@ -230,6 +235,7 @@ impl PhotonPasses {
             wave_pair: lazy("transport wave", shaders::WAVE_COMP.words()),
             wave_single: lazy("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words()),
             wave_threaded: lazy("transport wave (threaded BVH nodes)", shaders::WAVE_COMP_THREADED.words()),
+            wave_wide: lazy("transport wave (wide BVH nodes)", shaders::WAVE_COMP_WIDE.words()),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
             splat_compute: atomics.then(|| lazy("compute splat", shaders::SPLAT_COMP.words())),
             splat_compute_tiled: atomics.then(|| lazy("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
@@ -358,6 +364,7 @@ impl PhotonPasses {
             BvhLayout::Pair | BvhLayout::Auto => &self.wave_pair,
             BvhLayout::Single => &self.wave_single,
             BvhLayout::Threaded => &self.wave_threaded,
+            BvhLayout::Wide => &self.wave_wide,
         }
         .get()?;
         p.bind(cmd, &b.binds());

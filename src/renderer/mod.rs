@@ -444,11 +444,7 @@ impl Renderer {
             build_ms: b.build_ms,
             triangles: b.triangle_count,
             instances: b.instance_count,
-            nodes: match self.config.bvh_layout {
-                crate::bvh::BvhLayout::Pair | crate::bvh::BvhLayout::Auto => b.pair_node_count,
-                crate::bvh::BvhLayout::Single => b.single_node_count,
-                crate::bvh::BvhLayout::Threaded => b.threaded_node_count,
-            },
+            nodes: b.node_count(self.config.bvh_layout),
         }
     }
 
