@@ -796,24 +796,24 @@ fn unit_leaves(b2: &Bvh2, tris: &[[Vec4; 3]]) -> Bvh2 {
         Node(usize),
         Run(u32, u32),
     }
+    let halves =
+        |first: u32, count: u32| [Part::Run(first, count / 2), Part::Run(first + count / 2, count - count / 2)];
     let mut nodes = vec![Bvh2Node::default()];
     let mut todo = vec![(0usize, Part::Node(0))];
     while let Some((at, part)) = todo.pop() {
-        let (aabb, children) = match part {
+        // A one-triangle leaf is final; anything else becomes an inner node over two parts.
+        let (aabb, [a, b]) = match part {
             Part::Node(k) => {
                 let n = &b2.nodes[k];
-                let inner = n.prim_count == 0;
                 let f = n.first_index;
-                let kids = match (inner, n.prim_count) {
-                    (true, _) => Some([Part::Node(f as usize), Part::Node(f as usize + 1)]),
-                    (false, 1) => None,
-                    (false, c) => Some([Part::Run(f, c / 2), Part::Run(f + c / 2, c - c / 2)]),
-                };
-                if kids.is_none() {
-                    nodes[at] = Bvh2Node::new(n.aabb, 1, f);
-                    continue;
+                match n.prim_count {
+                    0 => (n.aabb, [Part::Node(f as usize), Part::Node(f as usize + 1)]),
+                    1 => {
+                        nodes[at] = Bvh2Node::new(n.aabb, 1, f);
+                        continue;
+                    }
+                    c => (n.aabb, halves(f, c)),
                 }
-                (n.aabb, kids)
             }
             Part::Run(first, 1) => {
                 nodes[at] = Bvh2Node::new(tri_box(first), 1, first);
@@ -821,17 +821,15 @@ fn unit_leaves(b2: &Bvh2, tris: &[[Vec4; 3]]) -> Bvh2 {
             }
             Part::Run(first, count) => {
                 let aabb = (first..first + count).map(tri_box).fold(Aabb::empty(), |a, b| a.union(&b));
-                (aabb, Some([Part::Run(first, count / 2), Part::Run(first + count / 2, count - count / 2)]))
+                (aabb, halves(first, count))
             }
         };
         let first = nodes.len();
         nodes.push(Bvh2Node::default());
         nodes.push(Bvh2Node::default());
         nodes[at] = Bvh2Node::new(aabb, 0, first as u32);
-        if let Some([a, b]) = children {
-            todo.push((first, a));
-            todo.push((first + 1, b));
-        }
+        todo.push((first, a));
+        todo.push((first + 1, b));
     }
     Bvh2 { nodes, primitive_indices: b2.primitive_indices.clone(), ..Bvh2::default() }
 }

@@ -210,9 +210,9 @@ uint bvh_wide_hits(BvhNodeWide n, vec3 o, vec3 inv, uint oct, float tmax) {
 // visit in the high byte with the inner-child mask in the low byte); the nearest child in octant order first, and
 // a node's leaf triangles tested before its inner children are entered.
 void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit hit, inout bool found) {
-    vec3 inv = 1.0 / vec3(abs(d.x) > 1e-30 ? d.x : (d.x < 0.0 ? -1e-30 : 1e-30),
-                          abs(d.y) > 1e-30 ? d.y : (d.y < 0.0 ? -1e-30 : 1e-30),
-                          abs(d.z) > 1e-30 ? d.z : (d.z < 0.0 ? -1e-30 : 1e-30));
+    // A zero component becomes a tiny one of its sign (-0 counts as positive, as the octant does).
+    vec3 tiny = mix(vec3(1e-30), vec3(-1e-30), lessThan(d, vec3(0.0)));
+    vec3 inv = 1.0 / mix(d, tiny, lessThanEqual(abs(d), vec3(1e-30)));
     uint oct = (inv.x < 0.0 ? 0u : 4u) | (inv.y < 0.0 ? 0u : 2u) | (inv.z < 0.0 ? 0u : 1u);
     uvec2 stack[BVH_WIDE_STACK];
     uint sp = 0u;
@@ -229,9 +229,7 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
             uint mask = group.y;
             uint bit = uint(findMSB(mask));
             group.y &= ~(1u << bit);
-            if ((group.y & 0xFF000000u) != 0u) {
-                if (sp < BVH_WIDE_STACK) stack[sp++] = group;
-            }
+            if ((group.y & 0xFF000000u) != 0u && sp < BVH_WIDE_STACK) stack[sp++] = group;
             // The child's slot, and its rank among the node's inner children (which are stored in slot order).
             uint slot = (bit - 24u) ^ oct;
             uint child = group.x + bitCount(mask & ~(0xFFFFFFFFu << slot));
