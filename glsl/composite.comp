@@ -57,13 +57,16 @@ layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
 // Only the glass pass traces: the exact composite reads its image.
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
 layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 uint bvh_instance_count() { return uint(bvh_instances.length()); }
-#ifdef BVH_LAYOUT_WIDE
-layout(std430, set = 0, binding = CB_BVH_WIDE) readonly buffer BvhNodesWide { BvhNodeWide bvh_nodes_wide[]; };
-layout(std430, set = 0, binding = CB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uint bvh_wide_prims[]; };
+#ifdef BVH_TEXELS
+layout(set = 0, binding = CB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;
+layout(set = 0, binding = CB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels;
+layout(set = 0, binding = CB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;
+layout(set = 0, binding = CB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;
+#else
+layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
 #endif
 #include "common/bvh.glsl"
 #define GRAY_MATERIALS
@@ -143,17 +146,17 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
                 // meter of this triangle (the square root of its uv area over its world area, in texels).
                 uint t = hit.tri;
                 vec3 b = hit.bary;
-                vec2 u0 = vec2(bvh_tris[3u * t].w, bvh_normal_rows[3u * t].w);
-                vec2 u1 = vec2(bvh_tris[3u * t + 1u].w, bvh_normal_rows[3u * t + 1u].w);
-                vec2 u2 = vec2(bvh_tris[3u * t + 2u].w, bvh_normal_rows[3u * t + 2u].w);
+                vec2 u0 = vec2(bvh_tri(3u * t).w, bvh_normal_row(3u * t).w);
+                vec2 u1 = vec2(bvh_tri(3u * t + 1u).w, bvh_normal_row(3u * t + 1u).w);
+                vec2 u2 = vec2(bvh_tri(3u * t + 2u).w, bvh_normal_row(3u * t + 2u).w);
                 mat2 m = mat2(I.ior_rgb.x, I.sigma_rgb.x, I.ior_rgb.y, I.sigma_rgb.y);
                 vec2 uv = m * (u0 * b.x + u1 * b.y + u2 * b.z) + vec2(I.ior_rgb.z, I.sigma_rgb.z);
                 vec2 e1 = m * (u1 - u0), e2 = m * (u2 - u0);
-                vec3 q0 = bvh_tris[3u * t].xyz;
+                vec3 q0 = bvh_tri(3u * t).xyz;
                 vec3 w1 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                                    bvh_tris[3u * t + 1u].xyz - q0, 0.0);
+                                    bvh_tri(3u * t + 1u).xyz - q0, 0.0);
                 vec3 w2 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                                    bvh_tris[3u * t + 2u].xyz - q0, 0.0);
+                                    bvh_tri(3u * t + 2u).xyz - q0, 0.0);
                 float uv_area = abs(e1.x * e2.y - e1.y * e2.x);
                 float world_area = length(cross(w1, w2));
                 float texels = sqrt(uv_area / max(world_area, 1e-30)) * float(textureSize(t_albedo_textures, 0).x);

@@ -166,6 +166,17 @@ pub struct BvhBuffers {
     pub instance_count: usize,
 }
 
+/// The texel formats the wide layout's variants read the BVH as (glsl/common/bvh.glsl): four 32-bit floats (a
+/// triangle's vertex, a normal row), four or one 32-bit unsigned integers (a fifth of a wide node, a triangle index).
+const FLOAT4: (vk::Format, u64) = (vk::Format::R32G32B32A32_SFLOAT, 16);
+const UINT4: (vk::Format, u64) = (vk::Format::R32G32B32A32_UINT, 16);
+const UINT1: (vk::Format, u64) = (vk::Format::R32_UINT, 4);
+
+/// A BVH buffer with the texel view those variants read it through.
+fn texels(buffer: Buffer, (format, bytes): (vk::Format, u64)) -> VkResult<Buffer> {
+    buffer.with_texel_view(format, bytes)
+}
+
 /// Empty lists still need a buffer to bind: one zeroed element.
 fn nonempty<T: bytemuck::Pod + Default>(v: &[T]) -> Vec<T> {
     if v.is_empty() {
@@ -189,15 +200,19 @@ impl BvhBuffers {
     pub fn placeholders(device: &Arc<Device>, recorder: &mut Recorder) -> VkResult<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let transfer_storage = storage | vk::BufferUsageFlags::TRANSFER_DST;
+        let readable = storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         let zeros = [[0u32; 4]; 4];
         Ok(BvhBuffers {
             pair_nodes: upload_buffer(device, recorder, "bvh pair nodes (none)", &zeros, storage)?,
             single_nodes: upload_buffer(device, recorder, "bvh single nodes (none)", &zeros, storage)?,
             threaded_nodes: upload_buffer(device, recorder, "bvh threaded nodes (none)", &zeros, storage)?,
-            wide_nodes: upload_buffer(device, recorder, "bvh wide nodes (none)", &[[0u32; 20]], storage)?,
-            wide_prims: upload_buffer(device, recorder, "bvh wide triangles (none)", &zeros, storage)?,
-            triangles: upload_buffer(device, recorder, "bvh triangles (none)", &zeros, storage)?,
-            normals: upload_buffer(device, recorder, "bvh normals (none)", &zeros, storage)?,
+            wide_nodes: texels(
+                upload_buffer(device, recorder, "bvh wide nodes (none)", &[[0u32; 20]], readable)?,
+                UINT4,
+            )?,
+            wide_prims: texels(upload_buffer(device, recorder, "bvh wide triangles (none)", &zeros, readable)?, UINT1)?,
+            triangles: texels(upload_buffer(device, recorder, "bvh triangles (none)", &zeros, readable)?, FLOAT4)?,
+            normals: texels(upload_buffer(device, recorder, "bvh normals (none)", &zeros, readable)?, FLOAT4)?,
             instances: upload_buffer(device, recorder, "bvh instances (none)", &[no_instance()], storage)?,
             refit_nodes: upload_buffer(device, recorder, "refit nodes (none)", &zeros, storage)?,
             refit_leaves: upload_buffer(device, recorder, "refit leaves (none)", &zeros, storage)?,
@@ -262,6 +277,7 @@ impl BvhBuffers {
     ) -> VkResult<()> {
         // (Transfer source: tests read the refit BVH back.)
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let readable = storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         if self.host.is_none() {
             let objects: Vec<BvhObject> = instances
                 .objects
@@ -272,8 +288,10 @@ impl BvhBuffers {
             cache.retain(instances.meshes);
             let bvh = SceneBvh::build_cached(instances.meshes, &objects, instances.deforming, cache);
             log::info!("scene BVH: {} triangles, built in {:.0} ms", bvh.triangles.len(), bvh.build_ms);
-            self.triangles = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), storage)?;
-            self.normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), storage)?;
+            let tris = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), readable)?;
+            self.triangles = texels(tris, FLOAT4)?;
+            let normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), readable)?;
+            self.normals = texels(normals, FLOAT4)?;
             let instances = if bvh.instances.is_empty() { vec![no_instance()] } else { bvh.instances.clone() };
             self.instances = upload_buffer(device, recorder, "bvh instances", &instances, storage)?;
             if !bvh.refit_nodes.is_empty() {
@@ -313,9 +331,10 @@ impl BvhBuffers {
                 upload_buffer(device, recorder, "bvh threaded nodes", &nonempty(&bvh.threaded_nodes), storage)?;
         }
         if wanted[3] && !self.uploaded[3] {
-            self.wide_nodes = upload_buffer(device, recorder, "bvh wide nodes", &nonempty(&bvh.wide_nodes), storage)?;
-            self.wide_prims =
-                upload_buffer(device, recorder, "bvh wide triangles", &nonempty(&bvh.wide_prims), storage)?;
+            let nodes = upload_buffer(device, recorder, "bvh wide nodes", &nonempty(&bvh.wide_nodes), readable)?;
+            self.wide_nodes = texels(nodes, UINT4)?;
+            let prims = upload_buffer(device, recorder, "bvh wide triangles", &nonempty(&bvh.wide_prims), readable)?;
+            self.wide_prims = texels(prims, UINT1)?;
         }
         let new_layout = self.uploaded.iter().zip(wanted).any(|(&u, w)| w && !u);
         for (u, w) in self.uploaded.iter_mut().zip(wanted) {

@@ -8,6 +8,35 @@
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
+// The triangles' vertices and vertex-normal rows (3 each per triangle), and the wide layout's nodes and triangle
+// list, from texel buffers or storage buffers (BVH_TEXELS, common/bvh_types.glsl).
+#ifdef BVH_TEXELS
+vec4 bvh_tri(uint k) { return texelFetch(bvh_tri_texels, int(k)); }
+vec4 bvh_normal_row(uint k) { return texelFetch(bvh_normal_texels, int(k)); }
+#else
+vec4 bvh_tri(uint k) { return bvh_tris[k]; }
+vec4 bvh_normal_row(uint k) { return bvh_normal_rows[k]; }
+#endif
+#if defined(BVH_LAYOUT_WIDE)
+BvhNodeWide bvh_wide_node(uint i) {
+#ifdef BVH_TEXELS
+    int k = 5 * int(i);
+    return BvhNodeWide(texelFetch(bvh_wide_texels, k), texelFetch(bvh_wide_texels, k + 1),
+                       texelFetch(bvh_wide_texels, k + 2), texelFetch(bvh_wide_texels, k + 3),
+                       texelFetch(bvh_wide_texels, k + 4));
+#else
+    return bvh_nodes_wide[i];
+#endif
+}
+uint bvh_wide_prim(uint i) {
+#ifdef BVH_TEXELS
+    return texelFetch(bvh_wide_prim_texels, int(i)).x;
+#else
+    return bvh_wide_prims[i];
+#endif
+}
+#endif
+
 const uint BVH_EMPTY = 0xFFFFFFFFu;
 const uint BVH_STACK = 64u;
 
@@ -51,7 +80,7 @@ Shear bvh_shear(vec3 d) {
 
 // Watertight ray/triangle test: t and the barycentric weights of the hit, if 0 < t < tmax.
 bool bvh_triangle(Shear sh, vec3 o, uint tri, float tmax, out float t, out vec3 bary) {
-    vec3 a = bvh_tris[3u * tri].xyz - o, b = bvh_tris[3u * tri + 1u].xyz - o, c = bvh_tris[3u * tri + 2u].xyz - o;
+    vec3 a = bvh_tri(3u * tri).xyz - o, b = bvh_tri(3u * tri + 1u).xyz - o, c = bvh_tri(3u * tri + 2u).xyz - o;
     uint kx = sh.k.x, ky = sh.k.y, kz = sh.k.z;
     float ax = a[kx] - sh.s.x * a[kz], ay = a[ky] - sh.s.y * a[kz];
     float bx = b[kx] - sh.s.x * b[kz], by = b[ky] - sh.s.y * b[kz];
@@ -223,7 +252,7 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
         while (tris.y != 0u) {
             uint k = uint(findMSB(tris.y));
             tris.y &= ~(1u << k);
-            bvh_leaf(sh, o, bvh_wide_prims[tris.x + k], 1u, ii, hit, found);
+            bvh_leaf(sh, o, bvh_wide_prim(tris.x + k), 1u, ii, hit, found);
         }
         if ((group.y & 0xFF000000u) != 0u) {
             uint mask = group.y;
@@ -233,7 +262,7 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
             // The child's slot, and its rank among the node's inner children (which are stored in slot order).
             uint slot = (bit - 24u) ^ oct;
             uint child = group.x + bitCount(mask & ~(0xFFFFFFFFu << slot));
-            BvhNodeWide n = bvh_nodes_wide[child];
+            BvhNodeWide n = bvh_wide_node(child);
             uint hits = bvh_wide_hits(n, o, inv, oct, hit.t);
             group = uvec2(n.w1.x, (hits & 0xFF000000u) | (n.w0.w >> 24));
             tris = uvec2(n.w1.y, hits & 0x00FFFFFFu);
@@ -285,9 +314,9 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
 // falling back to the geometric one where the interpolation degenerates), as src/reference/geometry.rs computes.
 void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
     BvhInstance I = bvh_instances[hit.inst];
-    vec3 p0 = bvh_tris[3u * hit.tri].xyz, p1 = bvh_tris[3u * hit.tri + 1u].xyz, p2 = bvh_tris[3u * hit.tri + 2u].xyz;
-    vec3 n = bvh_normal_rows[3u * hit.tri].xyz * hit.bary.x + bvh_normal_rows[3u * hit.tri + 1u].xyz * hit.bary.y
-        + bvh_normal_rows[3u * hit.tri + 2u].xyz * hit.bary.z;
+    vec3 p0 = bvh_tri(3u * hit.tri).xyz, p1 = bvh_tri(3u * hit.tri + 1u).xyz, p2 = bvh_tri(3u * hit.tri + 2u).xyz;
+    vec3 n = bvh_normal_row(3u * hit.tri).xyz * hit.bary.x + bvh_normal_row(3u * hit.tri + 1u).xyz * hit.bary.y
+        + bvh_normal_row(3u * hit.tri + 2u).xyz * hit.bary.z;
     // Normals transform with the inverse transpose: the transpose of object_from_world's 3x3 part (whose rows are
     // the columns GLSL's mat3 constructor takes).
     mat3 m = mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz);
@@ -304,17 +333,17 @@ void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out
     dnx = dny = vec3(0.0);
     BvhInstance I = bvh_instances[hit.inst];
     vec3 q0 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                        bvh_tris[3u * hit.tri].xyz, 1.0);
+                        bvh_tri(3u * hit.tri).xyz, 1.0);
     vec3 q1 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                        bvh_tris[3u * hit.tri + 1u].xyz, 1.0);
+                        bvh_tri(3u * hit.tri + 1u).xyz, 1.0);
     vec3 q2 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                        bvh_tris[3u * hit.tri + 2u].xyz, 1.0);
+                        bvh_tri(3u * hit.tri + 2u).xyz, 1.0);
     vec3 e1 = q1 - q0, e2 = q2 - q0, n = cross(e1, e2);
     float nn = dot(n, n);
     if (!(nn > 0.0)) return;
     vec3 g1 = cross(e2, n) / nn, g2 = cross(n, e1) / nn;
-    vec3 n0 = bvh_normal_rows[3u * hit.tri].xyz, n1 = bvh_normal_rows[3u * hit.tri + 1u].xyz;
-    vec3 n2 = bvh_normal_rows[3u * hit.tri + 2u].xyz;
+    vec3 n0 = bvh_normal_row(3u * hit.tri).xyz, n1 = bvh_normal_row(3u * hit.tri + 1u).xyz;
+    vec3 n2 = bvh_normal_row(3u * hit.tri + 2u).xyz;
     mat3 m = mat3(I.object_from_world[0].xyz, I.object_from_world[1].xyz, I.object_from_world[2].xyz);
     float len = length(m * (n0 * hit.bary.x + n1 * hit.bary.y + n2 * hit.bary.z));
     if (!(len > 0.0) || isinf(len)) return;
@@ -330,8 +359,8 @@ void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out
 // World-space hit point from the barycentric weights (more precise than ro + t*rd far from the origin).
 vec3 bvh_hit_point(SceneHit hit) {
     BvhInstance I = bvh_instances[hit.inst];
-    vec3 p = bvh_tris[3u * hit.tri].xyz * hit.bary.x + bvh_tris[3u * hit.tri + 1u].xyz * hit.bary.y
-        + bvh_tris[3u * hit.tri + 2u].xyz * hit.bary.z;
+    vec3 p = bvh_tri(3u * hit.tri).xyz * hit.bary.x + bvh_tri(3u * hit.tri + 1u).xyz * hit.bary.y
+        + bvh_tri(3u * hit.tri + 2u).xyz * hit.bary.z;
     return bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2], p, 1.0);
 }
 

@@ -65,8 +65,13 @@ layout(std430, set = 0, binding = PB_QUEUE1) buffer RayQueue1 { vec4 queue1[]; }
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle { BvhNodeSingle bvh_nodes_single[]; };
+#ifdef BVH_TEXELS
+layout(set = 0, binding = PB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;       // 3 per triangle
+layout(set = 0, binding = PB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels; // 3 per triangle
+#else
 layout(std430, set = 0, binding = PB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };          // 3 per triangle
 layout(std430, set = 0, binding = PB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; }; // 3 per triangle
+#endif
 layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 uint bvh_instance_count() { return uint(bvh_instances.length()); }
 
@@ -76,8 +81,13 @@ layout(std430, set = 0, binding = PB_FLUX_TEXELS) buffer FluxBuf { float flux_te
 // The threaded layout (src/bvh.rs): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
 layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { BvhNodeSingle bvh_nodes_threaded[]; };
 // The wide layout (src/bvh.rs): compressed 8-wide nodes, and its triangle list (indices into bvh_tris' triangles).
+#ifdef BVH_TEXELS
+layout(set = 0, binding = PB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;  // 5 per node
+layout(set = 0, binding = PB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;
+#else
 layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhNodesWide { BvhNodeWide bvh_nodes_wide[]; };
 layout(std430, set = 0, binding = PB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uint bvh_wide_prims[]; };
+#endif
 
 // Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
 // groups (lavapipe's limit).

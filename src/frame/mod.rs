@@ -240,8 +240,9 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.ts.mark(rec.cmd, "scene_update.triangles");
         update.water_triangles(rec.cmd, sb, &up.water_triangles)?;
         unsafe { d.cmd_fill_buffer(rec.cmd, b.refit_counters.raw, 0, vk::WHOLE_SIZE, 0) };
-        rec.sync.buffer(&b.triangles, &[Access::ComputeRead]);
-        rec.sync.buffer(&b.normals, &[Access::ComputeRead]);
+        // The wide layout's variants read them as texels.
+        rec.sync.buffer(&b.triangles, &[Access::ComputeRead, Access::ComputeTexels]);
+        rec.sync.buffer(&b.normals, &[Access::ComputeRead, Access::ComputeTexels]);
         for buf in [&b.refit_counters, &b.refit_boxes, &b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
             rec.sync.buffer(buf, &[Access::ComputeWrite]);
         }

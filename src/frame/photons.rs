@@ -2,6 +2,7 @@
 //! (exact transport's waves, or the two-interface trace) and splatted into the caustic flux map.
 
 use super::{Ctx, Rec};
+use crate::bvh::BvhLayout;
 use crate::gpu_types::{TransportState, TraversalState};
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape};
 use crate::settings::{Driven, Method, Transport};
@@ -81,7 +82,12 @@ impl Ctx<'_> {
     /// How this frame's traversal runs (work-group side as its dispatches count candidates, metric, cooperative
     /// checks); both the GPU- and the CPU-driven loop use it.
     fn traverse_shape(&self) -> TraverseShape {
-        TraverseShape { wg: self.s.traverse_dispatch_wg(), metric: self.s.metric, coop: self.s.coop_traversal() }
+        TraverseShape {
+            wg: self.s.traverse_dispatch_wg(),
+            metric: self.s.metric,
+            coop: self.s.coop_traversal(),
+            wide: self.s.transport == Transport::Exact && self.s.bvh_layout == BvhLayout::Wide,
+        }
     }
 
     fn bindings(&self) -> PhotonBindings<'_> {

@@ -6,7 +6,7 @@ use super::groups_2d;
 use crate::scene_gpu::BvhBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
-use crate::vk::pipeline::{kinds, ordered, LazyPipeline};
+use crate::vk::pipeline::{kinds, ordered, with_texels, LazyPipeline};
 use crate::vk::{Bind, BindKind, Buffer, Device, Image, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -116,7 +116,15 @@ impl CompositePass {
         let single = lazy("composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words());
         let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
         let glass = lazy("eye glass", shaders::COMPOSITE_COMP_GLASS.words());
-        let glass_wide = lazy("eye glass (wide BVH nodes)", shaders::COMPOSITE_COMP_GLASS_WIDE.words());
+        // Read as texels there (glsl/common/bvh.glsl, `BVH_TEXELS`).
+        let texel_binds = with_texels(binds, &[CB_BVH_TRIS, CB_BVH_NORMALS, CB_BVH_WIDE, CB_BVH_WIDE_PRIMS]);
+        let glass_wide = LazyPipeline::compute(
+            device,
+            "eye glass (wide BVH nodes)",
+            shaders::COMPOSITE_COMP_GLASS_WIDE.words(),
+            &texel_binds,
+            push,
+        );
         Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass, glass_wide })
     }
 

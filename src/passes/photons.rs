@@ -7,8 +7,8 @@ use crate::bvh::BvhLayout;
 use crate::gpu_types::PhotonPush;
 use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
-use crate::vk::pipeline::kinds;
 use crate::vk::pipeline::LazyPipeline;
+use crate::vk::pipeline::{kinds, with_texels};
 use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -40,6 +40,10 @@ const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
     (PB_BVH_WIDE_PRIMS, BindKind::Storage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
+
+/// The BVH bindings the wide layout's variants read as texel buffers (glsl/common/bvh.glsl, `BVH_TEXELS`): on a
+/// CPU driver a texel fetch gathers all lanes at once, where a storage-buffer load walks the lanes one by one.
+pub const BVH_TEXEL_BINDINGS: [u32; 4] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_WIDE, PB_BVH_WIDE_PRIMS];
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
 pub const TRACE_OFFSET: u64 = 16 * INDIRECT_TRACE as u64;
@@ -122,12 +126,12 @@ pub mod transport_mode {
 pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
-    /// Per metric (indexed by `Metric::code`), per work-group side: max-level (TRAVERSE_MAX_LEVEL: no metric
-    /// code, the last level fused into the one before), max-error and flux-error (TRAVERSE_METRIC: that metric's
-    /// code only).
-    traverse: [Vec<(u32, LazyPipeline)>; 3],
-    /// Max-error's and flux-error's 8x8 traversal with four lanes per candidate (TRAVERSE_COOP).
-    traverse_coop: [LazyPipeline; 2],
+    /// Per BVH layout the checks walk (pair, wide), per metric (indexed by `Metric::code`), per work-group side:
+    /// max-level (TRAVERSE_MAX_LEVEL: no metric code, the last level fused into the one before), max-error and
+    /// flux-error (TRAVERSE_METRIC: that metric's code only).
+    traverse: [[Vec<(u32, LazyPipeline)>; 3]; 2],
+    /// Per layout, max-error's and flux-error's 8x8 traversal with four lanes per candidate (TRAVERSE_COOP).
+    traverse_coop: [[LazyPipeline; 2]; 2],
     stats: Pipeline,
     dense_emit: LazyPipeline,
     trace: LazyPipeline,
@@ -146,12 +150,14 @@ pub struct PhotonPasses {
 }
 
 /// How traversal runs: the work-group side its dispatches count candidates in
-/// ([`crate::settings::Settings::traverse_dispatch_wg`]), the metric, and whether the checks are cooperative.
+/// ([`crate::settings::Settings::traverse_dispatch_wg`]), the metric, whether the checks are cooperative, and
+/// whether exact transport's checks walk the wide BVH layout (where the waves do) instead of the pair layout.
 #[derive(Clone, Copy, Debug)]
 pub struct TraverseShape {
     pub wg: u32,
     pub metric: Metric,
     pub coop: bool,
+    pub wide: bool,
 }
 
 impl PhotonPasses {
@@ -161,43 +167,62 @@ impl PhotonPasses {
         let binds = kinds(&LAYOUT);
         let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &binds, push);
         let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
-        // One traversal pipeline per metric (llvmpipe pays for code a metric never takes) and work-group side.
+        let texel_binds = with_texels(binds, &BVH_TEXEL_BINDINGS);
+        // One traversal pipeline per BVH layout the checks walk (pair; wide: texel reads), metric (llvmpipe pays
+        // for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
-        let variant = |metric: Metric, spv: [&'static [u32]; 5]| -> Vec<(u32, LazyPipeline)> {
-            sides.iter().zip(spv).map(|(&s, words)| (s, lazy(&format!("traverse {metric:?} {s}x{s}"), words))).collect()
+        let variant = |metric: Metric, wide: bool, spv: [&'static Spv; 5]| -> Vec<(u32, LazyPipeline)> {
+            let binds = if wide { &texel_binds } else { &binds };
+            let layout = if wide { ", wide BVH" } else { "" };
+            sides
+                .iter()
+                .zip(spv)
+                .map(|(&s, spv)| {
+                    let name = format!("traverse {metric:?} {s}x{s}{layout}");
+                    (s, LazyPipeline::compute(device, &name, spv.words(), binds, push))
+                })
+                .collect()
         };
-        let traverse = [
-            variant(
-                Metric::MaxLevel,
-                [
-                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG1.words(),
-                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG2.words(),
-                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG4.words(),
-                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG8.words(),
-                    shaders::TRAVERSE_COMP_MAX_LEVEL_WG16.words(),
-                ],
-            ),
-            variant(
-                Metric::MaxError,
-                [
-                    shaders::TRAVERSE_COMP_MAX_ERROR_WG1.words(),
-                    shaders::TRAVERSE_COMP_MAX_ERROR_WG2.words(),
-                    shaders::TRAVERSE_COMP_MAX_ERROR_WG4.words(),
-                    shaders::TRAVERSE_COMP_MAX_ERROR_WG8.words(),
-                    shaders::TRAVERSE_COMP_MAX_ERROR_WG16.words(),
-                ],
-            ),
-            variant(
-                Metric::FluxError,
-                [
-                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG1.words(),
-                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG2.words(),
-                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG4.words(),
-                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG8.words(),
-                    shaders::TRAVERSE_COMP_FLUX_ERROR_WG16.words(),
-                ],
-            ),
-        ];
+        use shaders::*;
+        let traverse_layout = |wide: bool| {
+            let pick = |pair: &'static Spv, w: &'static Spv| if wide { w } else { pair };
+            [
+                variant(
+                    Metric::MaxLevel,
+                    wide,
+                    [
+                        pick(TRAVERSE_COMP_MAX_LEVEL_WG1, TRAVERSE_COMP_MAX_LEVEL_WG1_WIDE),
+                        pick(TRAVERSE_COMP_MAX_LEVEL_WG2, TRAVERSE_COMP_MAX_LEVEL_WG2_WIDE),
+                        pick(TRAVERSE_COMP_MAX_LEVEL_WG4, TRAVERSE_COMP_MAX_LEVEL_WG4_WIDE),
+                        pick(TRAVERSE_COMP_MAX_LEVEL_WG8, TRAVERSE_COMP_MAX_LEVEL_WG8_WIDE),
+                        pick(TRAVERSE_COMP_MAX_LEVEL_WG16, TRAVERSE_COMP_MAX_LEVEL_WG16_WIDE),
+                    ],
+                ),
+                variant(
+                    Metric::MaxError,
+                    wide,
+                    [
+                        pick(TRAVERSE_COMP_MAX_ERROR_WG1, TRAVERSE_COMP_MAX_ERROR_WG1_WIDE),
+                        pick(TRAVERSE_COMP_MAX_ERROR_WG2, TRAVERSE_COMP_MAX_ERROR_WG2_WIDE),
+                        pick(TRAVERSE_COMP_MAX_ERROR_WG4, TRAVERSE_COMP_MAX_ERROR_WG4_WIDE),
+                        pick(TRAVERSE_COMP_MAX_ERROR_WG8, TRAVERSE_COMP_MAX_ERROR_WG8_WIDE),
+                        pick(TRAVERSE_COMP_MAX_ERROR_WG16, TRAVERSE_COMP_MAX_ERROR_WG16_WIDE),
+                    ],
+                ),
+                variant(
+                    Metric::FluxError,
+                    wide,
+                    [
+                        pick(TRAVERSE_COMP_FLUX_ERROR_WG1, TRAVERSE_COMP_FLUX_ERROR_WG1_WIDE),
+                        pick(TRAVERSE_COMP_FLUX_ERROR_WG2, TRAVERSE_COMP_FLUX_ERROR_WG2_WIDE),
+                        pick(TRAVERSE_COMP_FLUX_ERROR_WG4, TRAVERSE_COMP_FLUX_ERROR_WG4_WIDE),
+                        pick(TRAVERSE_COMP_FLUX_ERROR_WG8, TRAVERSE_COMP_FLUX_ERROR_WG8_WIDE),
+                        pick(TRAVERSE_COMP_FLUX_ERROR_WG16, TRAVERSE_COMP_FLUX_ERROR_WG16_WIDE),
+                    ],
+                ),
+            ]
+        };
+        let traverse = [traverse_layout(false), traverse_layout(true)];
         let splat = {
             let (device, binds) = (device.clone(), binds.to_vec());
             LazyPipeline::new(move || {
@@ -219,9 +244,20 @@ impl PhotonPasses {
                 )
             })
         };
+        let coop = |metric: &str, spv: &'static Spv, wide: bool| {
+            let (binds, layout) = if wide { (&texel_binds, ", wide BVH") } else { (&binds, "") };
+            let name = format!("traverse {metric} 8x8, four lanes a candidate{layout}");
+            LazyPipeline::compute(device, &name, spv.words(), binds, push)
+        };
         let traverse_coop = [
-            lazy("traverse MaxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_MAX_ERROR_COOP.words()),
-            lazy("traverse FluxError 8x8, four lanes a candidate", shaders::TRAVERSE_COMP_FLUX_ERROR_COOP.words()),
+            [
+                coop("MaxError", TRAVERSE_COMP_MAX_ERROR_COOP, false),
+                coop("FluxError", TRAVERSE_COMP_FLUX_ERROR_COOP, false),
+            ],
+            [
+                coop("MaxError", TRAVERSE_COMP_MAX_ERROR_COOP_WIDE, true),
+                coop("FluxError", TRAVERSE_COMP_FLUX_ERROR_COOP_WIDE, true),
+            ],
         ];
         let atomics = device.info.float_atomic_add;
         Ok(PhotonPasses {
@@ -235,7 +271,13 @@ impl PhotonPasses {
             wave_pair: lazy("transport wave", shaders::WAVE_COMP.words()),
             wave_single: lazy("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words()),
             wave_threaded: lazy("transport wave (threaded BVH nodes)", shaders::WAVE_COMP_THREADED.words()),
-            wave_wide: lazy("transport wave (wide BVH nodes)", shaders::WAVE_COMP_WIDE.words()),
+            wave_wide: LazyPipeline::compute(
+                device,
+                "transport wave (wide BVH nodes)",
+                shaders::WAVE_COMP_WIDE.words(),
+                &texel_binds,
+                push,
+            ),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
             splat_compute: atomics.then(|| lazy("compute splat", shaders::SPLAT_COMP.words())),
             splat_compute_tiled: atomics.then(|| lazy("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
@@ -246,13 +288,14 @@ impl PhotonPasses {
 
     /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built); `coop`: the
     /// cooperative checks' 8x8 pipeline of max-error or flux-error, whose groups take 4x4 candidates (`wg` is 4).
-    fn traverse_pipeline(&self, wg: u32, metric: Metric, coop: bool) -> VkResult<&Pipeline> {
-        match (coop, metric) {
-            (true, Metric::MaxError) => return self.traverse_coop[0].get(),
-            (true, Metric::FluxError) => return self.traverse_coop[1].get(),
+    fn traverse_pipeline(&self, shape: TraverseShape) -> VkResult<&Pipeline> {
+        let (wg, layout) = (shape.wg, shape.wide as usize);
+        match (shape.coop, shape.metric) {
+            (true, Metric::MaxError) => return self.traverse_coop[layout][0].get(),
+            (true, Metric::FluxError) => return self.traverse_coop[layout][1].get(),
             _ => {}
         }
-        let list = &self.traverse[metric.code() as usize];
+        let list = &self.traverse[layout][shape.metric.code() as usize];
         list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1).get()
     }
 
@@ -270,7 +313,7 @@ impl PhotonPasses {
         level: u32,
         shape: TraverseShape,
     ) -> VkResult<()> {
-        let p = self.traverse_pipeline(shape.wg, shape.metric, shape.coop)?;
+        let p = self.traverse_pipeline(shape)?;
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: shape.wg, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
@@ -286,7 +329,7 @@ impl PhotonPasses {
         count: u32,
         shape: TraverseShape,
     ) -> VkResult<()> {
-        let (wg, p) = (shape.wg, self.traverse_pipeline(shape.wg, shape.metric, shape.coop)?);
+        let (wg, p) = (shape.wg, self.traverse_pipeline(shape)?);
         p.bind(cmd, &b.binds());
         p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
         let groups = count.div_ceil(wg * wg);

@@ -20,6 +20,8 @@ pub struct Buffer {
     allocation: Option<Allocation>,
     /// Its name (in validation messages).
     pub name: String,
+    /// A view of its texels ([`Buffer::with_texel_view`]; null without one), which a texel-buffer binding reads.
+    pub texels: vk::BufferView,
 }
 
 impl Buffer {
@@ -62,7 +64,27 @@ impl Buffer {
             size,
             allocation: Some(allocation),
             name: name.to_string(),
+            texels: vk::BufferView::null(),
         })
+    }
+
+    /// The buffer with a view of its whole range as texels of `format` (`texel_bytes` each), for shaders that read it
+    /// through a uniform texel buffer (it needs the UNIFORM_TEXEL_BUFFER usage). A device reads at most
+    /// maxTexelBufferElements texels through one view: a longer buffer is an error.
+    pub fn with_texel_view(mut self, format: vk::Format, texel_bytes: u64) -> VkResult<Self> {
+        let texels = self.size / texel_bytes;
+        let limit = self.device.info.limits.max_texel_buffer_elements as u64;
+        if texels > limit {
+            return Err(VkError::Unsupported(format!(
+                "buffer `{}` holds {texels} texels, more than the device reads through a texel buffer ({limit})",
+                self.name
+            )));
+        }
+        let info =
+            vk::BufferViewCreateInfo::default().buffer(self.raw).format(format).offset(0).range(texels * texel_bytes);
+        self.texels = unsafe { self.device.create_buffer_view(&info, None) }.check("vkCreateBufferView")?;
+        self.device.set_name(self.texels, &format!("{} (texels)", self.name));
+        Ok(self)
     }
 
     /// A host-visible buffer filled with `data` (uniforms, readbacks, staging).
@@ -114,7 +136,12 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
-        unsafe { self.device.destroy_buffer(self.raw, None) };
+        unsafe {
+            if self.texels != vk::BufferView::null() {
+                self.device.destroy_buffer_view(self.texels, None);
+            }
+            self.device.destroy_buffer(self.raw, None);
+        }
         if let Some(a) = self.allocation.take() {
             let _ = self.device.allocator().free(a);
         }

@@ -15,6 +15,8 @@ pub enum BindKind {
     /// Combined image sampler.
     Sampled,
     StorageImage,
+    /// Uniform texel buffer: a buffer read through its texel view ([`crate::vk::Buffer::with_texel_view`]).
+    Texels,
 }
 
 impl BindKind {
@@ -24,6 +26,7 @@ impl BindKind {
             BindKind::Storage => vk::DescriptorType::STORAGE_BUFFER,
             BindKind::Sampled => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             BindKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+            BindKind::Texels => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         }
     }
 }
@@ -46,6 +49,15 @@ pub const fn bindings_in_order<T>(entries: &[(u32, T)]) -> bool {
 /// The kinds of a binding list (see [`bindings_in_order`]).
 pub fn kinds<const N: usize>(entries: &[(u32, BindKind); N]) -> [BindKind; N] {
     entries.map(|(_, k)| k)
+}
+
+/// `kinds` with the bindings `texels` names read as texel buffers (a variant that reads through texel views what
+/// the others read as storage buffers; [`Pipeline::bind`]).
+pub fn with_texels<const N: usize>(mut kinds: [BindKind; N], texels: &[u32]) -> [BindKind; N] {
+    for &b in texels {
+        kinds[b as usize] = BindKind::Texels;
+    }
+    kinds
 }
 
 /// The binds of a list in binding order, checked against its index constants.
@@ -315,13 +327,20 @@ impl Pipeline {
         })
     }
 
-    /// Bind the pipeline and push its descriptors (binding i = binds[i]).
+    /// Bind the pipeline and push its descriptors (binding i = binds[i]). A buffer bound where the pipeline's layout
+    /// has a texel-buffer binding (a variant that reads it as texels, where the others read it as storage) is bound
+    /// through its texel view.
     pub fn bind(&self, cmd: vk::CommandBuffer, binds: &[Bind]) {
         debug_assert_eq!(binds.len(), self.kinds.len(), "binding count mismatch");
         let mut buffer_infos = Vec::with_capacity(binds.len());
         let mut image_infos = Vec::with_capacity(binds.len());
-        for b in binds {
+        let mut texel_views = Vec::with_capacity(binds.len());
+        for (b, kind) in binds.iter().zip(&self.kinds) {
             match b {
+                Bind::Uniform(buf) | Bind::Storage(buf) if *kind == BindKind::Texels => {
+                    debug_assert!(buf.texels != vk::BufferView::null(), "buffer `{}` has no texel view", buf.name);
+                    texel_views.push(buf.texels)
+                }
                 Bind::Uniform(buf) | Bind::Storage(buf) => {
                     buffer_infos.push(vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE })
                 }
@@ -337,7 +356,7 @@ impl Pipeline {
                 }),
             }
         }
-        let (mut bi, mut ii) = (0, 0);
+        let (mut bi, mut ii, mut ti) = (0, 0, 0);
         let writes: Vec<_> = binds
             .iter()
             .enumerate()
@@ -346,6 +365,10 @@ impl Pipeline {
                     .dst_binding(i as u32)
                     .descriptor_type(self.kinds[i].descriptor_type());
                 match b {
+                    Bind::Uniform(_) | Bind::Storage(_) if self.kinds[i] == BindKind::Texels => {
+                        ti += 1;
+                        w.texel_buffer_view(std::slice::from_ref(&texel_views[ti - 1]))
+                    }
                     Bind::Uniform(_) | Bind::Storage(_) => {
                         bi += 1;
                         w.buffer_info(std::slice::from_ref(&buffer_infos[bi - 1]))

@@ -22,6 +22,8 @@ pub enum Access {
     ComputeWrite,
     /// Sampled image read in a compute shader.
     ComputeSampled,
+    /// Uniform texel buffer read in a compute shader.
+    ComputeTexels,
     /// Indirect dispatch/draw arguments.
     IndirectRead,
     /// Vertex buffer read by the input assembler.
@@ -61,6 +63,7 @@ impl Access {
                 (Stage::COMPUTE_SHADER, Acc::SHADER_STORAGE_WRITE | Acc::SHADER_STORAGE_READ, Layout::GENERAL)
             }
             ComputeSampled => (Stage::COMPUTE_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
+            ComputeTexels => (Stage::COMPUTE_SHADER, Acc::SHADER_SAMPLED_READ, Layout::GENERAL),
             IndirectRead => (Stage::DRAW_INDIRECT, Acc::INDIRECT_COMMAND_READ, Layout::UNDEFINED),
             VertexInput => (Stage::VERTEX_ATTRIBUTE_INPUT, Acc::VERTEX_ATTRIBUTE_READ, Layout::UNDEFINED),
             IndexInput => (Stage::INDEX_INPUT, Acc::INDEX_READ, Layout::UNDEFINED),
