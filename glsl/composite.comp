@@ -57,14 +57,14 @@ layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
 // Only the glass pass traces: the exact composite reads its image.
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
-uint bvh_instance_count() { return uint(bvh_instances.length()); }
 #ifdef BVH_TEXELS
+layout(set = 0, binding = CB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;
 layout(set = 0, binding = CB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;
 layout(set = 0, binding = CB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels;
 layout(set = 0, binding = CB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;
 layout(set = 0, binding = CB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;
 #else
+layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
 #endif
@@ -136,7 +136,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         vec3 p = bvh_hit_point(hit);
         vec3 ng, ns;
         bvh_normals(hit, ng, ns);
-        BvhInstance I = bvh_instances[hit.inst];
+        BvhInstance I = bvh_instance(hit.inst);
         if (!inst_is_dielectric(hit.inst)) {
             vec3 albedo = I.pad.yzw;
             float width = pixel * (ortho ? 1.0 : run + hit.t);

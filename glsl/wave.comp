@@ -7,6 +7,10 @@
 // invocation's flux goes to exactly one account term, summed per work group and added in fixed point.
 // Appends reserve once per work group. A reservation that does not fit aborts the batch (batching splits its
 // tile, as traversal overflow does) or, without batching, is dropped and counted as overflow.
+#if defined(BVH_LAYOUT_WIDE)
+// The layout CPU devices trace: the photons and the coverage pyramid are read as texels too.
+#define WAVE_TEXELS 1
+#endif
 #include "common/photon_bindings.glsl"
 #include "common/photon_push.glsl"
 #include "common/coverage.glsl"
@@ -170,7 +174,7 @@ void main() {
         bool lod = false;  // a weak branch carried for the photon's block
         if (wave == 0u) {
             pidx = state.capacity - tstate.in_count + i;
-            cell = photons[pidx];
+            cell = photon_at(pidx);
             cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
             if (diff) rdf = cell_ray_diff(cell_level(cell), cell_xy(cell), rd);
             w = 1.0;
@@ -188,7 +192,7 @@ void main() {
             pidx = state.capacity - 1u - (m & ((1u << PHOTON_INDEX_BITS) - 1u));
             depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
             lod = (m & LOD_RAY) != 0u;
-            cell = photons[pidx];
+            cell = photon_at(pidx);
             phi = cell_measure(cell_level(cell), cell_xy(cell));
         }
         if (diff) ray_side = cell_side(cell_level(cell));

@@ -167,7 +167,8 @@ pub struct BvhBuffers {
 }
 
 /// The texel formats the wide layout's variants read the BVH as (glsl/common/bvh.glsl): four 32-bit floats (a
-/// triangle's vertex, a normal row), four or one 32-bit unsigned integers (a fifth of a wide node, a triangle index).
+/// triangle's vertex, a normal row, a twelfth of an instance), four or one 32-bit unsigned integers (a fifth of a
+/// wide node, a triangle index).
 const FLOAT4: (vk::Format, u64) = (vk::Format::R32G32B32A32_SFLOAT, 16);
 const UINT4: (vk::Format, u64) = (vk::Format::R32G32B32A32_UINT, 16);
 const UINT1: (vk::Format, u64) = (vk::Format::R32_UINT, 4);
@@ -213,7 +214,10 @@ impl BvhBuffers {
             wide_prims: texels(upload_buffer(device, recorder, "bvh wide triangles (none)", &zeros, readable)?, UINT1)?,
             triangles: texels(upload_buffer(device, recorder, "bvh triangles (none)", &zeros, readable)?, FLOAT4)?,
             normals: texels(upload_buffer(device, recorder, "bvh normals (none)", &zeros, readable)?, FLOAT4)?,
-            instances: upload_buffer(device, recorder, "bvh instances (none)", &[no_instance()], storage)?,
+            instances: texels(
+                upload_buffer(device, recorder, "bvh instances (none)", &[no_instance()], readable)?,
+                FLOAT4,
+            )?,
             refit_nodes: upload_buffer(device, recorder, "refit nodes (none)", &zeros, storage)?,
             refit_leaves: upload_buffer(device, recorder, "refit leaves (none)", &zeros, storage)?,
             refit_boxes: upload_buffer(device, recorder, "refit boxes (none)", &zeros, storage)?,
@@ -293,7 +297,7 @@ impl BvhBuffers {
             let normals = upload_buffer(device, recorder, "bvh normals", &nonempty(&bvh.normals), readable)?;
             self.normals = texels(normals, FLOAT4)?;
             let instances = if bvh.instances.is_empty() { vec![no_instance()] } else { bvh.instances.clone() };
-            self.instances = upload_buffer(device, recorder, "bvh instances", &instances, storage)?;
+            self.instances = texels(upload_buffer(device, recorder, "bvh instances", &instances, readable)?, FLOAT4)?;
             if !bvh.refit_nodes.is_empty() {
                 let n = bvh.refit_nodes.len();
                 self.refit_nodes = upload_buffer(device, recorder, "refit nodes", &bvh.refit_nodes, storage)?;

@@ -187,13 +187,15 @@ impl Targets {
                 B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
                 gpu,
             )?,
+            // The wide layout's waves read the photons and the coverage pyramid as texels (glsl/wave.comp).
             photons: Buffer::new(
                 device,
                 "photon buffer",
                 8 * (capacity as u64 + PHOTON_GUARD as u64),
-                B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
+                B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
                 gpu,
-            )?,
+            )?
+            .with_texel_view(vk::Format::R32G32_UINT, 8)?,
             indirect: Buffer::new(
                 device,
                 "indirect commands",
@@ -201,7 +203,14 @@ impl Targets {
                 B::STORAGE_BUFFER | B::INDIRECT_BUFFER | B::TRANSFER_DST,
                 gpu,
             )?,
-            coverage: Buffer::new(device, "coverage pyramid", 4 * pyramid_len as u64, B::STORAGE_BUFFER, gpu)?,
+            coverage: Buffer::new(
+                device,
+                "coverage pyramid",
+                4 * pyramid_len as u64,
+                B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER,
+                gpu,
+            )?
+            .with_texel_view(vk::Format::R32_UINT, 4)?,
             debug: Buffer::new(
                 device,
                 "debug photons",

@@ -13,9 +13,19 @@
 #ifdef BVH_TEXELS
 vec4 bvh_tri(uint k) { return texelFetch(bvh_tri_texels, int(k)); }
 vec4 bvh_normal_row(uint k) { return texelFetch(bvh_normal_texels, int(k)); }
+// An instance is 12 texels, in the struct's order (the compiler drops the fetches of members a caller never reads).
+BvhInstance bvh_instance(uint i) {
+    int k = 12 * int(i);
+    vec4 t[12];
+    for (int j = 0; j < 12; j++) t[j] = texelFetch(bvh_instance_texels, k + j);
+    return BvhInstance(vec4[3](t[0], t[1], t[2]), vec4[3](t[3], t[4], t[5]), t[6], t[7], t[8], t[9], t[10], t[11]);
+}
+uint bvh_instance_count() { return uint(textureSize(bvh_instance_texels)) / 12u; }
 #else
 vec4 bvh_tri(uint k) { return bvh_tris[k]; }
 vec4 bvh_normal_row(uint k) { return bvh_normal_rows[k]; }
+BvhInstance bvh_instance(uint i) { return bvh_instances[i]; }
+uint bvh_instance_count() { return uint(bvh_instances.length()); }
 #endif
 #if defined(BVH_LAYOUT_WIDE)
 BvhNodeWide bvh_wide_node(uint i) {
@@ -286,7 +296,7 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
     bool found = false;
     vec3 inv_wd = 1.0 / rd;
     for (uint ii = 0u; ii < bvh_instance_count(); ii++) {
-        BvhInstance I = bvh_instances[ii];
+        BvhInstance I = bvh_instance(ii);
         if (isinf(bvh_slab(I.lo.xyz, I.hi.xyz, ro, inv_wd, hit.t))) continue;
         vec3 o = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], ro, 1.0);
         vec3 d = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], rd, 0.0);
@@ -313,7 +323,7 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
 // World-space geometric normal (unit; counter-clockwise winding faces it) and interpolated shading normal (unit,
 // falling back to the geometric one where the interpolation degenerates), as src/reference/geometry.rs computes.
 void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
-    BvhInstance I = bvh_instances[hit.inst];
+    BvhInstance I = bvh_instance(hit.inst);
     vec3 p0 = bvh_tri(3u * hit.tri).xyz, p1 = bvh_tri(3u * hit.tri + 1u).xyz, p2 = bvh_tri(3u * hit.tri + 2u).xyz;
     vec3 n = bvh_normal_row(3u * hit.tri).xyz * hit.bary.x + bvh_normal_row(3u * hit.tri + 1u).xyz * hit.bary.y
         + bvh_normal_row(3u * hit.tri + 2u).xyz * hit.bary.z;
@@ -331,7 +341,7 @@ void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
 // derivative of the normalization, (dm - ns (ns.dm)) / |m|.
 void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out vec3 dny) {
     dnx = dny = vec3(0.0);
-    BvhInstance I = bvh_instances[hit.inst];
+    BvhInstance I = bvh_instance(hit.inst);
     vec3 q0 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
                         bvh_tri(3u * hit.tri).xyz, 1.0);
     vec3 q1 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
@@ -358,7 +368,7 @@ void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out
 
 // World-space hit point from the barycentric weights (more precise than ro + t*rd far from the origin).
 vec3 bvh_hit_point(SceneHit hit) {
-    BvhInstance I = bvh_instances[hit.inst];
+    BvhInstance I = bvh_instance(hit.inst);
     vec3 p = bvh_tri(3u * hit.tri).xyz * hit.bary.x + bvh_tri(3u * hit.tri + 1u).xyz * hit.bary.y
         + bvh_tri(3u * hit.tri + 2u).xyz * hit.bary.z;
     return bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2], p, 1.0);

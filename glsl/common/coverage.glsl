@@ -12,10 +12,10 @@ uint coverage_bits(uint level, uvec2 xy) {
     if (level <= g) {
         uint m = g - level;
         uint res = R >> m;
-        return coverage[pyramid_offset(m) + xy.y * res + xy.x];
+        return coverage_at(pyramid_offset(m) + xy.y * res + xy.x);
     }
     uvec2 t = xy >> (level - g);
-    return coverage[pyramid_offset(0u) + t.y * R + t.x];
+    return coverage_at(pyramid_offset(0u) + t.y * R + t.x);
 }
 
 bool cell_any_covered(uint level, uvec2 xy) { return (coverage_bits(level, xy) & 1u) != 0u; }
@@ -32,7 +32,7 @@ uvec2 leaf_texel(uint level, uvec2 xy) {
 
 bool leaf_covered(uint level, uvec2 xy) {
     uvec2 t = leaf_texel(level, xy);
-    return (coverage[pyramid_offset(0u) + t.y * u_frame.grid.x + t.x] & 1u) != 0u;
+    return (coverage_at(pyramid_offset(0u) + t.y * u_frame.grid.x + t.x) & 1u) != 0u;
 }
 
 // Is the leaf cell (level, xy) a photon of the dense grid: its center's base texel is covered and its center lies

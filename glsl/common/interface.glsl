@@ -88,8 +88,8 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) 
 }
 
 // Specular: a dielectric or a mirror (everything else is a diffuse receiver).
-bool inst_is_dielectric(uint inst) { return bvh_instances[inst].material.y > 0.5; }
-bool inst_is_mirror(uint inst) { return bvh_instances[inst].material.y > 1.5; }
+bool inst_is_dielectric(uint inst) { return bvh_instance(inst).material.y > 0.5; }
+bool inst_is_mirror(uint inst) { return bvh_instance(inst).material.y > 1.5; }
 // The color channel this pass traces: 0 for one gray pass, 1..3 for red, green, blue (FrameData.transport.w).
 // The eye view (composite.comp, GRAY_MATERIALS) names its channels itself: its uniforms are a photon pass's, whose
 // channel is not the eye's.
@@ -101,10 +101,10 @@ uint color_channel() { return u_frame.transport.w & 0xffu; }
 // A dielectric's IOR and absorption coefficient (1/m) in channel c (0: the gray pass's d-line IOR and mean
 // absorption).
 float inst_ior_in(uint inst, uint c) {
-    return c == 0u ? bvh_instances[inst].material.x : bvh_instances[inst].ior_rgb[c - 1u];
+    return c == 0u ? bvh_instance(inst).material.x : bvh_instance(inst).ior_rgb[c - 1u];
 }
 float inst_sigma_in(uint inst, uint c) {
-    return c == 0u ? bvh_instances[inst].material.z : bvh_instances[inst].sigma_rgb[c - 1u];
+    return c == 0u ? bvh_instance(inst).material.z : bvh_instance(inst).sigma_rgb[c - 1u];
 }
 float inst_ior(uint inst) { return inst_ior_in(inst, color_channel()); }
 float inst_sigma(uint inst) { return inst_sigma_in(inst, color_channel()); }

@@ -6,7 +6,15 @@
 
 layout(std140, set = 0, binding = PB_FRAME) uniform FrameUbo { FrameData u_frame; };
 layout(std430, set = 0, binding = PB_STATE) buffer StateBuf { TraversalState state; };
+// The wave's read-only inputs (the photons, the coverage pyramid) are texel buffers where it reads the BVH as texels
+// (WAVE_TEXELS, glsl/wave.comp; common/bvh_types.glsl says why).
+#ifdef WAVE_TEXELS
+layout(set = 0, binding = PB_PHOTONS) uniform usamplerBuffer photon_texels;
+uvec2 photon_at(uint i) { return texelFetch(photon_texels, int(i)).xy; }
+#else
 layout(std430, set = 0, binding = PB_PHOTONS) buffer PhotonBuf { uvec2 photons[]; };
+uvec2 photon_at(uint i) { return photons[i]; }
+#endif
 // Indirect commands: dispatch[level] (x, y, z, pad) for each traversal level, the photon trace's dispatch, then
 // the splat's draw command (vertexCount, instanceCount, firstVertex, firstInstance).
 // Exact transport adds the current wave's dispatch.
@@ -16,7 +24,13 @@ layout(std430, set = 0, binding = PB_INDIRECT) buffer IndirectBuf { uvec4 indire
 #define draw_cmd indirect_cmd[INDIRECT_DRAW]
 #define wave_cmd indirect_cmd[INDIRECT_WAVE]
 #define splat_cmd indirect_cmd[INDIRECT_SPLAT]
+#ifdef WAVE_TEXELS
+layout(set = 0, binding = PB_COVERAGE) uniform usamplerBuffer coverage_texels;
+uint coverage_at(uint i) { return texelFetch(coverage_texels, int(i)).x; }
+#else
 layout(std430, set = 0, binding = PB_COVERAGE) readonly buffer CoverageBuf { uint coverage[]; };
+uint coverage_at(uint i) { return coverage[i]; }
+#endif
 layout(set = 0, binding = PB_FRONT) uniform usampler2D t_front;     // refractor front: normal, distance (0: none; common/gbuffer.glsl)
 layout(set = 0, binding = PB_FRONT_AUX) uniform sampler2D t_front_aux;  // refractor front: index of refraction
 layout(set = 0, binding = PB_BACK) uniform usampler2D t_back;      // refractor back: normal, distance
@@ -72,8 +86,11 @@ layout(set = 0, binding = PB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texel
 layout(std430, set = 0, binding = PB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };          // 3 per triangle
 layout(std430, set = 0, binding = PB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; }; // 3 per triangle
 #endif
+#ifdef BVH_TEXELS
+layout(set = 0, binding = PB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;  // 12 per instance
+#else
 layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
-uint bvh_instance_count() { return uint(bvh_instances.length()); }
+#endif
 
 // The compute splat's target: the caustic flux map as one float per texel (row-major), added to atomically, then
 // copied into the flux image that the resolve reads.

@@ -226,7 +226,7 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.sync.buffer(&sb.bvh.instances, &[Access::TransferDst]);
         rec.flush(d);
         update.write(rec.cmd, &sb.bvh.instances, records);
-        rec.sync.buffer(&sb.bvh.instances, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.bvh.instances, &[Access::ComputeRead, Access::ComputeTexels]);
     }
     if !up.water_triangles.is_empty() || !up.refits.is_empty() {
         let b = &sb.bvh;

@@ -178,7 +178,7 @@ impl Ctx<'_> {
         rec.sync.buffer(&t.photon.debug, &[Access::ComputeWrite]);
         rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
         rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
-        rec.sync.buffer(&t.photon.coverage, &[Access::ComputeRead]);
+        rec.sync.buffer(&t.photon.coverage, &[Access::ComputeRead, Access::ComputeTexels]);
         if self.compute_splat {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
         }
@@ -315,6 +315,8 @@ impl Ctx<'_> {
             for q in &t.photon.queues {
                 rec.sync.buffer(q, &[Access::ComputeWrite]);
             }
+            // The wide layout's waves read the photons traversal wrote as texels.
+            rec.sync.buffer(&t.photon.photons, &[Access::ComputeTexels]);
             rec.flush(self.d);
         };
         rec.ts.mark(rec.cmd, "transport_primary");

@@ -117,7 +117,8 @@ impl CompositePass {
         let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
         let glass = lazy("eye glass", shaders::COMPOSITE_COMP_GLASS.words());
         // Read as texels there (glsl/common/bvh.glsl, `BVH_TEXELS`).
-        let texel_binds = with_texels(binds, &[CB_BVH_TRIS, CB_BVH_NORMALS, CB_BVH_WIDE, CB_BVH_WIDE_PRIMS]);
+        let texel_binds =
+            with_texels(binds, &[CB_BVH_TRIS, CB_BVH_NORMALS, CB_BVH_INSTANCES, CB_BVH_WIDE, CB_BVH_WIDE_PRIMS]);
         let glass_wide = LazyPipeline::compute(
             device,
             "eye glass (wide BVH nodes)",
@@ -133,7 +134,7 @@ impl CompositePass {
     pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
         assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
         let pipeline = if i.wide { &self.glass_wide } else { &self.glass }.get()?;
-        self.bind(cmd, pipeline, i);
+        self.bind(cmd, pipeline, i)?;
         pipeline.push(cmd, &CompositePush { lights: 1 + i.more_lights.len() as u32, add: add as u32 });
         let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
@@ -149,19 +150,19 @@ impl CompositePass {
             (false, false) => &self.pipeline,
         }
         .get()?;
-        self.bind(cmd, pipeline, i);
+        self.bind(cmd, pipeline, i)?;
         pipeline.push(cmd, &CompositePush { lights: 1, add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
     }
 
-    fn bind(&self, cmd: vk::CommandBuffer, pipeline: &crate::vk::Pipeline, i: &CompositeInputs) {
+    fn bind(&self, cmd: vk::CommandBuffer, pipeline: &crate::vk::Pipeline, i: &CompositeInputs) -> VkResult<()> {
         // Lights the scene lacks bind the first light's maps (the shader reads only `lights` of them).
         let first = LightMaps { ubo: i.ubo, shadow: i.shadow, irradiance: i.irradiance, recv: i.recv };
         let l = |k: usize| i.more_lights.get(k).copied().unwrap_or(first);
         let (l1, l2) = (l(0), l(1));
-        pipeline.bind(
+        pipeline.bind_checked(
             cmd,
             &ordered([
                 (CB_FRAME, Bind::Uniform(i.ubo)),
@@ -194,6 +195,6 @@ impl CompositePass {
                 (CB_BVH_WIDE, Bind::Storage(&i.bvh.wide_nodes)),
                 (CB_BVH_WIDE_PRIMS, Bind::Storage(&i.bvh.wide_prims)),
             ]),
-        );
+        )
     }
 }

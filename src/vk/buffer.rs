@@ -70,21 +70,30 @@ impl Buffer {
 
     /// The buffer with a view of its whole range as texels of `format` (`texel_bytes` each), for shaders that read it
     /// through a uniform texel buffer (it needs the UNIFORM_TEXEL_BUFFER usage). A device reads at most
-    /// maxTexelBufferElements texels through one view: a longer buffer is an error.
+    /// maxTexelBufferElements texels through one view: a longer buffer gets none ([`Buffer::texel_view`] says so).
     pub fn with_texel_view(mut self, format: vk::Format, texel_bytes: u64) -> VkResult<Self> {
         let texels = self.size / texel_bytes;
-        let limit = self.device.info.limits.max_texel_buffer_elements as u64;
-        if texels > limit {
-            return Err(VkError::Unsupported(format!(
-                "buffer `{}` holds {texels} texels, more than the device reads through a texel buffer ({limit})",
-                self.name
-            )));
+        if texels > self.device.info.limits.max_texel_buffer_elements as u64 {
+            log::debug!("buffer `{}`: {texels} texels, more than one texel buffer reads; no texel view", self.name);
+            return Ok(self);
         }
         let info =
             vk::BufferViewCreateInfo::default().buffer(self.raw).format(format).offset(0).range(texels * texel_bytes);
         self.texels = unsafe { self.device.create_buffer_view(&info, None) }.check("vkCreateBufferView")?;
         self.device.set_name(self.texels, &format!("{} (texels)", self.name));
         Ok(self)
+    }
+
+    /// Its texel view, or an error naming the buffer when it has none (longer than a texel buffer reads).
+    pub fn texel_view(&self) -> VkResult<vk::BufferView> {
+        if self.texels == vk::BufferView::null() {
+            return Err(VkError::Unsupported(format!(
+                "buffer `{}` ({} bytes) is longer than this device reads through a texel buffer \
+                 (maxTexelBufferElements {}), which the wide BVH layout needs: use --bvh-layout pair",
+                self.name, self.size, self.device.info.limits.max_texel_buffer_elements
+            )));
+        }
+        Ok(self.texels)
     }
 
     /// A host-visible buffer filled with `data` (uniforms, readbacks, staging).

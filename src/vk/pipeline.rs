@@ -327,6 +327,18 @@ impl Pipeline {
         })
     }
 
+    /// [`Pipeline::bind`], after checking that every buffer bound to a texel-buffer binding has its texel view (an
+    /// error names the one that has none).
+    pub fn bind_checked(&self, cmd: vk::CommandBuffer, binds: &[Bind]) -> VkResult<()> {
+        for (b, kind) in binds.iter().zip(&self.kinds) {
+            if let (Bind::Uniform(buf) | Bind::Storage(buf), BindKind::Texels) = (b, kind) {
+                buf.texel_view()?;
+            }
+        }
+        self.bind(cmd, binds);
+        Ok(())
+    }
+
     /// Bind the pipeline and push its descriptors (binding i = binds[i]). A buffer bound where the pipeline's layout
     /// has a texel-buffer binding (a variant that reads it as texels, where the others read it as storage) is bound
     /// through its texel view.
