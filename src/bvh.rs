@@ -14,8 +14,9 @@
 //! 2017): one 80-byte node holds eight children's boxes quantized to a byte per plane, and the walk visits the
 //! children nearest first in the ray's octant order. The layouts are uploaded as frames need them;
 //! `--bvh-layout` picks the one the waves trace (`auto`: single on GPUs, wide on CPU devices, the faster on each
-//! in docs/experiments.md, "BVH layouts"). The eye view's glass pass walks the wide layout where the waves do and
-//! the pair layout otherwise; the traversal checks walk the pair layout.
+//! in docs/experiments.md, "BVH layouts"). The eye view's glass pass and exact transport's traversal checks walk
+//! the wide layout where the waves do and the pair layout otherwise; the wide layout's shaders read the BVH
+//! through texel views of its buffers (docs/design.md, "Texel reads").
 //! A deforming mesh has no wide nodes (the GPU refit rewrites only the binary layouts' boxes): the wide walk
 //! takes its instances' pair nodes.
 //!
