@@ -16,7 +16,7 @@
 //! `--bvh-layout` picks the one the waves trace (`auto`: single on GPUs, wide on CPU devices, the faster on each
 //! in docs/experiments.md, "BVH layouts"). The eye view's glass pass and exact transport's traversal checks walk
 //! the wide layout where the waves do and the pair layout otherwise; the wide layout's shaders read the BVH
-//! through texel views of its buffers (docs/design.md, "Texel reads").
+//! through texel views of its buffers (docs/design.md, "4. Transport").
 //! A deforming mesh has no wide nodes (the GPU refit rewrites only the binary layouts' boxes): the wide walk
 //! takes its instances' pair nodes.
 //!
