@@ -20,10 +20,10 @@ struct BvhNodeSingle { vec4 lo; vec4 hi; };
 // children's meta bytes; w2-w4: their quantized planes, a byte per child (x: low 0-3, low 4-7, high 0-3, high 4-7;
 // y in w3, z in w4).
 struct BvhNodeWide { uvec4 w0; uvec4 w1; uvec4 w2; uvec4 w3; uvec4 w4; };
-// The wide layout's variants read the triangles, their normals, the wide nodes and the triangle list as uniform
-// texel buffers (src/passes/photons.rs, BVH_TEXEL_BINDINGS), the other variants as storage buffers. The layout is
-// the one CPU devices trace, and a CPU driver (lavapipe) loads a storage buffer one lane at a time, each behind a
-// branch, where a texel fetch gathers the whole SIMD group.
+// The wide layout's variants read the triangles, their normals, the instances, the wide nodes and the triangle
+// list as uniform texel buffers (src/passes/photons.rs, BVH_TEXEL_BINDINGS), the other variants as storage
+// buffers. The layout is the one CPU devices trace, and a CPU driver (lavapipe) loads a storage buffer one lane at
+// a time, each behind a branch, where a texel fetch gathers the whole SIMD group.
 #if defined(BVH_LAYOUT_WIDE)
 #define BVH_TEXELS 1
 #endif

@@ -82,13 +82,10 @@ layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle 
 #ifdef BVH_TEXELS
 layout(set = 0, binding = PB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;       // 3 per triangle
 layout(set = 0, binding = PB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels; // 3 per triangle
+layout(set = 0, binding = PB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;  // 12 per instance
 #else
 layout(std430, set = 0, binding = PB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };          // 3 per triangle
 layout(std430, set = 0, binding = PB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; }; // 3 per triangle
-#endif
-#ifdef BVH_TEXELS
-layout(set = 0, binding = PB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;  // 12 per instance
-#else
 layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 #endif
 

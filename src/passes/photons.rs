@@ -43,12 +43,10 @@ const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
 /// The BVH bindings the wide layout's variants read as texel buffers (glsl/common/bvh.glsl, `BVH_TEXELS`): on a
 /// CPU driver a texel fetch gathers all lanes at once, where a storage-buffer load walks the lanes one by one.
-pub const BVH_TEXEL_BINDINGS: [u32; 5] =
-    [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTANCES, PB_BVH_WIDE, PB_BVH_WIDE_PRIMS];
+const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTANCES, PB_BVH_WIDE, PB_BVH_WIDE_PRIMS];
 
 /// The wide layout's waves read the photons and the coverage pyramid as texels too (glsl/wave.comp, `WAVE_TEXELS`).
-const WAVE_TEXEL_BINDINGS: [u32; 7] =
-    [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTANCES, PB_BVH_WIDE, PB_BVH_WIDE_PRIMS, PB_PHOTONS, PB_COVERAGE];
+const WAVE_TEXEL_BINDINGS: [u32; 2] = [PB_PHOTONS, PB_COVERAGE];
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
 pub const TRACE_OFFSET: u64 = 16 * INDIRECT_TRACE as u64;
@@ -173,7 +171,7 @@ impl PhotonPasses {
         let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &binds, push);
         let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
         let texel_binds = with_texels(binds, &BVH_TEXEL_BINDINGS);
-        let wave_texel_binds = with_texels(binds, &WAVE_TEXEL_BINDINGS);
+        let wave_texel_binds = with_texels(texel_binds, &WAVE_TEXEL_BINDINGS);
         // One traversal pipeline per BVH layout the checks walk (pair; wide: texel reads), metric (llvmpipe pays
         // for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
