@@ -1,10 +1,10 @@
 #version 460
 // Compute splat (docs/design.md step 5, `--splat compute`), dispatched indirectly over the records the draw would
-// draw: the same separable integer-radius tent (radii rx, ry) as splat.frag, evaluated at the same texel centers, each tap added
-// to the flux map with a float atomic. The weights of a record sum to exactly 1 over the map's texels (at an edge
-// they are renormalized over the taps on the map, splat_edge_norm), so flux is conserved as by the point draw; only
-// the order of the float additions differs. As with points, a record whose center lies outside the map is dropped
-// (a point primitive is clipped by its vertex).
+// draw: the same sheared tent of integer radii (glsl/common/photon_bindings.glsl, SplatShape) as splat.frag,
+// evaluated at the same texel centers, each tap added to the flux map with a float atomic. The weights of a record
+// sum to exactly 1 over the map's texels (at an edge they are renormalized over the taps on the map, splat_norm),
+// so flux is conserved as by the point draw; only the order of the float additions differs. As with points, a
+// record whose center lies outside the map is dropped (a point primitive is clipped by its vertex).
 //
 // SPLAT_TILED (the default variant): contention control. Neighbouring records come from neighbouring cells, so a
 // work group's records mostly land in a small window of the map, and where light focuses many land on the same
@@ -28,34 +28,34 @@ shared int s_lo_x, s_lo_y, s_hi_x, s_hi_y;
 shared ivec2 s_first;
 #endif
 
-// The coarse level a record of radii r splats at: the first where both are at most SPLAT_FINE_RADIUS texels (the
-// coarsest if none), or 0 for a record splatted as it is.
-uint splat_level(vec2 r, ivec2 size) {
+// The coarse level a record of the given extent (half-widths, texels) splats at: the first where both are at most
+// SPLAT_FINE_RADIUS texels (the coarsest if none), or 0 for a record splatted as it is.
+uint splat_level(vec2 e, ivec2 size) {
     if ((u_frame.transport.w & 0x100u) == 0u) return 0u;
-    float w = max(r.x, r.y);
+    float w = max(e.x, e.y);
     uint top = splat_levels(size), m = 0u;
     while (m < top && w > float(SPLAT_FINE_RADIUS << m)) m++;
     return m;
 }
 
-// A tent of radii r (texels of level 0) centred at c, at coarse level m: radii r / 2^m (at least 1), its weights
-// over the level's texels normalized to sum to 1 (radii that are not integers do not sum to it by themselves, and
-// at an edge the taps off the map are given back to the ones on it, as at level 0).
-void splat_coarse(vec2 c0, float flux, vec2 r, ivec2 size, uint m) {
-    float k = exp2(-float(m));
-    vec2 c = c0 * k, rm = max(r * k, vec2(1.0));
+// A record's tent centred at c0 (texels of level 0), at coarse level m: radii r / 2^m (at least 1) and the same
+// shear, its weights over the level's texels normalized to sum to 1 (radii that are not integers do not sum to it
+// by themselves, and at an edge the taps off the map are given back to the ones on it, as at level 0).
+void splat_coarse(vec2 c0, float flux, SplatShape k0, ivec2 size, uint m) {
+    float scale = exp2(-float(m));
+    vec2 c = c0 * scale;
+    SplatShape k = SplatShape(max(k0.r * scale, vec2(1.0)), k0.s, k0.shear_y);
     ivec2 n = size >> m;
-    vec2 sum = vec2(tent_sum(c.x, rm.x, n.x), tent_sum(c.y, rm.y, n.y));
-    if (!(sum.x > 0.0 && sum.y > 0.0)) return;
-    float f = flux / (sum.x * sum.y);
+    float sum = splat_sum(c, k, n);
+    if (!(sum > 0.0)) return;
+    float f = flux / sum;
     uint base = splat_level_offset(size, m);
-    ivec2 lo = max(ivec2(ceil(c - rm - 0.5)), ivec2(0)), hi = min(ivec2(floor(c + rm - 0.5)), n - 1);
+    vec2 e = splat_extent(k);
+    ivec2 lo = max(ivec2(ceil(c - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(c + e - 0.5)), n - 1);
     for (int y = lo.y; y <= hi.y; y++) {
-        float wy = tent(y, c.y, rm.y);
-        if (wy == 0.0) continue;
         for (int x = lo.x; x <= hi.x; x++) {
-            float wx = tent(x, c.x, rm.x);
-            if (wx != 0.0) atomicAdd(flux_texels[base + uint(y * n.x + x)], f * (wx * wy));
+            float w = splat_weight(ivec2(x, y), c, k);
+            if (w != 0.0) atomicAdd(flux_texels[base + uint(y * n.x + x)], f * w);
         }
     }
 }
@@ -69,21 +69,22 @@ void main() {
         s = splats[draw_cmd.z + i];
         valid = s.w > 0.0 && s.x >= 0.0 && s.y >= 0.0 && s.x <= float(size.x) && s.y <= float(size.y);
     }
-    vec2 r = splat_radii(s.w);
+    SplatShape k = splat_shape(s.w);
+    vec2 e = splat_extent(k);
     if (valid) {
-        uint m = splat_level(r, size);
+        uint m = splat_level(e, size);
         if (m > 0u) {
-            splat_coarse(s.xy, s.z, r, size, m);
+            splat_coarse(s.xy, s.z, k, size, m);
             valid = false;  // splatted: the level-0 taps (and the tiled window) leave it out
         }
     }
-    // Texel centers p + 0.5 with |p + 0.5 - c| < r on each axis.
+    // Texel centers p + 0.5 with |p + 0.5 - c| < e on each axis.
     ivec2 lo = ivec2(0), hi = ivec2(-1);
     float flux = 0.0;
     if (valid) {
-        flux = s.z * splat_edge_norm(s.xy, r, size);
-        lo = max(ivec2(ceil(s.xy - r - 0.5)), ivec2(0));
-        hi = min(ivec2(floor(s.xy + r - 0.5)), size - 1);
+        flux = s.z * splat_norm(s.xy, k, size);
+        lo = max(ivec2(ceil(s.xy - e - 0.5)), ivec2(0));
+        hi = min(ivec2(floor(s.xy + e - 0.5)), size - 1);
     }
 #ifdef SPLAT_TILED
     uint t = gl_LocalInvocationIndex;
@@ -111,12 +112,10 @@ void main() {
     ivec2 wlo = max(org, glo), whi = min(org + SPLAT_TILE - 1, ghi);
 #endif
     for (int y = lo.y; y <= hi.y; y++) {
-        float wy = tent(y, s.y, r.y) / r.y;
-        if (wy == 0.0) continue;
         for (int x = lo.x; x <= hi.x; x++) {
-            float wx = tent(x, s.x, r.x) / r.x;
-            if (wx == 0.0) continue;
-            float v = flux * (wx * wy);
+            float w = splat_weight(ivec2(x, y), s.xy, k);
+            if (w == 0.0) continue;
+            float v = flux * w;
 #ifdef SPLAT_TILED
             ivec2 q = ivec2(x, y) - org;
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(SPLAT_TILE)))) {

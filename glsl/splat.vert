@@ -5,20 +5,22 @@
 
 layout(location = 0) flat out float v_flux;
 layout(location = 1) flat out vec4 v_splat;  // center (texels), radii rx, ry (texels)
+layout(location = 2) flat out vec2 v_shear;  // shear, and 1 when it moves the columns (SplatShape)
 
 void main() {
     vec4 s = splats[gl_VertexIndex];
     vec2 size = u_frame.receiver_view.extent.xy;
+    SplatShape k = splat_shape(s.w > 0.0 ? s.w : 1.0);
     if (s.w > 0.0) {
         gl_Position = vec4(s.xy / size * 2.0 - 1.0, 0.5, 1.0);
-        vec2 r = splat_radii(s.w);
-        gl_PointSize = 2.0 * max(r.x, r.y);
+        vec2 e = splat_extent(k);
+        gl_PointSize = 2.0 * max(e.x, e.y);
     } else {
         gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the point is discarded
         gl_PointSize = 1.0;
     }
-    vec2 r = s.w > 0.0 ? splat_radii(s.w) : vec2(1.0);
-    // At an edge the fragments that the map clips away are given back to the ones on it.
-    v_flux = s.w > 0.0 ? s.z * splat_edge_norm(s.xy, r, ivec2(size)) : 0.0;
-    v_splat = vec4(s.xy, r);
+    // The weights' normalization; at an edge the fragments that the map clips away are given back to the ones on it.
+    v_flux = s.w > 0.0 ? s.z * splat_norm(s.xy, k, ivec2(size)) : 0.0;
+    v_splat = vec4(s.xy, k.r);
+    v_shear = vec2(k.s, k.shear_y ? 1.0 : 0.0);
 }

@@ -228,9 +228,9 @@ void main() {
                     // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius
                     // traversal gave it (its children's spread): the parallelogram the whole cell covers where it
                     // lands, which a round splat of the spread fits only where that is round.
-                    if (diff)
-                        r = footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r);
-                    record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, float(r));
+                    float shape = diff ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
+                                       : float(r);
+                    record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, shape);
                     rec = true;
                     rec_flux = flux;
                     one_event = depth == 1u;

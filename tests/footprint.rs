@@ -1,7 +1,7 @@
 //! Footprint-aware splats (`--footprint differential`): under exact transport each ray carries its ray
 //! differentials (Igehy 1999) for one cell width of its emitting cell, and the splat radii per map axis come from
-//! the parallelogram the cell covers where it lands. The splat is still a separable tent of integer radii, so
-//! flux is conserved exactly; only where it goes changes.
+//! the parallelogram the cell covers where it lands, as a sheared tent of integer radii fitted to the lattice of
+//! landings (docs/design.md step 5), so flux is conserved exactly; only where it goes changes.
 
 mod common;
 use caustics::image_io::RgbImage;
@@ -20,8 +20,9 @@ fn reference_all(scene: &str, photons: u64) -> RgbImage {
 /// the sphere's single external reflection lands). So the AOV's flux is the cell kernel's but for the float sums:
 /// measured 6.7e-6 (dense) and 2.5e-5 (flux-error) on lavapipe, allowed 1e-4. The
 /// two compute splats agree (rel-L1 <= 1e-4 at 256², as tests/splat.rs asks of the cell kernel). The raster splat
-/// draws every tent at level 0, so it differs from them by the coarse tents' smoother shape only: measured 3.9e-3
-/// (dense) and 3.4e-3 (flux-error) at 256² on lavapipe, allowed 5e-3. The same holds for flux-error's
+/// draws every tent at level 0, so it differs from them by the coarse tents' smoother shape only (a coarse level
+/// keeps a sheared tent's radius across its rows at one of its texels or more, so a thin one is wider there):
+/// measured 6.2e-3 (dense) and 3.7e-3 (flux-error) at 256² on lavapipe, allowed 8e-3. The same holds for flux-error's
 /// clusters, which take their own cell's parallelogram too, clamped around their children's spread (level 3, check
 /// level 2, E = 0.0158: clusters of levels 2 and 3; AOV flux measured 5.0e-4 from the cell footprint's).
 #[test]
@@ -66,20 +67,21 @@ fn conserves_flux_and_the_splats_agree(tag: &str, base: &[&str]) {
     assert!(m.rel_l1 <= 1e-4, "{tag} tiled vs compute rel-L1 {}", m.rel_l1);
     let m = compare(&runs[1].1, &runs[0].1, 256, 2.0);
     eprintln!("{tag}: differential compute vs raster (every tent at level 0): {m:?}");
-    assert!(m.rel_l1 <= 5e-3, "{tag} compute vs raster rel-L1 {}", m.rel_l1);
+    assert!(m.rel_l1 <= 8e-3, "{tag} compute vs raster rel-L1 {}", m.rel_l1);
 }
 
 /// Where light spreads (the sphere's caustic outside its focus, a convex mirror's reflection), low-level photons
 /// land several cell sizes apart and the cell kernel leaves moiré and speckles; the differential footprint widens
 /// each splat to the spacing of its neighbours. Measured on lavapipe (dense, rel-L1 at 256² against the 4M-photon
 /// all-paths reference used here; with 8M, `caustics bench` in docs/experiments.md: 0.2204/0.0374 and 0.8564/0.1935):
-/// sphere level 1 0.2211 (cell) against 0.0374 (differential), mirror_sphere level 3 0.8596 against 0.1353. The
+/// sphere level 1 0.2211 (cell) against 0.0456 (differential), mirror_sphere level 3 0.8596 against 0.1379 (the
+/// tent of each parallelogram's bounding box, before the sheared tent fitted to the lattice: 0.0374 and 0.1353). The
 /// test asks the differential footprint to win by half the measured margin and to stay within 15% of its measure.
 #[test]
 fn differential_lowers_the_error_where_light_spreads() {
     let dir = out_dir("footprint_error");
     for (name, level, cell_l1, diff_l1) in
-        [("sphere.toml", "1", 0.2211, 0.0374), ("mirror_sphere.toml", "3", 0.8596, 0.1353)]
+        [("sphere.toml", "1", 0.2211, 0.0456), ("mirror_sphere.toml", "3", 0.8596, 0.1379)]
     {
         let path = scene(name);
         let r = reference_all(&path, 4_000_000);
@@ -99,7 +101,7 @@ fn differential_lowers_the_error_where_light_spreads() {
 /// residual against the reference whose power sits in a few frequencies of each tile (`metrics::periodic_share`);
 /// the differential footprint's residual is nearer noise. The mirror sphere's wide, dim halo at level 3 (the
 /// default flux-error traversal), against the 16M-photon all-paths reference at 256², on lavapipe: periodic share
-/// 0.340 with the cell footprint, 0.187 with the differential one, and 0.12 for a second reference against the
+/// 0.340 with the cell footprint, 0.141 with the differential one (0.187 with bounding-box tents), and 0.12 for a second reference against the
 /// first (the floor noise sets). The test asks the cell footprint's share to stay above 0.30 (the measure sees
 /// the fringes) and the differential one's below 0.25.
 #[test]

@@ -51,8 +51,10 @@ fn built_scene(device: &std::sync::Arc<caustics::gpu::Device>, s: Settings, at: 
 
 fn same(a: &RgbImage, b: &RgbImage, what: &str) {
     let m = compare(a, b, 128, 2.0);
-    // The same triangles and photons: only the order of the splat's float additions differs (measured below 1e-6).
-    assert!(m.rel_l1 <= 1e-5 && (m.flux_ratio - 1.0).abs() <= 1e-5, "{what}: {m:?}");
+    // The same triangles and photons: the order of the splat's float additions differs, and a record whose ray
+    // differentials differ in their last bits can take another of the footprint's discrete choices (a step of the
+    // lattice reduction, a 1/255 step of the shear, a rounded radius): measured 4.3e-5 on lavapipe, allowed 1e-4.
+    assert!(m.rel_l1 <= 1e-4 && (m.flux_ratio - 1.0).abs() <= 1e-5, "{what}: {m:?}");
 }
 
 /// Placed on the GPU against baked on the host: the same triangles up to float rounding of the transform, traced in

@@ -40,18 +40,43 @@ layout(set = 0, binding = PB_RECEIVERS) uniform usampler2D t_recv;      // recei
 //   bits(hit.x, hit.y, hit.z), 0.
 layout(std430, set = 0, binding = PB_DEBUG) buffer DebugBuf { uvec4 debug_header; uvec4 debug_rows[]; };
 // Splat records, one per emitted photon (same index): landing point (caustic-map texels), flux (W, before the
-// light's color), splat radii (texels; 0: the photon did not land) as the float of rx | ry << 16, an exact integer
-// below 2^24; ry = 0 means ry = rx (a plain radius r is the isotropic tent of radius r).
+// light's color), and the splat's shape (0: the photon did not land) as an exact integer below 2^24 in a float
+// (splat_pack): radii rx (bits 0-6) and ry (bits 7-13, 0 meaning ry = rx, so a plain radius r is the isotropic
+// tent of radius r), a shear s in [-1, 1] in 1/255 steps (bits 14-22, two's complement) and its axis (bit 23).
 layout(std430, set = 0, binding = PB_SPLATS) buffer SplatBuf { vec4 splats[]; };
-vec2 splat_radii(float w) {
-    uint r = uint(w);
-    uint rx = r & 0xFFFFu, ry = r >> 16;
-    return vec2(float(rx), float(ry == 0u ? rx : ry));
+// A record's tent: integer radii r (texels) and a shear. Row by row (columns by column when shear_y), the tent
+// across the rows is centred s texels further per texel of distance along them, so its weight at offset d from
+// the record's center is tent(d.x - s d.y, rx) tent(d.y, ry) (d.y - s d.x and d.x when shear_y).
+struct SplatShape {
+    vec2 r;
+    float s;
+    bool shear_y;
+};
+float splat_pack(uvec2 r, float s, bool shear_y) {
+    uint q = uint(int(round(s * 255.0))) & 0x1FFu;
+    return float(r.x | (r.y << 7) | (q << 14) | (shear_y ? 1u << 23 : 0u));
+}
+SplatShape splat_shape(float w) {
+    uint b = uint(w);
+    uint rx = b & 0x7Fu, ry = (b >> 7) & 0x7Fu;
+    int q = int(b << 9) >> 23;  // bits 14-22, sign-extended
+    return SplatShape(vec2(float(rx), float(ry == 0u ? rx : ry)), float(q) / 255.0, (b & (1u << 23)) != 0u);
+}
+// The half-widths of the box that holds a shape's taps.
+vec2 splat_extent(SplatShape k) {
+    return k.shear_y ? vec2(k.r.x, k.r.y + abs(k.s) * k.r.x) : vec2(k.r.x + abs(k.s) * k.r.y, k.r.y);
 }
 // The weight of texel x (its center x + 0.5) in a tent of radius r centred at c, before normalization (splat.frag
 // weighs its fragments the same way).
 float tent(int x, float c, float r) {
     return max(0.0, 1.0 - abs(float(x) + 0.5 - c) / r);
+}
+// The weight of texel p in a shape centred at c, before normalization: over the whole lattice they sum to exactly
+// rx ry for integer radii (each row's tent sums to rx wherever the shear puts it).
+float splat_weight(ivec2 p, vec2 c, SplatShape k) {
+    vec2 d = vec2(p) + 0.5 - c;
+    return k.shear_y ? tent(p.x, c.x, k.r.x) * tent(p.y, c.y + k.s * d.x, k.r.y)
+                     : tent(p.x, c.x + k.s * d.y, k.r.x) * tent(p.y, c.y, k.r.y);
 }
 // The sum over the texel centers of a map n texels wide (0 <= x < n) of tent(x, c, r): exactly r for an integer r
 // whose tent lies inside the map, less where it reaches past an edge.
@@ -61,13 +86,33 @@ float tent_sum(float c, float r, int n) {
     for (int x = lo; x <= hi; x++) s += tent(x, c, r);
     return s;
 }
-// The factor that makes the on-map weights of a splat of integer radii r centred at c (texels) sum to exactly 1:
-// 1 for a tent inside the map; at an edge the taps that would fall off it are given back to the ones on it, so a
-// record whose center lands on the map deposits all its flux there, however wide its tent.
-float splat_edge_norm(vec2 c, vec2 r, ivec2 size) {
-    if (all(greaterThanEqual(c - r, vec2(0.0))) && all(lessThanEqual(c + r, vec2(size)))) return 1.0;
-    float on_map = tent_sum(c.x, r.x, size.x) * tent_sum(c.y, r.y, size.y);
-    return on_map > 0.0 ? (r.x * r.y) / on_map : 0.0;
+// The sum of a shape's weights over the texels of a map of the given size, row by row (column by column).
+float splat_sum(vec2 c, SplatShape k, ivec2 size) {
+    vec2 e = splat_extent(k);
+    float sum = 0.0;
+    if (k.shear_y) {
+        int lo = max(int(ceil(c.x - e.x - 0.5)), 0), hi = min(int(floor(c.x + e.x - 0.5)), size.x - 1);
+        for (int x = lo; x <= hi; x++) {
+            float wx = tent(x, c.x, k.r.x);
+            if (wx > 0.0) sum += wx * tent_sum(c.y + k.s * (float(x) + 0.5 - c.x), k.r.y, size.y);
+        }
+    } else {
+        int lo = max(int(ceil(c.y - e.y - 0.5)), 0), hi = min(int(floor(c.y + e.y - 0.5)), size.y - 1);
+        for (int y = lo; y <= hi; y++) {
+            float wy = tent(y, c.y, k.r.y);
+            if (wy > 0.0) sum += wy * tent_sum(c.x + k.s * (float(y) + 0.5 - c.y), k.r.x, size.x);
+        }
+    }
+    return sum;
+}
+// The factor that makes the on-map weights of a splat of integer radii centred at c (texels) sum to exactly 1:
+// 1 / (rx ry) for a tent inside the map; at an edge the taps that would fall off it are given back to the ones on
+// it, so a record whose center lands on the map deposits all its flux there, however wide its tent.
+float splat_norm(vec2 c, SplatShape k, ivec2 size) {
+    vec2 e = splat_extent(k);
+    if (all(greaterThanEqual(c - e, vec2(0.0))) && all(lessThanEqual(c + e, vec2(size)))) return 1.0 / (k.r.x * k.r.y);
+    float on_map = splat_sum(c, k, size);
+    return on_map > 0.0 ? 1.0 / on_map : 0.0;
 }
 
 // Exact transport (src/bvh.rs, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.

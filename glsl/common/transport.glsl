@@ -138,17 +138,45 @@ vec2 view_px_diff(View v, vec3 p, vec3 dp) {
     return dxy / v.window.zw * v.extent.xy;
 }
 
-// Splat radii (texels, per map axis) from the cell's landing parallelogram: its extent along each axis,
-// |dx.x| + |dy.x| and |dx.y| + |dy.y| (a tent of that half-width interpolates between neighbouring photons, as the
-// cell radius does for an unsheared lattice), rounded, and clamped to [max(1, r_cell / 4), min(8 r_cell,
-// MAX_SPLAT_RADIUS)] where r_cell is the cell footprint's radius. Packed as rx | ry << 16 (exact in a float).
-uint footprint_radii(vec2 mx, vec2 my, uint r_cell) {
-    vec2 ext = abs(mx) + abs(my);
+// The splat of a cell's landing parallelogram (mx, my: where one cell step along each light-view axis moves the
+// landing, in texels; docs/design.md step 5, "Splat footprint"). Neighbouring cells land on the lattice that mx and
+// my span; first the lattice's two shortest vectors replace them (Lagrange-Gauss reduction: where a caustic folds,
+// mx and my are long and nearly parallel while the landings lie about a texel apart). Then a sheared separable
+// tent takes their second moments: along the axis they extend more (say y) a tent of radius ry =
+// sqrt(mx.y² + my.y²); across it, row by row, a tent of radius rx = |det(mx, my)| / ry whose center moves by
+// s = (mx.x mx.y + my.x my.y) / ry² texels per texel of y (|s| <= 1). For an axis-aligned lattice that is the tent
+// of its spacing, which interpolates between neighbouring photons; a sheared one keeps its width across its rows,
+// where the tent of its bounding box would blur it. The radii are rounded and clamped to [max(1, r_cell / 4),
+// min(16 r_cell, MAX_SPLAT_RADIUS)], r_cell the cell footprint's radius; a row's tent of integer radius sums to
+// exactly rx at any center, so the weights still sum to exactly rx ry. Packed by splat_pack
+// (glsl/common/photon_bindings.glsl).
+float footprint_radii(vec2 mx, vec2 my, uint r_cell) {
     float lo = max(1.0, floor(float(r_cell) / 4.0));
     float hi = min(16.0 * float(r_cell), float(MAX_SPLAT_RADIUS));
-    if (any(isnan(ext)) || any(isinf(ext))) ext = vec2(float(r_cell));
-    uvec2 r = uvec2(clamp(round(ext), vec2(lo), vec2(hi)));
-    return r.x | (r.y << 16);
+    for (int i = 0; i < 4; i++) {
+        if (dot(mx, mx) > dot(my, my)) {
+            vec2 t = mx;
+            mx = my;
+            my = t;
+        }
+        float aa = dot(mx, mx);
+        my -= (aa > 0.0 ? round(dot(mx, my) / aa) : 0.0) * mx;
+    }
+    vec2 sq = mx * mx + my * my;  // the moments along x and y, times 6 (a tent of radius r has variance r² / 6)
+    bool shear_y = sq.x > sq.y;   // the lattice extends more along x: shear the columns
+    float major = sqrt(shear_y ? sq.x : sq.y);
+    float minor = major > 0.0 ? abs(mx.x * my.y - mx.y * my.x) / major : 0.0;
+    float s = major > 0.0 ? (mx.x * mx.y + my.x * my.y) / (major * major) : 0.0;
+    if (isnan(major + minor + s) || isinf(major + minor + s)) {
+        major = minor = float(r_cell);
+        s = 0.0;
+    }
+    float ra = clamp(round(major), lo, hi), rb = clamp(round(minor), lo, hi);
+    s = clamp(s, -1.0, 1.0);
+    // The taps' box is rb + |s| ra wide across the rows: kept within 2 MAX_SPLAT_RADIUS - 1 (a point of at most
+    // 254 pixels for the raster splat).
+    rb = max(1.0, min(rb, floor(2.0 * float(MAX_SPLAT_RADIUS) - 1.0 - abs(s) * ra)));
+    return splat_pack(uvec2(shear_y ? vec2(ra, rb) : vec2(rb, ra)), s, shear_y);
 }
 
 const uint DOM_OK = 0u;       // landed on a receiver after >= 1 specular interaction
