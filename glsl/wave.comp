@@ -1,14 +1,17 @@
 #version 460
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 // One wave of exact photon transport (docs/design.md step 4, `--transport exact`), dispatched indirectly with the
 // arguments the transport shader wrote after the previous wave. Wave 0 turns each emitted photon into a ray from
-// the light through its cell's center; wave k > 0 traces ray queue k & 1. At a dielectric the Fresnel split
-// appends the reflected and refracted children (each above the flux threshold) to queue (k + 1) & 1; at a diffuse
+// the light through its cell's center; wave k > 0 traces the rays wave k - 1 appended (rays_in: the two queues
+// swap bindings from wave to wave). At a dielectric the Fresnel split appends the reflected and refracted
+// children (each above the flux threshold) to rays_out; at a diffuse
 // receiver a path with one or more specular interactions becomes a splat record; a miss escapes. Every
 // invocation's flux goes to exactly one account term, summed per work group and added in fixed point.
 // Appends reserve once per work group. A reservation that does not fit aborts the batch (batching splits its
 // tile, as traversal overflow does) or, without batching, is dropped and counted as overflow.
 #if defined(BVH_LAYOUT_WIDE)
-// The layout CPU devices trace: the photons and the coverage pyramid are read as texels too.
+// The layout CPU devices trace: the photons, the coverage pyramid and the rays in are read as texels too.
 #define WAVE_TEXELS 1
 #endif
 #include "common/photon_bindings.glsl"
@@ -19,11 +22,17 @@
 
 layout(local_size_x = LINEAR_WG) in;
 
-shared float s_acc[ACC_TERMS][LINEAR_WG];
-// Flux whose term depends on the reservation verdict: children to append, records (and their one-interaction part).
-shared float s_pend_child[LINEAR_WG];
-shared float s_pend_rec[LINEAR_WG];
-shared float s_pend_one[LINEAR_WG];
+// Specialization constants (src/passes/photons.rs, wave_spec): wave 0, whose rays start at the photons' cells, or
+// a bounce wave, which reads its rays from a queue; and whether the rays carry ray differentials (`--footprint
+// differential`, docs/design.md step 5). The driver folds them before it compiles, so each wave holds only the
+// code it runs: a CPU driver such as lavapipe runs both sides of every branch under a mask.
+layout(constant_id = 0) const bool WAVE_PRIMARY = false;
+layout(constant_id = 1) const bool WAVE_DIFFERENTIAL = false;
+
+// Each subgroup's sums of the account's terms, then of the flux whose term depends on the reservation verdict:
+// children to append, records, and the records' one-interaction part (rows ACC_TERMS + PEND_*).
+const uint PEND_CHILD = 0u, PEND_REC = 1u, PEND_ONE = 2u;
+shared float s_acc[ACC_TERMS + 3u][LINEAR_WG];
 shared uint s_rays;
 shared uint s_recs;
 shared uint s_ray_base;
@@ -33,22 +42,18 @@ shared bool s_recs_ok;
 
 // A ray is RAY_VEC4S_CELL vec4s, (origin, throughput), (direction, bits(meta)), or with differential footprints
 // RAY_VEC4S_DIFFERENTIAL, the two and the packed differentials (diff_pack, glsl/common/transport.glsl).
-void queue_put(uint q, uint k, vec4 v) {
-    if (q == 0u) {
-        queue0[k] = v;
-    } else {
-        queue1[k] = v;
-    }
-}
-
-void store_ray(uint q, uint k, uint stride, vec3 o, float w, vec3 d, uint meta, RayDiff r, float side) {
+void store_ray(uint k, uint stride, vec3 o, float w, vec3 d, uint meta, RayDiff r, float side) {
     uint b = stride * k;
-    queue_put(q, b, vec4(o, w));
-    queue_put(q, b + 1u, vec4(d, uintBitsToFloat(meta)));
-    if (stride > RAY_VEC4S_CELL) queue_put(q, b + 2u, diff_pack(r, d, side));
+    rays_out[b] = vec4(o, w);
+    rays_out[b + 1u] = vec4(d, uintBitsToFloat(meta));
+    if (stride > RAY_VEC4S_CELL) rays_out[b + 2u] = diff_pack(r, d, side);
 }
 
-vec4 queue_get(uint q, uint k) { return q == 0u ? queue0[k] : queue1[k]; }
+#ifdef WAVE_TEXELS
+vec4 ray_get(uint k) { return uintBitsToFloat(texelFetch(rays_in_texels, int(k))); }
+#else
+vec4 ray_get(uint k) { return rays_in[k]; }
+#endif
 
 // Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.material.y of its
 // photon's flux is traced once per block instead of by each photon in the block. At a split of depth d the block's
@@ -133,9 +138,7 @@ void account_add(uint term, float v) {
 void main() {
     uint lid = gl_LocalInvocationIndex;
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
-    uint wave = pc.level;
-    // `--footprint differential`: rays carry their differentials (docs/design.md step 5).
-    bool diff = (u_frame.transport.w & 0x100u) != 0u;
+    const bool diff = WAVE_DIFFERENTIAL;
     uint stride = diff ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
     bool can_abort = pc.mode != 0u;
     if (lid == 0u) {
@@ -172,7 +175,7 @@ void main() {
                     // fill it from there down), which a 24-bit field holds for any batch (Settings::batch_photons)
         uvec2 cell;        // the photon's cell, read once
         bool lod = false;  // a weak branch carried for the photon's block
-        if (wave == 0u) {
+        if (WAVE_PRIMARY) {
             pidx = state.capacity - tstate.in_count + i;
             cell = photon_at(pidx);
             cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
@@ -182,9 +185,8 @@ void main() {
             phi = cell_measure(cell_level(cell), cell_xy(cell));
             acc[ACC_EMITTED] = phi;
         } else {
-            uint qi = wave & 1u;
-            vec4 a = queue_get(qi, stride * i);
-            vec4 b = queue_get(qi, stride * i + 1u);
+            vec4 a = ray_get(stride * i);
+            vec4 b = ray_get(stride * i + 1u);
             ro = a.xyz;
             w = a.w;
             rd = b.xyz;
@@ -196,7 +198,7 @@ void main() {
             phi = cell_measure(cell_level(cell), cell_xy(cell));
         }
         if (diff) ray_side = cell_side(cell_level(cell));
-        if (diff && wave > 0u) rdf = diff_unpack(queue_get(wave & 1u, stride * i + 2u), rd, ray_side);
+        if (diff && !WAVE_PRIMARY) rdf = diff_unpack(ray_get(stride * i + 2u), rd, ray_side);
         float flux = phi * w;
         SceneHit hit;
         if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) {
@@ -308,14 +310,20 @@ void main() {
             }
         }
     }
-    // The account's shares, written before the reservation's barrier: the work group sums them after it, once the
-    // verdict says whether the children and records went out or overflowed (barriers are costly on CPU drivers).
-    for (uint k = 0u; k < ACC_TERMS; k++) s_acc[k][lid] = acc[k];
+    // The account's shares, summed per subgroup and written before the reservation's barrier: the work group adds
+    // the subgroups' sums after it, once the verdict says whether the children and records went out or overflowed
+    // (barriers are costly on CPU drivers).
     float pend_child = 0.0;
     for (uint c = 0u; c < n_child; c++) pend_child += phi * c_w[c];
-    s_pend_child[lid] = pend_child;
-    s_pend_rec[lid] = rec ? rec_flux : 0.0;
-    s_pend_one[lid] = rec && one_event ? rec_flux : 0.0;
+    float share[ACC_TERMS + 3u];
+    for (uint k = 0u; k < ACC_TERMS; k++) share[k] = acc[k];
+    share[ACC_TERMS + PEND_CHILD] = pend_child;
+    share[ACC_TERMS + PEND_REC] = rec ? rec_flux : 0.0;
+    share[ACC_TERMS + PEND_ONE] = rec && one_event ? rec_flux : 0.0;
+    for (uint k = 0u; k < ACC_TERMS + 3u; k++) {
+        float v = subgroupAdd(share[k]);
+        if (subgroupElect()) s_acc[k][gl_SubgroupID] = v;
+    }
     barrier();
     if (lid == 0u) {
         s_rays_ok = false;
@@ -344,22 +352,18 @@ void main() {
         }
     }
     barrier();
-    uint q = (wave + 1u) & 1u;
     if (s_rays_ok) {
-        for (uint c = 0u; c < n_child; c++) store_ray(q, s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c], ray_side);
+        for (uint c = 0u; c < n_child; c++) store_ray(s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c], ray_side);
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
     // One invocation per term sums the work group's shares and adds them in fixed point.
     if (lid < ACC_TERMS) {
-        float sum = 0.0;
-        for (uint k = 0u; k < LINEAR_WG; k++) sum += s_acc[lid][k];
-        float child = 0.0, recs = 0.0, one = 0.0;
-        if (lid == ACC_OVERFLOW || lid == ACC_CAUSTIC || lid == ACC_ONE_EVENT) {
-            for (uint k = 0u; k < LINEAR_WG; k++) {
-                child += s_pend_child[k];
-                recs += s_pend_rec[k];
-                one += s_pend_one[k];
-            }
+        float sum = 0.0, child = 0.0, recs = 0.0, one = 0.0;
+        for (uint k = 0u; k < gl_NumSubgroups; k++) {
+            sum += s_acc[lid][k];
+            child += s_acc[ACC_TERMS + PEND_CHILD][k];
+            recs += s_acc[ACC_TERMS + PEND_REC][k];
+            one += s_acc[ACC_TERMS + PEND_ONE][k];
         }
         if (lid == ACC_OVERFLOW) sum += (s_rays_ok ? 0.0 : child) + (s_recs_ok ? 0.0 : recs);
         if (lid == ACC_CAUSTIC && s_recs_ok) sum += recs;

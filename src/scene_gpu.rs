@@ -353,6 +353,12 @@ impl BvhBuffers {
 }
 
 impl BvhBuffers {
+    /// Whether some instance deforms (water): it is refit every frame and has no wide nodes, so the wide walk
+    /// takes its pair nodes.
+    pub fn deforms(&self) -> bool {
+        self.host.as_ref().is_some_and(|h| !h.refit_leaves.is_empty())
+    }
+
     /// Move object `i` (once the BVH is built): its instance record on the host, which the frame's scene update
     /// then writes to the GPU. Returns whether there is a BVH to update.
     pub(crate) fn set_transform(&mut self, i: usize, world_from_object: Mat4) -> bool {

@@ -107,10 +107,10 @@ pub const PB_DEBUG: u32 = 9;
 pub const PB_SPLATS: u32 = 10;
 /// Binding: the transport state.
 pub const PB_TRANSPORT: u32 = 11;
-/// Binding: ray queue 0.
-pub const PB_QUEUE0: u32 = 12;
-/// Binding: ray queue 1.
-pub const PB_QUEUE1: u32 = 13;
+/// Binding: the ray queue a wave reads (the two queues swap bindings from wave to wave).
+pub const PB_RAYS_IN: u32 = 12;
+/// Binding: the ray queue a wave appends to.
+pub const PB_RAYS_OUT: u32 = 13;
 /// Binding: the BVH nodes (pair layout).
 pub const PB_BVH_PAIR: u32 = 14;
 /// Binding: the BVH triangles.

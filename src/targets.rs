@@ -226,21 +226,24 @@ impl Targets {
                 B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
                 gpu,
             )?,
+            // The wide layout's waves read their rays as texels too.
             queues: [
                 Buffer::new(
                     device,
                     "ray queue 0",
                     s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64,
-                    B::STORAGE_BUFFER,
+                    B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER,
                     gpu,
-                )?,
+                )?
+                .with_texel_view(vk::Format::R32G32B32A32_UINT, 16)?,
                 Buffer::new(
                     device,
                     "ray queue 1",
                     s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64,
-                    B::STORAGE_BUFFER,
+                    B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER,
                     gpu,
-                )?,
+                )?
+                .with_texel_view(vk::Format::R32G32B32A32_UINT, 16)?,
             ],
             capacity,
             pyramid_offsets,

@@ -119,8 +119,14 @@ float splat_norm(vec2 c, SplatShape k, ivec2 size) {
 // A ray is two vec4: origin and throughput (relative to its photon's flux); direction and bits(photon index |
 // interactions << PHOTON_INDEX_BITS); with `--footprint differential` three more hold its ray differentials (glsl/wave.comp). The photon index points into the photon buffer, whose cell gives the flux and footprint.
 layout(std430, set = 0, binding = PB_TRANSPORT) buffer TransportBuf { TransportState tstate; };
-layout(std430, set = 0, binding = PB_QUEUE0) buffer RayQueue0 { vec4 queue0[]; };
-layout(std430, set = 0, binding = PB_QUEUE1) buffer RayQueue1 { vec4 queue1[]; };
+// The two ray queues swap bindings from wave to wave (src/passes/photons.rs, PhotonPasses::wave): a wave reads
+// rays_in and appends to rays_out, with no branch on which queue is which.
+#ifdef WAVE_TEXELS
+layout(set = 0, binding = PB_RAYS_IN) uniform usamplerBuffer rays_in_texels;  // bits: a ray holds packed integers
+#else
+layout(std430, set = 0, binding = PB_RAYS_IN) readonly buffer RaysIn { vec4 rays_in[]; };
+#endif
+layout(std430, set = 0, binding = PB_RAYS_OUT) writeonly buffer RaysOut { vec4 rays_out[]; };
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle { BvhNodeSingle bvh_nodes_single[]; };

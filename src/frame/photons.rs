@@ -5,7 +5,7 @@ use super::{Ctx, Rec};
 use crate::bvh::BvhLayout;
 use crate::gpu_types::{TransportState, TraversalState};
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape};
-use crate::settings::{Driven, Method, Transport};
+use crate::settings::{Driven, Footprint, Method, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{Targets, CANARY, PHOTON_GUARD};
 use crate::vk::{Access, VkResult};
@@ -72,6 +72,8 @@ const TRAVERSE_LABELS: [&str; MAX_LEVELS as usize] = [
 /// How the photon passes use the traversal's buffers: the state, the photon buffer and the indirect arguments are
 /// read and written by each compute pass, and the arguments drive the next dispatch or draw.
 const TRAVERSAL: [Access; 2] = [Access::ComputeWrite, Access::IndirectRead];
+/// A ray queue: a wave appends to one and reads the other, as texels in the wide layout's variant.
+const RAY_QUEUE: [Access; 2] = [Access::ComputeWrite, Access::ComputeTexels];
 
 impl Ctx<'_> {
     /// The splat's debug dump: off, or from which level.
@@ -183,7 +185,7 @@ impl Ctx<'_> {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
         }
         for q in &t.photon.queues {
-            rec.sync.buffer(q, &[Access::ComputeWrite]);
+            rec.sync.buffer(q, &RAY_QUEUE);
         }
         rec.flush(d);
         match self.s.method {
@@ -313,7 +315,7 @@ impl Ctx<'_> {
             }
             rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
             for q in &t.photon.queues {
-                rec.sync.buffer(q, &[Access::ComputeWrite]);
+                rec.sync.buffer(q, &RAY_QUEUE);
             }
             // The wide layout's waves read the photons traversal wrote as texels.
             rec.sync.buffer(&t.photon.photons, &[Access::ComputeTexels]);
@@ -326,7 +328,7 @@ impl Ctx<'_> {
             if wave >= 1 {
                 rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
             }
-            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout)?;
+            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, self.s.footprint == Footprint::Differential)?;
             step(rec);
             ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;
         }

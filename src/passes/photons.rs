@@ -27,8 +27,8 @@ const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
     (PB_DEBUG, BindKind::Storage),
     (PB_SPLATS, BindKind::Storage),
     (PB_TRANSPORT, BindKind::Storage),
-    (PB_QUEUE0, BindKind::Storage),
-    (PB_QUEUE1, BindKind::Storage),
+    (PB_RAYS_IN, BindKind::Storage),
+    (PB_RAYS_OUT, BindKind::Storage),
     (PB_BVH_PAIR, BindKind::Storage),
     (PB_BVH_TRIS, BindKind::Storage),
     (PB_BVH_NORMALS, BindKind::Storage),
@@ -45,8 +45,21 @@ const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 /// CPU driver a texel fetch gathers all lanes at once, where a storage-buffer load walks the lanes one by one.
 const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTANCES, PB_BVH_WIDE, PB_BVH_WIDE_PRIMS];
 
-/// The wide layout's waves read the photons and the coverage pyramid as texels too (glsl/wave.comp, `WAVE_TEXELS`).
-const WAVE_TEXEL_BINDINGS: [u32; 2] = [PB_PHOTONS, PB_COVERAGE];
+/// The wide layout's waves read the photons, the coverage pyramid and their rays as texels too (glsl/wave.comp,
+/// `WAVE_TEXELS`).
+const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
+
+/// glsl/wave.comp's specialization constants: `WAVE_PRIMARY` (wave 0, whose rays start at the photons' cells),
+/// `WAVE_DIFFERENTIAL` (the rays carry ray differentials) and `BVH_PAIR_FALLBACK` (some instance has no wide nodes:
+/// glsl/common/bvh.glsl). A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
+fn wave_spec(variant: usize) -> [u32; 3] {
+    [(variant & 1) as u32, (variant >> 1 & 1) as u32, (variant >> 2 & 1) as u32]
+}
+
+/// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
+fn wave_variant(primary: bool, diff: bool, pair_fallback: bool) -> usize {
+    primary as usize | (diff as usize) << 1 | (pair_fallback as usize) << 2
+}
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
 pub const TRACE_OFFSET: u64 = 16 * INDIRECT_TRACE as u64;
@@ -91,8 +104,8 @@ impl PhotonBindings<'_> {
             (PB_DEBUG, Bind::Storage(self.debug)),
             (PB_SPLATS, Bind::Storage(self.splats)),
             (PB_TRANSPORT, Bind::Storage(self.transport)),
-            (PB_QUEUE0, Bind::Storage(self.queues[0])),
-            (PB_QUEUE1, Bind::Storage(self.queues[1])),
+            (PB_RAYS_IN, Bind::Storage(self.queues[0])),
+            (PB_RAYS_OUT, Bind::Storage(self.queues[1])),
             (PB_BVH_PAIR, Bind::Storage(&self.bvh.pair_nodes)),
             (PB_BVH_TRIS, Bind::Storage(&self.bvh.triangles)),
             (PB_BVH_NORMALS, Bind::Storage(&self.bvh.normals)),
@@ -138,10 +151,10 @@ pub struct PhotonPasses {
     stats: Pipeline,
     dense_emit: LazyPipeline,
     trace: LazyPipeline,
-    wave_pair: LazyPipeline,
-    wave_single: LazyPipeline,
-    wave_threaded: LazyPipeline,
-    wave_wide: LazyPipeline,
+    /// Exact transport's waves, per BVH layout (pair, single, threaded, wide) and per specialization
+    /// ([`wave_spec`]): wave 0 or a bounce wave, with or without ray differentials, with or without the wide walk's
+    /// pair fallback.
+    waves: [[LazyPipeline; 8]; 4],
     transport: LazyPipeline,
     splat: LazyPipeline,
     /// None when the device has no float atomics on buffers.
@@ -272,16 +285,24 @@ impl PhotonPasses {
             stats: compute("stats", shaders::STATS_COMP.words())?,
             dense_emit: lazy("dense emit", shaders::DENSE_EMIT_COMP.words()),
             trace: lazy("photon trace", shaders::TRACE_COMP.words()),
-            wave_pair: lazy("transport wave", shaders::WAVE_COMP.words()),
-            wave_single: lazy("transport wave (single-box BVH nodes)", shaders::WAVE_COMP_SINGLE.words()),
-            wave_threaded: lazy("transport wave (threaded BVH nodes)", shaders::WAVE_COMP_THREADED.words()),
-            wave_wide: LazyPipeline::compute(
-                device,
-                "transport wave (wide BVH nodes)",
-                shaders::WAVE_COMP_WIDE.words(),
-                &wave_texel_binds,
-                push,
-            ),
+            waves: [
+                ("pair", WAVE_COMP, &binds),
+                ("single-box", WAVE_COMP_SINGLE, &binds),
+                ("threaded", WAVE_COMP_THREADED, &binds),
+                ("wide", WAVE_COMP_WIDE, &wave_texel_binds),
+            ]
+            .map(|(layout, spv, binds)| {
+                std::array::from_fn(|k| {
+                    let [primary, diff, fallback] = wave_spec(k);
+                    let name = format!(
+                        "transport wave {}{}{} ({layout} BVH nodes)",
+                        if primary != 0 { "0" } else { "k > 0" },
+                        if diff != 0 { ", ray differentials" } else { "" },
+                        if fallback != 0 { ", pair fallback" } else { "" },
+                    );
+                    LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &wave_spec(k))
+                })
+            }),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
             splat_compute: atomics.then(|| lazy("compute splat", shaders::SPLAT_COMP.words())),
             splat_compute_tiled: atomics.then(|| lazy("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
@@ -398,6 +419,7 @@ impl PhotonPasses {
     }
 
     /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
+    /// `diff`: the rays carry ray differentials (`--footprint differential`).
     pub fn wave(
         &self,
         cmd: vk::CommandBuffer,
@@ -405,16 +427,24 @@ impl PhotonPasses {
         wave: u32,
         may_abort: bool,
         layout: BvhLayout,
+        diff: bool,
     ) -> VkResult<()> {
-        let p = match layout {
+        let l = match layout {
             // The settings resolve `auto`; pair is its fallback.
-            BvhLayout::Pair | BvhLayout::Auto => &self.wave_pair,
-            BvhLayout::Single => &self.wave_single,
-            BvhLayout::Threaded => &self.wave_threaded,
-            BvhLayout::Wide => &self.wave_wide,
+            BvhLayout::Pair | BvhLayout::Auto => 0,
+            BvhLayout::Single => 1,
+            BvhLayout::Threaded => 2,
+            BvhLayout::Wide => 3,
+        };
+        // Only the wide walk has a pair fallback (for the instances of deforming meshes).
+        let fallback = layout == BvhLayout::Wide && b.bvh.deforms();
+        let p = self.waves[l][wave_variant(wave == 0, diff, fallback)].get()?;
+        // Wave k reads the queue wave k - 1 appended to and appends to the other.
+        let mut binds = b.binds();
+        if wave % 2 == 1 {
+            binds.swap(PB_RAYS_IN as usize, PB_RAYS_OUT as usize);
         }
-        .get()?;
-        p.bind_checked(cmd, &b.binds())?;
+        p.bind_checked(cmd, &binds)?;
         p.push(cmd, &PhotonPush { level: wave, mode: may_abort as u32, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
         Ok(())

@@ -260,6 +260,16 @@ fn describe(
     }
 }
 
+/// Whether compute shaders may use subgroup arithmetic (the waves sum their energy account per subgroup,
+/// glsl/wave.comp): Vulkan 1.1 requires only the basic subgroup operations.
+fn subgroup_arithmetic(raw: &ash::Instance, physical: vk::PhysicalDevice) -> bool {
+    let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
+    unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
+    let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC;
+    sub.supported_stages.contains(vk::ShaderStageFlags::COMPUTE) && sub.supported_operations.contains(ops)
+}
+
 fn rank(kind: vk::PhysicalDeviceType) -> u32 {
     match kind {
         vk::PhysicalDeviceType::DISCRETE_GPU => 0,
@@ -303,6 +313,10 @@ impl Device {
             let core = f2.features;
             if f13.synchronization2 == 0 || f13.dynamic_rendering == 0 || core.large_points == 0 {
                 log::info!("skipping {name}: needs synchronization2, dynamicRendering and largePoints");
+                continue;
+            }
+            if !subgroup_arithmetic(raw, physical) {
+                log::info!("skipping {name}: needs subgroup arithmetic in compute shaders");
                 continue;
             }
             let exts = unsafe { raw.enumerate_device_extension_properties(physical) }
@@ -580,6 +594,11 @@ impl Context {
         let props = unsafe { instance.get_physical_device_properties(physical) };
         if vk::api_version_major(props.api_version) == 1 && vk::api_version_minor(props.api_version) < 3 {
             return Err(VkError::Unsupported("the imported device offers Vulkan 1.2 or older; 1.3 is required".into()));
+        }
+        if !subgroup_arithmetic(&instance, physical) {
+            return Err(VkError::Unsupported(
+                "the imported device has no subgroup arithmetic in compute shaders".into(),
+            ));
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let bits = families.get(queue_family as usize).map(|f| f.timestamp_valid_bits).unwrap_or(0);
