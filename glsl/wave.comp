@@ -33,7 +33,9 @@ layout(constant_id = 1) const bool WAVE_DIFFERENTIAL = false;
 // children to append, records, and the records' one-interaction part (rows ACC_TERMS + PEND_*).
 const uint PEND_CHILD = 0u, PEND_REC = 1u, PEND_ONE = 2u;
 shared float s_acc[ACC_TERMS + 3u][LINEAR_WG];
-shared uint s_rays;
+shared uint s_rays;         // the work group's children: those that travel inside glass, then those outside
+shared uint s_rays_inside;
+shared uint s_rays_outside;
 shared uint s_recs;
 shared uint s_ray_base;
 shared uint s_rec_base;
@@ -142,7 +144,8 @@ void main() {
     uint stride = diff ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
     bool can_abort = pc.mode != 0u;
     if (lid == 0u) {
-        s_rays = 0u;
+        s_rays_inside = 0u;
+        s_rays_outside = 0u;
         s_recs = 0u;
     }
     float acc[ACC_TERMS];
@@ -165,7 +168,12 @@ void main() {
     vec4 record = vec4(0.0);
     float phi = 0.0;  // the photon's flux / intensity
     float ray_side = 1.0;  // the photon's cell side: the scale of its packed differentials
-    uint ray_slot = 0u, rec_slot = 0u;
+    // Each child's slot among the work group's children that travel inside glass (c_inside) or outside it: the two
+    // are appended as two runs, so that neighbouring rays of the next wave tend to take the same way through the
+    // BVH (a SIMD group of a CPU driver, or a GPU's, walks as long as its longest ray).
+    uint c_slot[2] = uint[2](0u, 0u);
+    bool c_inside[2] = bool[2](false, false);
+    uint rec_slot = 0u;
     bool live = i < tstate.in_count && !(can_abort && state.aborted != 0u);
     if (live) {
         vec3 ro, rd;
@@ -305,7 +313,10 @@ void main() {
                             n_child++;
                         }
                     }
-                    if (n_child > 0u) ray_slot = atomicAdd(s_rays, n_child);
+                    for (uint c = 0u; c < n_child; c++) {
+                        c_inside[c] = dot(c_d[c], ng) < 0.0;  // ng faces out of the glass
+                        c_slot[c] = c_inside[c] ? atomicAdd(s_rays_inside, 1u) : atomicAdd(s_rays_outside, 1u);
+                    }
                 }
             }
         }
@@ -326,6 +337,7 @@ void main() {
     }
     barrier();
     if (lid == 0u) {
+        s_rays = s_rays_inside + s_rays_outside;
         s_rays_ok = false;
         s_recs_ok = false;
         if (s_rays > 0u) {
@@ -353,7 +365,10 @@ void main() {
     }
     barrier();
     if (s_rays_ok) {
-        for (uint c = 0u; c < n_child; c++) store_ray(s_ray_base + ray_slot + c, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c], ray_side);
+        for (uint c = 0u; c < n_child; c++) {
+            uint k = s_ray_base + (c_inside[c] ? c_slot[c] : s_rays_inside + c_slot[c]);
+            store_ray(k, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c], ray_side);
+        }
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
     // One invocation per term sums the work group's shares and adds them in fixed point.

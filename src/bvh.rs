@@ -407,6 +407,20 @@ impl SceneBvh {
         SceneBvh::build(&meshes, &objects, &[])
     }
 
+    /// The wide triangle list as the GPU reads it (`bvh_wide_prim` in glsl/common/bvh.glsl): per entry its
+    /// triangle's three vertices (the bits of x, y, z), the first's w the triangle's index in `triangles`. A leaf's
+    /// test then reads no index before its vertices (on a CPU driver each read is a call).
+    pub fn wide_triangle_records(&self) -> Vec<[u32; 4]> {
+        let mut out = Vec::with_capacity(3 * self.wide_prims.len());
+        for &t in &self.wide_prims {
+            let p = &self.triangles[t as usize].p;
+            for (k, v) in p.iter().enumerate() {
+                out.push([v[0].to_bits(), v[1].to_bits(), v[2].to_bits(), if k == 0 { t } else { 0 }]);
+            }
+        }
+        out
+    }
+
     /// Move object `object` rigidly: `world_from_object` maps its BVH space (its mesh's object space) to world. Its
     /// instance's world bounds become the transformed corners of its BVH-space box (the identity keeps them
     /// exact). An object with no triangle has no instance to move.

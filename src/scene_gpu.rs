@@ -167,11 +167,10 @@ pub struct BvhBuffers {
 }
 
 /// The texel formats the wide layout's variants read the BVH as (glsl/common/bvh.glsl): four 32-bit floats (a
-/// triangle's vertex, a normal row, a twelfth of an instance), four or one 32-bit unsigned integers (a fifth of a
-/// wide node, a triangle index).
+/// triangle's vertex, a normal row, a twelfth of an instance) or four 32-bit unsigned integers (a fifth of a wide
+/// node, a vertex of the wide triangle list with the triangle's index).
 const FLOAT4: (vk::Format, u64) = (vk::Format::R32G32B32A32_SFLOAT, 16);
 const UINT4: (vk::Format, u64) = (vk::Format::R32G32B32A32_UINT, 16);
-const UINT1: (vk::Format, u64) = (vk::Format::R32_UINT, 4);
 
 /// A BVH buffer with the texel view those variants read it through.
 fn texels(buffer: Buffer, (format, bytes): (vk::Format, u64)) -> VkResult<Buffer> {
@@ -211,7 +210,7 @@ impl BvhBuffers {
                 upload_buffer(device, recorder, "bvh wide nodes (none)", &[[0u32; 20]], readable)?,
                 UINT4,
             )?,
-            wide_prims: texels(upload_buffer(device, recorder, "bvh wide triangles (none)", &zeros, readable)?, UINT1)?,
+            wide_prims: texels(upload_buffer(device, recorder, "bvh wide triangles (none)", &zeros, readable)?, UINT4)?,
             triangles: texels(upload_buffer(device, recorder, "bvh triangles (none)", &zeros, readable)?, FLOAT4)?,
             normals: texels(upload_buffer(device, recorder, "bvh normals (none)", &zeros, readable)?, FLOAT4)?,
             instances: texels(
@@ -337,8 +336,9 @@ impl BvhBuffers {
         if wanted[3] && !self.uploaded[3] {
             let nodes = upload_buffer(device, recorder, "bvh wide nodes", &nonempty(&bvh.wide_nodes), readable)?;
             self.wide_nodes = texels(nodes, UINT4)?;
-            let prims = upload_buffer(device, recorder, "bvh wide triangles", &nonempty(&bvh.wide_prims), readable)?;
-            self.wide_prims = texels(prims, UINT1)?;
+            let records = nonempty(&bvh.wide_triangle_records());
+            let prims = upload_buffer(device, recorder, "bvh wide triangles", &records, readable)?;
+            self.wide_prims = texels(prims, UINT4)?;
         }
         let new_layout = self.uploaded.iter().zip(wanted).any(|(&u, w)| w && !u);
         for (u, w) in self.uploaded.iter_mut().zip(wanted) {

@@ -38,11 +38,12 @@ BvhNodeWide bvh_wide_node(uint i) {
     return bvh_nodes_wide[i];
 #endif
 }
-uint bvh_wide_prim(uint i) {
+// Texel k of the wide triangle list (entry k / 3's vertex k % 3; the first's w: the triangle's index).
+uvec4 bvh_wide_prim(uint k) {
 #ifdef BVH_TEXELS
-    return texelFetch(bvh_wide_prim_texels, int(i)).x;
+    return texelFetch(bvh_wide_prim_texels, int(k));
 #else
-    return bvh_wide_prims[i];
+    return bvh_wide_prims[k];
 #endif
 }
 #endif
@@ -88,9 +89,10 @@ Shear bvh_shear(vec3 d) {
     return sh;
 }
 
-// Watertight ray/triangle test: t and the barycentric weights of the hit, if 0 < t < tmax.
-bool bvh_triangle(Shear sh, vec3 o, uint tri, float tmax, out float t, out vec3 bary) {
-    vec3 a = bvh_tri(3u * tri).xyz - o, b = bvh_tri(3u * tri + 1u).xyz - o, c = bvh_tri(3u * tri + 2u).xyz - o;
+// Watertight ray/triangle test of the triangle (p0, p1, p2): t and the barycentric weights of the hit, if
+// 0 < t < tmax.
+bool bvh_triangle_of(Shear sh, vec3 o, vec3 p0, vec3 p1, vec3 p2, float tmax, out float t, out vec3 bary) {
+    vec3 a = p0 - o, b = p1 - o, c = p2 - o;
     uint kx = sh.k.x, ky = sh.k.y, kz = sh.k.z;
     float ax = a[kx] - sh.s.x * a[kz], ay = a[ky] - sh.s.y * a[kz];
     float bx = b[kx] - sh.s.x * b[kz], by = b[ky] - sh.s.y * b[kz];
@@ -104,6 +106,11 @@ bool bvh_triangle(Shear sh, vec3 o, uint tri, float tmax, out float t, out vec3 
     t = (u * a[kz] + v * b[kz] + w * c[kz]) * sh.s.z / det;
     bary = vec3(u, v, w) / det;
     return t > 0.0 && t < tmax;
+}
+
+bool bvh_triangle(Shear sh, vec3 o, uint tri, float tmax, out float t, out vec3 bary) {
+    return bvh_triangle_of(sh, o, bvh_tri(3u * tri).xyz, bvh_tri(3u * tri + 1u).xyz, bvh_tri(3u * tri + 2u).xyz,
+                           tmax, t, bary);
 }
 
 void bvh_leaf(Shear sh, vec3 o, uint first, uint count, uint inst, inout SceneHit hit, inout bool found) {
@@ -267,7 +274,19 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
         while (tris.y != 0u) {
             uint k = uint(findMSB(tris.y));
             tris.y &= ~(1u << k);
-            bvh_leaf(sh, o, bvh_wide_prim(tris.x + k), 1u, ii, hit, found);
+            // The entry holds the triangle's vertices, so the test reads no index first.
+            uint e = 3u * (tris.x + k);
+            uvec4 v0 = bvh_wide_prim(e);
+            float t;
+            vec3 bary;
+            if (bvh_triangle_of(sh, o, uintBitsToFloat(v0.xyz), uintBitsToFloat(bvh_wide_prim(e + 1u).xyz),
+                                uintBitsToFloat(bvh_wide_prim(e + 2u).xyz), hit.t, t, bary)) {
+                hit.t = t;
+                hit.inst = ii;
+                hit.tri = v0.w;
+                hit.bary = bary;
+                found = true;
+            }
         }
         if ((group.y & 0xFF000000u) != 0u) {
             uint mask = group.y;

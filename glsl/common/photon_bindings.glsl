@@ -145,13 +145,14 @@ layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances
 layout(std430, set = 0, binding = PB_FLUX_TEXELS) buffer FluxBuf { float flux_texels[]; };
 // The threaded layout (src/bvh.rs): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
 layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { BvhNodeSingle bvh_nodes_threaded[]; };
-// The wide layout (src/bvh.rs): compressed 8-wide nodes, and its triangle list (indices into bvh_tris' triangles).
+// The wide layout (src/bvh.rs): compressed 8-wide nodes, and its triangle list (each entry its triangle's three
+// vertices, the first's w the triangle's index in bvh_tris' triangles).
 #ifdef BVH_TEXELS
 layout(set = 0, binding = PB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;  // 5 per node
-layout(set = 0, binding = PB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;
+layout(set = 0, binding = PB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;  // 3 per entry
 #else
 layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhNodesWide { BvhNodeWide bvh_nodes_wide[]; };
-layout(std430, set = 0, binding = PB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uint bvh_wide_prims[]; };
+layout(std430, set = 0, binding = PB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uvec4 bvh_wide_prims[]; };
 #endif
 
 // Dispatch arguments for n invocations in groups of `per_group`, 2D because a dimension holds at most 65535
