@@ -59,9 +59,13 @@ fn line_at(x0: f64, y0: f64, x1: f64, y1: f64, x: f64) -> f64 {
 }
 
 impl Renderer {
-    /// Estimate the frame `desc` describes from probe frames: one at level 0 and 16×16 to build and compile what
-    /// the frame runs, then one three levels below the frame's at a quarter of its side and one two levels below
-    /// at half its side (at the frame's own level when it is 2 or lower). For a frame of several seconds the
+    /// Estimate the frame `desc` describes from probe frames: one three levels below the frame's (but at level 1
+    /// at least) at a quarter of its side, run twice, and one a level above that at half its side (both at the
+    /// frame's own level when it is 2 or lower). The first run builds and compiles what the frame runs, so that no
+    /// compile falls inside a timed probe: a CPU driver compiles a pipeline when it first runs it (lavapipe:
+    /// seconds for the traversal's), for each size class of the images it samples (lavapipe: whether a side is a
+    /// power of two), and a level-0 probe runs other pipelines than a frame of level 1 or more. A compile inside a
+    /// timed probe once made a 1 s frame's estimate 59 s. For a frame of several seconds the
     /// probes cost about a fifth of it; they leave the renderer as it was (they reuse nothing, and nothing reuses
     /// them).
     pub fn estimate(&mut self, desc: &FrameDesc) -> AppResult<FrameEstimate> {
@@ -88,11 +92,9 @@ impl Renderer {
             })
         };
         let (quarter, half) = (view(4), view(2));
-        let (la, lb) = if level <= 2 { (level, level) } else { (level - 3, level - 2) };
+        let (la, lb) = if level <= 2 { (level, level) } else { ((level - 3).max(1), (level - 3).max(1) + 1) };
         let result = (|| -> AppResult<(Probe, Probe)> {
-            let mut tiny = *desc.camera;
-            (tiny.width, tiny.height) = (16, 16);
-            probe(self, 0, &tiny)?;
+            probe(self, la, &quarter)?;
             Ok((probe(self, la, &quarter)?, probe(self, lb, &half)?))
         })();
         self.reuse = reuse;
