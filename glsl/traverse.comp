@@ -74,6 +74,15 @@ uint child_dominant(uint level, uvec2 xy, uint k, out vec2 p, out uint events, o
     return trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p, events, thr);
 }
 
+// Whether the frame traces exact transport (else the two-interface model). The wide layout's variants run only
+// under exact transport (its checks walk the layout the waves trace), so they compile no two-interface trace,
+// which a CPU driver would run, masked, beside every check.
+#if defined(BVH_LAYOUT_WIDE)
+bool transport_exact() { return true; }
+#else
+bool transport_exact() { return u_frame.transport.x != 0u; }
+#endif
+
 const uint ACT_DROP = 0u;
 const uint ACT_EMIT = 1u;
 const uint ACT_REFINE = 2u;
@@ -155,7 +164,7 @@ uint children_verdict_exact(uint level, uvec2 xy) {
 }
 
 uint children_verdict(uint level, uvec2 xy) {
-    if (u_frame.transport.x != 0u) return children_verdict_exact(level, xy);
+    if (transport_exact()) return children_verdict_exact(level, xy);
     vec2 p[4];
     uint status[4];
     // As in children_verdict_exact: stop tracing once the verdict can only be REFINE (a status that differs, or two
@@ -242,7 +251,7 @@ uint predicted_skip_mixed(uint level, float ratio) {
 uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, out uint skip) {
     radius = 0u;
     skip = 0u;
-    bool exact = u_frame.transport.x != 0u;
+    bool exact = transport_exact();
     float intensity = u_frame.light_power.w;
     vec2 p[4];
     float phi[4] = float[4](0.0, 0.0, 0.0, 0.0);
@@ -360,7 +369,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
 // would be traced by decide itself (child_dominant), so the two need to agree only for speed.
 bool needs_checks(uint level, uvec2 cell) {
     uvec2 xy = cell_xy(cell);
-    if (u_frame.transport.x == 0u || !cell_in_play(level, xy) || level >= u_frame.traversal.x) return false;
+    if (!transport_exact() || !cell_in_play(level, xy) || level >= u_frame.traversal.x) return false;
     bool checkable = level >= u_frame.traversal.z && cell_inside(level, xy);
 #if TRAVERSE_METRIC == 2
     if (checkable) return cell_radius(cell) == 0u;  // else predicted to refine: no check
