@@ -220,7 +220,7 @@ void bvh_walk_single(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout Scene
 const uint BVH_WIDE_STACK = 32u;
 
 // Specialization constant 2: whether some instance has no wide nodes (a deforming mesh, which the walk then takes
-// through its pair nodes). A pipeline that knows the scene has none (the waves: src/passes/photons.rs) compiles
+// through its pair nodes). A pipeline that knows the scene has none (the waves and the checks: src/passes/photons.rs) compiles
 // without the pair walk, which a CPU driver would otherwise run, masked, for every instance a ray meets.
 layout(constant_id = 2) const bool BVH_PAIR_FALLBACK = true;
 

@@ -49,12 +49,17 @@ const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTAN
 /// `WAVE_TEXELS`).
 const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
-/// glsl/wave.comp's specialization constants: `WAVE_PRIMARY` (wave 0, whose rays start at the photons' cells),
-/// `WAVE_DIFFERENTIAL` (the rays carry ray differentials) and `BVH_PAIR_FALLBACK` (some instance has no wide nodes:
-/// glsl/common/bvh.glsl). A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
-fn wave_spec(variant: usize) -> [u32; 3] {
-    [(variant & 1) as u32, (variant >> 1 & 1) as u32, (variant >> 2 & 1) as u32]
+/// glsl/wave.comp's specialization constants: `WAVE_PRIMARY` (0: wave 0, whose rays start at the photons' cells),
+/// `WAVE_DIFFERENTIAL` (1: the rays carry ray differentials) and `BVH_PAIR_FALLBACK` (2: some instance has no wide
+/// nodes; glsl/common/bvh.glsl). A CPU driver runs both sides of every branch, so each wave compiles only the code
+/// it runs.
+fn wave_spec(variant: usize) -> [(u32, u32); 3] {
+    [(0, (variant & 1) as u32), (1, (variant >> 1 & 1) as u32), (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32)]
 }
+
+/// The constant_id of `BVH_PAIR_FALLBACK` (glsl/common/bvh.glsl): the wide walk's pair fallback, compiled only
+/// when some instance has no wide nodes (a deforming mesh).
+const BVH_PAIR_FALLBACK_ID: u32 = 2;
 
 /// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
 fn wave_variant(primary: bool, diff: bool, pair_fallback: bool) -> usize {
@@ -142,12 +147,12 @@ pub mod transport_mode {
 pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
-    /// Per BVH layout the checks walk (pair, wide), per metric (indexed by `Metric::code`), per work-group side:
+    /// Per BVH layout the checks walk (pair, wide, wide without the pair fallback), per metric (indexed by `Metric::code`), per work-group side:
     /// max-level (TRAVERSE_MAX_LEVEL: no metric code, the last level fused into the one before), max-error and
     /// flux-error (TRAVERSE_METRIC: that metric's code only).
-    traverse: [[Vec<(u32, LazyPipeline)>; 3]; 2],
+    traverse: [[Vec<(u32, LazyPipeline)>; 3]; 3],
     /// Per layout, max-error's and flux-error's 8x8 traversal with four lanes per candidate (TRAVERSE_COOP).
-    traverse_coop: [[LazyPipeline; 2]; 2],
+    traverse_coop: [[LazyPipeline; 2]; 3],
     stats: Pipeline,
     dense_emit: LazyPipeline,
     trace: LazyPipeline,
@@ -166,14 +171,16 @@ pub struct PhotonPasses {
 }
 
 /// How traversal runs: the work-group side its dispatches count candidates in
-/// ([`crate::settings::Settings::traverse_dispatch_wg`]), the metric, whether the checks are cooperative, and
-/// whether exact transport's checks walk the wide BVH layout (where the waves do) instead of the pair layout.
+/// ([`crate::settings::Settings::traverse_dispatch_wg`]), the metric, whether the checks are cooperative,
+/// whether exact transport's checks walk the wide BVH layout (where the waves do) instead of the pair layout, and
+/// whether the wide walk needs its pair fallback (some mesh deforms).
 #[derive(Clone, Copy, Debug)]
 pub struct TraverseShape {
     pub wg: u32,
     pub metric: Metric,
     pub coop: bool,
     pub wide: bool,
+    pub pair_fallback: bool,
 }
 
 impl PhotonPasses {
@@ -188,25 +195,27 @@ impl PhotonPasses {
         // One traversal pipeline per BVH layout the checks walk (pair; wide: texel reads), metric (llvmpipe pays
         // for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
-        let variant = |metric: Metric, wide: bool, spv: [&'static Spv; 5]| -> Vec<(u32, LazyPipeline)> {
-            let binds = if wide { &texel_binds } else { &binds };
-            let layout = if wide { ", wide BVH" } else { "" };
+        // Each layout index: 0 pair, 1 wide, 2 wide without the pair fallback (no mesh deforms).
+        let layout_name = |l: usize| ["", ", wide BVH", ", wide BVH, no pair fallback"][l];
+        let fallback_spec = |l: usize| [(BVH_PAIR_FALLBACK_ID, (l != 2) as u32)];
+        let variant = |metric: Metric, l: usize, spv: [&'static Spv; 5]| -> Vec<(u32, LazyPipeline)> {
+            let binds = if l > 0 { &texel_binds } else { &binds };
             sides
                 .iter()
                 .zip(spv)
                 .map(|(&s, spv)| {
-                    let name = format!("traverse {metric:?} {s}x{s}{layout}");
-                    (s, LazyPipeline::compute(device, &name, spv.words(), binds, push))
+                    let name = format!("traverse {metric:?} {s}x{s}{}", layout_name(l));
+                    (s, LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &fallback_spec(l)))
                 })
                 .collect()
         };
         use shaders::*;
-        let traverse_layout = |wide: bool| {
-            let pick = |pair: &'static Spv, w: &'static Spv| if wide { w } else { pair };
+        let traverse_layout = |l: usize| {
+            let pick = |pair: &'static Spv, w: &'static Spv| if l > 0 { w } else { pair };
             [
                 variant(
                     Metric::MaxLevel,
-                    wide,
+                    l,
                     [
                         pick(TRAVERSE_COMP_MAX_LEVEL_WG1, TRAVERSE_COMP_MAX_LEVEL_WG1_WIDE),
                         pick(TRAVERSE_COMP_MAX_LEVEL_WG2, TRAVERSE_COMP_MAX_LEVEL_WG2_WIDE),
@@ -217,7 +226,7 @@ impl PhotonPasses {
                 ),
                 variant(
                     Metric::MaxError,
-                    wide,
+                    l,
                     [
                         pick(TRAVERSE_COMP_MAX_ERROR_WG1, TRAVERSE_COMP_MAX_ERROR_WG1_WIDE),
                         pick(TRAVERSE_COMP_MAX_ERROR_WG2, TRAVERSE_COMP_MAX_ERROR_WG2_WIDE),
@@ -228,7 +237,7 @@ impl PhotonPasses {
                 ),
                 variant(
                     Metric::FluxError,
-                    wide,
+                    l,
                     [
                         pick(TRAVERSE_COMP_FLUX_ERROR_WG1, TRAVERSE_COMP_FLUX_ERROR_WG1_WIDE),
                         pick(TRAVERSE_COMP_FLUX_ERROR_WG2, TRAVERSE_COMP_FLUX_ERROR_WG2_WIDE),
@@ -239,7 +248,7 @@ impl PhotonPasses {
                 ),
             ]
         };
-        let traverse = [traverse_layout(false), traverse_layout(true)];
+        let traverse = [traverse_layout(0), traverse_layout(1), traverse_layout(2)];
         let splat = {
             let (device, binds) = (device.clone(), binds.to_vec());
             LazyPipeline::new(move || {
@@ -261,21 +270,17 @@ impl PhotonPasses {
                 )
             })
         };
-        let coop = |metric: &str, spv: &'static Spv, wide: bool| {
-            let (binds, layout) = if wide { (&texel_binds, ", wide BVH") } else { (&binds, "") };
-            let name = format!("traverse {metric} 8x8, four lanes a candidate{layout}");
-            LazyPipeline::compute(device, &name, spv.words(), binds, push)
+        let coop = |metric: &str, pair: &'static Spv, wide: &'static Spv, l: usize| {
+            let (binds, spv) = if l > 0 { (&texel_binds, wide) } else { (&binds, pair) };
+            let name = format!("traverse {metric} 8x8, four lanes a candidate{}", layout_name(l));
+            LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &fallback_spec(l))
         };
-        let traverse_coop = [
+        let traverse_coop = [0, 1, 2].map(|l| {
             [
-                coop("MaxError", TRAVERSE_COMP_MAX_ERROR_COOP, false),
-                coop("FluxError", TRAVERSE_COMP_FLUX_ERROR_COOP, false),
-            ],
-            [
-                coop("MaxError", TRAVERSE_COMP_MAX_ERROR_COOP_WIDE, true),
-                coop("FluxError", TRAVERSE_COMP_FLUX_ERROR_COOP_WIDE, true),
-            ],
-        ];
+                coop("MaxError", TRAVERSE_COMP_MAX_ERROR_COOP, TRAVERSE_COMP_MAX_ERROR_COOP_WIDE, l),
+                coop("FluxError", TRAVERSE_COMP_FLUX_ERROR_COOP, TRAVERSE_COMP_FLUX_ERROR_COOP_WIDE, l),
+            ]
+        });
         let atomics = device.info.float_atomic_add;
         Ok(PhotonPasses {
             device: device.clone(),
@@ -293,7 +298,7 @@ impl PhotonPasses {
             ]
             .map(|(layout, spv, binds)| {
                 std::array::from_fn(|k| {
-                    let [primary, diff, fallback] = wave_spec(k);
+                    let [(_, primary), (_, diff), (_, fallback)] = wave_spec(k);
                     let name = format!(
                         "transport wave {}{}{} ({layout} BVH nodes)",
                         if primary != 0 { "0" } else { "k > 0" },
@@ -314,7 +319,12 @@ impl PhotonPasses {
     /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built); `coop`: the
     /// cooperative checks' 8x8 pipeline of max-error or flux-error, whose groups take 4x4 candidates (`wg` is 4).
     fn traverse_pipeline(&self, shape: TraverseShape) -> VkResult<&Pipeline> {
-        let (wg, layout) = (shape.wg, shape.wide as usize);
+        let layout = match (shape.wide, shape.pair_fallback) {
+            (false, _) => 0,
+            (true, true) => 1,
+            (true, false) => 2,
+        };
+        let wg = shape.wg;
         match (shape.coop, shape.metric) {
             (true, Metric::MaxError) => return self.traverse_coop[layout][0].get(),
             (true, Metric::FluxError) => return self.traverse_coop[layout][1].get(),

@@ -200,24 +200,25 @@ impl Pipeline {
         Self::compute_specialized(device, name, spv, kinds, push_size, &[])
     }
 
-    /// A compute pipeline whose specialization constants `constant_id = i` take `spec[i]` (32-bit each: a `bool`
-    /// constant takes 0 or 1). The driver folds them before it compiles, so a branch on one costs nothing, not
-    /// even on a CPU driver that runs both sides of every branch under a mask.
+    /// A compute pipeline whose specialization constants take the values `spec` gives, as (constant_id, value)
+    /// pairs (32-bit each: a `bool` constant takes 0 or 1). The driver folds them before it compiles, so a branch
+    /// on one costs nothing, not even on a CPU driver that runs both sides of every branch under a mask.
     pub fn compute_specialized(
         device: &Arc<Device>,
         name: &str,
         spv: &[u32],
         kinds: &[BindKind],
         push_size: u32,
-        spec: &[u32],
+        spec: &[(u32, u32)],
     ) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::COMPUTE;
         let layouts = Layouts::new(device, kinds, stages, push_size)?;
         let module = Module::new(device, spv)?;
         let entries: Vec<vk::SpecializationMapEntry> = (0..spec.len() as u32)
-            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
+            .map(|i| vk::SpecializationMapEntry { constant_id: spec[i as usize].0, offset: 4 * i, size: 4 })
             .collect();
-        let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(spec));
+        let values: Vec<u32> = spec.iter().map(|&(_, v)| v).collect();
+        let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&values));
         let mut stage = vk::PipelineShaderStageCreateInfo::default().stage(stages).module(module.raw).name(c"main");
         if !spec.is_empty() {
             stage = stage.specialization_info(&spec_info);
@@ -460,7 +461,7 @@ impl LazyPipeline {
         spv: &'static [u32],
         binds: &[BindKind],
         push: u32,
-        spec: &[u32],
+        spec: &[(u32, u32)],
     ) -> Self {
         let (device, name, binds, spec) = (device.clone(), name.to_string(), binds.to_vec(), spec.to_vec());
         Self::new(move || Pipeline::compute_specialized(&device, &name, spv, &binds, push, &spec))
