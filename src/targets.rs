@@ -179,6 +179,12 @@ impl Targets {
         let mips = s.gbuffer_level() + 1;
         let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_side(), mips);
         let debug_bytes = 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
+        // Exact transport's two ray queues; the wide layout's waves read their rays as texels too.
+        let ray_queue = |name: &str| {
+            let bytes = s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64;
+            Buffer::new(device, name, bytes, B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER, gpu)?
+                .with_texel_view(vk::Format::R32G32B32A32_UINT, 16)
+        };
         let photon = PhotonBuffers {
             state: Buffer::new(
                 device,
@@ -226,25 +232,7 @@ impl Targets {
                 B::STORAGE_BUFFER | B::TRANSFER_DST | B::TRANSFER_SRC,
                 gpu,
             )?,
-            // The wide layout's waves read their rays as texels too.
-            queues: [
-                Buffer::new(
-                    device,
-                    "ray queue 0",
-                    s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64,
-                    B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER,
-                    gpu,
-                )?
-                .with_texel_view(vk::Format::R32G32B32A32_UINT, 16)?,
-                Buffer::new(
-                    device,
-                    "ray queue 1",
-                    s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64,
-                    B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER,
-                    gpu,
-                )?
-                .with_texel_view(vk::Format::R32G32B32A32_UINT, 16)?,
-            ],
+            queues: [ray_queue("ray queue 0")?, ray_queue("ray queue 1")?],
             capacity,
             pyramid_offsets,
         };

@@ -297,13 +297,14 @@ impl PhotonPasses {
                 ("wide", WAVE_COMP_WIDE, &wave_texel_binds),
             ]
             .map(|(layout, spv, binds)| {
+                // Only the wide walk has a pair fallback: the other layouts' fallback slots are never used (wave()).
                 std::array::from_fn(|k| {
                     let [(_, primary), (_, diff), (_, fallback)] = wave_spec(k);
                     let name = format!(
                         "transport wave {}{}{} ({layout} BVH nodes)",
                         if primary != 0 { "0" } else { "k > 0" },
                         if diff != 0 { ", ray differentials" } else { "" },
-                        if fallback != 0 { ", pair fallback" } else { "" },
+                        if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
                     );
                     LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &wave_spec(k))
                 })
@@ -455,7 +456,7 @@ impl PhotonPasses {
             binds.swap(PB_RAYS_IN as usize, PB_RAYS_OUT as usize);
         }
         p.bind_checked(cmd, &binds)?;
-        p.push(cmd, &PhotonPush { level: wave, mode: may_abort as u32, ..Default::default() });
+        p.push(cmd, &PhotonPush { mode: may_abort as u32, ..Default::default() });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
         Ok(())
     }

@@ -92,7 +92,8 @@ impl Renderer {
             })
         };
         let (quarter, half) = (view(4), view(2));
-        let (la, lb) = if level <= 2 { (level, level) } else { ((level - 3).max(1), (level - 3).max(1) + 1) };
+        let la = if level <= 2 { level } else { (level - 3).max(1) };
+        let lb = if level <= 2 { level } else { la + 1 };
         let result = (|| -> AppResult<(Probe, Probe)> {
             probe(self, la, &quarter)?;
             Ok((probe(self, la, &quarter)?, probe(self, lb, &half)?))
