@@ -152,27 +152,28 @@ void main() {
     for (uint k = 0u; k < ACC_TERMS; k++) acc[k] = 0.0;
     barrier();
 
-    // What this invocation produces: up to two child rays and one splat record.
+    // What this invocation produces: up to two child rays and one splat record. The children are named, not an
+    // array: a CPU driver stores an element of a local array indexed per invocation lane by lane.
+    // Child 0 is the reflected branch when it is traced, else the refracted one; child 1 the refracted one when
+    // both are.
     uint n_child = 0u;
-    vec3 c_o[2], c_d[2];
-    float c_w[2];
-    uint c_meta[2];
-    RayDiff c_r[2];
+    vec3 c0_o = vec3(0.0), c0_d = vec3(0.0), c1_o = vec3(0.0), c1_d = vec3(0.0);
+    float c0_w = 0.0, c1_w = 0.0;
+    uint c0_meta = 0u, c1_meta = 0u;
     RayDiff rdf;
     rdf.dpx = rdf.dpy = rdf.ddx = rdf.ddy = vec3(0.0);
-    c_r[0] = rdf;
-    c_r[1] = rdf;
+    RayDiff c0_r = rdf, c1_r = rdf;
     bool rec = false;
     float rec_flux = 0.0;
     bool one_event = false;
     vec4 record = vec4(0.0);
     float phi = 0.0;  // the photon's flux / intensity
     float ray_side = 1.0;  // the photon's cell side: the scale of its packed differentials
-    // Each child's slot among the work group's children that travel inside glass (c_inside) or outside it: the two
+    // Each child's slot among the work group's children that travel inside glass (c*_inside) or outside it: the two
     // are appended as two runs, so that neighbouring rays of the next wave tend to take the same way through the
     // BVH (a SIMD group of a CPU driver, or a GPU's, walks as long as its longest ray).
-    uint c_slot[2] = uint[2](0u, 0u);
-    bool c_inside[2] = bool[2](false, false);
+    uint c0_slot = 0u, c1_slot = 0u;
+    bool c0_inside = false, c1_inside = false;
     uint rec_slot = 0u;
     bool live = i < tstate.in_count && !(can_abort && state.aborted != 0u);
     if (live) {
@@ -270,52 +271,60 @@ void main() {
                     if (diff && (s.k_refl != 0.0 || s.k_refr != 0.0)) {
                         bvh_shading_dn(hit, ns, rdf.dpx, rdf.dpy, dnx, dny);
                     }
+                    // Each branch is traced, cut, or left to its block's carrier; a carried one holds its block's share.
+                    bool keep_r = false, keep_t = false;
+                    bool carried_r = wr < weak, carried_t = wt < weak;
                     if (wr > 0.0) {
                         if (wr < cut) {
                             acc[ACC_THRESHOLD] += phi * wr;
-                        } else if (wr < weak && !carrier) {
+                        } else if (carried_r && !carrier) {
                             acc[ACC_WEAK_LEFT] += phi * wr;
                         } else {
-                            bool carried = wr < weak;
-                            c_o[n_child] = s.p_refl;
-                            c_d[n_child] = normalize(s.refl);
-                            c_w[n_child] = carried ? wr * scale : wr;
-                            c_meta[n_child] = carried ? meta | LOD_RAY : meta;
-                            if (carried) acc[ACC_WEAK_CARRIED] += phi * wr * (scale - 1.0);
-                            if (diff) {
-                                c_r[n_child] = rdf;
-                                c_r[n_child].ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
-                                c_r[n_child].ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
-                                if (carried) diff_scale(c_r[n_child], widen);
-                            }
-                            n_child++;
+                            keep_r = true;
+                            if (carried_r) acc[ACC_WEAK_CARRIED] += phi * wr * (scale - 1.0);
                         }
                     }
                     if (wt > 0.0) {
                         if (wt < cut) {
                             acc[ACC_THRESHOLD] += phi * wt;
-                        } else if (wt < weak && !carrier) {
+                        } else if (carried_t && !carrier) {
                             acc[ACC_WEAK_LEFT] += phi * wt;
                         } else {
-                            bool carried = wt < weak;
-                            c_o[n_child] = s.p_refr;
-                            c_d[n_child] = normalize(s.refr);
-                            c_w[n_child] = carried ? wt * scale : wt;
-                            c_meta[n_child] = carried ? meta | LOD_RAY : meta;
-                            if (carried) acc[ACC_WEAK_CARRIED] += phi * wt * (scale - 1.0);
-                            if (diff) {
-                                vec3 t = c_d[n_child];
-                                c_r[n_child] = rdf;
-                                c_r[n_child].ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, t, s.eta);
-                                c_r[n_child].ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, t, s.eta);
-                                if (carried) diff_scale(c_r[n_child], widen);
-                            }
-                            n_child++;
+                            keep_t = true;
+                            if (carried_t) acc[ACC_WEAK_CARRIED] += phi * wt * (scale - 1.0);
                         }
                     }
-                    for (uint c = 0u; c < n_child; c++) {
-                        c_inside[c] = dot(c_d[c], ng) < 0.0;  // ng faces out of the glass
-                        c_slot[c] = c_inside[c] ? atomicAdd(s_rays_inside, 1u) : atomicAdd(s_rays_outside, 1u);
+                    vec3 d_r = normalize(s.refl), d_t = normalize(s.refr);
+                    float w_r = carried_r ? wr * scale : wr, w_t = carried_t ? wt * scale : wt;
+                    uint m_r = carried_r ? meta | LOD_RAY : meta, m_t = carried_t ? meta | LOD_RAY : meta;
+                    RayDiff r_r = rdf, r_t = rdf;
+                    if (diff) {
+                        r_r.ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
+                        r_r.ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
+                        if (carried_r) diff_scale(r_r, widen);
+                        r_t.ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, d_t, s.eta);
+                        r_t.ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, d_t, s.eta);
+                        if (carried_t) diff_scale(r_t, widen);
+                    }
+                    n_child = uint(keep_r) + uint(keep_t);
+                    c0_o = keep_r ? s.p_refl : s.p_refr;
+                    c0_d = keep_r ? d_r : d_t;
+                    c0_w = keep_r ? w_r : w_t;
+                    c0_meta = keep_r ? m_r : m_t;
+                    if (diff) c0_r = keep_r ? r_r : r_t;
+                    c1_o = s.p_refr;
+                    c1_d = d_t;
+                    c1_w = w_t;
+                    c1_meta = m_t;
+                    if (diff) c1_r = r_t;
+                    // ng faces out of the glass. The slots are taken child 0 first, then child 1.
+                    if (n_child >= 1u) {
+                        c0_inside = dot(c0_d, ng) < 0.0;
+                        c0_slot = c0_inside ? atomicAdd(s_rays_inside, 1u) : atomicAdd(s_rays_outside, 1u);
+                    }
+                    if (n_child == 2u) {
+                        c1_inside = dot(c1_d, ng) < 0.0;
+                        c1_slot = c1_inside ? atomicAdd(s_rays_inside, 1u) : atomicAdd(s_rays_outside, 1u);
                     }
                 }
             }
@@ -325,7 +334,8 @@ void main() {
     // the subgroups' sums after it, once the verdict says whether the children and records went out or overflowed
     // (barriers are costly on CPU drivers).
     float pend_child = 0.0;
-    for (uint c = 0u; c < n_child; c++) pend_child += phi * c_w[c];
+    if (n_child >= 1u) pend_child += phi * c0_w;
+    if (n_child == 2u) pend_child += phi * c1_w;
     float share[ACC_TERMS + 3u];
     for (uint k = 0u; k < ACC_TERMS; k++) share[k] = acc[k];
     share[ACC_TERMS + PEND_CHILD] = pend_child;
@@ -364,11 +374,13 @@ void main() {
         }
     }
     barrier();
-    if (s_rays_ok) {
-        for (uint c = 0u; c < n_child; c++) {
-            uint k = s_ray_base + (c_inside[c] ? c_slot[c] : s_rays_inside + c_slot[c]);
-            store_ray(k, stride, c_o[c], c_w[c], c_d[c], c_meta[c], c_r[c], ray_side);
-        }
+    if (s_rays_ok && n_child >= 1u) {
+        uint k = s_ray_base + (c0_inside ? c0_slot : s_rays_inside + c0_slot);
+        store_ray(k, stride, c0_o, c0_w, c0_d, c0_meta, c0_r, ray_side);
+    }
+    if (s_rays_ok && n_child == 2u) {
+        uint k = s_ray_base + (c1_inside ? c1_slot : s_rays_inside + c1_slot);
+        store_ray(k, stride, c1_o, c1_w, c1_d, c1_meta, c1_r, ray_side);
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
     // One invocation per term sums the work group's shares and adds them in fixed point.
