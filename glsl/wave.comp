@@ -126,6 +126,21 @@ bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
     return (mine & (1u << findLSB(counted))) != 0u;
 }
 
+// Whether a wave of this kind sums row k of s_acc: the terms its invocations can add to, and the records' rows
+// (wave 0's rays reach a receiver only directly, a bounce wave's only after an interaction). The other rows stay
+// zero and are neither summed nor read: on a CPU driver each sum is a loop over the lanes.
+bool wave_row(uint k) {
+    if (k == ACC_CAUSTIC || k == ACC_OVERFLOW || k == ACC_ONE_EVENT) return false;  // the pending rows hold them
+    if (k == ACC_EMITTED || k == ACC_DIRECT) return WAVE_PRIMARY;
+    if (k == ACC_CAP || k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE) return !WAVE_PRIMARY;
+    return true;
+}
+
+void subgroup_sum(uint row, float v) {
+    float s = subgroupAdd(v);
+    if (subgroupElect()) s_acc[row][gl_SubgroupID] = s;
+}
+
 // Add a non-negative value to a (lo, hi) fixed-point pair of the batch account.
 void account_add(uint term, float v) {
     if (!(v > 0.0)) return;
@@ -230,7 +245,8 @@ void main() {
                 flux = phi * w;
             }
             if (!specular) {
-                if (depth == 0u) {
+                // Wave 0's rays have met nothing yet (depth 0); a bounce wave's have (depth 1 or more).
+                if (WAVE_PRIMARY) {
                     acc[ACC_DIRECT] += flux;
                 } else {
                     View rv = u_frame.receiver_view;
@@ -336,14 +352,13 @@ void main() {
     float pend_child = 0.0;
     if (n_child >= 1u) pend_child += phi * c0_w;
     if (n_child == 2u) pend_child += phi * c1_w;
-    float share[ACC_TERMS + 3u];
-    for (uint k = 0u; k < ACC_TERMS; k++) share[k] = acc[k];
-    share[ACC_TERMS + PEND_CHILD] = pend_child;
-    share[ACC_TERMS + PEND_REC] = rec ? rec_flux : 0.0;
-    share[ACC_TERMS + PEND_ONE] = rec && one_event ? rec_flux : 0.0;
-    for (uint k = 0u; k < ACC_TERMS + 3u; k++) {
-        float v = subgroupAdd(share[k]);
-        if (subgroupElect()) s_acc[k][gl_SubgroupID] = v;
+    for (uint k = 0u; k < ACC_TERMS; k++) {
+        if (wave_row(k)) subgroup_sum(k, acc[k]);
+    }
+    subgroup_sum(ACC_TERMS + PEND_CHILD, pend_child);
+    if (wave_row(ACC_TERMS + PEND_REC)) {
+        subgroup_sum(ACC_TERMS + PEND_REC, rec ? rec_flux : 0.0);
+        subgroup_sum(ACC_TERMS + PEND_ONE, rec && one_event ? rec_flux : 0.0);
     }
     barrier();
     if (lid == 0u) {
@@ -386,11 +401,14 @@ void main() {
     // One invocation per term sums the work group's shares and adds them in fixed point.
     if (lid < ACC_TERMS) {
         float sum = 0.0, child = 0.0, recs = 0.0, one = 0.0;
+        bool own = wave_row(lid), pend_rec = wave_row(ACC_TERMS + PEND_REC);
         for (uint k = 0u; k < gl_NumSubgroups; k++) {
-            sum += s_acc[lid][k];
+            if (own) sum += s_acc[lid][k];
             child += s_acc[ACC_TERMS + PEND_CHILD][k];
-            recs += s_acc[ACC_TERMS + PEND_REC][k];
-            one += s_acc[ACC_TERMS + PEND_ONE][k];
+            if (pend_rec) {
+                recs += s_acc[ACC_TERMS + PEND_REC][k];
+                one += s_acc[ACC_TERMS + PEND_ONE][k];
+            }
         }
         if (lid == ACC_OVERFLOW) sum += (s_rays_ok ? 0.0 : child) + (s_recs_ok ? 0.0 : recs);
         if (lid == ACC_CAUSTIC && s_recs_ok) sum += recs;
