@@ -126,13 +126,18 @@ bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
     return (mine & (1u << findLSB(counted))) != 0u;
 }
 
-// Whether a wave of this kind sums row k of s_acc: the terms its invocations can add to, and the records' rows
-// (wave 0's rays reach a receiver only directly, a bounce wave's only after an interaction). The other rows stay
-// zero and are neither summed nor read: on a CPU driver each sum is a loop over the lanes.
+// The terms a photon rarely meets (the interaction cap, a numerical dead end, absorption in tinted glass): an
+// invocation adds its own to the account, without a work-group sum.
+bool rare_term(uint k) { return k == ACC_CAP || k == ACC_LOST || k == ACC_ABSORBED; }
+
+// Whether a wave of this kind sums row k of s_acc: the terms its invocations can add to, but for the rare ones, and
+// the records' rows (wave 0's rays reach a receiver only directly, a bounce wave's only after an interaction). The
+// other rows are neither summed nor read: on a CPU driver each sum is a loop over the lanes.
 bool wave_row(uint k) {
     if (k == ACC_CAUSTIC || k == ACC_OVERFLOW || k == ACC_ONE_EVENT) return false;  // the pending rows hold them
+    if (rare_term(k)) return false;
     if (k == ACC_EMITTED || k == ACC_DIRECT) return WAVE_PRIMARY;
-    if (k == ACC_CAP || k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE) return !WAVE_PRIMARY;
+    if (k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE) return !WAVE_PRIMARY;
     return true;
 }
 
@@ -354,6 +359,7 @@ void main() {
     if (n_child == 2u) pend_child += phi * c1_w;
     for (uint k = 0u; k < ACC_TERMS; k++) {
         if (wave_row(k)) subgroup_sum(k, acc[k]);
+        if (rare_term(k)) account_add(k, acc[k]);
     }
     subgroup_sum(ACC_TERMS + PEND_CHILD, pend_child);
     if (wave_row(ACC_TERMS + PEND_REC)) {
