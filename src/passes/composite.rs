@@ -25,7 +25,8 @@ pub struct CompositePass {
     /// environment, into the glass image.
     glass: LazyPipeline,
     /// The glass pass walking the wide layout (where the waves trace it; the others walk the pair layout).
-    glass_wide: LazyPipeline,
+    /// The wide layout's glass pass, with the pair fallback and without it.
+    glass_wide: [LazyPipeline; 2],
 }
 
 #[repr(C)]
@@ -119,13 +120,18 @@ impl CompositePass {
         // Read as texels there (glsl/common/bvh.glsl, `BVH_TEXELS`).
         let texel_binds =
             with_texels(binds, &[CB_BVH_TRIS, CB_BVH_NORMALS, CB_BVH_INSTANCES, CB_BVH_WIDE, CB_BVH_WIDE_PRIMS]);
-        let glass_wide = LazyPipeline::compute(
-            device,
-            "eye glass (wide BVH nodes)",
-            shaders::COMPOSITE_COMP_GLASS_WIDE.words(),
-            &texel_binds,
-            push,
-        );
+        // Compiled with the wide walk's pair fallback (some mesh deforms) and without it (glsl/common/bvh.glsl,
+        // `BVH_PAIR_FALLBACK`), as the waves are.
+        let glass_wide = [1, 0].map(|fallback| {
+            LazyPipeline::compute_specialized(
+                device,
+                if fallback == 1 { "eye glass (wide BVH nodes, pair fallback)" } else { "eye glass (wide BVH nodes)" },
+                shaders::COMPOSITE_COMP_GLASS_WIDE.words(),
+                &texel_binds,
+                push,
+                &[(crate::passes::photons::BVH_PAIR_FALLBACK_ID, fallback)],
+            )
+        });
         Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass, glass_wide })
     }
 
@@ -133,7 +139,7 @@ impl CompositePass {
     /// into `i.glass`; `add`: onto what an earlier pass wrote.
     pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
         assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
-        let pipeline = if i.wide { &self.glass_wide } else { &self.glass }.get()?;
+        let pipeline = if i.wide { &self.glass_wide[usize::from(!i.bvh.deforms())] } else { &self.glass }.get()?;
         self.bind(cmd, pipeline, i)?;
         pipeline.push(cmd, &CompositePush { lights: 1 + i.more_lights.len() as u32, add: add as u32 });
         let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);

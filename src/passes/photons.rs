@@ -59,7 +59,7 @@ fn wave_spec(variant: usize) -> [(u32, u32); 3] {
 
 /// The constant_id of `BVH_PAIR_FALLBACK` (glsl/common/bvh.glsl): the wide walk's pair fallback, compiled only
 /// when some instance has no wide nodes (a deforming mesh).
-const BVH_PAIR_FALLBACK_ID: u32 = 2;
+pub(crate) const BVH_PAIR_FALLBACK_ID: u32 = 2;
 
 /// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
 fn wave_variant(primary: bool, diff: bool, pair_fallback: bool) -> usize {
