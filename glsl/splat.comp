@@ -52,10 +52,14 @@ void splat_coarse(vec2 c0, float flux, SplatShape k0, ivec2 size, uint m) {
     uint base = splat_level_offset(size, m);
     vec2 e = splat_extent(k);
     ivec2 lo = max(ivec2(ceil(c - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(c + e - 0.5)), n - 1);
-    for (int y = lo.y; y <= hi.y; y++) {
-        for (int x = lo.x; x <= hi.x; x++) {
-            float w = splat_weight(ivec2(x, y), c, k);
-            if (w != 0.0) atomicAdd(flux_texels[base + uint(y * n.x + x)], f * w);
+    // Line by line (rows, or columns when the shear runs along y), each over its own taps.
+    bool sy = k.shear_y;
+    for (int j = sy ? lo.x : lo.y; j <= (sy ? hi.x : hi.y); j++) {
+        ivec2 line = splat_line(c, k, j, sy ? ivec2(lo.y, hi.y) : ivec2(lo.x, hi.x));
+        for (int i = line.x; i <= line.y; i++) {
+            ivec2 q = sy ? ivec2(j, i) : ivec2(i, j);
+            float w = splat_weight(q, c, k);
+            if (w != 0.0) atomicAdd(flux_texels[base + uint(q.y * n.x + q.x)], f * w);
         }
     }
 }
@@ -111,19 +115,23 @@ void main() {
     if (any(greaterThanEqual(ghi - glo, ivec2(SPLAT_TILE))) && s_first.x > (-1 << 29)) org = s_first;
     ivec2 wlo = max(org, glo), whi = min(org + SPLAT_TILE - 1, ghi);
 #endif
-    for (int y = lo.y; y <= hi.y; y++) {
-        for (int x = lo.x; x <= hi.x; x++) {
-            float w = splat_weight(ivec2(x, y), s.xy, k);
+    // Line by line (rows, or columns when the shear runs along y), each over its own taps.
+    bool sy = k.shear_y;
+    for (int j = sy ? lo.x : lo.y; j <= (sy ? hi.x : hi.y); j++) {
+        ivec2 line = splat_line(s.xy, k, j, sy ? ivec2(lo.y, hi.y) : ivec2(lo.x, hi.x));
+        for (int i = line.x; i <= line.y; i++) {
+            ivec2 p = sy ? ivec2(j, i) : ivec2(i, j);
+            float w = splat_weight(p, s.xy, k);
             if (w == 0.0) continue;
             float v = flux * w;
 #ifdef SPLAT_TILED
-            ivec2 q = ivec2(x, y) - org;
+            ivec2 q = p - org;
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(SPLAT_TILE)))) {
                 atomicAdd(s_tile[q.y * SPLAT_TILE + q.x], v);
                 continue;
             }
 #endif
-            atomicAdd(flux_texels[y * size.x + x], v);
+            atomicAdd(flux_texels[p.y * size.x + p.x], v);
         }
     }
 #ifdef SPLAT_TILED

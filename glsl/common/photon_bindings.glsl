@@ -105,6 +105,14 @@ float splat_sum(vec2 c, SplatShape k, ivec2 size) {
     }
     return sum;
 }
+// The taps of a shape centred at c along its line j (a row, or a column when shear_y), within [lo, hi] along it:
+// where the line's tent, shifted by the shear, can be nonzero, with a texel to spare on each side for rounding (a
+// zero weight is skipped). A sheared shape's lines are narrower than the box that holds them all.
+ivec2 splat_line(vec2 c, SplatShape k, int j, ivec2 lo_hi) {
+    float center = k.shear_y ? c.y + k.s * (float(j) + 0.5 - c.x) : c.x + k.s * (float(j) + 0.5 - c.y);
+    float r = k.shear_y ? k.r.y : k.r.x;
+    return ivec2(max(int(ceil(center - r - 0.5)) - 1, lo_hi.x), min(int(floor(center + r - 0.5)) + 1, lo_hi.y));
+}
 // The factor that makes the on-map weights of a splat of integer radii centred at c (texels) sum to exactly 1:
 // 1 / (rx ry) for a tent inside the map; at an edge the taps that would fall off it are given back to the ones on
 // it, so a record whose center lands on the map deposits all its flux there, however wide its tent.
