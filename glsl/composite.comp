@@ -39,6 +39,14 @@ layout(push_constant) uniform Push {
 } pc;
 
 #ifdef GLASS_PASS
+// Specialization constants (src/passes/composite.rs, GlassKey): what the scene and the pass need, so that a CPU
+// driver, which runs both sides of every branch under a mask, runs no code for what the scene lacks. The defaults
+// read it all from the uniforms.
+layout(constant_id = 3) const uint GLASS_LIGHT_COUNT = 0u;  // the pass's lights, 1-3 (0: pc.lights)
+layout(constant_id = 4) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.eye.z)
+layout(constant_id = 5) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.eye.w)
+layout(constant_id = 6) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
+#define ENVIRONMENT_MAP GLASS_ENVIRONMENT
 // The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
 // environment comes with u_frame: a later pass's first light carries none.)
 layout(std140, set = 0, binding = CB_LIGHT1) uniform Light1 { FrameData u_light1; };
@@ -85,15 +93,16 @@ vec3 light_irradiance(View lv, vec3 power, float bias, sampler2D shadow, sampler
     return direct_irradiance_in(lv, power, bias, shadow, p, ns) + caustic_irradiance_in(lv, irr, recv, p, dx, dy);
 }
 
-// The same summed over the pass's lights (pc.lights of them).
+// The same summed over the pass's lights (GLASS_LIGHT_COUNT, or pc.lights, of them).
 vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
     vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow,
                               t_irradiance, t_recv, p, ns, t1, t2, width);
-    if (pc.lights > 1u) {
+    uint lights = GLASS_LIGHT_COUNT > 0u ? GLASS_LIGHT_COUNT : pc.lights;
+    if (lights > 1u) {
         e += light_irradiance(u_light1.receiver_view, u_light1.light_power.rgb, u_light1.params.y, t_shadow1,
                               t_irradiance1, t_recv1, p, ns, t1, t2, width);
     }
-    if (pc.lights > 2u) {
+    if (lights > 2u) {
         e += light_irradiance(u_light2.receiver_view, u_light2.light_power.rgb, u_light2.params.y, t_shadow2,
                               t_irradiance2, t_recv2, p, ns, t1, t2, width);
     }
@@ -140,7 +149,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         if (!inst_is_dielectric(hit.inst)) {
             vec3 albedo = I.pad.yzw;
             float width = pixel * (ortho ? 1.0 : run + hit.t);
-            if (I.material.w > 0.5) {
+            if (GLASS_TEXTURED && I.material.w > 0.5) {
                 // A textured receiver: its uv (packed in the triangle's and the normals' w) through the instance's
                 // uv transform, read at the mip the pixel's footprint there spans: its width times the texels per
                 // meter of this triangle (the square root of its uv area over its world area, in texels).
@@ -273,7 +282,7 @@ void main() {
         vec3 ro, rd;
         view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
         // Dispersive glass (FrameData.eye.z): each channel follows its own IOR's path.
-        if (u_frame.eye.z > 0.5) {
+        if (GLASS_DISPERSIVE && u_frame.eye.z > 0.5) {
             L.rgb = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
         } else {
             L.rgb = trace_glass(ro, rd, 0u);

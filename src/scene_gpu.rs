@@ -74,6 +74,8 @@ pub struct SceneImages {
     pub repeat: Sampler,
     /// Bilinear, wrapping in longitude, clamped in latitude (the environment maps).
     pub equirect: Sampler,
+    /// The scene has albedo textures (else `albedo` is the one white texel, and no receiver reads it).
+    pub textured: bool,
 }
 
 impl SceneImages {
@@ -123,6 +125,7 @@ impl SceneImages {
             environment_irradiance,
             repeat: Sampler::repeating(device, true)?,
             equirect: Sampler::repeating(device, false)?,
+            textured: !scene.textures.is_empty(),
         })
     }
 }

@@ -101,6 +101,11 @@ vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
 // (eye.w = 1): its equirectangular radiance times eye.x (W/(m^2 sr) per map unit). Without: a sky of radiance
 // L_sky * SKY_TINT over the upper hemisphere and a ground of L_sky * GROUND_TINT below, with L_sky = eye.x in
 // W/(m^2 sr) (0: off), with a soft horizon (±3°) for looks.
+// A shader that knows the scene has no environment map defines ENVIRONMENT_MAP false (a specialization constant),
+// so that it compiles no map lookups.
+#ifndef ENVIRONMENT_MAP
+#define ENVIRONMENT_MAP true
+#endif
 const vec3 SKY_TINT = vec3(0.85, 0.95, 1.20);
 const vec3 GROUND_TINT = vec3(0.30, 0.28, 0.25);
 
@@ -111,7 +116,7 @@ vec2 equirect_uv(vec3 d) {
 }
 
 vec3 environment(vec3 d) {
-    if (u_frame.eye.w > 0.5) return u_frame.eye.x * textureLod(t_env, equirect_uv(d), 0.0).rgb;
+    if (ENVIRONMENT_MAP && u_frame.eye.w > 0.5) return u_frame.eye.x * textureLod(t_env, equirect_uv(d), 0.0).rgb;
     float up = clamp(d.y, -1.0, 1.0);
     return u_frame.eye.x * mix(GROUND_TINT, SKY_TINT, smoothstep(-0.05, 0.05, up));
 }
@@ -121,7 +126,7 @@ vec3 environment(vec3 d) {
 // for the two hemispheres (the horizon band aside): a uniform upper hemisphere seen from a plane tilted by a
 // gives pi L (1 + cos a) / 2.
 vec3 environment_irradiance(vec3 n) {
-    if (u_frame.eye.w > 0.5) {
+    if (ENVIRONMENT_MAP && u_frame.eye.w > 0.5) {
         // The irradiance map's rows run from pole to pole (src/scene/environment.rs): row j at v = j / (h - 1).
         vec2 uv = equirect_uv(n);
         float h = float(textureSize(t_env_irr, 0).y);

@@ -22,11 +22,58 @@ pub struct CompositePass {
     single: LazyPipeline,
     exact_single: LazyPipeline,
     /// Exact transport, before the composite: the glass's radiance per eye sample under every light and the
-    /// environment, into the glass image.
-    glass: LazyPipeline,
-    /// The glass pass walking the wide layout (where the waves trace it; the others walk the pair layout).
-    /// The wide layout's glass pass, with the pair fallback and without it.
-    glass_wide: [LazyPipeline; 2],
+    /// environment, into the glass image. One pipeline per [`GlassKey`] (built when a frame first needs it).
+    glass: Vec<LazyPipeline>,
+}
+
+/// What a glass pass's pipeline is specialized for (glsl/composite.comp's specialization constants 2-6). A CPU
+/// driver runs both sides of every branch under a mask, so the pass compiles no code for what the frame lacks:
+/// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, or (on the
+/// wide layout) the wide walk's pair fallback for a deforming mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GlassKey {
+    /// Walk the wide layout (else the pair layout).
+    pub wide: bool,
+    /// The wide walk's pair fallback: some mesh deforms.
+    pub fallback: bool,
+    /// The pass's lights, 1 to [`GLASS_LIGHTS`].
+    pub lights: u32,
+    pub dispersive: bool,
+    pub environment: bool,
+    pub textured: bool,
+}
+
+impl GlassKey {
+    const COUNT: usize = 2 * 2 * GLASS_LIGHTS as usize * 2 * 2 * 2;
+
+    fn index(self) -> usize {
+        let bits = [self.wide, self.fallback && self.wide, self.dispersive, self.environment, self.textured];
+        let flags = bits.iter().fold(0, |k, &b| 2 * k + usize::from(b));
+        flags * GLASS_LIGHTS as usize + (self.lights as usize - 1)
+    }
+
+    fn of_index(k: usize) -> GlassKey {
+        let (flags, lights) = (k / GLASS_LIGHTS as usize, k % GLASS_LIGHTS as usize);
+        let bit = |i: usize| flags >> (4 - i) & 1 == 1;
+        GlassKey {
+            wide: bit(0),
+            fallback: bit(1),
+            lights: lights as u32 + 1,
+            dispersive: bit(2),
+            environment: bit(3),
+            textured: bit(4),
+        }
+    }
+
+    fn spec(self) -> [(u32, u32); 5] {
+        [
+            (crate::passes::photons::BVH_PAIR_FALLBACK_ID, self.fallback as u32),
+            (3, self.lights),
+            (4, self.dispersive as u32),
+            (5, self.environment as u32),
+            (6, self.textured as u32),
+        ]
+    }
 }
 
 #[repr(C)]
@@ -71,6 +118,10 @@ pub struct CompositeInputs<'a> {
     pub exact: bool,
     /// Trace it through the wide layout (uploaded: the waves trace it), else the pair layout.
     pub wide: bool,
+    /// Some glass disperses (`FrameData.eye.z`): the glass pass traces each channel.
+    pub dispersive: bool,
+    /// The scene has an environment map (`FrameData.eye.w`).
+    pub environment: bool,
 }
 
 /// The composite's bindings (glsl/composite.comp declares each with the same constant).
@@ -116,30 +167,36 @@ impl CompositePass {
         let exact = lazy("composite exact", shaders::COMPOSITE_COMP_EXACT.words());
         let single = lazy("composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words());
         let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
-        let glass = lazy("eye glass", shaders::COMPOSITE_COMP_GLASS.words());
-        // Read as texels there (glsl/common/bvh.glsl, `BVH_TEXELS`).
+        // The wide layout's glass pass reads the BVH as texels (glsl/common/bvh.glsl, `BVH_TEXELS`).
         let texel_binds =
             with_texels(binds, &[CB_BVH_TRIS, CB_BVH_NORMALS, CB_BVH_INSTANCES, CB_BVH_WIDE, CB_BVH_WIDE_PRIMS]);
-        // Compiled with the wide walk's pair fallback (some mesh deforms) and without it (glsl/common/bvh.glsl,
-        // `BVH_PAIR_FALLBACK`), as the waves are.
-        let glass_wide = [1, 0].map(|fallback| {
-            LazyPipeline::compute_specialized(
-                device,
-                if fallback == 1 { "eye glass (wide BVH nodes, pair fallback)" } else { "eye glass (wide BVH nodes)" },
-                shaders::COMPOSITE_COMP_GLASS_WIDE.words(),
-                &texel_binds,
-                push,
-                &[(crate::passes::photons::BVH_PAIR_FALLBACK_ID, fallback)],
-            )
-        });
-        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass, glass_wide })
+        let glass = (0..GlassKey::COUNT)
+            .map(|k| {
+                let key = GlassKey::of_index(k);
+                let (spv, binds) = if key.wide {
+                    (shaders::COMPOSITE_COMP_GLASS_WIDE.words(), &texel_binds)
+                } else {
+                    (shaders::COMPOSITE_COMP_GLASS.words(), &binds)
+                };
+                LazyPipeline::compute_specialized(device, &format!("eye glass {key:?}"), spv, binds, push, &key.spec())
+            })
+            .collect();
+        Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass })
     }
 
     /// Exact transport: the glass's radiance per eye sample under the lights of `i` (at most [`GLASS_LIGHTS`]),
     /// into `i.glass`; `add`: onto what an earlier pass wrote.
     pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
         assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
-        let pipeline = if i.wide { &self.glass_wide[usize::from(!i.bvh.deforms())] } else { &self.glass }.get()?;
+        let key = GlassKey {
+            wide: i.wide,
+            fallback: i.wide && i.bvh.deforms(),
+            lights: 1 + i.more_lights.len() as u32,
+            dispersive: i.dispersive,
+            environment: i.environment,
+            textured: i.images.textured,
+        };
+        let pipeline = self.glass[key.index()].get()?;
         self.bind(cmd, pipeline, i)?;
         pipeline.push(cmd, &CompositePush { lights: 1 + i.more_lights.len() as u32, add: add as u32 });
         let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
@@ -202,5 +259,27 @@ impl CompositePass {
                 (CB_BVH_WIDE_PRIMS, Bind::Storage(&i.bvh.wide_prims)),
             ]),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::GlassKey;
+
+    /// Every key a frame can ask for has its own pipeline (a key on the pair layout ignores the fallback).
+    #[test]
+    fn glass_keys_index_their_own_pipelines() {
+        let mut seen = std::collections::HashSet::new();
+        for k in 0..GlassKey::COUNT {
+            let key = GlassKey::of_index(k);
+            assert!((1..=3).contains(&key.lights));
+            if !key.wide && key.fallback {
+                assert_eq!(GlassKey { fallback: false, ..key }.index(), key.index());
+                continue;
+            }
+            assert_eq!(key.index(), k, "{key:?}");
+            assert!(seen.insert(k));
+        }
+        assert_eq!(seen.len(), GlassKey::COUNT * 3 / 4);
     }
 }
