@@ -34,15 +34,15 @@ layout(set = 0, binding = CB_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_te
 layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
 
 layout(push_constant) uniform Push {
-    uint lights;  // GLASS_PASS: the lights whose maps are bound (the first's at CB_FRAME, CB_SHADOW, ...)
-    uint add;     // GLASS_PASS: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights)
+    uint add;  // GLASS_PASS: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights)
 } pc;
 
 #ifdef GLASS_PASS
 // Specialization constants (src/passes/composite.rs, GlassKey): what the scene and the pass need, so that a CPU
-// driver, which runs both sides of every branch under a mask, runs no code for what the scene lacks. The defaults
-// read it all from the uniforms.
-layout(constant_id = 3) const uint GLASS_LIGHT_COUNT = 0u;  // the pass's lights, 1-3 (0: pc.lights)
+// driver, which runs both sides of every branch under a mask, runs no code for what the scene lacks. Each flag is
+// tested together with the uniform it mirrors.
+// The lights whose maps are bound, 1-3 (the first's at CB_FRAME, CB_SHADOW, ...).
+layout(constant_id = 3) const uint GLASS_LIGHT_COUNT = 1u;
 layout(constant_id = 4) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.eye.z)
 layout(constant_id = 5) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.eye.w)
 layout(constant_id = 6) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
@@ -93,16 +93,15 @@ vec3 light_irradiance(View lv, vec3 power, float bias, sampler2D shadow, sampler
     return direct_irradiance_in(lv, power, bias, shadow, p, ns) + caustic_irradiance_in(lv, irr, recv, p, dx, dy);
 }
 
-// The same summed over the pass's lights (GLASS_LIGHT_COUNT, or pc.lights, of them).
+// The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
 vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
     vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow,
                               t_irradiance, t_recv, p, ns, t1, t2, width);
-    uint lights = GLASS_LIGHT_COUNT > 0u ? GLASS_LIGHT_COUNT : pc.lights;
-    if (lights > 1u) {
+    if (GLASS_LIGHT_COUNT > 1u) {
         e += light_irradiance(u_light1.receiver_view, u_light1.light_power.rgb, u_light1.params.y, t_shadow1,
                               t_irradiance1, t_recv1, p, ns, t1, t2, width);
     }
-    if (lights > 2u) {
+    if (GLASS_LIGHT_COUNT > 2u) {
         e += light_irradiance(u_light2.receiver_view, u_light2.light_power.rgb, u_light2.params.y, t_shadow2,
                               t_irradiance2, t_recv2, p, ns, t1, t2, width);
     }

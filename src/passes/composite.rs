@@ -79,12 +79,11 @@ impl GlassKey {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct CompositePush {
-    /// The glass pass: how many lights' maps are bound.
-    lights: u32,
-    /// The glass pass: add to what an earlier pass wrote.
+    /// The glass pass: add to what an earlier pass wrote. (Its number of lights is a specialization constant,
+    /// [`GlassKey::lights`].)
     add: u32,
 }
-const _: () = assert!(std::mem::size_of::<CompositePush>() == 8);
+const _: () = assert!(std::mem::size_of::<CompositePush>() == 4);
 
 /// One light's uniforms and maps, as the glass pass reads them.
 #[derive(Clone, Copy)]
@@ -198,7 +197,7 @@ impl CompositePass {
         };
         let pipeline = self.glass[key.index()].get()?;
         self.bind(cmd, pipeline, i)?;
-        pipeline.push(cmd, &CompositePush { lights: 1 + i.more_lights.len() as u32, add: add as u32 });
+        pipeline.push(cmd, &CompositePush { add: add as u32 });
         let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
@@ -214,7 +213,7 @@ impl CompositePass {
         }
         .get()?;
         self.bind(cmd, pipeline, i)?;
-        pipeline.push(cmd, &CompositePush { lights: 1, add: 0 });
+        pipeline.push(cmd, &CompositePush { add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
