@@ -270,22 +270,22 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
     // The root as the only inner child of a virtual parent.
     uvec2 group = uvec2(root, 0x80000000u);
     uvec2 tris = uvec2(0u);
+    // The nearest hit's triangle-list texel: the loop keeps only its distance and where it is, and its weights and
+    // index are read once the walk ends (a CPU driver would otherwise blend every field of the hit into place
+    // under a mask, and spill them around each texel fetch, at every triangle of every lane).
+    uint best = BVH_EMPTY;
     while (true) {
         while (tris.y != 0u) {
             uint k = uint(findMSB(tris.y));
             tris.y &= ~(1u << k);
             // The entry holds the triangle's vertices, so the test reads no index first.
             uint e = 3u * (tris.x + k);
-            uvec4 v0 = bvh_wide_prim(e);
             float t;
             vec3 bary;
-            if (bvh_triangle_of(sh, o, uintBitsToFloat(v0.xyz), uintBitsToFloat(bvh_wide_prim(e + 1u).xyz),
+            if (bvh_triangle_of(sh, o, uintBitsToFloat(bvh_wide_prim(e).xyz), uintBitsToFloat(bvh_wide_prim(e + 1u).xyz),
                                 uintBitsToFloat(bvh_wide_prim(e + 2u).xyz), hit.t, t, bary)) {
                 hit.t = t;
-                hit.inst = ii;
-                hit.tri = v0.w;
-                hit.bary = bary;
-                found = true;
+                best = e;
             }
         }
         if ((group.y & 0xFF000000u) != 0u) {
@@ -307,6 +307,21 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
             if (sp == 0u) break;
             group = stack[--sp];
         }
+    }
+    if (best != BVH_EMPTY) {
+        // The same test of the same triangle gives the same weights (bounded by +inf: hit.t is its own t now).
+        uvec4 v0 = bvh_wide_prim(best);
+        float t;
+        vec3 bary = vec3(1.0 / 3.0);
+        vec3 b;
+        if (bvh_triangle_of(sh, o, uintBitsToFloat(v0.xyz), uintBitsToFloat(bvh_wide_prim(best + 1u).xyz),
+                            uintBitsToFloat(bvh_wide_prim(best + 2u).xyz), 1.0 / 0.0, t, b)) {
+            bary = b;
+        }
+        hit.inst = ii;
+        hit.tri = v0.w;
+        hit.bary = bary;
+        found = true;
     }
 }
 #endif
