@@ -108,12 +108,13 @@ bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
     }
     uint top = u_frame.traversal.x;
     uint up = top - cell_level(cell);  // the photon's cell is 2^up cells of the maximal level a side
-    uint side = weak_block();
+    uint side = weak_block(), shift = weak_block_shift();
     uvec2 b = (xy << up) & ~uvec2(side - 1u);
     float total = 0.0;
     uint n = 0u, counted = 0u, mine = 0u;
     for (uint k = 0u; k < side * side; k++) {
-        uvec2 c = b + uvec2(k % side, k / side);
+        // side is a power of two: a CPU driver would divide lane by lane.
+        uvec2 c = b + uvec2(k & (side - 1u), k >> shift);
         if (!leaf_emitted(top, c)) continue;
         counted |= 1u << k;
         if (all(equal(c >> up, xy))) mine |= 1u << k;
