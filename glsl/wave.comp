@@ -28,15 +28,19 @@ layout(local_size_x = LINEAR_WG) in;
 // code it runs: a CPU driver such as lavapipe runs both sides of every branch under a mask.
 layout(constant_id = 0) const bool WAVE_PRIMARY = false;
 layout(constant_id = 1) const bool WAVE_DIFFERENTIAL = false;
+// The most subgroups a work group can have on this device (LINEAR_WG over its least subgroup size).
+layout(constant_id = 3) const uint WAVE_SUBGROUPS = LINEAR_WG;
 
 // Each subgroup's sums of the account's terms, then of the flux whose term depends on the reservation verdict:
 // children to append, records, and the records' one-interaction part (rows ACC_TERMS + PEND_*).
 const uint PEND_CHILD = 0u, PEND_REC = 1u, PEND_ONE = 2u;
 shared float s_acc[ACC_TERMS + 3u][LINEAR_WG];
 shared uint s_rays;         // the work group's children: those that travel inside glass, then those outside
-shared uint s_rays_inside;
-shared uint s_rays_outside;
-shared uint s_recs;
+// The work group's children that travel inside glass, those outside it, and its records, counted in three 10-bit
+// fields of one word (each at most 2 LINEAR_WG; src/passes/photons.rs asserts it), so that an invocation takes all
+// its slots with one shared atomic: a CPU driver runs each atomic as a loop over the SIMD group's lanes.
+shared uint s_slots;
+const uint SLOT_INSIDE = 1u, SLOT_OUTSIDE = 1u << 10, SLOT_REC = 1u << 20, SLOT_MASK = 0x3FFu;
 shared uint s_ray_base;
 shared uint s_rec_base;
 shared bool s_rays_ok;
@@ -142,9 +146,22 @@ bool wave_row(uint k) {
     return true;
 }
 
+// The work group's sum of row `row` of s_acc, over its subgroups (at most WAVE_SUBGROUPS: the loop has a constant
+// bound, so the driver unrolls it and every address is the same for all invocations).
+float wave_sum(uint row) {
+    float s = 0.0;
+    for (uint k = 0u; k < WAVE_SUBGROUPS; k++) {
+        float x = s_acc[row][k];
+        s += k < gl_NumSubgroups ? x : 0.0;
+    }
+    return s;
+}
+
 void subgroup_sum(uint row, float v) {
     float s = subgroupAdd(v);
-    if (subgroupElect()) s_acc[row][gl_SubgroupID] = s;
+    // Every invocation reaches the sums (none returns early), so invocation 0 of each subgroup is active: on a CPU
+    // driver subgroupElect() would be a loop over the lanes.
+    if (gl_SubgroupInvocationID == 0u) s_acc[row][gl_SubgroupID] = s;
 }
 
 // Add a non-negative value to a (lo, hi) fixed-point pair of the batch account.
@@ -164,10 +181,13 @@ void main() {
     const bool diff = WAVE_DIFFERENTIAL;
     uint stride = diff ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
     bool can_abort = pc.mode != 0u;
+    // The transport state's scalars, read outside any branch: there a CPU driver loads a storage buffer's word once
+    // for the SIMD group, inside a branch lane by lane.
+    uint in_count = tstate.in_count, capacity = state.capacity;
+    uint queue_capacity = tstate.queue_capacity, record_capacity = tstate.record_capacity;
+    bool aborted = state.aborted != 0u;
     if (lid == 0u) {
-        s_rays_inside = 0u;
-        s_rays_outside = 0u;
-        s_recs = 0u;
+        s_slots = 0u;
     }
     float acc[ACC_TERMS];
     for (uint k = 0u; k < ACC_TERMS; k++) acc[k] = 0.0;
@@ -196,7 +216,7 @@ void main() {
     uint c0_slot = 0u, c1_slot = 0u;
     bool c0_inside = false, c1_inside = false;
     uint rec_slot = 0u;
-    bool live = i < tstate.in_count && !(can_abort && state.aborted != 0u);
+    bool live = i < in_count && !(can_abort && aborted);
     if (live) {
         vec3 ro, rd;
         float w;
@@ -206,7 +226,7 @@ void main() {
         uvec2 cell;        // the photon's cell, read once
         bool lod = false;  // a weak branch carried for the photon's block
         if (WAVE_PRIMARY) {
-            pidx = state.capacity - tstate.in_count + i;
+            pidx = capacity - in_count + i;
             cell = photon_at(pidx);
             cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
             if (diff) rdf = cell_ray_diff(cell_level(cell), cell_xy(cell), rd);
@@ -221,7 +241,7 @@ void main() {
             w = a.w;
             rd = b.xyz;
             uint m = floatBitsToUint(b.w);
-            pidx = state.capacity - 1u - (m & ((1u << PHOTON_INDEX_BITS) - 1u));
+            pidx = capacity - 1u - (m & ((1u << PHOTON_INDEX_BITS) - 1u));
             depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
             lod = (m & LOD_RAY) != 0u;
             cell = photon_at(pidx);
@@ -267,7 +287,6 @@ void main() {
                     rec = true;
                     rec_flux = flux;
                     one_event = depth == 1u;
-                    rec_slot = atomicAdd(s_recs, 1u);
                     atomicMax(tstate.max_depth, depth);
                 }
             } else if (depth >= MAX_INTERACTIONS) {
@@ -286,7 +305,7 @@ void main() {
                     bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
                         ? weak_carrier(cell, phi, depth, scale)
                         : false;
-                    uint meta = (state.capacity - 1u - pidx) | ((depth + 1u) << PHOTON_INDEX_BITS) | (lod ? LOD_RAY : 0u);
+                    uint meta = (capacity - 1u - pidx) | ((depth + 1u) << PHOTON_INDEX_BITS) | (lod ? LOD_RAY : 0u);
                     // Both children inherit dP; their dD follow their branch, with the interpolated normal's
                     // derivative where the branch used it.
                     vec3 dnx = vec3(0.0), dny = vec3(0.0);
@@ -339,19 +358,20 @@ void main() {
                     c1_w = w_t;
                     c1_meta = m_t;
                     if (diff) c1_r = r_t;
-                    // ng faces out of the glass. The slots are taken child 0 first, then child 1.
-                    if (n_child >= 1u) {
-                        c0_inside = dot(c0_d, ng) < 0.0;
-                        c0_slot = c0_inside ? atomicAdd(s_rays_inside, 1u) : atomicAdd(s_rays_outside, 1u);
-                    }
-                    if (n_child == 2u) {
-                        c1_inside = dot(c1_d, ng) < 0.0;
-                        c1_slot = c1_inside ? atomicAdd(s_rays_inside, 1u) : atomicAdd(s_rays_outside, 1u);
-                    }
+                    // ng faces out of the glass.
+                    c0_inside = dot(c0_d, ng) < 0.0;
+                    c1_inside = dot(c1_d, ng) < 0.0;
                 }
             }
         }
     }
+    // The slots, child 0's first, then child 1's, then the record's.
+    uint take = (n_child >= 1u ? (c0_inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) +
+                (n_child == 2u ? (c1_inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) + (rec ? SLOT_REC : 0u);
+    uint taken = take != 0u ? atomicAdd(s_slots, take) : 0u;
+    c0_slot = (taken >> (c0_inside ? 0u : 10u)) & SLOT_MASK;
+    c1_slot = ((taken >> (c1_inside ? 0u : 10u)) & SLOT_MASK) + (c0_inside == c1_inside ? 1u : 0u);
+    rec_slot = taken >> 20;
     // The account's shares, summed per subgroup and written before the reservation's barrier: the work group adds
     // the subgroups' sums after it, once the verdict says whether the children and records went out or overflowed
     // (barriers are costly on CPU drivers).
@@ -369,12 +389,14 @@ void main() {
     }
     barrier();
     if (lid == 0u) {
-        s_rays = s_rays_inside + s_rays_outside;
+        uint slots = s_slots;
+        s_rays = (slots & SLOT_MASK) + ((slots >> 10) & SLOT_MASK);
+        uint recs = slots >> 20;
         s_rays_ok = false;
         s_recs_ok = false;
         if (s_rays > 0u) {
             uint base = atomicAdd(tstate.out_reserved, s_rays);
-            if (base + s_rays <= tstate.queue_capacity) {
+            if (base + s_rays <= queue_capacity) {
                 s_rays_ok = true;
                 s_ray_base = atomicAdd(tstate.out_count, s_rays);
             } else {
@@ -383,44 +405,46 @@ void main() {
                 if (can_abort) atomicExchange(state.aborted, 1u);
             }
         }
-        if (s_recs > 0u) {
-            uint base = atomicAdd(tstate.records_reserved, s_recs);
-            if (base + s_recs <= tstate.record_capacity) {
+        if (recs > 0u) {
+            uint base = atomicAdd(tstate.records_reserved, recs);
+            if (base + recs <= record_capacity) {
                 s_recs_ok = true;
-                s_rec_base = atomicAdd(tstate.records, s_recs);
+                s_rec_base = atomicAdd(tstate.records, recs);
             } else {
-                atomicAdd(tstate.records_reserved, 0u - s_recs);
+                atomicAdd(tstate.records_reserved, 0u - recs);
                 atomicAdd(tstate.overflows, 1u);
                 if (can_abort) atomicExchange(state.aborted, 1u);
             }
         }
     }
     barrier();
+    uint inside_n = s_slots & SLOT_MASK;
     if (s_rays_ok && n_child >= 1u) {
-        uint k = s_ray_base + (c0_inside ? c0_slot : s_rays_inside + c0_slot);
+        uint k = s_ray_base + (c0_inside ? c0_slot : inside_n + c0_slot);
         store_ray(k, stride, c0_o, c0_w, c0_d, c0_meta, c0_r, ray_side);
     }
     if (s_rays_ok && n_child == 2u) {
-        uint k = s_ray_base + (c1_inside ? c1_slot : s_rays_inside + c1_slot);
+        uint k = s_ray_base + (c1_inside ? c1_slot : inside_n + c1_slot);
         store_ray(k, stride, c1_o, c1_w, c1_d, c1_meta, c1_r, ray_side);
     }
     if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
-    // One invocation per term sums the work group's shares and adds them in fixed point.
-    if (lid < ACC_TERMS) {
-        float sum = 0.0, child = 0.0, recs = 0.0, one = 0.0;
-        bool own = wave_row(lid), pend_rec = wave_row(ACC_TERMS + PEND_REC);
-        for (uint k = 0u; k < gl_NumSubgroups; k++) {
-            if (own) sum += s_acc[lid][k];
-            child += s_acc[ACC_TERMS + PEND_CHILD][k];
-            if (pend_rec) {
-                recs += s_acc[ACC_TERMS + PEND_REC][k];
-                one += s_acc[ACC_TERMS + PEND_ONE][k];
-            }
-        }
-        if (lid == ACC_OVERFLOW) sum += (s_rays_ok ? 0.0 : child) + (s_recs_ok ? 0.0 : recs);
-        if (lid == ACC_CAUSTIC && s_recs_ok) sum += recs;
-        if (lid == ACC_ONE_EVENT && s_recs_ok) sum += one;
-        account_add(lid, sum);
+    // The work group's shares: every invocation reads the subgroups' sums, at the same addresses and outside any
+    // branch (a CPU driver then loads each once for its SIMD group, where a branch or an address per invocation
+    // makes it load lane by lane), and invocation `lid` adds term lid in fixed point.
+    float child = wave_sum(ACC_TERMS + PEND_CHILD), recs = 0.0, one = 0.0;
+    if (wave_row(ACC_TERMS + PEND_REC)) {
+        recs = wave_sum(ACC_TERMS + PEND_REC);
+        one = wave_sum(ACC_TERMS + PEND_ONE);
     }
-    if (lid == 0u && i < tstate.in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, tstate.in_count - i));
+    bool rays_ok = s_rays_ok, recs_ok = s_recs_ok;
+    float mine = 0.0;
+    for (uint k = 0u; k < ACC_TERMS; k++) {
+        float sum = wave_row(k) ? wave_sum(k) : 0.0;
+        if (k == ACC_OVERFLOW) sum += (rays_ok ? 0.0 : child) + (recs_ok ? 0.0 : recs);
+        if (k == ACC_CAUSTIC) sum += recs_ok ? recs : 0.0;
+        if (k == ACC_ONE_EVENT) sum += recs_ok ? one : 0.0;
+        mine = lid == k ? sum : mine;
+    }
+    if (lid < ACC_TERMS) account_add(lid, mine);
+    if (lid == 0u && i < in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, in_count - i));
 }

@@ -50,12 +50,30 @@ const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTAN
 const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
 /// glsl/wave.comp's specialization constants: `WAVE_PRIMARY` (0: wave 0, whose rays start at the photons' cells),
-/// `WAVE_DIFFERENTIAL` (1: the rays carry ray differentials) and `BVH_PAIR_FALLBACK` (2: some instance has no wide
-/// nodes; glsl/common/bvh.glsl). A CPU driver runs both sides of every branch, so each wave compiles only the code
-/// it runs.
-fn wave_spec(variant: usize) -> [(u32, u32); 3] {
-    [(0, (variant & 1) as u32), (1, (variant >> 1 & 1) as u32), (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32)]
+/// `WAVE_DIFFERENTIAL` (1: the rays carry ray differentials), `BVH_PAIR_FALLBACK` (2: some instance has no wide
+/// nodes; glsl/common/bvh.glsl) and `WAVE_SUBGROUPS` (3: the most subgroups a work group can have, `subgroups`).
+/// A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
+fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 4] {
+    [
+        (0, (variant & 1) as u32),
+        (1, (variant >> 1 & 1) as u32),
+        (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32),
+        (WAVE_SUBGROUPS_ID, subgroups),
+    ]
 }
+
+/// The constant_id of glsl/wave.comp's `WAVE_SUBGROUPS`: the bound of its loop over a work group's subgroups.
+const WAVE_SUBGROUPS_ID: u32 = 3;
+
+/// The most subgroups a work group of `LINEAR_WG` invocations can have on a device whose least subgroup size is
+/// `min_subgroup_size`.
+fn wave_subgroups(min_subgroup_size: u32) -> u32 {
+    LINEAR_WG.div_ceil(min_subgroup_size.max(1))
+}
+
+// glsl/wave.comp counts a work group's children inside glass, outside it and its records in three 10-bit fields of
+// one word: each at most two per invocation.
+const _: () = assert!(2 * LINEAR_WG < 1 << 10);
 
 /// The constant_id of `BVH_PAIR_FALLBACK` (glsl/common/bvh.glsl): the wide walk's pair fallback, compiled only
 /// when some instance has no wide nodes (a deforming mesh).
@@ -299,14 +317,15 @@ impl PhotonPasses {
             .map(|(layout, spv, binds)| {
                 // Only the wide walk has a pair fallback: the other layouts' fallback slots are never used (wave()).
                 std::array::from_fn(|k| {
-                    let [(_, primary), (_, diff), (_, fallback)] = wave_spec(k);
+                    let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
+                    let [(_, primary), (_, diff), (_, fallback), _] = spec;
                     let name = format!(
                         "transport wave {}{}{} ({layout} BVH nodes)",
                         if primary != 0 { "0" } else { "k > 0" },
                         if diff != 0 { ", ray differentials" } else { "" },
                         if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
                     );
-                    LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &wave_spec(k))
+                    LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &spec)
                 })
             }),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
@@ -494,5 +513,27 @@ impl PhotonPasses {
             self.device.cmd_end_rendering(cmd);
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wave_subgroups_cover_every_subgroup_size() {
+        // A pipeline may run with any subgroup size from the device's least up: a work group of LINEAR_WG
+        // invocations then has LINEAR_WG / size subgroups (at least one), and the wave's loop over them, bounded by
+        // wave_subgroups(least), must reach the last.
+        let sizes = [1, 4, 8, 16, 32, 64, 128];
+        for least in sizes {
+            let bound = wave_subgroups(least);
+            assert!((1..=LINEAR_WG).contains(&bound), "least {least}: bound {bound}");
+            for size in sizes.into_iter().filter(|&s| s >= least) {
+                let subgroups = LINEAR_WG.div_ceil(size);
+                assert!(subgroups <= bound, "least {least}, size {size}: {subgroups} subgroups > {bound}");
+            }
+        }
+        assert_eq!(wave_subgroups(8), 8, "lavapipe's SIMD groups of 8 lanes");
     }
 }

@@ -158,6 +158,8 @@ pub struct DeviceInfo {
     pub float_atomic_add: bool,
     /// Size of the largest device-local memory heap (bytes).
     pub device_local_bytes: u64,
+    /// The least subgroup size a compute shader may run with (Vulkan 1.3's minSubgroupSize; at least 1).
+    pub min_subgroup_size: u32,
 }
 
 impl DeviceInfo {
@@ -232,8 +234,10 @@ fn describe(
         fa.shader_buffer_float32_atomic_add != 0 && fa.shader_shared_float32_atomic_add != 0
     };
     let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
-    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+    let mut size_control = vk::PhysicalDeviceSubgroupSizeControlProperties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props).push_next(&mut size_control);
     unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
+    let min_subgroup_size = size_control.min_subgroup_size.max(1);
     let driver = format!(
         "{} {}",
         driver_props.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
@@ -257,6 +261,7 @@ fn describe(
         timestamp_valid_bits,
         float_atomic_add,
         device_local_bytes,
+        min_subgroup_size,
     }
 }
 
