@@ -35,16 +35,14 @@ layout(constant_id = 3) const uint WAVE_SUBGROUPS = LINEAR_WG;
 // children to append, records, and the records' one-interaction part (rows ACC_TERMS + PEND_*).
 const uint PEND_CHILD = 0u, PEND_REC = 1u, PEND_ONE = 2u;
 shared float s_acc[ACC_TERMS + 3u][LINEAR_WG];
-shared uint s_rays;         // the work group's children: those that travel inside glass, then those outside
 // The work group's children that travel inside glass, those outside it, and its records, counted in three 10-bit
 // fields of one word (each at most 2 LINEAR_WG; src/passes/photons.rs asserts it), so that an invocation takes all
 // its slots with one shared atomic: a CPU driver runs each atomic as a loop over the SIMD group's lanes.
 shared uint s_slots;
 const uint SLOT_INSIDE = 1u, SLOT_OUTSIDE = 1u << 10, SLOT_REC = 1u << 20, SLOT_MASK = 0x3FFu;
-shared uint s_ray_base;
-shared uint s_rec_base;
-shared bool s_rays_ok;
-shared bool s_recs_ok;
+shared uint s_ray_base;  // where the work group's children go in rays_out, or NO_BASE
+shared uint s_rec_base;  // where its records go in splats, or NO_BASE
+const uint NO_BASE = 0xFFFFFFFFu;
 
 // A ray is RAY_VEC4S_CELL vec4s, (origin, throughput), (direction, bits(meta)), or with differential footprints
 // RAY_VEC4S_DIFFERENTIAL, the two and the packed differentials (diff_pack, glsl/common/transport.glsl).
@@ -388,46 +386,51 @@ void main() {
         subgroup_sum(ACC_TERMS + PEND_ONE, rec && one_event ? rec_flux : 0.0);
     }
     barrier();
+    // The reservation, by invocation 0. Whatever is read from shared memory is read outside any branch, and the
+    // verdicts are the bases themselves (NO_BASE: not reserved): a CPU driver runs a shared access inside a branch
+    // as a loop over the lanes, in every SIMD group of the work group.
+    uint slots = s_slots;
     if (lid == 0u) {
-        uint slots = s_slots;
-        s_rays = (slots & SLOT_MASK) + ((slots >> 10) & SLOT_MASK);
-        uint recs = slots >> 20;
-        s_rays_ok = false;
-        s_recs_ok = false;
-        if (s_rays > 0u) {
-            uint base = atomicAdd(tstate.out_reserved, s_rays);
-            if (base + s_rays <= queue_capacity) {
-                s_rays_ok = true;
-                s_ray_base = atomicAdd(tstate.out_count, s_rays);
+        uint rays = (slots & SLOT_MASK) + ((slots >> 10) & SLOT_MASK), recs = slots >> 20;
+        uint ray_base = NO_BASE, rec_base = NO_BASE, failed = 0u;
+        if (rays > 0u) {
+            uint base = atomicAdd(tstate.out_reserved, rays);
+            if (base + rays <= queue_capacity) {
+                ray_base = atomicAdd(tstate.out_count, rays);
             } else {
-                atomicAdd(tstate.out_reserved, 0u - s_rays);
-                atomicAdd(tstate.overflows, 1u);
-                if (can_abort) atomicExchange(state.aborted, 1u);
+                atomicAdd(tstate.out_reserved, 0u - rays);
+                failed++;
             }
         }
         if (recs > 0u) {
             uint base = atomicAdd(tstate.records_reserved, recs);
             if (base + recs <= record_capacity) {
-                s_recs_ok = true;
-                s_rec_base = atomicAdd(tstate.records, recs);
+                rec_base = atomicAdd(tstate.records, recs);
             } else {
                 atomicAdd(tstate.records_reserved, 0u - recs);
-                atomicAdd(tstate.overflows, 1u);
-                if (can_abort) atomicExchange(state.aborted, 1u);
+                failed++;
             }
         }
+        if (failed > 0u) {
+            atomicAdd(tstate.overflows, failed);
+            if (can_abort) atomicExchange(state.aborted, 1u);
+        }
+        s_ray_base = ray_base;
+        s_rec_base = rec_base;
     }
     barrier();
-    uint inside_n = s_slots & SLOT_MASK;
-    if (s_rays_ok && n_child >= 1u) {
-        uint k = s_ray_base + (c0_inside ? c0_slot : inside_n + c0_slot);
+    uint ray_base = s_ray_base, rec_base = s_rec_base;
+    bool rays_ok = ray_base != NO_BASE, recs_ok = rec_base != NO_BASE;
+    uint inside_n = slots & SLOT_MASK;
+    if (rays_ok && n_child >= 1u) {
+        uint k = ray_base + (c0_inside ? c0_slot : inside_n + c0_slot);
         store_ray(k, stride, c0_o, c0_w, c0_d, c0_meta, c0_r, ray_side);
     }
-    if (s_rays_ok && n_child == 2u) {
-        uint k = s_ray_base + (c1_inside ? c1_slot : inside_n + c1_slot);
+    if (rays_ok && n_child == 2u) {
+        uint k = ray_base + (c1_inside ? c1_slot : inside_n + c1_slot);
         store_ray(k, stride, c1_o, c1_w, c1_d, c1_meta, c1_r, ray_side);
     }
-    if (rec && s_recs_ok) splats[s_rec_base + rec_slot] = record;
+    if (rec && recs_ok) splats[rec_base + rec_slot] = record;
     // The work group's shares: every invocation reads the subgroups' sums, at the same addresses and outside any
     // branch (a CPU driver then loads each once for its SIMD group, where a branch or an address per invocation
     // makes it load lane by lane), and invocation `lid` adds term lid in fixed point.
@@ -436,7 +439,6 @@ void main() {
         recs = wave_sum(ACC_TERMS + PEND_REC);
         one = wave_sum(ACC_TERMS + PEND_ONE);
     }
-    bool rays_ok = s_rays_ok, recs_ok = s_recs_ok;
     float mine = 0.0;
     for (uint k = 0u; k < ACC_TERMS; k++) {
         float sum = wave_row(k) ? wave_sum(k) : 0.0;
