@@ -214,11 +214,13 @@ void main() {
     uint c0_slot = 0u, c1_slot = 0u;
     bool c0_inside = false, c1_inside = false;
     uint rec_slot = 0u;
+    // The ray's interactions so far: the wave's own index, since wave k traces what wave k - 1 appended (wave 0 the
+    // photons), so every ray of a wave has the same.
+    uint depth = 0u;
     bool live = i < in_count && !(can_abort && aborted);
     if (live) {
         vec3 ro, rd;
         float w;
-        uint depth;
         uint pidx;  // the photon's entry; a ray carries it counted from the buffer's top (the batch's photons
                     // fill it from there down), which a 24-bit field holds for any batch (Settings::batch_photons)
         uvec2 cell;        // the photon's cell, read once
@@ -285,7 +287,6 @@ void main() {
                     rec = true;
                     rec_flux = flux;
                     one_event = depth == 1u;
-                    atomicMax(tstate.max_depth, depth);
                 }
             } else if (depth >= MAX_INTERACTIONS) {
                 acc[ACC_CAP] += flux;
@@ -403,6 +404,9 @@ void main() {
             }
         }
         if (recs > 0u) {
+            // The deepest deposited path: invocation 0 holds the work group's first ray (live whenever the group
+            // has records), whose depth is every ray's of the wave. One atomic per work group, not per record.
+            atomicMax(tstate.max_depth, depth);
             uint base = atomicAdd(tstate.records_reserved, recs);
             if (base + recs <= record_capacity) {
                 rec_base = atomicAdd(tstate.records, recs);

@@ -362,6 +362,12 @@ fn absorption_follows_beer_lambert() {
     assert_sound("tinted", &st, &it);
     assert_sound("clear", &sc, &ic);
     assert_eq!(energy(&sc, "absorbed"), 0.0);
+    // The deepest deposited path: in, reflected inside at the bottom and then at the top (F² = 0.0016 of the flux,
+    // above the 1e-3 cut), out: four interactions; two more reflections (F⁴) are cut. The waves count it once per
+    // work group.
+    for (name, s) in [("tinted", &st), ("clear", &sc)] {
+        assert_eq!(s["exact_transport"]["max_depth"], 4, "{name}: max_depth");
+    }
     let ratio = energy(&st, "caustics") / energy(&sc, "caustics");
     let f: f64 = 0.04;
     let want = (-0.1f64).exp() * (1.0 + f * f * (-0.2f64).exp()) / (1.0 + f * f);
