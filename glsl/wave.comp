@@ -39,7 +39,11 @@ shared float s_acc[ACC_TERMS + 3u][LINEAR_WG];
 // fields of one word (each at most 2 LINEAR_WG; src/passes/photons.rs asserts it), so that an invocation takes all
 // its slots with one shared atomic: a CPU driver runs each atomic as a loop over the SIMD group's lanes.
 shared uint s_slots;
-const uint SLOT_INSIDE = 1u, SLOT_OUTSIDE = 1u << 10, SLOT_REC = 1u << 20, SLOT_MASK = 0x3FFu;
+const uint SLOT_BITS = 10u, SLOT_MASK = (1u << SLOT_BITS) - 1u;
+const uint SLOT_INSIDE = 1u, SLOT_OUTSIDE = 1u << SLOT_BITS, SLOT_REC = 1u << (2u * SLOT_BITS);
+
+// The count of children inside glass (else outside it) in a word of s_slots.
+uint slot_run(uint word, bool inside) { return (word >> (inside ? 0u : SLOT_BITS)) & SLOT_MASK; }
 shared uint s_ray_base;  // where the work group's children go in rays_out, or NO_BASE
 shared uint s_rec_base;  // where its records go in splats, or NO_BASE
 const uint NO_BASE = 0xFFFFFFFFu;
@@ -208,12 +212,10 @@ void main() {
     vec4 record = vec4(0.0);
     float phi = 0.0;  // the photon's flux / intensity
     float ray_side = 1.0;  // the photon's cell side: the scale of its packed differentials
-    // Each child's slot among the work group's children that travel inside glass (c*_inside) or outside it: the two
-    // are appended as two runs, so that neighbouring rays of the next wave tend to take the same way through the
-    // BVH (a SIMD group of a CPU driver, or a GPU's, walks as long as its longest ray).
-    uint c0_slot = 0u, c1_slot = 0u;
+    // Whether each child travels inside glass (else outside it): the work group appends the two kinds as two runs,
+    // so that neighbouring rays of the next wave tend to take the same way through the BVH (a SIMD group of a CPU
+    // driver, or a GPU's, walks as long as its longest ray).
     bool c0_inside = false, c1_inside = false;
-    uint rec_slot = 0u;
     // The ray's interactions so far: the wave's own index, since wave k traces what wave k - 1 appended (wave 0 the
     // photons), so every ray of a wave has the same.
     uint depth = 0u;
@@ -364,13 +366,13 @@ void main() {
             }
         }
     }
-    // The slots, child 0's first, then child 1's, then the record's.
+    // The slots, each child's within its run and the record's: child 0's first, then child 1's, then the record's.
     uint take = (n_child >= 1u ? (c0_inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) +
                 (n_child == 2u ? (c1_inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) + (rec ? SLOT_REC : 0u);
     uint taken = take != 0u ? atomicAdd(s_slots, take) : 0u;
-    c0_slot = (taken >> (c0_inside ? 0u : 10u)) & SLOT_MASK;
-    c1_slot = ((taken >> (c1_inside ? 0u : 10u)) & SLOT_MASK) + (c0_inside == c1_inside ? 1u : 0u);
-    rec_slot = taken >> 20;
+    uint c0_slot = slot_run(taken, c0_inside);
+    uint c1_slot = slot_run(taken, c1_inside) + (c0_inside == c1_inside ? 1u : 0u);
+    uint rec_slot = taken >> (2u * SLOT_BITS);
     // The account's shares, summed per subgroup and written before the reservation's barrier: the work group adds
     // the subgroups' sums after it, once the verdict says whether the children and records went out or overflowed
     // (barriers are costly on CPU drivers).
@@ -392,7 +394,7 @@ void main() {
     // as a loop over the lanes, in every SIMD group of the work group.
     uint slots = s_slots;
     if (lid == 0u) {
-        uint rays = (slots & SLOT_MASK) + ((slots >> 10) & SLOT_MASK), recs = slots >> 20;
+        uint rays = slot_run(slots, true) + slot_run(slots, false), recs = slots >> (2u * SLOT_BITS);
         uint ray_base = NO_BASE, rec_base = NO_BASE, failed = 0u;
         if (rays > 0u) {
             uint base = atomicAdd(tstate.out_reserved, rays);
@@ -425,7 +427,7 @@ void main() {
     barrier();
     uint ray_base = s_ray_base, rec_base = s_rec_base;
     bool rays_ok = ray_base != NO_BASE, recs_ok = rec_base != NO_BASE;
-    uint inside_n = slots & SLOT_MASK;
+    uint inside_n = slot_run(slots, true);
     if (rays_ok && n_child >= 1u) {
         uint k = ray_base + (c0_inside ? c0_slot : inside_n + c0_slot);
         store_ray(k, stride, c0_o, c0_w, c0_d, c0_meta, c0_r, ray_side);

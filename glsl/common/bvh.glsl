@@ -113,6 +113,17 @@ bool bvh_triangle(Shear sh, vec3 o, uint tri, float tmax, out float t, out vec3 
                            tmax, t, bary);
 }
 
+#if defined(BVH_LAYOUT_WIDE)
+// The same for the wide layout's triangle-list entry starting at texel e, which holds the vertices themselves;
+// tri: the triangle's index (the first texel's w).
+bool bvh_wide_triangle(Shear sh, vec3 o, uint e, float tmax, out float t, out vec3 bary, out uint tri) {
+    uvec4 v0 = bvh_wide_prim(e);
+    tri = v0.w;
+    return bvh_triangle_of(sh, o, uintBitsToFloat(v0.xyz), uintBitsToFloat(bvh_wide_prim(e + 1u).xyz),
+                           uintBitsToFloat(bvh_wide_prim(e + 2u).xyz), tmax, t, bary);
+}
+#endif
+
 void bvh_leaf(Shear sh, vec3 o, uint first, uint count, uint inst, inout SceneHit hit, inout bool found) {
     for (uint k = first; k < first + count; k++) {
         float t;
@@ -282,8 +293,8 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
             uint e = 3u * (tris.x + k);
             float t;
             vec3 bary;
-            if (bvh_triangle_of(sh, o, uintBitsToFloat(bvh_wide_prim(e).xyz), uintBitsToFloat(bvh_wide_prim(e + 1u).xyz),
-                                uintBitsToFloat(bvh_wide_prim(e + 2u).xyz), hit.t, t, bary)) {
+            uint tri;
+            if (bvh_wide_triangle(sh, o, e, hit.t, t, bary, tri)) {
                 hit.t = t;
                 best = e;
             }
@@ -310,16 +321,10 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
     }
     if (best != BVH_EMPTY) {
         // The same test of the same triangle gives the same weights (bounded by +inf: hit.t is its own t now).
-        uvec4 v0 = bvh_wide_prim(best);
         float t;
-        vec3 bary = vec3(1.0 / 3.0);
-        vec3 b;
-        if (bvh_triangle_of(sh, o, uintBitsToFloat(v0.xyz), uintBitsToFloat(bvh_wide_prim(best + 1u).xyz),
-                            uintBitsToFloat(bvh_wide_prim(best + 2u).xyz), 1.0 / 0.0, t, b)) {
-            bary = b;
-        }
+        vec3 bary = vec3(1.0 / 3.0), b;
+        if (bvh_wide_triangle(sh, o, best, 1.0 / 0.0, t, b, hit.tri)) bary = b;
         hit.inst = ii;
-        hit.tri = v0.w;
         hit.bary = bary;
         found = true;
     }
