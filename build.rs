@@ -46,6 +46,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("wave.comp", "threaded", &[("BVH_LAYOUT_THREADED", "1")]),
     ("wave.comp", "wide", &[("BVH_LAYOUT_WIDE", "1")]),
     ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
+    ("resolve.comp", "texels", &[("RESOLVE_TEXELS", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
     ("geometry.frag", "albedo", &[("WITH_ALBEDO", "1")]),
     ("geometry.vert", "albedo", &[("WITH_ALBEDO", "1")]),

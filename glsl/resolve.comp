@@ -4,9 +4,33 @@
 #include "common/types.glsl"
 #include "common/view.glsl"
 #include "common/gbuffer.glsl"
+#include "common/splat_levels.glsl"
 
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
+#ifdef RESOLVE_TEXELS
+// The compute splat's flux texels (a texel view of the buffer: level 0, then the coarse levels). The levels from 2
+// up have been added into level 1 (glsl/splat_collapse.comp); level 1's share is added here, with the same weights
+// and in the same order as splat_collapse.comp would add it into level 0, which saves that pass over the whole map
+// and the copy into the flux image.
+layout(set = 0, binding = 1) uniform samplerBuffer t_flux;
+
+float flux_at(ivec2 q, ivec2 size) {
+    float f = texelFetch(t_flux, q.y * size.x + q.x).r;
+    if (splat_levels(size) == 0u) return f;
+    ivec2 coarse = size >> 1, p = q >> 1;
+    ivec2 n = clamp(p + (q & 1) * 2 - 1, ivec2(0), coarse - 1);
+    int cb = size.x * size.y;
+    float a = texelFetch(t_flux, cb + p.y * coarse.x + p.x).r, b = texelFetch(t_flux, cb + p.y * coarse.x + n.x).r;
+    float c = texelFetch(t_flux, cb + n.y * coarse.x + p.x).r, d = texelFetch(t_flux, cb + n.y * coarse.x + n.x).r;
+    float v = (0.5625 * a + 0.1875 * (b + c) + 0.0625 * d) * 0.25;
+    return v != 0.0 ? f + v : f;
+}
+#else
+// The flux image (the raster splat's target, or the compute splat's level 0 copied into it).
 layout(set = 0, binding = 1) uniform sampler2D t_flux;
+
+float flux_at(ivec2 q, ivec2 size) { return texelFetch(t_flux, q, 0).r; }
+#endif
 layout(set = 0, binding = 2) uniform usampler2D t_recv;
 layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
 
@@ -33,17 +57,15 @@ void main() {
         if (!view_is_ortho(v)) area *= r.w * r.w;
         // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
         vec3 tint = u_frame.light_power.w > 0.0 ? u_frame.light_power.rgb / u_frame.light_power.w : vec3(0.0);
-        e = texelFetch(t_flux, p, 0).r * tint / area;
+        e = flux_at(p, size) * tint / area;
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
-    // and blue passes keep what the earlier ones wrote.
+    // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
+    // both sides of a branch, and an image store is a loop over the lanes for each channel.
     uint c = u_frame.transport.w & 0xffu;
-    if (c != 0u) {
-        vec4 prev = c == 1u && pc.add == 0u ? vec4(0.0) : imageLoad(o_irradiance, p);
-        prev[c - 1u] = e[c - 1u] + (pc.add != 0u ? prev[c - 1u] : 0.0);
-        imageStore(o_irradiance, p, prev);
-        return;
-    }
-    vec4 prev = pc.add != 0u ? imageLoad(o_irradiance, p) : vec4(0.0);
-    imageStore(o_irradiance, p, vec4(prev.rgb + e, 0.0));
+    bool add = pc.add != 0u;
+    vec4 prev = add || c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
+    bvec3 mine = c == 0u ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));
+    vec3 rgb = mix(prev.rgb, (add ? prev.rgb : vec3(0.0)) + e, mine);
+    imageStore(o_irradiance, p, vec4(rgb, 0.0));
 }

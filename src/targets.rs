@@ -159,15 +159,19 @@ impl Targets {
                     m,
                     color | U::TRANSFER_SRC | U::TRANSFER_DST,
                 )?,
+                // The resolve reads it through a texel view (a device whose texel buffers are too short for it
+                // gets none, and the resolve samples the flux image instead).
                 flux_texels: Buffer::new(
                     device,
                     "caustic flux texels",
                     4 * splat_texels(s.caustic_res),
                     vk::BufferUsageFlags::STORAGE_BUFFER
+                        | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
                         | vk::BufferUsageFlags::TRANSFER_SRC
                         | vk::BufferUsageFlags::TRANSFER_DST,
                     MemoryLocation::GpuOnly,
-                )?,
+                )?
+                .with_texel_view(vk::Format::R32_SFLOAT, 4)?,
                 irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
             })
         };

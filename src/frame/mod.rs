@@ -189,6 +189,10 @@ struct Ctx<'a> {
     compute_splat: bool,
     /// The compute splat gathers a work group's taps in shared memory first.
     tiled_splat: bool,
+    /// The resolve reads the compute splat's flux texels through their texel view and adds the first coarse level
+    /// itself, so that level's collapse and the copy into the flux image are not recorded (else it samples the
+    /// flux image).
+    resolve_texels: bool,
     /// The frame reads back the caustics or direct AOV, so the eye view writes them (else only the radiance).
     eye_aovs: bool,
 }
@@ -285,6 +289,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         data: &plan.data[p],
         compute_splat,
         tiled_splat: s.splat == Splat::Tiled,
+        resolve_texels: compute_splat && t.receivers[p / nc].flux_texels.texels != vk::BufferView::null(),
         eye_aovs: matches!(plan.aov, Some(Aov::Caustics) | Some(Aov::Direct)),
     };
     rec.report.caustics = plan.caustics.first().copied().unwrap_or(false);
@@ -307,7 +312,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
                 c.light_gbuffers(rec, caustics, first_channel);
                 c.coverage(rec);
                 c.photons(rec, plan.batch_slots, Some(cont.from_slot))?;
-                c.resolve(rec, true);
+                c.resolve(rec, true)?;
                 c.copy_light_state(rec);
             } else if first_channel {
                 c.reuse_caustics(rec);
@@ -321,7 +326,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
             if caustics {
                 c.coverage(rec);
                 c.photons(rec, plan.batch_slots, None)?;
-                c.resolve(rec, false);
+                c.resolve(rec, false)?;
                 c.copy_light_state(rec);
             } else if first_channel {
                 c.clear_irradiance(rec);

@@ -198,13 +198,16 @@ impl Ctx<'_> {
         }?;
         if self.compute_splat {
             self.collapse_splat_levels(rec)?;
-            self.copy_flux_texels(rec);
+            if !self.resolve_texels {
+                self.copy_flux_texels(rec);
+            }
         }
         Ok(())
     }
 
     /// Differential footprints: the compute splat put its wide tents in the flux texels' coarse levels; add each
-    /// into the one below it, coarsest first (glsl/splat_collapse.comp). Timed with the splat.
+    /// into the one below it, coarsest first (glsl/splat_collapse.comp). Timed with the splat. Where the resolve
+    /// reads the texels, it adds level 1 into level 0 itself.
     fn collapse_splat_levels(&self, rec: &mut Rec) -> VkResult<()> {
         if self.s.footprint != crate::settings::Footprint::Differential {
             return Ok(());
@@ -212,7 +215,8 @@ impl Ctx<'_> {
         let res = self.s.caustic_res;
         rec.ts.mark(rec.cmd, "splat");
         let b = self.bindings();
-        for level in (1..=crate::targets::splat_levels(res)).rev() {
+        let finest = if self.resolve_texels { 2 } else { 1 };
+        for level in (finest..=crate::targets::splat_levels(res)).rev() {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeRead, Access::ComputeWrite]);
             rec.flush(self.d);
             self.p.photons.splat_collapse(rec.cmd, &b, level, res)?;

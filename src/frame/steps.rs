@@ -7,6 +7,7 @@ use crate::passes::composite::{CompositeInputs, LightMaps};
 use crate::passes::coverage::CoverageInputs;
 use crate::passes::eye::{EyeGbuffer, EyeInputs};
 use crate::passes::geometry::GeometryTarget;
+use crate::passes::resolve::FluxSource;
 use crate::settings::Transport;
 use crate::targets::{Targets, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::{Access, Image, VkResult};
@@ -103,7 +104,7 @@ impl Ctx<'_> {
     }
 
     /// Step 6: caustic flux → irradiance. `add`: add to the map (a continuation's remaining batches).
-    pub(super) fn resolve(&self, rec: &mut Rec, add: bool) {
+    pub(super) fn resolve(&self, rec: &mut Rec, add: bool) -> VkResult<()> {
         rec.ts.mark(rec.cmd, "resolve");
         // A light's later color passes write their channel and keep the earlier ones.
         if self.channel == 0 && !add {
@@ -111,12 +112,19 @@ impl Ctx<'_> {
         } else {
             rec.sync.image(&self.r.irradiance, &[Access::ComputeWrite]);
         }
-        rec.sync.image(&self.r.flux, &[Access::ComputeSampled]);
+        let flux = if self.resolve_texels {
+            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeTexels]);
+            FluxSource::Texels(&self.r.flux_texels)
+        } else {
+            rec.sync.image(&self.r.flux, &[Access::ComputeSampled]);
+            FluxSource::Image(&self.r.flux)
+        };
         rec.sync.image(&self.r.geo, &[Access::ComputeSampled]);
         rec.flush(self.d);
-        self.p.resolve.record(rec.cmd, self.ubo, &self.r.flux, &self.r.geo, &self.r.irradiance, self.nearest, add);
+        self.p.resolve.record(rec.cmd, self.ubo, flux, &self.r.geo, &self.r.irradiance, self.nearest, add)?;
         rec.sync.image(&self.r.irradiance, &EYE_READ);
         rec.flush(self.d);
+        Ok(())
     }
 
     /// No refractor: the irradiance map is zero (no caustic pass is recorded).

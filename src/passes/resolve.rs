@@ -2,13 +2,24 @@
 
 use super::groups_2d;
 use crate::shaders;
+use crate::vk::pipeline::LazyPipeline;
 use crate::vk::{Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
+/// Where the resolve reads the frame's flux.
+pub enum FluxSource<'a> {
+    /// The flux image: the raster splat's target, or the compute splat's level 0 copied into it.
+    Image(&'a Image),
+    /// The compute splat's flux texels through their texel view, once the coarse levels from 2 up are collapsed:
+    /// the resolve adds level 1's share itself (glsl/resolve.comp, `RESOLVE_TEXELS`).
+    Texels(&'a Buffer),
+}
+
 pub struct ResolvePass {
     device: Arc<Device>,
     pipeline: Pipeline,
+    texels: LazyPipeline,
 }
 
 impl ResolvePass {
@@ -20,7 +31,14 @@ impl ResolvePass {
             &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::StorageImage],
             4,
         )?;
-        Ok(ResolvePass { device: device.clone(), pipeline })
+        let texels = LazyPipeline::compute(
+            device,
+            "resolve (flux texels)",
+            shaders::RESOLVE_COMP_TEXELS.words(),
+            &[BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage],
+            4,
+        );
+        Ok(ResolvePass { device: device.clone(), pipeline, texels })
     }
 
     /// Resolve `flux` into `out` (its channel, for a color pass); `add`: add to what `out` holds instead (the rest of
@@ -30,16 +48,32 @@ impl ResolvePass {
         &self,
         cmd: vk::CommandBuffer,
         ubo: &Buffer,
-        flux: &Image,
+        flux: FluxSource,
         recv: &Image,
         out: &Image,
         s: &Sampler,
         add: bool,
-    ) {
-        self.pipeline
-            .bind(cmd, &[Bind::Uniform(ubo), Bind::Sampled(flux, s), Bind::Sampled(recv, s), Bind::StorageImage(out)]);
-        self.pipeline.push(cmd, &(add as u32));
+    ) -> VkResult<()> {
+        let pipeline = match flux {
+            FluxSource::Image(img) => {
+                self.pipeline.bind(
+                    cmd,
+                    &[Bind::Uniform(ubo), Bind::Sampled(img, s), Bind::Sampled(recv, s), Bind::StorageImage(out)],
+                );
+                &self.pipeline
+            }
+            FluxSource::Texels(buf) => {
+                let p = self.texels.get()?;
+                p.bind_checked(
+                    cmd,
+                    &[Bind::Uniform(ubo), Bind::Storage(buf), Bind::Sampled(recv, s), Bind::StorageImage(out)],
+                )?;
+                p
+            }
+        };
+        pipeline.push(cmd, &(add as u32));
         let (gx, gy) = groups_2d(out.extent.width, out.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
+        Ok(())
     }
 }
