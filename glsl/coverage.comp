@@ -24,8 +24,12 @@ bool lit(ivec2 p, vec4 front) {
     return !(uv_inside(ruv) && dist_sample(t_recv, ruv, d) && d < view_dist(rv, p1) * (1.0 - 1e-3));
 }
 
+// Specialization constant 0: the pipeline builds mip 0 from the g-buffers (else a coarser mip from the one below).
+// A CPU driver runs both sides of a branch, so each pipeline holds only its own side.
+layout(constant_id = 0) const bool COVERAGE_MIP0 = true;
+
 layout(push_constant) uniform Push {
-    uint mip;        // mip to build
+    uint mip;        // mip to build (0 only with COVERAGE_MIP0)
     uint src_offset; // start of mip - 1
     uint dst_offset; // start of mip
     uint dst_res;    // side of mip
@@ -37,7 +41,7 @@ void main() {
     uvec2 p = gl_GlobalInvocationID.xy;
     if (p.x >= pc.dst_res || p.y >= pc.dst_res) return;
     uint bits;
-    if (pc.mip == 0u) {
+    if (COVERAGE_MIP0) {
         vec4 front = geo_fetch(t_front, ivec2(p));
         bits = front.w > 0.0 && lit(ivec2(p), front) ? 3u : 0u;
         if (bits == 0u && u_frame.transport.x != 0u) {

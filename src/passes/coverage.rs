@@ -18,7 +18,10 @@ pub struct CoverageInputs<'a> {
 
 pub struct CoveragePass {
     device: Arc<Device>,
-    pipeline: Pipeline,
+    /// Mip 0 from the g-buffers, and a coarser mip from the one below (specialization constant 0 of
+    /// glsl/coverage.comp).
+    mip0: Pipeline,
+    reduce: Pipeline,
 }
 
 /// Offsets of each mip in the coverage buffer, and the total length (entries).
@@ -35,14 +38,21 @@ pub fn pyramid_layout(gbuffer_res: u32, mips: u32) -> (Vec<u32>, u32) {
 
 impl CoveragePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        let pipeline = Pipeline::compute(
-            device,
-            "coverage",
-            shaders::COVERAGE_COMP.words(),
-            &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled, BindKind::Sampled],
-            std::mem::size_of::<CoveragePush>() as u32,
-        )?;
-        Ok(CoveragePass { device: device.clone(), pipeline })
+        let pipeline = |name: &str, mip0: bool| {
+            Pipeline::compute_specialized(
+                device,
+                name,
+                shaders::COVERAGE_COMP.words(),
+                &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled, BindKind::Sampled],
+                std::mem::size_of::<CoveragePush>() as u32,
+                &[(0, mip0 as u32)],
+            )
+        };
+        Ok(CoveragePass {
+            device: device.clone(),
+            mip0: pipeline("coverage (mip 0)", true)?,
+            reduce: pipeline("coverage (coarser mips)", false)?,
+        })
     }
 
     /// Build all mips of the pyramid over `front`; the coverage buffer ends in ComputeWrite.
@@ -55,12 +65,15 @@ impl CoveragePass {
             Bind::Sampled(i.front, i.sampler),
             Bind::Sampled(i.recv, i.sampler),
         ];
-        self.pipeline.bind(cmd, &binds);
         for m in 0..mips {
             if m > 0 {
                 Barriers::new()
                     .buffer(coverage, &[Access::ComputeWrite], &[Access::ComputeWrite])
                     .flush(&self.device, cmd);
+            }
+            let pipeline = if m == 0 { &self.mip0 } else { &self.reduce };
+            if m <= 1 {
+                pipeline.bind(cmd, &binds);
             }
             let res = gbuffer_res >> m;
             let push = CoveragePush {
@@ -69,7 +82,7 @@ impl CoveragePass {
                 dst_offset: offsets[m as usize],
                 dst_res: res,
             };
-            self.pipeline.push(cmd, &push);
+            pipeline.push(cmd, &push);
             let (gx, gy) = groups_2d(res, res);
             unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         }
