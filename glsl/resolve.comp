@@ -9,20 +9,20 @@
 layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 #ifdef RESOLVE_TEXELS
 // The compute splat's flux texels (a texel view of the buffer: level 0, then the coarse levels). The levels from 2
-// up have been added into level 1 (glsl/splat_collapse.comp); level 1's share is added here, with the same weights
-// and in the same order as splat_collapse.comp would add it into level 0, which saves that pass over the whole map
-// and the copy into the flux image.
+// up have been added into level 1 (glsl/splat_collapse.comp); level 1's share is added here, as splat_collapse.comp
+// would add it into level 0 (splat_parents and splat_share, glsl/common/splat_levels.glsl), which saves that pass
+// over the whole map and the copy into the flux image.
 layout(set = 0, binding = 1) uniform samplerBuffer t_flux;
 
 float flux_at(ivec2 q, ivec2 size) {
     float f = texelFetch(t_flux, q.y * size.x + q.x).r;
     if (splat_levels(size) == 0u) return f;
-    ivec2 coarse = size >> 1, p = q >> 1;
-    ivec2 n = clamp(p + (q & 1) * 2 - 1, ivec2(0), coarse - 1);
-    int cb = size.x * size.y;
+    ivec2 coarse = size >> 1, p, n;
+    splat_parents(q, coarse, p, n);
+    int cb = int(splat_level_offset(size, 1u));
     float a = texelFetch(t_flux, cb + p.y * coarse.x + p.x).r, b = texelFetch(t_flux, cb + p.y * coarse.x + n.x).r;
     float c = texelFetch(t_flux, cb + n.y * coarse.x + p.x).r, d = texelFetch(t_flux, cb + n.y * coarse.x + n.x).r;
-    float v = (0.5625 * a + 0.1875 * (b + c) + 0.0625 * d) * 0.25;
+    float v = splat_share(a, b, c, d);
     return v != 0.0 ? f + v : f;
 }
 #else
