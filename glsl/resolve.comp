@@ -63,15 +63,15 @@ void main() {
         // The map holds irradiance for a white light: the readers apply the light's color (common/receiver.glsl).
         e = flux_at(p, size) / area;
     }
+    // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
+    // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
+    // both sides of a branch, and an image store is a loop over the lanes for each channel.
     bool add = pc.add != 0u;
 #ifdef RESOLVE_MONO
     // One channel, written whole (a frame without color passes has only the gray pass).
     float prev = add ? imageLoad(o_irradiance, p).r : 0.0;
     imageStore(o_irradiance, p, vec4(prev + e, 0.0, 0.0, 0.0));
 #else
-    // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
-    // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
-    // both sides of a branch, and an image store is a loop over the lanes for each channel.
     uint c = u_frame.transport.w & 0xffu;
     vec4 prev = add || c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
     bvec3 mine = c == 0u ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));

@@ -18,7 +18,7 @@ const uint HIT_ESCAPED = 6u;     // left the caustic map without meeting a recei
 
 struct Hit {
     vec2 map_px;   // landing point in caustic-map texels
-    float flux;    // W (for a white light; the light's color tints the caustic where its irradiance map is read)
+    float flux;    // W (for a white light; the light's color multiplies it in the resolve)
     vec3 pos;      // landing point, world space
     uint status;
 };

@@ -30,21 +30,16 @@ pub struct Passes {
     pub scene_update: scene_update::SceneUpdatePass,
 }
 
-/// R32F where the device's optimal tiling offers `needs` for it, else RGBA32F: the one-channel maps' format.
-fn one_channel_format(device: &Device, needs: ash::vk::FormatFeatureFlags) -> ash::vk::Format {
+/// The caustic flux map holds one channel (the light's color is applied in the resolve): R32F where the device
+/// can blend it, else RGBA32F.
+pub fn flux_format(device: &Device) -> ash::vk::Format {
     let f = ash::vk::Format::R32_SFLOAT;
     let props = unsafe { device.instance.raw.get_physical_device_format_properties(device.physical, f) };
-    if props.optimal_tiling_features.contains(needs) {
+    if props.optimal_tiling_features.contains(ash::vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND) {
         f
     } else {
         HDR_FORMAT
     }
-}
-
-/// The caustic flux map holds one channel (the light's color is applied where the irradiance map is read): R32F
-/// where the device can blend it, else RGBA32F.
-pub fn flux_format(device: &Device) -> ash::vk::Format {
-    one_channel_format(device, ash::vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND)
 }
 
 /// The caustic irradiance map's format: one channel (R32F, sampled as gray through a swizzled view) when each light
@@ -54,8 +49,11 @@ pub fn flux_format(device: &Device) -> ash::vk::Format {
 /// channel.
 pub fn irradiance_format(device: &Device, channels: usize) -> ash::vk::Format {
     use ash::vk::FormatFeatureFlags as F;
-    if channels == 1 {
-        one_channel_format(device, F::STORAGE_IMAGE | F::SAMPLED_IMAGE | F::SAMPLED_IMAGE_FILTER_LINEAR)
+    let f = ash::vk::Format::R32_SFLOAT;
+    let props = unsafe { device.instance.raw.get_physical_device_format_properties(device.physical, f) };
+    let needs = F::STORAGE_IMAGE | F::SAMPLED_IMAGE | F::SAMPLED_IMAGE_FILTER_LINEAR;
+    if channels == 1 && props.optimal_tiling_features.contains(needs) {
+        f
     } else {
         HDR_FORMAT
     }
