@@ -29,8 +29,6 @@ pub struct Image {
     pub levels: u32,
     /// Its array layers (a layered image's view is a 2D array).
     pub layers: u32,
-    /// Its views' type.
-    view_type: vk::ImageViewType,
     allocation: Option<Allocation>,
     /// Its name (in validation messages).
     pub name: String,
@@ -137,7 +135,6 @@ impl Image {
             aspect,
             levels,
             layers: layer_count,
-            view_type,
             allocation: Some(allocation),
             name: name.to_string(),
         })
@@ -149,7 +146,7 @@ impl Image {
         let r = vk::ComponentSwizzle::R;
         let info = vk::ImageViewCreateInfo::default()
             .image(self.raw)
-            .view_type(self.view_type)
+            .view_type(if self.layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D })
             .format(self.format)
             .components(vk::ComponentMapping { r, g: r, b: r, a: vk::ComponentSwizzle::ONE })
             .subresource_range(self.range());
