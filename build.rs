@@ -47,8 +47,6 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("wave.comp", "wide", &[("BVH_LAYOUT_WIDE", "1")]),
     ("splat.comp", "tiled", &[("SPLAT_TILED", "1")]),
     ("resolve.comp", "texels", &[("RESOLVE_TEXELS", "1")]),
-    ("resolve.comp", "mono", &[("RESOLVE_MONO", "1")]),
-    ("resolve.comp", "texels_mono", &[("RESOLVE_TEXELS", "1"), ("RESOLVE_MONO", "1")]),
     ("geometry.frag", "aux", &[("WITH_AUX", "1")]),
     ("geometry.frag", "albedo", &[("WITH_ALBEDO", "1")]),
     ("geometry.vert", "albedo", &[("WITH_ALBEDO", "1")]),

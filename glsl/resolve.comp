@@ -32,12 +32,7 @@ layout(set = 0, binding = 1) uniform sampler2D t_flux;
 float flux_at(ivec2 q, ivec2 size) { return texelFetch(t_flux, q, 0).r; }
 #endif
 layout(set = 0, binding = 2) uniform usampler2D t_recv;
-#ifdef RESOLVE_MONO
-// One channel (a frame without color passes; src/passes/mod.rs, irradiance_format): the readers sample it as gray.
-layout(set = 0, binding = 3, r32f) uniform image2D o_irradiance;
-#else
 layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
-#endif
 
 // add: add to the irradiance already there (a frame's remaining batches) instead of writing it.
 layout(push_constant) uniform ResolvePush { uint add; } pc;
@@ -50,7 +45,7 @@ void main() {
     ivec2 size = ivec2(v.extent.xy);
     if (p.x >= size.x || p.y >= size.y) return;
     vec4 r = geo_fetch(t_recv, p);
-    float e = 0.0;
+    vec3 e = vec3(0.0);
     if (r.w > 0.0) {
         vec2 uv = (vec2(p) + 0.5) * v.extent.zw;
         vec2 xy = view_xy_of_uv(v, uv);
@@ -60,22 +55,17 @@ void main() {
         float side = v.window.z * v.extent.z;
         float area = view_cell_measure(v, xy, side) / cos_t;
         if (!view_is_ortho(v)) area *= r.w * r.w;
-        // The map holds irradiance for a white light: the readers apply the light's color (common/receiver.glsl).
-        e = flux_at(p, size) / area;
+        // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
+        vec3 tint = u_frame.light_power.w > 0.0 ? u_frame.light_power.rgb / u_frame.light_power.w : vec3(0.0);
+        e = flux_at(p, size) * tint / area;
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
     // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
     // both sides of a branch, and an image store is a loop over the lanes for each channel.
-    bool add = pc.add != 0u;
-#ifdef RESOLVE_MONO
-    // One channel, written whole (a frame without color passes has only the gray pass).
-    float prev = add ? imageLoad(o_irradiance, p).r : 0.0;
-    imageStore(o_irradiance, p, vec4(prev + e, 0.0, 0.0, 0.0));
-#else
     uint c = u_frame.transport.w & 0xffu;
+    bool add = pc.add != 0u;
     vec4 prev = add || c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
     bvec3 mine = c == 0u ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));
     vec3 rgb = mix(prev.rgb, (add ? prev.rgb : vec3(0.0)) + e, mine);
     imageStore(o_irradiance, p, vec4(rgb, 0.0));
-#endif
 }

@@ -172,15 +172,7 @@ impl Targets {
                     MemoryLocation::GpuOnly,
                 )?
                 .with_texel_view(vk::Format::R32_SFLOAT, 4)?,
-                irradiance: {
-                    let format = crate::passes::irradiance_format(device, passes / lights.max(1));
-                    let i = img("caustic irradiance map", format, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?;
-                    if format == HDR_FORMAT {
-                        i
-                    } else {
-                        i.with_gray_sampling()?
-                    }
-                },
+                irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
             })
         };
         let receivers = (0..lights.max(1)).map(|_| receiver()).collect::<VkResult<Vec<_>>>()?;

@@ -70,11 +70,10 @@ bool caustic_visible_in(View lv, usampler2D recv, vec3 p, out vec2 uv) {
     return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
 }
 
-// Caustic irradiance (W/m^2) of a light (view lv, power: its light_power, caustic map irr, receivers recv) averaged
-// over a footprint in its caustic map spanned by the uv offsets dx, dy (up to 8x8 bilinear taps), so that a caustic
-// sharper than the footprint keeps its flux. The map holds a white light's irradiance (one channel, read as gray,
-// or one per color pass; glsl/resolve.comp): the light's color per unit intensity tints it here.
-vec3 caustic_irradiance_in(View lv, vec4 power, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
+// Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) averaged over a footprint in
+// its caustic map spanned by the uv offsets dx, dy (up to 8x8 bilinear taps), so that a caustic sharper than the
+// footprint keeps its flux.
+vec3 caustic_irradiance_in(View lv, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
     vec2 uv;
     if (!caustic_visible_in(lv, recv, p, uv)) return vec3(0.0);
     vec2 size = vec2(textureSize(irr, 0));
@@ -87,8 +86,7 @@ vec3 caustic_irradiance_in(View lv, vec4 power, sampler2D irr, usampler2D recv, 
             e += textureLod(irr, uv + o.x * dx + o.y * dy, 0.0).rgb;
         }
     }
-    vec3 tint = power.w > 0.0 ? power.rgb / power.w : vec3(0.0);
-    return e * tint / float(nx * ny);
+    return e / float(nx * ny);
 }
 
 // The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
@@ -96,7 +94,7 @@ vec3 direct_irradiance(vec3 p, vec3 n) {
     return direct_irradiance_in(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow, p, n);
 }
 vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
-    return caustic_irradiance_in(u_frame.receiver_view, u_frame.light_power, t_irradiance, t_recv, p, dx, dy);
+    return caustic_irradiance_in(u_frame.receiver_view, t_irradiance, t_recv, p, dx, dy);
 }
 
 // The environment (docs/design.md "Environment"), seen directly, in reflections and through glass. With a map

@@ -42,23 +42,6 @@ pub fn flux_format(device: &Device) -> ash::vk::Format {
     }
 }
 
-/// The caustic irradiance map's format: one channel (R32F, sampled as gray through a swizzled view) when each light
-/// has one caustic pass (`channels` 1: no colored or dispersive glass) and the device can store and filter it, else
-/// RGBA32F, one channel per color pass. The light's color is applied where the map is read (common/receiver.glsl).
-/// The resolve stores one channel instead of four: on a CPU driver an image store is a loop over the lanes for each
-/// channel.
-pub fn irradiance_format(device: &Device, channels: usize) -> ash::vk::Format {
-    use ash::vk::FormatFeatureFlags as F;
-    let f = ash::vk::Format::R32_SFLOAT;
-    let props = unsafe { device.instance.raw.get_physical_device_format_properties(device.physical, f) };
-    let needs = F::STORAGE_IMAGE | F::SAMPLED_IMAGE | F::SAMPLED_IMAGE_FILTER_LINEAR;
-    if channels == 1 && props.optimal_tiling_features.contains(needs) {
-        f
-    } else {
-        HDR_FORMAT
-    }
-}
-
 impl Passes {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         Ok(Passes {

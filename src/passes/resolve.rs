@@ -20,9 +20,6 @@ pub struct ResolvePass {
     device: Arc<Device>,
     pipeline: Pipeline,
     texels: LazyPipeline,
-    /// The same two for a one-channel irradiance map (`RESOLVE_MONO`; [`crate::passes::irradiance_format`]).
-    mono: LazyPipeline,
-    texels_mono: LazyPipeline,
 }
 
 impl ResolvePass {
@@ -41,26 +38,11 @@ impl ResolvePass {
             &[BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage],
             4,
         );
-        let mono = LazyPipeline::compute(
-            device,
-            "resolve (one channel)",
-            shaders::RESOLVE_COMP_MONO.words(),
-            &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::StorageImage],
-            4,
-        );
-        let texels_mono = LazyPipeline::compute(
-            device,
-            "resolve (flux texels, one channel)",
-            shaders::RESOLVE_COMP_TEXELS_MONO.words(),
-            &[BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage],
-            4,
-        );
-        Ok(ResolvePass { device: device.clone(), pipeline, texels, mono, texels_mono })
+        Ok(ResolvePass { device: device.clone(), pipeline, texels })
     }
 
-    /// Resolve `flux` into `out` (its channel, for a color pass; its only channel, for a one-channel map); `add`: add
-    /// to what `out` holds instead (the rest of a frame's batches, traced after the first submission ran out of batch
-    /// slots).
+    /// Resolve `flux` into `out` (its channel, for a color pass); `add`: add to what `out` holds instead (the rest of
+    /// a frame's batches, traced after the first submission ran out of batch slots).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -72,18 +54,16 @@ impl ResolvePass {
         s: &Sampler,
         add: bool,
     ) -> VkResult<()> {
-        let mono = out.format == vk::Format::R32_SFLOAT;
         let pipeline = match flux {
             FluxSource::Image(img) => {
-                let p = if mono { self.mono.get()? } else { &self.pipeline };
-                p.bind(
+                self.pipeline.bind(
                     cmd,
                     &[Bind::Uniform(ubo), Bind::Sampled(img, s), Bind::Sampled(recv, s), Bind::StorageImage(out)],
                 );
-                p
+                &self.pipeline
             }
             FluxSource::Texels(buf) => {
-                let p = if mono { self.texels_mono.get()? } else { self.texels.get()? };
+                let p = self.texels.get()?;
                 p.bind_checked(
                     cmd,
                     &[Bind::Uniform(ubo), Bind::Storage(buf), Bind::Sampled(recv, s), Bind::StorageImage(out)],

@@ -17,8 +17,6 @@ pub struct Image {
     pub raw: vk::Image,
     /// A view of it.
     pub view: vk::ImageView,
-    /// The view that sampling reads where it differs from `view` ([`Image::with_gray_sampling`]); null otherwise.
-    sampled: vk::ImageView,
     /// Its format.
     pub format: vk::Format,
     /// Its size.
@@ -129,7 +127,6 @@ impl Image {
             device: device.clone(),
             raw,
             view,
-            sampled: vk::ImageView::null(),
             format,
             extent,
             aspect,
@@ -138,29 +135,6 @@ impl Image {
             allocation: Some(allocation),
             name: name.to_string(),
         })
-    }
-
-    /// A one-channel image that samples as gray: a second view whose components read its red channel as red, green
-    /// and blue (alpha one), for the samplers; storage access keeps the plain view.
-    pub fn with_gray_sampling(mut self) -> VkResult<Self> {
-        let r = vk::ComponentSwizzle::R;
-        let info = vk::ImageViewCreateInfo::default()
-            .image(self.raw)
-            .view_type(if self.layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D })
-            .format(self.format)
-            .components(vk::ComponentMapping { r, g: r, b: r, a: vk::ComponentSwizzle::ONE })
-            .subresource_range(self.range());
-        self.sampled = unsafe { self.device.create_image_view(&info, None) }.check("vkCreateImageView")?;
-        Ok(self)
-    }
-
-    /// The view a sampler reads.
-    pub fn sampled_view(&self) -> vk::ImageView {
-        if self.sampled == vk::ImageView::null() {
-            self.view
-        } else {
-            self.sampled
-        }
     }
 
     /// The subresource range of all its mip levels and layers.
@@ -178,9 +152,6 @@ impl Image {
 impl Drop for Image {
     fn drop(&mut self) {
         unsafe {
-            if self.sampled != vk::ImageView::null() {
-                self.device.destroy_image_view(self.sampled, None);
-            }
             self.device.destroy_image_view(self.view, None);
             self.device.destroy_image(self.raw, None);
         }

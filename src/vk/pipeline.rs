@@ -380,7 +380,7 @@ impl Pipeline {
                 }
                 Bind::Sampled(img, sampler) => image_infos.push(vk::DescriptorImageInfo {
                     sampler: sampler.raw,
-                    image_view: img.sampled_view(),
+                    image_view: img.view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }),
                 Bind::StorageImage(img) => image_infos.push(vk::DescriptorImageInfo {
