@@ -21,6 +21,7 @@ type Define = (&'static str, &'static str);
 /// (source file, variant suffix, extra macros).
 const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("water.comp", "bvh", &[("WATER_BVH", "1")]),
+    ("morph.comp", "bvh", &[("MORPH_BVH", "1")]),
     ("traverse.comp", "max_error_wg1", &[("TRAVERSE_WG_SIDE", "1"), ("TRAVERSE_METRIC", "1")]),
     ("traverse.comp", "max_error_wg2", &[("TRAVERSE_WG_SIDE", "2"), ("TRAVERSE_METRIC", "1")]),
     ("traverse.comp", "max_error_wg4", &[("TRAVERSE_WG_SIDE", "4"), ("TRAVERSE_METRIC", "1")]),

@@ -219,6 +219,8 @@ pub struct SceneBvh {
     pub refit_leaves: Vec<u32>,
     pub rest_tris: Vec<GpuTriangle>,
     pub rest_normals: Vec<GpuTriangle>,
+    /// Per rest triangle: the indices of its vertices in its mesh (a morphing mesh's triangles are read by them).
+    pub rest_corners: Vec<[u32; 3]>,
     /// Per mesh passed to [`SceneBvh::build`]: its refit data when it deforms.
     pub refit_meshes: Vec<Option<RefitMesh>>,
     pub build_ms: f64,
@@ -250,8 +252,19 @@ fn row(m: &Mat4, r: usize) -> [f32; 4] {
 /// CPU reference).
 /// With the texture coordinates packed in `w`: corner positions carry u, their normals v (see [`GpuTriangle`]).
 fn valid_triangles(m: &Mesh) -> (Vec<[Vec4; 3]>, Vec<[Vec4; 3]>) {
+    let (tris, nrms, _) = valid_triangles_with_corners(m);
+    (tris, nrms)
+}
+
+/// A triangle's three vertices (or vertex normals), each with a texture coordinate in w.
+type Corners = [Vec4; 3];
+
+/// [`valid_triangles`] with each kept triangle's vertex indices (what a deforming mesh's refit reads its morphed
+/// vertices by).
+fn valid_triangles_with_corners(m: &Mesh) -> (Vec<Corners>, Vec<Corners>, Vec<[u32; 3]>) {
     let mut tris = Vec::new();
     let mut nrms = Vec::new();
+    let mut corners = Vec::new();
     for t in m.indices.chunks_exact(3) {
         let p = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
         let ng = (p[1] - p[0]).cross(p[2] - p[0]);
@@ -262,8 +275,9 @@ fn valid_triangles(m: &Mesh) -> (Vec<[Vec4; 3]>, Vec<[Vec4; 3]>) {
         let n = [0, 1, 2].map(|k| m.normals.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO).extend(uv[k].y));
         tris.push([0, 1, 2].map(|k| p[k].extend(uv[k].x)));
         nrms.push(n);
+        corners.push([t[0], t[1], t[2]]);
     }
-    (tris, nrms)
+    (tris, nrms, corners)
 }
 
 /// An instance's material words (`BvhInstance.material`, `.pad.yzw`, `.ior_rgb`, `.sigma_rgb`).
@@ -353,7 +367,7 @@ impl SceneBvh {
         let mut blas: Vec<Option<Option<Blas>>> = vec![None; meshes.len()];
         for obj in objects {
             let built = *blas[obj.mesh].get_or_insert_with(|| {
-                let (tris, nrms) = valid_triangles(meshes[obj.mesh]);
+                let (tris, nrms, corners) = valid_triangles_with_corners(meshes[obj.mesh]);
                 if tris.is_empty() {
                     return None;
                 }
@@ -361,7 +375,7 @@ impl SceneBvh {
                 let deform = deforming.get(obj.mesh).copied().flatten();
                 let b2 = tree(obj.mesh, &tris);
                 let (pair_root, single_root, wide_root) =
-                    bvh.add_blas(&tris, &nrms, deform.is_some().then_some(obj.mesh), &b2);
+                    bvh.add_blas(&tris, &nrms, deform.is_some().then_some((obj.mesh, &corners[..])), &b2);
                 bvh.blas_builds += 1;
                 let (lo, hi) = deform.unwrap_or_else(|| {
                     tris.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| {
@@ -444,7 +458,14 @@ impl SceneBvh {
     /// Add one bottom-level BVH over `tris` from its tree `b2` (all four layouts, and the triangles in leaf
     /// order); with `refit` (the mesh's index), also its refit nodes and rest triangles, and no wide nodes (the
     /// refit does not requantize them). Returns the pair, single and wide roots (wide: `EMPTY` when none).
-    fn add_blas(&mut self, tris: &[[Vec4; 3]], nrms: &[[Vec4; 3]], refit: Option<usize>, b2: &Bvh2) -> (u32, u32, u32) {
+    /// `refit`: a deforming mesh's index, with each triangle's vertex indices.
+    fn add_blas(
+        &mut self,
+        tris: &[[Vec4; 3]],
+        nrms: &[[Vec4; 3]],
+        refit: Option<(usize, &[[u32; 3]])>,
+        b2: &Bvh2,
+    ) -> (u32, u32, u32) {
         // No spatial splits: the primitive list is a permutation, so leaves index the reordered triangles directly.
         let tri_base = self.triangles.len() as u32;
         for &i in &b2.primitive_indices {
@@ -508,8 +529,9 @@ impl SceneBvh {
         let pair_base = self.pair_nodes.len() as u32;
         // Where each node's box sits in the pair layout: its parent's slot (node << 1 | slot).
         let mut pair_slot = vec![EMPTY; nodes.len()];
-        if let Some(mesh) = refit {
+        if let Some((mesh, corners)) = refit {
             self.add_refit(mesh, b2, tri_base, single_base, threaded_base, &pos);
+            self.rest_corners.extend(b2.primitive_indices.iter().map(|&i| corners[i as usize]));
         }
         let child = |k: usize| -> ([f32; 4], [f32; 4], Option<usize>) {
             let n = &nodes[k];
@@ -527,7 +549,7 @@ impl SceneBvh {
             let empty_hi = [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, f32::from_bits(0)];
             self.pair_nodes.push(PairNode { lo0, hi0, lo1: empty_lo, hi1: empty_hi });
             pair_slot[0] = pair_base << 1;
-            self.set_pair_slots(refit, &pair_slot);
+            self.set_pair_slots(refit.map(|(m, _)| m), &pair_slot);
             return (pair_base, single_base, wide_root);
         }
         let mut stack = vec![(0usize, None::<(usize, usize)>)];
@@ -555,7 +577,7 @@ impl SceneBvh {
                 stack.push((c, Some((me, 0))));
             }
         }
-        self.set_pair_slots(refit, &pair_slot);
+        self.set_pair_slots(refit.map(|(m, _)| m), &pair_slot);
         (pair_base, single_base, wide_root)
     }
 

@@ -384,6 +384,63 @@ impl WaterPush {
     }
 }
 
+/// Push constants of morph.comp: one morphing object's vertices weighted by its morph targets (mode 0: its raster
+/// vertices, to world space; mode 1: its BVH triangles, in object space, read through their rest corners).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MorphPush {
+    /// Rows of world_from_object's 3x4 affine part (mode 0).
+    pub rows: [[f32; 4]; 3],
+    /// Rows of the inverse transpose of its 3x3 part (mode 0).
+    pub nrows: [[f32; 4]; 3],
+    /// Its base vertices in the morph data (targets follow, `vertices` apart), its vertex and target counts, and
+    /// its first weight.
+    pub first: u32,
+    pub vertices: u32,
+    pub targets: u32,
+    pub first_weight: u32,
+    /// First vertex (mode 0) or rest triangle (mode 1) read, first vertex or BVH triangle written, and how many.
+    pub src: u32,
+    pub dst: u32,
+    pub count: u32,
+}
+
+impl MorphPush {
+    /// The raster vertices of object `range` placed by `world_from_object`, morphed as `morph` says.
+    pub fn raster(
+        world_from_object: glam::Mat4,
+        range: &crate::scene_gpu::ObjectRange,
+        morph: &crate::scene_gpu::MorphRange,
+    ) -> Self {
+        let place = SceneUpdatePush::new(world_from_object, range);
+        MorphPush {
+            rows: place.rows,
+            nrows: place.nrows,
+            first: morph.first,
+            vertices: morph.vertices,
+            targets: morph.targets,
+            first_weight: morph.first_weight,
+            src: range.first_vertex,
+            dst: range.first_vertex,
+            count: range.vertex_count,
+        }
+    }
+
+    /// The BVH triangles of a morphing mesh (`r`).
+    pub fn bvh(r: &crate::bvh::RefitMesh, morph: &crate::scene_gpu::MorphRange) -> Self {
+        MorphPush {
+            first: morph.first,
+            vertices: morph.vertices,
+            targets: morph.targets,
+            first_weight: morph.first_weight,
+            src: r.rest_first,
+            dst: r.first_tri,
+            count: r.tri_count,
+            ..MorphPush::default()
+        }
+    }
+}
+
 /// Push constants of refit.comp: one deforming mesh's leaves, and the layouts on the GPU (1 pair, 2 single,
 /// 4 threaded).
 #[repr(C)]
@@ -423,6 +480,7 @@ const _: () = {
     // Within the 128 bytes of push constants every device has.
     assert!(size_of::<SceneUpdatePush>() == 112);
     assert!(size_of::<WaterPush>() == 124);
+    assert!(size_of::<MorphPush>() == 124);
     assert!(size_of::<RefitPush>() == 16);
     assert!(size_of::<FrameData>() == 672);
     assert!(offset_of!(FrameData, eye) == 640);

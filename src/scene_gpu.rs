@@ -31,6 +31,27 @@ pub struct ObjectRange {
     pub index_count: u32,
 }
 
+/// How an object deforms on the GPU: the scene update displaces its raster vertices and its BVH triangles, and
+/// refits its BVH.
+#[derive(Clone, Copy, Debug)]
+pub enum Deformer {
+    /// Water: its waves in `SceneBuffers::waves` (first, count).
+    Water(u32, u32),
+    /// Morph targets.
+    Morph(MorphRange),
+}
+
+/// A morphing object's part of `SceneBuffers::morphs` and `morph_weights`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MorphRange {
+    /// Its base vertices (two vec4 each), each target's displacements `vertices` further on.
+    pub first: u32,
+    pub vertices: u32,
+    pub targets: u32,
+    /// Its first weight.
+    pub first_weight: u32,
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DrawRange {
     pub first_index: u32,
@@ -53,8 +74,12 @@ pub struct SceneBuffers {
     pub bvh: BvhBuffers,
     /// Every water object's waves, two vec4 each: (direction x, direction z, k, ω) and (amplitude, 0, 0, 0).
     pub waves: Buffer,
-    /// Per scene object: its waves in `waves` (first, count) when it is water.
-    pub waters: Vec<Option<(u32, u32)>>,
+    /// Every morphing object's base vertices and morph targets (glsl/morph.comp), and their weights (the frame's
+    /// scene update writes them).
+    pub morphs: Buffer,
+    pub morph_weights: Buffer,
+    /// Per scene object: how it deforms on the GPU, if it does.
+    pub deformers: Vec<Option<Deformer>>,
     /// The albedo textures and the environment.
     pub images: SceneImages,
 }
@@ -151,6 +176,8 @@ pub struct BvhBuffers {
     pub refit_counters: Buffer,
     pub rest_tris: Buffer,
     pub rest_normals: Buffer,
+    /// Per rest triangle, its vertices' indices in its mesh (three u32).
+    pub rest_corners: Buffer,
     /// The deforming meshes' triangles and boxes on the GPU are the rest ones (just built or a layout just
     /// uploaded from the host copy): the next frame displaces and refits them whatever moved.
     pub stale_deform: bool,
@@ -226,6 +253,7 @@ impl BvhBuffers {
             refit_counters: upload_buffer(device, recorder, "refit counters (none)", &zeros, transfer_storage)?,
             rest_tris: upload_buffer(device, recorder, "rest triangles (none)", &zeros, storage)?,
             rest_normals: upload_buffer(device, recorder, "rest normals (none)", &zeros, storage)?,
+            rest_corners: upload_buffer(device, recorder, "rest corners (none)", &zeros, storage)?,
             stale_deform: false,
             host: None,
             uploaded: [false; 4],
@@ -311,6 +339,7 @@ impl BvhBuffers {
                 self.refit_counters = upload_buffer(device, recorder, "refit counters", &counters, usage)?;
                 self.rest_tris = upload_buffer(device, recorder, "rest triangles", &bvh.rest_tris, storage)?;
                 self.rest_normals = upload_buffer(device, recorder, "rest normals", &bvh.rest_normals, storage)?;
+                self.rest_corners = upload_buffer(device, recorder, "rest corners", &bvh.rest_corners, storage)?;
             }
             self.build_ms = bvh.build_ms;
             self.blas_builds += bvh.blas_builds;
@@ -500,26 +529,57 @@ impl SceneBuffers {
         let object_indices = upload_buffer(device, recorder, "scene indices (object space)", &object_indices, storage)?;
         let bvh = BvhBuffers::placeholders(device, recorder)?;
         let mut waves: Vec<[f32; 4]> = Vec::new();
-        let waters = scene
+        let mut morphs: Vec<[f32; 4]> = Vec::new();
+        let mut weights = 0u32;
+        let deformers = scene
             .objects
             .iter()
-            .map(|o| {
-                let w = o.animation.as_ref()?.water.as_ref()?;
-                let first = waves.len() as u32 / 2;
-                for wave in &w.waves {
-                    let k = std::f32::consts::TAU / wave.wavelength;
-                    waves.push([wave.direction.x, wave.direction.y, k, k * wave.speed]);
-                    waves.push([wave.amplitude, 0.0, 0.0, 0.0]);
+            .enumerate()
+            .map(|(i, o)| {
+                let a = o.animation.as_ref()?;
+                if let Some(w) = &a.water {
+                    let first = waves.len() as u32 / 2;
+                    for wave in &w.waves {
+                        let k = std::f32::consts::TAU / wave.wavelength;
+                        waves.push([wave.direction.x, wave.direction.y, k, k * wave.speed]);
+                        waves.push([wave.amplitude, 0.0, 0.0, 0.0]);
+                    }
+                    return Some(Deformer::Water(first, w.waves.len() as u32));
                 }
-                Some((first, w.waves.len() as u32))
+                let m = a.morph.as_ref().filter(|m| m.is_animated())?;
+                // The mesh the GPU holds for it: its base, in object space.
+                let base = &instances.meshes[instances.objects[i].0];
+                let range = MorphRange {
+                    first: morphs.len() as u32 / 2,
+                    vertices: base.positions.len() as u32,
+                    targets: m.targets.len() as u32,
+                    first_weight: weights,
+                };
+                let v4 = |v: &glam::Vec3| [v.x, v.y, v.z, 0.0];
+                for (p, n) in base.positions.iter().zip(&base.normals) {
+                    morphs.extend([v4(p), v4(n)]);
+                }
+                for t in &m.targets {
+                    for (k, p) in t.positions.iter().enumerate() {
+                        morphs.extend([v4(p), t.normals.get(k).map_or([0.0; 4], v4)]);
+                    }
+                }
+                weights += range.targets;
+                Some(Deformer::Morph(range))
             })
             .collect();
         let waves = upload_buffer(device, recorder, "water waves", &nonempty(&waves), storage)?;
+        let morphs = upload_buffer(device, recorder, "morph targets", &nonempty(&morphs), storage)?;
+        let weights = vec![0f32; weights.max(1) as usize];
+        let morph_weights =
+            upload_buffer(device, recorder, "morph weights", &weights, storage | vk::BufferUsageFlags::TRANSFER_DST)?;
         let images = SceneImages::new(device, recorder, scene)?;
         Ok(SceneBuffers {
             images,
             waves,
-            waters,
+            morphs,
+            morph_weights,
+            deformers,
             vertices,
             indices,
             object_vertices,

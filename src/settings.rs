@@ -706,6 +706,33 @@ pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
     Ok((w, h))
 }
 
+/// The output size: `--size` when given (with a warning when its aspect differs from the one the camera was
+/// authored at), else 512 pixels high and as wide as the camera's authored aspect (512x512 without one).
+pub fn output_size(size: Option<&str>, flag: &str, camera: &crate::scene::Camera) -> AppResult<(u32, u32)> {
+    match (size, camera.aspect) {
+        (Some(s), aspect) => {
+            let (w, h) = parse_size(s, flag)?;
+            if let Some(a) = aspect {
+                let given = w as f32 / h as f32;
+                if (given / a - 1.0).abs() > 0.01 {
+                    eprintln!(
+                        "{flag} {w}x{h} (aspect {given:.3}) differs from camera `{}`'s authored aspect {a:.3}: the \
+                         image keeps the camera's vertical extent and shows {} at the sides",
+                        camera.name,
+                        if given > a { "more" } else { "less" }
+                    );
+                }
+            }
+            Ok((w, h))
+        }
+        (None, Some(a)) => {
+            let w = ((512.0 * a / 2.0).round() as u32 * 2).clamp(2, 16384);
+            Ok((w, 512))
+        }
+        (None, None) => Ok((512, 512)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

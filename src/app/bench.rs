@@ -355,8 +355,9 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
         let scene_args = SceneArgs {
             scene: Some(scene_path.clone()),
             camera: Some(args.camera.clone()),
-            size: args.size.clone(),
+            size: Some(args.size.clone()),
             time: 0.0,
+            animation: None,
             environment: None,
         };
         let base = Settings {

@@ -33,16 +33,24 @@ pub struct SceneArgs {
     /// Camera name (default: the scene's first camera).
     #[arg(long)]
     pub camera: Option<String>,
-    /// Output size WxH.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
-    /// Scene time in seconds: animated objects stand where their keyframes place them then.
+    /// Output size WxH [default: 512 high, as wide as the camera's authored aspect ratio (glTF); else 512x512].
+    #[arg(long)]
+    pub size: Option<String>,
+    /// Scene time in seconds: animated objects, cameras and lights stand where their keyframes place them then.
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// glTF: the animation that plays, by name or index [default: all of them, together].
+    #[arg(long)]
+    pub animation: Option<String>,
     /// An equirectangular environment map (.hdr or .exr, 2:1) in place of the scene's: what the glass reflects
     /// and refracts, and light on the receivers (its texel values in W/(m²·sr), scaled by --sky).
     #[arg(long)]
     pub environment: Option<PathBuf>,
+}
+
+/// How `--animation` asks a scene to load: all of a glTF file's animations by default.
+pub fn load_options(animation: Option<&str>) -> caustics::scene::LoadOptions {
+    caustics::scene::LoadOptions { animation: animation.map_or(Default::default(), |a| a.parse().unwrap_or_default()) }
 }
 
 /// `--environment PATH` on a loaded scene: the map replaces the scene's own (intensity 1; `--sky` scales it).
@@ -354,15 +362,18 @@ pub const PROFILE_FRAMES_CPU: u32 = 3;
 
 impl Session {
     pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
-        let (width, height) = parse_size(&args.size, "--size")?;
+        if let Some(s) = &args.size {
+            parse_size(s, "--size")?;
+        }
         let path = args.scene.clone().unwrap_or_else(default_scene);
-        let mut scene = Scene::load(&path)?;
+        let mut scene = Scene::load_with(&path, &load_options(args.animation.as_deref()))?;
         apply_environment(&mut scene, args.environment.as_deref())?;
         if !args.time.is_finite() {
             return Err(AppError::BadInput(format!("--time {}: must be finite", args.time)));
         }
         scene.set_time(args.time);
         let camera = scene.camera(args.camera.as_deref()).map_err(AppError::BadInput)?.clone();
+        let (width, height) = caustics::settings::output_size(args.size.as_deref(), "--size", &camera)?;
         let desc = ContextDesc::from_env();
         let ctx = Context::headless(&desc)?;
         let renderer = Renderer::new(ctx.device, scene, settings)?;

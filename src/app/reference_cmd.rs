@@ -26,9 +26,12 @@ pub struct ReferenceArgs {
     /// Number of photons per light.
     #[arg(long, default_value_t = 4_000_000)]
     pub photons: u64,
-    /// Output size WxH.
-    #[arg(long, default_value = "512x512")]
-    pub size: String,
+    /// Output size WxH [default: as `render`'s: 512 high, as wide as the camera's authored aspect; else 512x512].
+    #[arg(long)]
+    pub size: Option<String>,
+    /// glTF: the animation that plays, by name or index [default: all of them, together].
+    #[arg(long)]
+    pub animation: Option<String>,
     /// Random seed: the same seed gives a bit-identical image on any number of threads.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -64,7 +67,10 @@ fn parse_vec3(s: &str, flag: &str) -> AppResult<Vec3> {
 impl ReferenceArgs {
     /// Validate the arguments into [`RefParams`] (bad values are [`AppError::BadInput`] naming the flag).
     pub fn params(&self) -> AppResult<RefParams> {
-        let (width, height) = parse_size(&self.size, "--size")?;
+        let (width, height) = match &self.size {
+            Some(s) => parse_size(s, "--size")?,
+            None => (512, 512),
+        };
         if self.photons == 0 {
             return Err(AppError::BadInput("--photons: must be at least 1".into()));
         }
@@ -96,13 +102,18 @@ fn check_output(path: &Path, flag: &str, ext: &str) -> AppResult<()> {
 
 /// `caustics reference`.
 pub fn run(args: &ReferenceArgs) -> AppResult<()> {
-    let params = args.params()?;
+    let mut params = args.params()?;
     check_output(&args.out, "--out", "exr")?;
     if let Some(s) = &args.stats {
         check_output(s, "--stats", "json")?;
     }
     let scene_path = args.scene.clone().unwrap_or_else(super::commands::default_scene);
-    let scene = Scene::load(&scene_path)?;
+    let mut scene = Scene::load_with(&scene_path, &super::commands::load_options(args.animation.as_deref()))?;
+    // The camera as it stands at --time, for the default size (the tracer places the scene there itself).
+    scene.set_time(args.time);
+    if let Ok(c) = scene.camera(args.camera.as_deref()) {
+        (params.width, params.height) = caustics::settings::output_size(args.size.as_deref(), "--size", c)?;
+    }
     let out = trace(&scene, &params)?;
     let mut meta = image_io::ExrMeta::new();
     meta.insert("scene".into(), scene_path.display().to_string());

@@ -179,8 +179,9 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
     let scene_args = SceneArgs {
         scene: args.scene.clone(),
         camera: Some(args.camera.clone()),
-        size: "64x64".into(),
+        size: Some("64x64".into()),
         time: 0.0,
+        animation: None,
         environment: None,
     };
     let mut session = Session::open(&scene_args, base.clone())?;

@@ -139,8 +139,9 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
     let scene_args = SceneArgs {
         scene: args.scene.clone(),
         camera: Some(args.camera.clone()),
-        size: args.size.clone(),
+        size: Some(args.size.clone()),
         time: 0.0,
+        animation: None,
         environment: None,
     };
     let mut session = Session::open(&scene_args, base.clone())?;

@@ -62,6 +62,11 @@ pub(crate) struct SceneUpdate {
     /// Water displaced to the frame's time: raster vertices (after `moves`), and BVH triangles.
     pub water_vertices: Vec<crate::gpu_types::WaterPush>,
     pub water_triangles: Vec<crate::gpu_types::WaterPush>,
+    /// Every morphing object's weights at the frame's time (written before the morphs), when one is morphed.
+    pub morph_weights: Option<Vec<f32>>,
+    /// Morphing objects weighted to the frame's time: raster vertices (after `moves`), and BVH triangles.
+    pub morph_vertices: Vec<crate::gpu_types::MorphPush>,
+    pub morph_triangles: Vec<crate::gpu_types::MorphPush>,
     /// The deforming meshes' BVHs to refit (after their triangles).
     pub refits: Vec<crate::gpu_types::RefitPush>,
 }
@@ -72,7 +77,14 @@ impl SceneUpdate {
             && self.instances.is_none()
             && self.water_vertices.is_empty()
             && self.water_triangles.is_empty()
+            && self.morph_vertices.is_empty()
+            && self.morph_triangles.is_empty()
             && self.refits.is_empty()
+    }
+
+    /// Whether it deforms raster vertices (after placing the moved ones).
+    fn deforms_vertices(&self) -> bool {
+        !self.water_vertices.is_empty() || !self.morph_vertices.is_empty()
     }
 }
 
@@ -205,22 +217,32 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         return Ok(());
     }
     let (d, sb, update) = (res.device, res.scene, &res.passes.scene_update);
+    if let Some(weights) = &up.morph_weights {
+        rec.ts.mark(rec.cmd, "scene_update.weights");
+        rec.sync.buffer(&sb.morph_weights, &[Access::TransferDst]);
+        rec.flush(d);
+        update.write(rec.cmd, &sb.morph_weights, weights);
+        rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
+    }
     rec.ts.mark(rec.cmd, "scene_update.vertices");
-    if !up.moves.is_empty() || !up.water_vertices.is_empty() {
+    if !up.moves.is_empty() || up.deforms_vertices() {
         rec.sync.buffer(&sb.object_vertices, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.object_indices, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
         rec.sync.buffer(&sb.indices, &[Access::ComputeWrite]);
         rec.flush(d);
         if !up.moves.is_empty() {
             update.place(rec.cmd, (&sb.object_vertices, &sb.object_indices), (&sb.vertices, &sb.indices), &up.moves)?;
         }
-        if !up.water_vertices.is_empty() {
-            // A moved water object's vertices were just placed at rest: the displacement overwrites them.
+        if up.deforms_vertices() {
+            // A moved deforming object's vertices were just placed at rest: the deformation overwrites them.
             rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
             rec.flush(d);
             update.water_vertices(rec.cmd, sb, &up.water_vertices)?;
+            update.morph_vertices(rec.cmd, sb, &up.morph_vertices)?;
         }
         rec.sync.buffer(&sb.vertices, &[Access::VertexInput]);
         rec.sync.buffer(&sb.indices, &[Access::IndexInput]);
@@ -232,17 +254,21 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         update.write(rec.cmd, &sb.bvh.instances, records);
         rec.sync.buffer(&sb.bvh.instances, &[Access::ComputeRead, Access::ComputeTexels]);
     }
-    if !up.water_triangles.is_empty() || !up.refits.is_empty() {
+    if !up.water_triangles.is_empty() || !up.morph_triangles.is_empty() || !up.refits.is_empty() {
         let b = &sb.bvh;
         rec.sync.buffer(&b.rest_tris, &[Access::ComputeRead]);
         rec.sync.buffer(&b.rest_normals, &[Access::ComputeRead]);
+        rec.sync.buffer(&b.rest_corners, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
         rec.sync.buffer(&b.triangles, &[Access::ComputeWrite]);
         rec.sync.buffer(&b.normals, &[Access::ComputeWrite]);
         rec.sync.buffer(&b.refit_counters, &[Access::TransferDst]);
         rec.flush(d);
         rec.ts.mark(rec.cmd, "scene_update.triangles");
         update.water_triangles(rec.cmd, sb, &up.water_triangles)?;
+        update.morph_triangles(rec.cmd, sb, &up.morph_triangles)?;
         unsafe { d.cmd_fill_buffer(rec.cmd, b.refit_counters.raw, 0, vk::WHOLE_SIZE, 0) };
         // The wide layout's variants read them as texels.
         rec.sync.buffer(&b.triangles, &[Access::ComputeRead, Access::ComputeTexels]);

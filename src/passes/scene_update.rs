@@ -2,11 +2,12 @@
 //! object's vertices and triangles are placed in the world-space buffers the rasterizer draws (one dispatch of
 //! scene_update.comp per object, from its object-space copies), the BVH's instance records, which carry the
 //! transforms exact transport and the eye view's glass trace read, are written from the host's copy in the command
-//! buffer, and each water object is displaced to the frame's time (water.comp: its raster vertices, and its BVH
-//! triangles) and its bottom-level BVH refit bottom-up (refit.comp). Nothing is rebuilt, nothing waits: the
+//! buffer, and each deforming object is deformed to the frame's time (water.comp for water, morph.comp for morph
+//! targets, with the frame's weights written first: its raster vertices, and its BVH triangles) and its
+//! bottom-level BVH refit bottom-up (refit.comp). Nothing is rebuilt, nothing waits: the
 //! frame's barriers order the writes after the last frame's reads.
 
-use crate::gpu_types::{RefitPush, SceneUpdatePush, WaterPush};
+use crate::gpu_types::{MorphPush, RefitPush, SceneUpdatePush, WaterPush};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::LINEAR_WG;
@@ -20,6 +21,8 @@ pub struct SceneUpdatePass {
     place: LazyPipeline,
     water: LazyPipeline,
     water_bvh: LazyPipeline,
+    morph: LazyPipeline,
+    morph_bvh: LazyPipeline,
     refit: LazyPipeline,
 }
 
@@ -50,6 +53,20 @@ impl SceneUpdatePass {
             &[BindKind::Storage; 5],
             size(std::mem::size_of::<WaterPush>()),
         );
+        let morph = LazyPipeline::compute(
+            device,
+            "morph",
+            shaders::MORPH_COMP.words(),
+            &[BindKind::Storage; 4],
+            size(std::mem::size_of::<MorphPush>()),
+        );
+        let morph_bvh = LazyPipeline::compute(
+            device,
+            "morph (BVH triangles)",
+            shaders::MORPH_COMP_BVH.words(),
+            &[BindKind::Storage; 7],
+            size(std::mem::size_of::<MorphPush>()),
+        );
         let refit = LazyPipeline::compute(
             device,
             "refit",
@@ -57,7 +74,7 @@ impl SceneUpdatePass {
             &[BindKind::Storage; 8],
             size(std::mem::size_of::<RefitPush>()),
         );
-        SceneUpdatePass { device: device.clone(), place, water, water_bvh, refit }
+        SceneUpdatePass { device: device.clone(), place, water, water_bvh, morph, morph_bvh, refit }
     }
 
     /// Dispatch `groups` work groups of LINEAR_WG in rows (lavapipe caps a dimension at 65535 groups).
@@ -93,6 +110,9 @@ impl SceneUpdatePass {
 
     /// Displace water's raster vertices (each job one object, to world space).
     pub fn water_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
+        if jobs.is_empty() {
+            return Ok(());
+        }
         let pipeline = self.water.get()?;
         pipeline
             .bind(cmd, &[Bind::Storage(&sb.waves), Bind::Storage(&sb.object_vertices), Bind::Storage(&sb.vertices)]);
@@ -105,6 +125,9 @@ impl SceneUpdatePass {
 
     /// Displace water's BVH triangles (each job one deforming mesh, in object space).
     pub fn water_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
+        if jobs.is_empty() {
+            return Ok(());
+        }
         let pipeline = self.water_bvh.get()?;
         let b = &sb.bvh;
         pipeline.bind(
@@ -124,8 +147,60 @@ impl SceneUpdatePass {
         Ok(())
     }
 
+    /// Morph the raster vertices of morphing objects (each job one object, to world space), with the weights in
+    /// `sb.morph_weights`.
+    pub fn morph_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[MorphPush]) -> VkResult<()> {
+        if jobs.is_empty() {
+            return Ok(());
+        }
+        let pipeline = self.morph.get()?;
+        pipeline.bind(
+            cmd,
+            &[
+                Bind::Storage(&sb.morphs),
+                Bind::Storage(&sb.morph_weights),
+                Bind::Storage(&sb.object_vertices),
+                Bind::Storage(&sb.vertices),
+            ],
+        );
+        for j in jobs {
+            pipeline.push(cmd, j);
+            self.dispatch(cmd, j.count);
+        }
+        Ok(())
+    }
+
+    /// Morph the BVH triangles of morphing meshes (each job one mesh, in object space).
+    pub fn morph_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[MorphPush]) -> VkResult<()> {
+        if jobs.is_empty() {
+            return Ok(());
+        }
+        let pipeline = self.morph_bvh.get()?;
+        let b = &sb.bvh;
+        pipeline.bind(
+            cmd,
+            &[
+                Bind::Storage(&sb.morphs),
+                Bind::Storage(&sb.morph_weights),
+                Bind::Storage(&b.rest_tris),
+                Bind::Storage(&b.rest_normals),
+                Bind::Storage(&b.rest_corners),
+                Bind::Storage(&b.triangles),
+                Bind::Storage(&b.normals),
+            ],
+        );
+        for j in jobs {
+            pipeline.push(cmd, j);
+            self.dispatch(cmd, j.count);
+        }
+        Ok(())
+    }
+
     /// Refit each deforming mesh's bottom-level BVH (its arrival counters zeroed before).
     pub fn refit(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[RefitPush]) -> VkResult<()> {
+        if jobs.is_empty() {
+            return Ok(());
+        }
         let pipeline = self.refit.get()?;
         let b = &sb.bvh;
         pipeline.bind(

@@ -274,7 +274,15 @@ impl Renderer {
         check_lights(&scene)?;
         let same_geometry = scene.objects.len() == self.scene.objects.len()
             && scene.objects.iter().zip(&self.scene.objects).all(|(a, b)| {
-                a.material == b.material && a.mesh.positions == b.mesh.positions && a.mesh.indices == b.mesh.indices
+                // An animated object's mesh on the GPU is its object-space one, and a deforming one's bounds.
+                type Bounds = Option<(glam::Vec3, glam::Vec3)>;
+                fn local(o: &crate::scene::Object) -> Option<(&[glam::Vec3], Bounds)> {
+                    o.animation.as_ref().map(|x| (&x.mesh.positions[..], x.deform_bounds()))
+                }
+                a.material == b.material
+                    && a.mesh.positions == b.mesh.positions
+                    && a.mesh.indices == b.mesh.indices
+                    && local(a) == local(b)
             });
         if !same_geometry {
             self.geometry_dirty = true;
@@ -541,6 +549,8 @@ impl Renderer {
     /// The scene update of this frame: the objects moved since the last one, placed on the GPU, and the BVH's
     /// instance records (its host copy moved with them) when it is built.
     fn take_scene_update(&mut self) -> SceneUpdate {
+        use crate::gpu_types::{MorphPush, WaterPush};
+        use crate::scene_gpu::Deformer;
         let moved = self.instances.take_moved();
         let mut deformed: std::collections::BTreeSet<usize> = self.instances.take_deformed().into_iter().collect();
         let sb = &mut self.scene_buffers;
@@ -549,8 +559,8 @@ impl Renderer {
         for &(i, transform) in &moved {
             up.moves.push(crate::gpu_types::SceneUpdatePush::new(transform, &sb.objects[i]));
             bvh_moved |= sb.bvh.set_transform(i, transform);
-            // A moved water object is placed at rest: displace it again.
-            if sb.waters[i].is_some() {
+            // A moved deforming object is placed at rest: deform it again.
+            if sb.deformers[i].is_some() {
                 deformed.insert(i);
             }
         }
@@ -559,21 +569,28 @@ impl Renderer {
         }
         let time = self.scene.time;
         for &i in &deformed {
-            if let Some(waves) = sb.waters[i] {
-                let transform = self.instances.transform_of(i);
-                up.water_vertices.push(crate::gpu_types::WaterPush::raster(transform, &sb.objects[i], time, waves));
+            let transform = self.instances.transform_of(i);
+            match sb.deformers[i] {
+                Some(Deformer::Water(first, count)) => {
+                    up.water_vertices.push(WaterPush::raster(transform, &sb.objects[i], time, (first, count)))
+                }
+                Some(Deformer::Morph(m)) => up.morph_vertices.push(MorphPush::raster(transform, &sb.objects[i], &m)),
+                None => {}
             }
         }
-        // The BVH's triangles and boxes: the displaced ones' (each deforming mesh once), or every one's when the
+        // The BVH's triangles and boxes: the deformed ones' (each deforming mesh once), or every one's when the
         // GPU holds their rest state (just built, or a layout just uploaded).
         let stale = std::mem::take(&mut sb.bvh.stale_deform);
         let mut refit_meshes = std::collections::BTreeSet::new();
-        for i in 0..sb.waters.len() {
-            let Some(waves) = sb.waters[i] else { continue };
+        for i in 0..sb.deformers.len() {
+            let Some(deformer) = sb.deformers[i] else { continue };
             let mesh = self.instances.mesh_of(i);
             let Some(r) = sb.bvh.refit_mesh(mesh) else { continue };
             if (stale || deformed.contains(&i)) && refit_meshes.insert(mesh) {
-                up.water_triangles.push(crate::gpu_types::WaterPush::bvh(&r, time, waves));
+                match deformer {
+                    Deformer::Water(first, count) => up.water_triangles.push(WaterPush::bvh(&r, time, (first, count))),
+                    Deformer::Morph(m) => up.morph_triangles.push(MorphPush::bvh(&r, &m)),
+                }
                 up.refits.push(crate::gpu_types::RefitPush {
                     first_leaf: r.first_leaf,
                     leaf_count: r.leaf_count,
@@ -581,6 +598,18 @@ impl Renderer {
                     depth: r.depth,
                 });
             }
+        }
+        // The weights at the frame's time, for every morphing object (a few floats each).
+        if !up.morph_vertices.is_empty() || !up.morph_triangles.is_empty() {
+            let mut weights = Vec::new();
+            for (i, d) in sb.deformers.iter().enumerate() {
+                if let (Some(Deformer::Morph(_)), Some(m)) =
+                    (d, self.scene.objects[i].animation.as_ref().and_then(|a| a.morph.as_ref()))
+                {
+                    weights.extend(m.weights_at(time));
+                }
+            }
+            up.morph_weights = Some(weights);
         }
         up
     }
@@ -634,7 +663,7 @@ impl Renderer {
             instance_bytes: scene_update.instances.as_ref().map_or(0, |r| std::mem::size_of_val(&r[..]) as u64),
             blas_builds: (self.scene_buffers.bvh.blas_builds - builds) as u32,
             blas_refits: scene_update.refits.len() as u32,
-            deformed_objects: scene_update.water_vertices.len() as u32,
+            deformed_objects: (scene_update.water_vertices.len() + scene_update.morph_vertices.len()) as u32,
             rebuilt,
             blocking_submits: self.recorder.blocking_submits - submits,
             wait_idles: self.device.wait_idle_count() - idles,
@@ -648,7 +677,7 @@ impl Renderer {
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
         // Water changes with the scene's time; rigid motion is in the transforms.
-        let deform_time = self.scene_buffers.waters.iter().any(|w| w.is_some()).then_some(self.scene.time.to_bits());
+        let deform_time = self.scene_buffers.deformers.iter().any(|w| w.is_some()).then_some(self.scene.time.to_bits());
         let key = CausticKey::new(
             &self.scene.lights,
             self.scene_generation,
@@ -779,6 +808,7 @@ fn default_camera() -> Camera {
         position: glam::Vec3::new(0.0, 1.0, 3.0),
         target: glam::Vec3::ZERO,
         up: glam::Vec3::Y,
+        aspect: None,
     }
 }
 

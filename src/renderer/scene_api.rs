@@ -61,11 +61,7 @@ impl Instances {
             })
             .unzip();
         let of_object = transforms.into_iter().enumerate().collect();
-        let deforming = scene
-            .objects
-            .iter()
-            .map(|o| o.animation.as_ref().and_then(|a| a.water.as_ref()).map(|w| w.bounds()))
-            .collect();
+        let deforming = scene.objects.iter().map(|o| o.animation.as_ref().and_then(|a| a.deform_bounds())).collect();
         Instances { meshes, of_object, moved: Default::default(), deforming, deformed: Default::default() }
     }
 
@@ -223,14 +219,14 @@ impl Renderer {
         Ok(())
     }
 
-    /// The host copy of object `i` (its world-space triangles) placed by `transform`: its mesh, displaced to the
-    /// scene's time when it is water.
+    /// The host copy of object `i` (its world-space triangles) placed by `transform`: its mesh, deformed to the
+    /// scene's time when it deforms (water, morph targets).
     fn place_host(&mut self, i: usize, transform: Mat4) {
         let m = self.instances.meshes[self.instances.of_object[i].0].clone();
         let o = &mut self.scene.objects[i];
-        o.mesh = match o.animation.as_ref().and_then(|a| a.water.as_ref()) {
-            Some(w) => w.displaced(&m, self.scene.time).transformed(transform),
-            None => (*m).clone().transformed(transform),
+        o.mesh = match o.animation.as_ref() {
+            Some(a) if a.deforms() => a.local_mesh_at(self.scene.time).transformed(transform),
+            _ => (*m).clone().transformed(transform),
         };
     }
 
@@ -249,18 +245,19 @@ impl Renderer {
     }
 
     /// Move the scene's animated objects to where they stand at time `t` (s), as [`Renderer::set_transform`]
-    /// would: the next frame's scene update places them on the GPU. Objects that do not animate stay where they
-    /// are (an animated object moved by `set_transform` goes back on its animation here).
+    /// would: the next frame's scene update places them on the GPU (and deforms the water and the morphing
+    /// meshes). Objects that do not animate stay where they are (an animated object moved by `set_transform` goes
+    /// back on its animation here). Animated cameras and lights move too.
     pub fn set_time(&mut self, t: f32) -> AppResult<()> {
         if !t.is_finite() {
             return Err(AppError::BadInput(format!("time {t}: must be finite")));
         }
         let old = std::mem::replace(&mut self.scene.time, t);
         for i in 0..self.scene.objects.len() {
-            let Some(a) = self.scene.objects[i].animation.clone() else { continue };
+            let Some(a) = self.scene.objects[i].animation.clone().filter(|a| a.changes()) else { continue };
             let m = a.transform_at(t);
             let current = self.instances.of_object[i].1;
-            if a.water.is_some() && t != old {
+            if a.deforms() && t != old {
                 // Displaced on the GPU by the next frame; the host copy follows (views, bounds, the reference).
                 self.instances.deformed.insert(i);
                 if m == current {
@@ -273,6 +270,7 @@ impl Renderer {
                 })?;
             }
         }
+        self.scene.place_movers();
         Ok(())
     }
 

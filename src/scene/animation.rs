@@ -1,13 +1,13 @@
-//! Rigid animation: an object's transform as a function of time, from TOML keyframes or glTF node animation
-//! channels. The renderer and the CPU reference evaluate the same [`Animation::transform_at`], so any frame of an
+//! Animation: an object's transform as a function of time, from TOML keyframes or glTF node animation channels
+//! (its node's own and its animated ancestors'), and glTF morph-target weights. The renderer and the CPU reference evaluate the same [`Animation::transform_at`], so any frame of an
 //! animation can be checked against the reference at its time.
 //!
 //! A transform is scale, then rotation, then translation (TRS), each its own track of keyframes: translation and
 //! scale interpolate linearly, rotation by spherical linear interpolation along the shorter arc (`linear`); or they
 //! hold each keyframe's value until the next (`step`); or they follow glTF's cubic Hermite spline with the
 //! keyframes' in and out tangents (`cubic`, glTF only: TOML keyframes carry no tangents). Outside its keyframes'
-//! times a track holds its first or last value (`clamp`), or the animation repeats with the period of its
-//! longest track (`loop`).
+//! times a track holds its first or last value (`clamp`), or the animation repeats (`loop`): a TOML object with the
+//! period of its own longest track, a glTF scene with that of the longest animation that plays.
 
 use glam::{Mat4, Quat, Vec3};
 
@@ -69,6 +69,16 @@ impl Animated for Vec3 {
     }
 }
 
+impl Animated for f32 {
+    fn lerp(a: f32, b: f32, s: f32) -> f32 {
+        a + (b - a) * s
+    }
+    fn hermite(p0: f32, m0: f32, p1: f32, m1: f32, s: f32, dt: f32) -> f32 {
+        let w = hermite_weights(s);
+        p0 * w[0] + m0 * (w[1] * dt) + p1 * w[2] + m1 * (w[3] * dt)
+    }
+}
+
 impl Animated for Quat {
     fn lerp(a: Quat, b: Quat, s: f32) -> Quat {
         // Along the shorter arc.
@@ -109,6 +119,10 @@ impl<T: Animated> Track<T> {
         }
         // The keyframe interval [k, k + 1] that holds t.
         let k = self.times.partition_point(|&x| x <= t) - 1;
+        // At a keyframe's time, its value exactly (a pose written at that time must render the same).
+        if t == self.times[k] {
+            return self.values[k];
+        }
         let (t0, t1) = (self.times[k], self.times[k + 1]);
         let dt = t1 - t0;
         let s = ((t - t0) / dt).clamp(0.0, 1.0);
@@ -122,10 +136,9 @@ impl<T: Animated> Track<T> {
     }
 }
 
-/// An object's transform over time: up to three tracks, each replacing that component of the rest pose, then
-/// `parent` (the glTF node's parents, which do not animate).
+/// One node's own transform over time: up to three tracks, each replacing that component of its rest pose.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Animation {
+pub struct Motion {
     /// Translation, m.
     pub translation: Option<Track<Vec3>>,
     /// Rotation, a unit quaternion.
@@ -134,15 +147,30 @@ pub struct Animation {
     pub scale: Option<Track<Vec3>>,
     /// The components no track animates: (translation, rotation, scale).
     pub rest: (Vec3, Quat, Vec3),
-    /// World from the node's parent space (the identity in TOML).
-    pub parent: Mat4,
-    /// Past the last keyframe: clamp or loop.
-    pub repeat: Repeat,
+    /// Its transform when no track animates it: the rest pose's TRS, or a glTF node's `matrix` exactly (shear and
+    /// all; glTF only animates nodes written as TRS).
+    pub still: Mat4,
 }
 
-impl Animation {
-    /// The longest track's last keyframe time (s): the loop's period.
-    pub fn duration(&self) -> f32 {
+impl Motion {
+    /// A node that stands still at `rest` (translation, rotation, scale).
+    pub fn rest(rest: (Vec3, Quat, Vec3)) -> Motion {
+        Motion {
+            translation: None,
+            rotation: None,
+            scale: None,
+            rest,
+            still: Mat4::from_scale_rotation_translation(rest.2, rest.1, rest.0),
+        }
+    }
+
+    /// Whether a track animates it.
+    pub fn is_animated(&self) -> bool {
+        self.translation.is_some() || self.rotation.is_some() || self.scale.is_some()
+    }
+
+    /// Its longest track's last keyframe time (s; 0 when it stands still).
+    pub fn end(&self) -> f32 {
         let ends = [
             self.translation.as_ref().map(Track::end),
             self.rotation.as_ref().map(Track::end),
@@ -151,17 +179,59 @@ impl Animation {
         ends.into_iter().flatten().fold(0.0, f32::max)
     }
 
-    /// Object → world at time `t` (s).
-    pub fn transform_at(&self, t: f32) -> Mat4 {
-        let d = self.duration();
-        let t = match self.repeat {
-            Repeat::Loop if d > 0.0 => t.rem_euclid(d),
-            _ => t,
-        };
+    /// Its own transform (parent space from its space) at time `t` (s), clamped to its keyframes.
+    pub fn local_at(&self, t: f32) -> Mat4 {
+        if !self.is_animated() {
+            return self.still;
+        }
         let tr = self.translation.as_ref().map_or(self.rest.0, |k| k.at(t));
         let rot = self.rotation.as_ref().map_or(self.rest.1, |k| k.at(t));
         let sc = self.scale.as_ref().map_or(self.rest.2, |k| k.at(t));
-        self.parent * Mat4::from_scale_rotation_translation(sc, rot, tr)
+        Mat4::from_scale_rotation_translation(sc, rot, tr)
+    }
+}
+
+/// An object's transform over time: its own node's [`Motion`] under those of its ancestors up to the outermost
+/// that animates (a glTF node hierarchy; a TOML object is a chain of one), under a parent placement that stands
+/// still.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Animation {
+    /// The nodes from the outermost animated ancestor down to the object's own, outermost first.
+    pub chain: Vec<Motion>,
+    /// World from the outermost chain node's parent space (the identity in TOML).
+    pub parent: Mat4,
+    /// Past the period: clamp or loop.
+    pub repeat: Repeat,
+    /// The loop's period (s): in TOML the object's last keyframe time; in glTF the last keyframe time of all the
+    /// animations that play, so that a scene loops as one (a track that ends sooner holds its last value until
+    /// then, as in Blender).
+    pub period: f32,
+}
+
+impl Animation {
+    /// A chain of one node (TOML keyframes) that loops, if it does, with its own last keyframe time.
+    pub fn single(motion: Motion, repeat: Repeat) -> Animation {
+        let period = motion.end();
+        Animation { chain: vec![motion], parent: Mat4::IDENTITY, repeat, period }
+    }
+
+    /// The loop's period (s): its animation's duration.
+    pub fn duration(&self) -> f32 {
+        self.period
+    }
+
+    /// The time (s) its tracks are read at for scene time `t`.
+    pub fn local_time(&self, t: f32) -> f32 {
+        match self.repeat {
+            Repeat::Loop if self.period > 0.0 => t.rem_euclid(self.period),
+            _ => t,
+        }
+    }
+
+    /// Object → world at time `t` (s).
+    pub fn transform_at(&self, t: f32) -> Mat4 {
+        let t = self.local_time(t);
+        self.chain.iter().fold(self.parent, |m, node| m * node.local_at(t))
     }
 }
 
@@ -195,14 +265,13 @@ mod tests {
         let q0 = Quat::IDENTITY;
         // The same 90° turn about y, given as its negated quaternion.
         let q1 = -Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
-        let a = Animation {
-            translation: None,
-            rotation: Some(Track::new(vec![0.0, 2.0], vec![q0, q1], Interpolation::Linear)),
-            scale: None,
-            rest: (Vec3::new(0.0, 1.0, 0.0), Quat::IDENTITY, Vec3::ONE),
-            parent: Mat4::IDENTITY,
-            repeat: Repeat::Loop,
-        };
+        let a = Animation::single(
+            Motion {
+                rotation: Some(Track::new(vec![0.0, 2.0], vec![q0, q1], Interpolation::Linear)),
+                ..Motion::rest((Vec3::new(0.0, 1.0, 0.0), Quat::IDENTITY, Vec3::ONE))
+            },
+            Repeat::Loop,
+        );
         let half = a.transform_at(1.0).transform_vector3(Vec3::X);
         let expect = Quat::from_rotation_y(std::f32::consts::FRAC_PI_4) * Vec3::X;
         assert!((half - expect).length() < 1e-5, "{half} against {expect}");

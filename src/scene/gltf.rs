@@ -5,9 +5,11 @@
 //! the CLI reports it with exit code 2. The file is validated before use and accessors are bounds-checked here,
 //! so a corrupt file is an error, never a panic.
 
-use super::animation::{Animation, Interpolation, Repeat, Track};
+use super::animation::{Animation, Interpolation, Motion, Repeat, Track};
+use super::morph::{Morph, MorphTarget};
 use super::{
-    AlbedoMap, Camera, Light, LightKind, Material, Mesh, Object, Projection, Scene, SceneError, Texture, MAX_LIGHTS,
+    AlbedoMap, AnimationChoice, Camera, Light, LightKind, LoadOptions, Material, Mesh, Moved, Mover, Object,
+    Projection, Scene, SceneError, Texture, MAX_LIGHTS,
 };
 use glam::{Mat4, Quat, Vec3};
 use gltf::json::validation::{Error as VError, Validate};
@@ -49,15 +51,15 @@ pub fn is_gltf(path: &Path) -> bool {
     )
 }
 
-pub fn load(path: &Path) -> Result<Scene, SceneError> {
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path)
         .map_err(|e| SceneError::Io { file: file.clone(), message: format!("cannot read scene: {e}") })?;
-    parse(&bytes, path)
+    parse(&bytes, path, options)
 }
 
 /// Parse glTF JSON or GLB bytes; `path` locates the file for messages and external buffers.
-pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
+pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let cx = Cx { file: path.display().to_string() };
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
         gltf::Error::Deserialize(j) => SceneError::Syntax {
@@ -129,6 +131,13 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
     let default_material = Material::diffuse(Vec3::ONE);
 
     let scene = document.default_scene().or_else(|| document.scenes().next());
+    if let Some(sc) = &scene {
+        let n = document.scenes().len();
+        if n > 1 {
+            let which = if document.default_scene().is_some() { "the file's `scene`" } else { "the first" };
+            cx.warn("scenes", &format!("the file has {n} scenes: scenes[{}] ({which}) is loaded", sc.index()));
+        }
+    }
     let roots: Vec<gltf::Node> = match &scene {
         Some(s) => s.nodes().collect(),
         None => {
@@ -147,16 +156,21 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
     out.path = path.to_path_buf();
     out.textures = textures.list;
     let mut visiting = vec![false; document.nodes().len()];
-    let tracks = animations(&cx, &document, &buffers)?;
+    let Played { tracks, period, names, chosen } = animations(&cx, &document, &buffers, &options.animation)?;
+    out.animations = names;
+    out.playing = chosen;
+    let rest_world = rest_worlds(&document);
     let g = Globals {
         buffers: &buffers,
         materials: &materials,
         tex_coords: &tex_coords,
         default_material,
         tracks: &tracks,
+        period,
+        rest_world: &rest_world,
     };
     for n in roots {
-        visit(&cx, &n, Mat4::IDENTITY, &g, &mut visiting, &mut out)?;
+        visit(&cx, &n, &Placement::root(), &g, &mut visiting, &mut out)?;
     }
     if out.lights.is_empty() {
         return Err(cx.err(
@@ -180,15 +194,7 @@ pub fn parse(bytes: &[u8], path: &Path) -> Result<Scene, SceneError> {
     if out.objects.is_empty() {
         return Err(cx.err("meshes", "the scene has no triangle meshes"));
     }
-    // A glTF directional light is at infinity; ours starts its beam at `position`. Start it just outside the
-    // scene's bounding sphere, up-beam, so that it lights everything.
-    let (lo, hi) = out.bounds();
-    let (center, radius) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
-    for l in out.lights.iter_mut().filter(|l| l.kind == LightKind::Directional) {
-        let dir = (l.target - l.position).normalize();
-        l.position = center - dir * (radius * 1.01 + 1e-3);
-        l.target = l.position + dir;
-    }
+    out.place_directional_lights();
     Ok(out)
 }
 
@@ -432,16 +438,19 @@ fn material(
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-/// What every node's visit reads: the buffers, the materials and the animation tracks.
+/// What every node's visit reads: the buffers, the materials, the animation tracks and the nodes' rest placement.
 struct Globals<'a> {
     buffers: &'a [Vec<u8>],
     materials: &'a [Material],
     /// Per material: the TEXCOORD set its base color texture reads (None: untextured).
     tex_coords: &'a [Option<u32>],
     default_material: Material,
-    /// Per node: its animation tracks (translation, rotation, scale), from the file's first animation.
+    /// Per node: its tracks, from the animations that play.
     tracks: &'a [NodeTracks],
+    /// The last keyframe time of the animations that play (s).
+    period: f32,
+    /// Per node: its world transform at rest (a skinned mesh stands where its joints place it at rest).
+    rest_world: &'a [Mat4],
 }
 
 /// A node's animated components.
@@ -450,115 +459,275 @@ struct NodeTracks {
     translation: Option<Track<Vec3>>,
     rotation: Option<Track<Quat>>,
     scale: Option<Track<Vec3>>,
+    /// Morph-target weights: one track per target.
+    weights: Option<Vec<Track<f32>>>,
 }
 
-/// The file's first animation, per node (each node its own tracks). Times must be finite and increase, values be
-/// finite, and a cubic-spline sampler hold three values (in tangent, value, out tangent) per keyframe. Morph-target
-/// weights are not supported (a warning), nor further animations (a warning: only the first plays).
-fn animations(cx: &Cx, document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<Vec<NodeTracks>, SceneError> {
+impl NodeTracks {
+    /// Whether its transform animates.
+    fn moves(&self) -> bool {
+        self.translation.is_some() || self.rotation.is_some() || self.scale.is_some()
+    }
+}
+
+/// Where a node stands: its world transform at time 0, and, when it or an ancestor animates, the chain of
+/// motions from the outermost animated node down to it, under that node's parent's world transform.
+#[derive(Clone)]
+struct Placement {
+    world: Mat4,
+    chain: Vec<Motion>,
+    chain_parent: Mat4,
+}
+
+impl Placement {
+    fn root() -> Placement {
+        Placement { world: Mat4::IDENTITY, chain: Vec::new(), chain_parent: Mat4::IDENTITY }
+    }
+
+    /// Its transform over time (None: it stands still).
+    fn animation(&self, period: f32) -> Option<Animation> {
+        (!self.chain.is_empty()).then(|| Animation {
+            chain: self.chain.clone(),
+            parent: self.chain_parent,
+            repeat: Repeat::Clamp,
+            period,
+        })
+    }
+}
+
+/// What the animations that play do.
+struct Played {
+    /// Per node: its tracks.
+    tracks: Vec<NodeTracks>,
+    /// The last keyframe time of them all (s).
+    period: f32,
+    /// Every animation's name (`animations[i]` for one without).
+    names: Vec<String>,
+    /// The one chosen (None: all).
+    chosen: Option<usize>,
+}
+
+/// The animations that play (`choice`), per node. Times must be finite and increase, values be finite, and a cubic-spline sampler
+/// hold three values (in tangent, value, out tangent) per keyframe. Two animations that play and animate the same
+/// property of a node: the first listed wins, with a warning (`--animation` picks one).
+fn animations(
+    cx: &Cx,
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    choice: &AnimationChoice,
+) -> Result<Played, SceneError> {
     let mut tracks = vec![NodeTracks::default(); document.nodes().len()];
-    let mut all = document.animations();
-    let Some(anim) = all.next() else { return Ok(tracks) };
-    if all.next().is_some() {
-        cx.warn("animations", "the file has several animations: only the first (animations[0]) plays");
+    let names: Vec<String> = document
+        .animations()
+        .map(|a| match a.name() {
+            Some(n) if !n.is_empty() => n.to_string(),
+            _ => format!("animations[{}]", a.index()),
+        })
+        .collect();
+    let listing = || {
+        let all: Vec<String> = names.iter().enumerate().map(|(i, n)| format!("{i} \"{n}\"")).collect();
+        if all.is_empty() {
+            "the file has none".to_string()
+        } else {
+            format!("the file has {}", all.join(", "))
+        }
+    };
+    let chosen = match choice {
+        AnimationChoice::All => None,
+        AnimationChoice::Index(i) if *i < names.len() => Some(*i),
+        AnimationChoice::Index(i) => {
+            return Err(cx.err("animations", format!("--animation {i}: no animation has that index ({})", listing())))
+        }
+        AnimationChoice::Name(n) => match names.iter().position(|x| x == n) {
+            Some(i) => Some(i),
+            None => {
+                return Err(cx.err("animations", format!("--animation {n}: no animation has that name ({})", listing())))
+            }
+        },
+    };
+    let mut period = 0.0f32;
+    // Per node and property: the animation that animates it.
+    let mut owner: std::collections::HashMap<(usize, &'static str), usize> = Default::default();
+    for anim in document.animations().filter(|a| chosen.map_or(true, |c| c == a.index())) {
+        for ch in anim.channels() {
+            let s_at = format!("animations[{}].samplers[{}]", anim.index(), ch.sampler().index());
+            let node = ch.target().node();
+            let n = node.index();
+            let times = read_floats(cx, &ch.sampler().input(), &format!("{s_at}.input"), buffers, 1)?;
+            if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
+                return Err(cx.err(format!("{s_at}.input"), "keyframe times must be finite, and there must be one"));
+            }
+            if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
+                return Err(cx.err(
+                    format!("{s_at}.input"),
+                    format!("keyframe times must increase: {} s follows {} s", times[k + 1], times[k]),
+                ));
+            }
+            use gltf::animation::Interpolation as GI;
+            use gltf::animation::Property;
+            let interpolation = match ch.sampler().interpolation() {
+                GI::Linear => Interpolation::Linear,
+                GI::Step => Interpolation::Step,
+                GI::CubicSpline => Interpolation::Cubic,
+            };
+            let per_key = if interpolation == Interpolation::Cubic { 3 } else { 1 };
+            let property = ch.target().property();
+            let (key, width) = match property {
+                Property::Translation => ("translation", 3),
+                Property::Rotation => ("rotation", 4),
+                Property::Scale => ("scale", 3),
+                Property::MorphTargetWeights => {
+                    let targets =
+                        node.mesh().and_then(|m| m.primitives().next()).map_or(0, |p| p.morph_targets().len());
+                    if targets == 0 {
+                        cx.warn(
+                            &format!("animations[{}].channels[{}]", anim.index(), ch.index()),
+                            &format!(
+                                "animates the morph weights of nodes[{n}], whose mesh has no morph targets: ignored"
+                            ),
+                        );
+                        continue;
+                    }
+                    ("weights", targets)
+                }
+            };
+            if let Some(&first) = owner.get(&(n, key)) {
+                cx.warn(
+                    &format!("animations[{}]", anim.index()),
+                    &format!(
+                        "\"{}\" animates the {key} of nodes[{n}] as \"{}\" does: \"{}\" plays it (--animation picks one)",
+                        names[anim.index()],
+                        names[first],
+                        names[first]
+                    ),
+                );
+                continue;
+            }
+            owner.insert((n, key), anim.index());
+            // Weights are SCALAR, one per target per keyframe; the TRS properties one VEC3 or VEC4 per keyframe.
+            let comps = if key == "weights" { 1 } else { width };
+            let values = read_floats(cx, &ch.sampler().output(), &format!("{s_at}.output"), buffers, comps)?;
+            if values.len() != times.len() * per_key * width {
+                return Err(cx.err(
+                    format!("{s_at}.output"),
+                    format!(
+                        "{} values for {} keyframes (a {:?} sampler of {key} needs {} each)",
+                        values.len() / width,
+                        times.len(),
+                        interpolation,
+                        per_key * width / if key == "weights" { width } else { 1 }
+                    ),
+                ));
+            }
+            if values.iter().any(|v| !v.is_finite()) {
+                return Err(cx.err(format!("{s_at}.output"), "values must be finite"));
+            }
+            period = period.max(*times.last().unwrap_or(&0.0));
+            // (in tangent, value, out tangent) per keyframe for cubic splines; the values alone otherwise.
+            fn split<T: Copy>(v: Vec<T>, per_key: usize) -> (Vec<T>, Vec<(T, T)>) {
+                if per_key == 1 {
+                    return (v, Vec::new());
+                }
+                let values = v.chunks_exact(3).map(|c| c[1]).collect();
+                let tangents = v.chunks_exact(3).map(|c| (c[0], c[2])).collect();
+                (values, tangents)
+            }
+            let t = &mut tracks[n];
+            match property {
+                Property::Translation | Property::Scale => {
+                    let v: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
+                    let (values, tangents) = split(v, per_key);
+                    let scale = property == Property::Scale;
+                    if scale && values.iter().any(|x| x.abs().min_element() < 1e-9) {
+                        return Err(cx.err(format!("{s_at}.output"), "scales must be non-zero"));
+                    }
+                    let track = Some(Track { times, values, tangents, interpolation });
+                    if scale {
+                        t.scale = track;
+                    } else {
+                        t.translation = track;
+                    }
+                }
+                Property::Rotation => {
+                    let v: Vec<Quat> = values.chunks_exact(4).map(Quat::from_slice).collect();
+                    if per_key == 1 && v.iter().any(|q| q.length() < 1e-6) {
+                        return Err(cx.err(format!("{s_at}.output"), "rotations must be non-zero quaternions"));
+                    }
+                    let (values, tangents) = split(v, per_key);
+                    if values.iter().any(|q| q.length() < 1e-6) {
+                        return Err(cx.err(format!("{s_at}.output"), "rotations must be non-zero quaternions"));
+                    }
+                    let values = values.into_iter().map(unit).collect();
+                    t.rotation = Some(Track { times, values, tangents, interpolation });
+                }
+                Property::MorphTargetWeights => {
+                    // Keyframe-major: per keyframe (and per spline part) one weight per target.
+                    let per_target = (0..width).map(|k| {
+                        let v: Vec<f32> = values.iter().skip(k).step_by(width).copied().collect();
+                        let (values, tangents) = split(v, per_key);
+                        Track { times: times.clone(), values, tangents, interpolation }
+                    });
+                    t.weights = Some(per_target.collect());
+                }
+            }
+        }
     }
-    for ch in anim.channels() {
-        let at = format!("animations[{}].channels[{}]", anim.index(), ch.index());
-        let s_at = format!("animations[{}].samplers[{}]", anim.index(), ch.sampler().index());
-        let reader = ch.reader(|b: gltf::Buffer| buffers.get(b.index()).map(|d| d.as_slice()));
-        let times: Vec<f32> =
-            reader.read_inputs().ok_or_else(|| cx.err(format!("{s_at}.input"), "cannot be read"))?.collect();
-        if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
-            return Err(cx.err(format!("{s_at}.input"), "keyframe times must be finite, and there must be one"));
-        }
-        if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(cx.err(
-                format!("{s_at}.input"),
-                format!("keyframe times must increase: {} s follows {} s", times[k + 1], times[k]),
-            ));
-        }
-        use gltf::animation::util::ReadOutputs;
-        use gltf::animation::Interpolation as GI;
-        let interpolation = match ch.sampler().interpolation() {
-            GI::Linear => Interpolation::Linear,
-            GI::Step => Interpolation::Step,
-            GI::CubicSpline => Interpolation::Cubic,
-        };
-        let per_key = if interpolation == Interpolation::Cubic { 3 } else { 1 };
-        let outputs = reader.read_outputs().ok_or_else(|| cx.err(format!("{s_at}.output"), "cannot be read"))?;
-        let node = ch.target().node().index();
-        let count_err = |n: usize| {
-            cx.err(
-                format!("{s_at}.output"),
-                format!(
-                    "{n} values for {} keyframes (a {:?} sampler needs {per_key} each)",
-                    times.len(),
-                    interpolation
-                ),
-            )
-        };
-        // (in tangent, value, out tangent) per keyframe for cubic splines; the values alone otherwise.
-        fn split<T: Copy>(v: Vec<T>, per_key: usize) -> (Vec<T>, Vec<(T, T)>) {
-            if per_key == 1 {
-                return (v, Vec::new());
-            }
-            let values = v.chunks_exact(3).map(|c| c[1]).collect();
-            let tangents = v.chunks_exact(3).map(|c| (c[0], c[2])).collect();
-            (values, tangents)
-        }
-        match outputs {
-            ReadOutputs::Translations(it) | ReadOutputs::Scales(it) => {
-                let scale = matches!(ch.target().property(), gltf::animation::Property::Scale);
-                let v: Vec<Vec3> = it.map(Vec3::from).collect();
-                if v.len() != times.len() * per_key {
-                    return Err(count_err(v.len()));
-                }
-                let (values, tangents) = split(v, per_key);
-                let bad = |x: &Vec3| !x.is_finite();
-                if values.iter().any(bad)
-                    || tangents.iter().any(|(a, b)| bad(a) || bad(b))
-                    || (scale && values.iter().any(|x| x.abs().min_element() < 1e-9))
-                {
-                    return Err(cx.err(format!("{s_at}.output"), "values must be finite (and scales non-zero)"));
-                }
-                let track = Track { times, values, tangents, interpolation };
-                if scale {
-                    tracks[node].scale = Some(track);
-                } else {
-                    tracks[node].translation = Some(track);
-                }
-            }
-            ReadOutputs::Rotations(r) => {
-                let v: Vec<Quat> = r.into_f32().map(Quat::from_array).collect();
-                if v.len() != times.len() * per_key {
-                    return Err(count_err(v.len()));
-                }
-                if v.iter().any(|q| !q.is_finite() || (per_key == 1 && q.length() < 1e-6)) {
-                    return Err(cx.err(format!("{s_at}.output"), "rotations must be finite, non-zero quaternions"));
-                }
-                let (values, tangents) = split(v, per_key);
-                let values = values.into_iter().map(|q| q.normalize()).collect();
-                tracks[node].rotation = Some(Track { times, values, tangents, interpolation });
-            }
-            ReadOutputs::MorphTargetWeights(_) => {
-                cx.warn(&at, "morph-target weights are not supported; the mesh keeps its base shape");
-            }
+    Ok(Played { tracks, period, names, chosen })
+}
+
+/// Every node's world transform at rest (its nodes' `matrix` or TRS, no animation), through its parents: what a
+/// skin's joints stand at. A node in a cycle (an error the scene traversal reports) keeps its own transform.
+fn rest_worlds(document: &gltf::Document) -> Vec<Mat4> {
+    let n = document.nodes().len();
+    let mut parent = vec![usize::MAX; n];
+    for node in document.nodes() {
+        for c in node.children() {
+            parent[c.index()] = node.index();
         }
     }
-    Ok(tracks)
+    let local: Vec<Mat4> = document.nodes().map(|node| Mat4::from_cols_array_2d(&node.transform().matrix())).collect();
+    (0..n)
+        .map(|i| {
+            let mut m = local[i];
+            let mut p = parent[i];
+            let mut steps = 0;
+            while p != usize::MAX && steps < MAX_DEPTH {
+                m = local[p] * m;
+                p = parent[p];
+                steps += 1;
+            }
+            m
+        })
+        .collect()
+}
+
+/// A rotation as a unit quaternion: as written when it is one to float precision (then a pose written from an
+/// animation's value renders exactly as the animation does), else normalized.
+fn unit(q: Quat) -> Quat {
+    if (q.length_squared() - 1.0).abs() <= 1e-5 {
+        q
+    } else {
+        q.normalize()
+    }
+}
+
+/// A node's label in messages: `nodes[i] "name"`.
+fn node_label(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(n) if !n.is_empty() => format!("nodes[{}] \"{n}\"", node.index()),
+        _ => format!("nodes[{}]", node.index()),
+    }
 }
 
 fn visit(
     cx: &Cx,
     node: &gltf::Node,
-    parent: Mat4,
+    parent: &Placement,
     g: &Globals,
     visiting: &mut Vec<bool>,
     out: &mut Scene,
 ) -> Result<(), SceneError> {
-    let (buffers, materials, default_material) = (g.buffers, g.materials, g.default_material);
     let tracks = &g.tracks[node.index()];
-    let animated = tracks.translation.is_some() || tracks.rotation.is_some() || tracks.scale.is_some();
     let at = format!("nodes[{}]", node.index());
     if visiting.iter().filter(|&&v| v).count() >= MAX_DEPTH {
         return Err(cx.err(at, format!("the node hierarchy is deeper than {MAX_DEPTH} levels")));
@@ -567,109 +736,75 @@ fn visit(
         return Err(cx.err(format!("{at}.children"), "the node hierarchy has a cycle"));
     }
     visiting[node.index()] = true;
-    let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+    let (translation, rotation, scale) = node.transform().decomposed();
+    let rest = (Vec3::from(translation), unit(Quat::from_array(rotation)), Vec3::from(scale));
+    // TRS composed as an animated node's is (so that a pose written into a file renders exactly as the animation
+    // placing it), or the node's `matrix` as it is.
+    let local = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
+        gltf::scene::Transform::Decomposed { .. } => Mat4::from_scale_rotation_translation(rest.2, rest.1, rest.0),
+    };
+    if !local.is_finite() {
+        return Err(cx.err(at, "the node's transform is not finite"));
+    }
+    if tracks.moves() && matches!(node.transform(), gltf::scene::Transform::Matrix { .. }) {
+        cx.warn(
+            &at,
+            "an animated node must be written as TRS, not `matrix` (glTF 2.0 §5.25): its matrix is decomposed",
+        );
+    }
+    let motion = Motion {
+        translation: tracks.translation.clone(),
+        rotation: tracks.rotation.clone(),
+        scale: tracks.scale.clone(),
+        rest,
+        still: local,
+    };
+    let mut place = parent.clone();
+    if place.chain.is_empty() && !motion.is_animated() {
+        place.world = parent.world * local;
+    } else {
+        if place.chain.is_empty() {
+            place.chain_parent = parent.world;
+        }
+        place.chain.push(motion);
+        place.world = place.animation(g.period).map_or(Mat4::IDENTITY, |a| a.transform_at(0.0));
+    }
+    let world = place.world;
     if !world.is_finite() {
         return Err(cx.err(at, "the node's transform is not finite"));
     }
-    let origin = world.transform_point3(Vec3::ZERO);
-    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let animation = place.animation(g.period);
 
     if let Some(mesh) = node.mesh() {
-        let mesh_at = format!("meshes[{}]", mesh.index());
-        let base_name =
-            node.name().or(mesh.name()).map(str::to_string).unwrap_or_else(|| format!("mesh{}", mesh.index()));
-        let count = mesh.primitives().len();
-        for p in mesh.primitives() {
-            let p_at = format!("{mesh_at}.primitives[{}]", p.index());
-            let name = if count > 1 { format!("{base_name}#{}", p.index()) } else { base_name.clone() };
-            if p.mode() != gltf::mesh::Mode::Triangles {
-                return Err(cx.err(
-                    format!("{p_at}.mode"),
-                    format!("mesh \"{base_name}\": only triangles are supported (this primitive is {:?})", p.mode()),
-                ));
-            }
-            let (m, computed_normals) = primitive(cx, &p, &p_at, buffers)?;
-            if m.triangle_count() == 0 {
-                cx.warn(&p_at, &format!("mesh \"{base_name}\" has no triangles and is skipped"));
-                continue;
-            }
-            // An animated node's mesh stays in its own space, placed by its animation at the scene's time.
-            let mut m = if animated { m } else { m.transformed(world) };
-            if m.positions.iter().any(|v| !v.is_finite()) {
-                return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
-            }
-            let material = match p.material().index() {
-                Some(i) => materials[i],
-                None => default_material,
-            };
-            // A textured material reads its TEXCOORD set (the texture coordinates are not transformed with the
-            // node).
-            if let Some(set) = p.material().index().and_then(|i| g.tex_coords[i]) {
-                let a = p.get(&gltf::Semantic::TexCoords(set)).ok_or_else(|| {
-                    cx.err(
-                        format!("{p_at}.attributes"),
-                        format!("its material's base color texture reads TEXCOORD_{set}, which the primitive lacks"),
-                    )
-                })?;
-                let uvs = read_uvs(cx, &a, &format!("{p_at}.attributes.TEXCOORD_{set}"), buffers)?;
-                if uvs.len() != m.positions.len() {
-                    return Err(cx.err(format!("{p_at}.attributes.TEXCOORD_{set}"), "needs one uv per position"));
-                }
-                m.uvs = uvs;
-            }
-            // The same repairs as an OBJ mesh's (docs/cli.md, "Input checks"): an open or non-manifold receiver
-            // is an ordinary surface, so only glass hears about its topology.
-            let report = super::mesh::sanitize(&mut m, computed_normals);
-            let glass = matches!(material, Material::Dielectric { .. });
-            for finding in report.findings() {
-                let topology = finding.starts_with("open") || finding.starts_with("non-");
-                if glass || !topology {
-                    cx.warn(&p_at, &format!("mesh \"{base_name}\": {finding}"));
-                }
-            }
-            if animated {
-                let (scale, rotation, translation) = node.transform().decomposed();
-                let animation = Animation {
-                    translation: tracks.translation.clone(),
-                    rotation: tracks.rotation.clone(),
-                    scale: tracks.scale.clone(),
-                    rest: (Vec3::from(translation), Quat::from_array(rotation).normalize(), Vec3::from(scale)),
-                    parent,
-                    repeat: Repeat::Loop,
-                };
-                let placed = m.clone().transformed(animation.transform_at(0.0));
-                let anim = std::sync::Arc::new(super::ObjectAnimation {
-                    mesh: m,
-                    animation: Some(animation),
-                    placement: Mat4::IDENTITY,
-                    water: None,
-                });
-                out.objects.push(Object { animation: Some(anim), ..Object::new(name, material, placed) });
-            } else {
-                out.objects.push(Object::new(name, material, m));
-            }
-        }
-    }
-    if animated && node.children().len() > 0 {
-        cx.warn(&at, "the node is animated; its children keep their rest placement (only a node's own meshes move)");
+        mesh_objects(cx, node, &mesh, &place, g, out)?;
     }
 
+    let origin = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     if let Some(cam) = node.camera() {
         let cam_at = format!("cameras[{}]", cam.index());
-        let projection = match cam.projection() {
+        let (projection, aspect) = match cam.projection() {
             gltf::camera::Projection::Perspective(p) => {
                 let fov = p.yfov();
                 if !(fov > 0.0 && fov < std::f32::consts::PI) {
                     return Err(cx.err(format!("{cam_at}.perspective.yfov"), format!("must lie in (0, π) (got {fov})")));
                 }
-                Projection::Perspective { fov }
+                let aspect = p.aspect_ratio();
+                if let Some(a) = aspect.filter(|a| !(a.is_finite() && *a > 0.0)) {
+                    return Err(cx.err(format!("{cam_at}.perspective.aspectRatio"), format!("must be > 0 (got {a})")));
+                }
+                (Projection::Perspective { fov }, aspect)
             }
             gltf::camera::Projection::Orthographic(o) => {
-                let h = o.ymag();
+                let (w, h) = (o.xmag(), o.ymag());
                 if !(h.is_finite() && h > 0.0) {
                     return Err(cx.err(format!("{cam_at}.orthographic.ymag"), format!("must be > 0 (got {h})")));
                 }
-                Projection::Orthographic { half_height: h }
+                if !(w.is_finite() && w > 0.0) {
+                    return Err(cx.err(format!("{cam_at}.orthographic.xmag"), format!("must be > 0 (got {w})")));
+                }
+                (Projection::Orthographic { half_height: h }, Some(w / h))
             }
         };
         let up = world.transform_vector3(Vec3::Y);
@@ -690,7 +825,17 @@ fn visit(
             cx.warn(&at, &format!("camera name `{name}` is taken; this camera is `{name}-{k}`"));
             name = format!("{name}-{k}");
         }
-        out.cameras.push(Camera { name, projection, position: origin, target: origin + forward, up: up.normalize() });
+        if let Some(a) = &animation {
+            out.movers.push(Mover { what: Moved::Camera(out.cameras.len()), animation: a.clone() });
+        }
+        out.cameras.push(Camera {
+            name,
+            projection,
+            position: origin,
+            target: origin + forward,
+            up: up.normalize(),
+            aspect,
+        });
     }
 
     if let Some(light) = node.light() {
@@ -708,10 +853,16 @@ fn visit(
         if forward == Vec3::ZERO {
             return Err(cx.err(at, "the light node's transform is degenerate"));
         }
+        if let Some(r) = light.range() {
+            cx.warn(
+                &format!("{l_at}.range"),
+                &format!("range {r} m is ignored: the light falls off as 1/d² with no cutoff (a hint the spec allows to ignore)"),
+            );
+        }
         let (kind, cone) = match light.kind() {
             gltf::khr_lights_punctual::Kind::Point => (LightKind::Point, std::f32::consts::PI),
             gltf::khr_lights_punctual::Kind::Directional => (LightKind::Directional, 0.0),
-            gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, .. } => {
+            gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, inner_cone_angle } => {
                 let deg = outer_cone_angle.to_degrees();
                 if !(deg > 0.0 && deg < 90.0) {
                     return Err(cx.err(
@@ -719,19 +870,209 @@ fn visit(
                         format!("the cone half-angle must lie in (0, π/2) (got {outer_cone_angle})"),
                     ));
                 }
+                if inner_cone_angle < outer_cone_angle * 0.999 {
+                    cx.warn(
+                        &format!("{l_at}.spot"),
+                        &format!(
+                            "the spot's soft edge from {:.1}° to {deg:.1}° is drawn hard at {deg:.1}° (innerConeAngle is ignored)",
+                            inner_cone_angle.to_degrees()
+                        ),
+                    );
+                }
                 (LightKind::Spot, outer_cone_angle)
             }
         };
         // A point light shines every way; its maps aim at the glass (Scene::aim_point_lights, once loaded).
         let target = if kind == LightKind::Point { Vec3::NAN } else { origin + forward };
+        if let Some(a) = &animation {
+            out.movers.push(Mover { what: Moved::Light(out.lights.len()), animation: a.clone() });
+        }
         out.lights.push(Light { kind, position: origin, target, cone, intensity, color });
     }
 
     for c in node.children() {
-        visit(cx, &c, world, g, visiting, out)?;
+        visit(cx, &c, &place, g, visiting, out)?;
     }
     visiting[node.index()] = false;
     Ok(())
+}
+
+/// The objects of `node`'s mesh, one per primitive: placed by the node (animated or not), a skinned mesh at its
+/// bind pose, with its morph targets weighted (static weights baked in; animated ones kept for the GPU).
+fn mesh_objects(
+    cx: &Cx,
+    node: &gltf::Node,
+    mesh: &gltf::Mesh,
+    place: &Placement,
+    g: &Globals,
+    out: &mut Scene,
+) -> Result<(), SceneError> {
+    let (buffers, materials) = (g.buffers, g.materials);
+    let tracks = &g.tracks[node.index()];
+    let at = format!("nodes[{}]", node.index());
+    let mesh_at = format!("meshes[{}]", mesh.index());
+    let base_name = node.name().or(mesh.name()).map(str::to_string).unwrap_or_else(|| format!("mesh{}", mesh.index()));
+    // A skinned mesh: its vertices are placed by its joints, not by its node (glTF 2.0 §3.7.3.3). At rest a
+    // skin's joint transforms times their inverse bind matrices are the mesh's bind placement; it stays there.
+    let mut place = place.clone();
+    if let Some(skin) = node.skin() {
+        let joint = skin.joints().next();
+        let ibm = match (skin.inverse_bind_matrices(), &joint) {
+            (Some(a), Some(_)) => {
+                let m = read_floats(cx, &a, &format!("skins[{}].inverseBindMatrices", skin.index()), buffers, 16)?;
+                m.get(..16).map_or(Mat4::IDENTITY, Mat4::from_cols_slice)
+            }
+            _ => Mat4::IDENTITY,
+        };
+        let bind = joint.map_or(Mat4::IDENTITY, |j| g.rest_world[j.index()]) * ibm;
+        cx.warn(
+            &node_label(node),
+            &format!(
+                "skins are not supported: mesh \"{base_name}\" stands at its bind pose (skins[{}] and its joints' animation are ignored)",
+                skin.index()
+            ),
+        );
+        if bind.is_finite() && glam::Mat3::from_mat4(bind).determinant().abs() > 1e-12 {
+            place = Placement { world: bind, chain: Vec::new(), chain_parent: Mat4::IDENTITY };
+        }
+    }
+    let animation = place.animation(g.period);
+    let count = mesh.primitives().len();
+    let targets_of = |p: &gltf::Primitive| p.morph_targets().len();
+    let n_targets = mesh.primitives().next().map_or(0, |p| targets_of(&p));
+    if let Some(p) = mesh.primitives().find(|p| targets_of(p) != n_targets) {
+        return Err(cx.err(
+            format!("{mesh_at}.primitives[{}].targets", p.index()),
+            format!(
+                "{} morph targets where the mesh's first primitive has {n_targets}: every primitive needs the same",
+                targets_of(&p)
+            ),
+        ));
+    }
+    // The weights: the node's, else the mesh's, else zero.
+    let weights: Vec<f32> = match node.weights().or(mesh.weights()) {
+        Some(w) => w.to_vec(),
+        None => vec![0.0; n_targets],
+    };
+    if weights.len() != n_targets || weights.iter().any(|w| !w.is_finite()) {
+        let field = if node.weights().is_some() { format!("{at}.weights") } else { format!("{mesh_at}.weights") };
+        return Err(cx.err(field, format!("needs one finite weight per morph target ({n_targets})")));
+    }
+    let weight_tracks = tracks.weights.clone().filter(|w| w.len() == n_targets);
+    for p in mesh.primitives() {
+        let p_at = format!("{mesh_at}.primitives[{}]", p.index());
+        let name = if count > 1 { format!("{base_name}#{}", p.index()) } else { base_name.clone() };
+        if p.mode() != gltf::mesh::Mode::Triangles {
+            return Err(cx.err(
+                format!("{p_at}.mode"),
+                format!("mesh \"{base_name}\": only triangles are supported (this primitive is {:?})", p.mode()),
+            ));
+        }
+        let (mut m, computed_normals) = primitive(cx, &p, &p_at, buffers)?;
+        if m.triangle_count() == 0 {
+            cx.warn(&p_at, &format!("mesh \"{base_name}\" has no triangles and is skipped"));
+            continue;
+        }
+        let material = match p.material().index() {
+            Some(i) => materials[i],
+            None => g.default_material,
+        };
+        // A textured material reads its TEXCOORD set (the texture coordinates are not transformed with the node).
+        if let Some(set) = p.material().index().and_then(|i| g.tex_coords[i]) {
+            let a = p.get(&gltf::Semantic::TexCoords(set)).ok_or_else(|| {
+                cx.err(
+                    format!("{p_at}.attributes"),
+                    format!("its material's base color texture reads TEXCOORD_{set}, which the primitive lacks"),
+                )
+            })?;
+            let uvs = read_uvs(cx, &a, &format!("{p_at}.attributes.TEXCOORD_{set}"), buffers)?;
+            if uvs.len() != m.positions.len() {
+                return Err(cx.err(format!("{p_at}.attributes.TEXCOORD_{set}"), "needs one uv per position"));
+            }
+            m.uvs = uvs;
+        }
+        let mut morph = if n_targets > 0 {
+            let targets = morph_targets(cx, &p, &p_at, buffers, m.positions.len())?;
+            Some(Morph {
+                targets,
+                weights: weights.clone(),
+                tracks: weight_tracks.clone().unwrap_or_default(),
+                repeat: Repeat::Clamp,
+                period: g.period,
+            })
+        } else {
+            None
+        };
+        // Still weights are baked into the mesh; animated ones deform it on the GPU.
+        if let Some(k) = morph.take() {
+            if k.is_animated() {
+                morph = Some(k);
+            } else if k.weights.iter().any(|&w| w != 0.0) {
+                m = k.apply(&m, &k.weights);
+            }
+        }
+        // The same repairs as an OBJ mesh's (docs/cli.md, "Input checks"): an open or non-manifold receiver
+        // is an ordinary surface, so only glass hears about its topology.
+        let report = super::mesh::sanitize(&mut m, computed_normals);
+        if report.normals_negated {
+            for t in morph.iter_mut().flat_map(|k| k.targets.iter_mut()) {
+                t.normals.iter_mut().for_each(|n| *n = -*n);
+            }
+        }
+        let glass = matches!(material, Material::Dielectric { .. });
+        for finding in report.findings() {
+            let topology = finding.starts_with("open") || finding.starts_with("non-");
+            if glass || !topology {
+                cx.warn(&p_at, &format!("mesh \"{base_name}\": {finding}"));
+            }
+        }
+        // The mesh stays in its node's space, placed by the node's world transform (an instance of it: the
+        // renderer's BVH holds it in that space), animated or not, so that a still pose and an animation reaching
+        // it render alike; and it is deformed at the scene's time when its morph weights animate.
+        let anim = std::sync::Arc::new(super::ObjectAnimation {
+            mesh: m,
+            animation: animation.clone(),
+            placement: place.world,
+            water: None,
+            morph,
+        });
+        let placed = anim.mesh_at(0.0);
+        if placed.positions.iter().any(|v| !v.is_finite()) {
+            return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
+        }
+        out.objects.push(Object { animation: Some(anim), ..Object::new(name, material, placed) });
+    }
+    Ok(())
+}
+
+/// A primitive's morph targets: POSITION (and NORMAL) displacements, one per vertex. Tangent displacements are
+/// ignored (the renderer has no tangents).
+fn morph_targets(
+    cx: &Cx,
+    p: &gltf::Primitive,
+    at: &str,
+    buffers: &[Vec<u8>],
+    vertices: usize,
+) -> Result<Vec<MorphTarget>, SceneError> {
+    let mut out = Vec::new();
+    for (k, t) in p.morph_targets().enumerate() {
+        let t_at = format!("{at}.targets[{k}]");
+        let read = |a: Option<gltf::Accessor>, what: &str| -> Result<Vec<Vec3>, SceneError> {
+            let Some(a) = a else { return Ok(Vec::new()) };
+            let v = read_floats(cx, &a, &format!("{t_at}.{what}"), buffers, 3)?;
+            let v: Vec<Vec3> = v.chunks_exact(3).map(Vec3::from_slice).collect();
+            if v.len() != vertices || v.iter().any(|x| !x.is_finite()) {
+                return Err(
+                    cx.err(format!("{t_at}.{what}"), format!("needs one finite displacement per vertex ({vertices})"))
+                );
+            }
+            Ok(v)
+        };
+        let positions = read(t.positions(), "POSITION")?;
+        let positions = if positions.is_empty() { vec![Vec3::ZERO; vertices] } else { positions };
+        out.push(MorphTarget { positions, normals: read(t.normals(), "NORMAL")? });
+    }
+    Ok(out)
 }
 
 /// A primitive's triangles, and whether its normals were computed (the file has none).
@@ -774,34 +1115,109 @@ fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Res
     }
 }
 
-/// The bytes of each element of a (non-sparse) accessor, bounds-checked.
-fn elements<'b>(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &'b [Vec<u8>]) -> Result<Vec<&'b [u8]>, SceneError> {
+/// An accessor's elements, densely packed (`count` × its element size): read from its bufferView through the
+/// view's byteStride (interleaved attributes), or zeros without one, then with its sparse substitutions applied.
+/// Everything is bounds-checked.
+fn dense(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<u8>, SceneError> {
     let acc_at = format!("accessors[{}]", a.index());
     let ctx = |m: &str| cx.err(format!("{at} ({acc_at})"), m.to_string());
-    if a.sparse().is_some() {
-        return Err(ctx("sparse accessors are not supported"));
-    }
-    let view = a.view().ok_or_else(|| ctx("an accessor without a bufferView is not supported"))?;
+    let view_bytes = |view: &gltf::buffer::View| -> Result<&[u8], SceneError> {
+        let buf = &buffers[view.buffer().index()];
+        view.offset()
+            .checked_add(view.length())
+            .and_then(|end| buf.get(view.offset()..end))
+            .ok_or_else(|| ctx("the bufferView lies outside its buffer"))
+    };
     let elem = a.size();
-    let stride = view.stride().unwrap_or(elem);
-    if stride < elem {
-        return Err(ctx("byteStride is smaller than the element"));
-    }
-    let buf = &buffers[view.buffer().index()];
-    let view_bytes = view
-        .offset()
-        .checked_add(view.length())
-        .and_then(|end| buf.get(view.offset()..end))
-        .ok_or_else(|| ctx("the bufferView lies outside its buffer"))?;
     let n = a.count();
-    if n == 0 {
-        return Ok(Vec::new());
+    let total = n.checked_mul(elem).filter(|&t| t <= 1 << 31).ok_or_else(|| ctx("the accessor is too large"))?;
+    let mut out = vec![0u8; total];
+    if let Some(view) = a.view() {
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return Err(ctx("byteStride is smaller than the element"));
+        }
+        let bytes = view_bytes(&view)?;
+        if n > 0 {
+            let end =
+                (n - 1).checked_mul(stride).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(a.offset()));
+            if !matches!(end, Some(e) if e <= bytes.len()) {
+                return Err(ctx("the accessor's data lies outside its bufferView"));
+            }
+        }
+        for i in 0..n {
+            let src = a.offset() + i * stride;
+            out[i * elem..(i + 1) * elem].copy_from_slice(&bytes[src..src + elem]);
+        }
     }
-    let end = (n - 1).checked_mul(stride).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(a.offset()));
-    if !matches!(end, Some(e) if e <= view_bytes.len()) {
-        return Err(ctx("the accessor's data lies outside its bufferView"));
+    if let Some(sparse) = a.sparse() {
+        let k = sparse.count();
+        let idx = sparse.indices();
+        let isize = match idx.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let ib = view_bytes(&idx.view())?;
+        let ib = idx.offset().checked_add(k * isize).and_then(|end| ib.get(idx.offset()..end));
+        let ib = ib.ok_or_else(|| ctx("the sparse indices lie outside their bufferView"))?;
+        let vals = sparse.values();
+        let vb = view_bytes(&vals.view())?;
+        let vb = vals.offset().checked_add(k * elem).and_then(|end| vb.get(vals.offset()..end));
+        let vb = vb.ok_or_else(|| ctx("the sparse values lie outside their bufferView"))?;
+        let mut last = None;
+        for j in 0..k {
+            let b = &ib[j * isize..(j + 1) * isize];
+            let i = match isize {
+                1 => b[0] as usize,
+                2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+            };
+            if i >= n || last.is_some_and(|l| i <= l) {
+                return Err(ctx("sparse indices must increase and lie below the accessor's count"));
+            }
+            last = Some(i);
+            out[i * elem..(i + 1) * elem].copy_from_slice(&vb[j * elem..(j + 1) * elem]);
+        }
     }
-    Ok((0..n).map(|i| &view_bytes[a.offset() + i * stride..a.offset() + i * stride + elem]).collect())
+    Ok(out)
+}
+
+/// An accessor of `width` components per element as floats: FLOAT, or normalized integers mapped as glTF 2.0
+/// §3.11 says (c / 127 for signed bytes, c / 65535 for unsigned shorts, ...).
+fn read_floats(
+    cx: &Cx,
+    a: &gltf::Accessor,
+    at: &str,
+    buffers: &[Vec<u8>],
+    width: usize,
+) -> Result<Vec<f32>, SceneError> {
+    use gltf::accessor::DataType;
+    let comps = a.dimensions().multiplicity();
+    if comps != width {
+        return Err(cx.err(
+            format!("{at} (accessors[{}])", a.index()),
+            format!("must have {width} components per element (got {:?})", a.dimensions()),
+        ));
+    }
+    let bytes = dense(cx, a, at, buffers)?;
+    let read: fn(&[u8]) -> f32 = match (a.data_type(), a.normalized()) {
+        (DataType::F32, _) => |b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        (DataType::I8, true) => |b| (b[0] as i8 as f32 / 127.0).max(-1.0),
+        (DataType::U8, true) => |b| b[0] as f32 / 255.0,
+        (DataType::I16, true) => |b| (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0),
+        (DataType::U16, true) => |b| u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
+        (t, _) => {
+            return Err(cx.err(
+                format!("{at} (accessors[{}])", a.index()),
+                format!("must be FLOAT or normalized integers (got {t:?}; quantized data is not supported)"),
+            ))
+        }
+    };
+    let size = a.data_type().size();
+    // A matrix's columns are padded to 4 bytes (§3.6.2.4): only MAT2 and MAT3 of bytes or shorts differ, and no
+    // accessor read here is one.
+    Ok(bytes.chunks_exact(size).map(read).collect())
 }
 
 fn read_vec3(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<Vec3>, SceneError> {
@@ -816,34 +1232,28 @@ fn read_vec3(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Resu
             ),
         ));
     }
-    let f = |b: &[u8], k: usize| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]);
-    Ok(elements(cx, a, at, buffers)?.into_iter().map(|b| Vec3::new(f(b, 0), f(b, 1), f(b, 2))).collect())
+    Ok(read_floats(cx, a, at, buffers, 3)?.chunks_exact(3).map(Vec3::from_slice).collect())
 }
 
 /// TEXCOORD data: VEC2 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT; finite.
 fn read_uvs(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<glam::Vec2>, SceneError> {
     use gltf::accessor::{DataType, Dimensions};
-    let bad = || {
-        cx.err(
+    let ok = matches!(
+        (a.data_type(), a.normalized()),
+        (DataType::F32, false) | (DataType::U8, true) | (DataType::U16, true)
+    );
+    if a.dimensions() != Dimensions::Vec2 || !ok {
+        return Err(cx.err(
             format!("{at} (accessors[{}])", a.index()),
             format!(
                 "must be VEC2 of FLOAT, or of normalized unsigned bytes or shorts (got {:?} of {:?})",
                 a.dimensions(),
                 a.data_type()
             ),
-        )
-    };
-    if a.dimensions() != Dimensions::Vec2 {
-        return Err(bad());
+        ));
     }
-    let read: fn(&[u8], usize) -> f32 = match (a.data_type(), a.normalized()) {
-        (DataType::F32, false) => |b, k| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]),
-        (DataType::U8, true) => |b, k| b[k] as f32 / 255.0,
-        (DataType::U16, true) => |b, k| u16::from_le_bytes([b[2 * k], b[2 * k + 1]]) as f32 / 65535.0,
-        _ => return Err(bad()),
-    };
     let uvs: Vec<glam::Vec2> =
-        elements(cx, a, at, buffers)?.into_iter().map(|b| glam::Vec2::new(read(b, 0), read(b, 1))).collect();
+        read_floats(cx, a, at, buffers, 2)?.chunks_exact(2).map(glam::Vec2::from_slice).collect();
     if uvs.iter().any(|uv| !uv.is_finite()) {
         return Err(cx.err(at.to_string(), "texture coordinates must be finite"));
     }
@@ -866,7 +1276,8 @@ fn read_indices(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> R
             ))
         }
     };
-    Ok(elements(cx, a, at, buffers)?.into_iter().map(read).collect())
+    let size = a.data_type().size();
+    Ok(dense(cx, a, at, buffers)?.chunks_exact(size).map(read).collect())
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ pub mod animation;
 pub mod environment;
 mod gltf;
 pub mod mesh;
+pub mod morph;
 mod schema;
 pub mod texture;
 pub mod view;
@@ -128,6 +129,9 @@ pub struct Camera {
     pub target: Vec3,
     /// Which way is up in its image.
     pub up: Vec3,
+    /// The image's width over its height as the file authored it (glTF `aspectRatio`, or `xmag / ymag`); the
+    /// default output size follows it. None: any (TOML cameras).
+    pub aspect: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -166,8 +170,9 @@ pub struct Object {
     pub animation: Option<std::sync::Arc<ObjectAnimation>>,
 }
 
-/// An object that changes over time: its mesh in object space, its placement (keyframed, or fixed), and for water
-/// its waves.
+/// An object placed from its own space: its mesh there, its placement (keyframed, or fixed), and how it deforms
+/// (water's waves, morph targets). A TOML object has one when it moves or is water; a glTF object always has one
+/// (its node's world transform), so that its triangles are instanced in the node's space.
 #[derive(Debug)]
 pub struct ObjectAnimation {
     /// The mesh, in object space (water: at rest).
@@ -178,6 +183,8 @@ pub struct ObjectAnimation {
     pub placement: Mat4,
     /// Its waves, when it is water.
     pub water: Option<water::Water>,
+    /// Its morph targets and their weights over time (glTF), when their weights animate.
+    pub morph: Option<morph::Morph>,
 }
 
 impl ObjectAnimation {
@@ -188,16 +195,42 @@ impl ObjectAnimation {
 
     /// Its triangles in world space at time `t`.
     pub fn mesh_at(&self, t: f32) -> Mesh {
-        let local = match &self.water {
-            Some(w) => w.displaced(&self.mesh, t),
-            None => self.mesh.clone(),
-        };
-        local.transformed(self.transform_at(t))
+        self.local_mesh_at(t).transformed(self.transform_at(t))
     }
 
-    /// Its keyframes' duration (0 without keyframes).
+    /// Its triangles in object space at time `t`: the water displaced, the morph targets weighted.
+    pub fn local_mesh_at(&self, t: f32) -> Mesh {
+        match (&self.water, &self.morph) {
+            (Some(w), _) => w.displaced(&self.mesh, t),
+            (None, Some(m)) => m.apply(&self.mesh, &m.weights_at(t)),
+            (None, None) => self.mesh.clone(),
+        }
+    }
+
+    /// Whether it changes with time: it moves, or it deforms.
+    pub fn changes(&self) -> bool {
+        self.animation.is_some() || self.deforms()
+    }
+
+    /// Whether its shape changes with time (water, animated morph weights): the renderer deforms it on the GPU and
+    /// refits its BVH.
+    pub fn deforms(&self) -> bool {
+        self.water.is_some() || self.morph.as_ref().is_some_and(|m| m.is_animated())
+    }
+
+    /// The object-space box its deforming mesh stays in (None: it does not deform).
+    pub fn deform_bounds(&self) -> Option<(Vec3, Vec3)> {
+        match (&self.water, &self.morph) {
+            (Some(w), _) => Some(w.bounds()),
+            (None, Some(m)) if m.is_animated() => Some(m.bounds(&self.mesh)),
+            _ => None,
+        }
+    }
+
+    /// Its animation's duration (0 without keyframes).
     pub fn duration(&self) -> f32 {
-        self.animation.as_ref().map_or(0.0, |a| a.duration())
+        let morph = self.morph.as_ref().map_or(0.0, |m| m.duration());
+        self.animation.as_ref().map_or(0.0, |a| a.duration()).max(morph)
     }
 }
 
@@ -274,6 +307,64 @@ pub struct Scene {
     pub textures: Vec<std::sync::Arc<Texture>>,
     /// Its environment map (None: the procedural sky).
     pub environment: Option<Environment>,
+    /// The cameras and lights that animations move (glTF), placed at `time`.
+    pub movers: Vec<Mover>,
+    /// The file's animations by name (glTF; `animations[i]` for one without a name), and which of them play.
+    pub animations: Vec<String>,
+    /// The animation that plays (None: all of them, together).
+    pub playing: Option<usize>,
+}
+
+/// What a [`Mover`] moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Moved {
+    /// `Scene::cameras[i]`.
+    Camera(usize),
+    /// `Scene::lights[i]`.
+    Light(usize),
+}
+
+/// A camera or light whose node an animation moves: it stands at the node's origin, looks (shines) down the
+/// node's -Z, and a camera's up is the node's +Y.
+#[derive(Clone, Debug)]
+pub struct Mover {
+    /// The camera or light.
+    pub what: Moved,
+    /// Its node's transform over time.
+    pub animation: animation::Animation,
+}
+
+/// Which of a file's animations play (`--animation`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum AnimationChoice {
+    /// Every one, together (Blender writes one animation per animated object).
+    #[default]
+    All,
+    /// The one at this index of the file's `animations`.
+    Index(usize),
+    /// The one of this name.
+    Name(String),
+}
+
+impl std::str::FromStr for AnimationChoice {
+    type Err = std::convert::Infallible;
+    /// `all`, an index, or a name.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s {
+            "all" => AnimationChoice::All,
+            _ => match s.parse::<usize>() {
+                Ok(i) => AnimationChoice::Index(i),
+                Err(_) => AnimationChoice::Name(s.to_string()),
+            },
+        })
+    }
+}
+
+/// How to load a scene file.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// glTF: which animations play.
+    pub animation: AnimationChoice,
 }
 
 struct Ctx<'a> {
@@ -315,27 +406,77 @@ impl Scene {
             time: 0.0,
             textures: Vec::new(),
             environment: None,
+            movers: Vec::new(),
+            animations: Vec::new(),
+            playing: None,
         }
     }
 
     /// Whether any object animates.
     pub fn is_animated(&self) -> bool {
-        self.objects.iter().any(|o| o.animation.is_some())
+        self.objects.iter().any(|o| o.animation.as_ref().is_some_and(|a| a.changes())) || !self.movers.is_empty()
     }
 
     /// The longest animation's duration (s; 0 for a still scene).
     pub fn duration(&self) -> f32 {
-        self.objects.iter().filter_map(|o| o.animation.as_ref()).map(|a| a.duration()).fold(0.0, f32::max)
+        let objects = self.objects.iter().filter_map(|o| o.animation.as_ref()).map(|a| a.duration());
+        objects.chain(self.movers.iter().map(|m| m.animation.duration())).fold(0.0, f32::max)
     }
 
-    /// Place every animated object where it stands at time `t` (s).
+    /// Place every animated object, camera and light where it stands at time `t` (s).
     pub fn set_time(&mut self, t: f32) {
         for o in &mut self.objects {
-            if let Some(a) = &o.animation {
+            if let Some(a) = o.animation.as_ref().filter(|a| a.changes()) {
                 o.mesh = a.mesh_at(t);
             }
         }
         self.time = t;
+        self.place_movers();
+    }
+
+    /// The cameras and lights that animations move, placed at the scene's time (directional lights' beams start
+    /// outside the scene's bounds there).
+    pub fn place_movers(&mut self) {
+        for k in 0..self.movers.len() {
+            let m = self.movers[k].animation.transform_at(self.time);
+            let origin = m.transform_point3(Vec3::ZERO);
+            let forward = m.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+            match self.movers[k].what {
+                Moved::Camera(i) => {
+                    let up = m.transform_vector3(Vec3::Y).normalize_or_zero();
+                    let c = &mut self.cameras[i];
+                    // A degenerate pose (a scale through zero) keeps the last good one.
+                    if forward != Vec3::ZERO && forward.cross(up).length() > 1e-4 {
+                        (c.position, c.target, c.up) = (origin, origin + forward, up);
+                    }
+                }
+                Moved::Light(i) => {
+                    let l = &mut self.lights[i];
+                    if forward == Vec3::ZERO {
+                        continue;
+                    }
+                    l.position = origin;
+                    if l.kind != LightKind::Point {
+                        l.target = origin + forward;
+                    }
+                }
+            }
+        }
+        if self.movers.iter().any(|m| matches!(m.what, Moved::Light(_))) {
+            self.place_directional_lights();
+        }
+    }
+
+    /// A glTF directional light is at infinity; ours starts its beam at `position`: start it just outside the
+    /// scene's bounding sphere, up-beam, so that it lights everything.
+    pub fn place_directional_lights(&mut self) {
+        let (lo, hi) = self.bounds();
+        let (center, radius) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+        for l in self.lights.iter_mut().filter(|l| l.kind == LightKind::Directional) {
+            let dir = (l.target - l.position).normalize();
+            l.position = center - dir * (radius * 1.01 + 1e-3);
+            l.target = l.position + dir;
+        }
     }
 
     /// The scene at time `t` (s).
@@ -348,8 +489,13 @@ impl Scene {
     /// Load a scene by its file type: TOML (`.toml`), or glTF 2.0 (`.gltf`, `.glb`). Any other file type is
     /// refused with the accepted ones named (an OBJ is a mesh: a TOML scene's `[[object]]` references it).
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Scene::load_with(path, &LoadOptions::default())
+    }
+
+    /// [`Scene::load`] with options (glTF: which animations play).
+    pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
         if gltf::is_gltf(path) {
-            return gltf::load(path);
+            return gltf::load(path, options);
         }
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         if ext.as_deref() != Some("toml") {
@@ -440,6 +586,9 @@ impl Scene {
             time: 0.0,
             textures: textures.list,
             environment,
+            movers: Vec::new(),
+            animations: Vec::new(),
+            playing: None,
         };
         scene.aim_point_lights();
         for (i, l) in scene.lights.iter().enumerate() {
@@ -721,7 +870,7 @@ fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {
             ))
         }
     };
-    Ok(Camera { name, projection, position, target, up: up.normalize() })
+    Ok(Camera { name, projection, position, target, up: up.normalize(), aspect: None })
 }
 
 fn positive_size(cx: &Ctx, field: String, v: &S<toml::Value>, n: usize) -> Result<Vec3, SceneError> {
@@ -824,7 +973,7 @@ fn keyframes(
     f: &dyn Fn(&str) -> String,
     rest: (Vec3, Quat, Vec3),
 ) -> Result<Option<animation::Animation>, SceneError> {
-    use animation::{Animation, Interpolation, Repeat, Track};
+    use animation::{Animation, Interpolation, Motion, Repeat, Track};
     if d.keyframe.is_empty() {
         for (field, span) in [
             ("interpolation", d.interpolation.as_ref().map(|v| v.span())),
@@ -913,14 +1062,13 @@ fn keyframes(
         rot.push(rotate);
         sc.push(scale);
     }
-    Ok(Some(Animation {
+    let motion = Motion {
         translation: Some(Track::new(times.clone(), tr, interpolation)),
         rotation: Some(Track::new(times.clone(), rot, interpolation)),
         scale: Some(Track::new(times, sc, interpolation)),
-        rest,
-        parent: Mat4::IDENTITY,
-        repeat,
-    }))
+        ..Motion::rest(rest)
+    };
+    Ok(Some(Animation::single(motion, repeat)))
 }
 
 fn environment_def(cx: &Ctx, e: &S<EnvironmentDef>) -> Result<Environment, SceneError> {
@@ -1218,6 +1366,7 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>, textures: &mut Textures) -> Resu
             animation: keyed,
             placement: transform,
             water: water.clone(),
+            morph: None,
         })
     });
     if let Some(a) = &animation {

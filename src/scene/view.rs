@@ -385,6 +385,7 @@ mod tests {
             position: Vec3::new(0.0, 3.0, 0.0),
             target: Vec3::ZERO,
             up: Vec3::NEG_Z,
+            aspect: None,
         };
         let v = CameraView::new(&cam, 256, 256, (Vec3::splat(-1.0), Vec3::splat(1.0)));
         // Row 0 is z = -1 and columns run along +x (docs/design.md's `top` camera).

@@ -23,6 +23,7 @@ pub enum Action {
     Transport,
     Animate,
     PlayScene,
+    NextAnimation,
     Screenshot,
     Profile,
     Trace,
@@ -104,6 +105,11 @@ pub const CONTROLS: &[Control] = &[
         input: "A",
         help: "play / pause the scene's animation (its keyframed objects; the light's is Space)",
         keys: &[("a", Action::PlayScene)],
+    },
+    Control {
+        input: "N",
+        help: "glTF: play the next animation alone (all of them together after the last)",
+        keys: &[("n", Action::NextAnimation)],
     },
     Control { input: "S", help: "save a screenshot (PNG, name printed)", keys: &[("s", Action::Screenshot)] },
     Control {

@@ -21,7 +21,7 @@ pub mod swapchain;
 pub use controls::{help_markdown, help_text, Action};
 pub use present::Capture;
 
-use crate::app::commands::{default_scene, MethodArgs};
+use crate::app::commands::{default_scene, load_options, MethodArgs};
 use crate::app::profiler;
 use ash::vk;
 use caustics::consts::*;
@@ -82,6 +82,12 @@ pub struct ViewArgs {
     /// Window size WxH in pixels.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
+    /// Scene time in seconds to start at (as `render --time`).
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f32,
+    /// glTF: the animation that plays, by name or index [default: all of them, together]; N switches.
+    #[arg(long)]
+    pub animation: Option<String>,
     #[command(flatten)]
     pub method: MethodArgs,
     /// Present without waiting for vertical blank: MAILBOX, else IMMEDIATE where available (default: FIFO).
@@ -133,6 +139,10 @@ pub struct ViewArgs {
     /// Testing: prefer an sRGB swapchain format (exercises the intermediate-image path).
     #[arg(long, hide = true)]
     pub srgb_surface: bool,
+    /// Testing: the scene's animation advances this many seconds per frame, not the frame's wall time
+    /// (deterministic playback).
+    #[arg(long, hide = true)]
+    pub frame_dt: Option<f32>,
     /// Testing: fail with a device loss when frame N is about to be rendered (checks the error path and exit).
     #[arg(long, hide = true)]
     pub inject_device_loss: Option<u32>,
@@ -175,8 +185,15 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     }
     let script = args.script.as_deref().map(Script::load).transpose()?;
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
-    let mut scene = Scene::load(&scene_path)?;
+    let mut scene = Scene::load_with(&scene_path, &load_options(args.animation.as_deref()))?;
     crate::app::commands::apply_environment(&mut scene, args.environment.as_deref())?;
+    if !args.time.is_finite() {
+        return Err(AppError::BadInput(format!("--time {}: must be finite", args.time)));
+    }
+    if let Some(dt) = args.frame_dt.filter(|dt| !(dt.is_finite() && *dt >= 0.0)) {
+        return Err(AppError::BadInput(format!("--frame-dt {dt}: must be finite and >= 0")));
+    }
+    scene.set_time(args.time);
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let event_loop = EventLoop::new().map_err(|e| {
         AppError::Failed(format!(
@@ -474,6 +491,11 @@ struct Viewer {
     /// The scene's animation plays (A pauses it), at `scene_time` seconds.
     scene_playing: bool,
     scene_time: f32,
+    /// --frame-dt: the seconds each frame advances the scene's animation (None: the frame's wall time).
+    frame_dt: Option<f32>,
+    /// The scene file and the options it was loaded with (N reloads it with another glTF animation).
+    scene_path: PathBuf,
+    environment: Option<PathBuf>,
     /// Per object: how far the user dragged it (Shift + left drag), on top of its own placement.
     offsets: Vec<Vec3>,
     /// Each still object's placement before any drag.
@@ -588,6 +610,9 @@ impl Viewer {
             animate: false,
             scene_playing,
             scene_time,
+            frame_dt: args.frame_dt,
+            scene_path: args.scene.clone().unwrap_or_else(default_scene),
+            environment: args.environment.clone(),
             offsets: vec![Vec3::ZERO; placements.len()],
             placements,
             grab: None,
@@ -753,6 +778,7 @@ impl Viewer {
                 self.change_settings(with(&|q| q.transport = transport))?
             }
             Animate => self.toggle_animation(),
+            NextAnimation => self.next_animation()?,
             PlayScene => {
                 if !self.renderer.scene().is_animated() {
                     eprintln!("the scene has no animated object (keyframes in TOML, animations in glTF)");
@@ -857,6 +883,31 @@ impl Viewer {
         Ok(())
     }
 
+    /// Play the next of a glTF file's animations alone (all of them together after the last): the file is loaded
+    /// again with that choice, at the same time.
+    fn next_animation(&mut self) -> AppResult<()> {
+        let scene = self.renderer.scene();
+        let n = scene.animations.len();
+        if n < 2 {
+            eprintln!("the scene has {} glTF animation{}: nothing to switch", n, if n == 1 { "" } else { "s" });
+            return Ok(());
+        }
+        let next = match scene.playing {
+            None => Some(0),
+            Some(i) if i + 1 < n => Some(i + 1),
+            Some(_) => None,
+        };
+        let choice = next.map_or(caustics::scene::AnimationChoice::All, caustics::scene::AnimationChoice::Index);
+        let mut scene = Scene::load_with(&self.scene_path, &caustics::scene::LoadOptions { animation: choice })?;
+        crate::app::commands::apply_environment(&mut scene, self.environment.as_deref())?;
+        scene.set_time(self.scene_time);
+        let name = next.map_or("all animations".to_string(), |i| format!("animation {i} \"{}\"", scene.animations[i]));
+        self.renderer.set_scene(scene)?;
+        self.place_objects();
+        eprintln!("playing {name}");
+        Ok(())
+    }
+
     fn toggle_animation(&mut self) {
         self.animate = !self.animate;
         if !self.animate {
@@ -882,6 +933,14 @@ impl Viewer {
         if let Err(e) = self.renderer.set_time(self.scene_time) {
             eprintln!("animation paused: {e}");
             self.scene_playing = false;
+        }
+        // An animated camera carries the view with it (orbited as the user orbited it).
+        let scene = self.renderer.scene();
+        if let Some(c) = scene.cameras.iter().find(|c| c.name == self.camera_name) {
+            let k = scene.cameras.iter().position(|x| x.name == c.name);
+            if scene.movers.iter().any(|m| Some(m.what) == k.map(caustics::scene::Moved::Camera)) {
+                self.orbit.follow(c);
+            }
         }
         for (i, &offset) in self.offsets.iter().enumerate() {
             if offset == Vec3::ZERO {
@@ -957,7 +1016,13 @@ impl Viewer {
             }
         }
         if self.scene_playing {
-            self.scene_time += dt;
+            self.scene_time += self.frame_dt.unwrap_or(dt);
+            // A glTF file's timeline loops, as Blender plays it.
+            let scene = self.renderer.scene();
+            let period = scene.duration();
+            if !scene.animations.is_empty() && period > 0.0 && self.scene_time > period {
+                self.scene_time = self.scene_time.rem_euclid(period);
+            }
             moved = true;
         }
         if moved {

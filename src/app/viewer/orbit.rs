@@ -29,6 +29,18 @@ impl Orbit {
         Orbit { base: camera.clone(), radius, yaw, pitch, base_yaw: yaw, base_pitch: pitch, zoom: 1.0, moved: false }
     }
 
+    /// Follow the scene's camera where an animation moved it: exactly, until the user orbits; then about its new
+    /// target, with its new projection.
+    pub fn follow(&mut self, camera: &Camera) {
+        if self.moved {
+            self.base = camera.clone();
+        } else {
+            let zoom = self.zoom;
+            *self = Orbit::new(camera);
+            self.zoom = zoom;
+        }
+    }
+
     /// Rotate by `dx`, `dy` radians (yaw about the vertical axis, pitch).
     pub fn rotate(&mut self, dx: f32, dy: f32) {
         if dx == 0.0 && dy == 0.0 {
@@ -78,7 +90,14 @@ mod tests {
     use super::*;
 
     fn cam(position: Vec3, up: Vec3) -> Camera {
-        Camera { name: "c".into(), projection: Projection::Perspective { fov: 0.7 }, position, target: Vec3::ZERO, up }
+        Camera {
+            name: "c".into(),
+            projection: Projection::Perspective { fov: 0.7 },
+            position,
+            target: Vec3::ZERO,
+            up,
+            aspect: None,
+        }
     }
 
     #[test]
