@@ -3,10 +3,11 @@
 
 mod common;
 use caustics::scene::{mesh, LightKind, Material, Projection, Scene};
+use common::gltf_doc::*;
 use common::*;
 use glam::Vec3;
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The TOML twin of [`gltf_scene`]: the sphere scene's floor, light and `top` camera, with a 0.4 m glass cube.
 const TOML: &str = r#"[[light]]
@@ -37,22 +38,6 @@ size = 0.4
 translate = [0.0, 0.5, 0.0]
 material = { kind = "dielectric", ior = 1.5 }
 "#;
-
-fn b64(data: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for c in data.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
-        for k in 0..4 {
-            if k <= c.len() {
-                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                s.push('=');
-            }
-        }
-    }
-    s
-}
 
 /// The glTF twin of [`TOML`] as JSON, and its binary buffer (not yet attached).
 fn gltf_scene() -> (Value, Vec<u8>) {
@@ -123,42 +108,6 @@ fn gltf_scene() -> (Value, Vec<u8>) {
         "accessors": accessors,
     });
     (doc, bin)
-}
-
-/// `doc` with its buffer embedded as a base64 data URI.
-fn embedded(mut doc: Value, bin: &[u8]) -> String {
-    doc["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", b64(bin)));
-    serde_json::to_string_pretty(&doc).unwrap()
-}
-
-/// `doc` and `bin` as a GLB container (JSON chunk, then BIN chunk; both padded to 4 bytes).
-fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut j = serde_json::to_vec(doc).unwrap();
-    while j.len() % 4 != 0 {
-        j.push(b' ');
-    }
-    let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
-        b.push(0);
-    }
-    let total = 12 + 8 + j.len() + 8 + b.len();
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&j);
-    out.extend_from_slice(&(b.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&b);
-    out
-}
-
-fn write(dir: &Path, name: &str, data: impl AsRef<[u8]>) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, data).unwrap();
-    p
 }
 
 fn close(a: Vec3, b: Vec3) -> bool {
@@ -552,29 +501,6 @@ fn gallery_gltf_matches_reference() {
 }
 
 /// `doc` and `bin` with one more accessor holding `data` (floats, `kind` SCALAR / VEC3 / VEC4); its index.
-fn add_accessor(doc: &mut Value, bin: &mut Vec<u8>, data: &[f32], kind: &str) -> usize {
-    let views = doc["bufferViews"].as_array_mut().unwrap();
-    views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * data.len()}));
-    let view = views.len() - 1;
-    bin.extend_from_slice(bytemuck::cast_slice(data));
-    let per = match kind {
-        "SCALAR" => 1,
-        "VEC3" => 3,
-        _ => 4,
-    };
-    let mut acc = json!({"bufferView": view, "componentType": 5126, "count": data.len() / per, "type": kind});
-    if kind == "SCALAR" {
-        let (lo, hi) = data.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-        acc["min"] = json!([lo]);
-        acc["max"] = json!([hi]);
-    }
-    let accessors = doc["accessors"].as_array_mut().unwrap();
-    accessors.push(acc);
-    let index = accessors.len() - 1;
-    doc["buffers"][0]["byteLength"] = json!(bin.len());
-    index
-}
-
 /// The glTF twin with its glass node animated: a linear translation, a step rotation and a cubic-spline scale.
 fn animated_gltf() -> (Value, Vec<u8>) {
     let (mut doc, mut bin) = gltf_scene();
@@ -605,8 +531,9 @@ fn animated_gltf() -> (Value, Vec<u8>) {
 }
 
 /// Node animation channels place the glass as the glTF interpolations say: linear translation, step rotation,
-/// and a cubic Hermite scale (with zero tangents, 1 + smoothstep at half time: 1.5), looping; the renderer and the
-/// reference evaluate the same placement (Scene::set_time).
+/// and a cubic Hermite scale (with zero tangents, 1 + smoothstep at half time: 1.5), holding the last pose past
+/// the end (as Blender holds an action's last frame); the renderer and the reference evaluate the same placement
+/// (Scene::set_time).
 #[test]
 fn gltf_animation_places_the_glass() {
     let dir = out_dir("gltf_animation");
@@ -622,12 +549,14 @@ fn gltf_animation_places_the_glass() {
     // At 0.5 s: translated halfway and scaled 1.5.
     assert!(close((lo + hi) * 0.5, Vec3::new(0.15, 0.55, 0.0)), "{lo} {hi}");
     assert!(close(hi - lo, Vec3::splat(0.6)), "{lo} {hi}");
-    // Looping: 1.5 s is 0.5 s.
-    assert_eq!(glass(&scene.at_time(1.5)), (lo, hi));
+    // Past the end, the last keyframe's pose: translated by (0.3, 0.1, 0), scaled 2.
+    let (lo, hi) = glass(&scene.at_time(1.5));
+    assert!(close((lo + hi) * 0.5, Vec3::new(0.3, 0.6, 0.0)) && close(hi - lo, Vec3::splat(0.8)), "{lo} {hi}");
     let o = half.objects.iter().find(|o| o.name == "glass").unwrap();
     let a = o.animation.as_ref().unwrap().animation.as_ref().unwrap();
-    // The step rotation holds its first keyframe (no turn) until the second, which the 1 s loop starts over at.
+    // The step rotation holds its first keyframe (no turn) until the second.
     assert!(a.transform_at(0.99).transform_vector3(Vec3::Z).x.abs() < 1e-5, "no turn before the second keyframe");
+    assert!((a.transform_at(1.0).transform_vector3(Vec3::Z).x.abs() - 2.0).abs() < 1e-5, "a quarter turn at 1 s");
 }
 
 #[test]

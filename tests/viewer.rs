@@ -567,3 +567,41 @@ fn the_pool_animates_and_pauses() {
     assert_eq!(s["scene_playing"], false);
     assert!(s["scene_update"]["deformed_objects"].as_u64().unwrap() <= 1, "{}", s["scene_update"]);
 }
+
+/// An animated glTF file plays in the viewer as its poses render: three frames at a fixed 0.125 s each bring the
+/// rig of tests/common/rig.rs to 0.375 s, and the third frame (each frame at the chosen level and full quality) is
+/// the headless beauty of the rig posed still at 0.375 s. Measured: identical bytes.
+#[test]
+fn an_animated_gltf_plays_as_its_poses_render() {
+    let dir = out_dir("viewer_gltf_rig");
+    let (animated, stills) = common::rig::write_rigs(&dir);
+    let t = common::rig::TIMES[1];
+    assert_eq!(t, 0.375);
+    let x = Xvfb::start();
+    let shot = dir.join("shot.png");
+    let mut args = vec!["--scene", animated.to_str().unwrap(), "--camera", "main", "--size", "256x256"];
+    args.extend(["--no-progressive", "--frame-dt", "0.125", "--frames", "3", "--level", "3", "--transport", "exact"]);
+    args.extend(["--screenshot", shot.to_str().unwrap()]);
+    let s = view_ok(&dir, "rig", &x.display, &args);
+    assert_eq!(s["scene_time_s"].as_f64(), Some(t as f64), "{}", s["scene_time_s"]);
+    assert!(s["scene_update"]["moved_objects"].as_u64().unwrap() >= 3, "{}", s["scene_update"]);
+    let still = dir.join("still.png");
+    let still_scene = stills[1].to_str().unwrap();
+    ok(&[
+        "render",
+        "--scene",
+        still_scene,
+        "--camera",
+        "main",
+        "--size",
+        "256x256",
+        "--level",
+        "3",
+        "--out",
+        still.to_str().unwrap(),
+    ]);
+    let (_, _, _, played) = luma(&shot);
+    let (_, _, _, posed) = luma(&still);
+    let d = max_diff(&played, &posed);
+    assert!(d <= 1, "the played frame differs from the still pose's by {d} levels");
+}

@@ -2,6 +2,9 @@
 //! validation included) and read what it wrote.
 #![allow(dead_code)]
 
+pub mod gltf_doc;
+pub mod rig;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
