@@ -586,3 +586,41 @@ fn bad_gltf_animations_exit_2() {
                               "samplers": [{"input": times, "output": moves}]}]);
     expect_bad(&dir, "nan.gltf", embedded(d, &b), &["animations[0].samplers[0].output", "finite"]);
 }
+
+/// The Khronos glTF validator (tools/setup installs it) finds no error in any glTF file the project writes or
+/// keeps: the gallery (tools/gltf_scenes), the Blender fixtures (tools/blender_scenes), and the files these tests
+/// and the animation tests write.
+#[test]
+fn the_khronos_validator_finds_no_error() {
+    let dir = out_dir("gltf_validator");
+    let mut files = vec![std::path::PathBuf::from(scene("gallery.gltf"))];
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender");
+    let mut glbs: Vec<_> = std::fs::read_dir(&fixtures)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    glbs.sort();
+    assert!(glbs.len() >= 6, "the Blender fixtures: {glbs:?}");
+    files.extend(glbs);
+    let (doc, bin) = gltf_scene();
+    files.push(write(&dir, "twin.gltf", embedded(doc.clone(), &bin)));
+    files.push(write(&dir, "twin.glb", glb(&doc, &bin)));
+    files.push(write(&dir, "textured.gltf", textured_gltf(&dir)));
+    let (doc, bin) = animated_gltf();
+    files.push(write(&dir, "animated.gltf", embedded(doc, &bin)));
+    let (rig, poses) = common::rig::write_rigs(&dir);
+    files.push(rig);
+    files.extend(poses);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/validate_gltf.cjs");
+    let out = std::process::Command::new("node")
+        .arg(&script)
+        .args(&files)
+        .output()
+        .expect("run node (tools/setup installs Node.js and the glTF validator)");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    eprintln!("{text}");
+    assert!(out.status.success(), "the glTF validator found errors:\n{text}");
+    assert_eq!(text.matches(": 0 errors").count(), files.len(), "every file validated:\n{text}");
+}

@@ -84,7 +84,7 @@ pub fn still_rig() -> (Value, Vec<u8>) {
             {"type": "perspective", "perspective": {"yfov": 0.75, "aspectRatio": 1.0, "znear": 0.01}}
         ],
         "extensions": {"KHR_lights_punctual": {"lights": [
-            {"type": "spot", "intensity": 683.0, "spot": {"innerConeAngle": 0.7, "outerConeAngle": 0.7}}
+            {"type": "spot", "intensity": 683.0, "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.7}}
         ]}},
         "buffers": [{"byteLength": 0}],
         "bufferViews": [],

@@ -1,0 +1,379 @@
+"""Write the glTF fixtures of tests/data/blender/ with Blender's own glTF exporter (run by tools/blender_scenes).
+
+    blender -b --factory-startup --python tools/blender_scenes.py -- OUT_DIR
+
+Each scene is built here in Blender (Z up, meters, 24 fps), as a user would build it in the UI, and exported with the
+exporter's defaults except where a comment says why. A scene that animates is also exported still at a few frames
+(`NAME@FRAME.glb`, animations off): Blender's own evaluation of the pose, which `render --time FRAME/24` of the
+animated file must reproduce.
+"""
+import json
+import math
+import os
+import sys
+
+import bpy
+from mathutils import Vector
+
+from io_scene_gltf2.blender.com.gltf2_blender_material_helpers import create_settings_group
+
+OUT = sys.argv[sys.argv.index("--") + 1]
+FPS = 24
+# What Blender says of each exported scene, for the tests (blender.json): per file, per frame, each mesh object's
+# world-space bounds (glTF axes: x, z, -y of Blender's) and triangle count as Blender evaluates them, and the
+# lights' power.
+FACTS = {}
+
+
+def reset():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.fps = FPS
+    sc.frame_start = 1
+    sc.frame_end = 48
+    # The cameras' aspect ratio (the exporter writes it): 16:9.
+    sc.render.resolution_x = 640
+    sc.render.resolution_y = 360
+
+
+def link(ob):
+    bpy.context.scene.collection.objects.link(ob)
+    return ob
+
+
+def active():
+    return bpy.context.view_layer.objects.active
+
+
+def principled(name):
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    return m, m.node_tree.nodes["Principled BSDF"]
+
+
+def glass(name, ior=1.45):
+    m, b = principled(name)
+    b.inputs["Metallic"].default_value = 0.0
+    b.inputs["Roughness"].default_value = 0.0
+    b.inputs["IOR"].default_value = ior
+    b.inputs["Transmission"].default_value = 1.0
+    return m
+
+
+def colored_glass(name, color, density, ior=1.5):
+    """Glass with a Volume Absorption node and the exporter's settings group (KHR_materials_volume)."""
+    m = glass(name, ior)
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    absorb = nodes.new("ShaderNodeVolumeAbsorption")
+    absorb.inputs["Color"].default_value = (*color, 1.0)
+    absorb.inputs["Density"].default_value = density
+    links.new(absorb.outputs["Volume"], nodes["Material Output"].inputs["Volume"])
+    group = nodes.new("ShaderNodeGroup")
+    group.node_tree = create_settings_group("glTF Material Output")
+    group.inputs["Thickness"].default_value = 0.3
+    # A volume is closed: its material is one-sided (the validator warns of a double-sided volume).
+    m.use_backface_culling = True
+    return m
+
+
+def diffuse(name, rgb):
+    m, b = principled(name)
+    b.inputs["Base Color"].default_value = (*rgb, 1.0)
+    b.inputs["Metallic"].default_value = 0.0
+    b.inputs["Roughness"].default_value = 0.6
+    return m
+
+
+def mirror(name):
+    m, b = principled(name)
+    b.inputs["Base Color"].default_value = (0.9, 0.9, 0.9, 1.0)
+    b.inputs["Metallic"].default_value = 1.0
+    b.inputs["Roughness"].default_value = 0.0
+    return m
+
+
+def give(ob, m):
+    ob.data.materials.clear()
+    ob.data.materials.append(m)
+    return ob
+
+
+def smooth(ob):
+    for p in ob.data.polygons:
+        p.use_smooth = True
+    return ob
+
+
+def floor(size=4.0):
+    bpy.ops.mesh.primitive_plane_add(size=size, location=(0, 0, 0))
+    ob = active()
+    ob.name = "Floor"
+    return give(ob, diffuse("Floor", (0.8, 0.8, 0.8)))
+
+
+def spot(location=(0, 0, 2.2), power=60.0, size_deg=70.0, blend=0.15, name="Spot"):
+    light = bpy.data.lights.new(name, "SPOT")
+    light.energy = power
+    light.spot_size = math.radians(size_deg)
+    light.spot_blend = blend
+    ob = link(bpy.data.objects.new(name, light))
+    ob.location = location
+    # A light shines down its -Z: straight down.
+    return ob
+
+
+def cameras(main_location=(2.6, -2.6, 2.0), target=(0, 0, 0.4)):
+    """A perspective `Camera` aimed at `target`, and an orthographic `Top` looking straight down (its image's up is
+    Blender's +Y, glTF's -Z)."""
+    cam = bpy.data.cameras.new("Camera")
+    cam.lens = 40
+    ob = link(bpy.data.objects.new("Camera", cam))
+    ob.location = main_location
+    direction = Vector(target) - Vector(main_location)
+    ob.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
+    top = bpy.data.cameras.new("Top")
+    top.type = "ORTHO"
+    top.ortho_scale = 4.0
+    t = link(bpy.data.objects.new("Top", top))
+    t.location = (0, 0, 4.0)
+    return ob, t
+
+
+def key(ob, path, frames_values, index=-1):
+    """Keyframes of `ob.path` at (frame, value), linear between them."""
+    for frame, value in frames_values:
+        setattr(ob, path, value)
+        ob.keyframe_insert(path, frame=frame, index=index)
+    data = ob.animation_data if hasattr(ob, "animation_data") else None
+    if data and data.action:
+        for fc in data.action.fcurves:
+            for kp in fc.keyframe_points:
+                kp.interpolation = "LINEAR"
+
+
+def facts(name, frames):
+    """Blender's own evaluation of the scene at each of `frames`."""
+    sc = bpy.context.scene
+    out = {"frames": {}, "lights": {}}
+    for f in frames:
+        sc.frame_set(f)
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        objects = {}
+        for ob in sc.objects:
+            if ob.type != "MESH":
+                continue
+            ev = ob.evaluated_get(depsgraph)
+            me = ev.to_mesh()
+            me.calc_loop_triangles()
+            pts = [ev.matrix_world @ v.co for v in me.vertices]
+            gl = [(p.x, p.z, -p.y) for p in pts]
+            lo = [min(p[k] for p in gl) for k in range(3)]
+            hi = [max(p[k] for p in gl) for k in range(3)]
+            objects[ob.name] = {"min": lo, "max": hi, "triangles": len(me.loop_triangles)}
+            ev.to_mesh_clear()
+        out["frames"][str(f)] = objects
+    for ob in sc.objects:
+        if ob.type == "LIGHT":
+            out["lights"][ob.name] = {"type": ob.data.type, "watts": ob.data.energy}
+    sc.frame_set(1)
+    FACTS[name] = out
+
+
+def export(name, apply_modifiers=False, animations=True):
+    path = os.path.join(OUT, name + ".glb")
+    bpy.ops.export_scene.gltf(
+        filepath=path,
+        export_format="GLB",
+        export_cameras=True,
+        export_lights=True,
+        export_apply=apply_modifiers,
+        export_animations=animations,
+        # A still export is the pose at the current frame (the exporter's default is frame 0's).
+        export_current_frame=not animations,
+        # Every frame sampled (the exporter's default), so that the file holds Blender's own evaluation.
+        export_force_sampling=True,
+    )
+    print("wrote", path, os.path.getsize(path), "bytes")
+
+
+def export_poses(name, frames, apply_modifiers=False):
+    """The animated scene, and Blender's still pose at each of `frames` (NAME@FRAME.glb)."""
+    facts(name, frames)
+    export(name, apply_modifiers)
+    for f in frames:
+        bpy.context.scene.frame_set(f)
+        export(f"{name}@{f}", apply_modifiers, animations=False)
+    bpy.context.scene.frame_set(1)
+
+
+def suzanne(location, subdivisions=1, name="Suzanne", scale=0.35):
+    bpy.ops.mesh.primitive_monkey_add(size=2.0, location=location)
+    ob = active()
+    ob.name = name
+    ob.scale = (scale, scale, scale)
+    smooth(ob)
+    mod = ob.modifiers.new("Subdivision", "SUBSURF")
+    mod.levels = subdivisions
+    mod.render_levels = subdivisions
+    return ob
+
+
+def ball(name, radius, location=(0, 0, 0)):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16, radius=radius, location=location)
+    ob = active()
+    ob.name = name
+    return smooth(ob)
+
+
+def scene_glass_modifiers():
+    """A still glass Suzanne with a subdivision and a solidify-free bevel-free stack: one Subdivision Surface
+    modifier (applied by the exporter), turned and lifted by her node."""
+    reset()
+    floor()
+    s = give(suzanne((0.0, 0.0, 0.55)), glass("Glass"))
+    s.rotation_euler = (math.radians(-20), 0, math.radians(30))
+    spot()
+    cameras()
+    facts("glass_modifiers", [1])
+    export("glass_modifiers", apply_modifiers=True)
+
+
+def scene_two_objects():
+    """Blender writes one animation per animated object: a glass Suzanne (subdivided) turning about her vertical
+    axis over 2 s, and a glass ball parented to an empty that slides across in 1.5 s."""
+    reset()
+    floor()
+    s = give(suzanne((-0.35, 0.0, 0.55), scale=0.3), glass("Glass"))
+    key(s, "rotation_euler", [(1, (0, 0, 0)), (48, (0, 0, 2 * math.pi))])
+    rig = link(bpy.data.objects.new("Slider", None))
+    rig.location = (0.2, -0.5, 0.35)
+    key(rig, "location", [(1, (0.2, -0.5, 0.35)), (36, (0.55, 0.5, 0.45))])
+    b = give(ball("Ball", 0.18), glass("Ball glass", 1.5))
+    b.parent = rig
+    b.location = (0.05, 0.0, 0.1)
+    spot()
+    cameras()
+    export_poses("two_objects", [1, 18, 40], apply_modifiers=True)
+
+
+def scene_rig():
+    """A parented, animated rig: an empty that moves and turns, a glass ball under it (its own offset, turn and
+    scale, and a pulsing scale), and a glass cube under the ball that follows both."""
+    reset()
+    floor()
+    rig = link(bpy.data.objects.new("Rig", None))
+    key(rig, "location", [(1, (-0.3, 0.1, 0.3)), (48, (0.3, -0.1, 0.4))])
+    key(rig, "rotation_euler", [(1, (0, 0, 0)), (48, (0, 0, math.radians(120)))])
+    b = give(ball("Ball", 0.2), glass("Glass"))
+    b.parent = rig
+    b.location = (0.2, 0.0, 0.15)
+    b.rotation_euler = (math.radians(15), 0, 0)
+    key(b, "scale", [(1, (1.0, 1.0, 1.0)), (24, (1.2, 0.9, 1.1)), (48, (1.0, 1.0, 1.0))])
+    bpy.ops.mesh.primitive_cube_add(size=0.15)
+    c = give(active(), glass("Cube glass", 1.6))
+    c.name = "Cube"
+    c.parent = b
+    c.location = (-0.15, 0.35, 0.3)
+    c.rotation_euler = (0, math.radians(30), math.radians(10))
+    spot(location=(0, 0, 2.4))
+    cameras()
+    export_poses("rig", [1, 20, 48])
+
+
+def scene_shape_keys():
+    """A glass slab whose top bulges into a lens (an animated shape key) and leans (a still one, at 0.4)."""
+    reset()
+    floor()
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=16, y_subdivisions=16, size=0.8, location=(0, 0, 0.5))
+    top = active()
+    # A closed slab: the grid, extruded down.
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.extrude_region_move(TRANSFORM_OT_translate={"value": (0, 0, -0.12)})
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.normals_make_consistent(inside=False)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    slab = smooth(give(top, glass("Glass", 1.5)))
+    slab.name = "Slab"
+    slab.shape_key_add(name="Basis")
+    bulge = slab.shape_key_add(name="Bulge", from_mix=False)
+    lean = slab.shape_key_add(name="Lean", from_mix=False)
+    for i, v in enumerate(slab.data.vertices):
+        co = v.co
+        if co.z > -1e-6:
+            r2 = (co.x * co.x + co.y * co.y) / (0.4 * 0.4)
+            bulge.data[i].co = co + Vector((0, 0, 0.15 * max(0.0, 1.0 - r2)))
+        lean.data[i].co = co + Vector((0.15 * co.z + 0.05 * co.y, 0, 0))
+    lean.value = 0.4
+    for frame, value in [(1, 0.0), (48, 1.0)]:
+        bulge.value = value
+        bulge.keyframe_insert("value", frame=frame)
+    for fc in slab.data.shape_keys.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            kp.interpolation = "LINEAR"
+    spot(location=(0, 0, 2.0), size_deg=60)
+    cameras()
+    export_poses("shape_keys", [1, 24, 48])
+
+
+def prism(name, location):
+    """A right triangular prism (not symmetric under x → -x)."""
+    verts = [(0, 0, 0), (0.4, 0, 0), (0, 0, 0.3), (0, 0.4, 0), (0.4, 0.4, 0), (0, 0.4, 0.3)]
+    faces = [(0, 2, 1), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5)]
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(verts, [], faces)
+    me.update()
+    ob = link(bpy.data.objects.new(name, me))
+    ob.location = location
+    return ob
+
+
+def scene_mirror(applied):
+    """A steep mirror throwing a patch of the spot onto the floor beside it, and a glass prism mirrored by its node's negative x scale
+    (`applied`: the same scene with the mirroring applied to the mesh, so that no node scale is negative)."""
+    reset()
+    floor()
+    bpy.ops.mesh.primitive_plane_add(size=4.0, location=(0, 2.0, 2.0), rotation=(math.radians(90), 0, 0))
+    wall = give(active(), diffuse("Wall", (0.7, 0.7, 0.7)))
+    wall.name = "Wall"
+    bpy.ops.mesh.primitive_plane_add(size=0.6, location=(0.5, -0.95, 0.45), rotation=(math.radians(-60), 0, 0))
+    m = give(active(), mirror("Mirror"))
+    m.name = "Mirror"
+    p = give(prism("Prism", (-0.3, -0.4, 0.35)), glass("Glass", 1.5))
+    p.scale = (-1.0, 1.0, 1.0)
+    p.rotation_euler = (0, 0, math.radians(20))
+    if applied:
+        bpy.ops.object.select_all(action="DESELECT")
+        p.select_set(True)
+        bpy.context.view_layer.objects.active = p
+        bpy.ops.object.transform_apply(location=False, rotation=False, scale=True)
+    spot(location=(0.2, -0.35, 2.0), size_deg=100)
+    cameras()
+    name = "mirror_applied" if applied else "mirror"
+    facts(name, [1])
+    export(name)
+
+
+def scene_colored_glass():
+    """An amber glass ball: Volume Absorption (exported as KHR_materials_volume attenuation) in clear glass."""
+    reset()
+    floor()
+    b = give(ball("Amber", 0.3, (0, 0, 0.5)), colored_glass("Amber", (0.9, 0.55, 0.2), 2.0))
+    spot()
+    cameras()
+    facts("colored_glass", [1])
+    export("colored_glass")
+
+
+os.makedirs(OUT, exist_ok=True)
+scene_glass_modifiers()
+scene_two_objects()
+scene_rig()
+scene_shape_keys()
+scene_mirror(False)
+scene_mirror(True)
+scene_colored_glass()
+with open(os.path.join(OUT, "blender.json"), "w") as f:
+    json.dump(FACTS, f, indent=1, sort_keys=True)
+    f.write("\n")
+print("wrote", os.path.join(OUT, "blender.json"))
