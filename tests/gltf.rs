@@ -624,3 +624,194 @@ fn the_khronos_validator_finds_no_error() {
     assert!(out.status.success(), "the glTF validator found errors:\n{text}");
     assert_eq!(text.matches(": 0 errors").count(), files.len(), "every file validated:\n{text}");
 }
+
+/// Bytes of `v` (f32 or u8/u16 scalars) appended to `bin` at a 4-byte boundary as a new bufferView (with
+/// `stride`, for interleaved data); returns the view's index.
+fn add_view(doc: &mut Value, bin: &mut Vec<u8>, bytes: &[u8], stride: Option<usize>) -> usize {
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let views = doc["bufferViews"].as_array_mut().unwrap();
+    let mut v = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
+    if let Some(s) = stride {
+        v["byteStride"] = json!(s);
+    }
+    views.push(v);
+    let index = views.len() - 1;
+    bin.extend_from_slice(bytes);
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    index
+}
+
+fn push_accessor(doc: &mut Value, acc: Value) -> usize {
+    let accessors = doc["accessors"].as_array_mut().unwrap();
+    accessors.push(acc);
+    accessors.len() - 1
+}
+
+/// The twin with what exporters write beyond the basics: a glass cube stored interleaved (positions and normals
+/// in one byteStride-24 view) with u8 indices; the same cube raised by a sparse accessor; raised again by a
+/// morph target whose displacements are a sparse accessor with no bufferView, at a still weight of 1; the cube
+/// placed by a `matrix`; mirrored by a negative scale; skinned (its node's own transform is ignored); a light with
+/// a `range`; a second scene that the file's `scene` picks.
+fn exporters_gltf() -> (Value, Vec<u8>) {
+    let (mut doc, mut bin) = gltf_scene();
+    let cube = mesh::cube(Vec3::splat(0.2));
+    let interleaved: Vec<f32> = cube
+        .positions
+        .iter()
+        .zip(&cube.normals)
+        .flat_map(|(p, n)| p.to_array().into_iter().chain(n.to_array()))
+        .collect();
+    let view = add_view(&mut doc, &mut bin, bytemuck::cast_slice(&interleaved), Some(24));
+    let (lo, hi) = cube.bounds();
+    let n = cube.positions.len();
+    let pos = push_accessor(
+        &mut doc,
+        json!({"bufferView": view, "componentType": 5126, "count": n, "type": "VEC3",
+        "min": lo.to_array(), "max": hi.to_array()}),
+    );
+    let nrm = push_accessor(
+        &mut doc,
+        json!({"bufferView": view, "byteOffset": 12, "componentType": 5126, "count": n, "type": "VEC3"}),
+    );
+    let idx8: Vec<u8> = cube.indices.iter().map(|&i| i as u8).collect();
+    let iv = add_view(&mut doc, &mut bin, &idx8, None);
+    let idx = push_accessor(
+        &mut doc,
+        json!({"bufferView": iv, "componentType": 5121, "count": idx8.len(), "type": "SCALAR"}),
+    );
+    // The top face's vertices, raised 0.1 m (sparse: u16 indices, then the values).
+    let top: Vec<u16> = (0..n as u16).filter(|&k| cube.positions[k as usize].y > 0.0).collect();
+    let si = add_view(&mut doc, &mut bin, bytemuck::cast_slice(&top), None);
+    let raised: Vec<f32> = top.iter().flat_map(|&k| (cube.positions[k as usize] + Vec3::Y * 0.1).to_array()).collect();
+    let sv = add_view(&mut doc, &mut bin, bytemuck::cast_slice(&raised), None);
+    let sparse = |values: usize| {
+        json!({"count": top.len(), "indices": {"bufferView": si, "componentType": 5123},
+        "values": {"bufferView": values}})
+    };
+    let up = push_accessor(
+        &mut doc,
+        json!({"bufferView": view, "componentType": 5126, "count": n, "type": "VEC3",
+        "min": lo.to_array(), "max": (hi + Vec3::Y * 0.1).to_array(), "sparse": sparse(sv)}),
+    );
+    let lift: Vec<f32> = top.iter().flat_map(|_| [0.0, 0.1, 0.0]).collect();
+    let lv = add_view(&mut doc, &mut bin, bytemuck::cast_slice(&lift), None);
+    let delta = push_accessor(
+        &mut doc,
+        json!({"componentType": 5126, "count": n, "type": "VEC3",
+        "min": [0.0, 0.0, 0.0], "max": [0.0, 0.1, 0.0], "sparse": sparse(lv)}),
+    );
+    let prim = |p: usize| json!({"attributes": {"POSITION": p, "NORMAL": nrm}, "indices": idx, "material": 1});
+    let mut morphing = prim(pos);
+    morphing["targets"] = json!([{"POSITION": delta}]);
+    let meshes = doc["meshes"].as_array_mut().unwrap();
+    meshes.push(json!({"name": "interleaved", "primitives": [prim(pos)]}));
+    meshes.push(json!({"name": "sparse", "primitives": [prim(up)]}));
+    meshes.push(json!({"name": "morphed", "primitives": [morphing], "weights": [1.0]}));
+    // Column-major: scale 0.5, a turn of 90° about y, then (0.4, 0.5, 0.4).
+    let m = glam::Mat4::from_scale_rotation_translation(
+        Vec3::splat(0.5),
+        glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+        Vec3::new(0.4, 0.5, 0.4),
+    );
+    let ibm = add_view(
+        &mut doc,
+        &mut bin,
+        bytemuck::cast_slice(&glam::Mat4::from_translation(-Vec3::Y * 0.5).to_cols_array()),
+        None,
+    );
+    let ibm = push_accessor(&mut doc, json!({"bufferView": ibm, "componentType": 5126, "count": 1, "type": "MAT4"}));
+    doc["skins"] = json!([{"joints": [10], "inverseBindMatrices": ibm}]);
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    nodes.extend([
+        json!({"name": "interleaved", "mesh": 2, "translation": [-0.4, 0.5, -0.4]}),
+        json!({"name": "sparse", "mesh": 3, "translation": [0.4, 0.5, -0.4]}),
+        json!({"name": "morphed", "mesh": 4, "translation": [-0.4, 0.5, 0.4]}),
+        json!({"name": "matrix", "mesh": 2, "matrix": m.to_cols_array()}),
+        json!({"name": "mirrored", "mesh": 2, "translation": [0.0, 0.8, 0.0], "scale": [-1.0, 1.0, 1.0]}),
+        json!({"name": "skinned", "mesh": 2, "skin": 0, "translation": [5.0, 5.0, 5.0]}),
+        json!({"name": "joint", "translation": [0.0, 0.5, 0.0]}),
+    ]);
+    doc["scenes"] = json!([{"nodes": [0, 2, 3]}, {"nodes": [0, 2, 3, 4, 5, 6, 7, 8, 9, 10]}]);
+    doc["scene"] = json!(1);
+    doc["extensions"]["KHR_lights_punctual"]["lights"][0]["range"] = json!(10.0);
+    (doc, bin)
+}
+
+/// What exporters write, as the glTF 2.0 spec means it: interleaved vertex data and u8 indices, sparse accessors
+/// (with and without a bufferView), still morph weights, `matrix` nodes, mirrored nodes, skins (a warning naming
+/// the node; the mesh at its bind pose), a light's `range` (a warning), several scenes (the file's `scene`), and
+/// a `.glb` whose texture is an image in a bufferView. The file renders, and the warnings reach the user.
+#[test]
+fn what_exporters_write_loads_as_the_spec_says() {
+    let dir = out_dir("gltf_exporters");
+    let (doc, bin) = exporters_gltf();
+    let path = write(&dir, "exporters.glb", glb(&doc, &bin));
+    let s = Scene::load(&path).unwrap();
+    let bounds =
+        |name: &str| s.objects.iter().find(|o| o.name == name).unwrap_or_else(|| panic!("{name}")).mesh.bounds();
+    let cube = |at: Vec3, top: f32| (at - Vec3::splat(0.1), at + Vec3::new(0.1, 0.1 + top, 0.1));
+    let same = |a: (Vec3, Vec3), b: (Vec3, Vec3)| close(a.0, b.0) && close(a.1, b.1);
+    assert!(same(bounds("interleaved"), cube(Vec3::new(-0.4, 0.5, -0.4), 0.0)), "{:?}", bounds("interleaved"));
+    assert!(same(bounds("sparse"), cube(Vec3::new(0.4, 0.5, -0.4), 0.1)), "{:?}", bounds("sparse"));
+    assert!(same(bounds("morphed"), cube(Vec3::new(-0.4, 0.5, 0.4), 0.1)), "{:?}", bounds("morphed"));
+    let (lo, hi) = bounds("matrix");
+    assert!(close(lo, Vec3::new(0.35, 0.45, 0.35)) && close(hi, Vec3::new(0.45, 0.55, 0.45)), "{lo} {hi}");
+    // Mirrored: the cube (symmetric) where it was, its triangles still wound outward (positive volume).
+    let mirrored = &s.objects.iter().find(|o| o.name == "mirrored").unwrap().mesh;
+    let volume: f32 = mirrored
+        .indices
+        .chunks(3)
+        .map(|t| {
+            let p = |k: usize| mirrored.positions[t[k] as usize];
+            p(0).dot(p(1).cross(p(2))) / 6.0
+        })
+        .sum();
+    assert!((volume - 0.008).abs() < 1e-5, "mirrored cube's volume {volume}");
+    // Skinned: at its bind pose, the joint (0, 0.5, 0) times its inverse bind matrix: the mesh where it was
+    // modelled, the node's own (5, 5, 5) ignored.
+    assert!(same(bounds("skinned"), cube(Vec3::ZERO, 0.0)), "{:?}", bounds("skinned"));
+    assert_eq!(s.objects.len(), 7, "scene 1: the floor and six cubes (scene 0 has no glass)");
+    // A GLB whose base color texture is a PNG in a bufferView.
+    let (mut doc, mut bin) = gltf_scene();
+    let png = dir.join("blocks.png");
+    write_block_texture(&png);
+    let image = add_view(&mut doc, &mut bin, &std::fs::read(&png).unwrap(), None);
+    let uvs = add_view(&mut doc, &mut bin, bytemuck::cast_slice(&mesh::plane(2.0, 2.0).uvs), None);
+    let uv = push_accessor(&mut doc, json!({"bufferView": uvs, "componentType": 5126, "count": 4, "type": "VEC2"}));
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(uv);
+    doc["images"] = json!([{"bufferView": image, "mimeType": "image/png"}]);
+    doc["textures"] = json!([{"source": 0}]);
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    let t = Scene::load(&write(&dir, "textured.glb", glb(&doc, &bin))).unwrap();
+    assert_eq!(t.textures.len(), 1);
+    assert_eq!((t.textures[0].width, t.textures[0].height), (64, 64));
+    // The file renders, with each warning on one line.
+    let (stats, _) = render(&dir, "exporters", path.to_str().unwrap(), &["--level", "2", "--size", "64x64"]);
+    assert!(stats["photons_splatted"].as_u64().unwrap() > 10_000, "{}", stats["photons_splatted"]);
+    // One bottom-level BVH per distinct mesh, however many nodes instance it: the floor, the cube (four nodes),
+    // and the raised cube (the sparse one and the morphed one hold the same triangles).
+    assert_eq!(stats["exact_transport"]["bvh"]["triangles"], 2 + 12 + 12, "{}", stats["exact_transport"]["bvh"]);
+    let o = caustics(&[
+        "render",
+        "--scene",
+        path.to_str().unwrap(),
+        "--level",
+        "1",
+        "--size",
+        "32x32",
+        "--out",
+        dir.join("w.png").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    for needle in [
+        "nodes[9] \"skinned\": skins are not supported: mesh \"skinned\" stands at its bind pose",
+        "lights[0].range: range 10 m is ignored",
+        "the file has 2 scenes: scenes[1] (the file's `scene`) is loaded",
+        "extension `EXT_made_up` is not supported and is ignored",
+    ] {
+        assert_eq!(stderr.matches(needle).count(), 1, "`{needle}` once in:\n{stderr}");
+    }
+}

@@ -50,18 +50,32 @@ pub(super) struct Instances {
 
 impl Instances {
     /// A loaded scene: each object its own mesh (its world-space triangles) with the identity transform.
-    /// An animated object's mesh is its object-space mesh, placed where it stands at the scene's time.
+    /// An object placed from its own space (animated, or glTF) instances its object-space mesh, placed where it
+    /// stands at the scene's time; objects of the same mesh that does not deform (a glTF mesh under several
+    /// nodes) share it, and so its bottom-level BVH.
     pub fn of(scene: &crate::scene::Scene) -> Instances {
-        let (meshes, transforms): (Vec<Arc<Mesh>>, Vec<Mat4>) = scene
-            .objects
-            .iter()
-            .map(|o| match &o.animation {
-                Some(a) => (Arc::new(a.mesh.clone()), a.transform_at(scene.time)),
-                None => (Arc::new(o.mesh.clone()), Mat4::IDENTITY),
-            })
-            .unzip();
-        let of_object = transforms.into_iter().enumerate().collect();
-        let deforming = scene.objects.iter().map(|o| o.animation.as_ref().and_then(|a| a.deform_bounds())).collect();
+        let mut meshes: Vec<Arc<Mesh>> = Vec::new();
+        let mut deforming: Vec<Option<(glam::Vec3, glam::Vec3)>> = Vec::new();
+        let mut shared: std::collections::HashMap<u64, Vec<usize>> = Default::default();
+        let mut of_object = Vec::with_capacity(scene.objects.len());
+        for o in &scene.objects {
+            let (mesh, transform, deform) = match &o.animation {
+                Some(a) => (&a.mesh, a.transform_at(scene.time), a.deform_bounds()),
+                None => (&o.mesh, Mat4::IDENTITY, None),
+            };
+            let same = |k: &usize| meshes[*k].as_ref() == mesh && deforming[*k].is_none();
+            let key = deform.is_none().then(|| content_hash(mesh));
+            let found = key.and_then(|h| shared.get(&h).and_then(|ks| ks.iter().copied().find(same)));
+            let index = found.unwrap_or_else(|| {
+                meshes.push(Arc::new(mesh.clone()));
+                deforming.push(deform);
+                if let Some(h) = key {
+                    shared.entry(h).or_default().push(meshes.len() - 1);
+                }
+                meshes.len() - 1
+            });
+            of_object.push((index, transform));
+        }
         Instances { meshes, of_object, moved: Default::default(), deforming, deformed: Default::default() }
     }
 
@@ -105,6 +119,18 @@ impl Instances {
         self.moved.clear();
         self.deformed.clear();
     }
+}
+
+/// A hash of a mesh's data (equal meshes hash alike).
+fn content_hash(m: &Mesh) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let floats = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array()).map(f32::to_bits).collect::<Vec<u32>>();
+    floats(&m.positions).hash(&mut h);
+    floats(&m.normals).hash(&mut h);
+    m.indices.hash(&mut h);
+    m.uvs.iter().flat_map(|p| p.to_array()).map(f32::to_bits).collect::<Vec<u32>>().hash(&mut h);
+    h.finish()
 }
 
 /// A mesh a renderer can draw: indices in range and a multiple of three, one normal per position, every coordinate

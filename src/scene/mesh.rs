@@ -3,7 +3,7 @@
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 /// Triangles: positions, one normal per position, and indices (three per triangle).
 pub struct Mesh {
     /// Vertex positions.
