@@ -271,3 +271,56 @@ fn the_default_size_follows_the_cameras_aspect() {
     let img = caustics::image_io::read_exr(&out).unwrap();
     assert_eq!((img.width, img.height), (64, 64));
 }
+
+/// Blender writes one animation per animated object, and they all play; `--animation` plays one alone (by name
+/// or index): Suzanne's turn alone leaves the ball at its first pose, the slider's alone leaves Suzanne still, each
+/// where Blender's frame puts what moves. An unknown one exits 2 naming the file's animations.
+#[test]
+fn one_animation_plays_alone_when_asked() {
+    use caustics::scene::{AnimationChoice, LoadOptions};
+    let facts = facts();
+    let blender = |frame: &str, obj: &str| {
+        let b = &facts["two_objects"]["frames"][frame][obj];
+        let v = |k: &str| {
+            Vec3::from_slice(&b[k].as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>())
+        };
+        (v("min"), v("max"))
+    };
+    let at = |choice: AnimationChoice, obj: &str| {
+        let s = Scene::load_with(&fixture("two_objects"), &LoadOptions { animation: choice }).unwrap();
+        assert_eq!(s.animations, vec!["SuzanneAction".to_string(), "SliderAction".to_string()]);
+        let (lo, hi, _) = object_bounds(&s.at_time(18.0 / FPS), obj).unwrap();
+        (lo, hi)
+    };
+    let near =
+        |a: (Vec3, Vec3), b: (Vec3, Vec3)| (a.0 - b.0).abs().max_element().max((a.1 - b.1).abs().max_element()) < 1e-4;
+    for (choice, turns, slides) in [
+        (AnimationChoice::All, true, true),
+        (AnimationChoice::Index(0), true, false),
+        (AnimationChoice::Name("SliderAction".into()), false, true),
+    ] {
+        let frame = |moves: bool| if moves { "18" } else { "1" };
+        assert!(near(at(choice.clone(), "Suzanne"), blender(frame(turns), "Suzanne")), "{choice:?}: Suzanne");
+        assert!(near(at(choice.clone(), "Ball"), blender(frame(slides), "Ball")), "{choice:?}: the ball");
+    }
+    let dir = out_dir("blender_animation_choice");
+    let out = dir.join("x.png");
+    let o = caustics(&[
+        "render",
+        "--scene",
+        fixture("two_objects").to_str().unwrap(),
+        "--animation",
+        "Walk",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(
+            "--animation Walk: no animation has that name (the file has 0 \"SuzanneAction\", 1 \"SliderAction\")"
+        ),
+        "{stderr}"
+    );
+    assert_no_output(&out);
+}

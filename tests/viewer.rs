@@ -605,3 +605,26 @@ fn an_animated_gltf_plays_as_its_poses_render() {
     let d = max_diff(&played, &posed);
     assert!(d <= 1, "the played frame differs from the still pose's by {d} levels");
 }
+
+/// `N` plays a glTF file's animations one at a time, then all together again (Blender's two-object export).
+#[test]
+fn the_n_key_switches_gltf_animations() {
+    let dir = out_dir("viewer_gltf_animations");
+    let x = Xvfb::start();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/blender/two_objects.glb");
+    for (presses, playing) in [
+        (0, serde_json::Value::Null),
+        (1, "SuzanneAction".into()),
+        (2, "SliderAction".into()),
+        (3, serde_json::Value::Null),
+    ] {
+        let script = dir.join(format!("n{presses}.txt"));
+        let mut steps: String = (0..presses).map(|_| "1 key n\n").collect();
+        steps.push_str("1 still\n");
+        std::fs::write(&script, steps).unwrap();
+        let mut args = vec!["--scene", scene, "--size", "96x54", "--script", script.to_str().unwrap()];
+        args.extend_from_slice(FAST);
+        let s = view_ok(&dir, &format!("n{presses}"), &x.display, &args);
+        assert_eq!(s["scene_animation"], playing, "after {presses} presses of N");
+    }
+}

@@ -1402,6 +1402,8 @@ impl Viewer {
             // The scene's animation: where it stands, whether it plays, and what the frames moved and displaced.
             "scene_time_s": self.scene_time,
             "scene_playing": self.scene_playing,
+            // A glTF file's animations: the one that plays (null: all of them).
+            "scene_animation": self.renderer.scene().playing.map(|i| self.renderer.scene().animations[i].clone()),
             "scene_update": {
                 "moved_objects": updates.moved_objects,
                 "deformed_objects": updates.deformed_objects,
