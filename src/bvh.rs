@@ -1025,6 +1025,66 @@ mod tests {
         nodes.iter().map(|n| (Vec3::from_slice(&n.lo[..3]), Vec3::from_slice(&n.hi[..3]))).collect()
     }
 
+    /// The refit: each node's box over `tris` (a deforming mesh's triangles in leaf order), children before
+    /// parents (the reverse of a depth-first order from the root), as glsl/refit.comp bounds them.
+    fn refit_boxes(built: &SceneBvh, r: &RefitMesh, tris: &[[Vec3; 3]]) -> Vec<(Vec3, Vec3)> {
+        let nodes = &built.refit_nodes[r.first_node as usize..];
+        let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); nodes.len()];
+        let mut order = vec![0usize];
+        let mut k = 0;
+        while k < order.len() {
+            let n = nodes[order[k]];
+            if n.tri_count == 0 {
+                order.push((n.left - r.first_node) as usize);
+                order.push((n.right - r.first_node) as usize);
+            }
+            k += 1;
+        }
+        for &k in order.iter().rev() {
+            let n = nodes[k];
+            boxes[k] = if n.tri_count > 0 {
+                let ts = &tris[(n.first_tri - r.first_tri) as usize..(n.first_tri - r.first_tri + n.tri_count) as usize];
+                ts.iter().flatten().fold(boxes[k], |(a, b), p| (a.min(*p), b.max(*p)))
+            } else {
+                let (a, b) = (boxes[(n.left - r.first_node) as usize], boxes[(n.right - r.first_node) as usize]);
+                (a.0.min(b.0), a.1.max(b.1))
+            };
+        }
+        boxes
+    }
+
+    /// The refit rule for morph targets, measured on Blender's shape-key export (a slab whose top bulges into a
+    /// lens, leaning): built once over the base mesh, refit at every sixth frame of its animation, against a tree
+    /// built afresh over the morphed mesh. The morph's triangles are read through their rest corners, as
+    /// glsl/morph.comp reads them.
+    #[test]
+    fn refit_morph_stays_near_a_fresh_build() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender/shape_keys.glb");
+        let scene = Scene::load(&path).expect("scene");
+        let a = scene.objects.iter().find_map(|o| o.animation.as_ref().filter(|a| a.deforms())).expect("a morph");
+        let morph = a.morph.as_ref().unwrap();
+        let rest = &a.mesh;
+        let m = Material::Dielectric { ior: 1.5, absorption: Vec3::ZERO, abbe: 0.0 };
+        let object = [BvhObject { mesh: 0, transform: Mat4::IDENTITY, material: &m }];
+        let built = SceneBvh::build(&[rest], &object, &[Some(morph.bounds(rest))]);
+        let r = built.refit_meshes[0].expect("refit data");
+        let corners = &built.rest_corners[r.rest_first as usize..(r.rest_first + r.tri_count) as usize];
+        let mut worst = 0.0f64;
+        for frame in (1..=48).step_by(6) {
+            let morphed = morph.apply(rest, &morph.weights_at(frame as f32 / 24.0));
+            let tris: Vec<[Vec3; 3]> = corners.iter().map(|c| c.map(|v| morphed.positions[v as usize])).collect();
+            let boxes = refit_boxes(&built, &r, &tris);
+            // Every box holds its triangles: the morph bounds them, as the GPU's refit does.
+            let (lo, hi) = morph.bounds(rest);
+            assert!(boxes[0].0.cmpge(lo).all() && boxes[0].1.cmple(hi).all(), "the root outgrew the morph's bounds");
+            let fresh = SceneBvh::build(&[&morphed], &object, &[]);
+            let ratio = sah(&built.single_nodes, &boxes) / sah(&fresh.single_nodes, &single_boxes(&fresh.single_nodes));
+            worst = worst.max(ratio);
+        }
+        eprintln!("morph refit SAH / fresh build SAH: worst {worst:.3}");
+        assert!(worst < 1.25, "the refit tree degraded past the rebuild threshold: {worst:.3}");
+    }
+
     /// The refit rule, measured: the pool's water (64² cells) built once at rest and refit for 20 s of its
     /// animation at 30 fps, against a tree built afresh over the displaced surface every second. Its cost (SAH) is
     /// what a ray pays; the rebuild threshold it must stay under is docs/design.md's (1.25×).
@@ -1057,29 +1117,7 @@ mod tests {
                 .iter()
                 .map(|g| g.p.map(|p| w.displace(Vec3::from_slice(&p[..3]), Vec3::Y, t).0))
                 .collect();
-            let nodes = &built.refit_nodes[r.first_node as usize..];
-            let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); nodes.len()];
-            let mut order = vec![0usize];
-            let mut k = 0;
-            while k < order.len() {
-                let n = nodes[order[k]];
-                if n.tri_count == 0 {
-                    order.push((n.left - r.first_node) as usize);
-                    order.push((n.right - r.first_node) as usize);
-                }
-                k += 1;
-            }
-            for &k in order.iter().rev() {
-                let n = nodes[k];
-                boxes[k] = if n.tri_count > 0 {
-                    let ts =
-                        &tris[(n.first_tri - r.first_tri) as usize..(n.first_tri - r.first_tri + n.tri_count) as usize];
-                    ts.iter().flatten().fold(boxes[k], |(a, b), p| (a.min(*p), b.max(*p)))
-                } else {
-                    let (a, b) = (boxes[(n.left - r.first_node) as usize], boxes[(n.right - r.first_node) as usize]);
-                    (a.0.min(b.0), a.1.max(b.1))
-                };
-            }
+            let boxes = refit_boxes(&built, &r, &tris);
             if frame % 30 != 0 {
                 continue;
             }

@@ -375,6 +375,21 @@ fn material(
     };
     let pbr = m.pbr_metallic_roughness();
     if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+        // What glTF's transmission has and this glass does not: a tint at each surface, and roughness.
+        let c = pbr.base_color_factor();
+        if c[..3].iter().any(|&x| x < 1.0) {
+            cx.warn(
+                &label,
+                &format!(
+                    "baseColorFactor ({}, {}, {}) tints transmitted light at each surface in glTF; this glass is clear \
+                     (KHR_materials_volume's attenuation colors it)",
+                    c[0], c[1], c[2]
+                ),
+            );
+        }
+        if pbr.roughness_factor() > 0.0 {
+            cx.warn(&label, &format!("roughnessFactor {}: the glass is rendered smooth", pbr.roughness_factor()));
+        }
         let ior = m.ior().unwrap_or(1.5);
         if !(ior.is_finite() && ior > 0.0) {
             return Err(cx.err(
