@@ -1,6 +1,7 @@
 //! glTF files written by Blender's own exporter (tests/data/blender, written by tools/blender_scenes with Blender
 //! 3.4 from scenes built there): glass with a modifier, a parented animated rig, two animated objects, a shape-key
-//! animation, a mirror beside a negatively scaled node, and colored glass. Each loads where Blender put everything
+//! animation, a mirror beside a negatively scaled node, colored glass, and a skinned cylinder (skins are not
+//! supported: it stands at its bind pose, which Blender's numbers give with the armature at rest). Each loads where Blender put everything
 //! (tests/data/blender/blender.json: Blender's own evaluation of each object's bounds), each animation renders at
 //! its frames as Blender's still export of that pose renders, and each renders what it must against the CPU
 //! reference.

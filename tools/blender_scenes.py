@@ -365,6 +365,36 @@ def scene_colored_glass():
     export("colored_glass")
 
 
+def scene_skinned():
+    """A glass cylinder skinned to an armature whose bone bends over the animation (the renderer has no skins: it
+    stands at its bind pose, which blender.json records with the armature at rest)."""
+    reset()
+    floor()
+    bpy.ops.object.armature_add(location=(0.1, 0.0, 0.2))
+    arm = active()
+    arm.name = "Armature"
+    bpy.ops.mesh.primitive_cylinder_add(vertices=24, radius=0.15, depth=0.6, location=(0.1, 0.0, 0.5))
+    cyl = smooth(give(active(), glass("Glass", 1.5)))
+    cyl.name = "Cylinder"
+    bpy.ops.object.select_all(action="DESELECT")
+    cyl.select_set(True)
+    arm.select_set(True)
+    bpy.context.view_layer.objects.active = arm
+    bpy.ops.object.parent_set(type="ARMATURE_AUTO")
+    bone = arm.pose.bones[0]
+    bone.rotation_mode = "XYZ"
+    key(bone, "rotation_euler", [(1, (0, 0, 0)), (48, (math.radians(40), 0, 0))])
+    for fc in arm.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            kp.interpolation = "LINEAR"
+    spot()
+    cameras()
+    arm.data.pose_position = "REST"
+    facts("skinned", [24])
+    arm.data.pose_position = "POSE"
+    export("skinned")
+
+
 os.makedirs(OUT, exist_ok=True)
 scene_glass_modifiers()
 scene_two_objects()
@@ -373,6 +403,7 @@ scene_shape_keys()
 scene_mirror(False)
 scene_mirror(True)
 scene_colored_glass()
+scene_skinned()
 with open(os.path.join(OUT, "blender.json"), "w") as f:
     json.dump(FACTS, f, indent=1, sort_keys=True)
     f.write("\n")
