@@ -1043,7 +1043,8 @@ mod tests {
         for &k in order.iter().rev() {
             let n = nodes[k];
             boxes[k] = if n.tri_count > 0 {
-                let ts = &tris[(n.first_tri - r.first_tri) as usize..(n.first_tri - r.first_tri + n.tri_count) as usize];
+                let ts =
+                    &tris[(n.first_tri - r.first_tri) as usize..(n.first_tri - r.first_tri + n.tri_count) as usize];
                 ts.iter().flatten().fold(boxes[k], |(a, b), p| (a.min(*p), b.max(*p)))
             } else {
                 let (a, b) = (boxes[(n.left - r.first_node) as usize], boxes[(n.right - r.first_node) as usize]);

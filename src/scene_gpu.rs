@@ -12,8 +12,8 @@ use glam::Mat4;
 use std::sync::Arc;
 
 /// The scene's objects as meshes and instances: per object (in the scene's order), the mesh it instances, in
-/// object space, and its transform (object → world). A scene loaded from a file has one mesh per object, its
-/// world-space triangles, with the identity.
+/// object space, and its transform (object → world) ([`crate::renderer`]'s `Instances::of` says how a loaded
+/// scene's objects become them).
 pub(crate) struct SceneInstances<'a> {
     pub meshes: &'a [Arc<Mesh>],
     /// (index into `meshes`, transform), one per scene object.

@@ -268,7 +268,8 @@ impl Renderer {
 
     /// Replace the scene (after moving the light, changing an IOR, ...): its triangles are uploaded again before
     /// the next frame when they changed. Lights and cameras are read every frame, so changing only them is free.
-    /// The scene's objects become its instances again, each its own mesh with the identity transform.
+    /// The scene's objects become its instances again: a TOML scene's still objects each their own mesh with the
+    /// identity transform, the others their object-space mesh with their placement.
     pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
         check_transport(&scene, &self.config)?;
         check_lights(&scene)?;

@@ -1,5 +1,6 @@
 //! The scene in code: meshes in object space, instances of them with a transform and a material, and the lights.
-//! A scene loaded from a file is the same thing: each of its objects is a mesh with the identity transform.
+//! A scene loaded from a file is the same thing: a TOML scene's still objects are each a mesh with the identity
+//! transform; an animated object, and every glTF object, its object-space mesh with its placement.
 //!
 //! The renderer keeps the instances' world-space triangles in its [`Scene`] (what the light views, the reference
 //! tracer and the stats read). Moving an instance rebuilds nothing: the next frame's scene update places its
@@ -49,7 +50,7 @@ pub(super) struct Instances {
 }
 
 impl Instances {
-    /// A loaded scene: each object its own mesh (its world-space triangles) with the identity transform.
+    /// A loaded scene: a still TOML object is its own mesh (its world-space triangles) with the identity transform.
     /// An object placed from its own space (animated, or glTF) instances its object-space mesh, placed where it
     /// stands at the scene's time; objects of the same mesh that does not deform (a glTF mesh under several
     /// nodes) share it, and so its bottom-level BVH.
@@ -305,7 +306,8 @@ impl Renderer {
         self.scene.time
     }
 
-    /// The transform instance `id` was placed with (the identity for a loaded scene's objects).
+    /// The transform instance `id` was placed with (for a loaded scene's objects: a glTF node's world transform,
+    /// an animated object's at the scene's time, the identity for a TOML scene's still objects).
     pub fn transform(&self, id: InstanceId) -> AppResult<Mat4> {
         Ok(self.instance(id)?.1)
     }

@@ -151,6 +151,14 @@ pub struct ViewArgs {
     pub print_controls: bool,
 }
 
+/// Each object's transform as the scene placed it (a glTF node's world transform; the identity for a TOML
+/// scene's still objects): what `R` puts a dragged object back to.
+fn initial_placements(renderer: &Renderer) -> Vec<glam::Mat4> {
+    (0..renderer.scene().objects.len())
+        .map(|i| renderer.transform(caustics::InstanceId::from_index(i)).unwrap_or(glam::Mat4::IDENTITY))
+        .collect()
+}
+
 fn pick_camera(scene: &Scene, name: Option<&str>) -> AppResult<Camera> {
     if name.is_none() {
         if let Some(c) = scene.cameras.iter().find(|c| matches!(c.projection, Projection::Perspective { .. })) {
@@ -575,9 +583,9 @@ impl Viewer {
             .first()
             .cloned()
             .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
-        let placements: Vec<glam::Mat4> = scene.objects.iter().map(|_| glam::Mat4::IDENTITY).collect();
         let (scene_playing, scene_time) = (scene.is_animated(), scene.time);
         let mut renderer = Renderer::new(device.clone(), scene, settings)?;
+        let placements = initial_placements(&renderer);
         let cpu_device = device.info.is_cpu();
         renderer.set_frames_in_flight(args.frames_in_flight.unwrap_or(if cpu_device { 1 } else { 2 }) as usize)?;
         let presenter = Presenter::new(&device);
@@ -903,6 +911,7 @@ impl Viewer {
         scene.set_time(self.scene_time);
         let name = next.map_or("all animations".to_string(), |i| format!("animation {i} \"{}\"", scene.animations[i]));
         self.renderer.set_scene(scene)?;
+        self.placements = initial_placements(&self.renderer);
         self.place_objects();
         eprintln!("playing {name}");
         Ok(())
