@@ -1,6 +1,7 @@
 //! Animated glTF renders as its pose renders still. A rig of nodes with non-identity rest transforms (a moving,
 //! turning parent; a child whose scale follows a cubic spline; a grandchild turned by steps; a mesh instanced by two
-//! nodes), animated by two animations as Blender writes them, is rendered at three times and compared with the
+//! nodes; a moving camera and a tilting spot light), animated by three animations as Blender writes them (one per
+//! animated thing), is rendered at three times and compared with the
 //! same file with each node's TRS at that time written in and the animations removed: the same photon count and a
 //! rel-L1 at 256² of at most 1e-4 on the caustics AOV and the linear beauty, under both transports; placed as
 //! `render --time` places it, and as playback moves it (the renderer's scene update: `render --sequence` and the
@@ -56,7 +57,7 @@ fn animated_gltf_renders_as_its_pose_renders_still() {
     let dir = out_dir("gltf_animation_pose");
     let (animated, stills) = write_rigs(&dir);
     let scene = Scene::load(&animated).expect("the animated rig loads");
-    assert_eq!(scene.animations, vec!["Rig".to_string(), "Glass".to_string()]);
+    assert_eq!(scene.animations, vec!["Rig".to_string(), "Glass".to_string(), "Lights".to_string()]);
     assert_eq!(scene.duration(), 1.5, "both animations play: the longer ends at 1.5 s");
     assert_eq!(scene.objects.len(), 4, "floor, cube, bead, and the cube's second instance");
     let (_lock, device) = gpu();
@@ -75,4 +76,21 @@ fn animated_gltf_renders_as_its_pose_renders_still() {
             assert_same_frames(&got, &want, &format!("{transport:?} at {t} s, played"));
         }
     }
+}
+
+/// `render --sequence` plays the rig as the renderer's scene update moves it, its camera included: the second of
+/// two frames from 0.25 s at 8 fps is the rig posed still at 0.375 s (measured: the same bytes).
+#[test]
+fn a_sequence_plays_the_rig_as_its_poses_render() {
+    let dir = out_dir("gltf_animation_sequence");
+    let (animated, stills) = write_rigs(&dir);
+    assert_eq!(TIMES[1], 0.375);
+    let frame = ["--camera", "main", "--size", "128x128", "--level", "3"];
+    let sequence = ["--sequence", "2", "--fps", "8", "--time", "0.25"];
+    let (s, _) = render(&dir, "frame_#", animated.to_str().unwrap(), &[&frame[..], &sequence[..]].concat());
+    assert_eq!(s["sequence"]["frames"], 2);
+    let played = dir.join("frame_1.png");
+    let (_, still) = render(&dir, "still", stills[1].to_str().unwrap(), &frame);
+    let read = |p: &std::path::Path| caustics::image_io::read_png(p).expect("PNG");
+    assert!(read(&played) == read(&still), "the sequence's second frame differs from the pose at 0.375 s");
 }

@@ -760,6 +760,10 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
         for k in 0..n {
             let t = args.scene.time + k as f32 / args.fps;
             session.renderer.set_time(t)?;
+            // An animated camera moves with its node.
+            if let Ok(c) = session.renderer.scene().camera(Some(&session.camera.name)) {
+                session.camera = c.clone();
+            }
             let (report, img) = session.frame(Some(aov))?;
             let image = img.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
             write_aov(&session, args, aov, &image, &sequence_path(&args.out, k), &mut extra)?;

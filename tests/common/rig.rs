@@ -1,6 +1,7 @@
 //! The animated rig of the glTF animation tests: nodes with non-identity rest transforms in a hierarchy (a moving,
 //! turning parent; a child whose scale follows a cubic spline; a grandchild turned by steps; a mesh instanced by two
-//! nodes), animated by two animations as Blender writes them; and the same rig posed still at a time.
+//! nodes; a moving camera and a tilting spot light), animated by three animations as Blender writes them; and the
+//! same rig posed still at a time.
 #![allow(dead_code)]
 
 use super::gltf_doc::*;
@@ -26,8 +27,9 @@ pub fn q(axis: Vec3, deg: f32) -> [f32; 4] {
     Quat::from_axis_angle(axis, deg.to_radians()).to_array()
 }
 
-/// The rig's two animations: "Rig" moves and turns the parent; "Glass" scales the child on a cubic spline, turns
-/// the grandchild by steps, and slides the second instance of the cube (starting after 0 s).
+/// The rig's three animations: "Rig" moves and turns the parent; "Glass" scales the child on a cubic spline, turns
+/// the grandchild by steps, and slides the second instance of the cube (starting after 0 s); "Lights" moves the
+/// main camera and tilts the spot light.
 pub fn channels() -> Vec<Vec<Channel>> {
     let c = |node, path, interpolation, times: &[f32], values: Vec<f32>| Channel {
         node,
@@ -60,7 +62,17 @@ pub fn channels() -> Vec<Vec<Channel>> {
             ),
             c(4, "translation", "LINEAR", &[0.25, 1.25], vec![-0.4, -0.15, 0.1, -0.3, -0.1, -0.2]),
         ],
+        vec![
+            // The main camera moves, and the spot light tilts by 8° about z.
+            c(7, "translation", "LINEAR", &[0.0, 1.5], vec![1.6, 1.7, 2.0, 1.9, 1.5, 2.1]),
+            c(6, "rotation", "LINEAR", &[0.0, 1.0], flat(&[q(Vec3::X, -90.0), tilted_down()])),
+        ],
     ]
+}
+
+/// The spot's last orientation: down, then turned 8° about z.
+fn tilted_down() -> [f32; 4] {
+    (Quat::from_axis_angle(Vec3::Z, 8f32.to_radians()) * Quat::from_axis_angle(Vec3::X, -90f32.to_radians())).to_array()
 }
 
 /// The rig without its animations: a floor, the cube (glass) under a parent node, a bead (denser glass) under
@@ -119,7 +131,7 @@ pub fn still_rig() -> (Value, Vec<u8>) {
     (doc, bin)
 }
 
-/// The rig with its two animations.
+/// The rig with its three animations.
 pub fn animated_rig() -> (Value, Vec<u8>) {
     let (mut doc, mut bin) = still_rig();
     let mut animations = Vec::new();
@@ -132,7 +144,7 @@ pub fn animated_rig() -> (Value, Vec<u8>) {
             list.push(json!({"sampler": samplers.len(), "target": {"node": ch.node, "path": ch.path}}));
             samplers.push(json!({"input": input, "output": output, "interpolation": ch.interpolation}));
         }
-        let name = ["Rig", "Glass"][a];
+        let name = ["Rig", "Glass", "Lights"][a];
         animations.push(json!({"name": name, "channels": list, "samplers": samplers}));
     }
     doc["animations"] = json!(animations);
