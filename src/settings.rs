@@ -133,12 +133,12 @@ pub enum Splat {
     Compute,
     /// The compute splat with contention control: a work group gathers its taps in a shared-memory window first.
     Tiled,
-    /// The fastest the device has, by the rule measured in docs/results.md: tiled on GPUs, compute on CPU devices.
+    /// The fastest the device has, by the rule measured in docs/experiments.md: tiled on GPUs, compute on CPU devices.
     Auto,
 }
 
 impl Splat {
-    /// The splat a device runs. `auto` follows the measured rule (docs/results.md, "Splat throughput"): on an H200 the
+    /// The splat a device runs. `auto` follows the measured rule (docs/experiments.md, "Splat throughput"): on an H200 the
     /// compute splats are 12-20x faster than the point draw and the tiled one is faster still where light
     /// focuses; on lavapipe the compute splat is 6-8x faster than the point draw, and the tiled one's barriers
     /// make it about 2x slower than the untiled one. Without float atomics: raster.

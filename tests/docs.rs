@@ -1,7 +1,8 @@
 //! The documentation agrees with the code: docs/scenes.md's key tables with the scene parser (both ways), docs/cli.md
 //! with clap's definitions (both ways), the environment and the stats JSON, docs/viewer.md with the viewer's
 //! controls; every relative link resolves and every file under docs/bench is named; the pipeline's step numbers
-//! cited in the code exist; no file names a work round; and no file refers to a document outside the repository.
+//! cited in the code exist; no file names a work round; no file refers to a document outside the repository; and the
+//! README and docs/results.md stay within their lengths.
 
 mod common;
 use caustics::scene::Scene;
@@ -614,4 +615,14 @@ fn cited_sections_exist() {
         }
     }
     assert!(bad.is_empty(), "citations of sections that do not exist:\n{}", bad.join("\n"));
+}
+
+/// The README stays a front page (at most 200 lines) and docs/results.md a page of current tables (at most 350);
+/// what was measured and replaced goes to docs/experiments.md.
+#[test]
+fn the_front_pages_stay_short() {
+    for (file, limit) in [("README.md", 200), ("docs/results.md", 350)] {
+        let n = read(file).lines().count();
+        assert!(n <= limit, "{file} has {n} lines; at most {limit} (move what was tried to docs/experiments.md)");
+    }
 }
