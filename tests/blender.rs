@@ -11,7 +11,7 @@ use caustics::image_io::RgbImage;
 use caustics::reference::{Aov as RefAov, Paths, RefParams};
 use caustics::scene::{Material, Scene};
 use caustics::settings::{Quality, Settings, Transport};
-use caustics::{Aov, AovData, FrameDesc, Renderer};
+use caustics::{Aov, Renderer};
 use common::*;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -96,15 +96,8 @@ fn settings(transport: Transport) -> Settings {
 
 /// A frame of `r` through camera `camera` at 256x144 (the cameras' 16:9): the float AOV and the photon count.
 fn frame(r: &mut Renderer, camera: &str, aov: Aov) -> (RgbImage, u64) {
-    let cam = r.scene().camera(Some(camera)).expect("camera").clone();
-    let view = r.camera_view(&cam, 256, 144);
-    let f = r.render(&FrameDesc::new(&view, Some(aov))).expect("frame");
-    match f.image {
-        Some(AovData::Float { width, height, rgba }) => {
-            (RgbImage { width, height, data: rgba.iter().map(|p| [p[0], p[1], p[2]]).collect() }, f.report.photons())
-        }
-        _ => panic!("a float AOV"),
-    }
+    let (image, report) = camera_aov(r, camera, (256, 144), aov);
+    (image, report.photons())
 }
 
 /// The caustics AOV from above (`Top`) and the linear beauty from the perspective `Camera`.

@@ -625,30 +625,6 @@ fn the_khronos_validator_finds_no_error() {
     assert_eq!(text.matches(": 0 errors").count(), files.len(), "every file validated:\n{text}");
 }
 
-/// Bytes of `v` (f32 or u8/u16 scalars) appended to `bin` at a 4-byte boundary as a new bufferView (with
-/// `stride`, for interleaved data); returns the view's index.
-fn add_view(doc: &mut Value, bin: &mut Vec<u8>, bytes: &[u8], stride: Option<usize>) -> usize {
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let views = doc["bufferViews"].as_array_mut().unwrap();
-    let mut v = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
-    if let Some(s) = stride {
-        v["byteStride"] = json!(s);
-    }
-    views.push(v);
-    let index = views.len() - 1;
-    bin.extend_from_slice(bytes);
-    doc["buffers"][0]["byteLength"] = json!(bin.len());
-    index
-}
-
-fn push_accessor(doc: &mut Value, acc: Value) -> usize {
-    let accessors = doc["accessors"].as_array_mut().unwrap();
-    accessors.push(acc);
-    accessors.len() - 1
-}
-
 /// The twin with what exporters write beyond the basics: a glass cube stored interleaved (positions and normals
 /// in one byteStride-24 view) with u8 indices; the same cube raised by a sparse accessor; raised again by a
 /// morph target whose displacements are a sparse accessor with no bufferView, at a still weight of 1; the cube

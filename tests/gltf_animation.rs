@@ -10,22 +10,14 @@
 mod common;
 use caustics::scene::Scene;
 use caustics::settings::{Quality, Settings, Transport};
-use caustics::{Aov, AovData, FrameDesc, Renderer};
+use caustics::{Aov, Renderer};
 use common::rig::*;
 use common::*;
 
 /// A frame of `r` through camera `camera` at 256²: the float AOV and the photon count.
 fn frame(r: &mut Renderer, camera: &str, aov: Aov) -> (caustics::image_io::RgbImage, u64) {
-    let cam = r.scene().camera(Some(camera)).expect("camera").clone();
-    let view = r.camera_view(&cam, 256, 256);
-    let f = r.render(&FrameDesc::new(&view, Some(aov))).expect("frame");
-    match f.image {
-        Some(AovData::Float { width, height, rgba }) => {
-            let data = rgba.iter().map(|p| [p[0], p[1], p[2]]).collect();
-            (caustics::image_io::RgbImage { width, height, data }, f.report.photons())
-        }
-        _ => panic!("a float AOV"),
-    }
+    let (image, report) = camera_aov(r, camera, (256, 256), aov);
+    (image, report.photons())
 }
 
 fn settings(transport: Transport) -> Settings {

@@ -87,6 +87,28 @@ impl SceneUpdatePass {
         unsafe { self.device.cmd_dispatch(cmd, x, groups.div_ceil(x), 1) };
     }
 
+    /// Bind `pipeline` to `binds` and dispatch one job each: its push constants, over `items(job)` invocations.
+    /// Without jobs nothing is recorded (and a pipeline never needed is never created).
+    fn run<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &LazyPipeline,
+        binds: &[Bind],
+        jobs: &[P],
+        items: impl Fn(&P) -> u32,
+    ) -> VkResult<()> {
+        if jobs.is_empty() {
+            return Ok(());
+        }
+        let pipeline = pipeline.get()?;
+        pipeline.bind(cmd, binds);
+        for j in jobs {
+            pipeline.push(cmd, j);
+            self.dispatch(cmd, items(j));
+        }
+        Ok(())
+    }
+
     /// Place each object of `moves` (its push constants) from `object` space into `world` space (vertex buffer,
     /// index buffer).
     pub fn place(
@@ -96,131 +118,70 @@ impl SceneUpdatePass {
         world: (&Buffer, &Buffer),
         moves: &[SceneUpdatePush],
     ) -> VkResult<()> {
-        let pipeline = self.place.get()?;
-        pipeline.bind(
-            cmd,
-            &[Bind::Storage(object.0), Bind::Storage(world.0), Bind::Storage(object.1), Bind::Storage(world.1)],
-        );
-        for m in moves {
-            pipeline.push(cmd, m);
-            self.dispatch(cmd, m.vertex_count.max(m.index_count / 3));
-        }
-        Ok(())
+        let binds = [Bind::Storage(object.0), Bind::Storage(world.0), Bind::Storage(object.1), Bind::Storage(world.1)];
+        self.run(cmd, &self.place, &binds, moves, |m| m.vertex_count.max(m.index_count / 3))
     }
 
     /// Displace water's raster vertices (each job one object, to world space).
     pub fn water_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
-        if jobs.is_empty() {
-            return Ok(());
-        }
-        let pipeline = self.water.get()?;
-        pipeline
-            .bind(cmd, &[Bind::Storage(&sb.waves), Bind::Storage(&sb.object_vertices), Bind::Storage(&sb.vertices)]);
-        for j in jobs {
-            pipeline.push(cmd, j);
-            self.dispatch(cmd, j.count);
-        }
-        Ok(())
+        let binds = [Bind::Storage(&sb.waves), Bind::Storage(&sb.object_vertices), Bind::Storage(&sb.vertices)];
+        self.run(cmd, &self.water, &binds, jobs, |j| j.count)
     }
 
     /// Displace water's BVH triangles (each job one deforming mesh, in object space).
     pub fn water_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
-        if jobs.is_empty() {
-            return Ok(());
-        }
-        let pipeline = self.water_bvh.get()?;
         let b = &sb.bvh;
-        pipeline.bind(
-            cmd,
-            &[
-                Bind::Storage(&sb.waves),
-                Bind::Storage(&b.rest_tris),
-                Bind::Storage(&b.rest_normals),
-                Bind::Storage(&b.triangles),
-                Bind::Storage(&b.normals),
-            ],
-        );
-        for j in jobs {
-            pipeline.push(cmd, j);
-            self.dispatch(cmd, j.count);
-        }
-        Ok(())
+        let binds = [
+            Bind::Storage(&sb.waves),
+            Bind::Storage(&b.rest_tris),
+            Bind::Storage(&b.rest_normals),
+            Bind::Storage(&b.triangles),
+            Bind::Storage(&b.normals),
+        ];
+        self.run(cmd, &self.water_bvh, &binds, jobs, |j| j.count)
     }
 
     /// Morph the raster vertices of morphing objects (each job one object, to world space), with the weights in
     /// `sb.morph_weights`.
     pub fn morph_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[MorphPush]) -> VkResult<()> {
-        if jobs.is_empty() {
-            return Ok(());
-        }
-        let pipeline = self.morph.get()?;
-        pipeline.bind(
-            cmd,
-            &[
-                Bind::Storage(&sb.morphs),
-                Bind::Storage(&sb.morph_weights),
-                Bind::Storage(&sb.object_vertices),
-                Bind::Storage(&sb.vertices),
-            ],
-        );
-        for j in jobs {
-            pipeline.push(cmd, j);
-            self.dispatch(cmd, j.count);
-        }
-        Ok(())
+        let binds = [
+            Bind::Storage(&sb.morphs),
+            Bind::Storage(&sb.morph_weights),
+            Bind::Storage(&sb.object_vertices),
+            Bind::Storage(&sb.vertices),
+        ];
+        self.run(cmd, &self.morph, &binds, jobs, |j| j.count)
     }
 
     /// Morph the BVH triangles of morphing meshes (each job one mesh, in object space).
     pub fn morph_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[MorphPush]) -> VkResult<()> {
-        if jobs.is_empty() {
-            return Ok(());
-        }
-        let pipeline = self.morph_bvh.get()?;
         let b = &sb.bvh;
-        pipeline.bind(
-            cmd,
-            &[
-                Bind::Storage(&sb.morphs),
-                Bind::Storage(&sb.morph_weights),
-                Bind::Storage(&b.rest_tris),
-                Bind::Storage(&b.rest_normals),
-                Bind::Storage(&b.rest_corners),
-                Bind::Storage(&b.triangles),
-                Bind::Storage(&b.normals),
-            ],
-        );
-        for j in jobs {
-            pipeline.push(cmd, j);
-            self.dispatch(cmd, j.count);
-        }
-        Ok(())
+        let binds = [
+            Bind::Storage(&sb.morphs),
+            Bind::Storage(&sb.morph_weights),
+            Bind::Storage(&b.rest_tris),
+            Bind::Storage(&b.rest_normals),
+            Bind::Storage(&b.rest_corners),
+            Bind::Storage(&b.triangles),
+            Bind::Storage(&b.normals),
+        ];
+        self.run(cmd, &self.morph_bvh, &binds, jobs, |j| j.count)
     }
 
     /// Refit each deforming mesh's bottom-level BVH (its arrival counters zeroed before).
     pub fn refit(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[RefitPush]) -> VkResult<()> {
-        if jobs.is_empty() {
-            return Ok(());
-        }
-        let pipeline = self.refit.get()?;
         let b = &sb.bvh;
-        pipeline.bind(
-            cmd,
-            &[
-                Bind::Storage(&b.refit_nodes),
-                Bind::Storage(&b.refit_leaves),
-                Bind::Storage(&b.refit_boxes),
-                Bind::Storage(&b.refit_counters),
-                Bind::Storage(&b.triangles),
-                Bind::Storage(&b.pair_nodes),
-                Bind::Storage(&b.single_nodes),
-                Bind::Storage(&b.threaded_nodes),
-            ],
-        );
-        for j in jobs {
-            pipeline.push(cmd, j);
-            self.dispatch(cmd, j.leaf_count);
-        }
-        Ok(())
+        let binds = [
+            Bind::Storage(&b.refit_nodes),
+            Bind::Storage(&b.refit_leaves),
+            Bind::Storage(&b.refit_boxes),
+            Bind::Storage(&b.refit_counters),
+            Bind::Storage(&b.triangles),
+            Bind::Storage(&b.pair_nodes),
+            Bind::Storage(&b.single_nodes),
+            Bind::Storage(&b.threaded_nodes),
+        ];
+        self.run(cmd, &self.refit, &binds, jobs, |j| j.leaf_count)
     }
 
     /// Write `data` at the start of `buffer` from the command buffer (in chunks vkCmdUpdateBuffer takes).

@@ -64,7 +64,8 @@ impl Instances {
                 Some(a) => (&a.mesh, a.transform_at(scene.time), a.deform_bounds()),
                 None => (&o.mesh, Mat4::IDENTITY, None),
             };
-            let same = |k: &usize| meshes[*k].as_ref() == mesh && deforming[*k].is_none();
+            // Only meshes that do not deform are shared (a deforming one is deformed and refit per object).
+            let same = |k: &usize| meshes[*k].as_ref() == mesh;
             let key = deform.is_none().then(|| content_hash(mesh));
             let found = key.and_then(|h| shared.get(&h).and_then(|ks| ks.iter().copied().find(same)));
             let index = found.unwrap_or_else(|| {

@@ -1,13 +1,14 @@
 //! Animation: an object's transform as a function of time, from TOML keyframes or glTF node animation channels
-//! (its node's own and its animated ancestors'), and glTF morph-target weights. The renderer and the CPU reference evaluate the same [`Animation::transform_at`], so any frame of an
-//! animation can be checked against the reference at its time.
+//! (its node's own and its animated ancestors'), and the tracks of glTF morph-target weights. The renderer and the
+//! CPU reference evaluate the same [`Animation::transform_at`], so any frame of an animation can be checked against
+//! the reference at its time.
 //!
 //! A transform is scale, then rotation, then translation (TRS), each its own track of keyframes: translation and
 //! scale interpolate linearly, rotation by spherical linear interpolation along the shorter arc (`linear`); or they
 //! hold each keyframe's value until the next (`step`); or they follow glTF's cubic Hermite spline with the
 //! keyframes' in and out tangents (`cubic`, glTF only: TOML keyframes carry no tangents). Outside its keyframes'
-//! times a track holds its first or last value (`clamp`), or the animation repeats (`loop`): a TOML object with the
-//! period of its own longest track, a glTF scene with that of the longest animation that plays.
+//! times a track holds its first or last value (`clamp`, and always in glTF, as Blender holds an action's ends), or
+//! a TOML object's animation repeats with the period of its own longest track (`loop`).
 
 use glam::{Mat4, Quat, Vec3};
 
@@ -202,9 +203,8 @@ pub struct Animation {
     pub parent: Mat4,
     /// Past the period: clamp or loop.
     pub repeat: Repeat,
-    /// The loop's period (s): in TOML the object's last keyframe time; in glTF the last keyframe time of all the
-    /// animations that play, so that a scene loops as one (a track that ends sooner holds its last value until
-    /// then, as in Blender).
+    /// Its duration (s), the loop's period: in TOML the object's last keyframe time; in glTF the last keyframe time
+    /// of all the animations that play (the scene's timeline, which the viewer loops over).
     pub period: f32,
 }
 

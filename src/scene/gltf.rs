@@ -159,7 +159,8 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     let Played { tracks, period, names, chosen } = animations(&cx, &document, &buffers, &options.animation)?;
     out.animations = names;
     out.playing = chosen;
-    let rest_world = rest_worlds(&document);
+    // Only skins stand where their joints are at rest.
+    let rest_world = if document.skins().len() > 0 { rest_worlds(&document) } else { Vec::new() };
     let g = Globals {
         buffers: &buffers,
         materials: &materials,
@@ -464,7 +465,8 @@ struct Globals<'a> {
     tracks: &'a [NodeTracks],
     /// The last keyframe time of the animations that play (s).
     period: f32,
-    /// Per node: its world transform at rest (a skinned mesh stands where its joints place it at rest).
+    /// Per node: its world transform at rest (a skinned mesh stands where its joints place it at rest); empty
+    /// when the file has no skins.
     rest_world: &'a [Mat4],
 }
 
@@ -622,15 +624,14 @@ fn animations(
             // Weights are SCALAR, one per target per keyframe; the TRS properties one VEC3 or VEC4 per keyframe.
             let comps = if key == "weights" { 1 } else { width };
             let values = read_floats(cx, &ch.sampler().output(), &format!("{s_at}.output"), buffers, comps)?;
-            if values.len() != times.len() * per_key * width {
+            // The accessor's elements, and how many each keyframe needs.
+            let (elements, per_keyframe) = (values.len() / comps, per_key * width / comps);
+            if elements != times.len() * per_keyframe {
                 return Err(cx.err(
                     format!("{s_at}.output"),
                     format!(
-                        "{} values for {} keyframes (a {:?} sampler of {key} needs {} each)",
-                        values.len() / width,
-                        times.len(),
-                        interpolation,
-                        per_key * width / if key == "weights" { width } else { 1 }
+                        "{elements} values for {} keyframes (a {interpolation:?} sampler of {key} needs {per_keyframe} each)",
+                        times.len()
                     ),
                 ));
             }
@@ -700,7 +701,7 @@ fn rest_worlds(document: &gltf::Document) -> Vec<Mat4> {
             parent[c.index()] = node.index();
         }
     }
-    let local: Vec<Mat4> = document.nodes().map(|node| Mat4::from_cols_array_2d(&node.transform().matrix())).collect();
+    let local: Vec<Mat4> = document.nodes().map(|node| node_local(&node).1).collect();
     (0..n)
         .map(|i| {
             let mut m = local[i];
@@ -714,6 +715,19 @@ fn rest_worlds(document: &gltf::Document) -> Vec<Mat4> {
             m
         })
         .collect()
+}
+
+/// A node's own transform: its TRS (the rotation a unit quaternion), and its matrix, composed from the TRS as an
+/// animated node's is (so that a pose written into a file renders exactly as the animation placing it), or its
+/// `matrix` as it is.
+fn node_local(node: &gltf::Node) -> ((Vec3, Quat, Vec3), Mat4) {
+    let (translation, rotation, scale) = node.transform().decomposed();
+    let rest = (Vec3::from(translation), unit(Quat::from_array(rotation)), Vec3::from(scale));
+    let local = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
+        gltf::scene::Transform::Decomposed { .. } => Mat4::from_scale_rotation_translation(rest.2, rest.1, rest.0),
+    };
+    (rest, local)
 }
 
 /// A rotation as a unit quaternion: as written when it is one to float precision (then a pose written from an
@@ -751,14 +765,7 @@ fn visit(
         return Err(cx.err(format!("{at}.children"), "the node hierarchy has a cycle"));
     }
     visiting[node.index()] = true;
-    let (translation, rotation, scale) = node.transform().decomposed();
-    let rest = (Vec3::from(translation), unit(Quat::from_array(rotation)), Vec3::from(scale));
-    // TRS composed as an animated node's is (so that a pose written into a file renders exactly as the animation
-    // placing it), or the node's `matrix` as it is.
-    let local = match node.transform() {
-        gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
-        gltf::scene::Transform::Decomposed { .. } => Mat4::from_scale_rotation_translation(rest.2, rest.1, rest.0),
-    };
+    let (rest, local) = node_local(node);
     if !local.is_finite() {
         return Err(cx.err(at, "the node's transform is not finite"));
     }
@@ -783,13 +790,15 @@ fn visit(
             place.chain_parent = parent.world;
         }
         place.chain.push(motion);
-        place.world = place.animation(g.period).map_or(Mat4::IDENTITY, |a| a.transform_at(0.0));
+    }
+    let animation = place.animation(g.period);
+    if let Some(a) = &animation {
+        place.world = a.transform_at(0.0);
     }
     let world = place.world;
     if !world.is_finite() {
         return Err(cx.err(at, "the node's transform is not finite"));
     }
-    let animation = place.animation(g.period);
 
     if let Some(mesh) = node.mesh() {
         mesh_objects(cx, node, &mesh, &place, g, out)?;
@@ -973,7 +982,6 @@ fn mesh_objects(
         let field = if node.weights().is_some() { format!("{at}.weights") } else { format!("{mesh_at}.weights") };
         return Err(cx.err(field, format!("needs one finite weight per morph target ({n_targets})")));
     }
-    let weight_tracks = tracks.weights.clone().filter(|w| w.len() == n_targets);
     for p in mesh.primitives() {
         let p_at = format!("{mesh_at}.primitives[{}]", p.index());
         let name = if count > 1 { format!("{base_name}#{}", p.index()) } else { base_name.clone() };
@@ -1006,20 +1014,15 @@ fn mesh_objects(
             }
             m.uvs = uvs;
         }
-        let mut morph = if n_targets > 0 {
-            let targets = morph_targets(cx, &p, &p_at, buffers, m.positions.len())?;
-            Some(Morph {
-                targets,
-                weights: weights.clone(),
-                tracks: weight_tracks.clone().unwrap_or_default(),
-                repeat: Repeat::Clamp,
-                period: g.period,
-            })
-        } else {
-            None
-        };
         // Still weights are baked into the mesh; animated ones deform it on the GPU.
-        if let Some(k) = morph.take() {
+        let mut morph = None;
+        if n_targets > 0 {
+            let k = Morph {
+                targets: morph_targets(cx, &p, &p_at, buffers, m.positions.len())?,
+                weights: weights.clone(),
+                tracks: tracks.weights.clone().unwrap_or_default(),
+                period: g.period,
+            };
             if k.is_animated() {
                 morph = Some(k);
             } else if k.weights.iter().any(|&w| w != 0.0) {

@@ -4,7 +4,7 @@
 //! there, as it does for water (glsl/morph.comp); the host evaluates the same formula ([`Morph::apply`]) for its own
 //! copy and the CPU reference.
 
-use super::animation::{Interpolation, Repeat, Track};
+use super::animation::{Interpolation, Track};
 use super::Mesh;
 use glam::Vec3;
 
@@ -24,11 +24,10 @@ pub struct Morph {
     pub targets: Vec<MorphTarget>,
     /// The weights where no track animates them (glTF: the node's `weights`, else the mesh's, else 0).
     pub weights: Vec<f32>,
-    /// One track per target (all animated together), or none: the weights stand still.
+    /// One track per target (all animated together, each holding its end values past its keyframes), or none:
+    /// the weights stand still.
     pub tracks: Vec<Track<f32>>,
-    /// Past the period: clamp or loop.
-    pub repeat: Repeat,
-    /// The loop's period (s).
+    /// The duration (s) of the animations that play (the scene's timeline, as glTF's other tracks have).
     pub period: f32,
 }
 
@@ -38,7 +37,7 @@ impl Morph {
         !self.tracks.is_empty()
     }
 
-    /// Its tracks' last keyframe time (s; 0 when the weights stand still).
+    /// Its animations' duration (s; 0 when the weights stand still).
     pub fn duration(&self) -> f32 {
         if self.is_animated() {
             self.period
@@ -52,10 +51,6 @@ impl Morph {
         if self.tracks.is_empty() {
             return self.weights.clone();
         }
-        let t = match self.repeat {
-            Repeat::Loop if self.period > 0.0 => t.rem_euclid(self.period),
-            _ => t,
-        };
         self.tracks.iter().map(|k| k.at(t)).collect()
     }
 
@@ -154,10 +149,9 @@ mod tests {
                 Track::new(vec![0.0, 1.0], vec![0.0, 1.0], Interpolation::Linear),
                 Track::new(vec![0.0, 1.0], vec![-0.5, 0.5], Interpolation::Linear),
             ],
-            repeat: Repeat::Loop,
             period: 1.0,
         };
-        let w = m.weights_at(1.25);
+        let w = m.weights_at(0.25);
         assert_eq!(w, vec![0.25, -0.25]);
         let d = m.apply(&base, &w);
         assert_eq!(d.positions[0], Vec3::new(0.0, 0.25, 0.0));

@@ -58,13 +58,35 @@ pub fn write(dir: &Path, name: &str, data: impl AsRef<[u8]>) -> PathBuf {
     p
 }
 
+/// `bytes` appended to `bin` at a 4-byte boundary as a new bufferView (with `stride`, for interleaved data);
+/// returns the view's index.
+pub fn add_view(doc: &mut Value, bin: &mut Vec<u8>, bytes: &[u8], stride: Option<usize>) -> usize {
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let views = doc["bufferViews"].as_array_mut().unwrap();
+    let mut v = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
+    if let Some(s) = stride {
+        v["byteStride"] = json!(s);
+    }
+    views.push(v);
+    let index = views.len() - 1;
+    bin.extend_from_slice(bytes);
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    index
+}
+
+/// `acc` appended to the accessors; returns its index.
+pub fn push_accessor(doc: &mut Value, acc: Value) -> usize {
+    let accessors = doc["accessors"].as_array_mut().unwrap();
+    accessors.push(acc);
+    accessors.len() - 1
+}
+
 /// Append `data` (f32) to `bin` as a new bufferView and accessor of `kind` (SCALAR, VEC3 or VEC4); SCALAR
 /// accessors get their min and max. Returns the accessor's index.
 pub fn add_accessor(doc: &mut Value, bin: &mut Vec<u8>, data: &[f32], kind: &str) -> usize {
-    let views = doc["bufferViews"].as_array_mut().unwrap();
-    views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * data.len()}));
-    let view = views.len() - 1;
-    bin.extend_from_slice(bytemuck::cast_slice(data));
+    let view = add_view(doc, bin, bytemuck::cast_slice(data), None);
     let per = match kind {
         "SCALAR" => 1,
         "VEC3" => 3,
@@ -76,11 +98,7 @@ pub fn add_accessor(doc: &mut Value, bin: &mut Vec<u8>, data: &[f32], kind: &str
         acc["min"] = json!([lo]);
         acc["max"] = json!([hi]);
     }
-    let accessors = doc["accessors"].as_array_mut().unwrap();
-    accessors.push(acc);
-    let index = accessors.len() - 1;
-    doc["buffers"][0]["byteLength"] = json!(bin.len());
-    index
+    push_accessor(doc, acc)
 }
 
 /// Append `mesh` (positions, normals, u32 indices) to `doc` and `bin` as a new mesh of one primitive with
@@ -98,14 +116,11 @@ pub fn add_mesh(
     doc["accessors"][p]["min"] = json!(lo.to_array());
     doc["accessors"][p]["max"] = json!(hi.to_array());
     let n = add_accessor(doc, bin, &flat(&mesh.normals), "VEC3");
-    let views = doc["bufferViews"].as_array_mut().unwrap();
-    views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4 * mesh.indices.len()}));
-    let view = views.len() - 1;
-    bin.extend_from_slice(bytemuck::cast_slice(&mesh.indices));
-    let accessors = doc["accessors"].as_array_mut().unwrap();
-    accessors.push(json!({"bufferView": view, "componentType": 5125, "count": mesh.indices.len(), "type": "SCALAR"}));
-    let i = accessors.len() - 1;
-    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    let view = add_view(doc, bin, bytemuck::cast_slice(&mesh.indices), None);
+    let i = push_accessor(
+        doc,
+        json!({"bufferView": view, "componentType": 5125, "count": mesh.indices.len(), "type": "SCALAR"}),
+    );
     let meshes = doc["meshes"].as_array_mut().unwrap();
     meshes.push(json!({"name": name, "primitives": [
         {"attributes": {"POSITION": p, "NORMAL": n}, "indices": i, "material": material}]}));

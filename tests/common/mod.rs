@@ -161,8 +161,19 @@ pub fn top_aov(
     side: u32,
     aov: caustics::Aov,
 ) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
-    let top = r.scene().camera(Some("top")).expect("a top camera").clone();
-    let view = r.camera_view(&top, side, side);
+    camera_aov(r, "top", (side, side), aov)
+}
+
+/// A float AOV (caustics, direct, linear beauty) of an in-process renderer from its scene's camera `camera` at
+/// `width`×`height`, with the frame's report.
+pub fn camera_aov(
+    r: &mut caustics::Renderer,
+    camera: &str,
+    (width, height): (u32, u32),
+    aov: caustics::Aov,
+) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
+    let cam = r.scene().camera(Some(camera)).unwrap_or_else(|e| panic!("{e}")).clone();
+    let view = r.camera_view(&cam, width, height);
     let frame = r.render(&caustics::FrameDesc::new(&view, Some(aov))).expect("frame");
     match frame.image {
         Some(caustics::AovData::Float { width, height, rgba }) => {
