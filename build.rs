@@ -5,10 +5,24 @@
 //! - Some shaders are compiled in several variants with extra macros (see VARIANTS).
 //! - A compile error fails the build with the file, the line and glslang's message.
 //!
-//! The output is `$OUT_DIR/shaders.rs`, included by src/shaders.rs: one aligned `&[u32]` per shader variant.
+//! - The GPU structs are written once, in Rust (src/gpu_types.rs, src/bvh/records.rs): build/structs.rs writes
+//!   their GLSL (`#include "generated/gpu_structs.glsl"`) and asserts their offsets on both sides, in Rust and in
+//!   every compiled shader's SPIR-V.
+//!
+//! The output is `$OUT_DIR/shaders.rs`, included by src/shaders.rs: one aligned `&[u32]` per shader variant, and
+//! `$OUT_DIR/gpu_layout.rs`, included by src/gpu_types.rs.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+#[path = "build/spirv.rs"]
+mod spirv;
+#[path = "build/structs.rs"]
+mod structs;
+
+/// The Rust files whose `#[repr(C)]` structs are the GPU structs, with their module paths.
+const STRUCT_SOURCES: &[(&str, &str)] =
+    &[("src/gpu_types.rs", "crate::gpu_types"), ("src/bvh/records.rs", "crate::bvh")];
 
 #[allow(dead_code)]
 mod consts {
@@ -84,6 +98,26 @@ fn shared_macros() -> Vec<(String, String)> {
     out
 }
 
+/// Parses the GPU structs and writes their Rust asserts (`$OUT_DIR/gpu_layout.rs`).
+fn gpu_structs(macros: &[(String, String)], out_dir: &Path) -> Vec<structs::Struct> {
+    let mut consts = std::collections::HashMap::new();
+    for (k, v) in macros {
+        let value = structs::eval(v, &consts).unwrap_or_else(|e| panic!("src/shader_consts.rs: {k}: {e}"));
+        consts.insert(k.clone(), value);
+    }
+    let mut found = Vec::new();
+    for (file, module) in STRUCT_SOURCES {
+        let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("read {file}: {e}"));
+        if let Err(e) = structs::parse(file, module, &text, &consts, &mut found) {
+            panic!("GPU structs: {e}");
+        }
+    }
+    std::fs::write(out_dir.join("gpu_layout.rs"), structs::rust_asserts(&found)).expect("write gpu_layout.rs");
+    let sources: Vec<&str> = STRUCT_SOURCES.iter().map(|s| s.0).collect();
+    std::fs::write(out_dir.join("gpu_structs.glsl"), structs::glsl(&found, &sources)).expect("write gpu_structs.glsl");
+    found
+}
+
 fn kind_of(path: &Path) -> Option<shaderc::ShaderKind> {
     match path.extension()?.to_str()? {
         "comp" => Some(shaderc::ShaderKind::Compute),
@@ -101,8 +135,14 @@ fn main() {
     let glsl = PathBuf::from("glsl");
     println!("cargo:rerun-if-changed=glsl");
     println!("cargo:rerun-if-changed=src/shader_consts.rs");
+    println!("cargo:rerun-if-changed=build");
+    for (file, _) in STRUCT_SOURCES {
+        println!("cargo:rerun-if-changed={file}");
+    }
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
     let macros = shared_macros();
+    let structs = gpu_structs(&macros, &out_dir);
+    let generated_glsl = structs::glsl(&structs, &STRUCT_SOURCES.iter().map(|s| s.0).collect::<Vec<_>>());
 
     let mut sources: Vec<PathBuf> = std::fs::read_dir(&glsl)
         .expect("glsl/ directory")
@@ -153,7 +193,8 @@ fn main() {
                     loop {
                         let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                         let Some((src, _, extra)) = jobs.get(i) else { break };
-                        done.push((i, compile(&compiler, &glsl, &macros, src, extra)));
+                        let result = compile(&compiler, &glsl, &generated_glsl, &macros, src, extra);
+                        done.push((i, result));
                     }
                     done
                 })
@@ -171,6 +212,12 @@ fn main() {
     for ((src, name, _), result) in jobs.iter().zip(results) {
         match result.expect("every job compiled") {
             Ok(words) => {
+                let spv_words: Vec<u32> =
+                    words.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+                if let Err(e) = structs::check_spirv(&format!("{} ({name})", src.display()), &spv_words, &structs) {
+                    errors.push(e);
+                    continue;
+                }
                 let spv = out_dir.join(format!("{name}.spv"));
                 std::fs::write(&spv, words).expect("write spv");
                 writeln!(
@@ -188,7 +235,7 @@ fn main() {
                 println!("cargo:warning={line}");
             }
         }
-        panic!("GLSL compilation failed:\n{}", errors.join("\n"));
+        panic!("GLSL compilation or its checks failed:\n{}", errors.join("\n"));
     }
     std::fs::write(out_dir.join("shaders.rs"), generated).expect("write shaders.rs");
 }
@@ -197,6 +244,7 @@ fn main() {
 fn compile(
     compiler: &shaderc::Compiler,
     glsl: &Path,
+    generated: &str,
     macros: &[(String, String)],
     src: &Path,
     extra: &[Define],
@@ -213,7 +261,11 @@ fn compile(
         options.add_macro_definition(k, Some(v));
     }
     let root = glsl.to_path_buf();
+    let generated = generated.to_string();
     options.set_include_callback(move |requested, _ty, requester, _depth| {
+        if requested == "generated/gpu_structs.glsl" {
+            return Ok(shaderc::ResolvedInclude { resolved_name: requested.to_string(), content: generated.clone() });
+        }
         let path = root.join(requested);
         std::fs::read_to_string(&path)
             .map(|content| shaderc::ResolvedInclude { resolved_name: path.display().to_string(), content })

@@ -64,7 +64,7 @@ layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
 #ifdef GLASS_PASS
 // Only the glass pass traces: the exact composite reads its image.
 #include "common/bvh_types.glsl"
-layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { PairNode bvh_nodes[]; };
 #ifdef BVH_TEXELS
 layout(set = 0, binding = CB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;
 layout(set = 0, binding = CB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;
@@ -72,7 +72,7 @@ layout(set = 0, binding = CB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texel
 layout(set = 0, binding = CB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;
 layout(set = 0, binding = CB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;
 #else
-layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { GpuInstance bvh_instances[]; };
 layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
 #endif
@@ -86,7 +86,7 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 #ifdef GLASS_PASS
 // Direct and caustic irradiance at receiver point p (shading normal ns) from one light, its caustics averaged
 // over the pixel's footprint: the square of side `width` on the tangent plane (axes t1, t2), in its caustic map.
-vec3 light_irradiance(View lv, vec3 power, float bias, sampler2D shadow, sampler2D irr, usampler2D recv, vec3 p,
+vec3 light_irradiance(GpuView lv, vec3 power, float bias, sampler2D shadow, sampler2D irr, usampler2D recv, vec3 p,
                       vec3 ns, vec3 t1, vec3 t2, float width) {
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
@@ -120,7 +120,7 @@ const int EYE_STACK = 8;
 // the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
 vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     uint cap = uint(u_frame.eye.y);
-    View cam = u_frame.camera;
+    GpuView cam = u_frame.camera;
     // A pixel's width at unit distance (perspective) or its width (orthographic).
     float pixel = cam.window.z * cam.extent.z;
     bool ortho = view_is_ortho(cam);
@@ -144,7 +144,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         vec3 p = bvh_hit_point(hit);
         vec3 ng, ns;
         bvh_normals(hit, ng, ns);
-        BvhInstance I = bvh_instance(hit.inst);
+        GpuInstance I = bvh_instance(hit.inst);
         if (!inst_is_dielectric(hit.inst)) {
             vec3 albedo = I.pad.yzw;
             float width = pixel * (ortho ? 1.0 : run + hit.t);
@@ -207,7 +207,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     return L;
 }
 #else
-vec3 behind(View cam, vec3 o, vec3 dir) {
+vec3 behind(GpuView cam, vec3 o, vec3 dir) {
     vec3 lo = u_frame.scene_min.xyz, hi = u_frame.scene_max.xyz;
     vec3 pad = 1e-2 * max(hi - lo, vec3(1.0));
     vec3 hit;
@@ -217,7 +217,7 @@ vec3 behind(View cam, vec3 o, vec3 dir) {
     return environment(dir);
 }
 
-vec3 shade_glass(View cam, vec3 ro, vec3 rd, vec4 front, float ior) {
+vec3 shade_glass(GpuView cam, vec3 ro, vec3 rd, vec4 front, float ior) {
     vec3 p1 = ro + rd * front.w;
     vec3 n1 = dot(front.xyz, rd) > 0.0 ? -front.xyz : front.xyz;
     if (ior < 0.0) return environment(reflect(rd, n1));  // a mirror
@@ -251,7 +251,7 @@ vec3 srgb_encode(vec3 y) {
 }
 
 // Radiance of one eye sample: buffer texel q, at uv on the image plane.
-vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
+vec3 shade_sample(GpuView cam, ivec2 q, vec2 uv) {
     vec3 ro, rd;
     view_ray(cam, uv, ro, rd);
     vec4 rad = texelFetch(t_radiance, q, 0);
@@ -271,7 +271,7 @@ vec3 shade_sample(View cam, ivec2 q, vec2 uv) {
 #ifdef GLASS_PASS
 // One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under every light.
 void main() {
-    View cam = u_frame.camera;
+    GpuView cam = u_frame.camera;
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
     if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
     vec4 rad = texelFetch(t_radiance, q, 0);
@@ -293,7 +293,7 @@ void main() {
 }
 #else
 void main() {
-    View cam = u_frame.camera;
+    GpuView cam = u_frame.camera;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     ivec2 out_size = imageSize(o_beauty);
     if (p.x >= out_size.x || p.y >= out_size.y) return;

@@ -1,4 +1,5 @@
 #version 460
+#include "generated/gpu_structs.glsl"
 // Coverage pyramid (docs/design.md step 2): mip 0 marks the refractor front buffer's covered texels (those whose
 // surface is in the light: a receiver between the light and the glass shadows it); each coarser mip
 // takes the max (bit 0, "any covered": a conservative test for traversal) and the min (bit 1, "all covered":
@@ -13,8 +14,8 @@ layout(set = 0, binding = 3) uniform usampler2D t_recv;  // receivers from the l
 
 // Is the refractor surface at this texel in the light, or does a receiver stand between them?
 bool lit(ivec2 p, vec4 front) {
-    View v = u_frame.photon_view;
-    View rv = u_frame.receiver_view;
+    GpuView v = u_frame.photon_view;
+    GpuView rv = u_frame.receiver_view;
     vec2 uv = (vec2(p) + 0.5) / vec2(textureSize(t_front, 0));
     vec3 ro, rd;
     view_ray(v, uv, ro, rd);
@@ -28,12 +29,7 @@ bool lit(ivec2 p, vec4 front) {
 // A CPU driver runs both sides of a branch, so each pipeline holds only its own side.
 layout(constant_id = 0) const bool COVERAGE_MIP0 = true;
 
-layout(push_constant) uniform Push {
-    uint mip;        // mip to build (0 only with COVERAGE_MIP0)
-    uint src_offset; // start of mip - 1
-    uint dst_offset; // start of mip
-    uint dst_res;    // side of mip
-} pc;
+layout(push_constant) uniform CoveragePushBlock { CoveragePush pc; };
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 

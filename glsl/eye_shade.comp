@@ -49,10 +49,10 @@ void store(ivec2 q, vec4 radiance, vec3 caustic, vec3 direct) {
 }
 
 // The ray through pixel q's center.
-void pixel_ray(View cam, ivec2 q, out vec3 ro, out vec3 rd) { view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd); }
+void pixel_ray(GpuView cam, ivec2 q, out vec3 ro, out vec3 rd) { view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd); }
 
 // Where pixel q's ray meets the plane through p with normal n (p itself when the ray grazes it).
-vec3 on_plane(View cam, ivec2 q, vec3 p, vec3 n) {
+vec3 on_plane(GpuView cam, ivec2 q, vec3 p, vec3 n) {
     vec3 ro, rd;
     pixel_ray(cam, q, ro, rd);
     float c = dot(rd, n);
@@ -60,7 +60,7 @@ vec3 on_plane(View cam, ivec2 q, vec3 p, vec3 n) {
 }
 
 void main() {
-    View cam = u_frame.camera;
+    GpuView cam = u_frame.camera;
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = imageSize(o_radiance);
     if (q.x >= size.x || q.y >= size.y) return;
@@ -79,7 +79,7 @@ void main() {
     // Caustics, averaged over the pixel's footprint on the map: the uv offsets to where the next pixels' rays
     // meet the receiver's tangent plane (the screen-space derivatives of uv), so that a caustic sharper than a
     // pixel keeps its flux: sum E * pixel area stays the flux that landed under the pixel.
-    View lv = u_frame.receiver_view;
+    GpuView lv = u_frame.receiver_view;
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, on_plane(cam, q + ivec2(1, 0), p, n)) - uv;
     vec2 dy = view_uv(lv, on_plane(cam, q + ivec2(0, 1), p, n)) - uv;

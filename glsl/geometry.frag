@@ -1,10 +1,7 @@
 #version 460
+#include "generated/gpu_structs.glsl"
 #include "common/gbuffer.glsl"
-layout(push_constant) uniform Push {
-    mat4 view_proj;
-    vec4 origin;
-    vec4 forward;
-} pc;
+layout(push_constant) uniform GeometryPushBlock { GeometryPush pc; };
 
 layout(location = 0) in vec3 v_world;
 layout(location = 1) in vec3 v_normal;

@@ -1,4 +1,5 @@
 #version 460
+#include "generated/gpu_structs.glsl"
 // Rasterize scene triangles into a view's g-buffer (light-view refractor front/back, receivers from the light,
 // shadow depth, eye-view refractor front/back). The distance written is along the view ray (see view.glsl).
 layout(location = 0) in vec4 a_position;  // xyz; w: texture u
@@ -6,11 +7,7 @@ layout(location = 1) in vec4 a_normal;    // xyz; w: texture v
 layout(location = 2) in vec4 a_material;  // x: index of refraction (dielectric) or albedo r; w: kind (a receiver:
                                           // -(albedo texture layer + 1), 0 for none)
 
-layout(push_constant) uniform Push {
-    mat4 view_proj;
-    vec4 origin;   // xyz; w: 0 perspective, 1 orthographic
-    vec4 forward;  // xyz
-} pc;
+layout(push_constant) uniform GeometryPushBlock { GeometryPush pc; };
 
 // Variants: WITH_AUX passes the material parameter (index of refraction); WITH_ALBEDO the rgb albedo (the eye's
 // receiver g-buffer); DEPTH_ONLY passes nothing.

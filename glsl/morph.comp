@@ -1,4 +1,5 @@
 #version 460
+#include "generated/gpu_structs.glsl"
 // Morph targets (src/scene/morph.rs, which runs the same formula on the host): weight a morphing object's
 // vertices to the frame's weights, p = p0 + sum_k w_k dp_k and n = normalize(n0 + sum_k w_k dn_k) (n0 where the sum
 // vanishes). The plain build writes its raster vertices in world space (through the instance's transform; the
@@ -18,22 +19,11 @@ layout(std430, set = 0, binding = 4) readonly buffer RestCorners { uint rest_cor
 layout(std430, set = 0, binding = 5) writeonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = 6) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
 #else
-struct Vertex { vec4 position; vec4 normal; vec4 material; };
 layout(std430, set = 0, binding = 2) readonly buffer ObjectVertices { Vertex object_vertices[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer WorldVertices { Vertex world_vertices[]; };
 #endif
 
-layout(push_constant) uniform Push {
-    vec4 rows[3];       // world_from_object, rows of its 3x4 affine part (mode 0)
-    vec4 nrows[3];      // rows of the inverse transpose of its 3x3 part (mode 0)
-    uint first;         // its base vertices in `morph` (in vertices: two vec4 each)
-    uint vertices;      // its vertex count: each target's displacements follow this far apart
-    uint targets;
-    uint first_weight;
-    uint src;           // first vertex (mode 0) or rest triangle (mode 1)
-    uint dst;           // first vertex (mode 0) or BVH triangle (mode 1)
-    uint count;         // vertices or triangles
-} pc;
+layout(push_constant) uniform MorphPushBlock { MorphPush pc; };
 
 // Vertex v of the object, weighted.
 void morphed(uint v, out vec3 p, out vec3 n) {

@@ -1,5 +1,6 @@
 #version 460
-// The GPU refit of a deforming mesh's bottom-level BVH (src/bvh.rs builds its tree once, at rest): one invocation
+#include "generated/gpu_structs.glsl"
+// The GPU refit of a deforming mesh's bottom-level BVH (src/bvh/ builds its tree once, at rest): one invocation
 // per leaf bounds the leaf's triangles, then climbs its parent links. At each inner node the first of the two
 // children to arrive stops (an atomic counter per node, zeroed before the dispatch); the second reads both
 // children's boxes and goes on up, so every node is bounded exactly once, after both its children. Each box is
@@ -9,37 +10,31 @@
 layout(local_size_x = LINEAR_WG) in;
 
 const uint NONE = 0xffffffffu;
-struct RefitNode { uint parent, left, right, first_tri, tri_count, single_node, threaded_node, pair_slot; };
 layout(std430, set = 0, binding = 0) readonly buffer Nodes { RefitNode nodes[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Leaves { uint leaves[]; };
 layout(std430, set = 0, binding = 2) coherent buffer Boxes { vec4 boxes[]; };
 layout(std430, set = 0, binding = 3) buffer Counters { uint counters[]; };
 layout(std430, set = 0, binding = 4) readonly buffer Tris { vec4 tris[]; };
-layout(std430, set = 0, binding = 5) buffer Pair { BvhNode pair_nodes[]; };
-layout(std430, set = 0, binding = 6) buffer Single { BvhNodeSingle single_nodes[]; };
-layout(std430, set = 0, binding = 7) buffer Threaded { BvhNodeSingle threaded_nodes[]; };
+layout(std430, set = 0, binding = 5) buffer Pair { PairNode pair_nodes[]; };
+layout(std430, set = 0, binding = 6) buffer Single { SingleNode single_nodes[]; };
+layout(std430, set = 0, binding = 7) buffer Threaded { SingleNode threaded_nodes[]; };
 
-layout(push_constant) uniform Push {
-    uint first_leaf;
-    uint leaf_count;
-    uint layouts;    // 1: pair, 2: single, 4: threaded (those on the GPU)
-    uint depth;      // the most parent links from a leaf to the root
-} pc;
+layout(push_constant) uniform RefitPushBlock { RefitPush pc; };
 
 void store(uint k, RefitNode n, vec3 lo, vec3 hi) {
     boxes[2u * k] = vec4(lo, 0.0);
     boxes[2u * k + 1u] = vec4(hi, 0.0);
     if ((pc.layouts & 2u) != 0u) {
-        single_nodes[n.single_node].lo.xyz = lo;
-        single_nodes[n.single_node].hi.xyz = hi;
+        single_nodes[n.single].lo.xyz = lo;
+        single_nodes[n.single].hi.xyz = hi;
     }
     if ((pc.layouts & 4u) != 0u) {
-        threaded_nodes[n.threaded_node].lo.xyz = lo;
-        threaded_nodes[n.threaded_node].hi.xyz = hi;
+        threaded_nodes[n.threaded].lo.xyz = lo;
+        threaded_nodes[n.threaded].hi.xyz = hi;
     }
-    if ((pc.layouts & 1u) != 0u && n.pair_slot != NONE) {
-        uint p = n.pair_slot >> 1u;
-        if ((n.pair_slot & 1u) == 0u) {
+    if ((pc.layouts & 1u) != 0u && n.pair != NONE) {
+        uint p = n.pair >> 1u;
+        if ((n.pair & 1u) == 0u) {
             pair_nodes[p].lo0.xyz = lo;
             pair_nodes[p].hi0.xyz = hi;
         } else {

@@ -40,7 +40,7 @@ layout(push_constant) uniform ResolvePush { uint add; } pc;
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
 void main() {
-    View v = u_frame.receiver_view;
+    GpuView v = u_frame.receiver_view;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(v.extent.xy);
     if (p.x >= size.x || p.y >= size.y) return;

@@ -1,24 +1,17 @@
 #version 460
+#include "generated/gpu_structs.glsl"
 // The scene update (src/passes/scene_update.rs): place one moved object's vertices and triangles in the world-space
 // buffers the rasterizer draws, from its object-space copies. Positions go through the affine transform, normals
 // through its inverse transpose (renormalized; zero where that degenerates, as Mesh::transformed does), and a
 // mirroring transform swaps two indices of each triangle so that the winding stays counter-clockwise outside.
 layout(local_size_x = LINEAR_WG) in;
 
-struct Vertex { vec4 position; vec4 normal; vec4 material; };
 layout(std430, set = 0, binding = 0) readonly buffer ObjectVertices { Vertex object_vertices[]; };
 layout(std430, set = 0, binding = 1) writeonly buffer WorldVertices { Vertex world_vertices[]; };
 layout(std430, set = 0, binding = 2) readonly buffer ObjectIndices { uint object_indices[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer WorldIndices { uint world_indices[]; };
 
-layout(push_constant) uniform Push {
-    vec4 rows[3];    // world_from_object, rows of its 3x4 affine part
-    vec4 nrows[3];   // rows of the inverse transpose of its 3x3 part; nrows[0].w: 1 when it mirrors
-    uint first_vertex;
-    uint vertex_count;
-    uint first_index;
-    uint index_count;
-} pc;
+layout(push_constant) uniform SceneUpdatePushBlock { SceneUpdatePush pc; };
 
 void main() {
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * LINEAR_WG;

@@ -29,7 +29,7 @@ void main() {
         for (uint k = 0u; k < ACC_TERMS; k++) tstate.batch_account[k] = uvec2(0u);
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;
-        tstate.wave_rays[0] += tstate.in_count;
+        tstate.wave_rays_pairs[0].x += tstate.in_count;
         set_draw(0u, 0u);
     } else if (pc.mode == AFTER_WAVE) {
         tstate.in_count = aborted && pc.rows != 0u ? 0u : tstate.out_count;
@@ -37,7 +37,8 @@ void main() {
         tstate.out_reserved = 0u;
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;
-        tstate.wave_rays[min(pc.level, MAX_INTERACTIONS)] += tstate.in_count;
+        uint w = min(pc.level, MAX_INTERACTIONS);
+        tstate.wave_rays_pairs[w >> 1u][w & 1u] += tstate.in_count;
     } else {
         tstate.in_count = 0u;
         wave_cmd = uvec4(0u, 0u, 1u, 0u);

@@ -1,4 +1,5 @@
 #version 460
+#include "generated/gpu_structs.glsl"
 // Water (src/scene/water.rs, which runs the same formula on the host): displace a water object's vertices to
 // the frame's time. The plain build writes its raster vertices in world space (from the object-space rest
 // copies, through the instance's transform); the WATER_BVH build writes its BVH triangles and vertex normals in
@@ -16,22 +17,11 @@ layout(std430, set = 0, binding = 2) readonly buffer RestNormals { vec4 rest_nor
 layout(std430, set = 0, binding = 3) writeonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
 #else
-struct Vertex { vec4 position; vec4 normal; vec4 material; };
 layout(std430, set = 0, binding = 1) readonly buffer ObjectVertices { Vertex object_vertices[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer WorldVertices { Vertex world_vertices[]; };
 #endif
 
-layout(push_constant) uniform Push {
-    vec4 rows[3];    // world_from_object, rows of its 3x4 affine part (mode 0)
-    vec4 nrows[3];   // rows of the inverse transpose of its 3x3 part (mode 0)
-    float time;
-    uint mode;       // 0: raster vertices (the plain build), 1: BVH triangles (WATER_BVH)
-    uint first_wave;
-    uint wave_count;
-    uint src;        // first vertex (mode 0) or rest triangle (mode 1)
-    uint dst;        // first vertex (mode 0) or BVH triangle (mode 1)
-    uint count;      // vertices or triangles
-} pc;
+layout(push_constant) uniform WaterPushBlock { WaterPush pc; };
 
 void displace(inout vec3 p, inout vec3 n) {
     if (p.y != 0.0) return;

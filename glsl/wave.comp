@@ -277,7 +277,7 @@ void main() {
                 if (WAVE_PRIMARY) {
                     acc[ACC_DIRECT] += flux;
                 } else {
-                    View rv = u_frame.receiver_view;
+                    GpuView rv = u_frame.receiver_view;
                     uint r = lod ? side_splat_radius(weak_widen(cell) * cell_side(cell_level(cell)))
                                  : cell_splat_radius(cell);
                     // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius

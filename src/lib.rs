@@ -48,6 +48,8 @@ pub mod settings;
 mod bvh;
 mod frame;
 mod gpu_types;
+#[cfg(test)]
+mod layout_check;
 mod passes;
 mod renderer;
 mod scene_gpu;

@@ -1,6 +1,6 @@
 //! The scene's triangles on the GPU: one vertex buffer and one index buffer in world space, receivers first, then
 //! refractors, for rasterization, with the same vertices and indices in each object's own space, from which the
-//! frame's scene update (src/passes/scene_update.rs) places a moved object; and the scene BVH (src/bvh.rs) for
+//! frame's scene update (src/passes/scene_update.rs) places a moved object; and the scene BVH (src/bvh/) for
 //! exact transport, built when a frame first needs it.
 
 use crate::bvh::{BvhLayout, BvhObject, GpuInstance, SceneBvh};

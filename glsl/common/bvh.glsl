@@ -1,4 +1,4 @@
-// Closest-hit queries against the scene's two-level BVH (src/bvh.rs builds it): the instances are tested
+// Closest-hit queries against the scene's two-level BVH (src/bvh/ builds it): the instances are tested
 // linearly against their world bounds, the ray is moved into each instance's BVH space, and its bottom-level tree
 // is walked with a short stack. Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013), as the
 // CPU reference does (there in f64): a ray cannot slip between two triangles that share an edge.
@@ -14,24 +14,24 @@
 vec4 bvh_tri(uint k) { return texelFetch(bvh_tri_texels, int(k)); }
 vec4 bvh_normal_row(uint k) { return texelFetch(bvh_normal_texels, int(k)); }
 // An instance is 12 texels, in the struct's order (the compiler drops the fetches of members a caller never reads).
-BvhInstance bvh_instance(uint i) {
+GpuInstance bvh_instance(uint i) {
     int k = 12 * int(i);
     vec4 t[12];
     for (int j = 0; j < 12; j++) t[j] = texelFetch(bvh_instance_texels, k + j);
-    return BvhInstance(vec4[3](t[0], t[1], t[2]), vec4[3](t[3], t[4], t[5]), t[6], t[7], t[8], t[9], t[10], t[11]);
+    return GpuInstance(vec4[3](t[0], t[1], t[2]), vec4[3](t[3], t[4], t[5]), t[6], t[7], t[8], t[9], t[10], t[11]);
 }
 uint bvh_instance_count() { return uint(textureSize(bvh_instance_texels)) / 12u; }
 #else
 vec4 bvh_tri(uint k) { return bvh_tris[k]; }
 vec4 bvh_normal_row(uint k) { return bvh_normal_rows[k]; }
-BvhInstance bvh_instance(uint i) { return bvh_instances[i]; }
+GpuInstance bvh_instance(uint i) { return bvh_instances[i]; }
 uint bvh_instance_count() { return uint(bvh_instances.length()); }
 #endif
 #if defined(BVH_LAYOUT_WIDE)
-BvhNodeWide bvh_wide_node(uint i) {
+WideNode bvh_wide_node(uint i) {
 #ifdef BVH_TEXELS
     int k = 5 * int(i);
-    return BvhNodeWide(texelFetch(bvh_wide_texels, k), texelFetch(bvh_wide_texels, k + 1),
+    return WideNode(texelFetch(bvh_wide_texels, k), texelFetch(bvh_wide_texels, k + 1),
                        texelFetch(bvh_wide_texels, k + 2), texelFetch(bvh_wide_texels, k + 3),
                        texelFetch(bvh_wide_texels, k + 4));
 #else
@@ -147,7 +147,7 @@ void bvh_walk_pair(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout SceneHi
     uint sp = 0u;
     uint node = root;
     while (true) {
-        BvhNode n = bvh_nodes[node];
+        PairNode n = bvh_nodes[node];
         float t0 = bvh_slab(n.lo0.xyz, n.hi0.xyz, o, inv, hit.t);
         float t1 = bvh_slab(n.lo1.xyz, n.hi1.xyz, o, inv, hit.t);
         uint i0 = floatBitsToUint(n.lo0.w), c0 = floatBitsToUint(n.hi0.w);
@@ -180,7 +180,7 @@ void bvh_walk_pair(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout SceneHi
 void bvh_walk_threaded(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout SceneHit hit, inout bool found) {
     uint n = root;
     while (n != BVH_EMPTY) {
-        BvhNodeSingle nd = bvh_nodes_threaded[n];
+        SingleNode nd = bvh_nodes_threaded[n];
         uint escape = floatBitsToUint(nd.lo.w);
         if (!isinf(bvh_slab(nd.lo.xyz, nd.hi.xyz, o, inv, hit.t))) {
             uint info = floatBitsToUint(nd.hi.w);
@@ -206,13 +206,13 @@ void bvh_walk_single(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout Scene
     uint sp = 0u;
     stack[sp++] = root;
     while (sp > 0u) {
-        BvhNodeSingle n = bvh_nodes_single[stack[--sp]];
+        SingleNode n = bvh_nodes_single[stack[--sp]];
         if (isinf(bvh_slab(n.lo.xyz, n.hi.xyz, o, inv, hit.t))) continue;
         uint first = floatBitsToUint(n.lo.w), count = floatBitsToUint(n.hi.w);
         if (count > 0u) {
             bvh_leaf(sh, o, first, count, ii, hit, found);
         } else if (sp + 2u <= BVH_STACK) {
-            BvhNodeSingle c0 = bvh_nodes_single[first], c1 = bvh_nodes_single[first + 1u];
+            SingleNode c0 = bvh_nodes_single[first], c1 = bvh_nodes_single[first + 1u];
             float t0 = bvh_slab(c0.lo.xyz, c0.hi.xyz, o, inv, hit.t);
             float t1 = bvh_slab(c1.lo.xyz, c1.hi.xyz, o, inv, hit.t);
             if (t0 <= t1) {
@@ -239,7 +239,7 @@ layout(constant_id = 2) const bool BVH_PAIR_FALLBACK = true;
 // (2017): an inner child sets bit 24 + (slot ^ oct) (so the highest set bit is the child nearest in the ray's
 // octant order), a leaf its triangles' bits (offsets from the node's first triangle-list entry) in the low 24.
 // inv is the ray's inverse direction kept finite, oct the octant code (0-7, one bit set per positive axis).
-uint bvh_wide_hits(BvhNodeWide n, vec3 o, vec3 inv, uint oct, float tmax) {
+uint bvh_wide_hits(WideNode n, vec3 o, vec3 inv, uint oct, float tmax) {
     vec3 e = uintBitsToFloat((uvec3(n.w0.w, n.w0.w >> 8, n.w0.w >> 16) & 0xFFu) << 23);
     // A plane q of a child sits at p + e q, the ray there at t = q s + b.
     vec3 s = e * inv, b = (uintBitsToFloat(n.w0.xyz) - o) * inv;
@@ -307,7 +307,7 @@ void bvh_walk_wide(uint root, uint ii, vec3 o, vec3 d, Shear sh, inout SceneHit 
             // The child's slot, and its rank among the node's inner children (which are stored in slot order).
             uint slot = (bit - 24u) ^ oct;
             uint child = group.x + bitCount(mask & ~(0xFFFFFFFFu << slot));
-            BvhNodeWide n = bvh_wide_node(child);
+            WideNode n = bvh_wide_node(child);
             uint hits = bvh_wide_hits(n, o, inv, oct, hit.t);
             group = uvec2(n.w1.x, (hits & 0xFF000000u) | (n.w0.w >> 24));
             tris = uvec2(n.w1.y, hits & 0x00FFFFFFu);
@@ -340,7 +340,7 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
     bool found = false;
     vec3 inv_wd = 1.0 / rd;
     for (uint ii = 0u; ii < bvh_instance_count(); ii++) {
-        BvhInstance I = bvh_instance(ii);
+        GpuInstance I = bvh_instance(ii);
         if (isinf(bvh_slab(I.lo.xyz, I.hi.xyz, ro, inv_wd, hit.t))) continue;
         vec3 o = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], ro, 1.0);
         vec3 d = bvh_xform(I.object_from_world[0], I.object_from_world[1], I.object_from_world[2], rd, 0.0);
@@ -367,7 +367,7 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
 // World-space geometric normal (unit; counter-clockwise winding faces it) and interpolated shading normal (unit,
 // falling back to the geometric one where the interpolation degenerates), as src/reference/geometry.rs computes.
 void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
-    BvhInstance I = bvh_instance(hit.inst);
+    GpuInstance I = bvh_instance(hit.inst);
     vec3 p0 = bvh_tri(3u * hit.tri).xyz, p1 = bvh_tri(3u * hit.tri + 1u).xyz, p2 = bvh_tri(3u * hit.tri + 2u).xyz;
     vec3 n = bvh_normal_row(3u * hit.tri).xyz * hit.bary.x + bvh_normal_row(3u * hit.tri + 1u).xyz * hit.bary.y
         + bvh_normal_row(3u * hit.tri + 2u).xyz * hit.bary.z;
@@ -385,7 +385,7 @@ void bvh_normals(SceneHit hit, out vec3 ng, out vec3 ns) {
 // derivative of the normalization, (dm - ns (ns.dm)) / |m|.
 void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out vec3 dny) {
     dnx = dny = vec3(0.0);
-    BvhInstance I = bvh_instance(hit.inst);
+    GpuInstance I = bvh_instance(hit.inst);
     vec3 q0 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
                         bvh_tri(3u * hit.tri).xyz, 1.0);
     vec3 q1 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
@@ -412,7 +412,7 @@ void bvh_shading_dn(SceneHit hit, vec3 ns, vec3 dpx, vec3 dpy, out vec3 dnx, out
 
 // World-space hit point from the barycentric weights (more precise than ro + t*rd far from the origin).
 vec3 bvh_hit_point(SceneHit hit) {
-    BvhInstance I = bvh_instance(hit.inst);
+    GpuInstance I = bvh_instance(hit.inst);
     vec3 p = bvh_tri(3u * hit.tri).xyz * hit.bary.x + bvh_tri(3u * hit.tri + 1u).xyz * hit.bary.y
         + bvh_tri(3u * hit.tri + 2u).xyz * hit.bary.z;
     return bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2], p, 1.0);

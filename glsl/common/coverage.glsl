@@ -39,7 +39,7 @@ bool leaf_covered(uint level, uvec2 xy) {
 // inside the cone. Dense emission and max-level traversal both decide by this one function, with the same float
 // arithmetic, so that max-level traversal emits exactly dense's cells.
 bool leaf_emitted(uint level, uvec2 xy) {
-    View v = u_frame.photon_view;
+    GpuView v = u_frame.photon_view;
     float side = v.window.z / float(LEVEL0_RES << level);
     vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
     return leaf_covered(level, xy) && view_in_cone(v, center);

@@ -43,7 +43,7 @@ bool geo_sample(usampler2D tex, vec2 uv, out vec4 v) {
 
 // Gap to the back surface: > 0 while p is in front of it (inside the refractor). -1e30 where the back buffer is
 // empty (outside the refractor's silhouette). The distance alone: the search needs the normal only where it ends.
-float back_gap(View v, usampler2D back, vec3 p) {
+float back_gap(GpuView v, usampler2D back, vec3 p) {
     vec2 uv = view_uv(v, p);
     float d;
     if (!uv_inside(uv) || !dist_sample(back, uv, d)) return -1e30;
@@ -51,7 +51,7 @@ float back_gap(View v, usampler2D back, vec3 p) {
 }
 
 // The back surface's normal at p's texel position; false outside the silhouette.
-bool back_normal(View v, usampler2D back, vec3 p, out vec3 n) {
+bool back_normal(GpuView v, usampler2D back, vec3 p, out vec3 n) {
     vec2 uv = view_uv(v, p);
     vec4 b;
     if (!uv_inside(uv) || !geo_sample(back, uv, b)) return false;
@@ -64,7 +64,7 @@ bool back_normal(View v, usampler2D back, vec3 p, out vec3 n) {
 // so a thin part is not jumped over carelessly), then Illinois regula falsi to a residual of 1e-5 times the thickness
 // (bisection while an end lies outside the silhouette). At most 20 + 12 samples; typically 4-6. The exit normal is the back
 // normal there.
-bool find_exit(View v, usampler2D back, float diameter, vec3 p1, vec3 dir, out vec3 p2, out vec3 n2) {
+bool find_exit(GpuView v, usampler2D back, float diameter, vec3 p1, vec3 dir, out vec3 p2, out vec3 n2) {
     float f0 = back_gap(v, back, p1);
     if (f0 < -1e29) return false;
     float t_in = 0.0;  // the last sample inside the silhouette and in front of the back surface

@@ -24,7 +24,7 @@ bool dist_sample(SURF_T tex, vec2 uv, out float d) {
 
 // g = surface distance - point distance in `v`; > 0 while the ray is in front of the surfaces. Empty texels count
 // as far away (1e30). Leaving the map sets `in_map` false.
-float surface_gap(View v, SURF_T surf, vec3 p, out bool in_map) {
+float surface_gap(GpuView v, SURF_T surf, vec3 p, out bool in_map) {
     vec2 uv = view_uv(v, p);
     in_map = uv_inside(uv);
     float d;
@@ -36,7 +36,7 @@ float surface_gap(View v, SURF_T surf, vec3 p, out bool in_map) {
 // the gap's slope (the first from the gap and the rate at which the ray recedes from the view's origin; each at
 // most 3x the last) bracket the first sign change, then Illinois regula falsi (bisection across empty texels) refines
 // it to a residual of 1e-6 tmax. At most 24 + 12 samples; a planar receiver takes about 4.
-bool find_surface(View v, SURF_T surf, vec3 o, vec3 dir, float tmax, out vec3 hit) {
+bool find_surface(GpuView v, SURF_T surf, vec3 o, vec3 dir, float tmax, out vec3 hit) {
     if (tmax <= 0.0) return false;
     bool in_map;
     float a = 0.0, ga = surface_gap(v, surf, o, in_map);

@@ -29,8 +29,8 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     h.flux = 0.0;
     h.map_px = vec2(-1e9);
     h.pos = vec3(0.0);
-    View v = u_frame.photon_view;
-    View rv = u_frame.receiver_view;
+    GpuView v = u_frame.photon_view;
+    GpuView rv = u_frame.receiver_view;
     vec2 xy = view_xy_of_uv(v, uv);
     if (!view_in_cone(v, xy)) { h.status = HIT_OUTSIDE_CONE; return h; }
     vec4 front;
@@ -91,7 +91,7 @@ bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame
 
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {
-    View v = u_frame.photon_view;
+    GpuView v = u_frame.photon_view;
     return view_cell_measure(v, view_xy_of_uv(v, cell_center_uv(level, xy)), cell_side(level));
 }
 

@@ -123,7 +123,7 @@ float splat_norm(vec2 c, SplatShape k, ivec2 size) {
     return on_map > 0.0 ? 1.0 / on_map : 0.0;
 }
 
-// Exact transport (src/bvh.rs, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.
+// Exact transport (src/bvh/, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.
 // A ray is two vec4: origin and throughput (relative to its photon's flux); direction and bits(photon index |
 // interactions << PHOTON_INDEX_BITS); with `--footprint differential` three more hold its ray differentials (glsl/wave.comp). The photon index points into the photon buffer, whose cell gives the flux and footprint.
 layout(std430, set = 0, binding = PB_TRANSPORT) buffer TransportBuf { TransportState tstate; };
@@ -136,8 +136,8 @@ layout(std430, set = 0, binding = PB_RAYS_IN) readonly buffer RaysIn { vec4 rays
 #endif
 layout(std430, set = 0, binding = PB_RAYS_OUT) writeonly buffer RaysOut { vec4 rays_out[]; };
 #include "common/bvh_types.glsl"
-layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle { BvhNodeSingle bvh_nodes_single[]; };
+layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhNodes { PairNode bvh_nodes[]; };
+layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle { SingleNode bvh_nodes_single[]; };
 #ifdef BVH_TEXELS
 layout(set = 0, binding = PB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;       // 3 per triangle
 layout(set = 0, binding = PB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels; // 3 per triangle
@@ -145,21 +145,21 @@ layout(set = 0, binding = PB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_t
 #else
 layout(std430, set = 0, binding = PB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };          // 3 per triangle
 layout(std430, set = 0, binding = PB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; }; // 3 per triangle
-layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances { GpuInstance bvh_instances[]; };
 #endif
 
 // The compute splat's target: the caustic flux map as one float per texel (row-major), added to atomically, then
 // copied into the flux image that the resolve reads.
 layout(std430, set = 0, binding = PB_FLUX_TEXELS) buffer FluxBuf { float flux_texels[]; };
-// The threaded layout (src/bvh.rs): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
-layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { BvhNodeSingle bvh_nodes_threaded[]; };
-// The wide layout (src/bvh.rs): compressed 8-wide nodes, and its triangle list (each entry its triangle's three
+// The threaded layout (src/bvh/): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
+layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { SingleNode bvh_nodes_threaded[]; };
+// The wide layout (src/bvh/): compressed 8-wide nodes, and its triangle list (each entry its triangle's three
 // vertices, the first's w the triangle's index in bvh_tris' triangles).
 #ifdef BVH_TEXELS
 layout(set = 0, binding = PB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;  // 5 per node
 layout(set = 0, binding = PB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;  // 3 per entry
 #else
-layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhNodesWide { BvhNodeWide bvh_nodes_wide[]; };
+layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhNodesWide { WideNode bvh_nodes_wide[]; };
 layout(std430, set = 0, binding = PB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uvec4 bvh_wide_prims[]; };
 #endif
 

@@ -13,7 +13,7 @@
 const float RECV_PI = 3.14159265358979;
 
 // Depth along the light's forward axis from a shadow-map depth value.
-float linear_depth(View v, float z) {
+float linear_depth(GpuView v, float z) {
     float n = v.down.w, f = v.forward.w;
     return view_is_ortho(v) ? n + z * (f - n) : f * n / (f - z * (f - n));
 }
@@ -21,7 +21,7 @@ float linear_depth(View v, float z) {
 // Percentage-closer filtering: a 4x4 grid of shadow-map texels with bilinear weights over a 3x3-texel tent (the
 // 2x2 bilinear PCF, box-filtered over 3x3 positions a texel apart), so that a shadow edge is a smooth ramp about
 // three texels wide instead of a staircase of texels.
-float lit_fraction_in(View v, sampler2D shadow, float bias_texels, vec3 p, vec3 n) {
+float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, vec3 p, vec3 n) {
     vec3 img = view_image(v, p);
     vec2 uv = (img.xy - v.window.xy) / v.window.zw;
     if (!uv_inside_strict(uv)) return 1.0;
@@ -49,7 +49,7 @@ float lit_fraction_in(View v, sampler2D shadow, float bias_texels, vec3 p, vec3 
 
 // Direct irradiance (W/m^2) at p with normal n from a light with view lv and power (W/sr, or W/m^2 across a
 // directional beam), shadowed by its shadow map.
-vec3 direct_irradiance_in(View lv, vec3 power, float bias_texels, sampler2D shadow, vec3 p, vec3 n) {
+vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, sampler2D shadow, vec3 p, vec3 n) {
     vec3 img = view_image(lv, p);
     vec3 l = -view_dir_to(lv, p);
     float cos_s = dot(n, l);
@@ -60,7 +60,7 @@ vec3 direct_irradiance_in(View lv, vec3 power, float bias_texels, sampler2D shad
 
 // Is p the receiver surface the light of view lv sees (its receivers' g-buffer recv), so that its caustic map
 // holds p's irradiance? Returns its uv.
-bool caustic_visible_in(View lv, usampler2D recv, vec3 p, out vec2 uv) {
+bool caustic_visible_in(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
     uv = view_uv(lv, p);
     if (!uv_inside_strict(uv)) return false;
     ivec2 size = textureSize(recv, 0);
@@ -73,7 +73,7 @@ bool caustic_visible_in(View lv, usampler2D recv, vec3 p, out vec2 uv) {
 // Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) averaged over a footprint in
 // its caustic map spanned by the uv offsets dx, dy (up to 8x8 bilinear taps), so that a caustic sharper than the
 // footprint keeps its flux.
-vec3 caustic_irradiance_in(View lv, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
+vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
     vec2 uv;
     if (!caustic_visible_in(lv, recv, p, uv)) return vec3(0.0);
     vec2 size = vec2(textureSize(irr, 0));

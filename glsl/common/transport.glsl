@@ -10,7 +10,7 @@
 
 // The photon ray of a cell: from the light through the cell's center.
 void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {
-    View v = u_frame.photon_view;
+    GpuView v = u_frame.photon_view;
     view_ray_xy(v, view_xy_of_uv(v, cell_center_uv(level, xy)), ro, rd);
 }
 
@@ -27,7 +27,7 @@ struct RayDiff {
 // D = d/|d| with d = x right + y down + forward, so dD = (dd - D (D.dd)) / |d| with dd = one cell side along
 // right (or down). Orthographic (directional): dP = one cell side along right (or down), dD = 0.
 RayDiff cell_ray_diff(uint level, uvec2 xy, vec3 rd) {
-    View v = u_frame.photon_view;
+    GpuView v = u_frame.photon_view;
     vec2 side = v.window.zw / float(LEVEL0_RES << level);
     vec3 ex = side.x * v.right.xyz, ey = side.y * v.down.xyz;
     RayDiff r;
@@ -130,7 +130,7 @@ vec3 diff_refract(vec3 d, vec3 dd, vec3 n, vec3 dn, vec3 t, float eta) {
 }
 
 // Derivative of a caustic-map position (texels) along a world offset dp at p (the receiver view's projection).
-vec2 view_px_diff(View v, vec3 p, vec3 dp) {
+vec2 view_px_diff(GpuView v, vec3 p, vec3 dp) {
     vec3 d = p - v.origin.xyz;
     vec3 a = vec3(dot(d, v.right.xyz), dot(d, v.down.xyz), dot(d, v.forward.xyz));
     vec3 da = vec3(dot(dp, v.right.xyz), dot(dp, v.down.xyz), dot(dp, v.forward.xyz));
@@ -207,7 +207,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
         if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) return DOM_ESCAPED;
         vec3 p = bvh_hit_point(hit);
         if (!inst_is_dielectric(hit.inst)) {
-            View rv = u_frame.receiver_view;
+            GpuView rv = u_frame.receiver_view;
             map_px = view_uv(rv, p) * rv.extent.xy;
             return events == 0u ? DOM_DIRECT : DOM_OK;
         }

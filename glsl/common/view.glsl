@@ -1,26 +1,26 @@
-// View math shared by every pass: image-plane coordinates, uv, rays and ray distances.
+// GpuView math shared by every pass: image-plane coordinates, uv, rays and ray distances.
 #ifndef VIEW_GLSL
 #define VIEW_GLSL
 #include "common/types.glsl"
 
-bool view_is_ortho(View v) { return v.origin.w > 0.5; }
+bool view_is_ortho(GpuView v) { return v.origin.w > 0.5; }
 
 // Image-plane point and depth along forward.
-vec3 view_image(View v, vec3 p) {
+vec3 view_image(GpuView v, vec3 p) {
     vec3 d = p - v.origin.xyz;
     float a = dot(d, v.right.xyz), b = dot(d, v.down.xyz), c = dot(d, v.forward.xyz);
     return view_is_ortho(v) ? vec3(a, b, c) : vec3(a / c, b / c, c);
 }
 
-vec2 view_uv(View v, vec3 p) {
+vec2 view_uv(GpuView v, vec3 p) {
     vec3 xyz = view_image(v, p);
     return (xyz.xy - v.window.xy) / v.window.zw;
 }
 
-vec2 view_xy_of_uv(View v, vec2 uv) { return v.window.xy + uv * v.window.zw; }
+vec2 view_xy_of_uv(GpuView v, vec2 uv) { return v.window.xy + uv * v.window.zw; }
 
 // Ray through an image-plane point.
-void view_ray_xy(View v, vec2 xy, out vec3 ro, out vec3 rd) {
+void view_ray_xy(GpuView v, vec2 xy, out vec3 ro, out vec3 rd) {
     if (view_is_ortho(v)) {
         ro = v.origin.xyz + xy.x * v.right.xyz + xy.y * v.down.xyz;
         rd = v.forward.xyz;
@@ -30,35 +30,35 @@ void view_ray_xy(View v, vec2 xy, out vec3 ro, out vec3 rd) {
     }
 }
 
-void view_ray(View v, vec2 uv, out vec3 ro, out vec3 rd) { view_ray_xy(v, view_xy_of_uv(v, uv), ro, rd); }
+void view_ray(GpuView v, vec2 uv, out vec3 ro, out vec3 rd) { view_ray_xy(v, view_xy_of_uv(v, uv), ro, rd); }
 
 // The distance stored in g-buffers: along the view ray from its origin.
-float view_dist(View v, vec3 p) {
+float view_dist(GpuView v, vec3 p) {
     vec3 d = p - v.origin.xyz;
     return view_is_ortho(v) ? dot(d, v.forward.xyz) : length(d);
 }
 
 // Direction of the view ray through p (from the origin towards p).
-vec3 view_dir_to(View v, vec3 p) {
+vec3 view_dir_to(GpuView v, vec3 p) {
     return view_is_ortho(v) ? v.forward.xyz : normalize(p - v.origin.xyz);
 }
 
 // Solid angle (perspective) or area (orthographic) of a square image-plane cell of side d centered at xy:
 // docs/design.md's midpoint formula d^2 / (1 + x^2 + y^2)^(3/2).
-float view_cell_measure(View v, vec2 xy, float d) {
+float view_cell_measure(GpuView v, vec2 xy, float d) {
     if (view_is_ortho(v)) return d * d;
     float q = 1.0 + dot(xy, xy);
     return d * d / (q * sqrt(q));
 }
 
 // Inside the spot cone (hard edge); always true without a cone.
-bool view_in_cone(View v, vec2 xy) {
+bool view_in_cone(GpuView v, vec2 xy) {
     if (view_is_ortho(v) || v.right.w <= -1.0) return true;
     return inversesqrt(1.0 + dot(xy, xy)) >= v.right.w;
 }
 
 // Does the image-plane rectangle [lo, hi] intersect the cone's disk? (conservative cell test)
-bool view_rect_touches_cone(View v, vec2 lo, vec2 hi) {
+bool view_rect_touches_cone(GpuView v, vec2 lo, vec2 hi) {
     if (view_is_ortho(v) || v.right.w <= -1.0) return true;
     float c = v.right.w;
     float t2 = (1.0 - c * c) / (c * c);  // tan^2 of the half-angle
@@ -67,7 +67,7 @@ bool view_rect_touches_cone(View v, vec2 lo, vec2 hi) {
 }
 
 // Is the rectangle entirely inside the cone (all four corners)?
-bool view_rect_inside_cone(View v, vec2 lo, vec2 hi) {
+bool view_rect_inside_cone(GpuView v, vec2 lo, vec2 hi) {
     if (view_is_ortho(v) || v.right.w <= -1.0) return true;
     vec2 far_corner = max(abs(lo), abs(hi));
     return view_in_cone(v, far_corner);

@@ -1,4 +1,4 @@
-//! The uniforms of one pass (`FrameData`, types.glsl): its light's views and power, the camera, the settings the
+//! The uniforms of one pass (`FrameData`, src/gpu_types.rs): its light's views and power, the camera, the settings the
 //! shaders read, and the exposure.
 
 use super::Views;

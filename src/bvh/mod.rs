@@ -24,114 +24,23 @@
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
 
 use crate::scene::{Material, Mesh};
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec3A, Vec4};
 use obvhs::bvh2::Bvh2;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use std::borrow::Cow;
 use std::collections::HashMap;
-use std::mem::size_of;
 use std::sync::Arc;
 use std::time::Instant;
+
+mod records;
+pub use records::*;
 
 /// Leaves hold at most this many triangles (obvhs collapses small subtrees into leaves up to this size).
 pub const MAX_LEAF_TRIS: u32 = 4;
 
 /// A child slot that holds nothing (a BVH whose root is a leaf has one).
 const EMPTY: u32 = u32::MAX;
-
-/// "pair" layout: `lo[k].w` is the child's index bits (inner node, or first triangle), `hi[k].w` its triangle count
-/// bits (0: inner node). Mirrors `BvhNode` in glsl/common/bvh.glsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct PairNode {
-    pub lo0: [f32; 4],
-    pub hi0: [f32; 4],
-    pub lo1: [f32; 4],
-    pub hi1: [f32; 4],
-}
-
-/// "single" layout: one box per node; `lo.w` is the first child (inner: children at `first`, `first + 1`) or the
-/// first triangle, `hi.w` the triangle count (0: inner).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct SingleNode {
-    pub lo: [f32; 4],
-    pub hi: [f32; 4],
-}
-
-/// "threaded" layout: one box per node in depth-first order, with an escape link, for a stackless traversal: a
-/// hit inner node continues at the next node (its first child), a missed node or a finished leaf at its escape.
-/// `lo.w`: escape index bits (`EMPTY`: done); `hi.w`: count << 29 | first triangle (count 0: inner node).
-pub type ThreadedNode = SingleNode;
-
-/// "wide" layout: a compressed 8-wide node (Ylitie, Karras and Laine 2017, as obvhs converts a binary tree to it),
-/// 80 bytes. Mirrors `BvhNodeWide` in glsl/common/bvh_types.glsl:
-/// - words 0-2: the node box's low corner `p`; word 3: the per-axis scale exponents `e` (bytes 0-2: a child plane
-///   is `p + 2^(e - 127) * q`) and the mask of inner children (byte 3);
-/// - word 4: the first inner child (the inner children are consecutive nodes); word 5: the first of its leaves'
-///   triangles in the wide triangle list (`SceneBvh::wide_prims`);
-/// - words 6-7: a meta byte per child slot (0: empty; an inner child: `0b001_11sss`, 24 + its slot; a leaf:
-///   its triangle count in unary in the top three bits, its first triangle's offset below);
-/// - words 8-19: the children's quantized planes, a byte per child: low x (8-9), high x (10-11), low y (12-13),
-///   high y (14-15), low z (16-17), high z (18-19), children 0-3 in the first word of each pair.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct WideNode {
-    pub words: [u32; 20],
-}
-
-/// One instance (`BvhInstance` in bvh.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuInstance {
-    /// Rows of the 3x4 affine transform world → BVH space.
-    pub object_from_world: [[f32; 4]; 3],
-    /// Rows of the 3x4 affine transform BVH space → world.
-    pub world_from_object: [[f32; 4]; 3],
-    /// World-space bounds; `lo.w`: root node index bits in the pair layout.
-    pub lo: [f32; 4],
-    /// `hi.w`: root node index bits in the single layout.
-    pub hi: [f32; 4],
-    /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
-    /// coefficient inside a dielectric (1/m); w: a receiver's albedo texture layer + 1 (0: none).
-    pub material: [f32; 4],
-    /// x: root node index bits in the threaded layout; y, z, w: a diffuse receiver's rgb albedo (the eye-view
-    /// ray tracer shades with it).
-    pub pad: [f32; 4],
-    /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); a textured receiver: its uv
-    /// transform's first row. w: root node index bits in the wide layout (`EMPTY`: a deforming mesh, whose
-    /// instances the wide variant walks in the pair layout, which the refit keeps).
-    pub ior_rgb: [f32; 4],
-    /// Dielectric: absorption coefficient per channel (1/m); a textured receiver: its uv transform's second row.
-    /// w unused.
-    pub sigma_rgb: [f32; 4],
-}
-
-/// Three vertices of one triangle, in its instance's BVH space. In the triangles `w` holds each corner's texture
-/// u, in their vertex normals its v (0 for a mesh without texture coordinates).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuTriangle {
-    pub p: [[f32; 4]; 3],
-}
-
-/// One node of a deforming mesh's tree for the GPU refit (`RefitNode` in glsl/refit.comp): its parent and children
-/// (indices into the refit nodes; `EMPTY` for none), its triangles (a leaf: `tri_count` > 0), and where its box
-/// goes in each layout (the single and threaded node, and the pair node's slot as `node << 1 | slot`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct RefitNode {
-    pub parent: u32,
-    pub left: u32,
-    pub right: u32,
-    pub first_tri: u32,
-    pub tri_count: u32,
-    pub single: u32,
-    pub threaded: u32,
-    pub pair: u32,
-}
 
 /// A deforming mesh's part of the refit arrays and of the triangles.
 #[derive(Clone, Copy, Debug, Default)]
@@ -148,15 +57,6 @@ pub struct RefitMesh {
     /// The most parent links from a leaf to the root.
     pub depth: u32,
 }
-
-const _: () = {
-    assert!(size_of::<RefitNode>() == 32);
-    assert!(size_of::<PairNode>() == 64);
-    assert!(size_of::<SingleNode>() == 32);
-    assert!(size_of::<GpuInstance>() == 192);
-    assert!(size_of::<GpuTriangle>() == 48);
-    assert!(size_of::<WideNode>() == 80);
-};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -615,7 +515,7 @@ impl SceneBvh {
                 w[6 + 2 * k] = pack(&bytes[..4]);
                 w[7 + 2 * k] = pack(&bytes[4..]);
             }
-            self.wide_nodes.push(WideNode { words: w });
+            self.wide_nodes.push(WideNode::from_words(w));
         }
         node_base
     }
@@ -767,7 +667,7 @@ impl SceneBvh {
                 }
                 BvhLayout::Wide => {
                     while let Some(n) = stack.pop() {
-                        let w = &self.wide_nodes[n as usize].words;
+                        let w = &self.wide_nodes[n as usize].words();
                         let p = Vec3::new(f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2]));
                         let e = Vec3::from_array([0, 8, 16].map(|s| f32::from_bits(((w[3] >> s) & 0xFF) << 23)));
                         let imask = w[3] >> 24;

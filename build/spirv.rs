@@ -1,0 +1,152 @@
+//! Just enough SPIR-V reading for the build's checks: names, struct member offsets, array strides, descriptor
+//! bindings and specialization-constant IDs.
+
+use std::collections::{BTreeMap, HashMap};
+
+/// What a descriptor binding is, as the shader declares it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Descriptor {
+    Uniform,
+    Storage,
+    Sampled,
+    StorageImage,
+    UniformTexel,
+    StorageTexel,
+}
+
+#[derive(Default)]
+pub struct Module {
+    pub names: HashMap<u32, String>,
+    /// Struct type → its member types.
+    pub struct_members: BTreeMap<u32, Vec<u32>>,
+    /// Struct type → member → byte offset.
+    pub member_offsets: HashMap<u32, HashMap<u32, u32>>,
+    /// Array type → stride.
+    pub array_strides: HashMap<u32, u32>,
+    /// (set, binding) → what it is and its variable's name, for every descriptor the shader declares.
+    pub bindings: BTreeMap<(u32, u32), (Descriptor, String)>,
+    /// Specialization-constant IDs, with their names.
+    pub spec_ids: BTreeMap<u32, String>,
+}
+
+const OP_NAME: u32 = 5;
+const OP_TYPE_IMAGE: u32 = 25;
+const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
+const OP_TYPE_ARRAY: u32 = 28;
+const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
+const OP_TYPE_STRUCT: u32 = 30;
+const OP_TYPE_POINTER: u32 = 32;
+const OP_VARIABLE: u32 = 59;
+const OP_DECORATE: u32 = 71;
+const OP_MEMBER_DECORATE: u32 = 72;
+
+const DEC_SPEC_ID: u32 = 1;
+const DEC_ARRAY_STRIDE: u32 = 6;
+const DEC_BINDING: u32 = 33;
+const DEC_DESCRIPTOR_SET: u32 = 34;
+const DEC_OFFSET: u32 = 35;
+
+const SC_UNIFORM_CONSTANT: u32 = 0;
+const SC_UNIFORM: u32 = 2;
+const SC_STORAGE_BUFFER: u32 = 12;
+
+fn string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).take_while(|&b| b != 0).collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+impl Module {
+    pub fn parse(words: &[u32]) -> Result<Module, String> {
+        if words.len() < 5 || words[0] != 0x0723_0203 {
+            return Err("not SPIR-V".into());
+        }
+        let mut m = Module::default();
+        let mut bindings: HashMap<u32, u32> = HashMap::new();
+        let mut sets: HashMap<u32, u32> = HashMap::new();
+        let mut spec: Vec<(u32, u32)> = Vec::new();
+        let mut images: HashMap<u32, (u32, u32)> = HashMap::new(); // id → (dim, sampled)
+        let mut sampled_images: HashMap<u32, u32> = HashMap::new();
+        let mut arrays: HashMap<u32, u32> = HashMap::new(); // array type → element type
+        let mut pointers: HashMap<u32, (u32, u32)> = HashMap::new(); // id → (storage class, pointee)
+        let mut variables: Vec<(u32, u32, u32)> = Vec::new(); // (pointer type, id, storage class)
+        let mut i = 5;
+        while i < words.len() {
+            let count = (words[i] >> 16) as usize;
+            let op = words[i] & 0xFFFF;
+            if count == 0 || i + count > words.len() {
+                return Err(format!("truncated instruction at word {i}"));
+            }
+            let a = &words[i + 1..i + count];
+            match op {
+                OP_NAME => {
+                    m.names.insert(a[0], string(&a[1..]));
+                }
+                OP_TYPE_IMAGE => {
+                    images.insert(a[0], (a[2], a[6]));
+                }
+                OP_TYPE_SAMPLED_IMAGE => {
+                    sampled_images.insert(a[0], a[1]);
+                }
+                OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY => {
+                    arrays.insert(a[0], a[1]);
+                }
+                OP_TYPE_STRUCT => {
+                    m.struct_members.insert(a[0], a[1..].to_vec());
+                }
+                OP_TYPE_POINTER => {
+                    pointers.insert(a[0], (a[1], a[2]));
+                }
+                OP_VARIABLE => variables.push((a[0], a[1], a[2])),
+                OP_DECORATE => match a[1] {
+                    DEC_SPEC_ID => spec.push((a[0], a[2])),
+                    DEC_ARRAY_STRIDE => {
+                        m.array_strides.insert(a[0], a[2]);
+                    }
+                    DEC_BINDING => {
+                        bindings.insert(a[0], a[2]);
+                    }
+                    DEC_DESCRIPTOR_SET => {
+                        sets.insert(a[0], a[2]);
+                    }
+                    _ => {}
+                },
+                OP_MEMBER_DECORATE if a[2] == DEC_OFFSET => {
+                    m.member_offsets.entry(a[0]).or_default().insert(a[1], a[3]);
+                }
+                _ => {}
+            }
+            i += count;
+        }
+        for (id, spec_id) in spec {
+            m.spec_ids.insert(spec_id, m.names.get(&id).cloned().unwrap_or_default());
+        }
+        for (ptr, id, class) in variables {
+            let Some(&binding) = bindings.get(&id) else { continue };
+            let set = sets.get(&id).copied().unwrap_or(0);
+            let mut ty = pointers.get(&ptr).map(|p| p.1).ok_or("a variable without a pointer type")?;
+            while let Some(&e) = arrays.get(&ty) {
+                ty = e;
+            }
+            let kind = match class {
+                SC_UNIFORM => Descriptor::Uniform,
+                SC_STORAGE_BUFFER => Descriptor::Storage,
+                SC_UNIFORM_CONSTANT => {
+                    if sampled_images.contains_key(&ty) {
+                        Descriptor::Sampled
+                    } else {
+                        match images.get(&ty) {
+                            // Dim Buffer: a texel buffer; sampled 1: read through a sampler, 2: a storage image.
+                            Some(&(5, 1)) => Descriptor::UniformTexel,
+                            Some(&(5, _)) => Descriptor::StorageTexel,
+                            Some(&(_, 2)) => Descriptor::StorageImage,
+                            _ => return Err(format!("binding {binding}: a descriptor of a kind not checked")),
+                        }
+                    }
+                }
+                _ => continue,
+            };
+            m.bindings.insert((set, binding), (kind, m.names.get(&id).cloned().unwrap_or_default()));
+        }
+        Ok(m)
+    }
+}

@@ -1,0 +1,341 @@
+//! The GPU structs, written once in Rust, turned into GLSL.
+//!
+//! Every `#[repr(C)]` struct of the listed Rust files is a GPU struct. This module parses their declarations (one
+//! field per line, the types below) and writes:
+//! - `gpu_structs.glsl`: the same structs in GLSL, with the Rust doc comments, for the shaders to include;
+//! - `gpu_layout.rs`: the byte offset of every field and every struct's size, asserted against the Rust types;
+//! - the layouts the SPIR-V check ([`check_spirv`]) compares each compiled shader's struct decorations with.
+//!
+//! Field types: `f32`, `u32`, `i32`; `[T; 2]` and `[T; 4]` of those (`vec2`, `uvec4`, ...); `[f32; 16]` (`mat4`);
+//! another GPU struct; and arrays `[T; N]` of any of these, where N may name constants of src/shader_consts.rs.
+//! A field that GLSL would place at another offset than Rust (std430 or std140) fails the build.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+
+/// One field: its GLSL type, name, array length (expression as GLSL reads it, and its value), offset and doc.
+pub struct Field {
+    pub glsl_type: String,
+    pub name: String,
+    pub array: Option<(String, u32)>,
+    pub offset: u32,
+    /// Bytes of one element (of the array, if any).
+    pub elem_size: u32,
+    pub doc: Vec<String>,
+}
+
+pub struct Struct {
+    pub name: String,
+    pub rust_path: String,
+    pub doc: Vec<String>,
+    pub fields: Vec<Field>,
+    /// Bytes in Rust: where its last field ends (GLSL rounds it up to `align` where it is an array element or a
+    /// member of another struct; [`parse`] refuses those uses unless it is a multiple already).
+    pub size: u32,
+    /// The largest member alignment std430 gives it.
+    pub align: u32,
+}
+
+/// (GLSL type, size, std430 alignment) of a Rust leaf type.
+fn leaf(ty: &str) -> Option<(&'static str, u32, u32)> {
+    Some(match ty {
+        "f32" => ("float", 4, 4),
+        "u32" => ("uint", 4, 4),
+        "i32" => ("int", 4, 4),
+        "[f32;2]" => ("vec2", 8, 8),
+        "[u32;2]" => ("uvec2", 8, 8),
+        "[i32;2]" => ("ivec2", 8, 8),
+        "[f32;4]" => ("vec4", 16, 16),
+        "[u32;4]" => ("uvec4", 16, 16),
+        "[i32;4]" => ("ivec4", 16, 16),
+        "[f32;16]" => ("mat4", 64, 16),
+        _ => return None,
+    })
+}
+
+/// Evaluates an array length: integers, constants, `+ - * /`, parentheses, and `as usize` (ignored).
+pub fn eval(expr: &str, consts: &HashMap<String, u32>) -> Result<u32, String> {
+    let tokens: Vec<String> = {
+        let mut t = Vec::new();
+        let mut cur = String::new();
+        for c in expr.chars() {
+            if c.is_alphanumeric() || c == '_' {
+                cur.push(c);
+            } else {
+                if !cur.is_empty() {
+                    t.push(std::mem::take(&mut cur));
+                }
+                if !c.is_whitespace() {
+                    t.push(c.to_string());
+                }
+            }
+        }
+        if !cur.is_empty() {
+            t.push(cur);
+        }
+        // `as usize` converts, which here changes nothing.
+        let mut out = Vec::new();
+        let mut i = 0;
+        while i < t.len() {
+            if t[i] == "as" {
+                i += 2;
+            } else {
+                out.push(t[i].clone());
+                i += 1;
+            }
+        }
+        out
+    };
+    fn sum(t: &[String], i: &mut usize, c: &HashMap<String, u32>) -> Result<u32, String> {
+        let mut v = product(t, i, c)?;
+        while let Some(op) = t.get(*i).filter(|s| *s == "+" || *s == "-").cloned() {
+            *i += 1;
+            let r = product(t, i, c)?;
+            v = if op == "+" { v + r } else { v - r };
+        }
+        Ok(v)
+    }
+    fn product(t: &[String], i: &mut usize, c: &HashMap<String, u32>) -> Result<u32, String> {
+        let mut v = atom(t, i, c)?;
+        while let Some(op) = t.get(*i).filter(|s| *s == "*" || *s == "/").cloned() {
+            *i += 1;
+            let r = atom(t, i, c)?;
+            v = if op == "*" { v * r } else { v / r };
+        }
+        Ok(v)
+    }
+    fn atom(t: &[String], i: &mut usize, c: &HashMap<String, u32>) -> Result<u32, String> {
+        let tok = t.get(*i).ok_or("unexpected end")?.clone();
+        *i += 1;
+        if tok == "(" {
+            let v = sum(t, i, c)?;
+            if t.get(*i).map(String::as_str) != Some(")") {
+                return Err("missing )".into());
+            }
+            *i += 1;
+            Ok(v)
+        } else if let Ok(n) = tok.parse::<u32>() {
+            Ok(n)
+        } else {
+            c.get(&tok).copied().ok_or(format!("unknown constant {tok}"))
+        }
+    }
+    let mut i = 0;
+    let v = sum(&tokens, &mut i, consts)?;
+    if i != tokens.len() {
+        return Err(format!("cannot read `{expr}`"));
+    }
+    Ok(v)
+}
+
+/// The GLSL spelling of an array length written in Rust.
+fn glsl_length(expr: &str) -> String {
+    expr.replace(" as usize", "").trim().to_string()
+}
+
+/// Splits `[T; N]` into `T` and `N` (at the top level).
+fn split_array(ty: &str) -> Option<(&str, &str)> {
+    let inner = ty.strip_prefix('[')?.strip_suffix(']')?;
+    let mut depth = 0;
+    for (i, c) in inner.char_indices() {
+        match c {
+            '[' | '(' => depth += 1,
+            ']' | ')' => depth -= 1,
+            ';' if depth == 0 => return Some((inner[..i].trim(), inner[i + 1..].trim())),
+            _ => {}
+        }
+    }
+    None
+}
+
+fn round_up(x: u32, a: u32) -> u32 {
+    x.div_ceil(a) * a
+}
+
+/// Parses the GPU structs of `text` (the Rust file `file`, whose module path is `module`).
+pub fn parse(
+    file: &str,
+    module: &str,
+    text: &str,
+    consts: &HashMap<String, u32>,
+    known: &mut Vec<Struct>,
+) -> Result<(), String> {
+    let mut doc: Vec<String> = Vec::new();
+    let mut repr_c = false;
+    let mut current: Option<Struct> = None;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        let at = |msg: String| format!("{file}:{}: {msg}", n + 1);
+        if let Some(d) = line.strip_prefix("///") {
+            doc.push(d.strip_prefix(' ').unwrap_or(d).to_string());
+            continue;
+        }
+        if let Some(s) = current.as_mut() {
+            if line == "}" {
+                known.push(current.take().unwrap());
+                doc.clear();
+                continue;
+            }
+            if line.is_empty() || line.starts_with("//") {
+                continue;
+            }
+            let body = line
+                .strip_prefix("pub ")
+                .and_then(|l| l.strip_suffix(','))
+                .ok_or_else(|| at(format!("a GPU struct's field must read `pub name: Type,`: `{line}`")))?;
+            let (name, ty) = body.split_once(':').ok_or_else(|| at(format!("no type in `{line}`")))?;
+            let ty = ty.trim();
+            let (elem, array) = match leaf(&ty.replace(' ', "")) {
+                Some(_) => (ty.to_string(), None),
+                None => match split_array(ty) {
+                    Some((e, len)) => {
+                        let v = eval(len, consts).map_err(|e| at(format!("array length `{len}`: {e}")))?;
+                        (e.to_string(), Some((glsl_length(len), v)))
+                    }
+                    None => (ty.to_string(), None),
+                },
+            };
+            let (glsl_type, elem_size, align) = match leaf(&elem.replace(' ', "")) {
+                Some((g, size, align)) => (g.to_string(), size, align),
+                None => {
+                    let inner = known
+                        .iter()
+                        .find(|k| k.name == elem)
+                        .ok_or_else(|| at(format!("`{elem}` is not a GPU type (declare it above, #[repr(C)])")))?;
+                    if inner.size % inner.align != 0 {
+                        return Err(at(format!(
+                            "`{elem}` ends at byte {} but GLSL rounds it to {} bytes: pad it to use it inside another",
+                            inner.size,
+                            round_up(inner.size, inner.align)
+                        )));
+                    }
+                    (inner.name.clone(), inner.size, inner.align)
+                }
+            };
+            // std430: an array's stride is its element's size rounded to its alignment; Rust packs it at the size.
+            if array.is_some() && elem_size % align != 0 {
+                return Err(at(format!("`{name}`: an array of {glsl_type} has another stride in GLSL")));
+            }
+            if s.size % align != 0 {
+                return Err(at(format!(
+                    "`{}` would be at byte {} in Rust but aligned to {align} in GLSL: add padding before it",
+                    name.trim(),
+                    s.size
+                )));
+            }
+            let count = array.as_ref().map_or(1, |a| a.1);
+            s.fields.push(Field {
+                glsl_type,
+                name: name.trim().to_string(),
+                array,
+                offset: s.size,
+                elem_size,
+                doc: std::mem::take(&mut doc),
+            });
+            s.size += elem_size * count;
+            s.align = s.align.max(align);
+            continue;
+        }
+        if line == "#[repr(C)]" {
+            repr_c = true;
+            continue;
+        }
+        if line.starts_with("#[") {
+            continue;
+        }
+        if let Some(rest) = line.strip_prefix("pub struct ") {
+            if repr_c {
+                let name = rest.trim_end_matches('{').trim().to_string();
+                current = Some(Struct {
+                    rust_path: format!("{module}::{name}"),
+                    name,
+                    doc: std::mem::take(&mut doc),
+                    fields: Vec::new(),
+                    size: 0,
+                    align: 4,
+                });
+            }
+        }
+        repr_c = false;
+        doc.clear();
+    }
+    Ok(())
+}
+
+/// The GLSL declarations of `structs`.
+pub fn glsl(structs: &[Struct], sources: &[&str]) -> String {
+    let mut out = format!(
+        "// Generated by build.rs from {}: edit the Rust structs, not this file.\n\
+         #ifndef GPU_STRUCTS_GLSL\n#define GPU_STRUCTS_GLSL\n",
+        sources.join(" and ")
+    );
+    for s in structs {
+        out.push('\n');
+        for d in &s.doc {
+            writeln!(out, "// {d}").unwrap();
+        }
+        writeln!(out, "struct {} {{  // {} bytes", s.name, s.size).unwrap();
+        for f in &s.fields {
+            for d in &f.doc {
+                writeln!(out, "    // {d}").unwrap();
+            }
+            let array = f.array.as_ref().map(|(e, _)| format!("[{e}]")).unwrap_or_default();
+            writeln!(out, "    {} {}{array};  // byte {}", f.glsl_type, f.name, f.offset).unwrap();
+        }
+        out.push_str("};\n");
+    }
+    out.push_str("#endif\n");
+    out
+}
+
+/// Rust asserts of every offset and size.
+pub fn rust_asserts(structs: &[Struct]) -> String {
+    let mut out =
+        String::from("// Generated by build.rs: the layouts gpu_structs.glsl was written for.\nconst _: () = {\n");
+    for s in structs {
+        writeln!(out, "    assert!(::std::mem::size_of::<{}>() == {});", s.rust_path, s.size).unwrap();
+        for f in &s.fields {
+            writeln!(out, "    assert!(::std::mem::offset_of!({}, {}) == {});", s.rust_path, f.name, f.offset).unwrap();
+        }
+    }
+    out.push_str("};\n");
+    out
+}
+
+/// Compares the struct layouts a compiled shader decorates with the Rust ones: every member's offset and every
+/// array's stride, in each struct type named like a GPU struct (glslang keeps one per layout it is used in).
+pub fn check_spirv(shader: &str, words: &[u32], structs: &[Struct]) -> Result<(), String> {
+    let m = super::spirv::Module::parse(words).map_err(|e| format!("{shader}: {e}"))?;
+    for (&id, members) in &m.struct_members {
+        let Some(name) = m.names.get(&id) else { continue };
+        let Some(s) = structs.iter().find(|s| &s.name == name) else { continue };
+        let offsets = m.member_offsets.get(&id);
+        if members.len() != s.fields.len() {
+            return Err(format!(
+                "{shader}: struct {name} has {} members in SPIR-V, {} in Rust",
+                members.len(),
+                s.fields.len()
+            ));
+        }
+        let Some(offsets) = offsets else { continue };
+        for (k, f) in s.fields.iter().enumerate() {
+            if let Some(&o) = offsets.get(&(k as u32)) {
+                if o != f.offset {
+                    return Err(format!("{shader}: {name}.{} is at byte {o} in SPIR-V, {} in Rust", f.name, f.offset));
+                }
+            }
+            if f.array.is_some() {
+                if let Some(&stride) = m.array_strides.get(&members[k]) {
+                    if stride != f.elem_size {
+                        return Err(format!(
+                            "{shader}: {name}.{} has an array stride of {stride} bytes in SPIR-V, {} in Rust \
+                             (std140 rounds array elements up to 16 bytes)",
+                            f.name, f.elem_size
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,99 @@
+//! Tests of the build's GPU-struct generator and its SPIR-V check (build/structs.rs, build/spirv.rs): that a
+//! layout GLSL would read differently from Rust is refused, in the Rust source or in a compiled shader.
+
+#[path = "../build/spirv.rs"]
+mod spirv;
+#[path = "../build/structs.rs"]
+mod structs;
+
+use std::collections::HashMap;
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+fn consts() -> HashMap<String, u32> {
+    let text = std::fs::read_to_string(format!("{ROOT}/src/shader_consts.rs")).unwrap();
+    let mut out = HashMap::new();
+    for line in text.lines().filter_map(|l| l.trim().strip_prefix("pub const ")) {
+        let (name, rest) = line.split_once(':').unwrap();
+        let value = rest.split_once('=').unwrap().1.trim().trim_end_matches(';');
+        let v = structs::eval(value, &out).unwrap();
+        out.insert(name.trim().to_string(), v);
+    }
+    out
+}
+
+fn parse(text: &str) -> Result<Vec<structs::Struct>, String> {
+    let mut found = Vec::new();
+    structs::parse("test.rs", "crate::test", text, &consts(), &mut found)?;
+    Ok(found)
+}
+
+fn real_structs(replace: Option<(&str, &str)>) -> Vec<structs::Struct> {
+    let mut found = Vec::new();
+    for (file, module) in [("src/gpu_types.rs", "crate::gpu_types"), ("src/bvh/records.rs", "crate::bvh")] {
+        let mut text = std::fs::read_to_string(format!("{ROOT}/{file}")).unwrap();
+        if let Some((a, b)) = replace {
+            text = text.replace(a, b);
+        }
+        structs::parse(file, module, &text, &consts(), &mut found).unwrap();
+    }
+    found
+}
+
+#[test]
+fn the_real_structs_parse_with_the_offsets_rust_gives_them() {
+    let found = real_structs(None);
+    let frame = found.iter().find(|s| s.name == "FrameData").unwrap();
+    assert_eq!(frame.size as usize, std::mem::size_of::<crate::gpu_types::FrameData>());
+    let eye = frame.fields.iter().find(|f| f.name == "eye").unwrap();
+    assert_eq!(eye.offset as usize, std::mem::offset_of!(crate::gpu_types::FrameData, eye));
+    assert!(found.iter().any(|s| s.name == "GpuInstance" && s.size == 192));
+    let asserts = structs::rust_asserts(&found);
+    assert!(asserts.contains("assert!(::std::mem::offset_of!(crate::gpu_types::FrameData, eye) == 640);"));
+}
+
+#[test]
+fn a_field_glsl_would_align_elsewhere_is_refused_with_its_line() {
+    let e = parse("#[repr(C)]\npub struct A {\n    pub a: u32,\n    pub b: [f32; 4],\n}\n").err().unwrap();
+    assert!(e.starts_with("test.rs:4:") && e.contains("`b`") && e.contains("padding"), "{e}");
+    // A struct whose size GLSL rounds up cannot sit inside another.
+    let text = "#[repr(C)]\npub struct A {\n    pub a: [f32; 4],\n    pub b: u32,\n}\n#[repr(C)]\npub struct B {\n    pub a: [A; 2],\n}\n";
+    let e = parse(text).err().unwrap();
+    assert!(e.starts_with("test.rs:8:") && e.contains("rounds it to 32"), "{e}");
+    let e = parse("#[repr(C)]\npub struct A {\n    pub a: [f64; 2],\n}\n").err().unwrap();
+    assert!(e.contains("not a GPU type"), "{e}");
+    let e = parse("#[repr(C)]\npub struct A {\n    pub a: [u32; NO_SUCH + 1],\n}\n").err().unwrap();
+    assert!(e.contains("unknown constant NO_SUCH"), "{e}");
+}
+
+#[test]
+fn the_generated_glsl_carries_the_docs_and_constant_lengths() {
+    let glsl = structs::glsl(&real_structs(None), &["src/gpu_types.rs"]);
+    assert!(glsl.contains("struct TraversalState {"));
+    assert!(glsl.contains("    LevelCounters levels[MAX_LEVELS];"));
+    assert!(glsl.contains("    // The eye.\n    GpuView camera;  // byte 320"));
+}
+
+#[test]
+fn a_shader_that_reads_a_struct_with_another_layout_fails_the_check() {
+    let words = crate::shaders::COMPOSITE_COMP.words();
+    let name = "composite.comp";
+    structs::check_spirv(name, words, &real_structs(None)).unwrap();
+    // std140 (the frame's uniform buffer) strides an array of uvec2 by 16 bytes, Rust by 8.
+    let pyramid = "pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],";
+    let wrong = real_structs(Some((pyramid, "pub pyramid: [[u32; 2]; (MAX_PYRAMID_MIPS / 2) as usize],")));
+    let e = structs::check_spirv(name, words, &wrong).unwrap_err();
+    assert!(e.contains("FrameData.pyramid has an array stride of 16 bytes in SPIR-V, 8 in Rust"), "{e}");
+    // A member the shader does not have.
+    let wrong =
+        real_structs(Some(("    pub material: [f32; 4],\n}", "    pub material: [f32; 4],\n    pub more: u32,\n}")));
+    let e = structs::check_spirv(name, words, &wrong).unwrap_err();
+    assert!(e.contains("struct FrameData has 13 members in SPIR-V, 14 in Rust"), "{e}");
+}
+
+#[test]
+fn the_descriptors_a_shader_declares_are_read() {
+    let m = spirv::Module::parse(crate::shaders::COVERAGE_COMP.words()).unwrap();
+    assert!(!m.bindings.is_empty());
+    assert!(m.bindings.values().any(|(kind, _)| *kind == spirv::Descriptor::Uniform));
+}
