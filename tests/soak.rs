@@ -1,7 +1,7 @@
 //! A short soak (src/soak.rs) under validation: a few hundred frames through one renderer, the light orbiting
 //! and the settings changing every frame (two-interface at levels 0 and 1 with every method, exact at levels 0
-//! and 1, three indices of refraction, five output sizes). Resident memory and GPU allocations stay flat after
-//! the warm-up cycle, validation stays silent, and every frame's caustic flux matches its first visit.
+//! and 1, three indices of refraction, five output sizes). Resident memory does not drift after the warm-up (the median of
+//! the last quarter of the frames against the first's), GPU allocations stay flat, validation stays silent, and every frame's caustic flux matches its first visit.
 //! `tools/soak --frames N` runs a longer one.
 
 mod common;
@@ -22,7 +22,8 @@ fn short_soak_is_flat_and_stable() {
     assert_eq!(s["period_frames"], 32);
     assert!(s["flux"]["worst_relative_deviation"].as_f64().unwrap() <= 1e-3);
     let rss = &s["rss_mib"];
-    let growth = rss["max_after_warmup"].as_f64().unwrap() - rss["warmup_peak"].as_f64().unwrap();
-    assert!(growth <= rss["bound_mib"].as_f64().unwrap(), "{rss}");
+    // A leak moves the median: 8 MiB (the default bound) between quarters 120 frames apart is a leak of 68 KiB
+    // a frame; measured 0.8 MiB. The soak fails itself past the bound; this reads the statistic back.
+    assert!(rss["median_drift_mib"].as_f64().unwrap() <= rss["bound_mib"].as_f64().unwrap(), "{rss}");
     assert!(s["exact_worst_residual"].as_f64().unwrap() < 1e-6);
 }

@@ -2,10 +2,10 @@
 //! headless while the light orbits and the settings change every frame (transport, method, metric, level, index
 //! of refraction, output size), and checks that
 //!
-//! - resident memory (`/proc/self/statm`, after `malloc_trim`) stays within `--rss-bound-mib` of its peak during
-//!   the warm-up (the first two full cycles of light positions and settings: the targets of every setting are
-//!   created and freed twice, and lavapipe's heap settles), and its growth after the warm-up is reported as a
-//!   least-squares slope and as the drift between the medians of the first and last quarter of the frames;
+//! - resident memory (`/proc/self/statm`, after `malloc_trim`) does not drift after the warm-up (the first two
+//!   full cycles of light positions and settings: the targets of every setting are created and freed twice, and
+//!   lavapipe's heap settles): the median of the last quarter of the later frames stays within `--rss-bound-mib`
+//!   of the first quarter's. Its least-squares slope, its minimum and maximum are reported too;
 //! - the GPU allocations (gpu-allocator's report) are the same at every visit of a setting after the warm-up
 //!   (the same count, and the same bytes within [`GPU_SLACK_BYTES`]: re-uploaded buffers land at other offsets,
 //!   with other alignment padding), and the memory blocks behind them never exceed the warm-up's peak;
@@ -49,8 +49,10 @@ pub struct SoakArgs {
     /// Side of the caustic map and of the refractor g-buffers.
     #[arg(long, default_value_t = 256)]
     pub map_res: u32,
-    /// Allowed resident-memory growth after the warm-up, MiB.
-    #[arg(long, default_value_t = 32.0)]
+    /// Allowed resident-memory drift after the warm-up, MiB: the median of the last quarter of the frames against
+    /// the first quarter's (measured: 0.8 MiB over 224 frames, while single frames peaked 21 MiB over the
+    /// warm-up's peak).
+    #[arg(long, default_value_t = 8.0)]
     pub rss_bound_mib: f64,
     /// Relative tolerance of a frame's caustic flux against the first visit of its light position and setting.
     #[arg(long, default_value_t = 1e-3)]
@@ -300,14 +302,6 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
                 }
                 _ => {}
             }
-            if rss > rss_base + (args.rss_bound_mib * 1048576.0) as u64 {
-                fail(format!(
-                    "resident memory {:.1} MiB, {:.1} MiB above the warm-up's peak {:.1} MiB",
-                    rss as f64 / 1048576.0,
-                    (rss - rss_base) as f64 / 1048576.0,
-                    rss_base as f64 / 1048576.0
-                ));
-            }
         }
         if i % 10 == 0 || i + 1 == args.frames as usize {
             samples.push(json!({
@@ -342,6 +336,17 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         f64::NAN
     };
     let after = rss_points.len();
+    // A leak is a trend: the medians of the first and last quarters after the warm-up move apart, where an
+    // allocator's passing peak (the maximum, which once exceeded a bound on it in one clean run of three) moves
+    // neither.
+    if drift > args.rss_bound_mib * 1048576.0 {
+        failures.push(format!(
+            "resident memory drifted {:.1} MiB after the warm-up (median of the last quarter of the frames against \
+             the first's), over the bound of {} MiB",
+            drift / 1048576.0,
+            args.rss_bound_mib
+        ));
+    }
     let summary = json!({
         "device": session.device().info.name,
         "validation": {"enabled": session.validation, "messages": caustics::gpu::validation_message_count()},
