@@ -12,6 +12,7 @@
 //! The output is `$OUT_DIR/shaders.rs`, included by src/shaders.rs: one aligned `&[u32]` per shader variant, and
 //! `$OUT_DIR/gpu_layout.rs`, included by src/gpu_types.rs.
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -98,17 +99,22 @@ fn shared_macros() -> Vec<(String, String)> {
     out
 }
 
-/// Parses the GPU structs and writes their Rust asserts (`$OUT_DIR/gpu_layout.rs`).
-fn gpu_structs(macros: &[(String, String)], out_dir: &Path) -> Vec<structs::Struct> {
-    let mut consts = std::collections::HashMap::new();
+/// The values of src/shader_consts.rs.
+fn const_values(macros: &[(String, String)]) -> HashMap<String, u32> {
+    let mut consts = HashMap::new();
     for (k, v) in macros {
         let value = structs::eval(v, &consts).unwrap_or_else(|e| panic!("src/shader_consts.rs: {k}: {e}"));
         consts.insert(k.clone(), value);
     }
+    consts
+}
+
+/// Parses the GPU structs and writes their Rust asserts (`$OUT_DIR/gpu_layout.rs`).
+fn gpu_structs(consts: &HashMap<String, u32>, out_dir: &Path) -> Vec<structs::Struct> {
     let mut found = Vec::new();
     for (file, module) in STRUCT_SOURCES {
         let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("read {file}: {e}"));
-        if let Err(e) = structs::parse(file, module, &text, &consts, &mut found) {
+        if let Err(e) = structs::parse(file, module, &text, consts, &mut found) {
             panic!("GPU structs: {e}");
         }
     }
@@ -141,7 +147,8 @@ fn main() {
     }
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
     let macros = shared_macros();
-    let structs = gpu_structs(&macros, &out_dir);
+    let consts = const_values(&macros);
+    let structs = gpu_structs(&consts, &out_dir);
     let generated_glsl = structs::glsl(&structs, &STRUCT_SOURCES.iter().map(|s| s.0).collect::<Vec<_>>());
 
     let mut sources: Vec<PathBuf> = std::fs::read_dir(&glsl)
@@ -152,6 +159,10 @@ fn main() {
     sources.sort();
     for entry in walk(&glsl) {
         println!("cargo:rerun-if-changed={}", entry.display());
+        let text = std::fs::read_to_string(&entry).unwrap_or_default();
+        if let Err(e) = structs::check_spec_ids(&entry.display().to_string(), &text, &consts) {
+            panic!("{e}");
+        }
     }
 
     // Every (source, static name, extra macros) to compile, in a fixed order.
@@ -214,7 +225,8 @@ fn main() {
             Ok(words) => {
                 let spv_words: Vec<u32> =
                     words.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-                if let Err(e) = structs::check_spirv(&format!("{} ({name})", src.display()), &spv_words, &structs) {
+                let shader = format!("{} ({name})", src.display());
+                if let Err(e) = structs::check_spirv(&shader, &spv_words, &structs) {
                     errors.push(e);
                     continue;
                 }

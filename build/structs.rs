@@ -339,3 +339,26 @@ pub fn check_spirv(shader: &str, words: &[u32], structs: &[Struct]) -> Result<()
     }
     Ok(())
 }
+
+/// Checks that every specialization constant of a GLSL source, `layout(constant_id = ...) const TYPE NAME`, takes
+/// its ID from src/shader_consts.rs's `NAME_ID` (written so), by which the passes specialize it. (The SPIR-V's
+/// names cannot tell: the optimizer renames a constant after a local it was copied into.)
+pub fn check_spec_ids(file: &str, text: &str, consts: &HashMap<String, u32>) -> Result<(), String> {
+    for (n, line) in text.lines().enumerate() {
+        let Some(rest) = line.split("constant_id").nth(1) else { continue };
+        let at = |msg: String| format!("{file}:{}: {msg}", n + 1);
+        let id = rest.trim_start().trim_start_matches('=').split(')').next().unwrap_or("").trim();
+        let name = rest.split(" const ").nth(1).and_then(|d| d.split_whitespace().nth(1)).unwrap_or("");
+        if name.is_empty() {
+            return Err(at(format!("cannot read the specialization constant in `{}`", line.trim())));
+        }
+        let want = format!("{name}_ID");
+        if id != want || !consts.contains_key(&want) {
+            return Err(at(format!(
+                "specialization constant {name} must take constant_id = {want}, defined in src/shader_consts.rs \
+                 (the passes specialize it by the same constant)"
+            )));
+        }
+    }
+    Ok(())
+}

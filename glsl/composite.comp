@@ -42,10 +42,10 @@ layout(push_constant) uniform Push {
 // driver, which runs both sides of every branch under a mask, runs no code for what the scene lacks. Each flag is
 // tested together with the uniform it mirrors.
 // The lights whose maps are bound, 1-3 (the first's at CB_FRAME, CB_SHADOW, ...).
-layout(constant_id = 3) const uint GLASS_LIGHT_COUNT = 1u;
-layout(constant_id = 4) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.eye.z)
-layout(constant_id = 5) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.eye.w)
-layout(constant_id = 6) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
+layout(constant_id = GLASS_LIGHT_COUNT_ID) const uint GLASS_LIGHT_COUNT = 1u;
+layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.eye.z)
+layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.eye.w)
+layout(constant_id = GLASS_TEXTURED_ID) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
 #define ENVIRONMENT_MAP GLASS_ENVIRONMENT
 // The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
 // environment comes with u_frame: a later pass's first light carries none.)

@@ -27,7 +27,7 @@ bool lit(ivec2 p, vec4 front) {
 
 // Specialization constant 0: the pipeline builds mip 0 from the g-buffers (else a coarser mip from the one below).
 // A CPU driver runs both sides of a branch, so each pipeline holds only its own side.
-layout(constant_id = 0) const bool COVERAGE_MIP0 = true;
+layout(constant_id = COVERAGE_MIP0_ID) const bool COVERAGE_MIP0 = true;
 
 layout(push_constant) uniform CoveragePushBlock { CoveragePush pc; };
 

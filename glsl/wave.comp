@@ -26,10 +26,10 @@ layout(local_size_x = LINEAR_WG) in;
 // a bounce wave, which reads its rays from a queue; and whether the rays carry ray differentials (`--footprint
 // differential`, docs/design.md step 5). The driver folds them before it compiles, so each wave holds only the
 // code it runs: a CPU driver such as lavapipe runs both sides of every branch under a mask.
-layout(constant_id = 0) const bool WAVE_PRIMARY = false;
-layout(constant_id = 1) const bool WAVE_DIFFERENTIAL = false;
+layout(constant_id = WAVE_PRIMARY_ID) const bool WAVE_PRIMARY = false;
+layout(constant_id = WAVE_DIFFERENTIAL_ID) const bool WAVE_DIFFERENTIAL = false;
 // The most subgroups a work group can have on this device (LINEAR_WG over its least subgroup size).
-layout(constant_id = 3) const uint WAVE_SUBGROUPS = LINEAR_WG;
+layout(constant_id = WAVE_SUBGROUPS_ID) const uint WAVE_SUBGROUPS = LINEAR_WG;
 
 // Each subgroup's sums of the account's terms, then of the flux whose term depends on the reservation verdict:
 // children to append, records, and the records' one-interaction part (rows ACC_TERMS + PEND_*).

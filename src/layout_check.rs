@@ -1,8 +1,7 @@
 //! Tests of the build's GPU-struct generator and its SPIR-V check (build/structs.rs, build/spirv.rs): that a
 //! layout GLSL would read differently from Rust is refused, in the Rust source or in a compiled shader.
 
-#[path = "../build/spirv.rs"]
-mod spirv;
+use crate::vk::spirv;
 #[path = "../build/structs.rs"]
 mod structs;
 
@@ -96,4 +95,16 @@ fn the_descriptors_a_shader_declares_are_read() {
     let m = spirv::Module::parse(crate::shaders::COVERAGE_COMP.words()).unwrap();
     assert!(!m.bindings.is_empty());
     assert!(m.bindings.values().any(|(kind, _)| *kind == spirv::Descriptor::Uniform));
+}
+
+#[test]
+fn a_specialization_constant_takes_its_id_from_the_shared_constants() {
+    let c = consts();
+    let ok = "layout(constant_id = WAVE_PRIMARY_ID) const bool WAVE_PRIMARY = false;";
+    structs::check_spec_ids("x.comp", ok, &c).unwrap();
+    let e = structs::check_spec_ids("x.comp", "\nlayout(constant_id = 0) const bool WAVE_PRIMARY = false;", &c)
+        .unwrap_err();
+    assert!(e.starts_with("x.comp:2:") && e.contains("constant_id = WAVE_PRIMARY_ID"), "{e}");
+    let e = structs::check_spec_ids("x.comp", "layout(constant_id = NEW_ID) const uint NEW = 1u;", &c).unwrap_err();
+    assert!(e.contains("src/shader_consts.rs"), "{e}");
 }

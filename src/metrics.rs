@@ -1,9 +1,9 @@
 //! The error metric used everywhere (`caustics compare`, the bench, the tests), docs/design.md "Ground truth and
 //! error":
 //!
-//! 1. Both images are reduced to one plane of irradiance, the **mean of the R, G and B channels** (all current
-//!    lights are white, where this equals any single channel; for colored light the mean weighs the channels
-//!    equally).
+//! 1. Both images are reduced to one plane of irradiance, the **mean of the R, G and B channels** (under white
+//!    light and glass that neither tints nor disperses, this equals any single channel; under colored light,
+//!    tinted or dispersive glass the mean weighs the channels equally).
 //! 2. Both planes are box-filtered to the comparison resolution `res` × `res·H/W` (rounded, at least 1):
 //!    area-weighted, so a source pixel that straddles two target pixels is split between them by overlap area.
 //!    Sizes need not be multiples of one another, and the filter preserves Σ E · pixel area exactly.

@@ -224,3 +224,25 @@ pub const EB_CAUSTICS: u32 = 9;
 pub const EB_DIRECT: u32 = 10;
 /// Bindings of the layout.
 pub const EB_COUNT: u32 = 11;
+
+// Specialization constants: each GLSL `layout(constant_id = NAME_ID) const ... NAME` takes its ID from here, and
+// the passes specialize it by the same constant; build.rs fails a shader whose constant NAME has no NAME_ID here
+// or another ID.
+/// glsl/wave.comp: wave 0, whose rays start at the photons' cells.
+pub const WAVE_PRIMARY_ID: u32 = 0;
+/// glsl/wave.comp: the rays carry ray differentials.
+pub const WAVE_DIFFERENTIAL_ID: u32 = 1;
+/// glsl/common/bvh.glsl: the wide walk's pair fallback (some instance has no wide nodes: a deforming mesh).
+pub const BVH_PAIR_FALLBACK_ID: u32 = 2;
+/// glsl/wave.comp: the most subgroups a work group can have (the bound of its loop over them).
+pub const WAVE_SUBGROUPS_ID: u32 = 3;
+/// glsl/composite.comp's glass pass: the lights whose maps are bound (1-3).
+pub const GLASS_LIGHT_COUNT_ID: u32 = 3;
+/// glsl/composite.comp's glass pass: some glass disperses.
+pub const GLASS_DISPERSIVE_ID: u32 = 4;
+/// glsl/composite.comp's glass pass: an environment map.
+pub const GLASS_ENVIRONMENT_ID: u32 = 5;
+/// glsl/composite.comp's glass pass: some receiver has an albedo texture.
+pub const GLASS_TEXTURED_ID: u32 = 6;
+/// glsl/coverage.comp: the pass builds mip 0 from the g-buffers.
+pub const COVERAGE_MIP0_ID: u32 = 0;

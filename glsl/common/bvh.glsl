@@ -233,7 +233,7 @@ const uint BVH_WIDE_STACK = 32u;
 // Specialization constant 2: whether some instance has no wide nodes (a deforming mesh, which the walk then takes
 // through its pair nodes). A pipeline that knows the scene has none (the waves and the checks: src/passes/photons.rs) compiles
 // without the pair walk, which a CPU driver would otherwise run, masked, for every instance a ray meets.
-layout(constant_id = 2) const bool BVH_PAIR_FALLBACK = true;
+layout(constant_id = BVH_PAIR_FALLBACK_ID) const bool BVH_PAIR_FALLBACK = true;
 
 // The children of wide node n that the ray enters before tmax, as the hit mask of Ylitie, Karras and Laine
 // (2017): an inner child sets bit 24 + (slot ^ oct) (so the highest set bit is the child nearest in the ray's

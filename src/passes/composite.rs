@@ -67,11 +67,11 @@ impl GlassKey {
 
     fn spec(self) -> [(u32, u32); 5] {
         [
-            (crate::passes::photons::BVH_PAIR_FALLBACK_ID, self.fallback as u32),
-            (3, self.lights),
-            (4, self.dispersive as u32),
-            (5, self.environment as u32),
-            (6, self.textured as u32),
+            (BVH_PAIR_FALLBACK_ID, self.fallback as u32),
+            (GLASS_LIGHT_COUNT_ID, self.lights),
+            (GLASS_DISPERSIVE_ID, self.dispersive as u32),
+            (GLASS_ENVIRONMENT_ID, self.environment as u32),
+            (GLASS_TEXTURED_ID, self.textured as u32),
         ]
     }
 }

@@ -2,7 +2,7 @@
 
 use super::groups_2d;
 use crate::gpu_types::CoveragePush;
-use crate::shaders;
+use crate::shaders::{self, consts::COVERAGE_MIP0_ID};
 use crate::vk::{Access, Barriers, Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
 use ash::vk;
 use std::sync::Arc;
@@ -45,7 +45,7 @@ impl CoveragePass {
                 shaders::COVERAGE_COMP.words(),
                 &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled, BindKind::Sampled],
                 std::mem::size_of::<CoveragePush>() as u32,
-                &[(0, mip0 as u32)],
+                &[(COVERAGE_MIP0_ID, mip0 as u32)],
             )
         };
         Ok(CoveragePass {

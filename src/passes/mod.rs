@@ -12,6 +12,14 @@ pub mod scene_update;
 use crate::vk::{Device, VkResult};
 use std::sync::Arc;
 
+// Every pass binds its resources as push descriptors, and Vulkan guarantees 32 of them (maxPushDescriptors) on
+// every device with VK_KHR_push_descriptor: the largest layouts stay within it, so no device is refused for it
+// (pipeline creation checks each layout against the device's own limit all the same, src/vk/pipeline.rs).
+const _: () = {
+    use crate::shaders::consts::{CB_COUNT, EB_COUNT, PB_COUNT};
+    assert!(CB_COUNT <= 32 && PB_COUNT <= 32 && EB_COUNT <= 32);
+};
+
 /// The view-space g-buffers: distance (float bits) and an octahedral normal (glsl/common/gbuffer.glsl).
 pub const GEO_FORMAT: ash::vk::Format = ash::vk::Format::R32G32_UINT;
 pub const AUX_FORMAT: ash::vk::Format = ash::vk::Format::R32_SFLOAT;

@@ -49,21 +49,17 @@ const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTAN
 /// `WAVE_TEXELS`).
 const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
-/// glsl/wave.comp's specialization constants: `WAVE_PRIMARY` (0: wave 0, whose rays start at the photons' cells),
-/// `WAVE_DIFFERENTIAL` (1: the rays carry ray differentials), `BVH_PAIR_FALLBACK` (2: some instance has no wide
-/// nodes; glsl/common/bvh.glsl) and `WAVE_SUBGROUPS` (3: the most subgroups a work group can have, `subgroups`).
+/// glsl/wave.comp's specialization constants (src/shader_consts.rs): `WAVE_PRIMARY`, `WAVE_DIFFERENTIAL`,
+/// `BVH_PAIR_FALLBACK` and `WAVE_SUBGROUPS` (`subgroups`).
 /// A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
 fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 4] {
     [
-        (0, (variant & 1) as u32),
-        (1, (variant >> 1 & 1) as u32),
+        (WAVE_PRIMARY_ID, (variant & 1) as u32),
+        (WAVE_DIFFERENTIAL_ID, (variant >> 1 & 1) as u32),
         (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32),
         (WAVE_SUBGROUPS_ID, subgroups),
     ]
 }
-
-/// The constant_id of glsl/wave.comp's `WAVE_SUBGROUPS`: the bound of its loop over a work group's subgroups.
-const WAVE_SUBGROUPS_ID: u32 = 3;
 
 /// The most subgroups a work group of `LINEAR_WG` invocations can have on a device whose least subgroup size is
 /// `min_subgroup_size`.
@@ -74,10 +70,6 @@ fn wave_subgroups(min_subgroup_size: u32) -> u32 {
 // glsl/wave.comp counts a work group's children inside glass, outside it and its records in three 10-bit fields of
 // one word: each at most two per invocation.
 const _: () = assert!(2 * LINEAR_WG < 1 << 10);
-
-/// The constant_id of `BVH_PAIR_FALLBACK` (glsl/common/bvh.glsl): the wide walk's pair fallback, compiled only
-/// when some instance has no wide nodes (a deforming mesh).
-pub(crate) const BVH_PAIR_FALLBACK_ID: u32 = 2;
 
 /// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
 fn wave_variant(primary: bool, diff: bool, pair_fallback: bool) -> usize {

@@ -160,6 +160,9 @@ pub struct DeviceInfo {
     pub device_local_bytes: u64,
     /// The least subgroup size a compute shader may run with (Vulkan 1.3's minSubgroupSize; at least 1).
     pub min_subgroup_size: u32,
+    /// VK_KHR_push_descriptor's maxPushDescriptors: the most bindings a pipeline's (push-descriptor) layout may
+    /// have.
+    pub max_push_descriptors: u32,
 }
 
 impl DeviceInfo {
@@ -235,7 +238,11 @@ fn describe(
     };
     let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
     let mut size_control = vk::PhysicalDeviceSubgroupSizeControlProperties::default();
-    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props).push_next(&mut size_control);
+    let mut push = vk::PhysicalDevicePushDescriptorPropertiesKHR::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut driver_props)
+        .push_next(&mut size_control)
+        .push_next(&mut push);
     unsafe { raw.get_physical_device_properties2(physical, &mut p2) };
     let min_subgroup_size = size_control.min_subgroup_size.max(1);
     let driver = format!(
@@ -262,6 +269,7 @@ fn describe(
         float_atomic_add,
         device_local_bytes,
         min_subgroup_size,
+        max_push_descriptors: push.max_push_descriptors,
     }
 }
 

@@ -40,6 +40,9 @@ pub enum VkError {
     /// The device or the request cannot do what is asked.
     #[error("{0}")]
     Unsupported(String),
+    /// A pipeline's layout does not match what its shader declares (a defect of this crate, named precisely).
+    #[error("{0}")]
+    Interface(String),
 }
 
 /// The result of a Vulkan-layer operation.

@@ -9,6 +9,9 @@ pub mod error;
 pub mod image;
 pub mod pipeline;
 pub mod query;
+/// SPIR-V reading (shared with build.rs): each pipeline's layout is checked against what its shaders declare.
+#[path = "../../build/spirv.rs"]
+pub(crate) mod spirv;
 pub mod sync;
 pub mod tracker;
 

@@ -3,7 +3,7 @@
 
 use super::buffer::Buffer;
 use super::context::Device;
-use super::error::{Check, VkResult};
+use super::error::{Check, VkError, VkResult};
 use super::image::{Image, Sampler};
 use ash::vk;
 use std::sync::Arc;
@@ -140,6 +140,57 @@ struct Layouts<'a> {
     pipeline: vk::PipelineLayout,
 }
 
+/// Checks a pipeline's layout against the device's limits and against what its shaders declare: every
+/// descriptor a shader reads is in the layout (set 0), of the kind the layout gives it. A mismatch is this crate's
+/// defect, and the error names the pipeline, the binding and both kinds; the device's limit is named by its
+/// Vulkan name.
+fn check_interface(
+    device: &Device,
+    name: &str,
+    shaders: &[&[u32]],
+    kinds: &[BindKind],
+    push_size: u32,
+) -> VkResult<()> {
+    use super::spirv::{Descriptor, Module};
+    let limits = &device.info.limits;
+    if kinds.len() as u32 > device.info.max_push_descriptors {
+        return Err(VkError::Unsupported(format!(
+            "pipeline {name}: its layout binds {} push descriptors; {} allows {} (maxPushDescriptors)",
+            kinds.len(),
+            device.info.name,
+            device.info.max_push_descriptors
+        )));
+    }
+    if push_size > limits.max_push_constants_size {
+        return Err(VkError::Unsupported(format!(
+            "pipeline {name}: {push_size} bytes of push constants; {} allows {} (maxPushConstantsSize)",
+            device.info.name, limits.max_push_constants_size
+        )));
+    }
+    for words in shaders {
+        let module = Module::parse(words).map_err(|e| VkError::Interface(format!("pipeline {name}: {e}")))?;
+        for (&(set, binding), (declared, var)) in &module.bindings {
+            let expected = match declared {
+                Descriptor::Uniform => Some(BindKind::Uniform),
+                Descriptor::Storage => Some(BindKind::Storage),
+                Descriptor::Sampled => Some(BindKind::Sampled),
+                Descriptor::StorageImage => Some(BindKind::StorageImage),
+                Descriptor::UniformTexel => Some(BindKind::Texels),
+                Descriptor::StorageTexel => None,
+            };
+            let layout = kinds.get(binding as usize).filter(|_| set == 0);
+            if layout.is_none() || layout != expected.as_ref() {
+                return Err(VkError::Interface(format!(
+                    "pipeline {name}: its shader declares `{var}` at set {set}, binding {binding} as {declared:?}; \
+                     the layout has {}",
+                    layout.map_or("nothing there".to_string(), |k| format!("{k:?}"))
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl<'a> Layouts<'a> {
     fn new(device: &'a Device, kinds: &[BindKind], stages: vk::ShaderStageFlags, push_size: u32) -> VkResult<Self> {
         let bindings: Vec<_> = kinds
@@ -212,6 +263,7 @@ impl Pipeline {
         spec: &[(u32, u32)],
     ) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::COMPUTE;
+        check_interface(device, name, &[spv], kinds, push_size)?;
         let layouts = Layouts::new(device, kinds, stages, push_size)?;
         let module = Module::new(device, spv)?;
         let entries: Vec<vk::SpecializationMapEntry> = (0..spec.len() as u32)
@@ -242,6 +294,7 @@ impl Pipeline {
 
     pub fn graphics(device: &Arc<Device>, name: &str, desc: &GraphicsDesc) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        check_interface(device, name, &[desc.vertex, desc.fragment], desc.binds, desc.push_size)?;
         let layouts = Layouts::new(device, desc.binds, stages, desc.push_size)?;
         let vs = Module::new(device, desc.vertex)?;
         let fs = Module::new(device, desc.fragment)?;
@@ -482,4 +535,30 @@ impl LazyPipeline {
 pub fn built_pipelines() -> &'static std::sync::atomic::AtomicUsize {
     static BUILT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     &BUILT
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shaders;
+
+    #[test]
+    fn a_layout_that_differs_from_its_shader_is_refused_with_the_binding_named() {
+        let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
+        let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
+        let spv = shaders::RESOLVE_COMP.words();
+        let push = 4;
+        let right = [BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::StorageImage];
+        Pipeline::compute(&device, "resolve", spv, &right, push).expect("the pass's own layout");
+        // The texel variant's layout under the plain shader.
+        let texels = [BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage];
+        let e = Pipeline::compute(&device, "resolve", spv, &texels, push).err().expect("refused").to_string();
+        assert!(e.contains("binding 1 as Sampled; the layout has Texels"), "{e}");
+        let e = Pipeline::compute(&device, "resolve", spv, &right[..3], push).err().expect("refused").to_string();
+        assert!(e.contains("binding 3 as StorageImage; the layout has nothing there"), "{e}");
+        let many = [BindKind::Storage; 64];
+        let e = Pipeline::compute(&device, "wide", spv, &many, push).err().expect("refused").to_string();
+        assert!(e.contains("maxPushDescriptors"), "{e}");
+        assert_eq!(crate::vk::validation_message_count(), 0);
+    }
 }
