@@ -131,8 +131,13 @@ impl Module {
                 SC_UNIFORM => Descriptor::Uniform,
                 SC_STORAGE_BUFFER => Descriptor::Storage,
                 SC_UNIFORM_CONSTANT => {
-                    if sampled_images.contains_key(&ty) {
-                        Descriptor::Sampled
+                    // A sampler of a buffer image (`samplerBuffer`) is a uniform texel buffer.
+                    if let Some(image) = sampled_images.get(&ty) {
+                        if images.get(image).is_some_and(|i| i.0 == 5) {
+                            Descriptor::UniformTexel
+                        } else {
+                            Descriptor::Sampled
+                        }
                     } else {
                         match images.get(&ty) {
                             // Dim Buffer: a texel buffer; sampled 1: read through a sampler, 2: a storage image.

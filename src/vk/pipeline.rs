@@ -556,6 +556,11 @@ mod tests {
         assert!(e.contains("binding 1 as Sampled; the layout has Texels"), "{e}");
         let e = Pipeline::compute(&device, "resolve", spv, &right[..3], push).err().expect("refused").to_string();
         assert!(e.contains("binding 3 as StorageImage; the layout has nothing there"), "{e}");
+        // The texel variant reads binding 1 as a texel buffer (a `usamplerBuffer`).
+        let spv = shaders::RESOLVE_COMP_TEXELS.words();
+        Pipeline::compute(&device, "resolve, texels", spv, &texels, push).expect("the texel variant's layout");
+        let e = Pipeline::compute(&device, "resolve, texels", spv, &right, push).err().expect("refused").to_string();
+        assert!(e.contains("binding 1 as UniformTexel; the layout has Sampled"), "{e}");
         let many = [BindKind::Storage; 64];
         let e = Pipeline::compute(&device, "wide", spv, &many, push).err().expect("refused").to_string();
         assert!(e.contains("maxPushDescriptors"), "{e}");
