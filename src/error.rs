@@ -1,11 +1,11 @@
-//! Application-level errors and their exit codes: 2 for bad input, 1 for everything else.
+//! The library's errors, and the exit codes the CLI gives them: 2 for bad input, 1 for everything else.
 
 use crate::scene::SceneError;
 use crate::vk::VkError;
 
-/// The library's errors. [`AppError::exit_code`] maps them to the CLI's exit codes.
+/// The library's errors. [`Error::exit_code`] maps them to the CLI's exit codes.
 #[derive(Debug, thiserror::Error)]
-pub enum AppError {
+pub enum Error {
     /// A scene that cannot be read (bad input).
     #[error(transparent)]
     Scene(#[from] SceneError),
@@ -18,20 +18,27 @@ pub enum AppError {
     /// A file could not be read or written.
     #[error("{0}")]
     Io(String),
+    /// An image file could not be read or written.
+    #[error(transparent)]
+    Image(#[from] crate::image_io::ImageError),
     /// The command ran but its check failed (for example `compare` above a threshold).
     #[error("{0}")]
     Failed(String),
 }
 
-impl AppError {
+impl Error {
     /// 2 for bad input (an argument, a scene, an image), 1 for anything else.
     pub fn exit_code(&self) -> i32 {
         match self {
-            AppError::Scene(_) | AppError::BadInput(_) => 2,
+            Error::Scene(_) | Error::BadInput(_) => 2,
+            Error::Image(e) => match e {
+                crate::image_io::ImageError::Write { .. } => 1,
+                _ => 2,
+            },
             _ => 1,
         }
     }
 }
 
-/// The result of a library operation.
-pub type AppResult<T> = Result<T, AppError>;
+/// The result of a library operation (a second parameter names another error type, as `std::result::Result`).
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -2,11 +2,8 @@
 //! (with these doc comments), and asserts every field's offset in Rust (`gpu_layout.rs`, included below) and in
 //! each compiled shader's SPIR-V, whether it reads the struct as std140 or std430.
 
-use crate::scene::view::{CameraView, LightView};
-use crate::scene::{LightKind, Projection};
 use crate::shaders::consts::*;
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
 use std::mem::size_of;
 
 /// A view from a point (perspective: spot light, perspective camera) or along a direction (orthographic:
@@ -28,42 +25,6 @@ pub struct GpuView {
     pub window: [f32; 4],
     /// Texels: width, height, 1/width, 1/height.
     pub extent: [f32; 4],
-}
-
-fn v4(v: Vec3, w: f32) -> [f32; 4] {
-    [v.x, v.y, v.z, w]
-}
-
-fn extent(w: u32, h: u32) -> [f32; 4] {
-    [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32]
-}
-
-impl GpuView {
-    pub fn from_light(v: &LightView, resolution: u32) -> Self {
-        GpuView {
-            view_proj: v.view_proj().to_cols_array(),
-            origin: v4(v.origin, if v.kind == LightKind::Directional { 1.0 } else { 0.0 }),
-            right: v4(v.right, v.cos_cone),
-            down: v4(v.down, v.near),
-            forward: v4(v.forward, v.far),
-            window: [v.window.x0, v.window.y0, v.window.w, v.window.w],
-            extent: extent(resolution, resolution),
-        }
-    }
-
-    pub fn from_camera(c: &CameraView) -> Self {
-        let h = c.half_extents();
-        let ortho = matches!(c.projection, Projection::Orthographic { .. });
-        GpuView {
-            view_proj: c.view_proj().to_cols_array(),
-            origin: v4(c.position, if ortho { 1.0 } else { 0.0 }),
-            right: v4(c.right, -1.0),
-            down: v4(-c.up, c.near),
-            forward: v4(c.forward, c.far),
-            window: [-h.x, -h.y, 2.0 * h.x, 2.0 * h.y],
-            extent: extent(c.width, c.height),
-        }
-    }
 }
 
 /// What every pass of a frame reads (a uniform buffer, std140).
@@ -334,24 +295,6 @@ pub struct SceneUpdatePush {
     pub index_count: u32,
 }
 
-impl SceneUpdatePush {
-    /// Object `range` placed by `world_from_object`.
-    pub fn new(world_from_object: glam::Mat4, range: &crate::scene_gpu::ObjectRange) -> Self {
-        let m3 = glam::Mat3::from_mat4(world_from_object);
-        let n = m3.inverse().transpose();
-        let mut nrows = [0, 1, 2].map(|r| n.row(r).extend(0.0).to_array());
-        nrows[0][3] = if m3.determinant() < 0.0 { 1.0 } else { 0.0 };
-        SceneUpdatePush {
-            rows: [0, 1, 2].map(|r| world_from_object.row(r).to_array()),
-            nrows,
-            first_vertex: range.first_vertex,
-            vertex_count: range.vertex_count,
-            first_index: range.first_index,
-            index_count: range.index_count,
-        }
-    }
-}
-
 /// Push constants of water.comp: one water object's displacement (mode 0: its raster vertices to world space;
 /// mode 1: its BVH triangles, in object space).
 #[repr(C)]
@@ -370,43 +313,6 @@ pub struct WaterPush {
     pub src: u32,
     pub dst: u32,
     pub count: u32,
-}
-
-impl WaterPush {
-    /// The raster vertices of object `range` placed by `world_from_object`, at `time`, with waves `waves`.
-    pub fn raster(
-        world_from_object: glam::Mat4,
-        range: &crate::scene_gpu::ObjectRange,
-        time: f32,
-        waves: (u32, u32),
-    ) -> Self {
-        let place = SceneUpdatePush::new(world_from_object, range);
-        WaterPush {
-            rows: place.rows,
-            nrows: place.nrows,
-            time,
-            mode: 0,
-            first_wave: waves.0,
-            wave_count: waves.1,
-            src: range.first_vertex,
-            dst: range.first_vertex,
-            count: range.vertex_count,
-        }
-    }
-
-    /// The BVH triangles of a deforming mesh (`r`), at `time`, with waves `waves`.
-    pub fn bvh(r: &crate::bvh::RefitMesh, time: f32, waves: (u32, u32)) -> Self {
-        WaterPush {
-            time,
-            mode: 1,
-            first_wave: waves.0,
-            wave_count: waves.1,
-            src: r.rest_first,
-            dst: r.first_tri,
-            count: r.tri_count,
-            ..WaterPush::default()
-        }
-    }
 }
 
 /// Push constants of morph.comp: one morphing object's vertices weighted by its morph targets (mode 0: its raster
@@ -428,42 +334,6 @@ pub struct MorphPush {
     pub src: u32,
     pub dst: u32,
     pub count: u32,
-}
-
-impl MorphPush {
-    /// The raster vertices of object `range` placed by `world_from_object`, morphed as `morph` says.
-    pub fn raster(
-        world_from_object: glam::Mat4,
-        range: &crate::scene_gpu::ObjectRange,
-        morph: &crate::scene_gpu::MorphRange,
-    ) -> Self {
-        let place = SceneUpdatePush::new(world_from_object, range);
-        MorphPush {
-            rows: place.rows,
-            nrows: place.nrows,
-            first: morph.first,
-            vertices: morph.vertices,
-            targets: morph.targets,
-            first_weight: morph.first_weight,
-            src: range.first_vertex,
-            dst: range.first_vertex,
-            count: range.vertex_count,
-        }
-    }
-
-    /// The BVH triangles of a morphing mesh (`r`).
-    pub fn bvh(r: &crate::bvh::RefitMesh, morph: &crate::scene_gpu::MorphRange) -> Self {
-        MorphPush {
-            first: morph.first,
-            vertices: morph.vertices,
-            targets: morph.targets,
-            first_weight: morph.first_weight,
-            src: r.rest_first,
-            dst: r.first_tri,
-            count: r.tri_count,
-            ..MorphPush::default()
-        }
-    }
 }
 
 /// Push constants of refit.comp: one deforming mesh's leaves, and the layouts on the GPU (1 pair, 2 single,

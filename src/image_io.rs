@@ -2,8 +2,36 @@
 //! temporary file in the same directory and is renamed into place, so a failed run never leaves a half-written
 //! file behind.
 
-use crate::error::{AppError, AppResult};
 use std::path::{Path, PathBuf};
+
+/// An image file that cannot be read or written. A leaf of the library: the library's [`crate::Error`] wraps it
+/// (a file that cannot be read, or a directory that does not exist, is bad input; a failed write is not).
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file cannot be read as the image it should be.
+    #[error("{path}: cannot read {format}: {message}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// EXR or PNG.
+        format: &'static str,
+        /// The decoder's message.
+        message: String,
+    },
+    /// The directory a file would be written into does not exist.
+    #[error("{0}: output directory does not exist")]
+    NoDirectory(PathBuf),
+    /// Writing failed (nothing is left behind).
+    #[error("{path}: cannot write: {message}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        message: String,
+    },
+}
+
+type Result<T, E = ImageError> = std::result::Result<T, E>;
 
 /// An RGB float image, row-major, row 0 at the top.
 #[derive(Clone, Debug)]
@@ -40,30 +68,28 @@ fn temp_path(path: &Path) -> PathBuf {
 
 /// Bad input unless the directory `path` would be written into exists (checked before any work starts, so
 /// that a long render does not fail at its end).
-pub fn check_output_dir(path: &Path) -> AppResult<()> {
+pub fn check_output_dir(path: &Path) -> Result<()> {
     match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) if !dir.is_dir() => {
-            Err(AppError::BadInput(format!("{}: output directory does not exist", path.display())))
-        }
+        Some(dir) if !dir.is_dir() => Err(ImageError::NoDirectory(path.to_path_buf())),
         _ => Ok(()),
     }
 }
 
 /// Write through a temporary file and rename it into place.
-pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> AppResult<()> {
+pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<()> {
     check_output_dir(path)?;
     let tmp = temp_path(path);
     match write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
         Ok(()) => Ok(()),
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
-            Err(AppError::Io(format!("{}: cannot write: {e}", path.display())))
+            Err(ImageError::Write { path: path.to_path_buf(), message: e })
         }
     }
 }
 
 /// Write `img` as a 32-bit float OpenEXR (through a temporary file, renamed: no half-written file).
-pub fn write_exr(path: &Path, img: &RgbImage) -> AppResult<()> {
+pub fn write_exr(path: &Path, img: &RgbImage) -> Result<()> {
     write_exr_meta(path, img, &ExrMeta::new())
 }
 
@@ -75,7 +101,7 @@ pub type ExrMeta = std::collections::BTreeMap<String, String>;
 pub const META_PREFIX: &str = "caustics.";
 
 /// Write an RGB float EXR with `meta` as `caustics.<key>` text attributes in its header.
-pub fn write_exr_meta(path: &Path, img: &RgbImage, meta: &ExrMeta) -> AppResult<()> {
+pub fn write_exr_meta(path: &Path, img: &RgbImage, meta: &ExrMeta) -> Result<()> {
     use exr::meta::attribute::{AttributeValue, Text};
     use exr::prelude::*;
     write_atomic(path, |tmp| {
@@ -96,12 +122,12 @@ pub fn write_exr_meta(path: &Path, img: &RgbImage, meta: &ExrMeta) -> AppResult<
 }
 
 /// Read an OpenEXR's RGB channels.
-pub fn read_exr(path: &Path) -> AppResult<RgbImage> {
+pub fn read_exr(path: &Path) -> Result<RgbImage> {
     read_exr_meta(path).map(|(img, _)| img)
 }
 
 /// Read an EXR's first RGB(A) layer and its `caustics.*` header attributes (empty for other files).
-pub fn read_exr_meta(path: &Path) -> AppResult<(RgbImage, ExrMeta)> {
+pub fn read_exr_meta(path: &Path) -> Result<(RgbImage, ExrMeta)> {
     use exr::meta::attribute::AttributeValue;
     use exr::prelude::*;
     let image = read_first_rgba_layer_from_file(
@@ -112,7 +138,7 @@ pub fn read_exr_meta(path: &Path) -> AppResult<(RgbImage, ExrMeta)> {
             img.data[pos.y() * w + pos.x()] = [r, g, b];
         },
     )
-    .map_err(|e| AppError::BadInput(format!("{}: cannot read EXR: {e}", path.display())))?;
+    .map_err(|e| ImageError::Read { path: path.to_path_buf(), format: "EXR", message: e.to_string() })?;
     let mut meta = ExrMeta::new();
     let layer = &image.layer_data.attributes.other;
     for (k, v) in layer.iter().chain(image.attributes.other.iter()) {
@@ -135,7 +161,7 @@ pub fn file_hash(path: &Path) -> String {
 }
 
 /// Write 8-bit RGBA (already tone-mapped and sRGB-encoded).
-pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> AppResult<()> {
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
     write_atomic(path, |tmp| {
         image::save_buffer_with_format(tmp, rgba, width, height, image::ColorType::Rgba8, image::ImageFormat::Png)
             .map_err(|e| e.to_string())
@@ -143,13 +169,17 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> AppResult
 }
 
 /// Read a PNG as (width, height, RGBA8 bytes).
-pub fn read_png(path: &Path) -> AppResult<(u32, u32, Vec<u8>)> {
-    let img = image::open(path).map_err(|e| AppError::BadInput(format!("{}: cannot read PNG: {e}", path.display())))?;
+pub fn read_png(path: &Path) -> Result<(u32, u32, Vec<u8>)> {
+    let img = image::open(path).map_err(|e| ImageError::Read {
+        path: path.to_path_buf(),
+        format: "PNG",
+        message: e.to_string(),
+    })?;
     let rgba = img.to_rgba8();
     Ok((rgba.width(), rgba.height(), rgba.into_raw()))
 }
 
 /// Write text (JSON, Markdown, SVG) atomically.
-pub fn write_text(path: &Path, text: &str) -> AppResult<()> {
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
     write_atomic(path, |tmp| std::fs::write(tmp, text).map_err(|e| e.to_string()))
 }

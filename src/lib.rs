@@ -57,7 +57,7 @@ mod shaders;
 mod targets;
 mod vk;
 
-pub use error::{AppError as Error, AppResult as Result};
+pub use error::{Error, Result};
 pub use frame::{Aov, AovData, FrameReport, LightReport, SceneUpdateReport, SlotVerdict, HOST_ROUNDTRIP};
 pub use gpu_types::{LevelCounters, TransportState, TraversalState, ACCOUNT_TERMS};
 pub use renderer::{

@@ -4,7 +4,7 @@
 
 mod app;
 
-use caustics::error::AppResult;
+use caustics::error::Result;
 use clap::{Parser, Subcommand};
 
 const ENVIRONMENT: &str = "\
@@ -54,7 +54,7 @@ enum Command {
     Soak(app::soak::SoakArgs),
 }
 
-fn run(cli: Cli) -> AppResult<()> {
+fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(a) => app::commands::run_render(&a),
         Command::Profile(a) => app::commands::run_profile(&a),

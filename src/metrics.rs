@@ -15,7 +15,7 @@
 //!    under test with a non-finite value, and a pair whose EXR metadata names different cameras, camera kinds or
 //!    AOVs; it warns about other metadata differences (the scene file's hash, the units, the paths).
 
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::image_io::{self, RgbImage};
 use serde::{Deserialize, Serialize};
 
@@ -252,12 +252,12 @@ pub fn check_pair(
     pb: &std::path::Path,
     b: &RgbImage,
     mb: &image_io::ExrMeta,
-) -> AppResult<()> {
+) -> Result<()> {
     let non_finite = |img: &RgbImage| img.data.iter().position(|p| !p.iter().all(|x| x.is_finite()));
     for (path, img, what) in [(pb, b, "reference"), (pa, a, "image under test")] {
         if let Some(i) = non_finite(img) {
             let (x, y) = (i as u32 % img.width, i as u32 / img.width);
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "{}: the {what} holds a non-finite value (pixel {x}, {y}: {:?})",
                 path.display(),
                 img.data[i]
@@ -265,7 +265,7 @@ pub fn check_pair(
         }
     }
     if b.data.iter().all(|p| p.iter().all(|&x| x == 0.0)) {
-        return Err(AppError::BadInput(format!(
+        return Err(Error::BadInput(format!(
             "{}: the reference is all zero: every error metric would be meaningless against it",
             pb.display()
         )));
@@ -273,7 +273,7 @@ pub fn check_pair(
     for key in ["camera", "camera_kind", "aov"] {
         if let (Some(x), Some(y)) = (ma.get(key), mb.get(key)) {
             if x != y {
-                return Err(AppError::BadInput(format!(
+                return Err(Error::BadInput(format!(
                     "{} has {key} `{x}` but {} has {key} `{y}`: the images do not show the same thing",
                     pa.display(),
                     pb.display()

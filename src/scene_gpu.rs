@@ -5,6 +5,7 @@
 
 use crate::bvh::{BvhLayout, BvhObject, GpuInstance, SceneBvh};
 use crate::gpu_types::Vertex;
+use crate::gpu_types::{MorphPush, SceneUpdatePush, WaterPush};
 use crate::scene::{Material, Mesh, Scene};
 use crate::vk::{cmd::upload_buffer, cmd::upload_image, Buffer, Device, Image, Recorder, Sampler, VkResult};
 use ash::vk;
@@ -590,5 +591,99 @@ impl SceneBuffers {
             shared_ior: scene.shared_ior(),
             bvh,
         })
+    }
+}
+
+// The push constants that place and deform the scene's objects, from its ranges (src/gpu_types.rs holds only
+// the data).
+
+impl SceneUpdatePush {
+    /// Object `range` placed by `world_from_object`.
+    pub fn new(world_from_object: glam::Mat4, range: &crate::scene_gpu::ObjectRange) -> Self {
+        let m3 = glam::Mat3::from_mat4(world_from_object);
+        let n = m3.inverse().transpose();
+        let mut nrows = [0, 1, 2].map(|r| n.row(r).extend(0.0).to_array());
+        nrows[0][3] = if m3.determinant() < 0.0 { 1.0 } else { 0.0 };
+        SceneUpdatePush {
+            rows: [0, 1, 2].map(|r| world_from_object.row(r).to_array()),
+            nrows,
+            first_vertex: range.first_vertex,
+            vertex_count: range.vertex_count,
+            first_index: range.first_index,
+            index_count: range.index_count,
+        }
+    }
+}
+
+impl WaterPush {
+    /// The raster vertices of object `range` placed by `world_from_object`, at `time`, with waves `waves`.
+    pub fn raster(
+        world_from_object: glam::Mat4,
+        range: &crate::scene_gpu::ObjectRange,
+        time: f32,
+        waves: (u32, u32),
+    ) -> Self {
+        let place = SceneUpdatePush::new(world_from_object, range);
+        WaterPush {
+            rows: place.rows,
+            nrows: place.nrows,
+            time,
+            mode: 0,
+            first_wave: waves.0,
+            wave_count: waves.1,
+            src: range.first_vertex,
+            dst: range.first_vertex,
+            count: range.vertex_count,
+        }
+    }
+
+    /// The BVH triangles of a deforming mesh (`r`), at `time`, with waves `waves`.
+    pub fn bvh(r: &crate::bvh::RefitMesh, time: f32, waves: (u32, u32)) -> Self {
+        WaterPush {
+            time,
+            mode: 1,
+            first_wave: waves.0,
+            wave_count: waves.1,
+            src: r.rest_first,
+            dst: r.first_tri,
+            count: r.tri_count,
+            ..WaterPush::default()
+        }
+    }
+}
+
+impl MorphPush {
+    /// The raster vertices of object `range` placed by `world_from_object`, morphed as `morph` says.
+    pub fn raster(
+        world_from_object: glam::Mat4,
+        range: &crate::scene_gpu::ObjectRange,
+        morph: &crate::scene_gpu::MorphRange,
+    ) -> Self {
+        let place = SceneUpdatePush::new(world_from_object, range);
+        MorphPush {
+            rows: place.rows,
+            nrows: place.nrows,
+            first: morph.first,
+            vertices: morph.vertices,
+            targets: morph.targets,
+            first_weight: morph.first_weight,
+            src: range.first_vertex,
+            dst: range.first_vertex,
+            count: range.vertex_count,
+        }
+    }
+
+    /// The BVH triangles of a morphing mesh (`r`).
+    pub fn bvh(r: &crate::bvh::RefitMesh, morph: &crate::scene_gpu::MorphRange) -> Self {
+        MorphPush {
+            first: morph.first,
+            vertices: morph.vertices,
+            targets: morph.targets,
+            first_weight: morph.first_weight,
+            src: r.rest_first,
+            dst: r.first_tri,
+            count: r.tri_count,
+            ..MorphPush::default()
+        }
     }
 }

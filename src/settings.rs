@@ -1,7 +1,6 @@
 //! Renderer settings: the method, its parameters, and the resolutions of the maps.
 
-pub use crate::bvh::BvhLayout;
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::shaders::consts::*;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -226,7 +225,7 @@ pub struct Tuning {
     /// The side of a weak-branch block in cells of the maximal level: 2 or 4, 0 for automatic (4).
     pub weak_block: u32,
     /// Exact transport: the BVH node layout the waves traverse.
-    pub bvh_layout: crate::bvh::BvhLayout,
+    pub bvh_layout: BvhLayout,
     /// Who writes adaptive traversal's dispatch arguments: the GPU, or the host after a readback per level.
     pub driven: Driven,
     /// Side of the light-view refractor g-buffers (power of two, >= 64).
@@ -262,7 +261,7 @@ impl Default for Tuning {
             flux_threshold: 1e-3,
             weak_branches: 0.05,
             weak_block: 0,
-            bvh_layout: crate::bvh::BvhLayout::Auto,
+            bvh_layout: BvhLayout::Auto,
             driven: Driven::Gpu,
             gbuffer_res: 1024,
             error_bound: 1.0,
@@ -327,7 +326,7 @@ pub struct ResolvedSettings {
     /// The weak-branch block side in cells of the maximal level: 2 or 4.
     pub weak_block: u32,
     /// The BVH layout the waves trace (never `auto`).
-    pub bvh_layout: crate::bvh::BvhLayout,
+    pub bvh_layout: BvhLayout,
     /// See [`Tuning::driven`].
     pub driven: Driven,
     /// See [`Tuning::gbuffer_res`].
@@ -432,9 +431,9 @@ pub const COOP_WG: u32 = 8;
 
 impl Settings {
     /// Check every value's range; the messages name the flag.
-    pub fn validate(&self) -> AppResult<()> {
+    pub fn validate(&self) -> Result<()> {
         let (q, t) = (&self.quality, &self.tuning);
-        let bad = |m: String| Err(AppError::BadInput(m));
+        let bad = |m: String| Err(Error::BadInput(m));
         if let Some(level) = q.level {
             if level >= MAX_LEVELS {
                 return bad(format!("--level {level}: must be at most {}", MAX_LEVELS - 1));
@@ -503,14 +502,14 @@ impl Settings {
 
     /// Resolve the settings for a device: its binding limit, and every automatic choice by the rules measured on
     /// each device class. A photon budget larger than the device's bindings allow is bad input.
-    pub fn resolve(&self, info: &crate::vk::DeviceInfo) -> AppResult<ResolvedSettings> {
+    pub fn resolve(&self, info: &crate::vk::DeviceInfo) -> Result<ResolvedSettings> {
         let class = if info.is_cpu() { DeviceClass::Cpu } else { DeviceClass::Gpu };
         let binding_limit = (info.limits.max_storage_buffer_range as u64).min(2 << 30);
         let mut c = self.resolve_with(class, binding_limit, info.device_local_bytes)?;
         c.splat = self.tuning.splat.resolve(info);
         let max = max_budget_mib(binding_limit);
         if c.photon_budget_mib > max {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "--photon-budget {}: at most {max} MiB on {} (the splat records, 16 bytes per 8-byte photon entry, \
                  must fit one storage-buffer binding of {} MiB: its maxStorageBufferRange)",
                 c.photon_budget_mib,
@@ -528,13 +527,13 @@ impl Settings {
         class: DeviceClass,
         binding_limit: u64,
         device_local_bytes: u64,
-    ) -> AppResult<ResolvedSettings> {
+    ) -> Result<ResolvedSettings> {
         self.validate()?;
         let (q, t) = (&self.quality, &self.tuning);
         let cpu = class == DeviceClass::Cpu;
         let level = q.level.unwrap_or(default_level(class));
         if q.method == Method::Dense && level > 12 {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "--level {level}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper levels"
             )));
         }
@@ -694,9 +693,8 @@ impl ResolvedSettings {
 }
 
 /// Parse `WxH`; `flag` names the option in the message.
-pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
-    let bad =
-        || AppError::BadInput(format!("{flag} `{s}`: expected WxH with 1 <= W, H <= 16384 (for example 512x512)"));
+pub fn parse_size(s: &str, flag: &str) -> Result<(u32, u32)> {
+    let bad = || Error::BadInput(format!("{flag} `{s}`: expected WxH with 1 <= W, H <= 16384 (for example 512x512)"));
     let (w, h) = s.trim().split_once(['x', 'X']).ok_or_else(bad)?;
     let w: u32 = w.trim().parse().map_err(|_| bad())?;
     let h: u32 = h.trim().parse().map_err(|_| bad())?;
@@ -708,7 +706,7 @@ pub fn parse_size(s: &str, flag: &str) -> AppResult<(u32, u32)> {
 
 /// The output size: `--size` when given (with a warning when its aspect differs from the one the camera was
 /// authored at), else 512 pixels high and as wide as the camera's authored aspect (512x512 without one).
-pub fn output_size(size: Option<&str>, flag: &str, camera: &crate::scene::Camera) -> AppResult<(u32, u32)> {
+pub fn output_size(size: Option<&str>, flag: &str, camera: &crate::scene::Camera) -> Result<(u32, u32)> {
     match (size, camera.aspect) {
         (Some(s), aspect) => {
             let (w, h) = parse_size(s, flag)?;
@@ -730,6 +728,40 @@ pub fn output_size(size: Option<&str>, flag: &str, camera: &crate::scene::Camera
             Ok((w, 512))
         }
         (None, None) => Ok((512, 512)),
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+/// The BVH node layout exact transport's waves trace.
+pub enum BvhLayout {
+    /// The faster layout for the device, by the rule measured in docs/experiments.md ("BVH layouts"):
+    /// single on GPUs, wide on CPU devices. The settings resolve it to the layout it picks, so the stats report
+    /// that.
+    Auto,
+    /// Both children's boxes in the parent (64-byte nodes).
+    Pair,
+    /// One box per node (32-byte nodes).
+    Single,
+    /// One box per node in depth-first order with escape links: a stackless traversal (32-byte nodes).
+    Threaded,
+    /// Compressed 8-wide nodes (80 bytes) with children's boxes quantized to 8 bits a plane (Ylitie, Karras and
+    /// Laine 2017), walked in the ray's octant order.
+    Wide,
+}
+
+impl BvhLayout {
+    /// The layout a device traces with: `auto` follows the measured rule. On the H200 the single-box layout's
+    /// bounce waves are 10-15% faster than the pair layout's (frame: 8-10% faster at level 5, sphere and bunny);
+    /// the wide layout has not been timed on a GPU yet. On lavapipe the pair layout is about 20% faster than the
+    /// single one, and the wide layout's bounce waves are about 20% faster than the pair layout's.
+    pub fn resolve(self, class: DeviceClass) -> BvhLayout {
+        match self {
+            BvhLayout::Auto if class == DeviceClass::Cpu => BvhLayout::Wide,
+            BvhLayout::Auto => BvhLayout::Single,
+            l => l,
+        }
     }
 }
 
@@ -764,7 +796,7 @@ mod tests {
             assert_eq!(c.level, default_level(class));
             assert!(c.photon_budget_mib > 0.0);
             assert!(!matches!(c.splat, Splat::Auto));
-            assert_ne!(c.bvh_layout, crate::bvh::BvhLayout::Auto);
+            assert_ne!(c.bvh_layout, BvhLayout::Auto);
             assert_ne!(c.coop_checks, CoopChecks::Auto);
             assert!([2, 4].contains(&c.weak_block));
         }

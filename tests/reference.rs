@@ -9,7 +9,7 @@
 //! does not flip it, while a real error (a wrong Fresnel term, a lost interface, a leak) moves the figures by
 //! more than the tolerance.
 
-use caustics::error::AppError;
+use caustics::error::Error;
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
 use caustics::reference::{trace, Aov, Paths, RefOutput, RefParams};
@@ -251,10 +251,10 @@ fn hard_case_scenes_trace_and_close_their_account() {
 #[test]
 fn perspective_and_unknown_cameras_are_bad_input() {
     let e = trace(sphere(), &RefParams { camera: Some("main".into()), ..RefParams::default() }).unwrap_err();
-    assert!(matches!(&e, AppError::BadInput(m) if m.contains("`main`") && m.contains("perspective")), "{e}");
+    assert!(matches!(&e, Error::BadInput(m) if m.contains("`main`") && m.contains("perspective")), "{e}");
     assert_eq!(e.exit_code(), 2);
     let e = trace(sphere(), &RefParams { camera: Some("nope".into()), ..RefParams::default() }).unwrap_err();
-    assert!(matches!(&e, AppError::BadInput(m) if m.contains("nope")), "{e}");
+    assert!(matches!(&e, Error::BadInput(m) if m.contains("nope")), "{e}");
 }
 
 fn cli(args: &[&str]) -> (i32, String) {

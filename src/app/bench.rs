@@ -8,7 +8,7 @@ use crate::app::bench_report::{self, BenchRow};
 use crate::app::commands::{to_rgb, SceneArgs, Session};
 use crate::app::profiler::Summary;
 use caustics::consts::*;
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::image_io::{self, RgbImage};
 use caustics::metrics;
 use caustics::reference::{self, Paths, RefParams};
@@ -121,8 +121,8 @@ fn exact_extra(report: &FrameReport, intensity: f64) -> serde_json::Value {
     })
 }
 
-fn parse_levels(s: &str) -> AppResult<Vec<u32>> {
-    let bad = || AppError::BadInput(format!("--levels `{s}`: expected a list like 2,3,4 or a range like 2-6"));
+fn parse_levels(s: &str) -> Result<Vec<u32>> {
+    let bad = || Error::BadInput(format!("--levels `{s}`: expected a list like 2,3,4 or a range like 2-6"));
     let mut out = Vec::new();
     for part in s.split(',') {
         if let Some((a, b)) = part.split_once('-') {
@@ -168,7 +168,7 @@ impl Point {
     }
 }
 
-fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
+fn points(args: &BenchArgs) -> Result<Vec<Point>> {
     let mut out = Vec::new();
     let driven: Vec<Driven> = args
         .driven
@@ -176,19 +176,19 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
         .map(|d| match d.as_str() {
             "gpu" => Ok(Driven::Gpu),
             "cpu" => Ok(Driven::Cpu),
-            _ => Err(AppError::BadInput(format!("--driven `{d}`: expected gpu or cpu"))),
+            _ => Err(Error::BadInput(format!("--driven `{d}`: expected gpu or cpu"))),
         })
-        .collect::<AppResult<_>>()?;
+        .collect::<Result<_>>()?;
     for e in &args.target_errors {
         if !(e.is_finite() && *e > 0.0 && *e <= 1.0) {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "--target-errors {e}: each must lie in (0, 1] (the relative L1 at 64² that merging may add)"
             )));
         }
     }
     for wg in &args.traverse_wg {
         if !TRAVERSE_WG_SWEEP.contains(wg) {
-            return Err(AppError::BadInput(format!("--traverse-wg {wg}: must be one of 1, 2, 4, 8, 16")));
+            return Err(Error::BadInput(format!("--traverse-wg {wg}: must be one of 1, 2, 4, 8, 16")));
         }
     }
     for m in &args.methods {
@@ -208,7 +208,7 @@ fn points(args: &BenchArgs) -> AppResult<Vec<Point>> {
             "max-error" => Metric::MaxError,
             "flux-error" => Metric::FluxError,
             _ => {
-                return Err(AppError::BadInput(format!(
+                return Err(Error::BadInput(format!(
                     "--methods `{m}`: expected dense, max-level, max-error or flux-error"
                 )))
             }
@@ -262,14 +262,14 @@ pub fn reference_photons(explicit: Option<u64>, max_level: u32) -> u64 {
 /// The bench warns when its reference's noise exceeds this share of a scene's smallest error (rel-L1 64²).
 const NOISE_WARN: f64 = 0.3;
 
-fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: u64) -> AppResult<References> {
+fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: u64) -> Result<References> {
     if args.no_reference {
         return Ok(References { main: None, other: None, noise: None });
     }
     let (main, other) = match args.paths.as_str() {
         "two-refractions" => (Paths::TwoRefractions, Paths::All),
         "all" => (Paths::All, Paths::TwoRefractions),
-        p => return Err(AppError::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
+        p => return Err(Error::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
     };
     let make = |paths, photons, seed| {
         let p = RefParams {
@@ -286,7 +286,7 @@ fn references(args: &BenchArgs, scene: &Path, width: u32, height: u32, photons: 
         eprintln!("reference {:?} for {}: {photons} photons, seed {seed} (cached once built)", paths, scene.display());
         let img = reference::cached_in(&reference::cache_dir_from_env(), scene, &p)?;
         eprintln!("reference {:?} for {}: ready in {:.1} s", paths, scene.display(), t.elapsed().as_secs_f64());
-        Ok::<_, AppError>(img)
+        Ok::<_, Error>(img)
     };
     // The main reference is two independent halves, averaged: the rel-L1 between them is about twice the noise of
     // their mean (each half's deviation has sqrt(2) times the mean's, their difference sqrt(2) times a half's).
@@ -320,7 +320,7 @@ fn stage_median(frames: &[FrameReport], prefix: &str) -> f64 {
     median_of(frames, |f| f.stages.iter().filter(|(l, _)| l.starts_with(prefix)).map(|(_, ms)| ms).sum::<f64>() + 0.0)
 }
 
-fn write_reports(args: &BenchArgs, device: &str, rows: &[BenchRow]) -> AppResult<()> {
+fn write_reports(args: &BenchArgs, device: &str, rows: &[BenchRow]) -> Result<()> {
     if let Some(p) = &args.markdown {
         image_io::write_text(p, &format!("Device: {device}\n\n{}", bench_report::markdown_report(rows)))?;
     }
@@ -330,17 +330,17 @@ fn write_reports(args: &BenchArgs, device: &str, rows: &[BenchRow]) -> AppResult
     Ok(())
 }
 
-pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
+pub fn run_bench(args: &BenchArgs) -> Result<()> {
     for p in [&args.json, &args.markdown, &args.plot].into_iter().flatten() {
         image_io::check_output_dir(p)?;
     }
     if let Some(src) = &args.from_json {
         let text = std::fs::read_to_string(src)
-            .map_err(|e| AppError::BadInput(format!("{}: cannot read: {e}", src.display())))?;
+            .map_err(|e| Error::BadInput(format!("{}: cannot read: {e}", src.display())))?;
         let doc: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| AppError::BadInput(format!("{}: not a bench JSON: {e}", src.display())))?;
+            .map_err(|e| Error::BadInput(format!("{}: not a bench JSON: {e}", src.display())))?;
         let rows: Vec<BenchRow> = serde_json::from_value(doc["rows"].clone())
-            .map_err(|e| AppError::BadInput(format!("{}: rows: {e}", src.display())))?;
+            .map_err(|e| Error::BadInput(format!("{}: rows: {e}", src.display())))?;
         let device = doc["device"].as_str().unwrap_or("").to_string();
         write_reports(args, &device, &rows)?;
         println!("{}", bench_report::markdown_report(&rows));
@@ -417,7 +417,7 @@ pub fn run_bench(args: &BenchArgs) -> AppResult<()> {
                         image = img.as_ref().and_then(to_rgb);
                     }
                 }
-                let image = image.ok_or_else(|| AppError::Failed("no caustics image was read back".into()))?;
+                let image = image.ok_or_else(|| Error::Failed("no caustics image was read back".into()))?;
                 let last = frames.last().expect("frames").clone();
                 let st = last.state.unwrap_or(bytemuck::Zeroable::zeroed());
                 // Only the resolutions the image carries (a 64² image scored at 256² would measure the filter).

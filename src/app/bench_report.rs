@@ -13,7 +13,7 @@
 //!   `peak_offset_m` (docs/design.md reports all three; defaults to 0 when absent);
 //! - `extra`: anything else (per-stage times, overflow counts), free-form JSON, defaults to null.
 
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::image_io;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -220,10 +220,9 @@ fn log_range(values: impl Iterator<Item = f64>, default: (f64, f64)) -> std::ops
 
 /// A log-log SVG plot of rel-L1 at 64² (y) against median GPU ms (x), one line per (scene, transport, method,
 /// metric): one colour per (scene, method, metric), solid for exact transport, dashed for two-interface.
-pub fn svg_plot(rows: &[BenchRow], path: &Path) -> AppResult<()> {
-    let svg =
-        svg_string(rows).map_err(|e| AppError::Failed(format!("{}: cannot draw the plot: {e}", path.display())))?;
-    image_io::write_text(path, &svg)
+pub fn svg_plot(rows: &[BenchRow], path: &Path) -> Result<()> {
+    let svg = svg_string(rows).map_err(|e| Error::Failed(format!("{}: cannot draw the plot: {e}", path.display())))?;
+    Ok(image_io::write_text(path, &svg)?)
 }
 
 /// The SVG text of [`svg_plot`].

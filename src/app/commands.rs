@@ -2,7 +2,7 @@
 
 use crate::app::profiler;
 use caustics::consts::*;
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::gpu::{Context, ContextDesc};
 use caustics::image_io::{self, RgbImage};
 use caustics::scene::{Camera, Projection, Scene};
@@ -54,10 +54,10 @@ pub fn load_options(animation: Option<&str>) -> caustics::scene::LoadOptions {
 }
 
 /// `--environment PATH` on a loaded scene: the map replaces the scene's own (intensity 1; `--sky` scales it).
-pub fn apply_environment(scene: &mut Scene, path: Option<&std::path::Path>) -> AppResult<()> {
+pub fn apply_environment(scene: &mut Scene, path: Option<&std::path::Path>) -> Result<()> {
     if let Some(p) = path {
         let map =
-            caustics::scene::EnvironmentMap::load(p).map_err(|e| AppError::BadInput(format!("--environment: {e}")))?;
+            caustics::scene::EnvironmentMap::load(p).map_err(|e| Error::BadInput(format!("--environment: {e}")))?;
         scene.environment = Some(caustics::scene::Environment { map: std::sync::Arc::new(map), intensity: 1.0 });
     }
     Ok(())
@@ -253,7 +253,7 @@ pub fn level_arg(s: &str) -> Result<u32, String> {
 
 impl MethodArgs {
     /// The settings these flags give, validated, with a warning for each flag the method ignores.
-    pub fn settings(&self) -> AppResult<Settings> {
+    pub fn settings(&self) -> Result<Settings> {
         let (q, t) = (&self.quality, &self.traversal);
         let s = Settings {
             quality: q.quality(),
@@ -278,7 +278,7 @@ impl MethodArgs {
         }
         if let (Method::Dense, Some(level)) = (method, q.level) {
             if level > 12 {
-                return Err(AppError::BadInput(format!(
+                return Err(Error::BadInput(format!(
                     "--level {level}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper \
                      levels"
                 )));
@@ -361,7 +361,7 @@ pub const PROFILE_FRAMES_GPU: u32 = 20;
 pub const PROFILE_FRAMES_CPU: u32 = 3;
 
 impl Session {
-    pub fn open(args: &SceneArgs, settings: Settings) -> AppResult<Session> {
+    pub fn open(args: &SceneArgs, settings: Settings) -> Result<Session> {
         if let Some(s) = &args.size {
             parse_size(s, "--size")?;
         }
@@ -369,10 +369,10 @@ impl Session {
         let mut scene = Scene::load_with(&path, &load_options(args.animation.as_deref()))?;
         apply_environment(&mut scene, args.environment.as_deref())?;
         if !args.time.is_finite() {
-            return Err(AppError::BadInput(format!("--time {}: must be finite", args.time)));
+            return Err(Error::BadInput(format!("--time {}: must be finite", args.time)));
         }
         scene.set_time(args.time);
-        let camera = scene.camera(args.camera.as_deref()).map_err(AppError::BadInput)?.clone();
+        let camera = scene.camera(args.camera.as_deref()).map_err(Error::BadInput)?.clone();
         let (width, height) = caustics::settings::output_size(args.size.as_deref(), "--size", &camera)?;
         let desc = ContextDesc::from_env();
         let ctx = Context::headless(&desc)?;
@@ -432,7 +432,7 @@ impl Session {
     /// devices, and wherever the photon count alone says it may take over [`SLOW_FRAME_S`]. A frame estimated
     /// over it gets a line saying so and progress lines while it renders. Returns the estimate, in seconds of
     /// wall time, when one was made.
-    pub fn plan(&mut self, aov: Option<Aov>) -> AppResult<Option<f64>> {
+    pub fn plan(&mut self, aov: Option<Aov>) -> Result<Option<f64>> {
         let cpu = self.device().info.is_cpu();
         if !cpu && !self.estimate_frame_s().is_some_and(|t| t > SLOW_FRAME_S) {
             return Ok(None);
@@ -453,7 +453,7 @@ impl Session {
     }
     /// Render one frame (a frame whose batch slots run out is finished in further submissions, not rendered
     /// again: see `Renderer::render`).
-    pub fn frame(&mut self, aov: Option<Aov>) -> AppResult<(FrameReport, Option<AovData>)> {
+    pub fn frame(&mut self, aov: Option<Aov>) -> Result<(FrameReport, Option<AovData>)> {
         let view = self.renderer.camera_view(&self.camera, self.width, self.height);
         let Frame { report, image } = match self.slow_frame_s {
             None => self.renderer.render(&FrameDesc::new(&view, aov))?,
@@ -497,14 +497,14 @@ impl Session {
 
 /// Check `--out`'s extension against the AOV, and return the AOV to read back: beauty written as `.exr` is the
 /// linear radiance (`Aov::BeautyHdr`).
-fn check_output(aov: Aov, out: &Path) -> AppResult<Aov> {
+fn check_output(aov: Aov, out: &Path) -> Result<Aov> {
     let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     let want = if aov == Aov::Beauty { "png" } else { "exr" };
     if aov == Aov::Beauty && ext == "exr" {
         return Ok(Aov::BeautyHdr);
     }
     if ext != want {
-        return Err(AppError::BadInput(format!(
+        return Err(Error::BadInput(format!(
             "--out {}: the {} AOV is written as .{want}",
             out.display(),
             match aov {
@@ -736,13 +736,13 @@ fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
     Value::Array(rows)
 }
 
-pub fn run_render(args: &RenderArgs) -> AppResult<()> {
+pub fn run_render(args: &RenderArgs) -> Result<()> {
     let aov = check_output(args.aov.parse()?, &args.out)?;
     if let Some(p) = &args.stats {
         image_io::check_output_dir(p)?;
     }
     if args.frames == 0 {
-        return Err(AppError::BadInput("--frames must be at least 1".into()));
+        return Err(Error::BadInput("--frames must be at least 1".into()));
     }
     if let Some(n) = args.sequence {
         check_sequence(args, n)?;
@@ -765,7 +765,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
                 session.camera = c.clone();
             }
             let (report, img) = session.frame(Some(aov))?;
-            let image = img.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
+            let image = img.ok_or_else(|| Error::Failed("no image was read back".into()))?;
             write_aov(&session, args, aov, &image, &sequence_path(&args.out, k), &mut extra)?;
             reports.push(report);
             bar.inc(1);
@@ -788,7 +788,7 @@ pub fn run_render(args: &RenderArgs) -> AppResult<()> {
             reports.push(report);
             image = img;
         }
-        let image = image.ok_or_else(|| AppError::Failed("no image was read back".into()))?;
+        let image = image.ok_or_else(|| Error::Failed("no image was read back".into()))?;
         write_aov(&session, args, aov, &image, &args.out, &mut extra)?;
     }
     if let Some(last) = reports.last().filter(|r| r.guard_intact.is_some()) {
@@ -822,31 +822,31 @@ fn write_aov(
     image: &AovData,
     path: &Path,
     extra: &mut serde_json::Map<String, Value>,
-) -> AppResult<()> {
+) -> Result<()> {
     match image {
-        AovData::Rgba8 { width, height, rgba } => image_io::write_png(path, *width, *height, rgba),
+        AovData::Rgba8 { width, height, rgba } => Ok(image_io::write_png(path, *width, *height, rgba)?),
         AovData::Float { .. } => {
             let rgb = to_rgb(image).expect("float image");
             if let (Some(area), false) = (session.pixel_area(), aov == Aov::BeautyHdr) {
                 let flux: f64 = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
                 extra.insert("aov_flux_w".into(), json!(flux));
             }
-            image_io::write_exr_meta(path, &rgb, &exr_meta(session, &args.aov))
+            Ok(image_io::write_exr_meta(path, &rgb, &exr_meta(session, &args.aov))?)
         }
     }
 }
 
 /// `--sequence N`: at least one frame, a positive frame rate, no `--frames`, and an output name with a run of `#`
 /// long enough for the frame numbers.
-fn check_sequence(args: &RenderArgs, n: u32) -> AppResult<()> {
+fn check_sequence(args: &RenderArgs, n: u32) -> Result<()> {
     if n == 0 {
-        return Err(AppError::BadInput("--sequence must be at least 1 frame".into()));
+        return Err(Error::BadInput("--sequence must be at least 1 frame".into()));
     }
     if !(args.fps.is_finite() && args.fps > 0.0) {
-        return Err(AppError::BadInput(format!("--fps {}: must be a positive number of frames per second", args.fps)));
+        return Err(Error::BadInput(format!("--fps {}: must be a positive number of frames per second", args.fps)));
     }
     if args.frames != 1 {
-        return Err(AppError::BadInput(
+        return Err(Error::BadInput(
             "--frames repeats one time's frame; --sequence renders frames at successive times: give one of them".into(),
         ));
     }
@@ -854,7 +854,7 @@ fn check_sequence(args: &RenderArgs, n: u32) -> AppResult<()> {
     let run = hash_run(name).map_or(0, |(a, b)| b - a);
     let digits = (n - 1).max(1).ilog10() as usize + 1;
     if run < digits {
-        return Err(AppError::BadInput(format!(
+        return Err(Error::BadInput(format!(
             "--out {}: a sequence's file name needs a run of at least {digits} `#` for the frame number (for example \
              frame_{}.png)",
             args.out.display(),
@@ -920,10 +920,10 @@ pub fn camera_kind(c: &Camera) -> &'static str {
 }
 
 /// Any validation message fails the command (after its outputs are written).
-pub fn validation_verdict(session: &Session) -> AppResult<()> {
+pub fn validation_verdict(session: &Session) -> Result<()> {
     let n = caustics::gpu::validation_message_count();
     if session.validation && n > 0 {
-        return Err(AppError::Failed(format!("{n} Vulkan validation messages (see above)")));
+        return Err(Error::Failed(format!("{n} Vulkan validation messages (see above)")));
     }
     Ok(())
 }
@@ -945,9 +945,9 @@ fn debug_photons_json(rows: &[[u32; 4]], n: usize) -> Value {
     Value::Array(list)
 }
 
-pub fn run_profile(args: &ProfileArgs) -> AppResult<()> {
+pub fn run_profile(args: &ProfileArgs) -> Result<()> {
     if args.frames == Some(0) {
-        return Err(AppError::BadInput("--frames must be at least 1".into()));
+        return Err(Error::BadInput("--frames must be at least 1".into()));
     }
     if let Some(p) = &args.trace {
         image_io::check_output_dir(p)?;

@@ -1,7 +1,7 @@
 //! `caustics compare A.exr B.exr`: the project's error metric on two images, with thresholds that fail the
 //! command.
 
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::image_io;
 use caustics::metrics::{check_pair, compare, max_comparison_res, Metrics};
 use serde::{Deserialize, Serialize};
@@ -52,12 +52,12 @@ pub struct CompareReport {
     pub failures: Vec<String>,
 }
 
-pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
+pub fn run_compare(args: &CompareArgs) -> Result<()> {
     if args.res == Some(0) {
-        return Err(AppError::BadInput("--res: must be at least 1".into()));
+        return Err(Error::BadInput("--res: must be at least 1".into()));
     }
     if !(args.extent.is_finite() && args.extent > 0.0) {
-        return Err(AppError::BadInput(format!("--extent: must be a positive width in meters, got {}", args.extent)));
+        return Err(Error::BadInput(format!("--extent: must be a positive width in meters, got {}", args.extent)));
     }
     let (a, meta_a) = image_io::read_exr_meta(&args.a)?;
     let (b, meta_b) = image_io::read_exr_meta(&args.b)?;
@@ -66,7 +66,7 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
         format!("{} is {}x{}, {} is {}x{}", args.a.display(), a.width, a.height, args.b.display(), b.width, b.height);
     let (ra, rb) = (a.width as f64 / a.height as f64, b.width as f64 / b.height as f64);
     if ((ra - rb) / rb).abs() > 1e-3 {
-        return Err(AppError::BadInput(format!("{sizes}: the aspect ratios differ")));
+        return Err(Error::BadInput(format!("{sizes}: the aspect ratios differ")));
     }
     if (a.width, a.height) != (b.width, b.height) {
         log::warn!("{sizes}: both are box-filtered to the comparison sizes, which only go up to the smaller image");
@@ -76,9 +76,7 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     let carried = max_comparison_res(&a, &b);
     let res = args.res.unwrap_or(64.min(carried));
     if res > carried {
-        return Err(AppError::BadInput(format!(
-            "--res {res}: above what the images carry ({carried} columns; {sizes})"
-        )));
+        return Err(Error::BadInput(format!("--res {res}: above what the images carry ({carried} columns; {sizes})")));
     }
     let m64 = (carried >= 64).then(|| compare(&a, &b, 64, args.extent));
     let m256 = (carried >= 256).then(|| compare(&a, &b, 256, args.extent));
@@ -114,7 +112,7 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
             extent_m: args.extent,
             failures: failures.clone(),
         };
-        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| AppError::Failed(e.to_string()))?);
+        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| Error::Failed(e.to_string()))?);
     } else {
         for (label, m) in [("rel-L1 (64²): ", m64), ("rel-L1 (256²):", m256)] {
             match m {
@@ -134,6 +132,6 @@ pub fn run_compare(args: &CompareArgs) -> AppResult<()> {
     if failures.is_empty() {
         Ok(())
     } else {
-        Err(AppError::Failed(format!("{} vs {}: {}", args.a.display(), args.b.display(), failures.join("; "))))
+        Err(Error::Failed(format!("{} vs {}: {}", args.a.display(), args.b.display(), failures.join("; "))))
     }
 }

@@ -1,6 +1,6 @@
 //! `caustics reference`: the exact CPU photon tracer as a command.
 
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::image_io;
 use caustics::reference::{trace, Progress, RefParams};
 use caustics::scene::Scene;
@@ -53,34 +53,35 @@ pub struct ReferenceArgs {
     pub radial_center: Option<String>,
 }
 
-fn parse_vec3(s: &str, flag: &str) -> AppResult<Vec3> {
-    let v: Vec<f32> =
-        s.split(',').map(|x| x.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| {
-            AppError::BadInput(format!("{flag}: expected three comma-separated numbers x,y,z, got `{s}`"))
-        })?;
+fn parse_vec3(s: &str, flag: &str) -> Result<Vec3> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| Error::BadInput(format!("{flag}: expected three comma-separated numbers x,y,z, got `{s}`")))?;
     match v.as_slice() {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
-        _ => Err(AppError::BadInput(format!("{flag}: expected three finite numbers x,y,z, got `{s}`"))),
+        _ => Err(Error::BadInput(format!("{flag}: expected three finite numbers x,y,z, got `{s}`"))),
     }
 }
 
 impl ReferenceArgs {
-    /// Validate the arguments into [`RefParams`] (bad values are [`AppError::BadInput`] naming the flag).
-    pub fn params(&self) -> AppResult<RefParams> {
+    /// Validate the arguments into [`RefParams`] (bad values are [`Error::BadInput`] naming the flag).
+    pub fn params(&self) -> Result<RefParams> {
         let (width, height) = match &self.size {
             Some(s) => parse_size(s, "--size")?,
             None => (512, 512),
         };
         if self.photons == 0 {
-            return Err(AppError::BadInput("--photons: must be at least 1".into()));
+            return Err(Error::BadInput("--photons: must be at least 1".into()));
         }
         if self.threads == Some(0) {
-            return Err(AppError::BadInput("--threads: must be at least 1".into()));
+            return Err(Error::BadInput("--threads: must be at least 1".into()));
         }
         Ok(RefParams {
             camera: self.camera.clone(),
-            aov: self.aov.parse().map_err(AppError::BadInput)?,
-            paths: self.paths.parse().map_err(AppError::BadInput)?,
+            aov: self.aov.parse().map_err(Error::BadInput)?,
+            paths: self.paths.parse().map_err(Error::BadInput)?,
             photons: self.photons,
             width,
             height,
@@ -93,15 +94,15 @@ impl ReferenceArgs {
     }
 }
 
-fn check_output(path: &Path, flag: &str, ext: &str) -> AppResult<()> {
+fn check_output(path: &Path, flag: &str, ext: &str) -> Result<()> {
     if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case(ext)) != Some(true) {
-        return Err(AppError::BadInput(format!("{flag}: {} must end in .{ext}", path.display())));
+        return Err(Error::BadInput(format!("{flag}: {} must end in .{ext}", path.display())));
     }
-    image_io::check_output_dir(path).map_err(|e| AppError::BadInput(format!("{flag}: {e}")))
+    image_io::check_output_dir(path).map_err(|e| Error::BadInput(format!("{flag}: {e}")))
 }
 
 /// `caustics reference`.
-pub fn run(args: &ReferenceArgs) -> AppResult<()> {
+pub fn run(args: &ReferenceArgs) -> Result<()> {
     let mut params = args.params()?;
     check_output(&args.out, "--out", "exr")?;
     if let Some(s) = &args.stats {
@@ -130,7 +131,7 @@ pub fn run(args: &ReferenceArgs) -> AppResult<()> {
     meta.insert("time".into(), args.time.to_string());
     image_io::write_exr_meta(&args.out, &out.image, &meta)?;
     if let Some(s) = &args.stats {
-        let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;
+        let json = serde_json::to_string_pretty(&out.stats).map_err(|e| Error::Failed(e.to_string()))?;
         image_io::write_text(s, &json)?;
     }
     let st = &out.stats;

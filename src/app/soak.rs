@@ -19,7 +19,7 @@
 //! in turn and the whole schedule repeats every S·A frames.
 
 use crate::app::commands::{to_rgb, SceneArgs, Session};
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::image_io;
 use caustics::scene::{LightKind, Material, Scene};
 use caustics::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
@@ -163,12 +163,12 @@ fn with_ior(scene: &Scene, ior: f32) -> Scene {
     s
 }
 
-pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
+pub fn run_soak(args: &SoakArgs) -> Result<()> {
     if args.frames == 0 || args.angles == 0 {
-        return Err(AppError::BadInput("--frames and --angles must be at least 1".into()));
+        return Err(Error::BadInput("--frames and --angles must be at least 1".into()));
     }
     if args.max_level > 6 {
-        return Err(AppError::BadInput(format!("--max-level {}: at most 6", args.max_level)));
+        return Err(Error::BadInput(format!("--max-level {}: at most 6", args.max_level)));
     }
     if let Some(p) = &args.json {
         image_io::check_output_dir(p)?;
@@ -188,7 +188,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
     };
     let mut session = Session::open(&scene_args, base.clone())?;
     if session.pixel_area().is_none() {
-        return Err(AppError::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
+        return Err(Error::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
     }
     let scene0 = session.renderer.scene().clone();
     let light0 = scene0.lights[0].clone();
@@ -244,7 +244,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         let wall = t.elapsed().as_secs_f64() * 1e3;
         let slot = &mut ms_by_transport[(step.transport == Transport::Exact) as usize];
         *slot = (slot.0 + wall, slot.1 + 1);
-        let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| AppError::Failed("no caustics AOV read back".into()))?;
+        let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| Error::Failed("no caustics AOV read back".into()))?;
         let area = session.pixel_area().expect("orthographic");
         let flux = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
         let mut fail = |m: String| {
@@ -397,7 +397,7 @@ pub fn run_soak(args: &SoakArgs) -> AppResult<()> {
         failures.len()
     );
     if !failures.is_empty() {
-        return Err(AppError::Failed(format!("soak: {} failed checks (first: {})", failures.len(), failures[0])));
+        return Err(Error::Failed(format!("soak: {} failed checks (first: {})", failures.len(), failures[0])));
     }
     crate::app::commands::validation_verdict(&session)
 }

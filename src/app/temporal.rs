@@ -14,7 +14,7 @@
 //! change at half the photons to see it).
 
 use crate::app::commands::{to_rgb, SceneArgs, Session};
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::image_io::{self, RgbImage};
 use caustics::metrics;
 use caustics::reference::{self, Paths, RefParams};
@@ -86,7 +86,7 @@ fn orbit(scene: &Scene, d: Vec3, deg: f32) -> Scene {
 
 /// The reference at one light position, cached next to the bench's references (the key adds the light's
 /// position to the scene file's).
-fn reference_at(scene_path: &std::path::Path, scene: &Scene, p: &RefParams) -> AppResult<RgbImage> {
+fn reference_at(scene_path: &std::path::Path, scene: &Scene, p: &RefParams) -> Result<RgbImage> {
     let key = reference::cache_key(scene_path, p)?;
     let pos = scene.lights[0].position.to_array().map(f32::to_bits);
     let dir = reference::cache_dir_from_env();
@@ -97,14 +97,14 @@ fn reference_at(scene_path: &std::path::Path, scene: &Scene, p: &RefParams) -> A
         }
     }
     let out = reference::trace(scene, p)?;
-    std::fs::create_dir_all(&dir).map_err(|e| AppError::Io(format!("{}: cannot create: {e}", dir.display())))?;
+    std::fs::create_dir_all(&dir).map_err(|e| Error::Io(format!("{}: cannot create: {e}", dir.display())))?;
     image_io::write_exr(&file, &out.image)?;
     Ok(out.image)
 }
 
-pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
+pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     if args.frames < 2 {
-        return Err(AppError::BadInput("--frames: at least 2".into()));
+        return Err(Error::BadInput("--frames: at least 2".into()));
     }
     for p in [&args.json, &args.markdown].into_iter().flatten() {
         image_io::check_output_dir(p)?;
@@ -112,7 +112,7 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
     let paths = match args.paths.as_str() {
         "two-refractions" => Paths::TwoRefractions,
         "all" => Paths::All,
-        p => return Err(AppError::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
+        p => return Err(Error::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
     };
     let methods: Vec<(String, Method, Metric)> = args
         .methods
@@ -122,11 +122,9 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
             "max-level" => Ok((m.clone(), Method::Adaptive, Metric::MaxLevel)),
             "max-error" => Ok((m.clone(), Method::Adaptive, Metric::MaxError)),
             "flux-error" => Ok((m.clone(), Method::Adaptive, Metric::FluxError)),
-            _ => {
-                Err(AppError::BadInput(format!("--methods `{m}`: expected dense, max-level, max-error or flux-error")))
-            }
+            _ => Err(Error::BadInput(format!("--methods `{m}`: expected dense, max-level, max-error or flux-error"))),
         })
-        .collect::<AppResult<_>>()?;
+        .collect::<Result<_>>()?;
     let base = Settings {
         quality: Quality {
             transport: args.transport,
@@ -148,7 +146,7 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
     let half_height = match session.camera.projection {
         Projection::Orthographic { half_height } => half_height,
         Projection::Perspective { .. } => {
-            return Err(AppError::BadInput(format!("--camera {}: must be orthographic", args.camera)))
+            return Err(Error::BadInput(format!("--camera {}: must be orthographic", args.camera)))
         }
     };
     let scene0 = session.renderer.scene().clone();
@@ -191,7 +189,7 @@ pub fn run_temporal(args: &TemporalArgs) -> AppResult<()> {
             }
             let (report, img) = session.frame(Some(Aov::Caustics))?;
             ms.push(report.gpu_ms);
-            let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| AppError::Failed("no caustics AOV".into()))?;
+            let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| Error::Failed("no caustics AOV".into()))?;
             planes.push(plane64(&rgb));
         }
         let n = planes.len();

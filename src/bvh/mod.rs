@@ -34,6 +34,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod records;
+pub use crate::settings::BvhLayout;
 pub use records::*;
 
 /// Leaves hold at most this many triangles (obvhs collapses small subtrees into leaves up to this size).
@@ -56,40 +57,6 @@ pub struct RefitMesh {
     pub tri_count: u32,
     /// The most parent links from a leaf to the root.
     pub depth: u32,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
-#[serde(rename_all = "kebab-case")]
-/// The BVH node layout exact transport's waves trace.
-pub enum BvhLayout {
-    /// The faster layout for the device, by the rule measured in docs/experiments.md ("BVH layouts"):
-    /// single on GPUs, wide on CPU devices. The settings resolve it to the layout it picks, so the stats report
-    /// that.
-    Auto,
-    /// Both children's boxes in the parent (64-byte nodes).
-    Pair,
-    /// One box per node (32-byte nodes).
-    Single,
-    /// One box per node in depth-first order with escape links: a stackless traversal (32-byte nodes).
-    Threaded,
-    /// Compressed 8-wide nodes (80 bytes) with children's boxes quantized to 8 bits a plane (Ylitie, Karras and
-    /// Laine 2017), walked in the ray's octant order.
-    Wide,
-}
-
-impl BvhLayout {
-    /// The layout a device traces with: `auto` follows the measured rule. On the H200 the single-box layout's
-    /// bounce waves are 10-15% faster than the pair layout's (frame: 8-10% faster at level 5, sphere and bunny);
-    /// the wide layout has not been timed on a GPU yet. On lavapipe the pair layout is about 20% faster than the
-    /// single one, and the wide layout's bounce waves are about 20% faster than the pair layout's.
-    pub fn resolve(self, class: crate::settings::DeviceClass) -> BvhLayout {
-        match self {
-            BvhLayout::Auto if class == crate::settings::DeviceClass::Cpu => BvhLayout::Wide,
-            BvhLayout::Auto => BvhLayout::Single,
-            l => l,
-        }
-    }
 }
 
 /// The host side of the scene BVH: everything the GPU buffers hold, plus build statistics.

@@ -1,7 +1,7 @@
 //! What a frame reports once it has completed: its GPU timings, its traversal and transport state, and the AOV
 //! it read back.
 
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::gpu_types::{TransportState, TraversalState};
 use crate::scene::view::LightView;
 use crate::settings::{Method, ResolvedSettings, Transport};
@@ -22,13 +22,13 @@ pub enum Aov {
 }
 
 impl std::str::FromStr for Aov {
-    type Err = AppError;
-    fn from_str(s: &str) -> AppResult<Aov> {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Aov> {
         match s {
             "beauty" => Ok(Aov::Beauty),
             "caustics" => Ok(Aov::Caustics),
             "direct" => Ok(Aov::Direct),
-            _ => Err(AppError::BadInput(format!("--aov `{s}`: expected beauty, caustics or direct"))),
+            _ => Err(Error::BadInput(format!("--aov `{s}`: expected beauty, caustics or direct"))),
         }
     }
 }
@@ -232,7 +232,7 @@ pub(crate) fn read_results(
     readback: &Buffer,
     s: &ResolvedSettings,
     report: &mut FrameReport,
-) -> AppResult<()> {
+) -> Result<()> {
     let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
     if report.reused {
         return Ok(());
@@ -268,7 +268,7 @@ pub(crate) fn read_aov(
     readback: &Buffer,
     s: &ResolvedSettings,
     aov: Option<Aov>,
-) -> AppResult<Option<AovData>> {
+) -> Result<Option<AovData>> {
     let layout = Targets::readback_layout(s, 16 * t.width as u64 * t.height as u64);
     let n = (t.width * t.height) as usize;
     Ok(match aov {

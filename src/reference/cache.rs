@@ -6,7 +6,7 @@
 //! tracer itself. The thread count is not part of it (the image does not depend on it).
 
 use super::{trace, RefParams};
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::image_io::{self, RgbImage};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -69,10 +69,9 @@ fn mesh_files(scene_path: &Path, text: &str) -> Vec<PathBuf> {
 }
 
 /// The cache key (32 hex digits) of a reference run.
-pub fn cache_key(scene_path: &Path, p: &RefParams) -> AppResult<String> {
-    let read = |path: &Path| {
-        std::fs::read(path).map_err(|e| AppError::BadInput(format!("{}: cannot read: {e}", path.display())))
-    };
+pub fn cache_key(scene_path: &Path, p: &RefParams) -> Result<String> {
+    let read =
+        |path: &Path| std::fs::read(path).map_err(|e| Error::BadInput(format!("{}: cannot read: {e}", path.display())));
     let text = read(scene_path)?;
     let mut parts: Vec<Vec<u8>> = vec![TRACER_VERSION.to_le_bytes().to_vec(), text.clone()];
     for mesh in mesh_files(scene_path, &String::from_utf8_lossy(&text)) {
@@ -96,7 +95,7 @@ pub fn cache_key(scene_path: &Path, p: &RefParams) -> AppResult<String> {
 
 /// The reference for `scene_path` and `p` from the cache in `dir` (created if missing), traced and stored there
 /// the first time.
-pub fn cached_in(dir: &Path, scene_path: &Path, p: &RefParams) -> AppResult<RgbImage> {
+pub fn cached_in(dir: &Path, scene_path: &Path, p: &RefParams) -> Result<RgbImage> {
     let key = cache_key(scene_path, p)?;
     let exr = dir.join(format!("{key}.exr"));
     if exr.is_file() {
@@ -108,8 +107,8 @@ pub fn cached_in(dir: &Path, scene_path: &Path, p: &RefParams) -> AppResult<RgbI
     }
     let scene = Scene::load(scene_path)?;
     let out = trace(&scene, p)?;
-    std::fs::create_dir_all(dir).map_err(|e| AppError::Io(format!("{}: cannot create: {e}", dir.display())))?;
-    let json = serde_json::to_string_pretty(&out.stats).map_err(|e| AppError::Failed(e.to_string()))?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::Io(format!("{}: cannot create: {e}", dir.display())))?;
+    let json = serde_json::to_string_pretty(&out.stats).map_err(|e| Error::Failed(e.to_string()))?;
     image_io::write_text(&dir.join(format!("{key}.json")), &json)?;
     image_io::write_exr(&exr, &out.image)?;
     Ok(out.image)

@@ -41,7 +41,7 @@ mod tracer;
 pub use cache::{cache_dir_from_env, cache_key, cached_in};
 pub use tracer::Tally;
 
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::image_io::RgbImage;
 use crate::scene::{CameraView, LightKind, LightView, Projection, Scene};
 use geometry::Geometry;
@@ -334,8 +334,8 @@ pub struct RefOutput {
     pub radial: Option<RadialProfile>,
 }
 
-fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> AppResult<&'a crate::scene::Camera> {
-    let camera = scene.camera(name).map_err(AppError::BadInput)?;
+fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> Result<&'a crate::scene::Camera> {
+    let camera = scene.camera(name).map_err(Error::BadInput)?;
     if let Projection::Perspective { .. } = camera.projection {
         let ortho: Vec<&str> = scene
             .cameras
@@ -348,7 +348,7 @@ fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> AppResult<&'
         } else {
             format!("use --camera {}", ortho.join(" or --camera "))
         };
-        return Err(AppError::BadInput(format!(
+        return Err(Error::BadInput(format!(
             "{}: camera `{}` is perspective; the reference bins into orthographic cameras only ({usable})",
             scene.path.display(),
             camera.name
@@ -530,16 +530,16 @@ fn run_chunks(
 }
 
 /// Trace photons through `scene` and bin them into the orthographic camera's image.
-pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
+pub fn trace(scene: &Scene, p: &RefParams) -> Result<RefOutput> {
     let start = Instant::now();
     if p.photons == 0 {
-        return Err(AppError::BadInput("--photons: must be at least 1".into()));
+        return Err(Error::BadInput("--photons: must be at least 1".into()));
     }
     if p.width == 0 || p.height == 0 {
-        return Err(AppError::BadInput("--size: width and height must be at least 1".into()));
+        return Err(Error::BadInput("--size: width and height must be at least 1".into()));
     }
     if !p.time.is_finite() {
-        return Err(AppError::BadInput(format!("--time {}: must be finite", p.time)));
+        return Err(Error::BadInput(format!("--time {}: must be finite", p.time)));
     }
     let timed;
     let scene = if scene.is_animated() && scene.time != p.time {
@@ -568,7 +568,7 @@ pub fn trace(scene: &Scene, p: &RefParams) -> AppResult<RefOutput> {
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
             .build()
-            .map_err(|e| AppError::Failed(format!("cannot start {n} worker threads: {e}")))?
+            .map_err(|e| Error::Failed(format!("cannot start {n} worker threads: {e}")))?
             .install(|| run_chunks(&tracer, &chunks, pixels, p.radial_center, p.progress.as_ref(), total)),
         None => run_chunks(&tracer, &chunks, pixels, p.radial_center, p.progress.as_ref(), total),
     };

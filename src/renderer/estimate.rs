@@ -5,7 +5,7 @@
 //! photons from the probes' growth per level, its pixels from its size.
 
 use super::{FrameDesc, Renderer};
-use crate::error::AppResult;
+use crate::error::Result;
 use crate::settings::Method;
 use crate::settings::Metric;
 use std::time::Instant;
@@ -68,7 +68,7 @@ impl Renderer {
     /// timed probe once made a 1 s frame's estimate 59 s. For a frame of several seconds the
     /// probes cost about a fifth of it; they leave the renderer as it was (they reuse nothing, and nothing reuses
     /// them).
-    pub fn estimate(&mut self, desc: &FrameDesc) -> AppResult<FrameEstimate> {
+    pub fn estimate(&mut self, desc: &FrameDesc) -> Result<FrameEstimate> {
         let start = Instant::now();
         let level = desc.level.map_or(self.config.level, |l| l.min(self.config.level));
         let view = |div: u32| {
@@ -79,7 +79,7 @@ impl Renderer {
         };
         let reuse = std::mem::replace(&mut self.reuse, false);
         let hint = self.queue.slots_hint();
-        let probe = |r: &mut Renderer, l: u32, camera: &crate::scene::CameraView| -> AppResult<Probe> {
+        let probe = |r: &mut Renderer, l: u32, camera: &crate::scene::CameraView| -> Result<Probe> {
             let d = FrameDesc { camera, aov: None, level: Some(l), preview: desc.preview };
             let f = r.render(&d)?;
             let eye: f64 = f.report.stages.iter().filter(|(l, _)| is_eye_stage(l)).map(|(_, ms)| ms).sum();
@@ -94,7 +94,7 @@ impl Renderer {
         let (quarter, half) = (view(4), view(2));
         let la = if level <= 2 { level } else { (level - 3).max(1) };
         let lb = if level <= 2 { level } else { la + 1 };
-        let result = (|| -> AppResult<(Probe, Probe)> {
+        let result = (|| -> Result<(Probe, Probe)> {
             probe(self, la, &quarter)?;
             Ok((probe(self, la, &quarter)?, probe(self, lb, &half)?))
         })();

@@ -18,7 +18,7 @@ pub use queue::MAX_FRAMES_IN_FLIGHT;
 pub use scene_api::{InstanceId, MeshId};
 pub use views::Views;
 
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::frame::{FramePlan, FrameResources, Rec, SceneUpdate};
 use crate::passes::Passes;
 use crate::scene::view::CameraView;
@@ -163,21 +163,21 @@ impl Drop for Renderer {
 }
 
 /// The two-interface model refracts through front and back glass surfaces; it has no mirrors.
-fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> AppResult<()> {
+fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
     if settings.transport == Transport::TwoInterface {
         if let Some(o) = scene
             .objects
             .iter()
             .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0))
         {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "{}: object `{}` absorbs: absorption needs --transport exact (the two-interface model has none)",
                 scene.path.display(),
                 o.name
             )));
         }
         if let Some(m) = scene.objects.iter().find(|o| o.is_mirror()) {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "{}: object `{}` is a mirror: mirrors need --transport exact (the two-interface model only refracts)",
                 scene.path.display(),
                 m.name
@@ -186,7 +186,7 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> AppResult<()> 
         if let Some(o) =
             scene.objects.iter().find(|o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0))
         {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "{}: object `{}` disperses (`abbe`): dispersion needs --transport exact (the two-interface model has one IOR per texel)",
                 scene.path.display(),
                 o.name
@@ -197,10 +197,10 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> AppResult<()> 
 }
 
 /// 1..=MAX_LIGHTS lights (the scene parsers enforce it; scenes built in code are checked here).
-fn check_lights(scene: &Scene) -> AppResult<()> {
+fn check_lights(scene: &Scene) -> Result<()> {
     let n = scene.lights.len();
     if n == 0 || n > MAX_LIGHTS {
-        return Err(AppError::BadInput(format!(
+        return Err(Error::BadInput(format!(
             "{}: the scene has {n} lights; this renderer handles 1 to {MAX_LIGHTS}",
             scene.path.display()
         )));
@@ -211,7 +211,7 @@ fn check_lights(scene: &Scene) -> AppResult<()> {
 impl Renderer {
     /// A renderer on `device` for `scene`, with `settings` resolved for the device (bad settings or a scene the
     /// transport cannot render are bad input).
-    pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> AppResult<Self> {
+    pub fn new(device: Arc<Device>, scene: Scene, settings: Settings) -> Result<Self> {
         let config = settings.resolve(&device.info)?;
         check_transport(&scene, &config)?;
         check_lights(&scene)?;
@@ -270,7 +270,7 @@ impl Renderer {
     /// the next frame when they changed. Lights and cameras are read every frame, so changing only them is free.
     /// The scene's objects become its instances again: a TOML scene's still objects each their own mesh with the
     /// identity transform, the others their object-space mesh with their placement.
-    pub fn set_scene(&mut self, scene: Scene) -> AppResult<()> {
+    pub fn set_scene(&mut self, scene: Scene) -> Result<()> {
         check_transport(&scene, &self.config)?;
         check_lights(&scene)?;
         let same_geometry = scene.objects.len() == self.scene.objects.len()
@@ -295,9 +295,9 @@ impl Renderer {
 
     /// Replace light `index` (its position, target, power...). Checked as a whole scene would be: a light
     /// that would see an object behind it is refused, and the scene keeps the light it had.
-    pub fn set_light(&mut self, index: usize, light: crate::scene::Light) -> AppResult<()> {
+    pub fn set_light(&mut self, index: usize, light: crate::scene::Light) -> Result<()> {
         if index >= self.scene.lights.len() {
-            return Err(AppError::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
+            return Err(Error::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
         }
         let old = std::mem::replace(&mut self.scene.lights[index], light);
         let view = CameraView::new(
@@ -314,7 +314,7 @@ impl Renderer {
     }
 
     /// Replace the settings: resolved for this device and checked against the scene before they take effect.
-    pub fn set_settings(&mut self, settings: Settings) -> AppResult<()> {
+    pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         let config = settings.resolve(&self.device.info)?;
         check_transport(&self.scene, &config)?;
         if config.method != self.config.method
@@ -352,7 +352,7 @@ impl Renderer {
     /// Let up to `n` frames be in flight (1..=MAX_FRAMES_IN_FLIGHT): [`Renderer::submit`] then returns before the
     /// GPU has finished, and waits only for the frame that last used the slot it takes. Headless rendering keeps
     /// 1; the viewer uses 2 on GPUs.
-    pub fn set_frames_in_flight(&mut self, n: usize) -> AppResult<()> {
+    pub fn set_frames_in_flight(&mut self, n: usize) -> Result<()> {
         let n = n.clamp(1, MAX_FRAMES_IN_FLIGHT);
         if n == self.queue.frames_in_flight() {
             return Ok(());
@@ -371,7 +371,7 @@ impl Renderer {
     /// run out of batch slots with tiles of the photon quadtree left is not rendered again: the batches it
     /// committed stay in its maps, and further submissions trace the remaining tiles and add their light (each
     /// one host round trip, counted in the report's `host_readbacks` and `continuations`).
-    pub fn render(&mut self, desc: &FrameDesc) -> AppResult<Frame> {
+    pub fn render(&mut self, desc: &FrameDesc) -> Result<Frame> {
         let start = Instant::now();
         self.finish_frames()?;
         self.submit(desc, None, &SubmitSync::default())?;
@@ -414,15 +414,15 @@ impl Renderer {
         cmd: vk::CommandBuffer,
         desc: &FrameDesc,
         target: Option<&RecordTarget>,
-    ) -> AppResult<RecordedFrame> {
+    ) -> Result<RecordedFrame> {
         if self.queue.has_external() {
-            return Err(AppError::BadInput(
+            return Err(Error::BadInput(
                 "a recorded frame has not been completed: call Renderer::complete after its submission finishes".into(),
             ));
         }
         if self.config.driven == crate::settings::Driven::Cpu && self.config.method == crate::settings::Method::Adaptive
         {
-            return Err(AppError::BadInput(
+            return Err(Error::BadInput(
                 "CPU-driven traversal reads each level back mid-frame: it cannot record into a host's command buffer"
                     .into(),
             ));
@@ -439,7 +439,7 @@ impl Renderer {
 
     /// Read back a frame recorded with [`Renderer::record`]. The host must have waited for the submission of the
     /// command buffer it was recorded into.
-    pub fn complete(&mut self, frame: RecordedFrame) -> AppResult<Frame> {
+    pub fn complete(&mut self, frame: RecordedFrame) -> Result<Frame> {
         let RecordedFrame { .. } = frame;
         let (report, image) = self.queue.complete_external(self.targets.as_ref(), &mut self.caches)?;
         Ok(Frame { report, image })
@@ -466,12 +466,12 @@ impl Renderer {
     /// The frame-in-flight slot the next frame takes. When every slot is in flight, this first waits for the
     /// oldest frame, the last to use that slot, and keeps its report for [`Renderer::take_completed`]. The viewer
     /// calls it before acquiring a swapchain image with that slot's semaphore.
-    pub fn next_slot(&mut self) -> AppResult<usize> {
+    pub fn next_slot(&mut self) -> Result<usize> {
         self.queue.next_slot(self.targets.as_ref(), &mut self.caches)
     }
 
     /// Wait for every frame in flight and keep their reports for [`Renderer::take_completed`].
-    pub fn finish_frames(&mut self) -> AppResult<()> {
+    pub fn finish_frames(&mut self) -> Result<()> {
         self.queue.finish(self.targets.as_ref(), &mut self.caches)
     }
 
@@ -493,7 +493,7 @@ impl Renderer {
 
     /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
-    fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> AppResult<()> {
+    fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> Result<()> {
         let lights = self.scene.lights.len();
         let passes = lights * self.scene.color_channels();
         let key = TargetsKey::new(s, passes, self.queue.frames_in_flight());
@@ -523,9 +523,9 @@ impl Renderer {
     /// Record and submit a frame without waiting for it: its report comes later from
     /// [`Renderer::take_completed`], once a later frame needs its slot or [`Renderer::finish_frames`] is called.
     /// `finish` appends commands to its last command buffer and `sync` gives that submission its semaphores.
-    pub fn submit(&mut self, desc: &FrameDesc, finish: Option<Finish>, sync: &SubmitSync) -> AppResult<()> {
+    pub fn submit(&mut self, desc: &FrameDesc, finish: Option<Finish>, sync: &SubmitSync) -> Result<()> {
         if self.queue.has_external() {
-            return Err(AppError::BadInput(
+            return Err(Error::BadInput(
                 "a recorded frame has not been completed: call Renderer::complete after its submission finishes".into(),
             ));
         }
@@ -534,7 +534,7 @@ impl Renderer {
 
     /// Rebuild the scene's buffers when its geometry or materials changed (after the frames in flight that bind
     /// them are done). Returns whether it did.
-    fn update_scene(&mut self) -> AppResult<bool> {
+    fn update_scene(&mut self) -> Result<bool> {
         if !self.geometry_dirty {
             return Ok(false);
         }
@@ -624,7 +624,7 @@ impl Renderer {
         finish: Option<Finish>,
         sync: &SubmitSync,
         continuation: Option<&ContinuationPlan>,
-    ) -> AppResult<()> {
+    ) -> Result<()> {
         let start = Instant::now();
         let (idles, submits, builds) =
             (self.device.wait_idle_count(), self.recorder.blocking_submits, self.scene_buffers.bvh.blas_builds);
@@ -672,7 +672,7 @@ impl Renderer {
         let nl = self.scene.lights.len();
         // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
         let nc = self.scene.color_channels();
-        let views = (0..nl).map(|i| Views::new(&self.scene, &s, camera, i)).collect::<AppResult<Vec<_>>>()?;
+        let views = (0..nl).map(|i| Views::new(&self.scene, &s, camera, i)).collect::<Result<Vec<_>>>()?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs

@@ -3,7 +3,7 @@
 //! The queue also keeps GPU-driven batching's slot count, adapted from the frames' reports.
 
 use super::keys::Caches;
-use crate::error::AppResult;
+use crate::error::Result;
 use crate::frame::report::{read_aov, read_results};
 use crate::frame::{Aov, AovData, FrameReport, SlotVerdict, HOST_ROUNDTRIP};
 use crate::settings::{Method, ResolvedSettings};
@@ -87,7 +87,7 @@ impl FrameQueue {
 
     /// The slot the next frame takes. When every slot is in flight, this first waits for the oldest frame, the
     /// last to use that slot, and keeps its report for [`FrameQueue::take_completed`].
-    pub fn next_slot(&mut self, targets: Option<&Targets>, caches: &mut Caches) -> AppResult<usize> {
+    pub fn next_slot(&mut self, targets: Option<&Targets>, caches: &mut Caches) -> Result<usize> {
         while self.pending.len() >= self.frames_in_flight {
             let oldest = self.pending.pop_front().expect("a frame in flight");
             let (report, _) = self.complete(oldest, targets, caches)?;
@@ -97,7 +97,7 @@ impl FrameQueue {
     }
 
     /// Wait for every frame in flight and keep their reports.
-    pub fn finish(&mut self, targets: Option<&Targets>, caches: &mut Caches) -> AppResult<()> {
+    pub fn finish(&mut self, targets: Option<&Targets>, caches: &mut Caches) -> Result<()> {
         while let Some(oldest) = self.pending.pop_front() {
             let (report, _) = self.complete(oldest, targets, caches)?;
             self.completed.push(report);
@@ -110,7 +110,7 @@ impl FrameQueue {
         &mut self,
         targets: Option<&Targets>,
         caches: &mut Caches,
-    ) -> AppResult<(FrameReport, Option<AovData>)> {
+    ) -> Result<(FrameReport, Option<AovData>)> {
         let last = self.pending.pop_back().expect("the frame just submitted");
         self.complete(last, targets, caches)
     }
@@ -125,7 +125,7 @@ impl FrameQueue {
         &mut self,
         targets: Option<&Targets>,
         caches: &mut Caches,
-    ) -> AppResult<(FrameReport, Option<AovData>)> {
+    ) -> Result<(FrameReport, Option<AovData>)> {
         let i = self.pending.iter().position(|p| p.external).expect("a recorded frame");
         let p = self.pending.remove(i).expect("in range");
         self.complete(p, targets, caches)
@@ -147,7 +147,7 @@ impl FrameQueue {
         p: Pending,
         targets: Option<&Targets>,
         caches: &mut Caches,
-    ) -> AppResult<(FrameReport, Option<AovData>)> {
+    ) -> Result<(FrameReport, Option<AovData>)> {
         let FrameSlot { recorder, timestamps } = &mut self.slots[p.slot];
         if !p.external {
             recorder.wait()?;

@@ -9,7 +9,7 @@
 //! next frame; the meshes' own data is kept, so a mesh is never read from its file again.
 
 use super::{check_transport, Renderer};
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::scene::{mesh::MAX_COORDINATE, Material, Mesh, Object};
 use crate::scene_gpu::SceneInstances;
 use glam::Mat4;
@@ -137,8 +137,8 @@ fn content_hash(m: &Mesh) -> u64 {
 
 /// A mesh a renderer can draw: indices in range and a multiple of three, one normal per position, every coordinate
 /// finite and within ±1e9.
-fn check_mesh(mesh: &Mesh) -> AppResult<()> {
-    let bad = |m: String| Err(AppError::BadInput(format!("add_mesh: {m}")));
+fn check_mesh(mesh: &Mesh) -> Result<()> {
+    let bad = |m: String| Err(Error::BadInput(format!("add_mesh: {m}")));
     if mesh.indices.is_empty() || mesh.indices.len() % 3 != 0 {
         return bad(format!("{} indices: must be a positive multiple of 3", mesh.indices.len()));
     }
@@ -157,29 +157,29 @@ fn check_mesh(mesh: &Mesh) -> AppResult<()> {
     Ok(())
 }
 
-fn check_transform(m: &Mat4) -> AppResult<()> {
+fn check_transform(m: &Mat4) -> Result<()> {
     let det = glam::Mat3::from_mat4(*m).determinant();
     if !(m.is_finite() && det.is_finite() && det.abs() > 1e-12) {
-        return Err(AppError::BadInput(format!("transform {m}: must be finite and invertible")));
+        return Err(Error::BadInput(format!("transform {m}: must be finite and invertible")));
     }
     Ok(())
 }
 
 /// A textured material's texture must be one the scene holds, and its mesh must carry texture coordinates.
-fn check_map(scene: &crate::scene::Scene, material: &Material, mesh: &Mesh) -> AppResult<()> {
+fn check_map(scene: &crate::scene::Scene, material: &Material, mesh: &Mesh) -> Result<()> {
     if let Material::Diffuse { map: Some(m), .. } = material {
         if m.texture >= scene.textures.len() {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "albedo texture {} does not exist (the scene has {}; Renderer::add_texture adds one)",
                 m.texture,
                 scene.textures.len()
             )));
         }
         if mesh.uvs.len() != mesh.positions.len() {
-            return Err(AppError::BadInput("a textured material needs a mesh with texture coordinates".into()));
+            return Err(Error::BadInput("a textured material needs a mesh with texture coordinates".into()));
         }
         if !m.uv_transform.iter().flatten().all(|x| x.is_finite()) {
-            return Err(AppError::BadInput("the uv transform must be finite".into()));
+            return Err(Error::BadInput("the uv transform must be finite".into()));
         }
     }
     Ok(())
@@ -188,12 +188,12 @@ fn check_map(scene: &crate::scene::Scene, material: &Material, mesh: &Mesh) -> A
 impl Renderer {
     /// Add an albedo texture; a diffuse material names it by the index returned ([`crate::scene::AlbedoMap`]).
     /// The textures are uploaded again before the next frame.
-    pub fn add_texture(&mut self, texture: crate::scene::Texture) -> AppResult<usize> {
+    pub fn add_texture(&mut self, texture: crate::scene::Texture) -> Result<usize> {
         if texture.width == 0
             || texture.height == 0
             || texture.texels.len() != (texture.width * texture.height) as usize
         {
-            return Err(AppError::BadInput(format!(
+            return Err(Error::BadInput(format!(
                 "texture `{}`: {}x{} with {} texels",
                 texture.name,
                 texture.width,
@@ -207,7 +207,7 @@ impl Renderer {
     }
 
     /// Add a mesh (object space) the scene can then instance any number of times.
-    pub fn add_mesh(&mut self, mesh: Mesh) -> AppResult<MeshId> {
+    pub fn add_mesh(&mut self, mesh: Mesh) -> Result<MeshId> {
         check_mesh(&mesh)?;
         self.instances.meshes.push(Arc::new(mesh));
         self.instances.deforming.push(None);
@@ -222,7 +222,7 @@ impl Renderer {
         name: &str,
         material: Material,
         transform: Mat4,
-    ) -> AppResult<InstanceId> {
+    ) -> Result<InstanceId> {
         let m = self.mesh(mesh)?.clone();
         check_transform(&transform)?;
         check_map(&self.scene, &material, &m)?;
@@ -238,7 +238,7 @@ impl Renderer {
 
     /// Place instance `id` by `transform` (object → world, replacing its last one). Nothing is rebuilt and nothing
     /// waits: the next frame's scene update moves it on the GPU (its report's `scene` counts what that cost).
-    pub fn set_transform(&mut self, id: InstanceId, transform: Mat4) -> AppResult<()> {
+    pub fn set_transform(&mut self, id: InstanceId, transform: Mat4) -> Result<()> {
         check_transform(&transform)?;
         self.instance(id)?;
         self.place_host(id.index(), transform);
@@ -260,7 +260,7 @@ impl Renderer {
 
     /// Give instance `id` another material. Refused, with the material unchanged, where the transport cannot
     /// render it (a mirror or absorbing or dispersive glass under the two-interface model).
-    pub fn set_material(&mut self, id: InstanceId, material: Material) -> AppResult<()> {
+    pub fn set_material(&mut self, id: InstanceId, material: Material) -> Result<()> {
         self.instance(id)?;
         check_map(&self.scene, &material, self.instances.mesh_at(self.instances.mesh_of(id.index())))?;
         let old = std::mem::replace(&mut self.scene.objects[id.index()].material, material);
@@ -276,9 +276,9 @@ impl Renderer {
     /// would: the next frame's scene update places them on the GPU (and deforms the water and the morphing
     /// meshes). Objects that do not animate stay where they are (an animated object moved by `set_transform` goes
     /// back on its animation here). Animated cameras and lights move too.
-    pub fn set_time(&mut self, t: f32) -> AppResult<()> {
+    pub fn set_time(&mut self, t: f32) -> Result<()> {
         if !t.is_finite() {
-            return Err(AppError::BadInput(format!("time {t}: must be finite")));
+            return Err(Error::BadInput(format!("time {t}: must be finite")));
         }
         let old = std::mem::replace(&mut self.scene.time, t);
         for i in 0..self.scene.objects.len() {
@@ -293,9 +293,8 @@ impl Renderer {
                 }
             }
             if m != current {
-                self.set_transform(InstanceId::from_index(i), m).map_err(|e| {
-                    AppError::BadInput(format!("object `{}` at {t} s: {e}", self.scene.objects[i].name))
-                })?;
+                self.set_transform(InstanceId::from_index(i), m)
+                    .map_err(|e| Error::BadInput(format!("object `{}` at {t} s: {e}", self.scene.objects[i].name)))?;
             }
         }
         self.scene.place_movers();
@@ -309,19 +308,20 @@ impl Renderer {
 
     /// The transform instance `id` was placed with (for a loaded scene's objects: a glTF node's world transform,
     /// an animated object's at the scene's time, the identity for a TOML scene's still objects).
-    pub fn transform(&self, id: InstanceId) -> AppResult<Mat4> {
+    pub fn transform(&self, id: InstanceId) -> Result<Mat4> {
         Ok(self.instance(id)?.1)
     }
 
-    fn instance(&self, id: InstanceId) -> AppResult<(MeshId, Mat4)> {
+    fn instance(&self, id: InstanceId) -> Result<(MeshId, Mat4)> {
         self.instances.of_object.get(id.index()).map(|&(m, t)| (MeshId(m as u32), t)).ok_or_else(|| {
-            AppError::BadInput(format!("instance {}: the scene has {} objects", id.0, self.scene.objects.len()))
+            Error::BadInput(format!("instance {}: the scene has {} objects", id.0, self.scene.objects.len()))
         })
     }
 
-    fn mesh(&self, id: MeshId) -> AppResult<&Arc<Mesh>> {
-        self.instances.meshes.get(id.0 as usize).ok_or_else(|| {
-            AppError::BadInput(format!("mesh {}: {} meshes were added", id.0, self.instances.meshes.len()))
-        })
+    fn mesh(&self, id: MeshId) -> Result<&Arc<Mesh>> {
+        self.instances
+            .meshes
+            .get(id.0 as usize)
+            .ok_or_else(|| Error::BadInput(format!("mesh {}: {} meshes were added", id.0, self.instances.meshes.len())))
     }
 }

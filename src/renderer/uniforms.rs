@@ -3,6 +3,8 @@
 
 use super::Views;
 use crate::gpu_types::{FrameData, GpuView};
+use crate::scene::view::{CameraView, LightView};
+use crate::scene::Projection;
 use crate::scene::{LightKind, Material, Scene};
 use crate::scene_gpu::SceneBuffers;
 use crate::settings::{Footprint, ResolvedSettings, Transport};
@@ -90,5 +92,43 @@ pub(crate) fn frame_data(
             scene.environment.is_some() as u32 as f32,
         ],
         material: [scene_buffers.shared_ior.unwrap_or(0.0), s.weak_branches, s.weak_block as f32, 0.0],
+    }
+}
+
+// How the scene's views fill the GPU's (src/gpu_types.rs holds only the data).
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+fn extent(w: u32, h: u32) -> [f32; 4] {
+    [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32]
+}
+
+impl GpuView {
+    pub fn from_light(v: &LightView, resolution: u32) -> Self {
+        GpuView {
+            view_proj: v.view_proj().to_cols_array(),
+            origin: v4(v.origin, if v.kind == LightKind::Directional { 1.0 } else { 0.0 }),
+            right: v4(v.right, v.cos_cone),
+            down: v4(v.down, v.near),
+            forward: v4(v.forward, v.far),
+            window: [v.window.x0, v.window.y0, v.window.w, v.window.w],
+            extent: extent(resolution, resolution),
+        }
+    }
+
+    pub fn from_camera(c: &CameraView) -> Self {
+        let h = c.half_extents();
+        let ortho = matches!(c.projection, Projection::Orthographic { .. });
+        GpuView {
+            view_proj: c.view_proj().to_cols_array(),
+            origin: v4(c.position, if ortho { 1.0 } else { 0.0 }),
+            right: v4(c.right, -1.0),
+            down: v4(-c.up, c.near),
+            forward: v4(c.forward, c.far),
+            window: [-h.x, -h.y, 2.0 * h.x, 2.0 * h.y],
+            extent: extent(c.width, c.height),
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! The views of a frame: each light's photon view (fitted to the refractors) and receiver view (over the
 //! receivers: caustic map, receiver g-buffer and shadow map), and the eye camera.
 
-use crate::error::{AppError, AppResult};
+use crate::error::{Error, Result};
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{LightKind, Scene};
 use crate::settings::ResolvedSettings;
@@ -19,7 +19,7 @@ pub struct Views {
 
 impl Views {
     /// The views of light `index`.
-    pub fn new(scene: &Scene, settings: &ResolvedSettings, camera: &CameraView, index: usize) -> AppResult<Views> {
+    pub fn new(scene: &Scene, settings: &ResolvedSettings, camera: &CameraView, index: usize) -> Result<Views> {
         let light = &scene.lights[index];
         let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
         let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied());
@@ -32,7 +32,7 @@ impl Views {
         };
         if light.kind == LightKind::Spot {
             if let Some(o) = scene.refractors().find(behind) {
-                return Err(AppError::BadInput(format!(
+                return Err(Error::BadInput(format!(
                     "{}: object `{}` reaches behind the spot light's plane; a spot light must see every refractor in front of it",
                     scene.path.display(),
                     o.name
@@ -41,7 +41,7 @@ impl Views {
         }
         if light.kind == LightKind::Point {
             if let Some(o) = scene.objects.iter().find(behind) {
-                return Err(AppError::BadInput(format!(
+                return Err(Error::BadInput(format!(
                     "{}: object `{}` reaches behind the plane through point light {index} facing its target; its shadow and caustic maps are one frustum, so every object must lie in front of that plane (move the light or its `target`)",
                     scene.path.display(),
                     o.name

@@ -25,7 +25,7 @@ use crate::app::commands::{default_scene, load_options, MethodArgs};
 use crate::app::profiler;
 use ash::vk;
 use caustics::consts::*;
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use caustics::gpu::{ContextDesc, Device, Instance, SubmitSync, VkError};
 use caustics::image_io;
 use caustics::scene::{Camera, Light, Material, Projection, Scene};
@@ -159,16 +159,16 @@ fn initial_placements(renderer: &Renderer) -> Vec<glam::Mat4> {
         .collect()
 }
 
-fn pick_camera(scene: &Scene, name: Option<&str>) -> AppResult<Camera> {
+fn pick_camera(scene: &Scene, name: Option<&str>) -> Result<Camera> {
     if name.is_none() {
         if let Some(c) = scene.cameras.iter().find(|c| matches!(c.projection, Projection::Perspective { .. })) {
             return Ok(c.clone());
         }
     }
-    Ok(scene.camera(name).map_err(AppError::BadInput)?.clone())
+    Ok(scene.camera(name).map_err(Error::BadInput)?.clone())
 }
 
-pub fn run(args: &ViewArgs) -> AppResult<()> {
+pub fn run(args: &ViewArgs) -> Result<()> {
     if args.print_controls {
         print!("{}", help_markdown());
         return Ok(());
@@ -177,7 +177,7 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     let settings = args.method.settings()?;
     if let Some(p) = &args.screenshot {
         if !p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-            return Err(AppError::BadInput(format!("--screenshot {}: screenshots are written as .png", p.display())));
+            return Err(Error::BadInput(format!("--screenshot {}: screenshots are written as .png", p.display())));
         }
         image_io::check_output_dir(p)?;
     }
@@ -186,9 +186,7 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     }
     if let Some(ms) = args.interactive_ms {
         if !(ms.is_finite() && ms > 0.0) {
-            return Err(AppError::BadInput(format!(
-                "--interactive-ms {ms}: expected a positive number of milliseconds"
-            )));
+            return Err(Error::BadInput(format!("--interactive-ms {ms}: expected a positive number of milliseconds")));
         }
     }
     let script = args.script.as_deref().map(Script::load).transpose()?;
@@ -196,15 +194,15 @@ pub fn run(args: &ViewArgs) -> AppResult<()> {
     let mut scene = Scene::load_with(&scene_path, &load_options(args.animation.as_deref()))?;
     crate::app::commands::apply_environment(&mut scene, args.environment.as_deref())?;
     if !args.time.is_finite() {
-        return Err(AppError::BadInput(format!("--time {}: must be finite", args.time)));
+        return Err(Error::BadInput(format!("--time {}: must be finite", args.time)));
     }
     if let Some(dt) = args.frame_dt.filter(|dt| !(dt.is_finite() && *dt >= 0.0)) {
-        return Err(AppError::BadInput(format!("--frame-dt {dt}: must be finite and >= 0")));
+        return Err(Error::BadInput(format!("--frame-dt {dt}: must be finite and >= 0")));
     }
     scene.set_time(args.time);
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let event_loop = EventLoop::new().map_err(|e| {
-        AppError::Failed(format!(
+        Error::Failed(format!(
             "cannot open a window: {e}. `caustics view` needs a display (DISPLAY or WAYLAND_DISPLAY); \
              without one, run it under `xvfb-run -a`, or use `caustics render`"
         ))
@@ -267,11 +265,11 @@ struct App<'a> {
     scene_path: PathBuf,
     viewer: Option<Viewer>,
     outcome: Option<Outcome>,
-    error: Option<AppError>,
+    error: Option<Error>,
 }
 
 impl App<'_> {
-    fn fail(&mut self, el: &ActiveEventLoop, e: AppError) {
+    fn fail(&mut self, el: &ActiveEventLoop, e: Error) {
         if self.error.is_none() {
             self.error = Some(e);
         }
@@ -296,16 +294,16 @@ impl App<'_> {
         }
     }
 
-    fn finish(mut self, run: Result<(), winit::error::EventLoopError>) -> AppResult<()> {
+    fn finish(mut self, run: Result<(), winit::error::EventLoopError>) -> Result<()> {
         self.teardown();
         if let Some(e) = self.error.take() {
             return Err(e);
         }
-        run.map_err(|e| AppError::Failed(format!("window event loop: {e}")))?;
-        let out = self.outcome.take().ok_or_else(|| AppError::Failed("the viewer window was never created".into()))?;
+        run.map_err(|e| Error::Failed(format!("window event loop: {e}")))?;
+        let out = self.outcome.take().ok_or_else(|| Error::Failed("the viewer window was never created".into()))?;
         if let Some(p) = &self.args.screenshot {
             let c =
-                out.capture.as_ref().ok_or_else(|| AppError::Failed("no frame was presented: no screenshot".into()))?;
+                out.capture.as_ref().ok_or_else(|| Error::Failed("no frame was presented: no screenshot".into()))?;
             image_io::write_png(p, c.width, c.height, &c.rgba)?;
             eprintln!("wrote {} ({}x{}, the last presented frame: #{})", p.display(), c.width, c.height, out.presented);
         }
@@ -324,7 +322,7 @@ impl App<'_> {
             image_io::write_text(p, &serde_json::to_string_pretty(&stats).unwrap_or_default())?;
         }
         if out.validation && messages > 0 {
-            return Err(AppError::Failed(format!("{messages} Vulkan validation messages (see above)")));
+            return Err(Error::Failed(format!("{messages} Vulkan validation messages (see above)")));
         }
         Ok(())
     }
@@ -561,13 +559,13 @@ impl Viewer {
         settings: Settings,
         script: Option<Script>,
         (width, height): (u32, u32),
-    ) -> AppResult<Self> {
+    ) -> Result<Self> {
         let scene_name = scene.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let attrs = Window::default_attributes()
             .with_title(format!("caustics — {scene_name}"))
             .with_inner_size(PhysicalSize::new(width, height));
-        let window = el.create_window(attrs).map_err(|e| AppError::Failed(format!("cannot create a window: {e}")))?;
-        let handle_err = |e: raw_window_handle::HandleError| AppError::Failed(format!("window handle: {e}"));
+        let window = el.create_window(attrs).map_err(|e| Error::Failed(format!("cannot create a window: {e}")))?;
+        let handle_err = |e: raw_window_handle::HandleError| Error::Failed(format!("window handle: {e}"));
         let display = window.display_handle().map_err(handle_err)?.as_raw();
         let window_handle = window.window_handle().map_err(handle_err)?.as_raw();
         let mut desc = ContextDesc::from_env();
@@ -582,7 +580,7 @@ impl Viewer {
             .lights
             .first()
             .cloned()
-            .ok_or_else(|| AppError::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
+            .ok_or_else(|| Error::BadInput(format!("{}: the scene has no [[light]]", scene.path.display())))?;
         let (scene_playing, scene_time) = (scene.is_animated(), scene.time);
         let mut renderer = Renderer::new(device.clone(), scene, settings)?;
         let placements = initial_placements(&renderer);
@@ -682,7 +680,7 @@ impl Viewer {
         size.width == 0 || size.height == 0 || self.window.is_minimized() == Some(true)
     }
 
-    fn window_event(&mut self, event: WindowEvent) -> AppResult<()> {
+    fn window_event(&mut self, event: WindowEvent) -> Result<()> {
         match event {
             WindowEvent::CloseRequested | WindowEvent::Destroyed => self.quit = true,
             WindowEvent::Resized(size) => {
@@ -743,7 +741,7 @@ impl Viewer {
         Ok(())
     }
 
-    fn act(&mut self, action: Action) -> AppResult<()> {
+    fn act(&mut self, action: Action) -> Result<()> {
         use Action::*;
         let c = self.renderer.config().clone();
         // A change asks for the current settings with one quality choice changed (the tuning stays).
@@ -863,16 +861,16 @@ impl Viewer {
         })
     }
 
-    fn change_settings(&mut self, settings: Settings) -> AppResult<()> {
+    fn change_settings(&mut self, settings: Settings) -> Result<()> {
         match self.renderer.set_settings(settings) {
             Ok(()) => eprintln!("{}", self.describe()),
-            Err(AppError::BadInput(m)) => eprintln!("not changed: {m}"),
+            Err(Error::BadInput(m)) => eprintln!("not changed: {m}"),
             Err(e) => return Err(e),
         }
         Ok(())
     }
 
-    fn change_ior(&mut self, delta: f32) -> AppResult<()> {
+    fn change_ior(&mut self, delta: f32) -> Result<()> {
         let mut scene = self.renderer.scene().clone();
         let mut changed = false;
         for o in scene.objects.iter_mut() {
@@ -893,7 +891,7 @@ impl Viewer {
 
     /// Play the next of a glTF file's animations alone (all of them together after the last): the file is loaded
     /// again with that choice, at the same time.
-    fn next_animation(&mut self) -> AppResult<()> {
+    fn next_animation(&mut self) -> Result<()> {
         let scene = self.renderer.scene();
         let n = scene.animations.len();
         if n < 2 {
@@ -1054,7 +1052,7 @@ impl Viewer {
     }
 
     /// Render and present one frame.
-    fn redraw(&mut self) -> AppResult<()> {
+    fn redraw(&mut self) -> Result<()> {
         if self.quit || self.minimized() {
             return Ok(());
         }
@@ -1220,7 +1218,7 @@ impl Viewer {
     }
 
     /// --script: this frame's scripted input (a camera orbit, a light drag, a key).
-    fn script_input(&mut self) -> AppResult<()> {
+    fn script_input(&mut self) -> Result<()> {
         let Some((verb, first)) = self.script.as_mut().and_then(|s| s.begin_frame()) else {
             return Ok(());
         };
@@ -1237,14 +1235,14 @@ impl Viewer {
     }
 
     /// Wait for every frame in flight and take in their reports (before reading the stats at exit).
-    fn finish_frames(&mut self) -> AppResult<()> {
+    fn finish_frames(&mut self) -> Result<()> {
         self.renderer.finish_frames()?;
         self.take_reports()
     }
 
     /// Take in the reports of the frames that completed (a frame's report arrives when a later frame needs its
     /// slot): the title, the profiler's ring, the batch slots and the interactive level follow them.
-    fn take_reports(&mut self) -> AppResult<()> {
+    fn take_reports(&mut self) -> Result<()> {
         for report in self.renderer.take_completed() {
             let chosen = self.renderer.config().level;
             let frame = self.in_flight.pop_front().unwrap_or(InFlight { scale: 1, step: None });

@@ -13,7 +13,7 @@
 //! level and full quality completed (`converged_ms`).
 
 use super::controls::{Action, CONTROLS};
-use caustics::error::{AppError, AppResult};
+use caustics::error::{Error, Result};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::time::Instant;
@@ -54,11 +54,11 @@ pub struct Script {
     logs: Vec<StepLog>,
 }
 
-fn bad(path: &Path, line: usize, msg: &str) -> AppError {
-    AppError::BadInput(format!("{}:{line}: {msg}", path.display()))
+fn bad(path: &Path, line: usize, msg: &str) -> Error {
+    Error::BadInput(format!("{}:{line}: {msg}", path.display()))
 }
 
-fn number(path: &Path, line: usize, what: &str, s: Option<&str>) -> AppResult<f32> {
+fn number(path: &Path, line: usize, what: &str, s: Option<&str>) -> Result<f32> {
     let s = s.ok_or_else(|| bad(path, line, &format!("missing {what}")))?;
     match s.parse::<f32>() {
         Ok(v) if v.is_finite() => Ok(v),
@@ -67,13 +67,13 @@ fn number(path: &Path, line: usize, what: &str, s: Option<&str>) -> AppResult<f3
 }
 
 impl Script {
-    pub fn load(path: &Path) -> AppResult<Script> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| AppError::BadInput(format!("--script {}: {e}", path.display())))?;
+    pub fn load(path: &Path) -> Result<Script> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| Error::BadInput(format!("--script {}: {e}", path.display())))?;
         Script::parse(path, &text)
     }
 
-    pub fn parse(path: &Path, text: &str) -> AppResult<Script> {
+    pub fn parse(path: &Path, text: &str) -> Result<Script> {
         let mut steps = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
@@ -125,7 +125,7 @@ impl Script {
             steps.push(ScriptStep { line, frames, verb, text: body.to_string() });
         }
         if steps.is_empty() {
-            return Err(AppError::BadInput(format!("--script {}: no steps", path.display())));
+            return Err(Error::BadInput(format!("--script {}: no steps", path.display())));
         }
         let logs = vec![StepLog::default(); steps.len()];
         Ok(Script { steps, current: 0, frame_in_step: 0, logs })
