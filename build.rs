@@ -70,8 +70,7 @@ const VARIANTS: &[(&str, &str, &[Define])] = &[
     ("composite.comp", "exact", &[("EXACT_EYE", "1")]),
     ("composite.comp", "single", &[("SINGLE_SAMPLE", "1")]),
     ("composite.comp", "exact_single", &[("EXACT_EYE", "1"), ("SINGLE_SAMPLE", "1")]),
-    ("composite.comp", "glass", &[("EXACT_EYE", "1"), ("GLASS_PASS", "1")]),
-    ("composite.comp", "glass_wide", &[("EXACT_EYE", "1"), ("GLASS_PASS", "1"), ("BVH_LAYOUT_WIDE", "1")]),
+    ("glass.comp", "wide", &[("BVH_LAYOUT_WIDE", "1")]),
     ("geometry.vert", "aux", &[("WITH_AUX", "1")]),
     ("geometry.vert", "depth", &[("DEPTH_ONLY", "1")]),
 ];

@@ -3,210 +3,14 @@
 // Each output pixel averages AA x AA samples of the eye buffers (rendered AA times larger per side, AA =
 // camera extent / beauty width): the linear radiance into the HDR image, and the tone-mapped values (before the
 // sRGB encoding) into the beauty image.
-// On glass, with EXACT_EYE (`--transport exact`): the glass pass's radiance (variant GLASS_PASS, dispatched before
-// the composite at the eye buffers' resolution): the eye ray traced through the scene BVH, splitting at every
-// dielectric interface into its reflected and refracted branches (Fresnel, total internal reflection, mirrors,
-// Beer–Lambert absorption inside the glass) down to the depth cap; a branch ends on a diffuse receiver (shaded
-// with every bound light's direct light and caustic irradiance, and the environment's light) or in the
-// environment. Without it: the papers' deferred refraction through two surfaces (Wyman & Nichols sec. 3.1), in
-// the eye g-buffers.
-#include "common/types.glsl"
-#include "common/view.glsl"
-#include "common/optics.glsl"
-#include "common/march.glsl"
-
-layout(std140, set = 0, binding = CB_FRAME) uniform FrameUbo { FrameData u_frame; };
-layout(set = 0, binding = CB_RADIANCE) uniform sampler2D t_radiance;      // receivers: rgb radiance, a: eye distance
-layout(set = 0, binding = CB_FRONT) uniform usampler2D t_front;        // refractor front: normal, eye distance
-layout(set = 0, binding = CB_FRONT_AUX) uniform sampler2D t_front_aux;     // refractor front: index of refraction
-layout(set = 0, binding = CB_BACK) uniform usampler2D t_back;         // refractor back: normal, eye distance
-layout(set = 0, binding = CB_RADIANCE_LINEAR) uniform sampler2D t_radiance_lin;  // the radiance buffer, linear filtering
-layout(set = 0, binding = CB_BEAUTY, rgba8) uniform writeonly image2D o_beauty;
-layout(set = 0, binding = CB_HDR, rgba32f) uniform writeonly image2D o_hdr;  // linear radiance, before exposure
-layout(set = 0, binding = CB_SHADOW) uniform sampler2D t_shadow;        // light depth of all objects
-layout(set = 0, binding = CB_IRRADIANCE) uniform sampler2D t_irradiance;    // caustic irradiance, W/m^2 (linear filtering)
-layout(set = 0, binding = CB_RECEIVERS) uniform usampler2D t_recv;        // receivers from the light: normal, distance
-layout(set = 0, binding = CB_ENV) uniform sampler2D t_env;                 // the environment map
-layout(set = 0, binding = CB_ENV_IRRADIANCE) uniform sampler2D t_env_irr;  // its irradiance map
-layout(set = 0, binding = CB_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_textures;  // receivers' albedo textures
-// Exact transport: the glass's radiance per eye sample under every light, written by the GLASS_PASS dispatch; the
-// composite reads it.
-layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
-
-layout(push_constant) uniform Push {
-    uint add;  // GLASS_PASS: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights)
-} pc;
-
-#ifdef GLASS_PASS
-// Specialization constants (src/passes/composite.rs, GlassKey): what the scene and the pass need, so that a CPU
-// driver, which runs both sides of every branch under a mask, runs no code for what the scene lacks. Each flag is
-// tested together with the uniform it mirrors.
-// The lights whose maps are bound, 1-3 (the first's at CB_FRAME, CB_SHADOW, ...).
-layout(constant_id = GLASS_LIGHT_COUNT_ID) const uint GLASS_LIGHT_COUNT = 1u;
-layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.eye.z)
-layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.eye.w)
-layout(constant_id = GLASS_TEXTURED_ID) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
-#define ENVIRONMENT_MAP GLASS_ENVIRONMENT
-// The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
-// environment comes with u_frame: a later pass's first light carries none.)
-layout(std140, set = 0, binding = CB_LIGHT1) uniform Light1 { FrameData u_light1; };
-layout(set = 0, binding = CB_SHADOW1) uniform sampler2D t_shadow1;
-layout(set = 0, binding = CB_IRRADIANCE1) uniform sampler2D t_irradiance1;
-layout(set = 0, binding = CB_RECEIVERS1) uniform usampler2D t_recv1;
-layout(std140, set = 0, binding = CB_LIGHT2) uniform Light2 { FrameData u_light2; };
-layout(set = 0, binding = CB_SHADOW2) uniform sampler2D t_shadow2;
-layout(set = 0, binding = CB_IRRADIANCE2) uniform sampler2D t_irradiance2;
-layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
-#endif
-
+// On glass, with EXACT_EYE (`--transport exact`): the glass pass's radiance (glsl/glass.comp). Without it: the
+// papers' deferred refraction through two surfaces (Wyman & Nichols sec. 3.1), in the eye g-buffers.
+#include "common/composite_bindings.glsl"
 #include "common/receiver.glsl"
-
-#ifdef GLASS_PASS
-// Only the glass pass traces: the exact composite reads its image.
-#include "common/bvh_types.glsl"
-layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { PairNode bvh_nodes[]; };
-#ifdef BVH_TEXELS
-layout(set = 0, binding = CB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;
-layout(set = 0, binding = CB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;
-layout(set = 0, binding = CB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels;
-layout(set = 0, binding = CB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;
-layout(set = 0, binding = CB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;
-#else
-layout(std430, set = 0, binding = CB_BVH_INSTANCES) readonly buffer BvhInstances { GpuInstance bvh_instances[]; };
-layout(std430, set = 0, binding = CB_BVH_TRIS) readonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = CB_BVH_NORMALS) readonly buffer BvhNormals { vec4 bvh_normal_rows[]; };
-#endif
-#include "common/bvh.glsl"
-#define GRAY_MATERIALS
-#include "common/interface.glsl"
-#endif
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
-#ifdef GLASS_PASS
-// Direct and caustic irradiance at receiver point p (shading normal ns) from one light, its caustics averaged
-// over the pixel's footprint: the square of side `width` on the tangent plane (axes t1, t2), in its caustic map.
-vec3 light_irradiance(GpuView lv, vec3 power, float bias, sampler2D shadow, sampler2D irr, usampler2D recv, vec3 p,
-                      vec3 ns, vec3 t1, vec3 t2, float width) {
-    vec2 uv = view_uv(lv, p);
-    vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
-    return direct_irradiance_in(lv, power, bias, shadow, p, ns) + caustic_irradiance_in(lv, irr, recv, p, dx, dy);
-}
-
-// The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
-vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
-    vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow,
-                              t_irradiance, t_recv, p, ns, t1, t2, width);
-    if (GLASS_LIGHT_COUNT > 1u) {
-        e += light_irradiance(u_light1.receiver_view, u_light1.light_power.rgb, u_light1.params.y, t_shadow1,
-                              t_irradiance1, t_recv1, p, ns, t1, t2, width);
-    }
-    if (GLASS_LIGHT_COUNT > 2u) {
-        e += light_irradiance(u_light2.receiver_view, u_light2.light_power.rgb, u_light2.params.y, t_shadow2,
-                              t_irradiance2, t_recv2, p, ns, t1, t2, width);
-    }
-    return e;
-}
-
-// A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance
-// in its direction instead (so that nothing turns black where the tree is cut).
-const float EYE_THRESHOLD = 0.05;
-const int EYE_STACK = 8;
-
-// Radiance along the eye ray ro + t rd (which reaches glass first), through every interface, with the IORs of
-// channel c (0: the d line, for glass that does not disperse), under every light and the environment. Absorption inside the glass is per channel (Beer–Lambert with the red, green
-// and blue coefficients), so the colors of absorbing glass show in every trace. A receiver reached through the
-// glass takes its caustic irradiance averaged over the pixel's footprint there: the pixel's width at the distance
-// the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
-vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
-    uint cap = uint(u_frame.eye.y);
-    GpuView cam = u_frame.camera;
-    // A pixel's width at unit distance (perspective) or its width (orthographic).
-    float pixel = cam.window.z * cam.extent.z;
-    bool ortho = view_is_ortho(cam);
-    vec3 so[EYE_STACK], sd[EYE_STACK], sw[EYE_STACK];
-    uint sn[EYE_STACK];
-    float sl[EYE_STACK];
-    int sp = 0;
-    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u; sl[0] = 0.0;
-    sp = 1;
-    vec3 L = vec3(0.0);
-    while (sp > 0) {
-        sp--;
-        vec3 o = so[sp], d = sd[sp], w = sw[sp];
-        uint depth = sn[sp];
-        float run = sl[sp];
-        SceneHit hit;
-        if (!bvh_closest(o, d, 1.0 / 0.0, hit)) {
-            L += w * environment(d);
-            continue;
-        }
-        vec3 p = bvh_hit_point(hit);
-        vec3 ng, ns;
-        bvh_normals(hit, ng, ns);
-        GpuInstance I = bvh_instance(hit.inst);
-        if (!inst_is_dielectric(hit.inst)) {
-            vec3 albedo = I.pad.yzw;
-            float width = pixel * (ortho ? 1.0 : run + hit.t);
-            if (GLASS_TEXTURED && I.material.w > 0.5) {
-                // A textured receiver: its uv (packed in the triangle's and the normals' w) through the instance's
-                // uv transform, read at the mip the pixel's footprint there spans: its width times the texels per
-                // meter of this triangle (the square root of its uv area over its world area, in texels).
-                uint t = hit.tri;
-                vec3 b = hit.bary;
-                vec2 u0 = vec2(bvh_tri(3u * t).w, bvh_normal_row(3u * t).w);
-                vec2 u1 = vec2(bvh_tri(3u * t + 1u).w, bvh_normal_row(3u * t + 1u).w);
-                vec2 u2 = vec2(bvh_tri(3u * t + 2u).w, bvh_normal_row(3u * t + 2u).w);
-                mat2 m = mat2(I.ior_rgb.x, I.sigma_rgb.x, I.ior_rgb.y, I.sigma_rgb.y);
-                vec2 uv = m * (u0 * b.x + u1 * b.y + u2 * b.z) + vec2(I.ior_rgb.z, I.sigma_rgb.z);
-                vec2 e1 = m * (u1 - u0), e2 = m * (u2 - u0);
-                vec3 q0 = bvh_tri(3u * t).xyz;
-                vec3 w1 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                                    bvh_tri(3u * t + 1u).xyz - q0, 0.0);
-                vec3 w2 = bvh_xform(I.world_from_object[0], I.world_from_object[1], I.world_from_object[2],
-                                    bvh_tri(3u * t + 2u).xyz - q0, 0.0);
-                float uv_area = abs(e1.x * e2.y - e1.y * e2.x);
-                float world_area = length(cross(w1, w2));
-                float texels = sqrt(uv_area / max(world_area, 1e-30)) * float(textureSize(t_albedo_textures, 0).x);
-                float lod = log2(max(width * texels, 1e-6));
-                albedo *= textureLod(t_albedo_textures, vec3(uv, I.material.w - 1.0), lod).rgb;
-            }
-            vec3 n_eye = dot(ns, d) > 0.0 ? -ns : ns;
-            vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
-            vec3 t2 = cross(ns, t1);
-            vec3 e = lights_irradiance(p, ns, t1, t2, width) + environment_irradiance(n_eye);
-            L += w * albedo / RECV_PI * e;
-            continue;
-        }
-        // The segment that reached an exit from the inside ran through the glass: Beer–Lambert, per channel.
-        if (dot(d, ng) > 0.0) w *= exp(-I.sigma_rgb.xyz * hit.t);
-        if (depth >= cap) {
-            L += w * environment(d);
-            continue;
-        }
-        Split s = split_interface(d, p, ng, ns, inst_ior_in(hit.inst, c), inst_is_mirror(hit.inst));
-        if (!s.ok) continue;
-        vec3 wr = w * s.F, wt = w * (1.0 - s.F);
-        if (s.F < 1.0) {
-            if (max(wt.r, max(wt.g, wt.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
-                so[sp] = s.p_refr; sd[sp] = normalize(s.refr); sw[sp] = wt; sn[sp] = depth + 1u;
-                sl[sp] = run + hit.t;
-                sp++;
-            } else {
-                L += wt * environment(normalize(s.refr));
-            }
-        }
-        if (max(wr.r, max(wr.g, wr.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
-            so[sp] = s.p_refl; sd[sp] = normalize(s.refl); sw[sp] = wr; sn[sp] = depth + 1u;
-            sl[sp] = run + hit.t;
-            sp++;
-        } else {
-            L += wr * environment(normalize(s.refl));
-        }
-    }
-    return L;
-}
-#else
+#ifndef EXACT_EYE
 vec3 behind(GpuView cam, vec3 o, vec3 dir) {
     vec3 lo = u_frame.scene_min.xyz, hi = u_frame.scene_max.xyz;
     vec3 pad = 1e-2 * max(hi - lo, vec3(1.0));
@@ -268,30 +72,6 @@ vec3 shade_sample(GpuView cam, ivec2 q, vec2 uv) {
     return environment(rd);
 }
 
-#ifdef GLASS_PASS
-// One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under every light.
-void main() {
-    GpuView cam = u_frame.camera;
-    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
-    if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
-    vec4 rad = texelFetch(t_radiance, q, 0);
-    vec4 front = geo_fetch(t_front, q);
-    vec4 L = vec4(0.0);
-    if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
-        vec3 ro, rd;
-        view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
-        // Dispersive glass (FrameData.eye.z): each channel follows its own IOR's path.
-        if (GLASS_DISPERSIVE && u_frame.eye.z > 0.5) {
-            L.rgb = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
-        } else {
-            L.rgb = trace_glass(ro, rd, 0u);
-        }
-        L.a = 1.0;
-    }
-    if (pc.add != 0u) L.rgb += imageLoad(o_glass, q).rgb;
-    imageStore(o_glass, q, L);
-}
-#else
 void main() {
     GpuView cam = u_frame.camera;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -318,4 +98,3 @@ void main() {
     imageStore(o_hdr, p, vec4(sum * k, 1.0));
 #endif
 }
-#endif

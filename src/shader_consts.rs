@@ -132,7 +132,7 @@ pub const PB_BVH_WIDE_PRIMS: u32 = 22;
 /// Bindings of the layout.
 pub const PB_COUNT: u32 = 23;
 
-// Binding indices of the composite (glsl/composite.comp, src/passes/composite.rs).
+// Binding indices of the composite and the glass pass (glsl/common/composite_bindings.glsl, src/passes/composite.rs).
 /// Binding: the frame uniforms.
 pub const CB_FRAME: u32 = 0;
 /// Binding: the receivers' radiance.
@@ -236,13 +236,13 @@ pub const WAVE_DIFFERENTIAL_ID: u32 = 1;
 pub const BVH_PAIR_FALLBACK_ID: u32 = 2;
 /// glsl/wave.comp: the most subgroups a work group can have (the bound of its loop over them).
 pub const WAVE_SUBGROUPS_ID: u32 = 3;
-/// glsl/composite.comp's glass pass: the lights whose maps are bound (1-3).
+/// glsl/glass.comp: the lights whose maps are bound (1-3).
 pub const GLASS_LIGHT_COUNT_ID: u32 = 3;
-/// glsl/composite.comp's glass pass: some glass disperses.
+/// glsl/glass.comp: some glass disperses.
 pub const GLASS_DISPERSIVE_ID: u32 = 4;
-/// glsl/composite.comp's glass pass: an environment map.
+/// glsl/glass.comp: an environment map.
 pub const GLASS_ENVIRONMENT_ID: u32 = 5;
-/// glsl/composite.comp's glass pass: some receiver has an albedo texture.
+/// glsl/glass.comp: some receiver has an albedo texture.
 pub const GLASS_TEXTURED_ID: u32 = 6;
 /// glsl/coverage.comp: the pass builds mip 0 from the g-buffers.
 pub const COVERAGE_MIP0_ID: u32 = 0;

@@ -1,6 +1,6 @@
 // A specular interface hit by a ray through the scene BVH: the ray-origin offset, the deterministic Fresnel split
 // of a dielectric (or a mirror's reflection), and the instances' materials. Shared by the exact photon transport
-// (glsl/common/transport.glsl) and the eye-view ray tracer (glsl/composite.comp). Needs optics.glsl and bvh.glsl
+// (glsl/common/transport.glsl) and the eye-view ray tracer (glsl/glass.comp). Needs optics.glsl and bvh.glsl
 // (and the BVH bindings).
 #ifndef INTERFACE_GLSL
 #define INTERFACE_GLSL
@@ -91,7 +91,7 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) 
 bool inst_is_dielectric(uint inst) { return bvh_instance(inst).material.y > 0.5; }
 bool inst_is_mirror(uint inst) { return bvh_instance(inst).material.y > 1.5; }
 // The color channel this pass traces: 0 for one gray pass, 1..3 for red, green, blue (FrameData.transport.w).
-// The eye view (composite.comp, GRAY_MATERIALS) names its channels itself: its uniforms are a photon pass's, whose
+// The eye view (glass.comp, GRAY_MATERIALS) names its channels itself: its uniforms are a photon pass's, whose
 // channel is not the eye's.
 #ifdef GRAY_MATERIALS
 uint color_channel() { return 0u; }

@@ -1,5 +1,5 @@
 // Shading of a diffuse receiver point, shared by the deferred eye shading (glsl/eye_shade.comp) and the eye-view ray
-// tracer (glsl/composite.comp): direct irradiance from the light through a filtered shadow map, caustic
+// tracer (glsl/glass.comp): direct irradiance from the light through a filtered shadow map, caustic
 // irradiance from the light-space caustic map, and the environment (docs/design.md "Eye view").
 // Needs u_frame and the samplers t_shadow (light depth of all objects), t_irradiance (caustic irradiance, linear
 // filtering), t_recv (receivers from the light: normal, distance), t_env (the environment map) and t_env_irr (its

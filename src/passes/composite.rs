@@ -26,7 +26,7 @@ pub struct CompositePass {
     glass: Vec<LazyPipeline>,
 }
 
-/// What a glass pass's pipeline is specialized for (glsl/composite.comp's specialization constants 2-6). A CPU
+/// What a glass pass's pipeline is specialized for (glsl/glass.comp's specialization constants, src/shader_consts.rs). A CPU
 /// driver runs both sides of every branch under a mask, so the pass compiles no code for what the frame lacks:
 /// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, or (on the
 /// wide layout) the wide walk's pair fallback for a deforming mesh.
@@ -123,7 +123,8 @@ pub struct CompositeInputs<'a> {
     pub environment: bool,
 }
 
-/// The composite's bindings (glsl/composite.comp declares each with the same constant).
+/// The composite's and the glass pass's bindings (glsl/common/composite_bindings.glsl declares each with the same
+/// constant).
 const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
     (CB_FRAME, BindKind::Uniform),
     (CB_RADIANCE, BindKind::Sampled),
@@ -173,9 +174,9 @@ impl CompositePass {
             .map(|k| {
                 let key = GlassKey::of_index(k);
                 let (spv, binds) = if key.wide {
-                    (shaders::COMPOSITE_COMP_GLASS_WIDE.words(), &texel_binds)
+                    (shaders::GLASS_COMP_WIDE.words(), &texel_binds)
                 } else {
-                    (shaders::COMPOSITE_COMP_GLASS.words(), &binds)
+                    (shaders::GLASS_COMP.words(), &binds)
                 };
                 LazyPipeline::compute_specialized(device, &format!("eye glass {key:?}"), spv, binds, push, &key.spec())
             })
