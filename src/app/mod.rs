@@ -1,4 +1,4 @@
-//! The command-line applications on the library's public API: `render` and `profile` (commands.rs), `reference`,
+//! The command-line applications on the library's public API: `render` and `profile` (commands/), `reference`,
 //! `compare`, `bench` (with its report), `view` (the windowed viewer), `temporal` and the hidden `soak`.
 
 pub mod bench;
