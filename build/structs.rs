@@ -6,7 +6,8 @@
 //! - `gpu_layout.rs`: the byte offset of every field and every struct's size, asserted against the Rust types;
 //! - the layouts the SPIR-V check ([`check_spirv`]) compares each compiled shader's struct decorations with.
 //!
-//! Field types: `f32`, `u32`, `i32`; `[T; 2]` and `[T; 4]` of those (`vec2`, `uvec4`, ...); `[f32; 16]` (`mat4`);
+//! Field types: `f32`, `u32`, `i32`; `[T; 2]` and `[T; 4]` of those (`vec2`, `uvec4`, ...); `[f32; 3]` (`vec3`,
+//! which a scalar may follow in its last four bytes, but no array may hold); `[f32; 16]` (`mat4`);
 //! another GPU struct; and arrays `[T; N]` of any of these, where N may name constants of src/shader_consts.rs.
 //! A field that GLSL would place at another offset than Rust (std430 or std140) fails the build.
 
@@ -45,6 +46,7 @@ fn leaf(ty: &str) -> Option<(&'static str, u32, u32)> {
         "[f32;2]" => ("vec2", 8, 8),
         "[u32;2]" => ("uvec2", 8, 8),
         "[i32;2]" => ("ivec2", 8, 8),
+        "[f32;3]" => ("vec3", 12, 16),
         "[f32;4]" => ("vec4", 16, 16),
         "[u32;4]" => ("uvec4", 16, 16),
         "[i32;4]" => ("ivec4", 16, 16),

@@ -40,7 +40,7 @@ void main() {
     if (COVERAGE_MIP0) {
         vec4 front = geo_fetch(t_front, ivec2(p));
         bits = front.w > 0.0 && lit(ivec2(p), front) ? 3u : 0u;
-        if (bits == 0u && u_frame.transport.x != 0u) {
+        if (bits == 0u && u_frame.exact != 0u) {
             // Exact transport traces each cell's own ray, so a cell whose texel center misses the glass may still
             // hit it: dilate "any" by one texel so that silhouette cells are emitted (the ray decides; a miss
             // becomes direct light in the energy account).

@@ -12,8 +12,8 @@
 // tested together with the uniform it mirrors.
 // The lights whose maps are bound, 1-3 (the first's at CB_FRAME, CB_SHADOW, ...).
 layout(constant_id = GLASS_LIGHT_COUNT_ID) const uint GLASS_LIGHT_COUNT = 1u;
-layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.eye.z)
-layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.eye.w)
+layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.disperses)
+layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.environment)
 layout(constant_id = GLASS_TEXTURED_ID) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
 #define ENVIRONMENT_MAP GLASS_ENVIRONMENT
 // The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
@@ -59,14 +59,14 @@ vec3 light_irradiance(GpuView lv, vec3 power, float bias, sampler2D shadow, samp
 
 // The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
 vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
-    vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power.rgb, u_frame.params.y, t_shadow,
+    vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power, u_frame.shadow_bias, t_shadow,
                               t_irradiance, t_recv, p, ns, t1, t2, width);
     if (GLASS_LIGHT_COUNT > 1u) {
-        e += light_irradiance(u_light1.receiver_view, u_light1.light_power.rgb, u_light1.params.y, t_shadow1,
+        e += light_irradiance(u_light1.receiver_view, u_light1.light_power, u_light1.shadow_bias, t_shadow1,
                               t_irradiance1, t_recv1, p, ns, t1, t2, width);
     }
     if (GLASS_LIGHT_COUNT > 2u) {
-        e += light_irradiance(u_light2.receiver_view, u_light2.light_power.rgb, u_light2.params.y, t_shadow2,
+        e += light_irradiance(u_light2.receiver_view, u_light2.light_power, u_light2.shadow_bias, t_shadow2,
                               t_irradiance2, t_recv2, p, ns, t1, t2, width);
     }
     return e;
@@ -83,7 +83,7 @@ const int EYE_STACK = 8;
 // glass takes its caustic irradiance averaged over the pixel's footprint there: the pixel's width at the distance
 // the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
 vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
-    uint cap = uint(u_frame.eye.y);
+    uint cap = uint(u_frame.eye_depth);
     GpuView cam = u_frame.camera;
     // A pixel's width at unit distance (perspective) or its width (orthographic).
     float pixel = cam.window.z * cam.extent.z;
@@ -182,8 +182,8 @@ void main() {
     if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
         vec3 ro, rd;
         view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
-        // Dispersive glass (FrameData.eye.z): each channel follows its own IOR's path.
-        if (GLASS_DISPERSIVE && u_frame.eye.z > 0.5) {
+        // Dispersive glass (FrameData.disperses): each channel follows its own IOR's path.
+        if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
             L.rgb = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
         } else {
             L.rgb = trace_glass(ro, rd, 0u);

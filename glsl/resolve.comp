@@ -56,13 +56,13 @@ void main() {
         float area = view_cell_measure(v, xy, side) / cos_t;
         if (!view_is_ortho(v)) area *= r.w * r.w;
         // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
-        vec3 tint = u_frame.light_power.w > 0.0 ? u_frame.light_power.rgb / u_frame.light_power.w : vec3(0.0);
+        vec3 tint = u_frame.light_intensity > 0.0 ? u_frame.light_power / u_frame.light_intensity : vec3(0.0);
         e = flux_at(p, size) * tint / area;
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
     // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
     // both sides of a branch, and an image store is a loop over the lanes for each channel.
-    uint c = u_frame.transport.w & 0xffu;
+    uint c = u_frame.channel;
     bool add = pc.add != 0u;
     vec4 prev = add || c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
     bvec3 mine = c == 0u ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));

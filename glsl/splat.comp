@@ -31,7 +31,7 @@ shared ivec2 s_first;
 // The coarse level a record of the given extent (half-widths, texels) splats at: the first where both are at most
 // SPLAT_FINE_RADIUS texels (the coarsest if none), or 0 for a record splatted as it is.
 uint splat_level(vec2 e, ivec2 size) {
-    if ((u_frame.transport.w & 0x100u) == 0u) return 0u;
+    if (u_frame.differential == 0u) return 0u;
     float w = max(e.x, e.y);
     uint top = splat_levels(size), m = 0u;
     while (m < top && w > float(SPLAT_FINE_RADIUS << m)) m++;

@@ -63,7 +63,7 @@ vec4 ray_get(uint k) { return uintBitsToFloat(texelFetch(rays_in_texels, int(k))
 vec4 ray_get(uint k) { return rays_in[k]; }
 #endif
 
-// Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.material.y of its
+// Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.weak_fraction of its
 // photon's flux is traced once per block instead of by each photon in the block. At a split of depth d the block's
 // members take turns (member d mod n of the n, in raster order): the photon whose turn it is traces the weak branch
 // carrying the block's share (its weight times `scale`, the block's solid angle over its own), flagged LOD_RAY so
@@ -82,12 +82,12 @@ const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its bl
 bool weak_fine(uvec2 cell) { return !weak_by_siblings(cell_level(cell)); }
 
 bool weak_branches_apply(uvec2 cell) {
-    return u_frame.material.y > 0.0 && (weak_fine(cell) || cell_siblings(cell) != 0u);
+    return u_frame.weak_fraction > 0.0 && (weak_fine(cell) || cell_siblings(cell) != 0u);
 }
 
 // The block's side over the photon's cell's: how much wider a carried branch is than the photon's own.
 float weak_widen(uvec2 cell) {
-    return weak_fine(cell) ? exp2(float(weak_block_shift()) - float(u_frame.traversal.x - cell_level(cell))) : 2.0;
+    return weak_fine(cell) ? exp2(float(weak_block_shift()) - float(u_frame.max_level - cell_level(cell))) : 2.0;
 }
 
 // Whether this photon (`own`: its cell's measure, the photon's phi) carries its block's weak branches at `depth`,
@@ -112,7 +112,7 @@ bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
         scale = total / own;
         return depth % n == self_i;
     }
-    uint top = u_frame.traversal.x;
+    uint top = u_frame.max_level;
     uint up = top - cell_level(cell);  // the photon's cell is 2^up cells of the maximal level a side
     uint side = weak_block(), shift = weak_block_shift();
     uvec2 b = (xy << up) & ~uvec2(side - 1u);
@@ -285,7 +285,7 @@ void main() {
                     // lands, which a round splat of the spread fits only where that is round.
                     float shape = diff ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
                                        : float(r);
-                    record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_power.w, shape);
+                    record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_intensity, shape);
                     rec = true;
                     rec_flux = flux;
                     one_event = depth == 1u;
@@ -300,8 +300,8 @@ void main() {
                     float wr = w * s.F, wt = w * (1.0 - s.F);
                     // A carried weak branch holds its block's share: it is cut where its siblings' would be.
                     float widen = weak_widen(cell);
-                    float cut = u_frame.params.z * (lod ? widen * widen : 1.0);
-                    float weak = !lod && weak_branches_apply(cell) ? u_frame.material.y : 0.0;
+                    float cut = u_frame.flux_threshold * (lod ? widen * widen : 1.0);
+                    float weak = !lod && weak_branches_apply(cell) ? u_frame.weak_fraction : 0.0;
                     float scale = 1.0;
                     bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
                         ? weak_carrier(cell, phi, depth, scale)

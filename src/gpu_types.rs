@@ -27,7 +27,8 @@ pub struct GpuView {
     pub extent: [f32; 4],
 }
 
-/// What every pass of a frame reads (a uniform buffer, std140).
+/// What every pass of a frame reads (a uniform buffer, std140): the frame's views, the pass's light, the scene,
+/// the targets, and the settings of the pass's photons, transport and eye view.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct FrameData {
@@ -37,33 +38,64 @@ pub struct FrameData {
     pub receiver_view: GpuView,
     /// The eye.
     pub camera: GpuView,
-    /// rgb: I·color (W/sr; W/m² for directional lights); w: intensity.
-    pub light_power: [f32; 4],
-    /// xyz: scene bounds; w: refractor bounding diameter (m).
-    pub scene_min: [f32; 4],
-    /// xyz; w: exposure (1 / reference radiance).
-    pub scene_max: [f32; 4],
-    /// x: refractor g-buffer resolution R; y: log2(R/64); z: caustic map resolution M; w: pyramid mips.
-    pub grid: [u32; 4],
-    /// x: max level; y: metric (bits 0-7) | batching << 8; z: first checked level; w: photons one batch may emit
-    /// (`Settings::batch_photons`).
-    pub traversal: [u32; 4],
-    /// x: max-error bound (caustic-map texels); y: shadow bias (texels); z: exact transport's flux threshold;
-    /// w: flux-error's per-cell threshold tau (`Settings::tau`).
-    pub params: [f32; 4],
-    /// x: 1 for exact transport; y: rays per queue; z: splat records per batch; w: bits 0-7 the color channel of
-    /// the pass (0 gray; 1, 2, 3: red, green, blue), bit 8 differential footprints (rays carry their
-    /// differentials: 5 vec4s each, else 2).
-    pub transport: [u32; 4],
+    /// The pass's light: I·color, W/sr (W/m² for directional lights).
+    pub light_power: [f32; 3],
+    /// Its intensity I, W/sr (W/m²).
+    pub light_intensity: f32,
+    /// The scene's bounds.
+    pub scene_min: [f32; 3],
+    /// The refractors' bounding diameter (m).
+    pub refractor_diameter: f32,
+    pub scene_max: [f32; 3],
+    /// Exposure: 1 / the reference radiance, times 2^EV.
+    pub exposure: f32,
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
-    /// x: the environment's sky radiance, W/(m²·sr) (0: off); y: eye-ray depth cap (interfaces); z: 1 when some
-    /// glass disperses (the eye view traces each color channel with its own IOR).
-    pub eye: [f32; 4],
-    /// x: the index of refraction every refractor shares (-1: all mirrors), 0 when they differ: then the light
-    /// and eye views draw it per texel into their IOR buffers; y: exact transport's weak-branch fraction (0: off);
-    /// z: the weak-branch block side in cells.
-    pub material: [f32; 4],
+    /// The refractor g-buffers' side R, log2(R/64), the caustic map's side M, and the coverage pyramid's mips.
+    pub gbuffer_res: u32,
+    pub gbuffer_level: u32,
+    pub caustic_res: u32,
+    pub pyramid_mips: u32,
+    /// The traversal: its deepest level, its metric (`Metric::code`), whether an overflowing batch splits
+    /// (1) or drops its work (0), the first level checked for convergence, and the photons one batch may emit
+    /// (`Settings::batch_photons`).
+    pub max_level: u32,
+    pub metric: u32,
+    pub batching: u32,
+    pub check_level: u32,
+    pub batch_photons: u32,
+    /// 1 for exact transport, 0 for two-interface; rays per queue; splat records per batch.
+    pub exact: u32,
+    pub queue_rays: u32,
+    pub record_capacity: u32,
+    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue.
+    pub channel: u32,
+    /// 1: differential footprints (rays carry their differentials: 3 vec4s each, else 2).
+    pub differential: u32,
+    /// Max-error's bound (caustic-map texels), the shadow bias (texels), exact transport's flux threshold
+    /// (relative to the photon's), flux-error's per-cell threshold tau (`Settings::tau`).
+    pub error_bound: f32,
+    pub shadow_bias: f32,
+    pub flux_threshold: f32,
+    pub tau: f32,
+    /// The environment's sky radiance, W/(m²·sr) (0: off, and on every pass but the first light's).
+    pub sky: f32,
+    /// The eye rays' depth cap (interfaces).
+    pub eye_depth: f32,
+    /// 1 when some glass disperses (the eye view traces each color channel with its own IOR), else 0.
+    pub disperses: f32,
+    /// 1 when the scene has an environment map, else 0.
+    pub environment: f32,
+    /// The index of refraction every refractor shares (-1: all mirrors), 0 when they differ: then the light and
+    /// eye views draw it per texel into their IOR buffers.
+    pub shared_ior: f32,
+    /// Exact transport's weak-branch fraction (0: off), and the weak-branch block's side in cells.
+    pub weak_fraction: f32,
+    pub weak_block: f32,
+    /// To 16 bytes, the size std140 gives the block (scalars: std140 would align an array to 16 bytes).
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// One traversal level's counts.

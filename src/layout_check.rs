@@ -44,11 +44,14 @@ fn the_real_structs_parse_with_the_offsets_rust_gives_them() {
     let found = real_structs(None);
     let frame = found.iter().find(|s| s.name == "FrameData").unwrap();
     assert_eq!(frame.size as usize, std::mem::size_of::<crate::gpu_types::FrameData>());
-    let eye = frame.fields.iter().find(|f| f.name == "eye").unwrap();
-    assert_eq!(eye.offset as usize, std::mem::offset_of!(crate::gpu_types::FrameData, eye));
+    let sky = frame.fields.iter().find(|f| f.name == "sky").unwrap();
+    assert_eq!(sky.offset as usize, std::mem::offset_of!(crate::gpu_types::FrameData, sky));
+    // A vec3 and the scalar in its last four bytes.
+    let intensity = frame.fields.iter().find(|f| f.name == "light_intensity").unwrap();
+    assert_eq!((intensity.offset, frame.size), (492, 688));
     assert!(found.iter().any(|s| s.name == "GpuInstance" && s.size == 192));
     let asserts = structs::rust_asserts(&found);
-    assert!(asserts.contains("assert!(::std::mem::offset_of!(crate::gpu_types::FrameData, eye) == 640);"));
+    assert!(asserts.contains("assert!(::std::mem::offset_of!(crate::gpu_types::FrameData, light_intensity) == 492);"));
 }
 
 #[test]
@@ -59,6 +62,11 @@ fn a_field_glsl_would_align_elsewhere_is_refused_with_its_line() {
     let text = "#[repr(C)]\npub struct A {\n    pub a: [f32; 4],\n    pub b: u32,\n}\n#[repr(C)]\npub struct B {\n    pub a: [A; 2],\n}\n";
     let e = parse(text).err().unwrap();
     assert!(e.starts_with("test.rs:8:") && e.contains("rounds it to 32"), "{e}");
+    let e = parse("#[repr(C)]\npub struct A {\n    pub a: [f64; 2],\n}\n").err().unwrap();
+    assert!(e.contains("not a GPU type"), "{e}");
+    // An array of vec3 has a 16-byte stride in GLSL, 12 in Rust.
+    let e = parse("#[repr(C)]\npub struct A {\n    pub a: [[f32; 3]; 2],\n}\n").err().unwrap();
+    assert!(e.contains("another stride"), "{e}");
     let e = parse("#[repr(C)]\npub struct A {\n    pub a: [f64; 2],\n}\n").err().unwrap();
     assert!(e.contains("not a GPU type"), "{e}");
     let e = parse("#[repr(C)]\npub struct A {\n    pub a: [u32; NO_SUCH + 1],\n}\n").err().unwrap();
@@ -84,10 +92,16 @@ fn a_shader_that_reads_a_struct_with_another_layout_fails_the_check() {
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
     assert!(e.contains("FrameData.pyramid has an array stride of 16 bytes in SPIR-V, 8 in Rust"), "{e}");
     // A member the shader does not have.
-    let wrong =
-        real_structs(Some(("    pub material: [f32; 4],\n}", "    pub material: [f32; 4],\n    pub more: u32,\n}")));
+    let wrong = real_structs(Some(("    pub pad2: u32,\n}", "    pub pad2: u32,\n    pub more: u32,\n}")));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
-    assert!(e.contains("struct FrameData has 13 members in SPIR-V, 14 in Rust"), "{e}");
+    assert!(e.contains("struct FrameData has 38 members in SPIR-V, 39 in Rust"), "{e}");
+    // The build's own check of such a struct is stricter: compiled from it, std140 would align the array to 16
+    // bytes (byte 688) where Rust packs it at 676, and the build fails there. Against these shaders, the members
+    // no longer match.
+    let pads = "    pub pad0: u32,\n    pub pad1: u32,\n    pub pad2: u32,";
+    let wrong = real_structs(Some((pads, "    pub pad: [u32; 3],")));
+    let e = structs::check_spirv(name, words, &wrong).unwrap_err();
+    assert!(e.contains("struct FrameData has 38 members in SPIR-V, 36 in Rust"), "{e}");
 }
 
 #[test]

@@ -38,7 +38,7 @@ impl Metric {
         }
     }
 
-    /// The code the traverse shader reads (FrameData.traversal.y, bits 0-7).
+    /// The code the traverse shader reads (`FrameData.metric`).
     pub fn code(self) -> u32 {
         match self {
             Metric::MaxLevel => 0,

@@ -46,12 +46,12 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     vec3 t1;
     if (!refract_dir(rd, n1, 1.0 / ior, t1)) { h.status = HIT_TIR; return h; }
     vec3 p2, n2;
-    if (!find_exit(v, t_back, u_frame.scene_min.w, p1, t1, p2, n2)) { h.status = HIT_NO_EXIT; return h; }
+    if (!find_exit(v, t_back, u_frame.refractor_diameter, p1, t1, p2, n2)) { h.status = HIT_NO_EXIT; return h; }
     if (dot(n2, t1) < 0.0) n2 = -n2;  // outward, along the ray
     float F2 = fresnel_dielectric(dot(t1, n2), ior, 1.0);
     vec3 t2;
     if (!refract_dir(t1, -n2, ior, t2)) { h.status = HIT_TIR; return h; }
-    vec3 lo = u_frame.scene_min.xyz, hi = u_frame.scene_max.xyz;
+    vec3 lo = u_frame.scene_min, hi = u_frame.scene_max;
     vec3 pad = 1e-3 * max(hi - lo, vec3(1.0));
     vec3 p3;
     if (!find_surface(rv, t_recv, p2, t2, ray_box_exit(p2, t2, lo - pad, hi + pad), p3)) {
@@ -60,7 +60,7 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     }
     h.pos = p3;
     h.map_px = view_uv(rv, p3) * rv.extent.xy;
-    h.flux = u_frame.light_power.w * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
+    h.flux = u_frame.light_intensity * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
     return h;
 }
 
@@ -85,9 +85,9 @@ uint cell_splat_radius(uvec2 cell) {
 // Weak branches (glsl/wave.comp, docs/design.md step 4): the maximal level's blocks are weak_block() (2 or 4) of
 // its cells a side. A photon at least as large as a block shares with its siblings instead, where traverse.comp
 // marks them.
-uint weak_block() { return uint(u_frame.material.z); }
+uint weak_block() { return uint(u_frame.weak_block); }
 uint weak_block_shift() { return findLSB(weak_block()); }
-bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame.traversal.x; }
+bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame.max_level; }
 
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {

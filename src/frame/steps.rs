@@ -245,8 +245,8 @@ impl Ctx<'_> {
             more_lights,
             exact: self.exact_eye(),
             wide: self.s.bvh_layout == crate::bvh::BvhLayout::Wide,
-            dispersive: self.data.eye[2] > 0.5,
-            environment: self.data.eye[3] > 0.5,
+            dispersive: self.data.disperses > 0.5,
+            environment: self.data.environment > 0.5,
         }
     }
 

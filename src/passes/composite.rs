@@ -117,9 +117,9 @@ pub struct CompositeInputs<'a> {
     pub exact: bool,
     /// Trace it through the wide layout (uploaded: the waves trace it), else the pair layout.
     pub wide: bool,
-    /// Some glass disperses (`FrameData.eye.z`): the glass pass traces each channel.
+    /// Some glass disperses (`FrameData.disperses`): the glass pass traces each channel.
     pub dispersive: bool,
-    /// The scene has an environment map (`FrameData.eye.w`).
+    /// The scene has an environment map (`FrameData.environment`).
     pub environment: bool,
 }
 
