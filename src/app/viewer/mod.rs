@@ -15,6 +15,7 @@
 mod controls;
 mod orbit;
 mod present;
+mod refine;
 mod script;
 pub mod swapchain;
 
@@ -59,11 +60,6 @@ const ANIMATION_MAX_STEP_S: f32 = 0.25;
 /// refinement), by default: about 80 fps on a GPU, at least 5 fps on a CPU device (`--interactive-ms`).
 const INTERACTIVE_MS_GPU: f64 = 12.0;
 const INTERACTIVE_MS_CPU: f64 = 150.0;
-/// GPU time the eye view of a preview frame (eye and composite passes) aims at: above it, previews are drawn at a
-/// lower resolution (dynamic resolution, `--preview-scale auto`).
-const PREVIEW_EYE_MS: f64 = 30.0;
-/// The coarsest automatic preview: 1/MAX_PREVIEW_SCALE of the window's resolution per side.
-const MAX_PREVIEW_SCALE: u32 = 4;
 
 /// A light straight above its target is tilted by this much when animated, so that its orbit moves it.
 const ANIMATION_TILT_DEG: f32 = 25.0;
@@ -522,7 +518,7 @@ struct Viewer {
     interactive_ms: f64,
     /// Preview frames are drawn at 1/preview_scale of the window's resolution per side, upscaled when presented.
     preview_scale: u32,
-    /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near PREVIEW_EYE_MS.
+    /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near `refine::PREVIEW_EYE_MS`.
     preview_scale_fixed: bool,
     /// Each frame submitted and not yet reported, oldest first (frames complete in the order they were submitted).
     in_flight: VecDeque<InFlight>,
@@ -1133,32 +1129,19 @@ impl Viewer {
         let mut finish = |_: &Device, cmd: vk::CommandBuffer, out: &FrameOutput| {
             presenter.record(cmd, out.beauty, sc, index, capture)
         };
-        // Progressive refinement: an interactive level while the light or the glass changes, then one level more
-        // per frame up to the chosen one (each frame complete and flux-correct at its level).
+        // Progressive refinement and previews (refine.rs).
         let chosen = renderer.config().level;
         let interacting = std::mem::take(&mut self.interacting);
-        let level = if !self.progressive {
-            chosen
-        } else if interacting {
-            chosen.min(self.interactive_level)
-        } else {
-            chosen.min(self.shown_level.saturating_add(1)).max(chosen.min(self.interactive_level))
-        };
-        // The eye view's detail waits for the view to hold still: a frame in which the camera, the light or the
-        // glass moved, or that is still refining, is a preview (one eye sample per pixel, glass by two-surface
-        // deferred refraction, maybe at a lower resolution), and the first still frame at the chosen level has the
-        // chosen --aa and, under exact transport, glass traced through the BVH.
+        let level =
+            refine::frame_level(self.progressive, interacting, chosen, self.interactive_level, self.shown_level);
         let camera = orbit.camera();
         let moved = self
             .last_camera
             .as_ref()
             .is_some_and(|c| c.position != camera.position || c.target != camera.target || c.up != camera.up);
         self.last_camera = Some(camera.clone());
-        // Frames that refine toward the chosen level are previews too: only the last one pays for the full eye view.
-        let preview = self.progressive && (moved || interacting || level < chosen);
-        // Dynamic resolution: a preview may be drawn smaller; the copy to the swapchain image scales it up.
-        // A screenshot frame is drawn at full resolution (it may be copied from the beauty image itself).
-        let scale = if preview && !capture { self.preview_scale } else { 1 };
+        let preview = refine::is_preview(self.progressive, moved, interacting, level, chosen);
+        let scale = refine::draw_scale(preview, capture, self.preview_scale);
         let view = renderer.camera_view(&camera, (extent.width / scale).max(1), (extent.height / scale).max(1));
         renderer.submit(
             &FrameDesc { camera: &view, aov: None, level: Some(level), preview },
@@ -1254,25 +1237,14 @@ impl Viewer {
             self.counters.preview_frames += report.preview as u64;
             let drawn_at = frame.scale;
             if report.preview && !report.eye_reused && !self.preview_scale_fixed && drawn_at == self.preview_scale {
-                // Dynamic resolution: keep a preview's eye view under PREVIEW_EYE_MS. Coarser as soon as it costs
-                // more; finer when the next finer scale would still fit with a margin if all of the cost scaled with
-                // the pixels (part of it, the vertices, does not, so the real cost there is lower).
                 let stage = |name: &str| report.stages.iter().find(|(l, _)| *l == name).map_or(0.0, |(_, ms)| *ms);
-                let eye_ms = stage("eye") + stage("composite");
-                let s = self.preview_scale;
-                if eye_ms > PREVIEW_EYE_MS && s < MAX_PREVIEW_SCALE {
-                    self.preview_scale = s + 1;
-                } else if s > 1 && eye_ms * ((s * s) as f64 / ((s - 1) * (s - 1)) as f64) <= 0.8 * PREVIEW_EYE_MS {
-                    self.preview_scale = s - 1;
-                }
+                self.preview_scale = refine::adapt_preview_scale(self.preview_scale, stage("eye") + stage("composite"));
             }
             let interactive = self.interactive_level.min(chosen);
             if self.progressive && report.preview && !report.reused && report.level == interactive {
-                // Keep interactive frames near `interactive_ms` (a level costs up to 4 times the one below it).
-                if report.gpu_ms > 1.5 * self.interactive_ms && interactive > 0 {
-                    self.interactive_level = interactive - 1;
-                } else if report.gpu_ms < 0.3 * self.interactive_ms && interactive < chosen {
-                    self.interactive_level = interactive + 1;
+                let next = refine::adapt_interactive_level(interactive, chosen, report.gpu_ms, self.interactive_ms);
+                if next != interactive {
+                    self.interactive_level = next;
                 }
             }
             // The shared slot policy; an incomplete frame is still presented (its image can be presented once).
