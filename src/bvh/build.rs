@@ -137,26 +137,7 @@ impl SceneBvh {
 
         // Threaded layout: depth-first order, escape = the node after the subtree.
         let threaded_base = self.threaded_nodes.len() as u32;
-        let mut order = Vec::new();
-        let mut st = vec![0usize];
-        while let Some(k) = st.pop() {
-            order.push(k);
-            if nodes[k].prim_count == 0 {
-                st.push(nodes[k].first_index as usize + 1);
-                st.push(nodes[k].first_index as usize);
-            }
-        }
-        let mut pos = vec![0u32; nodes.len()];
-        for (i, &k) in order.iter().enumerate() {
-            pos[k] = i as u32;
-        }
-        let mut size = vec![1u32; nodes.len()];
-        for &k in order.iter().rev() {
-            if nodes[k].prim_count == 0 {
-                let f = nodes[k].first_index as usize;
-                size[k] = 1 + size[f] + size[f + 1];
-            }
-        }
+        let (order, pos, size) = depth_first(nodes);
         for &k in &order {
             let n = &nodes[k];
             let (lo, hi) = aabb(k);
@@ -221,6 +202,32 @@ impl SceneBvh {
         self.set_pair_slots(refit.map(|(m, _)| m), &pair_slot);
         (pair_base, single_base, wide_root)
     }
+}
+
+/// The nodes of `nodes` in depth-first order (left child first), each node's position in that order, and the size
+/// of its subtree (itself included): the threaded layout's order and escape links.
+fn depth_first(nodes: &[obvhs::bvh2::node::Bvh2Node]) -> (Vec<usize>, Vec<u32>, Vec<u32>) {
+    let mut order = Vec::new();
+    let mut st = vec![0usize];
+    while let Some(k) = st.pop() {
+        order.push(k);
+        if nodes[k].prim_count == 0 {
+            st.push(nodes[k].first_index as usize + 1);
+            st.push(nodes[k].first_index as usize);
+        }
+    }
+    let mut pos = vec![0u32; nodes.len()];
+    for (i, &k) in order.iter().enumerate() {
+        pos[k] = i as u32;
+    }
+    let mut size = vec![1u32; nodes.len()];
+    for &k in order.iter().rev() {
+        if nodes[k].prim_count == 0 {
+            let f = nodes[k].first_index as usize;
+            size[k] = 1 + size[f] + size[f + 1];
+        }
+    }
+    (order, pos, size)
 }
 
 /// A mesh's tree over its valid triangles. obvhs' medium build (PLOC) with reinsertion over every node, before and

@@ -82,18 +82,13 @@ impl SceneBvh {
                 BvhLayout::Wide => {
                     while let Some(n) = stack.pop() {
                         let w = &self.wide_nodes[n as usize].words();
-                        let p = Vec3::new(f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2]));
-                        let e = Vec3::from_array([0, 8, 16].map(|s| f32::from_bits(((w[3] >> s) & 0xFF) << 23)));
                         let imask = w[3] >> 24;
-                        let byte = |word: usize, c: usize| (w[word + c / 4] >> (8 * (c % 4))) & 0xFF;
                         for c in 0..8 {
-                            let meta = byte(6, c);
+                            let meta = wide_byte(w, 6, c);
                             if meta == 0 {
                                 continue;
                             }
-                            let q = |k: usize| byte(8 + 2 * k, c) as f32;
-                            let l = p + e * Vec3::new(q(0), q(2), q(4));
-                            let h = p + e * Vec3::new(q(1), q(3), q(5));
+                            let (l, h) = wide_child_box(w, c);
                             if slab(l, h, lo_, inv, t_best).is_none() {
                                 continue;
                             }
@@ -128,6 +123,19 @@ impl SceneBvh {
         }
         best
     }
+}
+
+/// Byte `c` of the wide node's byte array that starts at word `word` (a child's meta byte or one of its planes).
+fn wide_byte(w: &[u32; 20], word: usize, c: usize) -> u32 {
+    (w[word + c / 4] >> (8 * (c % 4))) & 0xFF
+}
+
+/// Child `c`'s box in a wide node: `p + 2^(e - 127) * q` for its quantized planes (records.rs, `WideNode`).
+fn wide_child_box(w: &[u32; 20], c: usize) -> (Vec3, Vec3) {
+    let p = Vec3::new(f32::from_bits(w[0]), f32::from_bits(w[1]), f32::from_bits(w[2]));
+    let e = Vec3::from_array([0, 8, 16].map(|s| f32::from_bits(((w[3] >> s) & 0xFF) << 23)));
+    let q = |k: usize| wide_byte(w, 8 + 2 * k, c) as f32;
+    (p + e * Vec3::new(q(0), q(2), q(4)), p + e * Vec3::new(q(1), q(3), q(5)))
 }
 
 #[cfg(test)]
