@@ -5,7 +5,7 @@
 //! - Some shaders are compiled in several variants with extra macros (see VARIANTS).
 //! - A compile error fails the build with the file, the line and glslang's message.
 //!
-//! - The GPU structs are written once, in Rust (src/gpu_types.rs, src/bvh/records.rs): build/structs.rs writes
+//! - The GPU structs are written once, in Rust (structs::SOURCES: src/gpu_types.rs, src/bvh/records.rs): build/structs.rs writes
 //!   their GLSL (`#include "generated/gpu_structs.glsl"`) and asserts their offsets on both sides, in Rust and in
 //!   every compiled shader's SPIR-V.
 //!
@@ -20,10 +20,6 @@ use std::path::{Path, PathBuf};
 mod spirv;
 #[path = "build/structs.rs"]
 mod structs;
-
-/// The Rust files whose `#[repr(C)]` structs are the GPU structs, with their module paths.
-const STRUCT_SOURCES: &[(&str, &str)] =
-    &[("src/gpu_types.rs", "crate::gpu_types"), ("src/bvh/records.rs", "crate::bvh")];
 
 #[allow(dead_code)]
 mod consts {
@@ -84,43 +80,27 @@ const WIDE_TOO: &[&str] = &["traverse.comp"];
 
 fn shared_macros() -> Vec<(String, String)> {
     let text = std::fs::read_to_string("src/shader_consts.rs").expect("read src/shader_consts.rs");
-    let mut out = Vec::new();
-    for line in text.lines() {
-        let line = line.trim();
-        if let Some(rest) = line.strip_prefix("pub const ") {
-            let (name, rest) = rest.split_once(':').expect("const NAME: type = value;");
-            let value = rest.split_once('=').expect("= value").1.trim().trim_end_matches(';').trim();
-            out.push((name.trim().to_string(), value.to_string()));
-        }
-    }
+    let out = structs::shader_consts(&text);
     // Sanity: the parsed values must match the compiled-in constants.
     assert!(out.iter().any(|(n, v)| n == "TRAVERSE_WG" && v.parse::<u32>().ok() == Some(consts::TRAVERSE_WG)));
     out
 }
 
-/// The values of src/shader_consts.rs.
-fn const_values(macros: &[(String, String)]) -> HashMap<String, u32> {
-    let mut consts = HashMap::new();
-    for (k, v) in macros {
-        let value = structs::eval(v, &consts).unwrap_or_else(|e| panic!("src/shader_consts.rs: {k}: {e}"));
-        consts.insert(k.clone(), value);
-    }
-    consts
-}
-
-/// Parses the GPU structs and writes their Rust asserts (`$OUT_DIR/gpu_layout.rs`).
-fn gpu_structs(consts: &HashMap<String, u32>, out_dir: &Path) -> Vec<structs::Struct> {
+/// Parses the GPU structs and writes their Rust asserts (`$OUT_DIR/gpu_layout.rs`) and their GLSL (returned, and
+/// written to `$OUT_DIR/gpu_structs.glsl` for a reader).
+fn gpu_structs(consts: &HashMap<String, u32>, out_dir: &Path) -> (Vec<structs::Struct>, String) {
     let mut found = Vec::new();
-    for (file, module) in STRUCT_SOURCES {
+    for (file, module) in structs::SOURCES {
         let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("read {file}: {e}"));
         if let Err(e) = structs::parse(file, module, &text, consts, &mut found) {
             panic!("GPU structs: {e}");
         }
     }
     std::fs::write(out_dir.join("gpu_layout.rs"), structs::rust_asserts(&found)).expect("write gpu_layout.rs");
-    let sources: Vec<&str> = STRUCT_SOURCES.iter().map(|s| s.0).collect();
-    std::fs::write(out_dir.join("gpu_structs.glsl"), structs::glsl(&found, &sources)).expect("write gpu_structs.glsl");
-    found
+    let sources: Vec<&str> = structs::SOURCES.iter().map(|s| s.0).collect();
+    let glsl = structs::glsl(&found, &sources);
+    std::fs::write(out_dir.join("gpu_structs.glsl"), &glsl).expect("write gpu_structs.glsl");
+    (found, glsl)
 }
 
 fn kind_of(path: &Path) -> Option<shaderc::ShaderKind> {
@@ -141,14 +121,13 @@ fn main() {
     println!("cargo:rerun-if-changed=glsl");
     println!("cargo:rerun-if-changed=src/shader_consts.rs");
     println!("cargo:rerun-if-changed=build");
-    for (file, _) in STRUCT_SOURCES {
+    for (file, _) in structs::SOURCES {
         println!("cargo:rerun-if-changed={file}");
     }
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
     let macros = shared_macros();
-    let consts = const_values(&macros);
-    let structs = gpu_structs(&consts, &out_dir);
-    let generated_glsl = structs::glsl(&structs, &STRUCT_SOURCES.iter().map(|s| s.0).collect::<Vec<_>>());
+    let consts = structs::const_values(&macros).unwrap_or_else(|e| panic!("{e}"));
+    let (structs, generated_glsl) = gpu_structs(&consts, &out_dir);
 
     let mut sources: Vec<PathBuf> = std::fs::read_dir(&glsl)
         .expect("glsl/ directory")

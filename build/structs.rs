@@ -14,6 +14,33 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
+/// The Rust files whose `#[repr(C)]` structs are the GPU structs, with their module paths.
+pub const SOURCES: &[(&str, &str)] = &[("src/gpu_types.rs", "crate::gpu_types"), ("src/bvh/records.rs", "crate::bvh")];
+
+/// The constants of src/shader_consts.rs (`text`), as (name, value as written): the macros build.rs passes to
+/// GLSL.
+pub fn shader_consts(text: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        if let Some(rest) = line.trim().strip_prefix("pub const ") {
+            let (name, rest) = rest.split_once(':').expect("const NAME: type = value;");
+            let value = rest.split_once('=').expect("= value").1.trim().trim_end_matches(';').trim();
+            out.push((name.trim().to_string(), value.to_string()));
+        }
+    }
+    out
+}
+
+/// The values of [`shader_consts`]' constants (a value may name the constants before it).
+pub fn const_values(consts: &[(String, String)]) -> Result<HashMap<String, u32>, String> {
+    let mut values = HashMap::new();
+    for (k, v) in consts {
+        let value = eval(v, &values).map_err(|e| format!("src/shader_consts.rs: {k}: {e}"))?;
+        values.insert(k.clone(), value);
+    }
+    Ok(values)
+}
+
 /// One field: its GLSL type, name, array length (expression as GLSL reads it, and its value), offset and doc.
 pub struct Field {
     pub glsl_type: String,

@@ -11,14 +11,7 @@ const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
 fn consts() -> HashMap<String, u32> {
     let text = std::fs::read_to_string(format!("{ROOT}/src/shader_consts.rs")).unwrap();
-    let mut out = HashMap::new();
-    for line in text.lines().filter_map(|l| l.trim().strip_prefix("pub const ")) {
-        let (name, rest) = line.split_once(':').unwrap();
-        let value = rest.split_once('=').unwrap().1.trim().trim_end_matches(';');
-        let v = structs::eval(value, &out).unwrap();
-        out.insert(name.trim().to_string(), v);
-    }
-    out
+    structs::const_values(&structs::shader_consts(&text)).unwrap()
 }
 
 fn parse(text: &str) -> Result<Vec<structs::Struct>, String> {
@@ -29,7 +22,7 @@ fn parse(text: &str) -> Result<Vec<structs::Struct>, String> {
 
 fn real_structs(replace: Option<(&str, &str)>) -> Vec<structs::Struct> {
     let mut found = Vec::new();
-    for (file, module) in [("src/gpu_types.rs", "crate::gpu_types"), ("src/bvh/records.rs", "crate::bvh")] {
+    for &(file, module) in structs::SOURCES {
         let mut text = std::fs::read_to_string(format!("{ROOT}/{file}")).unwrap();
         if let Some((a, b)) = replace {
             text = text.replace(a, b);
