@@ -4,6 +4,9 @@
 
 mod app;
 
+#[global_allocator]
+static HEAP: app::heap::CountingAlloc = app::heap::CountingAlloc;
+
 use caustics::error::Result;
 use clap::{Parser, Subcommand};
 

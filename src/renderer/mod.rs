@@ -238,7 +238,7 @@ impl Renderer {
             targets: None,
             targets_key: None,
             targets_generation: 0,
-            tracker: Tracker::new(),
+            tracker: Tracker::new(&device),
             settings,
             config,
             reuse: true,
@@ -749,6 +749,7 @@ impl Renderer {
             Some(cmd) => cmd,
             None => frame_slot.recorder.begin()?,
         };
+        self.tracker.prune();
         let mut rec = Rec {
             recorder: host_cmd.is_none().then_some(&mut frame_slot.recorder),
             ts: &mut frame_slot.timestamps,

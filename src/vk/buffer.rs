@@ -154,5 +154,6 @@ impl Drop for Buffer {
         if let Some(a) = self.allocation.take() {
             let _ = self.device.allocator().free(a);
         }
+        self.device.retire(self.id);
     }
 }

@@ -205,6 +205,8 @@ pub struct Device {
     owned: bool,
     /// vkDeviceWaitIdle calls made through [`Device::wait_idle`] (the stats count the stalls a frame caused).
     wait_idles: std::sync::atomic::AtomicU64,
+    /// The barrier trackers' lists of destroyed buffers and images ([`Device::retired_ids`]).
+    retired: Mutex<Vec<std::sync::Weak<Mutex<Vec<u64>>>>>,
 }
 
 impl std::ops::Deref for Device {
@@ -495,6 +497,7 @@ impl Device {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             owned: true,
             wait_idles: Default::default(),
+            retired: Default::default(),
         }))
     }
 
@@ -517,6 +520,24 @@ impl Device {
     pub fn wait_idle(&self) -> VkResult<()> {
         self.wait_idles.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         unsafe { self.raw.device_wait_idle() }.check("vkDeviceWaitIdle")
+    }
+
+    /// A list that receives the id of every buffer and image of this device destroyed from now on, for a barrier
+    /// tracker to drop their histories.
+    pub fn retired_ids(&self) -> std::sync::Arc<Mutex<Vec<u64>>> {
+        let list = std::sync::Arc::new(Mutex::new(Vec::new()));
+        let mut lists = self.retired.lock().unwrap_or_else(|e| e.into_inner());
+        lists.retain(|l| l.strong_count() > 0);
+        lists.push(std::sync::Arc::downgrade(&list));
+        list
+    }
+
+    /// A buffer or image with this id was destroyed: every tracker that asked ([`Device::retired_ids`]) hears of it.
+    pub(crate) fn retire(&self, id: u64) {
+        let lists = self.retired.lock().unwrap_or_else(|e| e.into_inner());
+        for list in lists.iter().filter_map(std::sync::Weak::upgrade) {
+            list.lock().unwrap_or_else(|e| e.into_inner()).push(id);
+        }
     }
 
     /// How many times [`Device::wait_idle`] has been called.
@@ -644,6 +665,7 @@ impl Context {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             owned: false,
             wait_idles: Default::default(),
+            retired: Default::default(),
         });
         Ok(Context { device })
     }

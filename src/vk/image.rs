@@ -158,6 +158,7 @@ impl Drop for Image {
         if let Some(a) = self.allocation.take() {
             let _ = self.device.allocator().free(a);
         }
+        self.device.retire(self.id);
     }
 }
 

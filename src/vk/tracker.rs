@@ -23,6 +23,7 @@ use super::image::Image;
 use super::sync::{Access, Barriers};
 use ash::vk;
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 type Stage = vk::PipelineStageFlags2;
 type Acc = vk::AccessFlags2;
@@ -134,17 +135,33 @@ fn writes() -> Acc {
 }
 
 /// Per-resource last accesses and the barriers declared since the last flush.
-#[derive(Default)]
 pub struct Tracker {
     states: HashMap<u64, State>,
+    /// Buffers and images destroyed since the last [`Tracker::prune`] (the device fills it).
+    retired: Arc<Mutex<Vec<u64>>>,
     pending: Barriers,
     /// Barriers flushed so far (each `vkCmdPipelineBarrier2` call counts once).
     flushes: u64,
 }
 
 impl Tracker {
-    pub fn new() -> Self {
-        Self::default()
+    pub fn new(device: &Device) -> Self {
+        Tracker { states: HashMap::new(), retired: device.retired_ids(), pending: Barriers::default(), flushes: 0 }
+    }
+
+    /// Drop the histories of the buffers and images destroyed since the last call (a renderer that re-creates
+    /// resources as its settings change would otherwise keep one history per resource it ever made).
+    pub fn prune(&mut self) {
+        let mut retired = self.retired.lock().unwrap_or_else(|e| e.into_inner());
+        for id in retired.drain(..) {
+            self.states.remove(&id);
+        }
+    }
+
+    /// Resources with a history.
+    #[cfg(test)]
+    fn tracked(&self) -> usize {
+        self.states.len()
     }
 
     /// Declare that the next commands use `buffer` with `accesses`.
@@ -255,5 +272,29 @@ mod tests {
         let n = s.apply(&union(&[Access::ColorAttachment]), true, true).expect("discard");
         assert_eq!(n.4, vk::ImageLayout::UNDEFINED);
         assert!(n.0.contains(Stage::COMPUTE_SHADER | Stage::FRAGMENT_SHADER), "after the reads: {:?}", n.0);
+    }
+
+    #[test]
+    fn a_destroyed_buffer_leaves_the_tracker_at_the_next_prune() {
+        let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
+        let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
+        let mut tracker = Tracker::new(&device);
+        let other = Tracker::new(&device);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let kept = Buffer::new(&device, "kept", 64, usage, gpu_allocator::MemoryLocation::GpuOnly).expect("buffer");
+        for _ in 0..3 {
+            let b = Buffer::new(&device, "passing", 64, usage, gpu_allocator::MemoryLocation::GpuOnly).expect("buffer");
+            tracker.buffer(&b, &[Access::ComputeWrite]).buffer(&kept, &[Access::ComputeRead]);
+            tracker.pending.clear();
+        }
+        assert_eq!(tracker.tracked(), 4);
+        tracker.prune();
+        assert_eq!(tracker.tracked(), 1, "the kept buffer's history stays");
+        // Every tracker of the device hears of each destroyed resource.
+        assert_eq!(other.retired.lock().expect("list").len(), 3);
+        drop(other);
+        drop(kept);
+        tracker.prune();
+        assert_eq!(tracker.tracked(), 0);
     }
 }
