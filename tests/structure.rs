@@ -12,7 +12,7 @@ const GLSL_LIMIT: usize = 150;
 const OVER: &[(&str, &str, usize)] = &[
     ("glsl/wave.comp", "main", 279),
     ("glsl/traverse.comp", "main", 168),
-    ("src/app/soak.rs", "run_soak", 238),
+    ("src/app/soak.rs", "run_soak", 185),
     ("src/app/bench.rs", "run_bench", 203),
     ("src/renderer/mod.rs", "record_into", 183),
     ("src/scene/gltf.rs", "visit", 172),

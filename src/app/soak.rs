@@ -81,6 +81,123 @@ struct Sample {
     gpu: caustics::gpu::AllocationTotals,
 }
 
+/// What the soak watches of memory: resident memory, the program's heap and the GPU allocations, sampled after each
+/// frame; during the warm-up only their peaks, after it their every visit of a setting.
+struct Memory {
+    warmup: usize,
+    rss_base: u64,
+    warm_capacity: u64,
+    rss_min: u64,
+    rss_max: u64,
+    /// (frame, bytes) after the warm-up.
+    rss_points: Vec<(f64, f64)>,
+    samples: Vec<Sample>,
+    /// The heap's bytes and the GPU's allocations at each setting's first visit after the warm-up.
+    heap_at: Vec<Option<u64>>,
+    gpu_alloc: Vec<Option<(usize, u64)>>,
+    worst_heap_change: u64,
+}
+
+impl Memory {
+    /// Sized up front for `frames`: the soak's own records must not grow the heap it measures.
+    fn new(frames: usize, settings: usize, warmup: usize) -> Self {
+        Memory {
+            warmup,
+            rss_base: 0,
+            warm_capacity: 0,
+            rss_min: u64::MAX,
+            rss_max: 0,
+            rss_points: Vec::with_capacity(frames),
+            samples: Vec::with_capacity(frames / 10 + 2),
+            heap_at: vec![None; settings],
+            gpu_alloc: vec![None; settings],
+            worst_heap_change: 0,
+        }
+    }
+
+    /// Sample after frame `i` (setting `si`) and check it; returns resident memory and the GPU's allocations.
+    fn observe(
+        &mut self,
+        i: usize,
+        si: usize,
+        gpu: caustics::gpu::AllocationTotals,
+        fail: &mut impl FnMut(String),
+    ) -> (u64, caustics::gpu::AllocationTotals) {
+        trim_heap();
+        let rss = rss_bytes();
+        let heap = crate::app::heap::live_bytes();
+        if i % 10 == 0 {
+            self.samples.push(Sample { frame: i, rss, heap, gpu });
+        }
+        if i < self.warmup {
+            self.rss_base = self.rss_base.max(rss);
+            self.warm_capacity = self.warm_capacity.max(gpu.capacity_bytes);
+            return (rss, gpu);
+        }
+        self.rss_max = self.rss_max.max(rss);
+        self.rss_min = self.rss_min.min(rss);
+        self.rss_points.push((i as f64, rss as f64));
+        if gpu.capacity_bytes > self.warm_capacity {
+            fail(format!(
+                "GPU memory blocks grew to {} bytes (warm-up peak {})",
+                gpu.capacity_bytes, self.warm_capacity
+            ));
+        }
+        match self.heap_at[si] {
+            None => self.heap_at[si] = Some(heap),
+            Some(h) => {
+                self.worst_heap_change = self.worst_heap_change.max(heap.abs_diff(h));
+                if heap.abs_diff(h) > HEAP_SLACK_BYTES {
+                    fail(format!(
+                        "the program's heap holds {heap} bytes, {h} at this setting's first visit after warm-up"
+                    ));
+                }
+            }
+        }
+        match self.gpu_alloc[si] {
+            None => self.gpu_alloc[si] = Some((gpu.allocations, gpu.allocated_bytes)),
+            Some(a) if a.0 != gpu.allocations || a.1.abs_diff(gpu.allocated_bytes) > GPU_SLACK_BYTES => fail(format!(
+                "GPU allocations {} ({} bytes), {} ({} bytes) at this setting's first visit after warm-up",
+                gpu.allocations, gpu.allocated_bytes, a.0, a.1
+            )),
+            _ => {}
+        }
+        (rss, gpu)
+    }
+
+    /// Resident memory's figures in MiB, and the rise of its floor in bytes. A leak raises the floor: the least
+    /// resident memory of the last quarter of the frames after the warm-up against the first quarter's. Single
+    /// frames' peaks (the allocator's passing high-water marks) and the medians (which jump when a cycle's peaks
+    /// outnumber its troughs) move it neither way.
+    fn rss_summary(&self, start: u64, bound_mib: f64) -> (serde_json::Value, f64) {
+        let mib = |b: u64| b as f64 / 1048576.0;
+        let floor = |q: &[(f64, f64)]| q.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        let (n, qn) = (self.rss_points.len(), self.rss_points.len() / 4);
+        let drift = if qn > 0 { floor(&self.rss_points[n - qn..]) - floor(&self.rss_points[..qn]) } else { f64::NAN };
+        let after = |b: u64| if n > 0 { mib(b) } else { f64::NAN };
+        let summary = json!({
+            "start": mib(start), "warmup_peak": mib(self.rss_base),
+            "min_after_warmup": after(self.rss_min), "max_after_warmup": after(self.rss_max),
+            "final": mib(rss_bytes()), "bound_mib": bound_mib,
+            "slope_mib_per_1000_frames": slope(&self.rss_points) * 1000.0 / 1048576.0,
+            "floor_drift_mib": drift / 1048576.0,
+        });
+        (summary, drift)
+    }
+
+    fn samples_json(&self) -> Vec<serde_json::Value> {
+        self.samples
+            .iter()
+            .map(|s| {
+                json!({
+                    "frame": s.frame, "rss_bytes": s.rss, "heap_bytes": s.heap, "gpu_allocations": s.gpu.allocations,
+                    "gpu_allocated_bytes": s.gpu.allocated_bytes, "gpu_block_bytes": s.gpu.capacity_bytes,
+                })
+            })
+            .collect()
+    }
+}
+
 /// One entry of the settings schedule.
 #[derive(Clone, Debug)]
 struct Step {
@@ -222,15 +339,7 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
     let period = s_count * args.angles as usize;
     let warmup = (2 * period).min(args.frames as usize);
     let mut reference: Vec<Option<f64>> = vec![None; period];
-    let mut gpu_alloc: Vec<Option<(usize, u64)>> = vec![None; s_count];
-    let mut warm_capacity = 0u64;
-    let mut rss_base = 0u64;
-    let (mut rss_max, mut rss_min) = (0u64, u64::MAX);
-    // Sized up front: the soak's own records must not grow the heap it measures.
-    let mut rss_points = Vec::with_capacity(args.frames as usize);
-    let mut samples = Vec::with_capacity(args.frames as usize / 10 + 2);
-    let mut heap_at: Vec<Option<u64>> = vec![None; s_count];
-    let mut worst_heap_change = 0u64;
+    let mut memory = Memory::new(args.frames as usize, s_count, warmup);
     let mut failures: Vec<String> = Vec::with_capacity(21);
     let mut worst_flux_dev = 0.0f64;
     let mut worst_residual = 0.0f64;
@@ -298,45 +407,7 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
             fail(format!("{messages} validation messages"));
             break;
         }
-        let gpu = session.device().allocation_report();
-        trim_heap();
-        let rss = rss_bytes();
-        let heap = crate::app::heap::live_bytes();
-        if i < warmup {
-            rss_base = rss_base.max(rss);
-            warm_capacity = warm_capacity.max(gpu.capacity_bytes);
-        } else {
-            rss_max = rss_max.max(rss);
-            rss_min = rss_min.min(rss);
-            rss_points.push((i as f64, rss as f64));
-            if gpu.capacity_bytes > warm_capacity {
-                fail(format!("GPU memory blocks grew to {} bytes (warm-up peak {warm_capacity})", gpu.capacity_bytes));
-            }
-            match heap_at[si] {
-                None => heap_at[si] = Some(heap),
-                Some(h) => {
-                    worst_heap_change = worst_heap_change.max(heap.abs_diff(h));
-                    if heap.abs_diff(h) > HEAP_SLACK_BYTES {
-                        fail(format!(
-                            "the program's heap holds {heap} bytes, {h} at this setting's first visit after warm-up"
-                        ));
-                    }
-                }
-            }
-            match gpu_alloc[si] {
-                None => gpu_alloc[si] = Some((gpu.allocations, gpu.allocated_bytes)),
-                Some(a) if a.0 != gpu.allocations || a.1.abs_diff(gpu.allocated_bytes) > GPU_SLACK_BYTES => {
-                    fail(format!(
-                        "GPU allocations {} ({} bytes), {} ({} bytes) at this setting's first visit after warm-up",
-                        gpu.allocations, gpu.allocated_bytes, a.0, a.1
-                    ))
-                }
-                _ => {}
-            }
-        }
-        if i % 10 == 0 || i + 1 == args.frames as usize {
-            samples.push(Sample { frame: i, rss, heap, gpu });
-        }
+        let (rss, gpu) = memory.observe(i, si, session.device().allocation_report(), &mut fail);
         if (i + 1) % 100 == 0 {
             eprintln!(
                 "soak: {}/{} frames, {:.0} s, RSS {:.1} MiB, GPU {} allocations {:.1} MiB, worst flux deviation {:.2e}",
@@ -351,14 +422,7 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         }
     }
     let mib = |b: u64| b as f64 / 1048576.0;
-    let growth_per_1000 = slope(&rss_points) * 1000.0;
-    // A leak raises the floor: the least resident memory of the last quarter of the frames after the warm-up
-    // against the first quarter's. Single frames' peaks (the allocator's passing high-water marks) and the medians
-    // (which jump when a cycle's peaks outnumber its troughs) move it neither way.
-    let floor = |q: &[(f64, f64)]| q.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
-    let qn = rss_points.len() / 4;
-    let drift = if qn > 0 { floor(&rss_points[rss_points.len() - qn..]) - floor(&rss_points[..qn]) } else { f64::NAN };
-    let after = rss_points.len();
+    let (rss_json, drift) = memory.rss_summary(rss_start, args.rss_bound_mib);
     if drift > args.rss_bound_mib * 1048576.0 {
         failures.push(format!(
             "resident memory's floor rose {:.1} MiB after the warm-up (least of the last quarter of the frames \
@@ -367,15 +431,6 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
             args.rss_bound_mib
         ));
     }
-    let samples: Vec<_> = samples
-        .iter()
-        .map(|s: &Sample| {
-            json!({
-                "frame": s.frame, "rss_bytes": s.rss, "heap_bytes": s.heap, "gpu_allocations": s.gpu.allocations,
-                "gpu_allocated_bytes": s.gpu.allocated_bytes, "gpu_block_bytes": s.gpu.capacity_bytes,
-            })
-        })
-        .collect();
     let summary = json!({
         "device": session.device().info.name,
         "validation": {"enabled": session.validation, "messages": caustics::gpu::validation_message_count()},
@@ -390,39 +445,33 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
             "two_interface": ms_by_transport[0].0 / ms_by_transport[0].1.max(1) as f64,
             "exact": ms_by_transport[1].0 / ms_by_transport[1].1.max(1) as f64,
         },
-        "rss_mib": {
-            "start": mib(rss_start), "warmup_peak": mib(rss_base),
-            "min_after_warmup": if after > 0 { mib(rss_min) } else { f64::NAN },
-            "max_after_warmup": if after > 0 { mib(rss_max) } else { f64::NAN },
-            "final": mib(rss_bytes()), "bound_mib": args.rss_bound_mib,
-            "slope_mib_per_1000_frames": growth_per_1000 / 1048576.0,
-            "floor_drift_mib": drift / 1048576.0,
-        },
-        "heap": {"slack_bytes": HEAP_SLACK_BYTES, "worst_change_bytes": worst_heap_change},
+        "rss_mib": rss_json,
+        "heap": {"slack_bytes": HEAP_SLACK_BYTES, "worst_change_bytes": memory.worst_heap_change},
         "gpu": {
-            "warmup_block_peak_mib": mib(warm_capacity),
-            "allocations_per_setting": gpu_alloc.iter().map(|a| a.map(|(n, b)| json!({"count": n, "mib": mib(b)}))).collect::<Vec<_>>(),
+            "warmup_block_peak_mib": mib(memory.warm_capacity),
+            "allocations_per_setting": memory.gpu_alloc.iter().map(|a| a.map(|(n, b)| json!({"count": n, "mib": mib(b)}))).collect::<Vec<_>>(),
         },
         "flux": {"tolerance": args.flux_tolerance, "worst_relative_deviation": worst_flux_dev, "cone_power_w": cone_power},
         "exact_worst_residual": worst_residual,
         "failures": failures.len(),
         "first_failures": failures.iter().take(20).collect::<Vec<_>>(),
-        "samples": samples,
+        "samples": memory.samples_json(),
     });
     if let Some(p) = &args.json {
         image_io::write_text(p, &serde_json::to_string_pretty(&summary).unwrap_or_default())?;
     }
+    let f = |k: &str| rss_json[k].as_f64().unwrap_or(f64::NAN);
     eprintln!(
         "soak: {} frames in {:.0} s; RSS peak {:.1} MiB in the warm-up, {:.1}..{:.1} MiB after ({:+.2} MiB per 1000 frames); \
          floor drift {:+.1} MiB; heap change at most {} bytes; worst flux deviation {:.2e}; exact residual {:.1e}; {} failures",
         args.frames,
         start.elapsed().as_secs_f64(),
-        mib(rss_base),
-        if after > 0 { mib(rss_min) } else { f64::NAN },
-        if after > 0 { mib(rss_max) } else { f64::NAN },
-        growth_per_1000 / 1048576.0,
+        f("warmup_peak"),
+        f("min_after_warmup"),
+        f("max_after_warmup"),
+        f("slope_mib_per_1000_frames"),
         drift / 1048576.0,
-        worst_heap_change,
+        memory.worst_heap_change,
         worst_flux_dev,
         worst_residual,
         failures.len()

@@ -493,7 +493,10 @@ impl Renderer {
 
     /// Create the targets, or re-create what a change of settings or output size invalidates: a new window size
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
+    /// Also drops the tracker's histories of the buffers and images destroyed since the last frame (it runs once per
+    /// frame).
     fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> Result<()> {
+        self.tracker.prune();
         let lights = self.scene.lights.len();
         let passes = lights * self.scene.color_channels();
         let key = TargetsKey::new(s, passes, self.queue.frames_in_flight());
@@ -749,7 +752,6 @@ impl Renderer {
             Some(cmd) => cmd,
             None => frame_slot.recorder.begin()?,
         };
-        self.tracker.prune();
         let mut rec = Rec {
             recorder: host_cmd.is_none().then_some(&mut frame_slot.recorder),
             ts: &mut frame_slot.timestamps,
