@@ -3,17 +3,27 @@
 //! levels launched with `vkCmdDispatchIndirect`, photons splatted indirectly, every indirect command written by the
 //! GPU, and no host readback inside a frame. Exact transport traces every glass path through a BVH of the scene.
 //!
-//! The library renders headless (it creates its own device, a CPU one such as lavapipe included), into a window
-//! surface a host owns, or inside a host's own Vulkan device and command buffer:
+//! Three ways to use it:
 //!
-//! - [`gpu::Context::headless`] creates a device; [`gpu::Context::import`] wraps the host's instance, physical
-//!   device, device and queue (see [`gpu::Imported`] for what they must enable).
-//! - [`Renderer::new`] takes the device, a [`scene::Scene`] and [`settings::Settings`]; the scene can also be built
-//!   in code ([`scene::Scene::new`], [`Renderer::add_mesh`], [`Renderer::add_instance`],
-//!   [`Renderer::set_transform`], [`Renderer::set_light`], [`Renderer::set_material`]).
-//! - [`Renderer::render`] renders a frame and returns its AOVs as host images with the frame's stats;
-//!   [`Renderer::record`] records a frame into the host's command buffer and copies the beauty image into the
-//!   host's image.
+//! - **Headless**: [`gpu::Context::headless`] creates an instance and a device (a CPU one such as lavapipe
+//!   included), and [`Renderer::render`] renders a frame and returns its AOVs as host images with the frame's stats
+//!   (below, and `examples/headless.rs`).
+//! - **In a window**: [`gpu::Instance::new`] with the window system's extensions
+//!   ([`gpu::ContextDesc::instance_extensions`], [`gpu::ContextDesc::swapchain`]), [`gpu::Device::new`] with a
+//!   filter for a queue that presents, and [`Renderer::submit`]: its `finish` callback appends the host's copy of
+//!   the [`FrameOutput`] to its swapchain image, and its [`gpu::SubmitSync`] semaphores wait for that image and
+//!   signal its presentation. The `caustics view` viewer (the `apps` feature) is built this way.
+//! - **In a host's device**: [`gpu::Context::import`] wraps the host's instance, physical device, device and queue
+//!   (see [`gpu::Imported`] for what they must enable); [`Renderer::record`] records a frame into the host's command
+//!   buffer and copies the beauty image into the host's image, and [`Renderer::complete`] collects its report once
+//!   the host's submission has finished (`examples/embed.rs`).
+//!
+//! [`Renderer::new`] takes the device, a [`scene::Scene`] and [`settings::Settings`]; the scene can also be built in
+//! code ([`scene::Scene::new`], [`Renderer::add_mesh`], [`Renderer::add_instance`], [`Renderer::set_transform`],
+//! [`Renderer::set_light`], [`Renderer::set_material`]).
+//!
+//! On Debian and Ubuntu, the shaderc library the build compiles the shaders with needs a link fix in the user's
+//! cargo configuration, which the repository's `tools/setup` adds (README.md, "As a library").
 //!
 //! ```no_run
 //! use caustics::{gpu, scene::Scene, settings::Settings, Aov, FrameDesc, Renderer};
