@@ -16,7 +16,8 @@
 //! - **In a host's device**: [`gpu::Context::import`] wraps the host's instance, physical device, device and queue
 //!   (see [`gpu::Imported`] for what they must enable); [`Renderer::record`] records a frame into the host's command
 //!   buffer and copies the beauty image into the host's image, and [`Renderer::complete`] collects its report once
-//!   the host's submission has finished (`examples/embed.rs`).
+//!   the host's submission has finished (`examples/embed.rs` on an ash host, `examples/wgpu.rs` in a wgpu
+//!   application).
 //!
 //! [`Renderer::new`] takes the device, a [`scene::Scene`] and [`settings::Settings`]; the scene can also be built in
 //! code ([`scene::Scene::new`], [`Renderer::add_mesh`], [`Renderer::add_instance`], [`Renderer::set_transform`],

@@ -1,7 +1,7 @@
 //! The examples run on lavapipe with validation (and synchronization validation) on: `headless` writes its EXR and
 //! PNG; `embed` records a frame into a Vulkan device and command buffer it created itself (the import path) and
-//! checks that its image is byte for byte the one `Renderer::render` gives. `cargo test` builds the examples; this
-//! runs them.
+//! checks that its image is byte for byte the one `Renderer::render` gives; `wgpu` does the same inside a wgpu
+//! application's device. `cargo test` builds the examples; this runs them.
 
 mod common;
 use std::path::PathBuf;
@@ -47,6 +47,23 @@ fn headless_example_writes_its_images() {
 fn embed_example_matches_render() {
     let text = run("embed", &[&common::scene("sphere.toml")]);
     assert!(text.contains(" 0 of 76800 bytes differ from Renderer::render"), "{text}");
+}
+
+/// A wgpu application on lavapipe, with validation and synchronization validation on: caustics records into
+/// wgpu's command encoder and texture, and wgpu's readback of the texture is byte for byte `Renderer::render`'s
+/// image of the same frame (the example fails itself on a difference or on any validation message wgpu reports).
+#[test]
+fn wgpu_example_matches_render() {
+    let out = Command::new(example("wgpu"))
+        .args(["--headless", &common::scene("sphere.toml")])
+        .env("CAUSTICS_VALIDATION", "1")
+        .env("VK_LAYER_ENABLES", "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT")
+        .output()
+        .expect("run the wgpu example");
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "example wgpu failed ({:?}):\n{text}", out.status.code());
+    assert!(text.contains(" 0 of 98304 bytes differ from Renderer::render"), "{text}");
+    assert!(!text.contains("wgpu_hal::vulkan::instance"), "a validation message:\n{text}");
 }
 
 /// The shipped environment map is the `sky` example's output, byte for byte (so it can be made again, and its

@@ -589,11 +589,12 @@ pub struct Context {
 /// A host's Vulkan objects for [`Context::import`]. The host keeps them alive while the context and every renderer
 /// on it live, and destroys them itself afterwards.
 ///
-/// The device must have been created with Vulkan 1.3's `synchronization2` and `dynamicRendering`, the core
-/// `largePoints` feature (and, where the device offers them, `vertexPipelineStoresAndAtomics`,
-/// `fragmentStoresAndAtomics` and `shaderInt64`), and the `VK_KHR_push_descriptor` extension; with
-/// `VK_EXT_shader_atomic_float`'s `shaderBufferFloat32AtomicAdd` and `shaderSharedFloat32AtomicAdd` enabled too,
-/// the compute splats can run (say so with `float_atomic_add`). The queue must support graphics, compute and
+/// The device must have been created with Vulkan 1.3's `synchronization2` and `dynamicRendering` (and, where the
+/// device offers them, `vertexPipelineStoresAndAtomics`, `fragmentStoresAndAtomics` and `shaderInt64`), and the
+/// `VK_KHR_push_descriptor` extension. With `VK_EXT_shader_atomic_float`'s `shaderBufferFloat32AtomicAdd` and
+/// `shaderSharedFloat32AtomicAdd` enabled too, the compute splats run (say so with `float_atomic_add`); without
+/// them the photons are drawn as points, which needs the core `largePoints` feature (a wgpu device cannot have it:
+/// give it the float atomics, as examples/wgpu.rs does). The queue must support graphics, compute and
 /// timestamps; every frame the renderer submits goes to it, and frames recorded into the host's command buffers
 /// must be submitted to it.
 pub struct Imported {
