@@ -344,7 +344,7 @@ mod window {
     impl Shown {
         fn redraw(&mut self) -> Res<()> {
             let (w, h) = (self.config.width, self.config.height);
-            if self.texture.as_ref().map_or(true, |t| (t.width(), t.height()) != (w, h)) {
+            if self.texture.as_ref().is_none_or(|t| (t.width(), t.height()) != (w, h)) {
                 self.texture = Some(caustics_texture(&self.g, w, h, self.config.format));
                 self.layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
             }

@@ -126,7 +126,7 @@ impl Memory {
         trim_heap();
         let rss = rss_bytes();
         let heap = crate::app::heap::live_bytes();
-        if i % 10 == 0 {
+        if i.is_multiple_of(10) {
             self.samples.push(Sample { frame: i, rss, heap, gpu });
         }
         if i < self.warmup {

@@ -139,7 +139,7 @@ fn content_hash(m: &Mesh) -> u64 {
 /// finite and within ±1e9.
 fn check_mesh(mesh: &Mesh) -> Result<()> {
     let bad = |m: String| Err(Error::BadInput(format!("add_mesh: {m}")));
-    if mesh.indices.is_empty() || mesh.indices.len() % 3 != 0 {
+    if mesh.indices.is_empty() || !mesh.indices.len().is_multiple_of(3) {
         return bad(format!("{} indices: must be a positive multiple of 3", mesh.indices.len()));
     }
     if mesh.normals.len() != mesh.positions.len() {

@@ -565,7 +565,7 @@ fn animations(
     let mut period = 0.0f32;
     // Per node and property: the animation that animates it.
     let mut owner: std::collections::HashMap<(usize, &'static str), usize> = Default::default();
-    for anim in document.animations().filter(|a| chosen.map_or(true, |c| c == a.index())) {
+    for anim in document.animations().filter(|a| chosen.is_none_or(|c| c == a.index())) {
         for ch in anim.channels() {
             let s_at = format!("animations[{}].samplers[{}]", anim.index(), ch.sampler().index());
             let node = ch.target().node();

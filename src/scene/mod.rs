@@ -594,7 +594,7 @@ impl Scene {
                 let r = s.cross(e1);
                 let v = dir.dot(r) / det;
                 let t = e2.dot(r) / det;
-                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && best.map_or(true, |(_, b)| t < b) {
+                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && best.is_none_or(|(_, b)| t < b) {
                     best = Some((i, t));
                 }
             }

@@ -101,7 +101,7 @@ impl Texture {
         let texels = (0..n * n)
             .map(|i| {
                 let (x, y) = (i % n, i / n);
-                if ((x * squares / n) + (y * squares / n)) % 2 == 0 {
+                if ((x * squares / n) + (y * squares / n)).is_multiple_of(2) {
                     ea
                 } else {
                     eb

@@ -30,11 +30,11 @@ pub fn embedded(mut doc: Value, bin: &[u8]) -> String {
 /// `doc` and `bin` as a GLB container (JSON chunk, then BIN chunk; both padded to 4 bytes).
 pub fn glb(doc: &Value, bin: &[u8]) -> Vec<u8> {
     let mut j = serde_json::to_vec(doc).unwrap();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + j.len() + 8 + b.len();
@@ -61,7 +61,7 @@ pub fn write(dir: &Path, name: &str, data: impl AsRef<[u8]>) -> PathBuf {
 /// `bytes` appended to `bin` at a 4-byte boundary as a new bufferView (with `stride`, for interleaved data);
 /// returns the view's index.
 pub fn add_view(doc: &mut Value, bin: &mut Vec<u8>, bytes: &[u8], stride: Option<usize>) -> usize {
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let views = doc["bufferViews"].as_array_mut().unwrap();

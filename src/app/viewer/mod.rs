@@ -1190,7 +1190,7 @@ impl Viewer {
         }
         self.take_reports()?;
         self.resize_tick();
-        let cycle_done = self.resize.as_ref().map_or(true, |r| r.finished());
+        let cycle_done = self.resize.as_ref().is_none_or(|r| r.finished());
         if self.frames > 0 && self.counters.presented >= self.frames as u64 && cycle_done {
             self.quit = true;
         }
