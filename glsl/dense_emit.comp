@@ -3,7 +3,7 @@
 // is emitted, one band of rows at a time. The draw count that follows is written by stats (mode 2), so dense
 // and adaptive feed the same indirect splat.
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform DenseEmitPushBlock { DenseEmitPush pc; };
 #include "common/coverage.glsl"
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;

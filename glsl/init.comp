@@ -1,9 +1,9 @@
 #version 460
-// Init (Piao's initialization shader). Mode 0, once per frame: clear the counters and push the root tile (the
-// whole 64^2 level-0 grid). Mode 1, once per batch: pop a tile, write its level-0 candidates (or its one cell),
-// and write the first level's dispatch-indirect arguments and an empty draw-indirect command. Mode 2: dense.
+// Init (Piao's initialization shader). INIT_FRAME, once per frame: clear the counters and push the root tile (the
+// whole 64^2 level-0 grid). INIT_BATCH, once per batch: pop a tile, write its level-0 candidates (or its one cell),
+// and write the first level's dispatch-indirect arguments and an empty draw-indirect command. INIT_DENSE: a dense band.
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform InitPushBlock { InitPush pc; };
 
 layout(local_size_x = 256) in;
 
@@ -12,19 +12,19 @@ shared ivec4 s_tile;
 
 void main() {
     uint tid = gl_LocalInvocationIndex;
-    if (pc.mode == 0u || pc.mode == 2u) {
+    if (pc.mode == INIT_FRAME || pc.mode == INIT_DENSE) {
         if (tid == 0u) {
             // The frame-start clear of the whole state is a vkCmdFillBuffer; here only the non-zero fields.
             state.batching = u_frame.batching;
             // A batching traversal may fill the whole buffer, its photons within traversal.w (traverse.comp checks
             // both); dense bands, and traversal without batching, use traversal.w entries at most.
-            state.capacity = pc.mode == 0u && state.batching != 0u ? u_frame.record_capacity : u_frame.batch_photons;
+            state.capacity = pc.mode == INIT_FRAME && state.batching != 0u ? u_frame.record_capacity : u_frame.batch_photons;
             state.start_level = MAX_LEVELS;
             state.stack_size = 0u;
             state.emit_count = 0u;
             state.used = 0u;
             state.aborted = 0u;
-            if (pc.mode == 0u) {
+            if (pc.mode == INIT_FRAME) {
                 state.stack[0] = ivec4(-6, 0, 0, 0);  // 2^6 = 64: the whole level-0 grid
                 state.stack_size = 1u;
             }

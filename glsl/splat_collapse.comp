@@ -5,7 +5,7 @@
 // Dispatched once per level, coarsest first, with a barrier between: level m - 1 is complete before it is added on.
 // Where the resolve reads the flux texels, it adds level 1 itself (glsl/resolve.comp).
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform SplatCollapsePushBlock { SplatCollapsePush pc; };
 #include "common/splat_levels.glsl"
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;

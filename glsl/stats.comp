@@ -1,11 +1,11 @@
 #version 460
 // Stats (Piao's post-traversal statistics shader), one invocation after each traversal level: count the level's
 // candidates, move the read window onto the children just appended, and write the next level's
-// dispatch-indirect arguments. After the last level (mode 1) it commits the batch: on success the batch's counts
+// dispatch-indirect arguments. After the last level (STATS_COMMIT) it commits the batch: on success the batch's counts
 // join the frame's and the draw-indirect command is set to the emitted photons; after an overflow the batch's
 // tile is split into four tiles pushed on the tile stack, and nothing is drawn.
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform StatsPushBlock { StatsPush pc; };
 
 layout(local_size_x = 1) in;
 
@@ -52,7 +52,7 @@ void commit() {
 
 void main() {
     uint l = pc.level;
-    if (pc.mode == 2u) {
+    if (pc.mode == STATS_DENSE) {
         // Dense: the band's photons are all emitted; draw them.
         uint n = min(state.emit_count, state.capacity);
         state.photons_total += n;
@@ -72,5 +72,5 @@ void main() {
             dispatch_cmd[l + 1u] = stop ? uvec4(0u, 0u, 1u, 0u) : dispatch_groups(state.read_count, pc.wg_side * pc.wg_side);
         }
     }
-    if (pc.mode == 1u) commit();
+    if (pc.mode == STATS_COMMIT) commit();
 }

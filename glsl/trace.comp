@@ -5,7 +5,7 @@
 // wrote. Tracing in compute rather than in the splat's vertex shader keeps the heavy arithmetic on every shader
 // core (GPUs such as the H100 run graphics stages on a few units only); the splat then only rasterizes.
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform TracePushBlock { TracePush pc; };
 #include "common/coverage.glsl"
 #include "common/photon.glsl"
 

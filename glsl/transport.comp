@@ -1,24 +1,19 @@
 #version 460
-// The exact transport's bookkeeping (one invocation; docs/design.md step 4): mode 0/1 begins a batch's waves (1 for
-// adaptive: nothing when the batch has no tile or aborted), mode 2 follows each wave (the appended children become
-// the next wave, with its dispatch-indirect arguments), mode 3 commits the batch (its energy account joins the
-// frame's and the splat draws its records) unless it aborted, in which case traversal's commit splits its tile.
-// Push: mode; rows = 1 when the batch may abort (adaptive traversal with batching); level: after a wave, the next
-// wave's index (its rays count to wave_rays there; the rays past the last wave are none: paths end at the cap).
+// The exact transport's bookkeeping (one invocation; docs/design.md step 4): TRANSPORT_BEGIN_DENSE or _ADAPTIVE
+// begins a batch's waves (adaptive: nothing when the batch has no tile or aborted), TRANSPORT_AFTER_WAVE follows each
+// wave (the appended children become the next wave, with its dispatch-indirect arguments), TRANSPORT_COMMIT commits
+// the batch (its energy account joins the frame's and the splat draws its records) unless it aborted, in which case
+// traversal's commit splits its tile. After a wave, `next_wave` is the wave it prepares (its rays count to
+// wave_rays there; the rays past the last wave are none: paths end at the cap).
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform TransportPushBlock { TransportPush pc; };
 
 layout(local_size_x = 1) in;
 
-const uint BEGIN_DENSE = 0u;
-const uint BEGIN_ADAPTIVE = 1u;
-const uint AFTER_WAVE = 2u;
-const uint COMMIT = 3u;
-
 void main() {
     bool aborted = state.aborted != 0u && state.batching != 0u;
-    if (pc.mode == BEGIN_DENSE || pc.mode == BEGIN_ADAPTIVE) {
-        bool none = pc.mode == BEGIN_ADAPTIVE && (state.start_level >= MAX_LEVELS || aborted);
+    if (pc.mode == TRANSPORT_BEGIN_DENSE || pc.mode == TRANSPORT_BEGIN_ADAPTIVE) {
+        bool none = pc.mode == TRANSPORT_BEGIN_ADAPTIVE && (state.start_level >= MAX_LEVELS || aborted);
         tstate.in_count = none ? 0u : min(state.emit_count, state.capacity);
         tstate.out_count = 0u;
         tstate.out_reserved = 0u;
@@ -31,18 +26,18 @@ void main() {
         if (tstate.in_count > 0u) tstate.waves += 1u;
         tstate.wave_rays_pairs[0].x += tstate.in_count;
         set_draw(0u, 0u);
-    } else if (pc.mode == AFTER_WAVE) {
-        tstate.in_count = aborted && pc.rows != 0u ? 0u : tstate.out_count;
+    } else if (pc.mode == TRANSPORT_AFTER_WAVE) {
+        tstate.in_count = aborted && pc.may_abort != 0u ? 0u : tstate.out_count;
         tstate.out_count = 0u;
         tstate.out_reserved = 0u;
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;
-        uint w = min(pc.level, MAX_INTERACTIONS);
+        uint w = min(pc.next_wave, MAX_INTERACTIONS);
         tstate.wave_rays_pairs[w >> 1u][w & 1u] += tstate.in_count;
     } else {
         tstate.in_count = 0u;
         wave_cmd = uvec4(0u, 0u, 1u, 0u);
-        if (aborted && pc.rows != 0u) {
+        if (aborted && pc.may_abort != 0u) {
             set_draw(0u, 0u);
             return;
         }

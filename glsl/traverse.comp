@@ -19,7 +19,7 @@
 // longest of four paths instead of all four in a row: on a GPU, where a level's few checked cells leave most
 // lanes idle, that is about 4x shorter; on a CPU device it is the same work, and early returns trace less.
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform TraversePushBlock { TraversePush pc; };
 #include "common/coverage.glsl"
 #include "common/photon.glsl"
 #include "common/transport.glsl"

@@ -15,7 +15,7 @@
 #define WAVE_TEXELS 1
 #endif
 #include "common/photon_bindings.glsl"
-#include "common/photon_push.glsl"
+layout(push_constant) uniform WavePushBlock { WavePush pc; };
 #include "common/coverage.glsl"
 #include "common/photon.glsl"
 #include "common/transport.glsl"
@@ -182,7 +182,7 @@ void main() {
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
     const bool diff = WAVE_DIFFERENTIAL;
     uint stride = diff ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
-    bool can_abort = pc.mode != 0u;
+    bool can_abort = pc.may_abort != 0u;
     // The transport state's scalars, read outside any branch: there a CPU driver loads a storage buffer's word once
     // for the SIMD group, inside a branch lane by lane.
     uint in_count = tstate.in_count, capacity = state.capacity;

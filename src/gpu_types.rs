@@ -275,25 +275,90 @@ impl TransportState {
     }
 }
 
-/// Push constants of the photon passes (glsl/common/photon_push.glsl).
+// Push constants of the photon passes: one struct per pass, each field with one meaning. The pipelines of the
+// photon passes share one layout, whose push range is the largest of these (PHOTON_PUSH_BYTES).
+
+/// Push constants of glsl/init.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct PhotonPush {
-    /// The traversal level (traverse, stats) or the dense level.
-    pub level: u32,
-    /// init: 0 frame start, 1 batch start, 2 dense; stats: 0 level, 1 last level (commit).
+pub struct InitPush {
+    /// INIT_FRAME, INIT_BATCH or INIT_DENSE (src/shader_consts.rs).
     pub mode: u32,
-    /// The traversal work-group side the dispatch arguments are computed for.
+    /// The traversal work-group side the first level's dispatch arguments are computed for.
     pub wg_side: u32,
-    /// Dense emission: the first row of this band.
+}
+
+/// Push constants of glsl/traverse.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TraversePush {
+    /// The level traversed.
+    pub level: u32,
+    /// The work-group side of the dispatch.
+    pub wg_side: u32,
+}
+
+/// Push constants of glsl/stats.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct StatsPush {
+    /// The level just traversed (or the dense level).
+    pub level: u32,
+    /// STATS_LEVEL, STATS_COMMIT or STATS_DENSE (src/shader_consts.rs).
+    pub mode: u32,
+    /// The work-group side the next level's dispatch arguments are computed for.
+    pub wg_side: u32,
+}
+
+/// Push constants of glsl/dense_emit.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct DenseEmitPush {
+    /// The dense level.
+    pub level: u32,
+    /// The first row of this band.
     pub row0: u32,
-    /// The splat: 1 dumps the photons into the debug buffer.
-    pub debug: u32,
-    /// Dense emission: the rows in this band.
+    /// The rows in this band.
     pub rows: u32,
-    /// The splat: dump only photons at this level or deeper.
+}
+
+/// Push constants of glsl/trace.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TracePush {
+    /// 1: dump the traced photons into the debug buffer.
+    pub debug: u32,
+    /// Dump only photons at this level or deeper.
     pub debug_min_level: u32,
-    pub pad: u32,
+}
+
+/// Push constants of glsl/transport.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TransportPush {
+    /// TRANSPORT_BEGIN_DENSE, TRANSPORT_BEGIN_ADAPTIVE, TRANSPORT_AFTER_WAVE or TRANSPORT_COMMIT
+    /// (src/shader_consts.rs).
+    pub mode: u32,
+    /// 1: the batch may abort (adaptive traversal with batching).
+    pub may_abort: u32,
+    /// After a wave: the index of the wave it prepares (its rays count to that wave's).
+    pub next_wave: u32,
+}
+
+/// Push constants of glsl/wave.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct WavePush {
+    /// 1: the batch may abort (adaptive traversal with batching).
+    pub may_abort: u32,
+}
+
+/// Push constants of glsl/splat_collapse.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SplatCollapsePush {
+    /// The coarse level of the flux texels added into the level below it.
+    pub level: u32,
 }
 
 /// Push constants of geometry.vert/.frag.
@@ -414,5 +479,5 @@ const _: () = {
     assert!(size_of::<MorphPush>() <= 128);
     assert!(size_of::<GeometryPush>() <= 128);
     // `wave_rays_pairs` holds waves 0 to MAX_INTERACTIONS and a pad.
-    assert!(MAX_INTERACTIONS % 2 == 0);
+    assert!(MAX_INTERACTIONS.is_multiple_of(2));
 };

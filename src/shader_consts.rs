@@ -225,6 +225,28 @@ pub const EB_DIRECT: u32 = 10;
 /// Bindings of the layout.
 pub const EB_COUNT: u32 = 11;
 
+// Pass modes: what a pass's `mode` push constant selects (the passes push these; the shaders compare with them).
+/// glsl/init.comp: frame start (clear the counters, push the root tile).
+pub const INIT_FRAME: u32 = 0;
+/// glsl/init.comp: batch start (pop a tile, write its level-0 candidates).
+pub const INIT_BATCH: u32 = 1;
+/// glsl/init.comp: a dense band.
+pub const INIT_DENSE: u32 = 2;
+/// glsl/stats.comp: after a traversal level.
+pub const STATS_LEVEL: u32 = 0;
+/// glsl/stats.comp: after the last level: commit the batch.
+pub const STATS_COMMIT: u32 = 1;
+/// glsl/stats.comp: a dense band's photons are all emitted.
+pub const STATS_DENSE: u32 = 2;
+/// glsl/transport.comp: begin a dense batch's waves.
+pub const TRANSPORT_BEGIN_DENSE: u32 = 0;
+/// glsl/transport.comp: begin an adaptive batch's waves (nothing when it has no tile or aborted).
+pub const TRANSPORT_BEGIN_ADAPTIVE: u32 = 1;
+/// glsl/transport.comp: after a wave: its appended children become the next wave.
+pub const TRANSPORT_AFTER_WAVE: u32 = 2;
+/// glsl/transport.comp: commit the batch.
+pub const TRANSPORT_COMMIT: u32 = 3;
+
 // Specialization constants: each GLSL `layout(constant_id = NAME_ID) const ... NAME` takes its ID from here, and
 // the passes specialize it by the same constant; build.rs fails a shader whose constant NAME has no NAME_ID here
 // or another ID.

@@ -4,7 +4,9 @@
 
 use super::begin_rendering;
 use crate::bvh::BvhLayout;
-use crate::gpu_types::PhotonPush;
+use crate::gpu_types::{
+    DenseEmitPush, InitPush, SplatCollapsePush, StatsPush, TracePush, TransportPush, TraversePush, WavePush,
+};
 use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
 use crate::vk::pipeline::LazyPipeline;
@@ -134,25 +136,46 @@ impl PhotonBindings<'_> {
     }
 }
 
+/// Modes of init.comp (src/shader_consts.rs).
 pub mod init_mode {
-    pub const FRAME: u32 = 0;
-    pub const BATCH: u32 = 1;
-    pub const DENSE: u32 = 2;
+    pub use crate::shaders::consts::{INIT_BATCH as BATCH, INIT_DENSE as DENSE, INIT_FRAME as FRAME};
 }
 
+/// Modes of stats.comp (src/shader_consts.rs).
 pub mod stats_mode {
-    pub const LEVEL: u32 = 0;
-    pub const COMMIT: u32 = 1;
-    pub const DENSE: u32 = 2;
+    pub use crate::shaders::consts::{STATS_COMMIT as COMMIT, STATS_DENSE as DENSE, STATS_LEVEL as LEVEL};
 }
 
-/// Modes of transport.comp.
+/// Modes of transport.comp (src/shader_consts.rs).
 pub mod transport_mode {
-    pub const BEGIN_DENSE: u32 = 0;
-    pub const BEGIN_ADAPTIVE: u32 = 1;
-    pub const AFTER_WAVE: u32 = 2;
-    pub const COMMIT: u32 = 3;
+    pub use crate::shaders::consts::{
+        TRANSPORT_AFTER_WAVE as AFTER_WAVE, TRANSPORT_BEGIN_ADAPTIVE as BEGIN_ADAPTIVE,
+        TRANSPORT_BEGIN_DENSE as BEGIN_DENSE, TRANSPORT_COMMIT as COMMIT,
+    };
 }
+
+/// The push range of the photon passes' shared layout: the largest of their push structs.
+const PHOTON_PUSH_BYTES: usize = {
+    let sizes = [
+        std::mem::size_of::<InitPush>(),
+        std::mem::size_of::<TraversePush>(),
+        std::mem::size_of::<StatsPush>(),
+        std::mem::size_of::<DenseEmitPush>(),
+        std::mem::size_of::<TracePush>(),
+        std::mem::size_of::<TransportPush>(),
+        std::mem::size_of::<WavePush>(),
+        std::mem::size_of::<SplatCollapsePush>(),
+    ];
+    let mut max = 0;
+    let mut i = 0;
+    while i < sizes.len() {
+        if sizes[i] > max {
+            max = sizes[i];
+        }
+        i += 1;
+    }
+    max
+};
 
 pub struct PhotonPasses {
     device: Arc<Device>,
@@ -196,7 +219,7 @@ pub struct TraverseShape {
 impl PhotonPasses {
     /// `flux_format`: the caustic flux map's format (R32F where it can be blended).
     pub fn new(device: &Arc<Device>, flux_format: vk::Format) -> VkResult<Self> {
-        let push = std::mem::size_of::<PhotonPush>() as u32;
+        let push = PHOTON_PUSH_BYTES as u32;
         let binds = kinds(&LAYOUT);
         let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &binds, push);
         let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
@@ -348,7 +371,7 @@ impl PhotonPasses {
 
     pub fn init(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, wg: u32) {
         self.init.bind(cmd, &b.binds());
-        self.init.push(cmd, &PhotonPush { mode, wg_side: wg, ..Default::default() });
+        self.init.push(cmd, &InitPush { mode, wg_side: wg });
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
     }
 
@@ -362,7 +385,7 @@ impl PhotonPasses {
     ) -> VkResult<()> {
         let p = self.traverse_pipeline(shape)?;
         p.bind_checked(cmd, &b.binds())?;
-        p.push(cmd, &PhotonPush { level, wg_side: shape.wg, ..Default::default() });
+        p.push(cmd, &TraversePush { level, wg_side: shape.wg });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
         Ok(())
     }
@@ -378,7 +401,7 @@ impl PhotonPasses {
     ) -> VkResult<()> {
         let (wg, p) = (shape.wg, self.traverse_pipeline(shape)?);
         p.bind_checked(cmd, &b.binds())?;
-        p.push(cmd, &PhotonPush { level, wg_side: wg, ..Default::default() });
+        p.push(cmd, &TraversePush { level, wg_side: wg });
         let groups = count.div_ceil(wg * wg);
         if groups > 0 {
             let gx = groups.min(65535);
@@ -389,7 +412,7 @@ impl PhotonPasses {
 
     pub fn stats(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, mode: u32, wg: u32) {
         self.stats.bind(cmd, &b.binds());
-        self.stats.push(cmd, &PhotonPush { level, mode, wg_side: wg, ..Default::default() });
+        self.stats.push(cmd, &StatsPush { level, mode, wg_side: wg });
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
     }
 
@@ -404,7 +427,7 @@ impl PhotonPasses {
     ) -> VkResult<()> {
         let p = self.dense_emit.get()?;
         p.bind(cmd, &b.binds());
-        p.push(cmd, &PhotonPush { level, row0, rows, ..Default::default() });
+        p.push(cmd, &DenseEmitPush { level, row0, rows });
         let n = LEVEL0_RES << level;
         unsafe { self.device.cmd_dispatch(cmd, n.div_ceil(TILE_WG), rows.div_ceil(TILE_WG), 1) };
         Ok(())
@@ -415,9 +438,7 @@ impl PhotonPasses {
     pub fn trace(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, debug: Option<u32>) -> VkResult<()> {
         let p = self.trace.get()?;
         p.bind(cmd, &b.binds());
-        let push =
-            PhotonPush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0), ..Default::default() };
-        p.push(cmd, &push);
+        p.push(cmd, &TracePush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0) });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, TRACE_OFFSET) };
         Ok(())
     }
@@ -434,8 +455,7 @@ impl PhotonPasses {
     ) -> VkResult<()> {
         let p = self.transport.get()?;
         p.bind(cmd, &b.binds());
-        let push = PhotonPush { mode, rows: may_abort as u32, level: next_wave, ..Default::default() };
-        p.push(cmd, &push);
+        p.push(cmd, &TransportPush { mode, may_abort: may_abort as u32, next_wave });
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
         Ok(())
     }
@@ -467,7 +487,7 @@ impl PhotonPasses {
             binds.swap(PB_RAYS_IN as usize, PB_RAYS_OUT as usize);
         }
         p.bind_checked(cmd, &binds)?;
-        p.push(cmd, &PhotonPush { mode: may_abort as u32, ..Default::default() });
+        p.push(cmd, &WavePush { may_abort: may_abort as u32 });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
         Ok(())
     }
@@ -479,7 +499,6 @@ impl PhotonPasses {
         let Some(p) = p.as_ref() else { return Ok(()) };
         let p = p.get()?;
         p.bind(cmd, &b.binds());
-        p.push(cmd, &PhotonPush::default());
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
         Ok(())
     }
@@ -488,7 +507,7 @@ impl PhotonPasses {
     pub fn splat_collapse(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, res: u32) -> VkResult<()> {
         let p = self.splat_collapse.get()?;
         p.bind(cmd, &b.binds());
-        p.push(cmd, &PhotonPush { level, ..Default::default() });
+        p.push(cmd, &SplatCollapsePush { level });
         let groups = (res >> (level - 1)).div_ceil(TILE_WG);
         unsafe { self.device.cmd_dispatch(cmd, groups, groups, 1) };
         Ok(())
@@ -499,7 +518,6 @@ impl PhotonPasses {
         let p = self.splat.get()?;
         begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
         p.bind(cmd, &b.binds());
-        p.push(cmd, &PhotonPush::default());
         unsafe {
             self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16);
             self.device.cmd_end_rendering(cmd);
