@@ -17,10 +17,16 @@ fn example(name: &str) -> PathBuf {
 }
 
 fn run(name: &str, args: &[&str]) -> String {
+    run_env(name, args, &[])
+}
+
+/// [`run`] with more environment variables.
+fn run_env(name: &str, args: &[&str], env: &[(&str, &str)]) -> String {
     let out = Command::new(example(name))
         .args(args)
         .env("CAUSTICS_VALIDATION", "1")
         .env("RUST_LOG", "warn")
+        .envs(env.iter().copied())
         .output()
         .expect("run the example");
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
@@ -54,14 +60,8 @@ fn embed_example_matches_render() {
 /// image of the same frame (the example fails itself on a difference or on any validation message wgpu reports).
 #[test]
 fn wgpu_example_matches_render() {
-    let out = Command::new(example("wgpu"))
-        .args(["--headless", &common::scene("sphere.toml")])
-        .env("CAUSTICS_VALIDATION", "1")
-        .env("VK_LAYER_ENABLES", "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT")
-        .output()
-        .expect("run the wgpu example");
-    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "example wgpu failed ({:?}):\n{text}", out.status.code());
+    let sync = ("VK_LAYER_ENABLES", "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT");
+    let text = run_env("wgpu", &["--headless", &common::scene("sphere.toml")], &[sync]);
     assert!(text.contains(" 0 of 98304 bytes differ from Renderer::render"), "{text}");
     assert!(!text.contains("wgpu_hal::vulkan::instance"), "a validation message:\n{text}");
 }
