@@ -5,6 +5,7 @@
 //! - Some shaders are compiled in several variants with extra macros (see VARIANTS).
 //! - A compile error fails the build with the file, the line and glslang's message.
 //!
+//! - Each shader's descriptors are checked against the Rust table of the layout it binds by (build/layouts.rs).
 //! - The GPU structs are written once, in Rust (structs::SOURCES: src/gpu_types.rs, src/bvh/records.rs): build/structs.rs writes
 //!   their GLSL (`#include "generated/gpu_structs.glsl"`) and asserts their offsets on both sides, in Rust and in
 //!   every compiled shader's SPIR-V.
@@ -16,6 +17,8 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+#[path = "build/layouts.rs"]
+mod layouts;
 #[path = "build/spirv.rs"]
 mod spirv;
 #[path = "build/structs.rs"]
@@ -135,6 +138,15 @@ fn main() {
         .filter(|p| kind_of(p).is_some())
         .collect();
     sources.sort();
+    let layouts: Vec<layouts::Layout> = layouts::LAYOUTS
+        .iter()
+        .map(|&(prefix, file, name)| {
+            println!("cargo:rerun-if-changed={file}");
+            let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{file}: {e}"));
+            let kinds = layouts::parse(file, &text, name, &consts).unwrap_or_else(|e| panic!("{e}"));
+            layouts::Layout { prefix, origin: format!("{file} {name}"), kinds }
+        })
+        .collect();
     for entry in walk(&glsl) {
         println!("cargo:rerun-if-changed={}", entry.display());
         let text = std::fs::read_to_string(&entry).unwrap_or_default();
@@ -205,6 +217,13 @@ fn main() {
                     words.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
                 let shader = format!("{} ({name})", src.display());
                 if let Err(e) = structs::check_spirv(&shader, &spv_words, &structs) {
+                    errors.push(e);
+                    continue;
+                }
+                let text = layouts::with_includes(&glsl, src, &mut Vec::new());
+                let checked = layouts::layout_of(&shader, &text, &layouts)
+                    .and_then(|l| l.map_or(Ok(()), |l| layouts::check(&shader, &spv_words, l)));
+                if let Err(e) = checked {
                     errors.push(e);
                     continue;
                 }

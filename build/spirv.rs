@@ -150,7 +150,9 @@ impl Module {
                 }
                 _ => continue,
             };
-            m.bindings.insert((set, binding), (kind, m.names.get(&id).cloned().unwrap_or_default()));
+            // A block without an instance name (`buffer SplatBuf { ... };`) is named by its block.
+            let name = m.names.get(&id).filter(|n| !n.is_empty()).or_else(|| m.names.get(&ty)).cloned();
+            m.bindings.insert((set, binding), (kind, name.unwrap_or_default()));
         }
         Ok(m)
     }

@@ -291,6 +291,77 @@ pub fn parse(
     Ok(())
 }
 
+/// The GPU structs that travel as `uvec4` words, in queues a pass may read as texels (a ray queue): build.rs writes
+/// `T T_from_words(uvec4 w0, ...)` and `void T_to_words(T v, out uvec4 w0, ...)` for each, so that the packing
+/// follows the one definition. Each must be a whole number of 16-byte words of 4-byte scalars and vectors.
+pub const WORD_STRUCTS: &[&str] = &["GpuRay"];
+
+/// The components of a field of a word struct: (the GLSL type of its bits, components, whether they are floats).
+fn word_components(glsl_type: &str) -> Option<(&'static str, u32, bool)> {
+    Some(match glsl_type {
+        "float" => ("uint", 1, true),
+        "uint" => ("uint", 1, false),
+        "vec2" => ("uvec2", 2, true),
+        "uvec2" => ("uvec2", 2, false),
+        "vec3" => ("uvec3", 3, true),
+        "vec4" => ("uvec4", 4, true),
+        "uvec4" => ("uvec4", 4, false),
+        _ => return None,
+    })
+}
+
+/// The word packers of [`WORD_STRUCTS`] (GLSL), or why a struct cannot be one.
+pub fn word_functions(s: &Struct) -> Result<String, String> {
+    if !s.size.is_multiple_of(16) {
+        return Err(format!("{}: {} bytes are not whole 16-byte words", s.name, s.size));
+    }
+    let words = s.size / 16;
+    let word = |byte: u32| format!("w{}.{}", byte / 16, ["x", "y", "z", "w"][(byte % 16 / 4) as usize]);
+    let params: Vec<String> = (0..words).map(|i| format!("uvec4 w{i}")).collect();
+    let outs: Vec<String> = (0..words).map(|i| format!("out uvec4 w{i}")).collect();
+    let mut from = format!(
+        "{0} {0}_from_words({1}) {{
+    {0} v;
+",
+        s.name,
+        params.join(", ")
+    );
+    let mut to = format!(
+        "void {}_to_words({} v, {}) {{
+",
+        s.name,
+        s.name,
+        outs.join(", ")
+    );
+    for i in 0..words {
+        writeln!(to, "    w{i} = uvec4(0u);").unwrap();
+    }
+    for f in &s.fields {
+        let (ctor, n, float) = word_components(&f.glsl_type)
+            .filter(|_| f.array.is_none())
+            .ok_or_else(|| format!("{}.{}: a word struct holds 4-byte scalars and vectors only", s.name, f.name))?;
+        let parts: Vec<String> = (0..n).map(|c| word(f.offset + 4 * c)).collect();
+        let bits = if n == 1 { parts[0].clone() } else { format!("{ctor}({})", parts.join(", ")) };
+        let value = if float { format!("uintBitsToFloat({bits})") } else { bits };
+        writeln!(from, "    v.{} = {value};", f.name).unwrap();
+        for (c, part) in parts.iter().enumerate() {
+            let comp = if n == 1 { format!("v.{}", f.name) } else { format!("v.{}[{c}]", f.name) };
+            let comp = if float { format!("floatBitsToUint({comp})") } else { comp };
+            writeln!(to, "    {part} = {comp};").unwrap();
+        }
+    }
+    from.push_str(
+        "    return v;
+}
+",
+    );
+    to.push_str(
+        "}
+",
+    );
+    Ok(format!("// {} as {words} uvec4 words (WORD_STRUCTS, build/structs.rs).\n{from}{to}", s.name))
+}
+
 /// The GLSL declarations of `structs`.
 pub fn glsl(structs: &[Struct], sources: &[&str]) -> String {
     let mut out = format!(
@@ -312,6 +383,9 @@ pub fn glsl(structs: &[Struct], sources: &[&str]) -> String {
             writeln!(out, "    {} {}{array};  // byte {}", f.glsl_type, f.name, f.offset).unwrap();
         }
         out.push_str("};\n");
+        if WORD_STRUCTS.contains(&s.name.as_str()) {
+            out.push_str(&word_functions(s).unwrap_or_else(|e| panic!("build/structs.rs WORD_STRUCTS: {e}")));
+        }
     }
     out.push_str("#endif\n");
     out

@@ -67,18 +67,18 @@ void splat_coarse(vec2 c0, float flux, SplatShape k0, ivec2 size, uint m) {
 void main() {
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + gl_LocalInvocationIndex;
     ivec2 size = ivec2(u_frame.receiver_view.extent.xy);
-    vec4 s = vec4(0.0);
+    GpuSplat s = GpuSplat(vec2(0.0), 0.0, 0.0);
     bool valid = false;
     if (i < draw_cmd.x) {
         s = splats[draw_cmd.z + i];
-        valid = s.w > 0.0 && s.x >= 0.0 && s.y >= 0.0 && s.x <= float(size.x) && s.y <= float(size.y);
+        valid = s.shape > 0.0 && all(greaterThanEqual(s.texel, vec2(0.0))) && all(lessThanEqual(s.texel, vec2(size)));
     }
-    SplatShape k = splat_shape(s.w);
+    SplatShape k = splat_shape(s.shape);
     vec2 e = splat_extent(k);
     if (valid) {
         uint m = splat_level(e, size);
         if (m > 0u) {
-            splat_coarse(s.xy, s.z, k, size, m);
+            splat_coarse(s.texel, s.flux, k, size, m);
             valid = false;  // splatted: the level-0 taps (and the tiled window) leave it out
         }
     }
@@ -86,9 +86,9 @@ void main() {
     ivec2 lo = ivec2(0), hi = ivec2(-1);
     float flux = 0.0;
     if (valid) {
-        flux = s.z * splat_norm(s.xy, k, size);
-        lo = max(ivec2(ceil(s.xy - e - 0.5)), ivec2(0));
-        hi = min(ivec2(floor(s.xy + e - 0.5)), size - 1);
+        flux = s.flux * splat_norm(s.texel, k, size);
+        lo = max(ivec2(ceil(s.texel - e - 0.5)), ivec2(0));
+        hi = min(ivec2(floor(s.texel + e - 0.5)), size - 1);
     }
 #ifdef SPLAT_TILED
     uint t = gl_LocalInvocationIndex;
@@ -105,7 +105,7 @@ void main() {
         atomicMax(s_hi_x, hi.x);
         atomicMax(s_hi_y, hi.y);
     }
-    if (t == 0u && valid) s_first = ivec2(floor(s.xy)) - SPLAT_TILE / 2;
+    if (t == 0u && valid) s_first = ivec2(floor(s.texel)) - SPLAT_TILE / 2;
     barrier();
     if (s_hi_x < 0) return;  // uniform: no record of this group has a tap
     ivec2 glo = ivec2(s_lo_x, s_lo_y), ghi = ivec2(s_hi_x, s_hi_y);
@@ -118,10 +118,10 @@ void main() {
     // Line by line (rows, or columns when the shear runs along y), each over its own taps.
     bool sy = k.shear_y;
     for (int j = sy ? lo.x : lo.y; j <= (sy ? hi.x : hi.y); j++) {
-        ivec2 line = splat_line(s.xy, k, j, sy ? ivec2(lo.y, hi.y) : ivec2(lo.x, hi.x));
+        ivec2 line = splat_line(s.texel, k, j, sy ? ivec2(lo.y, hi.y) : ivec2(lo.x, hi.x));
         for (int i = line.x; i <= line.y; i++) {
             ivec2 p = sy ? ivec2(j, i) : ivec2(i, j);
-            float w = splat_weight(p, s.xy, k);
+            float w = splat_weight(p, s.texel, k);
             if (w == 0.0) continue;
             float v = flux * w;
 #ifdef SPLAT_TILED

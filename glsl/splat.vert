@@ -8,11 +8,11 @@ layout(location = 1) flat out vec4 v_splat;  // center (texels), radii rx, ry (t
 layout(location = 2) flat out vec2 v_shear;  // shear, and 1 when it moves the columns (SplatShape)
 
 void main() {
-    vec4 s = splats[gl_VertexIndex];
+    GpuSplat s = splats[gl_VertexIndex];
     vec2 size = u_frame.receiver_view.extent.xy;
-    SplatShape k = splat_shape(s.w > 0.0 ? s.w : 1.0);
-    if (s.w > 0.0) {
-        gl_Position = vec4(s.xy / size * 2.0 - 1.0, 0.5, 1.0);
+    SplatShape k = splat_shape(s.shape > 0.0 ? s.shape : 1.0);
+    if (s.shape > 0.0) {
+        gl_Position = vec4(s.texel / size * 2.0 - 1.0, 0.5, 1.0);
         vec2 e = splat_extent(k);
         gl_PointSize = 2.0 * max(e.x, e.y);
     } else {
@@ -20,7 +20,7 @@ void main() {
         gl_PointSize = 1.0;
     }
     // The weights' normalization; at an edge the fragments that the map clips away are given back to the ones on it.
-    v_flux = s.w > 0.0 ? s.z * splat_norm(s.xy, k, ivec2(size)) : 0.0;
-    v_splat = vec4(s.xy, k.r);
+    v_flux = s.shape > 0.0 ? s.flux * splat_norm(s.texel, k, ivec2(size)) : 0.0;
+    v_splat = vec4(s.texel, k.r);
     v_shear = vec2(k.s, k.shear_y ? 1.0 : 0.0);
 }

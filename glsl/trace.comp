@@ -21,7 +21,7 @@ void main() {
     Hit h = trace_cell(level, xy);
     uint r = cell_splat_radius(cell);
     bool ok = h.status == HIT_OK;
-    splats[j] = vec4(h.map_px, ok ? h.flux : 0.0, ok ? float(r) : 0.0);
+    splats[j] = GpuSplat(h.map_px, ok ? h.flux : 0.0, ok ? float(r) : 0.0);
     if (pc.debug != 0u && level >= pc.debug_min_level) {
         uint k = atomicAdd(debug_header.x, 1u);
         if (k < debug_header.y) {

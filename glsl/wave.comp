@@ -48,20 +48,54 @@ shared uint s_ray_base;  // where the work group's children go in rays_out, or N
 shared uint s_rec_base;  // where its records go in splats, or NO_BASE
 const uint NO_BASE = 0xFFFFFFFFu;
 
-// A ray is RAY_VEC4S_CELL vec4s, (origin, throughput), (direction, bits(meta)), or with differential footprints
-// RAY_VEC4S_DIFFERENTIAL, the two and the packed differentials (diff_pack, glsl/common/transport.glsl).
-void store_ray(uint k, uint stride, vec3 o, float w, vec3 d, uint meta, RayDiff r, float side) {
-    uint b = stride * k;
-    rays_out[b] = vec4(o, w);
-    rays_out[b + 1u] = vec4(d, uintBitsToFloat(meta));
-    if (stride > RAY_VEC4S_CELL) rays_out[b + 2u] = diff_pack(r, d, side);
-}
+// A child ray: the ray, its differentials, and whether it travels inside glass (else outside it). The work group
+// appends the two kinds as two runs, so that neighbouring rays of the next wave tend to take the same way through
+// the BVH (a SIMD group of a CPU driver, or a GPU's, walks as long as its longest ray).
+struct Child {
+    GpuRay ray;
+    RayDiff diff;
+    bool inside;
+};
 
-#ifdef WAVE_TEXELS
-vec4 ray_get(uint k) { return uintBitsToFloat(texelFetch(rays_in_texels, int(k))); }
-#else
-vec4 ray_get(uint k) { return rays_in[k]; }
-#endif
+// What one invocation produces: up to two child rays and one splat record. The children are named, not an array:
+// a CPU driver stores an element of a local array indexed per invocation lane by lane. Child 0 is the reflected
+// branch when it is traced, else the refracted one; child 1 the refracted one when both are.
+struct Outcome {
+    uint n_child;
+    Child c0, c1;
+    bool rec;          // a splat record
+    GpuSplat record;
+    float rec_flux;    // its flux, relative to the light's intensity (the account's unit)
+    bool one_event;    // its path met exactly one interaction
+};
+
+// The ray an invocation traces, and its photon.
+struct Traced {
+    GpuRay ray;
+    RayDiff diff;
+    uint pidx;    // the photon's entry; a ray carries it counted from the buffer's top (the batch's photons fill it
+                  // from there down), which a 24-bit field holds for any batch (Settings::batch_photons)
+    uvec2 cell;   // the photon's cell, read once
+    float phi;    // the photon's flux / intensity
+    float side;   // the photon's cell side: the scale of its packed differentials
+    uint depth;   // the ray's interactions so far: the wave's own index, since wave k traces what wave k - 1
+                  // appended (wave 0 the photons), so every ray of a wave has the same
+    bool lod;     // a weak branch carried for the photon's block
+};
+
+// The invocation's shares of the account's terms (ACC_*), summed per work group at the end.
+float acc[ACC_TERMS];
+
+// A queue entry (GpuRay, src/gpu_types.rs): the ray's words, then with differential footprints their packed
+// word (diff_pack, glsl/common/transport.glsl).
+void store_ray(uint k, uint stride, Child c, float side) {
+    uint b = stride * k;
+    uvec4 w0, w1;
+    GpuRay_to_words(c.ray, w0, w1);
+    rays_out[b] = w0;
+    rays_out[b + 1u] = w1;
+    if (stride > RAY_VEC4S_CELL) rays_out[b + 2u] = diff_pack(c.diff, c.ray.dir, side);
+}
 
 // Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.weak_fraction of its
 // photon's flux is traced once per block instead of by each photon in the block. At a split of depth d the block's
@@ -76,7 +110,8 @@ vec4 ray_get(uint k) { return rays_in[k]; }
 //   smaller than the block) share a block consistently;
 // - a larger photon (a cluster) shares with its three siblings when traversal found each of them a photon of its
 //   level too, or empty (cell_siblings, glsl/common/types.glsl); otherwise it traces its own weak branches.
-const uint LOD_RAY = 0x80000000u;  // meta bit: a weak branch carried for its block (the depth stays in the 6 bits above PHOTON_INDEX_BITS)
+// The meta bit of a weak branch carried for its block (the depth stays in the 6 bits above PHOTON_INDEX_BITS).
+const uint LOD_RAY = 0x80000000u;
 
 // Whether the photon shares the maximal level's blocks (else its siblings, if traversal marked any).
 bool weak_fine(uvec2 cell) { return !weak_by_siblings(cell_level(cell)); }
@@ -177,269 +212,207 @@ void account_add(uint term, float v) {
     if (hi + carry != 0u) atomicAdd(tstate.batch_account[term].y, hi + carry);
 }
 
-void main() {
-    uint lid = gl_LocalInvocationIndex;
-    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
+// The ray invocation i traces: wave 0 makes it from its photon's cell, a bounce wave reads it from the queue.
+Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     const bool diff = WAVE_DIFFERENTIAL;
-    uint stride = diff ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
-    bool can_abort = pc.may_abort != 0u;
-    // The transport state's scalars, read outside any branch: there a CPU driver loads a storage buffer's word once
-    // for the SIMD group, inside a branch lane by lane.
-    uint in_count = tstate.in_count, capacity = state.capacity;
-    uint queue_capacity = tstate.queue_capacity, record_capacity = tstate.record_capacity;
-    bool aborted = state.aborted != 0u;
-    if (lid == 0u) {
-        s_slots = 0u;
+    Traced t;
+    t.diff.dpx = t.diff.dpy = t.diff.ddx = t.diff.ddy = vec3(0.0);
+    t.lod = false;
+    if (WAVE_PRIMARY) {
+        t.pidx = capacity - in_count + i;
+        t.cell = photon_at(t.pidx);
+        cell_ray(cell_level(t.cell), cell_xy(t.cell), t.ray.origin, t.ray.dir);
+        if (diff) t.diff = cell_ray_diff(cell_level(t.cell), cell_xy(t.cell), t.ray.dir);
+        t.ray.throughput = 1.0;
+        t.ray.meta = 0u;
+        t.depth = 0u;
+    } else {
+        t.ray = GpuRay_from_words(ray_word_in(stride * i), ray_word_in(stride * i + 1u));
+        uint m = t.ray.meta;
+        t.pidx = capacity - 1u - (m & ((1u << PHOTON_INDEX_BITS) - 1u));
+        t.depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
+        t.lod = (m & LOD_RAY) != 0u;
+        t.cell = photon_at(t.pidx);
     }
-    float acc[ACC_TERMS];
-    for (uint k = 0u; k < ACC_TERMS; k++) acc[k] = 0.0;
-    barrier();
+    t.phi = cell_measure(cell_level(t.cell), cell_xy(t.cell));
+    t.side = diff ? cell_side(cell_level(t.cell)) : 1.0;
+    if (diff && !WAVE_PRIMARY) t.diff = diff_unpack(ray_word_in(stride * i + 2u), t.ray.dir, t.side);
+    return t;
+}
 
-    // What this invocation produces: up to two child rays and one splat record. The children are named, not an
-    // array: a CPU driver stores an element of a local array indexed per invocation lane by lane.
-    // Child 0 is the reflected branch when it is traced, else the refracted one; child 1 the refracted one when
-    // both are.
-    uint n_child = 0u;
-    vec3 c0_o = vec3(0.0), c0_d = vec3(0.0), c1_o = vec3(0.0), c1_d = vec3(0.0);
-    float c0_w = 0.0, c1_w = 0.0;
-    uint c0_meta = 0u, c1_meta = 0u;
-    RayDiff rdf;
-    rdf.dpx = rdf.dpy = rdf.ddx = rdf.ddy = vec3(0.0);
-    RayDiff c0_r = rdf, c1_r = rdf;
-    bool rec = false;
-    float rec_flux = 0.0;
-    bool one_event = false;
-    vec4 record = vec4(0.0);
-    float phi = 0.0;  // the photon's flux / intensity
-    float ray_side = 1.0;  // the photon's cell side: the scale of its packed differentials
-    // Whether each child travels inside glass (else outside it): the work group appends the two kinds as two runs,
-    // so that neighbouring rays of the next wave tend to take the same way through the BVH (a SIMD group of a CPU
-    // driver, or a GPU's, walks as long as its longest ray).
-    bool c0_inside = false, c1_inside = false;
-    // The ray's interactions so far: the wave's own index, since wave k traces what wave k - 1 appended (wave 0 the
-    // photons), so every ray of a wave has the same.
-    uint depth = 0u;
-    bool live = i < in_count && !(can_abort && aborted);
-    if (live) {
-        vec3 ro, rd;
-        float w;
-        uint pidx;  // the photon's entry; a ray carries it counted from the buffer's top (the batch's photons
-                    // fill it from there down), which a 24-bit field holds for any batch (Settings::batch_photons)
-        uvec2 cell;        // the photon's cell, read once
-        bool lod = false;  // a weak branch carried for the photon's block
+// A ray of a bounce wave reaches a diffuse receiver at p: its splat record. (Wave 0's rays have met nothing yet.)
+void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
+    GpuView rv = u_frame.receiver_view;
+    uint r = t.lod ? side_splat_radius(weak_widen(t.cell) * cell_side(cell_level(t.cell))) : cell_splat_radius(t.cell);
+    // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius traversal
+    // gave it (its children's spread): the parallelogram the whole cell covers where it lands, which a round splat
+    // of the spread fits only where that is round.
+    float shape = WAVE_DIFFERENTIAL ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
+                                    : float(r);
+    o.record = GpuSplat(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_intensity, shape);
+    o.rec = true;
+    o.rec_flux = flux;
+    o.one_event = t.depth == 1u;
+}
+
+// Whether a Fresnel branch of weight wb is traced: cut below the flux threshold, left to its block's carrier when
+// it is weak (`weak`: the weak fraction) and this photon does not carry it, else kept.
+bool branch_kept(float phi, float wb, float cut, float weak, bool carrier, float scale) {
+    if (!(wb > 0.0)) return false;
+    if (wb < cut) {
+        acc[ACC_THRESHOLD] += phi * wb;
+        return false;
+    }
+    if (wb < weak && !carrier) {
+        acc[ACC_WEAK_LEFT] += phi * wb;
+        return false;
+    }
+    if (wb < weak) acc[ACC_WEAK_CARRIED] += phi * wb * (scale - 1.0);
+    return true;
+}
+
+// The Fresnel split of the ray t (weight w) at a dielectric hit at p: its reflected and refracted children, each
+// traced, cut, or left to its block's carrier (a carried one holds its block's share).
+void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, float w, uint capacity,
+              inout Outcome o) {
+    const bool diff = WAVE_DIFFERENTIAL;
+    vec3 rd = t.ray.dir;
+    Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
+    if (!s.ok) {
+        acc[ACC_LOST] += t.phi * w;
+        return;
+    }
+    float wr = w * s.F, wt = w * (1.0 - s.F);
+    // A carried weak branch holds its block's share: it is cut where its siblings' would be.
+    float widen = weak_widen(t.cell);
+    float cut = u_frame.flux_threshold * (t.lod ? widen * widen : 1.0);
+    float weak = !t.lod && weak_branches_apply(t.cell) ? u_frame.weak_fraction : 0.0;
+    float scale = 1.0;
+    bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak) ? weak_carrier(t.cell, t.phi, t.depth, scale)
+                                                                         : false;
+    uint meta = (capacity - 1u - t.pidx) | ((t.depth + 1u) << PHOTON_INDEX_BITS) | (t.lod ? LOD_RAY : 0u);
+    bool keep_r = branch_kept(t.phi, wr, cut, weak, carrier, scale);
+    bool keep_t = branch_kept(t.phi, wt, cut, weak, carrier, scale);
+    bool carried_r = wr < weak, carried_t = wt < weak;
+    uint m_r = carried_r ? meta | LOD_RAY : meta, m_t = carried_t ? meta | LOD_RAY : meta;
+    Child r = Child(GpuRay(s.p_refl, carried_r ? wr * scale : wr, normalize(s.refl), m_r), rdf, false);
+    Child tr = Child(GpuRay(s.p_refr, carried_t ? wt * scale : wt, normalize(s.refr), m_t), rdf, false);
+    if (diff) {
+        // Both children inherit dP; their dD follow their branch, with the interpolated normal's derivative where
+        // the branch used it.
+        vec3 dnx = vec3(0.0), dny = vec3(0.0);
+        if (s.k_refl != 0.0 || s.k_refr != 0.0) bvh_shading_dn(hit, ns, rdf.dpx, rdf.dpy, dnx, dny);
+        r.diff.ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
+        r.diff.ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
+        if (carried_r) diff_scale(r.diff, widen);
+        tr.diff.ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, tr.ray.dir, s.eta);
+        tr.diff.ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, tr.ray.dir, s.eta);
+        if (carried_t) diff_scale(tr.diff, widen);
+    }
+    // ng faces out of the glass.
+    r.inside = dot(r.ray.dir, ng) < 0.0;
+    tr.inside = dot(tr.ray.dir, ng) < 0.0;
+    o.n_child = uint(keep_r) + uint(keep_t);
+    o.c0 = keep_r ? r : tr;
+    o.c1 = tr;
+}
+
+// Trace the ray t: it escapes, reaches a receiver (a record in a bounce wave), meets the interaction cap, or splits
+// at a dielectric; absorption in tinted glass first takes its share of a segment that ran through the glass.
+void interact(Traced t, uint capacity, inout Outcome o) {
+    const bool diff = WAVE_DIFFERENTIAL;
+    vec3 ro = t.ray.origin, rd = t.ray.dir;
+    float w = t.ray.throughput;
+    RayDiff rdf = t.diff;
+    SceneHit hit;
+    if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) {
+        acc[ACC_ESCAPED] += t.phi * w;
+        return;
+    }
+    vec3 p = bvh_hit_point(hit);
+    bool specular = inst_is_dielectric(hit.inst);
+    // The normals, once: the absorption test and the interface both need them.
+    vec3 ng = vec3(0.0), ns = vec3(0.0);
+    if (specular || (diff && t.depth > 0u)) bvh_normals(hit, ng, ns);
+    // The differentials move to the hit, in the plane of its triangle.
+    if (diff) diff_transfer(rdf, rd, dot(p - ro, rd), ng);
+    float sigma = inst_sigma(hit.inst);
+    if (specular && sigma > 0.0 && dot(rd, ng) > 0.0) {
+        // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation, exactly
+        // (no sampling).
+        float keep = exp(-sigma * distance(p, ro));
+        acc[ACC_ABSORBED] += t.phi * w * (1.0 - keep);
+        w *= keep;
+    }
+    if (!specular) {
         if (WAVE_PRIMARY) {
-            pidx = capacity - in_count + i;
-            cell = photon_at(pidx);
-            cell_ray(cell_level(cell), cell_xy(cell), ro, rd);
-            if (diff) rdf = cell_ray_diff(cell_level(cell), cell_xy(cell), rd);
-            w = 1.0;
-            depth = 0u;
-            phi = cell_measure(cell_level(cell), cell_xy(cell));
-            acc[ACC_EMITTED] = phi;
+            acc[ACC_DIRECT] += t.phi * w;
         } else {
-            vec4 a = ray_get(stride * i);
-            vec4 b = ray_get(stride * i + 1u);
-            ro = a.xyz;
-            w = a.w;
-            rd = b.xyz;
-            uint m = floatBitsToUint(b.w);
-            pidx = capacity - 1u - (m & ((1u << PHOTON_INDEX_BITS) - 1u));
-            depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
-            lod = (m & LOD_RAY) != 0u;
-            cell = photon_at(pidx);
-            phi = cell_measure(cell_level(cell), cell_xy(cell));
+            record_at(t, rdf, p, t.phi * w, o);
         }
-        if (diff) ray_side = cell_side(cell_level(cell));
-        if (diff && !WAVE_PRIMARY) rdf = diff_unpack(ray_get(stride * i + 2u), rd, ray_side);
-        float flux = phi * w;
-        SceneHit hit;
-        if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) {
-            acc[ACC_ESCAPED] += flux;
+    } else if (t.depth >= MAX_INTERACTIONS) {
+        acc[ACC_CAP] += t.phi * w;
+    } else {
+        split_at(t, rdf, hit, p, ng, ns, w, capacity, o);
+    }
+}
+
+// Invocation 0 reserves the work group's children in rays_out and its records in splats (NO_BASE: not reserved).
+// A reservation that does not fit is undone and counted as an overflow, and aborts the batch where it may.
+void reserve(uint slots, uint depth, uint queue_capacity, uint record_capacity, bool can_abort) {
+    uint rays = slot_run(slots, true) + slot_run(slots, false), recs = slots >> (2u * SLOT_BITS);
+    uint ray_base = NO_BASE, rec_base = NO_BASE, failed = 0u;
+    if (rays > 0u) {
+        uint base = atomicAdd(tstate.out_reserved, rays);
+        if (base + rays <= queue_capacity) {
+            ray_base = atomicAdd(tstate.out_count, rays);
         } else {
-            vec3 p = bvh_hit_point(hit);
-            bool specular = inst_is_dielectric(hit.inst);
-            // The normals, once: the absorption test and the interface both need them.
-            vec3 ng = vec3(0.0), ns = vec3(0.0);
-            if (specular || (diff && depth > 0u)) bvh_normals(hit, ng, ns);
-            // The differentials move to the hit, in the plane of its triangle.
-            if (diff) diff_transfer(rdf, rd, dot(p - ro, rd), ng);
-            float sigma = inst_sigma(hit.inst);
-            if (specular && sigma > 0.0 && dot(rd, ng) > 0.0) {
-                // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation,
-                // exactly (no sampling).
-                float keep = exp(-sigma * distance(p, ro));
-                acc[ACC_ABSORBED] += flux * (1.0 - keep);
-                w *= keep;
-                flux = phi * w;
-            }
-            if (!specular) {
-                // Wave 0's rays have met nothing yet (depth 0); a bounce wave's have (depth 1 or more).
-                if (WAVE_PRIMARY) {
-                    acc[ACC_DIRECT] += flux;
-                } else {
-                    GpuView rv = u_frame.receiver_view;
-                    uint r = lod ? side_splat_radius(weak_widen(cell) * cell_side(cell_level(cell)))
-                                 : cell_splat_radius(cell);
-                    // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius
-                    // traversal gave it (its children's spread): the parallelogram the whole cell covers where it
-                    // lands, which a round splat of the spread fits only where that is round.
-                    float shape = diff ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
-                                       : float(r);
-                    record = vec4(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_intensity, shape);
-                    rec = true;
-                    rec_flux = flux;
-                    one_event = depth == 1u;
-                }
-            } else if (depth >= MAX_INTERACTIONS) {
-                acc[ACC_CAP] += flux;
-            } else {
-                Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
-                if (!s.ok) {
-                    acc[ACC_LOST] += flux;
-                } else {
-                    float wr = w * s.F, wt = w * (1.0 - s.F);
-                    // A carried weak branch holds its block's share: it is cut where its siblings' would be.
-                    float widen = weak_widen(cell);
-                    float cut = u_frame.flux_threshold * (lod ? widen * widen : 1.0);
-                    float weak = !lod && weak_branches_apply(cell) ? u_frame.weak_fraction : 0.0;
-                    float scale = 1.0;
-                    bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak)
-                        ? weak_carrier(cell, phi, depth, scale)
-                        : false;
-                    uint meta = (capacity - 1u - pidx) | ((depth + 1u) << PHOTON_INDEX_BITS) | (lod ? LOD_RAY : 0u);
-                    // Both children inherit dP; their dD follow their branch, with the interpolated normal's
-                    // derivative where the branch used it.
-                    vec3 dnx = vec3(0.0), dny = vec3(0.0);
-                    if (diff && (s.k_refl != 0.0 || s.k_refr != 0.0)) {
-                        bvh_shading_dn(hit, ns, rdf.dpx, rdf.dpy, dnx, dny);
-                    }
-                    // Each branch is traced, cut, or left to its block's carrier; a carried one holds its block's share.
-                    bool keep_r = false, keep_t = false;
-                    bool carried_r = wr < weak, carried_t = wt < weak;
-                    if (wr > 0.0) {
-                        if (wr < cut) {
-                            acc[ACC_THRESHOLD] += phi * wr;
-                        } else if (carried_r && !carrier) {
-                            acc[ACC_WEAK_LEFT] += phi * wr;
-                        } else {
-                            keep_r = true;
-                            if (carried_r) acc[ACC_WEAK_CARRIED] += phi * wr * (scale - 1.0);
-                        }
-                    }
-                    if (wt > 0.0) {
-                        if (wt < cut) {
-                            acc[ACC_THRESHOLD] += phi * wt;
-                        } else if (carried_t && !carrier) {
-                            acc[ACC_WEAK_LEFT] += phi * wt;
-                        } else {
-                            keep_t = true;
-                            if (carried_t) acc[ACC_WEAK_CARRIED] += phi * wt * (scale - 1.0);
-                        }
-                    }
-                    vec3 d_r = normalize(s.refl), d_t = normalize(s.refr);
-                    float w_r = carried_r ? wr * scale : wr, w_t = carried_t ? wt * scale : wt;
-                    uint m_r = carried_r ? meta | LOD_RAY : meta, m_t = carried_t ? meta | LOD_RAY : meta;
-                    RayDiff r_r = rdf, r_t = rdf;
-                    if (diff) {
-                        r_r.ddx = diff_reflect(rd, rdf.ddx, s.n_refl, s.k_refl * dnx);
-                        r_r.ddy = diff_reflect(rd, rdf.ddy, s.n_refl, s.k_refl * dny);
-                        if (carried_r) diff_scale(r_r, widen);
-                        r_t.ddx = diff_refract(rd, rdf.ddx, s.n_refr, s.k_refr * dnx, d_t, s.eta);
-                        r_t.ddy = diff_refract(rd, rdf.ddy, s.n_refr, s.k_refr * dny, d_t, s.eta);
-                        if (carried_t) diff_scale(r_t, widen);
-                    }
-                    n_child = uint(keep_r) + uint(keep_t);
-                    c0_o = keep_r ? s.p_refl : s.p_refr;
-                    c0_d = keep_r ? d_r : d_t;
-                    c0_w = keep_r ? w_r : w_t;
-                    c0_meta = keep_r ? m_r : m_t;
-                    if (diff) c0_r = keep_r ? r_r : r_t;
-                    c1_o = s.p_refr;
-                    c1_d = d_t;
-                    c1_w = w_t;
-                    c1_meta = m_t;
-                    if (diff) c1_r = r_t;
-                    // ng faces out of the glass.
-                    c0_inside = dot(c0_d, ng) < 0.0;
-                    c1_inside = dot(c1_d, ng) < 0.0;
-                }
-            }
+            atomicAdd(tstate.out_reserved, 0u - rays);
+            failed++;
         }
     }
-    // The slots, each child's within its run and the record's: child 0's first, then child 1's, then the record's.
-    uint take = (n_child >= 1u ? (c0_inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) +
-                (n_child == 2u ? (c1_inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) + (rec ? SLOT_REC : 0u);
-    uint taken = take != 0u ? atomicAdd(s_slots, take) : 0u;
-    uint c0_slot = slot_run(taken, c0_inside);
-    uint c1_slot = slot_run(taken, c1_inside) + (c0_inside == c1_inside ? 1u : 0u);
-    uint rec_slot = taken >> (2u * SLOT_BITS);
-    // The account's shares, summed per subgroup and written before the reservation's barrier: the work group adds
-    // the subgroups' sums after it, once the verdict says whether the children and records went out or overflowed
-    // (barriers are costly on CPU drivers).
+    if (recs > 0u) {
+        // The deepest deposited path: invocation 0 holds the work group's first ray (live whenever the group has
+        // records), whose depth is every ray's of the wave. One atomic per work group, not per record.
+        atomicMax(tstate.max_depth, depth);
+        uint base = atomicAdd(tstate.records_reserved, recs);
+        if (base + recs <= record_capacity) {
+            rec_base = atomicAdd(tstate.records, recs);
+        } else {
+            atomicAdd(tstate.records_reserved, 0u - recs);
+            failed++;
+        }
+    }
+    if (failed > 0u) {
+        atomicAdd(tstate.overflows, failed);
+        if (can_abort) atomicExchange(state.aborted, 1u);
+    }
+    s_ray_base = ray_base;
+    s_rec_base = rec_base;
+}
+
+// Each subgroup's sums of the invocations' shares, written before the reservation's barrier: the work group adds
+// them after it, once the verdict says whether the children and records went out or overflowed (barriers are
+// costly on CPU drivers). The rare terms go to the account directly.
+void sum_shares(Outcome o, float phi) {
     float pend_child = 0.0;
-    if (n_child >= 1u) pend_child += phi * c0_w;
-    if (n_child == 2u) pend_child += phi * c1_w;
+    if (o.n_child >= 1u) pend_child += phi * o.c0.ray.throughput;
+    if (o.n_child == 2u) pend_child += phi * o.c1.ray.throughput;
     for (uint k = 0u; k < ACC_TERMS; k++) {
         if (wave_row(k)) subgroup_sum(k, acc[k]);
         if (rare_term(k)) account_add(k, acc[k]);
     }
     subgroup_sum(ACC_TERMS + PEND_CHILD, pend_child);
     if (wave_row(ACC_TERMS + PEND_REC)) {
-        subgroup_sum(ACC_TERMS + PEND_REC, rec ? rec_flux : 0.0);
-        subgroup_sum(ACC_TERMS + PEND_ONE, rec && one_event ? rec_flux : 0.0);
+        subgroup_sum(ACC_TERMS + PEND_REC, o.rec ? o.rec_flux : 0.0);
+        subgroup_sum(ACC_TERMS + PEND_ONE, o.rec && o.one_event ? o.rec_flux : 0.0);
     }
-    barrier();
-    // The reservation, by invocation 0. Whatever is read from shared memory is read outside any branch, and the
-    // verdicts are the bases themselves (NO_BASE: not reserved): a CPU driver runs a shared access inside a branch
-    // as a loop over the lanes, in every SIMD group of the work group.
-    uint slots = s_slots;
-    if (lid == 0u) {
-        uint rays = slot_run(slots, true) + slot_run(slots, false), recs = slots >> (2u * SLOT_BITS);
-        uint ray_base = NO_BASE, rec_base = NO_BASE, failed = 0u;
-        if (rays > 0u) {
-            uint base = atomicAdd(tstate.out_reserved, rays);
-            if (base + rays <= queue_capacity) {
-                ray_base = atomicAdd(tstate.out_count, rays);
-            } else {
-                atomicAdd(tstate.out_reserved, 0u - rays);
-                failed++;
-            }
-        }
-        if (recs > 0u) {
-            // The deepest deposited path: invocation 0 holds the work group's first ray (live whenever the group
-            // has records), whose depth is every ray's of the wave. One atomic per work group, not per record.
-            atomicMax(tstate.max_depth, depth);
-            uint base = atomicAdd(tstate.records_reserved, recs);
-            if (base + recs <= record_capacity) {
-                rec_base = atomicAdd(tstate.records, recs);
-            } else {
-                atomicAdd(tstate.records_reserved, 0u - recs);
-                failed++;
-            }
-        }
-        if (failed > 0u) {
-            atomicAdd(tstate.overflows, failed);
-            if (can_abort) atomicExchange(state.aborted, 1u);
-        }
-        s_ray_base = ray_base;
-        s_rec_base = rec_base;
-    }
-    barrier();
-    uint ray_base = s_ray_base, rec_base = s_rec_base;
-    bool rays_ok = ray_base != NO_BASE, recs_ok = rec_base != NO_BASE;
-    uint inside_n = slot_run(slots, true);
-    if (rays_ok && n_child >= 1u) {
-        uint k = ray_base + (c0_inside ? c0_slot : inside_n + c0_slot);
-        store_ray(k, stride, c0_o, c0_w, c0_d, c0_meta, c0_r, ray_side);
-    }
-    if (rays_ok && n_child == 2u) {
-        uint k = ray_base + (c1_inside ? c1_slot : inside_n + c1_slot);
-        store_ray(k, stride, c1_o, c1_w, c1_d, c1_meta, c1_r, ray_side);
-    }
-    if (rec && recs_ok) splats[rec_base + rec_slot] = record;
-    // The work group's shares: every invocation reads the subgroups' sums, at the same addresses and outside any
-    // branch (a CPU driver then loads each once for its SIMD group, where a branch or an address per invocation
-    // makes it load lane by lane), and invocation `lid` adds term lid in fixed point.
+}
+
+// The work group's shares: every invocation reads the subgroups' sums, at the same addresses and outside any branch
+// (a CPU driver then loads each once for its SIMD group, where a branch or an address per invocation makes it load
+// lane by lane), and invocation `lid` adds term lid in fixed point. What was not appended is overflow.
+void add_shares(uint lid, bool rays_ok, bool recs_ok) {
     float child = wave_sum(ACC_TERMS + PEND_CHILD), recs = 0.0, one = 0.0;
     if (wave_row(ACC_TERMS + PEND_REC)) {
         recs = wave_sum(ACC_TERMS + PEND_REC);
@@ -454,5 +427,58 @@ void main() {
         mine = lid == k ? sum : mine;
     }
     if (lid < ACC_TERMS) account_add(lid, mine);
+}
+
+void main() {
+    uint lid = gl_LocalInvocationIndex;
+    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
+    uint stride = WAVE_DIFFERENTIAL ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
+    bool can_abort = pc.may_abort != 0u;
+    // The transport state's scalars, read outside any branch: there a CPU driver loads a storage buffer's word once
+    // for the SIMD group, inside a branch lane by lane.
+    uint in_count = tstate.in_count, capacity = state.capacity;
+    uint queue_capacity = tstate.queue_capacity, record_capacity = tstate.record_capacity;
+    bool aborted = state.aborted != 0u;
+    if (lid == 0u) s_slots = 0u;
+    for (uint k = 0u; k < ACC_TERMS; k++) acc[k] = 0.0;
+    barrier();
+
+    RayDiff none;
+    none.dpx = none.dpy = none.ddx = none.ddy = vec3(0.0);
+    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false);
+    Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0.0, false);
+    float phi = 0.0, side = 1.0;
+    uint depth = 0u;
+    if (i < in_count && !(can_abort && aborted)) {
+        Traced t = traced_ray(i, stride, in_count, capacity);
+        phi = t.phi;
+        side = t.side;
+        depth = t.depth;
+        if (WAVE_PRIMARY) acc[ACC_EMITTED] = t.phi;
+        interact(t, capacity, o);
+    }
+    // The slots, each child's within its run and the record's: child 0's first, then child 1's, then the record's.
+    uint take = (o.n_child >= 1u ? (o.c0.inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) +
+                (o.n_child == 2u ? (o.c1.inside ? SLOT_INSIDE : SLOT_OUTSIDE) : 0u) + (o.rec ? SLOT_REC : 0u);
+    uint taken = take != 0u ? atomicAdd(s_slots, take) : 0u;
+    uint c0_slot = slot_run(taken, o.c0.inside);
+    uint c1_slot = slot_run(taken, o.c1.inside) + (o.c0.inside == o.c1.inside ? 1u : 0u);
+    uint rec_slot = taken >> (2u * SLOT_BITS);
+    sum_shares(o, phi);
+    barrier();
+    // Whatever is read from shared memory is read outside any branch, and the verdicts are the bases themselves: a
+    // CPU driver runs a shared access inside a branch as a loop over the lanes, in every SIMD group of the group.
+    uint slots = s_slots;
+    if (lid == 0u) reserve(slots, depth, queue_capacity, record_capacity, can_abort);
+    barrier();
+    uint ray_base = s_ray_base, rec_base = s_rec_base;
+    bool rays_ok = ray_base != NO_BASE, recs_ok = rec_base != NO_BASE;
+    uint inside_n = slot_run(slots, true);
+    uint k0 = ray_base + (o.c0.inside ? c0_slot : inside_n + c0_slot);
+    uint k1 = ray_base + (o.c1.inside ? c1_slot : inside_n + c1_slot);
+    if (rays_ok && o.n_child >= 1u) store_ray(k0, stride, o.c0, side);
+    if (rays_ok && o.n_child == 2u) store_ray(k1, stride, o.c1, side);
+    if (o.rec && recs_ok) splats[rec_base + rec_slot] = o.record;
+    add_shares(lid, rays_ok, recs_ok);
     if (lid == 0u && i < in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, in_count - i));
 }

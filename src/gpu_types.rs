@@ -275,6 +275,41 @@ impl TransportState {
     }
 }
 
+/// A ray of exact transport in a queue (glsl/wave.comp). A queue entry is this ray, RAY_VEC4S_CELL words, then the
+/// parts the frame's settings add, in order: the packed ray differentials (one word, `--footprint differential`).
+/// A part that a frame does not need is not in its entries, so a ray costs only what its scene uses. The entries
+/// are read as texels on CPU drivers, so the ray travels as words (build/structs.rs, WORD_STRUCTS).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuRay {
+    /// Where it starts (m, world space).
+    pub origin: [f32; 3],
+    /// Its flux over its photon's.
+    pub throughput: f32,
+    /// Its unit direction.
+    pub dir: [f32; 3],
+    /// Its photon's entry, counted from the photon buffer's top (the low PHOTON_INDEX_BITS); its interactions so
+    /// far (the 6 bits above); bit 31: a weak branch carried for its photon's block (LOD_RAY, glsl/wave.comp).
+    pub meta: u32,
+}
+
+/// A splat record: where one photon path lands on a receiver, and what it deposits there (glsl/splat.comp,
+/// glsl/splat.vert). One per emitted photon in the two-interface model (the same index), appended per record in
+/// exact transport.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSplat {
+    /// Its center, caustic-map texels.
+    pub texel: [f32; 2],
+    /// Its flux (W, before the light's color).
+    pub flux: f32,
+    /// Its tent, packed (splat_pack, glsl/common/photon_bindings.glsl); 0: the photon did not land.
+    pub shape: f32,
+}
+
+const _: () = assert!(size_of::<GpuRay>() == 16 * RAY_VEC4S_CELL as usize);
+const _: () = assert!(RAY_VEC4S_DIFFERENTIAL == RAY_VEC4S_CELL + 1);
+
 // Push constants of the photon passes: one struct per pass, each field with one meaning. The pipelines of the
 // photon passes share one layout, whose push range is the largest of these (PHOTON_PUSH_BYTES).
 

@@ -2,6 +2,8 @@
 //! layout GLSL would read differently from Rust is refused, in the Rust source or in a compiled shader.
 
 use crate::vk::spirv;
+#[path = "../build/layouts.rs"]
+mod layouts;
 #[path = "../build/structs.rs"]
 mod structs;
 
@@ -114,4 +116,86 @@ fn a_specialization_constant_takes_its_id_from_the_shared_constants() {
     assert!(e.starts_with("x.comp:2:") && e.contains("constant_id = WAVE_PRIMARY_ID"), "{e}");
     let e = structs::check_spec_ids("x.comp", "layout(constant_id = NEW_ID) const uint NEW = 1u;", &c).unwrap_err();
     assert!(e.contains("src/shader_consts.rs"), "{e}");
+}
+
+/// The photon passes' layout as build.rs reads it, with `edit` applied to src/passes/photons.rs first.
+fn photon_layout(edit: Option<(&str, &str)>) -> Result<layouts::Layout, String> {
+    let mut text = std::fs::read_to_string(format!("{ROOT}/src/passes/photons.rs")).unwrap();
+    if let Some((a, b)) = edit {
+        assert!(text.contains(a), "{a}");
+        text = text.replace(a, b);
+    }
+    let kinds = layouts::parse("src/passes/photons.rs", &text, "LAYOUT", &consts())?;
+    Ok(layouts::Layout { prefix: "PB_", origin: "photons.rs LAYOUT".into(), kinds })
+}
+
+#[test]
+fn every_shader_of_a_shared_layout_declares_what_the_rust_table_does() {
+    let layout = photon_layout(None).unwrap();
+    for (name, words) in [
+        ("wave", crate::shaders::WAVE_COMP.words()),
+        ("wave wide (texels)", crate::shaders::WAVE_COMP_WIDE.words()),
+        ("splat", crate::shaders::SPLAT_COMP.words()),
+        ("splat.vert", crate::shaders::SPLAT_VERT.words()),
+        ("trace", crate::shaders::TRACE_COMP.words()),
+    ] {
+        layouts::check(name, words, &layout).unwrap();
+    }
+    // Which layout a source binds by follows from the constants it (or an include) names.
+    let glsl = std::path::Path::new(ROOT).join("glsl");
+    let text = layouts::with_includes(&glsl, &glsl.join("wave.comp"), &mut Vec::new());
+    let all = [layout, photon_layout(None).map(|l| layouts::Layout { prefix: "CB_", ..l }).unwrap()];
+    assert_eq!(layouts::layout_of("wave.comp", &text, &all).unwrap().map(|l| l.prefix), Some("PB_"));
+}
+
+#[test]
+fn a_shader_that_declares_another_kind_or_an_undeclared_binding_fails_the_check() {
+    let words = crate::shaders::WAVE_COMP.words();
+    let wrong = photon_layout(Some(("(PB_SPLATS, BindKind::Storage)", "(PB_SPLATS, BindKind::Sampled)"))).unwrap();
+    let e = layouts::check("wave.comp", words, &wrong).unwrap_err();
+    assert!(e.contains("binding 10, a Storage descriptor; photons.rs LAYOUT has BindKind::Sampled"), "{e}");
+    let wrong = photon_layout(Some(("    (PB_SPLATS, BindKind::Storage),\n", ""))).unwrap();
+    let e = layouts::check("wave.comp", words, &wrong).unwrap_err();
+    assert!(e.contains("has nothing there"), "{e}");
+    // A table entry build.rs cannot read is refused with its line.
+    let e = photon_layout(Some(("(PB_SPLATS, BindKind::Storage),", "(PB_SPLATS BindKind::Storage),"))).err().unwrap();
+    assert!(e.starts_with("src/passes/photons.rs:") && e.contains("no kind"), "{e}");
+}
+
+#[test]
+fn a_word_struct_packs_each_field_into_its_bytes_and_refuses_what_does_not_fill_words() {
+    let ok = parse(
+        "#[repr(C)]\npub struct W {\n    pub a: [f32; 3],\n    pub b: u32,\n    pub c: [u32; 2],\n    pub d: [f32; 2],\n}\n",
+    )
+    .unwrap();
+    let f = structs::word_functions(&ok[0]).unwrap();
+    for line in [
+        "W W_from_words(uvec4 w0, uvec4 w1) {",
+        "    v.a = uintBitsToFloat(uvec3(w0.x, w0.y, w0.z));",
+        "    v.b = w0.w;",
+        "    v.c = uvec2(w1.x, w1.y);",
+        "    v.d = uintBitsToFloat(uvec2(w1.z, w1.w));",
+        "    w1.z = floatBitsToUint(v.d[0]);",
+    ] {
+        assert!(f.lines().any(|l| l == line), "{line}\n{f}");
+    }
+    let short = parse("#[repr(C)]\npub struct S {\n    pub a: [f32; 3],\n}\n").unwrap();
+    let e = structs::word_functions(&short[0]).unwrap_err();
+    assert!(e.contains("12 bytes are not whole 16-byte words"), "{e}");
+}
+
+#[test]
+fn every_shared_layout_table_parses_with_one_entry_per_binding() {
+    use crate::shaders::consts::{CB_COUNT, EB_COUNT, PB_COUNT};
+    for &(prefix, file, name) in layouts::LAYOUTS {
+        let text = std::fs::read_to_string(format!("{ROOT}/{file}")).unwrap();
+        let kinds = layouts::parse(file, &text, name, &consts()).unwrap();
+        let count = match prefix {
+            "PB_" => PB_COUNT,
+            "CB_" => CB_COUNT,
+            _ => EB_COUNT,
+        };
+        assert_eq!(kinds.len() as u32, count, "{file} {name}");
+        assert!((0..count).all(|b| kinds.contains_key(&b)), "{file} {name}");
+    }
 }

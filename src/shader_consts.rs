@@ -73,7 +73,7 @@ pub const INDIRECT_SPLAT: u32 = MAX_LEVELS + 3;
 pub const INDIRECT_COMMANDS: u32 = MAX_LEVELS + 4;
 
 // Exact transport's rays.
-/// vec4s per ray with the cell footprint: (origin, throughput), (direction, bits(meta)).
+/// vec4s per ray with the cell footprint: a `GpuRay` (src/gpu_types.rs).
 pub const RAY_VEC4S_CELL: u32 = 2;
 /// vec4s per ray with ray differentials: one more, dP/dx, dP/dy, dD/dx and dD/dy across the ray as half-float pairs
 /// (`diff_pack`, glsl/common/transport.glsl).

@@ -39,11 +39,11 @@ layout(set = 0, binding = PB_RECEIVERS) uniform usampler2D t_recv;      // recei
 //   (cell x, cell y, level | status << 8 | radius << 16, bits(flux.r)), bits(uv.x, uv.y, map_px.x, map_px.y),
 //   bits(hit.x, hit.y, hit.z), 0.
 layout(std430, set = 0, binding = PB_DEBUG) buffer DebugBuf { uvec4 debug_header; uvec4 debug_rows[]; };
-// Splat records, one per emitted photon (same index): landing point (caustic-map texels), flux (W, before the
-// light's color), and the splat's shape (0: the photon did not land) as an exact integer below 2^24 in a float
-// (splat_pack): radii rx (bits 0-6) and ry (bits 7-13, 0 meaning ry = rx, so a plain radius r is the isotropic
-// tent of radius r), a shear s in [-1, 1] in 1/255 steps (bits 14-22, two's complement) and its axis (bit 23).
-layout(std430, set = 0, binding = PB_SPLATS) buffer SplatBuf { vec4 splats[]; };
+// Splat records (GpuSplat). A record's shape (0: the photon did not land) is an exact integer below 2^24 in a
+// float (splat_pack): radii rx (bits 0-6) and ry (bits 7-13, 0 meaning ry = rx, so a plain radius r is the
+// isotropic tent of radius r), a shear s in [-1, 1] in 1/255 steps (bits 14-22, two's complement) and its axis
+// (bit 23).
+layout(std430, set = 0, binding = PB_SPLATS) buffer SplatBuf { GpuSplat splats[]; };
 // A record's tent: integer radii r (texels) and a shear. Row by row (columns by column when shear_y), the tent
 // across the rows is centred s texels further per texel of distance along them, so its weight at offset d from
 // the record's center is tent(d.x - s d.y, rx) tent(d.y, ry) (d.y - s d.x and d.x when shear_y).
@@ -124,17 +124,19 @@ float splat_norm(vec2 c, SplatShape k, ivec2 size) {
 }
 
 // Exact transport (src/bvh/, glsl/common/bvh.glsl): the wave state, two ray queues, and the scene BVH.
-// A ray is two vec4: origin and throughput (relative to its photon's flux); direction and bits(photon index |
-// interactions << PHOTON_INDEX_BITS); with `--footprint differential` three more hold its ray differentials (glsl/wave.comp). The photon index points into the photon buffer, whose cell gives the flux and footprint.
+// A queue entry is a GpuRay's words, then the parts the frame adds (GpuRay says which). The ray's photon index
+// points into the photon buffer, whose cell gives the flux and footprint.
 layout(std430, set = 0, binding = PB_TRANSPORT) buffer TransportBuf { TransportState tstate; };
 // The two ray queues swap bindings from wave to wave (src/passes/photons.rs, PhotonPasses::wave): a wave reads
 // rays_in and appends to rays_out, with no branch on which queue is which.
 #ifdef WAVE_TEXELS
-layout(set = 0, binding = PB_RAYS_IN) uniform usamplerBuffer rays_in_texels;  // bits: a ray holds packed integers
+layout(set = 0, binding = PB_RAYS_IN) uniform usamplerBuffer rays_in_texels;
+uvec4 ray_word_in(uint k) { return texelFetch(rays_in_texels, int(k)); }
 #else
-layout(std430, set = 0, binding = PB_RAYS_IN) readonly buffer RaysIn { vec4 rays_in[]; };
+layout(std430, set = 0, binding = PB_RAYS_IN) readonly buffer RaysIn { uvec4 rays_in[]; };
+uvec4 ray_word_in(uint k) { return rays_in[k]; }
 #endif
-layout(std430, set = 0, binding = PB_RAYS_OUT) writeonly buffer RaysOut { vec4 rays_out[]; };
+layout(std430, set = 0, binding = PB_RAYS_OUT) writeonly buffer RaysOut { uvec4 rays_out[]; };
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhNodes { PairNode bvh_nodes[]; };
 layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle { SingleNode bvh_nodes_single[]; };

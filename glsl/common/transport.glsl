@@ -73,18 +73,17 @@ vec3 diff_unpack2(uint u, vec3 b1, vec3 b2, float k) {
 }
 
 // The packed differentials of a ray of unit direction d whose photon's cell has side `side`.
-vec4 diff_pack(RayDiff r, vec3 d, float side) {
+uvec4 diff_pack(RayDiff r, vec3 d, float side) {
     vec3 b1, b2;
     diff_basis(d, b1, b2);
     float k = 1.0 / side;
-    return uintBitsToFloat(uvec4(diff_pack2(r.dpx, b1, b2, k), diff_pack2(r.dpy, b1, b2, k),
-                                 diff_pack2(r.ddx, b1, b2, k), diff_pack2(r.ddy, b1, b2, k)));
+    return uvec4(diff_pack2(r.dpx, b1, b2, k), diff_pack2(r.dpy, b1, b2, k), diff_pack2(r.ddx, b1, b2, k),
+                 diff_pack2(r.ddy, b1, b2, k));
 }
 
-RayDiff diff_unpack(vec4 v, vec3 d, float side) {
+RayDiff diff_unpack(uvec4 u, vec3 d, float side) {
     vec3 b1, b2;
     diff_basis(d, b1, b2);
-    uvec4 u = floatBitsToUint(v);
     RayDiff r;
     r.dpx = diff_unpack2(u.x, b1, b2, side);
     r.dpy = diff_unpack2(u.y, b1, b2, side);
