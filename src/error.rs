@@ -12,6 +12,17 @@ pub enum Error {
     /// A bad argument or input file; the message names it.
     #[error("{0}")]
     BadInput(String),
+    /// A setting outside its range, or one the scene cannot be rendered with (bad input). `field` names it as the
+    /// library's types do (`Quality::level`); the CLI names its flag instead.
+    #[error("{field} = {value}: {rule}")]
+    Setting {
+        /// The field, as `Type::field`.
+        field: &'static str,
+        /// Its value, as given.
+        value: String,
+        /// What it must be.
+        rule: String,
+    },
     /// A Vulkan call or requirement failed.
     #[error(transparent)]
     Vk(#[from] VkError),
@@ -30,13 +41,20 @@ impl Error {
     /// 2 for bad input (an argument, a scene, an image), 1 for anything else.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Error::Scene(_) | Error::BadInput(_) => 2,
+            Error::Scene(_) | Error::BadInput(_) | Error::Setting { .. } => 2,
             Error::Image(e) => match e {
                 crate::image_io::ImageError::Write { .. } => 1,
                 _ => 2,
             },
             _ => 1,
         }
+    }
+}
+
+impl Error {
+    /// A [`Error::Setting`].
+    pub fn setting(field: &'static str, value: impl std::fmt::Display, rule: impl Into<String>) -> Error {
+        Error::Setting { field, value: value.to_string(), rule: rule.into() }
     }
 }
 

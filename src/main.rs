@@ -97,7 +97,27 @@ fn main() {
         .init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
-        eprintln!("error: {e}");
+        eprintln!("error: {}", app::flags::message(&e));
         std::process::exit(e.exit_code());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::CommandFactory;
+
+    /// The flag src/app/flags.rs gives each library field is an option of `render` or `reference`.
+    #[test]
+    fn every_mapped_flag_is_an_option() {
+        let cli = Cli::command();
+        let longs: Vec<String> = ["render", "reference"]
+            .iter()
+            .flat_map(|name| cli.find_subcommand(name).unwrap().get_arguments())
+            .filter_map(|a| a.get_long().map(|l| format!("--{l}")))
+            .collect();
+        for (field, flag) in crate::app::flags::FLAGS {
+            assert!(longs.iter().any(|l| l == flag), "{field}: {flag} is not an option of render or reference");
+        }
     }
 }

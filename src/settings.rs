@@ -430,72 +430,70 @@ pub const TRAVERSE_WG_SWEEP: [u32; 5] = [1, 2, 4, 8, 16];
 pub const COOP_WG: u32 = 8;
 
 impl Settings {
-    /// Check every value's range; the messages name the flag.
+    /// Check every value's range; the errors name the field ([`Error::Setting`]).
     pub fn validate(&self) -> Result<()> {
         let (q, t) = (&self.quality, &self.tuning);
-        let bad = |m: String| Err(Error::BadInput(m));
+        let bad = |field, value: &dyn std::fmt::Display, rule: String| Err(Error::setting(field, value, rule));
         if let Some(level) = q.level {
             if level >= MAX_LEVELS {
-                return bad(format!("--level {level}: must be at most {}", MAX_LEVELS - 1));
+                return bad("Quality::level", &level, format!("must be at most {}", MAX_LEVELS - 1));
             }
         }
         if !t.gbuffer_res.is_power_of_two() || t.gbuffer_res < LEVEL0_RES || t.gbuffer_res > 8192 {
-            return bad(format!("--gbuffer-res {}: must be a power of two in 64..=8192", t.gbuffer_res));
+            return bad("Tuning::gbuffer_res", &t.gbuffer_res, "must be a power of two in 64..=8192".into());
         }
         if t.gbuffer_res.trailing_zeros() - LEVEL0_RES.trailing_zeros() >= MAX_PYRAMID_MIPS {
-            return bad(format!("--gbuffer-res {}: too many pyramid levels", t.gbuffer_res));
+            return bad("Tuning::gbuffer_res", &t.gbuffer_res, "too many pyramid levels".into());
         }
         if q.caustic_res < 16 || q.caustic_res > 8192 {
-            return bad(format!("--caustic-res {}: must lie in 16..=8192", q.caustic_res));
+            return bad("Quality::caustic_res", &q.caustic_res, "must lie in 16..=8192".into());
         }
         if !(q.photon_budget_mib.is_finite() && q.photon_budget_mib >= 0.0) {
-            return bad(format!("--photon-budget {}: must be > 0 MiB (or 0: automatic)", q.photon_budget_mib));
+            return bad("Quality::photon_budget_mib", &q.photon_budget_mib, "must be > 0 MiB (or 0: automatic)".into());
         }
         if !(t.error_bound.is_finite() && t.error_bound > 0.0) {
-            return bad(format!("--error-bound {}: must be > 0 texels", t.error_bound));
+            return bad("Tuning::error_bound", &t.error_bound, "must be > 0 texels".into());
         }
         if !(q.target_error.is_finite() && q.target_error > 0.0 && q.target_error <= 1.0) {
-            return bad(format!(
-                "--target-error {}: must lie in (0, 1] (the relative L1 at 64² that merging may add)",
-                q.target_error
-            ));
+            let rule = "must lie in (0, 1] (the relative L1 at 64² that merging may add)";
+            return bad("Quality::target_error", &q.target_error, rule.into());
         }
         if let Some(tau) = t.tau {
             if !(tau.is_finite() && tau > 0.0 && tau <= crate::calibration::TAU_MAX) {
-                return bad(format!("--tau {tau}: must lie in (0, {}]", crate::calibration::TAU_MAX));
+                return bad("Tuning::tau", &tau, format!("must lie in (0, {}]", crate::calibration::TAU_MAX));
             }
         }
         if !(q.exposure_ev.is_finite() && q.exposure_ev.abs() <= 32.0) {
-            return bad(format!("--exposure {}: must lie in [-32, 32] stops", q.exposure_ev));
+            return bad("Quality::exposure_ev", &q.exposure_ev, "must lie in [-32, 32] stops".into());
         }
         if !(1..=MAX_AA).contains(&q.aa) {
-            return bad(format!("--aa {}: must lie in 1..={MAX_AA}", q.aa));
+            return bad("Quality::aa", &q.aa, format!("must lie in 1..={MAX_AA}"));
         }
         if let Some(sky) = q.sky {
             if !(sky.is_finite() && sky >= 0.0) {
-                return bad(format!("--sky {sky}: must be a radiance >= 0 W/(m²·sr)"));
+                return bad("Quality::sky", &sky, "must be a radiance >= 0 W/(m²·sr)".into());
             }
         }
         if !(1..=MAX_EYE_DEPTH).contains(&q.eye_depth) {
-            return bad(format!("--eye-depth {}: must lie in 1..={MAX_EYE_DEPTH}", q.eye_depth));
+            return bad("Quality::eye_depth", &q.eye_depth, format!("must lie in 1..={MAX_EYE_DEPTH}"));
         }
         if !(t.flux_threshold.is_finite() && (0.0..1.0).contains(&t.flux_threshold)) {
-            return bad(format!("--flux-threshold {}: must lie in [0, 1)", t.flux_threshold));
+            return bad("Tuning::flux_threshold", &t.flux_threshold, "must lie in [0, 1)".into());
         }
         if !(t.weak_branches.is_finite() && (0.0..1.0).contains(&t.weak_branches)) {
-            return bad(format!("--weak-branches {}: must lie in [0, 1)", t.weak_branches));
+            return bad("Tuning::weak_branches", &t.weak_branches, "must lie in [0, 1)".into());
         }
         if ![0, 2, 4].contains(&t.weak_block) {
-            return bad(format!("--weak-block {}: must be 2, 4 or 0 (automatic)", t.weak_block));
+            return bad("Tuning::weak_block", &t.weak_block, "must be 2, 4 or 0 (automatic)".into());
         }
         if !TRAVERSE_WG_SWEEP.contains(&t.traverse_wg) {
-            return bad(format!("--traverse-wg {}: must be one of 1, 2, 4, 8, 16", t.traverse_wg));
+            return bad("Tuning::traverse_wg", &t.traverse_wg, "must be one of 1, 2, 4, 8, 16".into());
         }
         if t.debug_photons > MAX_DEBUG_PHOTONS {
-            return bad(format!("--debug-photons {}: at most {MAX_DEBUG_PHOTONS}", t.debug_photons));
+            return bad("Tuning::debug_photons", &t.debug_photons, format!("at most {MAX_DEBUG_PHOTONS}"));
         }
         if t.batch_slots > MAX_BATCHES {
-            return bad(format!("--batch-slots {}: at most {MAX_BATCHES}", t.batch_slots));
+            return bad("Tuning::batch_slots", &t.batch_slots, format!("at most {MAX_BATCHES}"));
         }
         Ok(())
     }
@@ -509,13 +507,16 @@ impl Settings {
         c.splat = self.tuning.splat.resolve(info);
         let max = max_budget_mib(binding_limit);
         if c.photon_budget_mib > max {
-            return Err(Error::BadInput(format!(
-                "--photon-budget {}: at most {max} MiB on {} (the splat records, 16 bytes per 8-byte photon entry, \
-                 must fit one storage-buffer binding of {} MiB: its maxStorageBufferRange)",
+            return Err(Error::setting(
+                "Quality::photon_budget_mib",
                 c.photon_budget_mib,
-                info.name,
-                binding_limit >> 20
-            )));
+                format!(
+                    "at most {max} MiB on {} (the splat records, 16 bytes per 8-byte photon entry, must fit one \
+                     storage-buffer binding of {} MiB: its maxStorageBufferRange)",
+                    info.name,
+                    binding_limit >> 20
+                ),
+            ));
         }
         Ok(c)
     }
@@ -533,9 +534,8 @@ impl Settings {
         let cpu = class == DeviceClass::Cpu;
         let level = q.level.unwrap_or(default_level(class));
         if q.method == Method::Dense && level > 12 {
-            return Err(Error::BadInput(format!(
-                "--level {level}: dense goes up to level 12 (262,144² photons); use --method adaptive for deeper levels"
-            )));
+            let rule = "the dense method goes up to level 12 (262,144² photons); the adaptive one goes deeper";
+            return Err(Error::setting("Quality::level", level, rule));
         }
         let photon_budget_mib = if q.photon_budget_mib == 0.0 {
             auto_photon_budget_mib(cpu, binding_limit, device_local_bytes)

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod bench_report;
 pub mod commands;
 pub mod compare;
+pub mod flags;
 pub mod heap;
 pub mod profiler;
 pub mod reference_cmd;

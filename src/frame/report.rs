@@ -28,7 +28,7 @@ impl std::str::FromStr for Aov {
             "beauty" => Ok(Aov::Beauty),
             "caustics" => Ok(Aov::Caustics),
             "direct" => Ok(Aov::Direct),
-            _ => Err(Error::BadInput(format!("--aov `{s}`: expected beauty, caustics or direct"))),
+            _ => Err(Error::BadInput(format!("AOV `{s}`: expected beauty, caustics or direct"))),
         }
     }
 }

@@ -88,7 +88,7 @@ impl FromStr for Aov {
         match s {
             "caustics" => Ok(Aov::Caustics),
             "direct" => Ok(Aov::Direct),
-            _ => Err(format!("--aov: expected `caustics` or `direct`, got `{s}`")),
+            _ => Err(format!("AOV `{s}`: expected `caustics` or `direct`")),
         }
     }
 }
@@ -108,7 +108,7 @@ impl FromStr for Paths {
         match s {
             "all" => Ok(Paths::All),
             "two-refractions" => Ok(Paths::TwoRefractions),
-            _ => Err(format!("--paths: expected `all` or `two-refractions`, got `{s}`")),
+            _ => Err(format!("paths `{s}`: expected `all` or `two-refractions`")),
         }
     }
 }
@@ -346,7 +346,7 @@ fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> Result<&'a c
         let usable = if ortho.is_empty() {
             "the scene has no orthographic camera: add one (docs/scenes.md)".to_string()
         } else {
-            format!("use --camera {}", ortho.join(" or --camera "))
+            format!("orthographic: {}", ortho.join(", "))
         };
         return Err(Error::BadInput(format!(
             "{}: camera `{}` is perspective; the reference bins into orthographic cameras only ({usable})",
@@ -533,13 +533,17 @@ fn run_chunks(
 pub fn trace(scene: &Scene, p: &RefParams) -> Result<RefOutput> {
     let start = Instant::now();
     if p.photons == 0 {
-        return Err(Error::BadInput("--photons: must be at least 1".into()));
+        return Err(Error::setting("RefParams::photons", p.photons, "must be at least 1"));
     }
     if p.width == 0 || p.height == 0 {
-        return Err(Error::BadInput("--size: width and height must be at least 1".into()));
+        return Err(Error::setting(
+            "RefParams::width",
+            format!("{}x{}", p.width, p.height),
+            "width and height must be at least 1",
+        ));
     }
     if !p.time.is_finite() {
-        return Err(Error::BadInput(format!("--time {}: must be finite", p.time)));
+        return Err(Error::setting("RefParams::time", p.time, "must be finite"));
     }
     let timed;
     let scene = if scene.is_animated() && scene.time != p.time {

@@ -170,27 +170,39 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
             .iter()
             .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0))
         {
-            return Err(Error::BadInput(format!(
-                "{}: object `{}` absorbs: absorption needs --transport exact (the two-interface model has none)",
-                scene.path.display(),
-                o.name
-            )));
+            return Err(Error::setting(
+                "Quality::transport",
+                "two-interface",
+                format!(
+                    "{}: object `{}` absorbs: absorption needs exact transport (the two-interface model has none)",
+                    scene.path.display(),
+                    o.name
+                ),
+            ));
         }
         if let Some(m) = scene.objects.iter().find(|o| o.is_mirror()) {
-            return Err(Error::BadInput(format!(
-                "{}: object `{}` is a mirror: mirrors need --transport exact (the two-interface model only refracts)",
-                scene.path.display(),
-                m.name
-            )));
+            return Err(Error::setting(
+                "Quality::transport",
+                "two-interface",
+                format!(
+                    "{}: object `{}` is a mirror: mirrors need exact transport (the two-interface model only refracts)",
+                    scene.path.display(),
+                    m.name
+                ),
+            ));
         }
         if let Some(o) =
             scene.objects.iter().find(|o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0))
         {
-            return Err(Error::BadInput(format!(
-                "{}: object `{}` disperses (`abbe`): dispersion needs --transport exact (the two-interface model has one IOR per texel)",
+            return Err(Error::setting(
+                "Quality::transport",
+                "two-interface",
+                format!(
+                "{}: object `{}` disperses (`abbe`): dispersion needs exact transport (the two-interface model has one IOR per texel)",
                 scene.path.display(),
                 o.name
-            )));
+            ),
+            ));
         }
     }
     Ok(())
@@ -389,7 +401,7 @@ impl Renderer {
             let tiles: u32 = report.lights.iter().filter_map(|l| l.state.map(|s| s.stack_size)).sum();
             log::info!(
                 "the photon buffer held {} batches of this frame; tracing its {tiles} remaining tiles in another \
-                 submission (a larger --photon-budget avoids it)",
+                 submission (a larger photon budget, Quality::photon_budget_mib, avoids it)",
                 report.batch_slots
             );
             let from_slot = self.last_slot;

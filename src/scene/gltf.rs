@@ -553,12 +553,12 @@ fn animations(
         AnimationChoice::All => None,
         AnimationChoice::Index(i) if *i < names.len() => Some(*i),
         AnimationChoice::Index(i) => {
-            return Err(cx.err("animations", format!("--animation {i}: no animation has that index ({})", listing())))
+            return Err(cx.err("animations", format!("animation {i}: no animation has that index ({})", listing())))
         }
         AnimationChoice::Name(n) => match names.iter().position(|x| x == n) {
             Some(i) => Some(i),
             None => {
-                return Err(cx.err("animations", format!("--animation {n}: no animation has that name ({})", listing())))
+                return Err(cx.err("animations", format!("animation `{n}`: no animation has that name ({})", listing())))
             }
         },
     };
@@ -612,7 +612,7 @@ fn animations(
                 cx.warn(
                     &format!("animations[{}]", anim.index()),
                     &format!(
-                        "\"{}\" animates the {key} of nodes[{n}] as \"{}\" does: \"{}\" plays it (--animation picks one)",
+                        "\"{}\" animates the {key} of nodes[{n}] as \"{}\" does: \"{}\" plays it (choose one animation to play the other)",
                         names[anim.index()],
                         names[first],
                         names[first]

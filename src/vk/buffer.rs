@@ -89,7 +89,7 @@ impl Buffer {
         if self.texels == vk::BufferView::null() {
             return Err(VkError::Unsupported(format!(
                 "buffer `{}` ({} bytes) is longer than this device reads through a texel buffer \
-                 (maxTexelBufferElements {}), which the wide BVH layout needs: use --bvh-layout pair",
+                 (maxTexelBufferElements {}), which the wide BVH layout needs: use the pair layout (Tuning::bvh_layout)",
                 self.name, self.size, self.device.info.limits.max_texel_buffer_elements
             )));
         }

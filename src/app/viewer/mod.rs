@@ -860,7 +860,9 @@ impl Viewer {
     fn change_settings(&mut self, settings: Settings) -> Result<()> {
         match self.renderer.set_settings(settings) {
             Ok(()) => eprintln!("{}", self.describe()),
-            Err(Error::BadInput(m)) => eprintln!("not changed: {m}"),
+            Err(e @ (Error::BadInput(_) | Error::Setting { .. })) => {
+                eprintln!("not changed: {}", crate::app::flags::message(&e))
+            }
             Err(e) => return Err(e),
         }
         Ok(())
