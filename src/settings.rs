@@ -713,7 +713,7 @@ pub fn output_size(size: Option<&str>, flag: &str, camera: &crate::scene::Camera
             if let Some(a) = aspect {
                 let given = w as f32 / h as f32;
                 if (given / a - 1.0).abs() > 0.01 {
-                    eprintln!(
+                    log::warn!(
                         "{flag} {w}x{h} (aspect {given:.3}) differs from camera `{}`'s authored aspect {a:.3}: the \
                          image keeps the camera's vertical extent and shows {} at the sides",
                         camera.name,

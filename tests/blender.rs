@@ -312,7 +312,7 @@ fn one_animation_plays_alone_when_asked() {
     assert_eq!(o.status.code(), Some(2), "{stderr}");
     assert!(
         stderr.contains(
-            "--animation Walk: no animation has that name (the file has 0 \"SuzanneAction\", 1 \"SliderAction\")"
+            "animation `Walk`: no animation has that name (the file has 0 \"SuzanneAction\", 1 \"SliderAction\")"
         ),
         "{stderr}"
     );

@@ -148,7 +148,10 @@ fn reference_with_a_perspective_camera_names_the_usable_ones() {
     let o = caustics(&["reference", "--camera", "main", "--photons", "1000", "--out", out.to_str().unwrap()]);
     let e = stderr_of(&o);
     assert_eq!(o.status.code(), Some(2), "{e}");
-    assert!(e.contains("perspective") && e.contains("--camera top"), "{e}");
+    assert!(
+        e.contains("--camera main: ") && e.contains("perspective") && e.contains("orthographic cameras: top"),
+        "{e}"
+    );
 }
 
 /// `caustics bench` at level 1 under two-interface transport, one frame of 64×64, writing `NAME.json` and `NAME.md`

@@ -60,7 +60,10 @@ fn package(target: &Path, into: &Path) -> PathBuf {
     );
     let name = format!("caustics-{}", env!("CARGO_PKG_VERSION"));
     let crate_file = target.join("package").join(format!("{name}.crate"));
-    run(Command::new("tar").arg("-xzf").arg(&crate_file).arg("-C").arg(into), "unpack the .crate");
+    // `-m`: the files take the time of unpacking. The .crate gives every file one fixed old date, and cargo, which
+    // judges a path dependency's freshness by file times, would reuse the last run's build script in this target
+    // directory whatever the package now holds.
+    run(Command::new("tar").arg("-xzmf").arg(&crate_file).arg("-C").arg(into), "unpack the .crate");
     let unpacked = into.join(&name);
     assert!(unpacked.join("Cargo.toml").is_file(), "{} holds no Cargo.toml", unpacked.display());
     unpacked

@@ -340,7 +340,8 @@ fn mirrors_need_exact_transport() {
         caustics(&["render", "--scene", &scene_path, "--transport", "two-interface", "--out", out.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("`mirror` is a mirror") && stderr.contains("--transport exact"), "{stderr}");
+    let named = stderr.contains("--transport two-interface: ") && stderr.contains("need exact transport");
+    assert!(stderr.contains("`mirror` is a mirror") && named, "{stderr}");
     assert_no_output(&out);
 }
 

@@ -251,10 +251,12 @@ fn hard_case_scenes_trace_and_close_their_account() {
 #[test]
 fn perspective_and_unknown_cameras_are_bad_input() {
     let e = trace(sphere(), &RefParams { camera: Some("main".into()), ..RefParams::default() }).unwrap_err();
-    assert!(matches!(&e, Error::BadInput(m) if m.contains("`main`") && m.contains("perspective")), "{e}");
+    let perspective =
+        |r: &str| r.contains("`main`") && r.contains("perspective") && r.contains("orthographic cameras: top");
+    assert!(matches!(&e, Error::Setting { field: "RefParams::camera", rule, .. } if perspective(rule)), "{e}");
     assert_eq!(e.exit_code(), 2);
     let e = trace(sphere(), &RefParams { camera: Some("nope".into()), ..RefParams::default() }).unwrap_err();
-    assert!(matches!(&e, Error::BadInput(m) if m.contains("nope")), "{e}");
+    assert!(matches!(&e, Error::Setting { value, rule, .. } if value == "nope" && rule.contains("cameras: ")), "{e}");
 }
 
 fn cli(args: &[&str]) -> (i32, String) {

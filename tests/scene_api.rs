@@ -112,7 +112,10 @@ fn a_scene_built_in_code_renders_as_its_file_and_moves_as_edited() {
     two_interface.quality.transport = Transport::TwoInterface;
     r.set_settings(two_interface).unwrap();
     let e = r.add_instance(floor, "mirror", Material::Mirror, at(-0.5)).unwrap_err().to_string();
-    assert!(e.contains("mirror") && e.contains("--transport exact"), "{e}");
+    assert!(
+        e.contains("mirror") && e.contains("Quality::transport = two-interface") && e.contains("exact transport"),
+        "{e}"
+    );
     assert_eq!(r.scene().objects.len(), objects, "a refused instance leaves the scene as it was");
     assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }

@@ -28,7 +28,16 @@ pub const FLAGS: &[(&str, &str)] = &[
     ("RefParams::photons", "--photons"),
     ("RefParams::width", "--size"),
     ("RefParams::time", "--time"),
+    ("RefParams::camera", "--camera"),
 ];
+
+/// `Scene::camera`'s error for `--camera NAME`.
+pub fn camera_error(name: Option<&str>, e: String) -> Error {
+    match name {
+        Some(n) => Error::BadInput(format!("--camera {n}: {e}")),
+        None => Error::BadInput(e),
+    }
+}
 
 /// An error as the CLI prints it: a setting by its flag, anything else as the library words it.
 pub fn message(e: &Error) -> String {

@@ -80,8 +80,8 @@ impl ReferenceArgs {
         }
         Ok(RefParams {
             camera: self.camera.clone(),
-            aov: self.aov.parse().map_err(Error::BadInput)?,
-            paths: self.paths.parse().map_err(Error::BadInput)?,
+            aov: self.aov.parse().map_err(|e| Error::BadInput(format!("--aov: {e}")))?,
+            paths: self.paths.parse().map_err(|e| Error::BadInput(format!("--paths: {e}")))?,
             photons: self.photons,
             width,
             height,

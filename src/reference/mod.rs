@@ -335,7 +335,7 @@ pub struct RefOutput {
 }
 
 fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> Result<&'a crate::scene::Camera> {
-    let camera = scene.camera(name).map_err(Error::BadInput)?;
+    let camera = scene.camera(name).map_err(|e| Error::setting("RefParams::camera", name.unwrap_or(""), e))?;
     if let Projection::Perspective { .. } = camera.projection {
         let ortho: Vec<&str> = scene
             .cameras
@@ -346,13 +346,17 @@ fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> Result<&'a c
         let usable = if ortho.is_empty() {
             "the scene has no orthographic camera: add one (docs/scenes.md)".to_string()
         } else {
-            format!("orthographic: {}", ortho.join(", "))
+            format!("its orthographic cameras: {}", ortho.join(", "))
         };
-        return Err(Error::BadInput(format!(
-            "{}: camera `{}` is perspective; the reference bins into orthographic cameras only ({usable})",
-            scene.path.display(),
-            camera.name
-        )));
+        return Err(Error::setting(
+            "RefParams::camera",
+            &camera.name,
+            format!(
+                "{}: camera `{}` is perspective; the reference bins into orthographic cameras only ({usable})",
+                scene.path.display(),
+                camera.name
+            ),
+        ));
     }
     Ok(camera)
 }

@@ -505,9 +505,11 @@ impl Scene {
     pub fn camera(&self, name: Option<&str>) -> Result<&Camera, String> {
         let names = || self.cameras.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ");
         match name {
-            Some(n) => self.cameras.iter().find(|c| c.name == n).ok_or_else(|| {
-                format!("camera `{n}`: {} has no camera named `{n}` (cameras: {})", self.path.display(), names())
-            }),
+            Some(n) => self
+                .cameras
+                .iter()
+                .find(|c| c.name == n)
+                .ok_or_else(|| format!("{} has no camera named `{n}` (cameras: {})", self.path.display(), names())),
             None => self.cameras.first().ok_or_else(|| format!("{}: the scene has no [[camera]]", self.path.display())),
         }
     }

@@ -1,5 +1,6 @@
 //! The `render` and `profile` commands (the CLI edge: arguments in, files and stats out).
 
+use crate::app::flags::camera_error;
 use crate::app::profiler;
 use caustics::consts::*;
 use caustics::error::{Error, Result};
@@ -380,7 +381,7 @@ impl Session {
             return Err(Error::BadInput(format!("--time {}: must be finite", args.time)));
         }
         scene.set_time(args.time);
-        let camera = scene.camera(args.camera.as_deref()).map_err(Error::BadInput)?.clone();
+        let camera = scene.camera(args.camera.as_deref()).map_err(|e| camera_error(args.camera.as_deref(), e))?.clone();
         let (width, height) = caustics::settings::output_size(args.size.as_deref(), "--size", &camera)?;
         let desc = ContextDesc::from_env();
         let ctx = Context::headless(&desc)?;

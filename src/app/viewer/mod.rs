@@ -161,7 +161,7 @@ fn pick_camera(scene: &Scene, name: Option<&str>) -> Result<Camera> {
             return Ok(c.clone());
         }
     }
-    Ok(scene.camera(name).map_err(Error::BadInput)?.clone())
+    Ok(scene.camera(name).map_err(|e| crate::app::flags::camera_error(name, e))?.clone())
 }
 
 pub fn run(args: &ViewArgs) -> Result<()> {
