@@ -179,6 +179,7 @@ bool wave_row(uint k) {
     if (k == ACC_CAUSTIC || k == ACC_OVERFLOW || k == ACC_ONE_EVENT) return false;  // the pending rows hold them
     if (rare_term(k)) return false;
     if (k == ACC_EMITTED || k == ACC_DIRECT) return WAVE_PRIMARY;
+    if (k == ACC_UNSEEN) return !WAVE_PRIMARY;
     if (k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE) return !WAVE_PRIMARY;
     return true;
 }
@@ -240,16 +241,22 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     return t;
 }
 
-// A ray of a bounce wave reaches a diffuse receiver at p: its splat record. (Wave 0's rays have met nothing yet.)
+// A ray of a bounce wave reaches a diffuse receiver at p: its splat record, where the light's view sees p (else the
+// caustic map cannot hold it: ACC_UNSEEN). (Wave 0's rays have met nothing yet.)
 void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
     GpuView rv = u_frame.receiver_view;
+    vec2 uv;
+    if (!receiver_seen(rv, t_recv, p, uv)) {
+        acc[ACC_UNSEEN] += flux;
+        return;
+    }
     uint r = t.lod ? side_splat_radius(weak_widen(t.cell) * cell_side(cell_level(t.cell))) : cell_splat_radius(t.cell);
     // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius traversal
     // gave it (its children's spread): the parallelogram the whole cell covers where it lands, which a round splat
     // of the spread fits only where that is round.
     float shape = WAVE_DIFFERENTIAL ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
                                     : float(r);
-    o.record = GpuSplat(view_uv(rv, p) * rv.extent.xy, flux * u_frame.light_intensity, shape);
+    o.record = GpuSplat(uv * rv.extent.xy, flux * u_frame.light_intensity, shape);
     o.rec = true;
     o.rec_flux = flux;
     o.one_event = t.depth == 1u;

@@ -172,7 +172,8 @@ pub struct TraversalState {
 /// (`--weak-branches`): `weak_left`, the flux photons left to the sibling that carries their block's weak branches,
 /// and `weak_carried`, the extra flux those carriers took on. The account closes as
 /// `emitted + weak_carried = caustics + direct + escaped + cut_threshold + cut_cap + lost + overflow + absorbed +
-/// weak_left` ([`TransportState::residual`]).
+/// weak_left + unseen` ([`TransportState::residual`]); `unseen` is caustic light the caustic map cannot hold
+/// (`ACC_UNSEEN`).
 pub const ACCOUNT_TERMS: [&str; ACC_TERMS as usize] = [
     "emitted",
     "caustics",
@@ -186,6 +187,7 @@ pub const ACCOUNT_TERMS: [&str; ACC_TERMS as usize] = [
     "caustics_one_interaction",
     "weak_left",
     "weak_carried",
+    "unseen",
 ];
 
 /// Exact transport (docs/design.md step 4, `--transport exact`): the state of the waves of one batch and the
@@ -193,7 +195,7 @@ pub const ACCOUNT_TERMS: [&str; ACC_TERMS as usize] = [
 /// to queue (k + 1) & 1 with atomicAdd; the transport shader turns out_count into the next wave's dispatch
 /// arguments. Account terms are flux / light intensity (sr for spot lights, m² for directional ones) in 64-bit
 /// fixed point (2^ACCOUNT_SHIFT units per 1), added as (lo, hi) word pairs with a carry, so the sums are exact
-/// and repeatable. The terms' indices (`ACC_EMITTED` ... `ACC_WEAK_CARRIED`, `ACC_TERMS`) are constants of
+/// and repeatable. The terms' indices (`ACC_EMITTED` ... `ACC_UNSEEN`, `ACC_TERMS`) are constants of
 /// src/shader_consts.rs.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -266,7 +268,7 @@ impl TransportState {
         // Terms 1..=8 and weak_left partition what came in; one-interaction is a part of `caustics`.
         let term = |k: u32| a[k as usize];
         let input = term(ACC_EMITTED) + term(ACC_WEAK_CARRIED);
-        let out: f64 = (ACC_CAUSTIC..=ACC_ABSORBED).map(term).sum::<f64>() + term(ACC_WEAK_LEFT);
+        let out: f64 = (ACC_CAUSTIC..=ACC_ABSORBED).map(term).sum::<f64>() + term(ACC_WEAK_LEFT) + term(ACC_UNSEEN);
         if term(ACC_EMITTED) > 0.0 {
             (input - out).abs() / term(ACC_EMITTED)
         } else {

@@ -57,8 +57,13 @@ pub const ACC_ONE_EVENT: u32 = 9;
 pub const ACC_WEAK_LEFT: u32 = 10;
 /// The extra flux the weight carriers took on for their siblings (an input: emitted + carried = the outputs).
 pub const ACC_WEAK_CARRIED: u32 = 11;
+/// Reached a receiver after one or more specular interactions where the light's view sees another receiver (in
+/// front of it, or behind it), or outside the light's view: the caustic map, which holds one receiver per texel,
+/// cannot hold this light (the floor of a deep pool beside its wall, lit by refraction where the wall shades it
+/// along the light's straight rays).
+pub const ACC_UNSEEN: u32 = 12;
 /// Terms of the account.
-pub const ACC_TERMS: u32 = 12;
+pub const ACC_TERMS: u32 = 13;
 
 // The indirect-command buffer, in 16-byte commands: one dispatch per traversal level (0..MAX_LEVELS), then these.
 /// The two-interface trace's dispatch.

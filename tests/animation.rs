@@ -3,6 +3,7 @@
 //! bad keyframes refused. In process on the shared device under validation, except the CLI's own checks.
 
 mod common;
+use caustics::consts::{ACC_CAUSTIC, ACC_UNSEEN};
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
 use caustics::reference::{Aov as RefAov, Paths};
@@ -73,9 +74,16 @@ fn keyframed_glass_matches_the_reference_at_its_times() {
 #[test]
 fn water_matches_the_reference_at_its_times() {
     for (t, (m, report, change)) in TIMES.into_iter().zip(against_reference(POOL, 3, 2.2)) {
-        // Measured rel-L1 0.069, 0.079, 0.053 and flux ratios 1.011, 1.012, 1.012 (dense level 3; the floor and
-        // walls seen from above).
-        assert!(m.rel_l1 < 0.12 && (m.flux_ratio - 1.0).abs() < 0.02, "t = {t} s: {m:?}");
+        // The caustic light the caustic map cannot hold (`unseen`: refracted under the walls' rims, where the light's
+        // straight rays see the rims) is missing from the image and nowhere else: the image's flux is the
+        // reference's less that share. Measured rel-L1 0.060, 0.067, 0.057, flux ratios 0.960, 0.952, 0.962 and
+        // unseen shares 0.037, 0.045, 0.035, each pair summing to 0.997-0.998 (dense level 3; the floor and walls seen
+        // from above). Before the photons deposited by the receivers' rule, that light lit the rims: rel-L1 0.069,
+        // 0.079, 0.053, flux ratios 1.011-1.012.
+        let a = report.transport.expect("exact transport").account();
+        let unseen = a[ACC_UNSEEN as usize] / (a[ACC_CAUSTIC as usize] + a[ACC_UNSEEN as usize]);
+        eprintln!("t = {t} s: unseen share {unseen:.4}, flux ratio + share {:.4}", m.flux_ratio + unseen);
+        assert!(m.rel_l1 < 0.12 && (m.flux_ratio + unseen - 1.0).abs() < 0.01, "t = {t} s: {m:?}, unseen {unseen}");
         if let Some(change) = change {
             assert!(change > 0.05, "t = {t} s: the caustic did not change ({change})");
             assert_eq!((report.scene.blas_builds, report.scene.blas_refits), (0, 1), "t = {t} s: {:?}", report.scene);

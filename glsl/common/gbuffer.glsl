@@ -32,4 +32,20 @@ vec4 geo_fetch(usampler2D t, ivec2 p) {
 float geo_dist(usampler2D t, ivec2 p) { return uintBitsToFloat(texelFetch(t, p, 0).x); }
 float geo_dist(sampler2D t, ivec2 p) { return texelFetch(t, p, 0).w; }
 
+// Whether p is the receiver surface that a light of view lv sees at p's texel of its receivers' g-buffer recv (at
+// the same distance, within four texels' footprint), so that the light's caustic map, one receiver per texel, holds
+// the light that reaches p: the photons deposit only there (glsl/wave.comp, ACC_UNSEEN), and the receivers' shading
+// reads only there (common/receiver.glsl). Returns p's uv in the view. Defined where common/view.glsl came first.
+#ifdef VIEW_GLSL
+bool receiver_seen(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
+    uv = view_uv(lv, p);
+    if (!uv_inside_strict(uv)) return false;
+    ivec2 size = textureSize(recv, 0);
+    float r_dist = geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1));
+    float d = view_dist(lv, p);
+    float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
+    return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
+}
+#endif
+
 #endif

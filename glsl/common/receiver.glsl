@@ -59,15 +59,9 @@ vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, sampler2D s
 }
 
 // Is p the receiver surface the light of view lv sees (its receivers' g-buffer recv), so that its caustic map
-// holds p's irradiance? Returns its uv.
+// holds p's irradiance? Returns its uv. (The photons deposit by the same rule: receiver_seen, common/gbuffer.glsl.)
 bool caustic_visible_in(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
-    uv = view_uv(lv, p);
-    if (!uv_inside_strict(uv)) return false;
-    ivec2 size = textureSize(recv, 0);
-    float r_dist = geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1));
-    float d = view_dist(lv, p);
-    float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
-    return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
+    return receiver_seen(lv, recv, p, uv);
 }
 
 // Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) averaged over a footprint in
