@@ -368,7 +368,7 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
             },
             tuning: args.tuning.tuning(Driven::Gpu, TRAVERSE_WG),
         };
-        let mut session = Session::open(&scene_args, base.clone())?;
+        let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
         // Max-level's image per (transport, level), and the flux-error rows to score against it once the scene's
         // sweep is done (the methods may come in any order).
         let mut max_level_images: HashMap<(&'static str, u32), RgbImage> = HashMap::new();

@@ -319,7 +319,7 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         animation: None,
         environment: None,
     };
-    let mut session = Session::open(&scene_args, base.clone())?;
+    let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
     if session.pixel_area().is_none() {
         return Err(Error::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
     }

@@ -142,7 +142,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         animation: None,
         environment: None,
     };
-    let mut session = Session::open(&scene_args, base.clone())?;
+    let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
     let half_height = match session.camera.projection {
         Projection::Orthographic { half_height } => half_height,
         Projection::Perspective { .. } => {

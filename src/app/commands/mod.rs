@@ -27,16 +27,28 @@ pub use render::run_render;
 use stats::*;
 
 pub fn default_scene() -> PathBuf {
-    let here = PathBuf::from("assets/scenes/sphere.toml");
+    shipped_scene("sphere.toml")
+}
+
+/// The scene `render` and `view` open when given none: the pool in the sun, a picture worth keeping. The
+/// measuring commands (`profile`, `reference`, `bench`) open [`default_scene`], the glass ball the results use.
+pub fn first_picture_scene() -> PathBuf {
+    shipped_scene("swimming_pool.toml")
+}
+
+/// assets/scenes/`name`, from the working directory when it holds it, else from the source tree.
+fn shipped_scene(name: &str) -> PathBuf {
+    let here = PathBuf::from("assets/scenes").join(name);
     if here.is_file() {
         return here;
     }
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/sphere.toml")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/scenes").join(name)
 }
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct SceneArgs {
-    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/sphere.toml.
+    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/swimming_pool.toml for render,
+    /// assets/scenes/sphere.toml for profile.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Camera name (default: the scene's first camera).
@@ -370,11 +382,12 @@ pub const PROFILE_FRAMES_GPU: u32 = 20;
 pub const PROFILE_FRAMES_CPU: u32 = 3;
 
 impl Session {
-    pub fn open(args: &SceneArgs, settings: Settings) -> Result<Session> {
+    /// Opens `args.scene`, or the scene `default` names.
+    pub fn open(args: &SceneArgs, settings: Settings, default: fn() -> PathBuf) -> Result<Session> {
         if let Some(s) = &args.size {
             parse_size(s, "--size")?;
         }
-        let path = args.scene.clone().unwrap_or_else(default_scene);
+        let path = args.scene.clone().unwrap_or_else(default);
         let mut scene = Scene::load_with(&path, &load_options(args.animation.as_deref()))?;
         apply_environment(&mut scene, args.environment.as_deref())?;
         if !args.time.is_finite() {

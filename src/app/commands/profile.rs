@@ -10,7 +10,7 @@ pub fn run_profile(args: &ProfileArgs) -> Result<()> {
         image_io::check_output_dir(p)?;
     }
     let settings = args.method.settings()?;
-    let mut session = Session::open(&args.scene, settings)?;
+    let mut session = Session::open(&args.scene, settings, default_scene)?;
     // The profiler times every stage: nothing is reused.
     session.renderer.set_reuse(false);
     session.announce_defaults();

@@ -14,7 +14,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         check_sequence(args, n)?;
     }
     let settings = args.method.settings()?;
-    let mut session = Session::open(&args.scene, settings)?;
+    let mut session = Session::open(&args.scene, settings, first_picture_scene)?;
     session.renderer.set_reuse(!args.no_reuse);
     session.announce_defaults();
     session.plan(Some(aov))?;

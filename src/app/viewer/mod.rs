@@ -22,7 +22,7 @@ pub mod swapchain;
 pub use controls::{help_markdown, help_text, Action};
 pub use present::Capture;
 
-use crate::app::commands::{default_scene, load_options, MethodArgs};
+use crate::app::commands::{first_picture_scene, load_options, MethodArgs};
 use crate::app::profiler;
 use ash::vk;
 use caustics::consts::*;
@@ -66,7 +66,7 @@ const ANIMATION_TILT_DEG: f32 = 25.0;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct ViewArgs {
-    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/sphere.toml.
+    /// Scene file: TOML (.toml) or glTF 2.0 (.gltf, .glb). Default: assets/scenes/swimming_pool.toml.
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// An equirectangular environment map (.hdr or .exr) in place of the scene's (as `render --environment`).
@@ -186,7 +186,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         }
     }
     let script = args.script.as_deref().map(Script::load).transpose()?;
-    let scene_path = args.scene.clone().unwrap_or_else(default_scene);
+    let scene_path = args.scene.clone().unwrap_or_else(first_picture_scene);
     let mut scene = Scene::load_with(&scene_path, &load_options(args.animation.as_deref()))?;
     crate::app::commands::apply_environment(&mut scene, args.environment.as_deref())?;
     if !args.time.is_finite() {
@@ -613,7 +613,7 @@ impl Viewer {
             scene_playing,
             scene_time,
             frame_dt: args.frame_dt,
-            scene_path: args.scene.clone().unwrap_or_else(default_scene),
+            scene_path: args.scene.clone().unwrap_or_else(first_picture_scene),
             environment: args.environment.clone(),
             offsets: vec![Vec3::ZERO; placements.len()],
             placements,
