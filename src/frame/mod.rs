@@ -107,7 +107,7 @@ pub(crate) struct FramePlan<'a> {
     pub reused: bool,
     /// The eye view of the last frame serves this one too: steps 7 and 8 are not recorded.
     pub eye_reused: bool,
-    /// A preview: one eye sample per pixel, glass by the two-surface deferred refraction.
+    /// A preview: one eye sample per pixel (glass traced as in a still, at the preview's resolution).
     pub preview: bool,
     /// The AOV to copy to the readback buffer.
     pub aov: Option<Aov>,
@@ -195,7 +195,6 @@ struct Ctx<'a> {
     pass: usize,
     channel: usize,
     s: &'a ResolvedSettings,
-    preview: bool,
     data: &'a FrameData,
     /// The records are splatted by the compute pass into the flux texels (else drawn as points).
     compute_splat: bool,
@@ -311,7 +310,6 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         pass: p,
         channel: p % nc,
         s,
-        preview: plan.preview,
         data: &plan.data[p],
         compute_splat,
         tiled_splat: s.splat == Splat::Tiled,

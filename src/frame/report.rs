@@ -116,7 +116,7 @@ pub struct FrameReport {
     pub reused: bool,
     /// The photon level this frame rendered (below the chosen one while the viewer refines progressively).
     pub level: u32,
-    /// A viewer preview: one eye sample per pixel, glass by two-surface deferred refraction.
+    /// A viewer preview: one eye sample per pixel (glass traced as in a still under exact transport).
     pub preview: bool,
     /// Nothing the eye view depends on changed since the last frame (camera, lights, settings, the caustic map):
     /// its beauty image was presented again, and no eye or composite pass was recorded.

@@ -218,10 +218,12 @@ impl Ctx<'_> {
         );
     }
 
-    /// The composite traces eye rays through the BVH (exact transport, full-quality frames); else it refracts
-    /// through the eye's front and back buffers.
+    /// The composite traces eye rays through the BVH under exact transport, previews too (at their resolution and
+    /// one sample, so that a preview is coarser than a still, never wrong); else it refracts through the eye's
+    /// front and back buffers, whose two surfaces miss what lies between (a pool's water block is one front
+    /// surface over a floor that stands in it).
     pub(super) fn exact_eye(&self) -> bool {
-        self.s.transport == Transport::Exact && !self.preview
+        self.s.transport == Transport::Exact
     }
 
     fn composite_inputs<'b>(&'b self, more_lights: &'b [LightMaps<'b>]) -> CompositeInputs<'b> {

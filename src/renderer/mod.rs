@@ -102,7 +102,7 @@ pub struct FrameDesc<'a> {
     pub aov: Option<Aov>,
     /// Render at this level when it is below the settings' level (progressive refinement); None: the settings'.
     pub level: Option<u32>,
-    /// A preview: one eye sample per pixel, and glass by the two-surface deferred refraction.
+    /// A preview: one eye sample per pixel (glass traced as in a still under exact transport).
     pub preview: bool,
 }
 

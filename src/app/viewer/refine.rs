@@ -4,7 +4,8 @@
 //! Progressive refinement: an interactive level while the light or the glass changes, then one level more per
 //! frame up to the chosen one (each frame complete and flux-correct at its level). The eye view's detail waits for
 //! the view to hold still: a frame in which the camera, the light or the glass moved, or that is still refining,
-//! is a preview (one eye sample per pixel, glass by two-surface deferred refraction, maybe at a lower resolution).
+//! is a preview (one eye sample per pixel, maybe at a lower resolution; glass traced as in a still under exact
+//! transport).
 
 /// GPU time the eye view of a preview frame (eye and composite passes) aims at: above it, previews are drawn at a
 /// lower resolution (dynamic resolution, `--preview-scale auto`).
