@@ -49,9 +49,7 @@ impl Error {
             _ => 1,
         }
     }
-}
 
-impl Error {
     /// A [`Error::Setting`].
     pub fn setting(field: &'static str, value: impl std::fmt::Display, rule: impl Into<String>) -> Error {
         Error::Setting { field, value: value.to_string(), rule: rule.into() }

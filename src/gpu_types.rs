@@ -265,7 +265,7 @@ impl TransportState {
     /// nothing was emitted).
     pub fn residual(&self) -> f64 {
         let a = self.account();
-        // Terms 1..=8 and weak_left partition what came in; one-interaction is a part of `caustics`.
+        // Terms 1..=8, weak_left and unseen partition what came in; one-interaction is a part of `caustics`.
         let term = |k: u32| a[k as usize];
         let input = term(ACC_EMITTED) + term(ACC_WEAK_CARRIED);
         let out: f64 = (ACC_CAUSTIC..=ACC_ABSORBED).map(term).sum::<f64>() + term(ACC_WEAK_LEFT) + term(ACC_UNSEEN);

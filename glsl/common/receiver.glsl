@@ -58,18 +58,12 @@ vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, sampler2D s
     return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, p, n);
 }
 
-// Is p the receiver surface the light of view lv sees (its receivers' g-buffer recv), so that its caustic map
-// holds p's irradiance? Returns its uv. (The photons deposit by the same rule: receiver_seen, common/gbuffer.glsl.)
-bool caustic_visible_in(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
-    return receiver_seen(lv, recv, p, uv);
-}
-
 // Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) averaged over a footprint in
 // its caustic map spanned by the uv offsets dx, dy (up to 8x8 bilinear taps), so that a caustic sharper than the
 // footprint keeps its flux.
 vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
     vec2 uv;
-    if (!caustic_visible_in(lv, recv, p, uv)) return vec3(0.0);
+    if (!receiver_seen(lv, recv, p, uv)) return vec3(0.0);  // the map holds another receiver's light there
     vec2 size = vec2(textureSize(irr, 0));
     int nx = int(clamp(ceil(length(dx * size)), 1.0, 8.0));
     int ny = int(clamp(ceil(length(dy * size)), 1.0, 8.0));

@@ -335,7 +335,10 @@ pub struct RefOutput {
 }
 
 fn orthographic_camera<'a>(scene: &'a Scene, name: Option<&str>) -> Result<&'a crate::scene::Camera> {
-    let camera = scene.camera(name).map_err(|e| Error::setting("RefParams::camera", name.unwrap_or(""), e))?;
+    let camera = scene.camera(name).map_err(|e| match name {
+        Some(n) => Error::setting("RefParams::camera", n, e),
+        None => Error::BadInput(e), // the scene has no camera at all
+    })?;
     if let Projection::Perspective { .. } = camera.projection {
         let ortho: Vec<&str> = scene
             .cameras

@@ -164,45 +164,32 @@ impl Drop for Renderer {
 
 /// The two-interface model refracts through front and back glass surfaces; it has no mirrors.
 fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
-    if settings.transport == Transport::TwoInterface {
-        if let Some(o) = scene
-            .objects
-            .iter()
-            .find(|o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0))
-        {
-            return Err(Error::setting(
-                "Quality::transport",
-                "two-interface",
-                format!(
-                    "{}: object `{}` absorbs: absorption needs exact transport (the two-interface model has none)",
-                    scene.path.display(),
-                    o.name
-                ),
-            ));
-        }
-        if let Some(m) = scene.objects.iter().find(|o| o.is_mirror()) {
-            return Err(Error::setting(
-                "Quality::transport",
-                "two-interface",
-                format!(
-                    "{}: object `{}` is a mirror: mirrors need exact transport (the two-interface model only refracts)",
-                    scene.path.display(),
-                    m.name
-                ),
-            ));
-        }
-        if let Some(o) =
-            scene.objects.iter().find(|o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0))
-        {
-            return Err(Error::setting(
-                "Quality::transport",
-                "two-interface",
-                format!(
-                "{}: object `{}` disperses (`abbe`): dispersion needs exact transport (the two-interface model has one IOR per texel)",
+    if settings.transport != Transport::TwoInterface {
+        return Ok(());
+    }
+    // (what the object does and what that needs, what the two-interface model lacks, whether an object does it)
+    type Needs = (&'static str, &'static str, fn(&crate::scene::Object) -> bool);
+    let needs: [Needs; 3] = [
+        (
+            "absorbs: absorption needs",
+            "has none",
+            |o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0),
+        ),
+        ("is a mirror: mirrors need", "only refracts", |o| o.is_mirror()),
+        (
+            "disperses (`abbe`): dispersion needs",
+            "has one IOR per texel",
+            |o| matches!(o.material, Material::Dielectric { abbe, .. } if abbe > 0.0),
+        ),
+    ];
+    for (does, lacks, test) in needs {
+        if let Some(o) = scene.objects.iter().find(|o| test(o)) {
+            let rule = format!(
+                "{}: object `{}` {does} exact transport (the two-interface model {lacks})",
                 scene.path.display(),
                 o.name
-            ),
-            ));
+            );
+            return Err(Error::setting("Quality::transport", "two-interface", rule));
         }
     }
     Ok(())
