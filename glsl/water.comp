@@ -1,7 +1,7 @@
 #version 460
 #include "generated/gpu_structs.glsl"
 // Water (src/scene/water.rs, which runs the same formula on the host): displace a water object's vertices to
-// the frame's time. The plain build writes its raster vertices in world space (from the object-space rest
+// the frame's time, adding its simulated surface's heights (glsl/water_step.comp) where it has one. The plain build writes its raster vertices in world space (from the object-space rest
 // copies, through the instance's transform); the WATER_BVH build writes its BVH triangles and vertex normals in
 // object space (from their rest copies, in leaf order), which the refit (refit.comp) then bounds. A vertex at y = 0 rises to
 //   h = sum_i a_i sin(k_i (d_i . (x, z)) - w_i t),
@@ -16,9 +16,11 @@ layout(std430, set = 0, binding = 1) readonly buffer RestTris { vec4 rest_tris[]
 layout(std430, set = 0, binding = 2) readonly buffer RestNormals { vec4 rest_normals[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = 4) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Heights { float heights[]; };
 #else
 layout(std430, set = 0, binding = 1) readonly buffer ObjectVertices { Vertex object_vertices[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer WorldVertices { Vertex world_vertices[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Heights { float heights[]; };
 #endif
 
 layout(push_constant) uniform WaterPushBlock { WaterPush pc; };
@@ -33,6 +35,19 @@ void displace(inout vec3 p, inout vec3 n) {
         float phase = a.z * (a.x * p.x + a.y * p.z) - a.w * pc.time;
         h += amp * sin(phase);
         g += a.xy * (amp * a.z * cos(phase));
+    }
+    if (pc.heights != 0u) {
+        // The simulated surface at the nearest node (src/scene/water.rs Water::node), its gradient by central
+        // differences, zero across a wall (HeightField::at).
+        vec4 r = waves[2u * (pc.first_wave + pc.wave_count)];
+        uint nodes = floatBitsToUint(r.x);
+        float cells = float(nodes - 1u);
+        uint i = uint(clamp(round(p.x * 2.0 * r.y + 0.5 * cells), 0.0, cells));
+        uint j = uint(clamp(round(p.z * 2.0 * r.z + 0.5 * cells), 0.0, cells));
+        uint at = pc.heights - 1u + j * nodes + i;
+        h += heights[at];
+        if (i > 0u && i + 1u < nodes) g.x += (heights[at + 1u] - heights[at - 1u]) * r.y;
+        if (j > 0u && j + 1u < nodes) g.y += (heights[at + nodes] - heights[at - nodes]) * r.z;
     }
     p.y = h;
     if (n == vec3(0.0, 1.0, 0.0)) n = normalize(vec3(-g.x, 1.0, -g.y));

@@ -440,13 +440,42 @@ pub struct WaterPush {
     pub nrows: [[f32; 4]; 3],
     /// The scene's time, s.
     pub time: f32,
-    pub mode: u32,
+    /// 0 without a simulated surface, else 1 + the first float of its heights now in `SceneBuffers::heights`
+    /// (nodes and spacing in the record after its waves).
+    pub heights: u32,
     pub first_wave: u32,
     pub wave_count: u32,
     /// First vertex (mode 0) or rest triangle (mode 1) read, first vertex or BVH triangle written, and how many.
     pub src: u32,
     pub dst: u32,
     pub count: u32,
+}
+
+/// Push constants of water_step.comp: one step of a simulated water surface (`mode` WATER_STEP) or one drop into
+/// it (WATER_DROP), over its nodes² nodes (src/scene/water.rs runs the same on the host). Its heights are two
+/// slots of nodes² floats from `base` in `SceneBuffers::heights`; `slot` (0 or 1) holds the heights now, the other
+/// those one step before, which the step overwrites with the next.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct WaterStepPush {
+    pub base: u32,
+    pub nodes: u32,
+    pub mode: u32,
+    pub slot: u32,
+    /// 1 − γ Δt, (c Δt / Δx)², (c Δt / Δz)² and the largest |h| (m).
+    pub keep: f32,
+    pub cx: f32,
+    pub cz: f32,
+    pub limit: f32,
+    /// The water's size in x and z and its depth, m.
+    pub size_x: f32,
+    pub size_z: f32,
+    pub depth: f32,
+    pub body_count: u32,
+    /// WATER_DROP: (x, z, radius, depth), m.
+    pub drop: [f32; 4],
+    /// WATER_STEP: each body's sphere (center, radius) at the step's start, then at its end.
+    pub bodies: [[f32; 4]; 4],
 }
 
 /// Push constants of morph.comp: one morphing object's vertices weighted by its morph targets (mode 0: its raster
@@ -513,6 +542,7 @@ const _: () = {
     // Within the 128 bytes of push constants every device has.
     assert!(size_of::<SceneUpdatePush>() <= 128);
     assert!(size_of::<WaterPush>() <= 128);
+    assert!(size_of::<WaterStepPush>() <= 128);
     assert!(size_of::<MorphPush>() <= 128);
     assert!(size_of::<GeometryPush>() <= 128);
     // `wave_rays_pairs` holds waves 0 to MAX_INTERACTIONS and a pad.

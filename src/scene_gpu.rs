@@ -36,10 +36,80 @@ pub struct ObjectRange {
 /// refits its BVH.
 #[derive(Clone, Copy, Debug)]
 pub enum Deformer {
-    /// Water: its waves in `SceneBuffers::waves` (first, count).
-    Water(u32, u32),
+    /// Water: its waves, and its simulated surface.
+    Water(WaterRange),
     /// Morph targets.
     Morph(MorphRange),
+}
+
+/// A water object's part of `SceneBuffers::waves` and `heights`.
+#[derive(Clone, Copy, Debug)]
+pub struct WaterRange {
+    /// Its first wave (two vec4 each) and how many.
+    pub first_wave: u32,
+    pub wave_count: u32,
+    /// Its simulated surface: the first of its heights' two slots of nodes² floats in `SceneBuffers::heights`,
+    /// and its step (its nodes and spacing are also in `waves`, the record after its waves).
+    pub simulation: Option<(u32, crate::scene::water::StepCoefficients)>,
+}
+
+/// Where a simulated water surface stands on the GPU: steps taken since rest, and the slot holding its heights
+/// now. The scene update steps it to the frame's time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SimulationState {
+    pub steps: u64,
+    pub slot: u32,
+}
+
+/// What the deforming objects upload: water's waves and the size of its heights, and the morph targets and
+/// the count of their weights.
+#[derive(Default)]
+struct DeformData {
+    waves: Vec<[f32; 4]>,
+    heights: u32,
+    morphs: Vec<[f32; 4]>,
+    weights: u32,
+}
+
+impl DeformData {
+    /// Water `w`'s waves, and its simulated surface's record and heights.
+    fn water(&mut self, w: &crate::scene::water::Water) -> WaterRange {
+        let first_wave = self.waves.len() as u32 / 2;
+        for wave in &w.waves {
+            let k = std::f32::consts::TAU / wave.wavelength;
+            self.waves.push([wave.direction.x, wave.direction.y, k, k * wave.speed]);
+            self.waves.push([wave.amplitude, 0.0, 0.0, 0.0]);
+        }
+        let simulation = w.step_coefficients().map(|k| {
+            self.waves.push([f32::from_bits(k.nodes), 0.5 / k.dx, 0.5 / k.dz, 0.0]);
+            self.waves.push([0.0; 4]);
+            let base = self.heights;
+            self.heights += 2 * k.nodes * k.nodes;
+            (base, k)
+        });
+        WaterRange { first_wave, wave_count: w.waves.len() as u32, simulation }
+    }
+
+    /// A morphing mesh's base (`base`, object space) and targets.
+    fn morph(&mut self, base: &crate::scene::Mesh, m: &crate::scene::morph::Morph) -> MorphRange {
+        let range = MorphRange {
+            first: self.morphs.len() as u32 / 2,
+            vertices: base.positions.len() as u32,
+            targets: m.targets.len() as u32,
+            first_weight: self.weights,
+        };
+        let v4 = |v: &glam::Vec3| [v.x, v.y, v.z, 0.0];
+        for (p, n) in base.positions.iter().zip(&base.normals) {
+            self.morphs.extend([v4(p), v4(n)]);
+        }
+        for t in &m.targets {
+            for (k, p) in t.positions.iter().enumerate() {
+                self.morphs.extend([v4(p), t.normals.get(k).map_or([0.0; 4], v4)]);
+            }
+        }
+        self.weights += range.targets;
+        range
+    }
 }
 
 /// A morphing object's part of `SceneBuffers::morphs` and `morph_weights`.
@@ -73,8 +143,13 @@ pub struct SceneBuffers {
     /// The IOR every refractor's vertices carry, when they all carry the same ([`shared_ior`]).
     pub shared_ior: Option<f32>,
     pub bvh: BvhBuffers,
-    /// Every water object's waves, two vec4 each: (direction x, direction z, k, ω) and (amplitude, 0, 0, 0).
+    /// Every water object's waves, two vec4 each: (direction x, direction z, k, ω) and (amplitude, 0, 0, 0);
+    /// after a simulated one's, a record (nodes as bits, 1 / 2Δx, 1 / 2Δz, 0) and a pad.
     pub waves: Buffer,
+    /// Every simulated water surface's heights (m), two slots each ([`WaterRange::simulation`]).
+    pub heights: Buffer,
+    /// Per scene object: where its simulated surface stands on the GPU (what the recorded frames stepped it to).
+    pub simulations: Vec<Option<SimulationState>>,
     /// Every morphing object's base vertices and morph targets (glsl/morph.comp), and their weights (the frame's
     /// scene update writes them).
     pub morphs: Buffer,
@@ -529,47 +604,38 @@ impl SceneBuffers {
             upload_buffer(device, recorder, "scene vertices (object space)", &object_vertices, storage)?;
         let object_indices = upload_buffer(device, recorder, "scene indices (object space)", &object_indices, storage)?;
         let bvh = BvhBuffers::placeholders(device, recorder)?;
-        let mut waves: Vec<[f32; 4]> = Vec::new();
-        let mut morphs: Vec<[f32; 4]> = Vec::new();
-        let mut weights = 0u32;
-        let deformers = scene
+        let mut data = DeformData::default();
+        let deformers: Vec<Option<Deformer>> = scene
             .objects
             .iter()
             .enumerate()
             .map(|(i, o)| {
                 let a = o.animation.as_ref()?;
                 if let Some(w) = &a.water {
-                    let first = waves.len() as u32 / 2;
-                    for wave in &w.waves {
-                        let k = std::f32::consts::TAU / wave.wavelength;
-                        waves.push([wave.direction.x, wave.direction.y, k, k * wave.speed]);
-                        waves.push([wave.amplitude, 0.0, 0.0, 0.0]);
-                    }
-                    return Some(Deformer::Water(first, w.waves.len() as u32));
+                    return Some(Deformer::Water(data.water(w)));
                 }
                 let m = a.morph.as_ref().filter(|m| m.is_animated())?;
                 // The mesh the GPU holds for it: its base, in object space.
-                let base = &instances.meshes[instances.objects[i].0];
-                let range = MorphRange {
-                    first: morphs.len() as u32 / 2,
-                    vertices: base.positions.len() as u32,
-                    targets: m.targets.len() as u32,
-                    first_weight: weights,
-                };
-                let v4 = |v: &glam::Vec3| [v.x, v.y, v.z, 0.0];
-                for (p, n) in base.positions.iter().zip(&base.normals) {
-                    morphs.extend([v4(p), v4(n)]);
-                }
-                for t in &m.targets {
-                    for (k, p) in t.positions.iter().enumerate() {
-                        morphs.extend([v4(p), t.normals.get(k).map_or([0.0; 4], v4)]);
-                    }
-                }
-                weights += range.targets;
-                Some(Deformer::Morph(range))
+                Some(Deformer::Morph(data.morph(&instances.meshes[instances.objects[i].0], m)))
             })
             .collect();
+        let DeformData { waves, heights, morphs, weights } = data;
         let waves = upload_buffer(device, recorder, "water waves", &nonempty(&waves), storage)?;
+        let simulations = deformers
+            .iter()
+            .map(|d| match d {
+                Some(Deformer::Water(w)) if w.simulation.is_some() => Some(SimulationState::default()),
+                _ => None,
+            })
+            .collect();
+        let heights = vec![0f32; heights.max(1) as usize];
+        let heights = upload_buffer(
+            device,
+            recorder,
+            "water heights",
+            &heights,
+            storage | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+        )?;
         let morphs = upload_buffer(device, recorder, "morph targets", &nonempty(&morphs), storage)?;
         let weights = vec![0f32; weights.max(1) as usize];
         let morph_weights =
@@ -578,6 +644,8 @@ impl SceneBuffers {
         Ok(SceneBuffers {
             images,
             waves,
+            heights,
+            simulations,
             morphs,
             morph_weights,
             deformers,
@@ -616,34 +684,41 @@ impl SceneUpdatePush {
 }
 
 impl WaterPush {
-    /// The raster vertices of object `range` placed by `world_from_object`, at `time`, with waves `waves`.
+    /// The raster vertices of object `range` placed by `world_from_object`, at `time`, with `water`'s waves and
+    /// its simulated surface's heights now (the first float of `heights`, when it has one).
     pub fn raster(
         world_from_object: glam::Mat4,
         range: &crate::scene_gpu::ObjectRange,
         time: f32,
-        waves: (u32, u32),
+        water: &crate::scene_gpu::WaterRange,
+        heights: Option<u32>,
     ) -> Self {
         let place = SceneUpdatePush::new(world_from_object, range);
         WaterPush {
             rows: place.rows,
             nrows: place.nrows,
             time,
-            mode: 0,
-            first_wave: waves.0,
-            wave_count: waves.1,
+            heights: heights.map_or(0, |h| h + 1),
+            first_wave: water.first_wave,
+            wave_count: water.wave_count,
             src: range.first_vertex,
             dst: range.first_vertex,
             count: range.vertex_count,
         }
     }
 
-    /// The BVH triangles of a deforming mesh (`r`), at `time`, with waves `waves`.
-    pub fn bvh(r: &crate::bvh::RefitMesh, time: f32, waves: (u32, u32)) -> Self {
+    /// The BVH triangles of a deforming mesh (`r`), at `time`, as [`WaterPush::raster`].
+    pub fn bvh(
+        r: &crate::bvh::RefitMesh,
+        time: f32,
+        water: &crate::scene_gpu::WaterRange,
+        heights: Option<u32>,
+    ) -> Self {
         WaterPush {
             time,
-            mode: 1,
-            first_wave: waves.0,
-            wave_count: waves.1,
+            heights: heights.map_or(0, |h| h + 1),
+            first_wave: water.first_wave,
+            wave_count: water.wave_count,
             src: r.rest_first,
             dst: r.first_tri,
             count: r.tri_count,

@@ -26,6 +26,10 @@ pub const MAX_PYRAMID_MIPS: u32 = 12;
 pub const MAX_BATCHES: u32 = 4096;
 /// Capacity of the GPU tile stack used by batching (depth-first: at most 3 per level, plus one).
 pub const TILE_STACK: u32 = 96;
+/// water_step.comp's modes: step a simulated water surface, or drop into it.
+pub const WATER_STEP: u32 = 0;
+/// See WATER_STEP.
+pub const WATER_DROP: u32 = 1;
 /// Exact transport: the most specular interactions a path may have before it is cut (the CPU reference's cap).
 pub const MAX_INTERACTIONS: u32 = 32;
 /// Exact transport: energy-account terms are fixed point with 2^ACCOUNT_SHIFT units per sr (or m²).

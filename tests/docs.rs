@@ -53,9 +53,26 @@ fn parser_keys(section: &str) -> BTreeSet<String> {
              waves = [{{ amplitude = 0.01, wavelength = 0.5, {probe} }}]\n"
         ),
         "[environment]" => format!("{BASE}\n[environment]\npath = \"x.hdr\"\n{probe}\n"),
+        // Two tables: `simulation.KEY` and `drops[].KEY`.
+        "simulation" => {
+            let water = |line: &str| {
+                format!(
+                    "{BASE}\n[[object]]\nname = \"w\"\nshape = \"water\"\nsize = 1.0\nmaterial = {{ kind = \"diffuse\" }}\n{line}\n"
+                )
+            };
+            let sim = parser_keys_of(&water(&format!("simulation = {{ {probe} }}")));
+            let drops = parser_keys_of(&water(&format!("drops = [{{ time = 0.0, at = [0.0, 0.0], {probe} }}]")));
+            let sim = sim.into_iter().map(|k| format!("simulation.{k}"));
+            return sim.chain(drops.into_iter().map(|k| format!("drops[].{k}"))).collect();
+        }
         s => panic!("unknown section {s}"),
     };
-    let e = Scene::parse(&text, Path::new("probe.toml")).unwrap_err().to_string();
+    parser_keys_of(&text)
+}
+
+/// The keys serde's unknown-field message for `text` (with one `zz_probe` key) lists.
+fn parser_keys_of(text: &str) -> BTreeSet<String> {
+    let e = Scene::parse(text, Path::new("probe.toml")).unwrap_err().to_string();
     let (_, expected) = e.split_once("expected").unwrap_or_else(|| panic!("no key list in `{e}`"));
     let keys: BTreeSet<String> = expected.split('`').skip(1).step_by(2).map(str::to_string).collect();
     assert!(e.contains("zz_probe") && !keys.is_empty(), "{e}");
@@ -90,6 +107,7 @@ fn scenes_md_matches_the_parser() {
             "[[object]]",
             "[[object.keyframe]]",
             "waves",
+            "simulation",
             "material",
             "[environment]"
         ]

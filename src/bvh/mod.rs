@@ -322,6 +322,7 @@ mod tests {
             depth: 0.42,
             grid: 64,
             waves: vec![wave(0.012, 0.7, 0.0, 0.35), wave(0.007, 0.41, 65.0, 0.28), wave(0.004, 0.23, 140.0, 0.22)],
+            simulation: None,
         };
         let rest = w.rest_mesh();
         let m = Material::Dielectric { ior: 1.33, absorption: Vec3::ZERO, abbe: 0.0 };
@@ -335,14 +336,14 @@ mod tests {
             // depth-first order from the root).
             let tris: Vec<[Vec3; 3]> = built.rest_tris[r.rest_first as usize..(r.rest_first + r.tri_count) as usize]
                 .iter()
-                .map(|g| g.p.map(|p| w.displace(Vec3::from_slice(&p[..3]), Vec3::Y, t).0))
+                .map(|g| g.p.map(|p| w.displace(Vec3::from_slice(&p[..3]), Vec3::Y, t, None).0))
                 .collect();
             let boxes = refit_boxes(&built, &r, &tris);
             if frame % 30 != 0 {
                 continue;
             }
             let refit = sah(&built.single_nodes, &boxes);
-            let displaced = w.displaced(&rest, t);
+            let displaced = w.displaced(&rest, t, None);
             let fresh = SceneBvh::build(&[&displaced], &object, &[]);
             let rebuilt = sah(&fresh.single_nodes, &single_boxes(&fresh.single_nodes));
             let ratio = refit / rebuilt;

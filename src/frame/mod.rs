@@ -59,6 +59,10 @@ pub(crate) struct SceneUpdate {
     pub moves: Vec<crate::gpu_types::SceneUpdatePush>,
     /// Every instance record, when the BVH is built and an object moved.
     pub instances: Option<Vec<crate::bvh::GpuInstance>>,
+    /// Simulated water surfaces put back at rest (ranges of `SceneBuffers::heights`: first float, count), then
+    /// stepped to the frame's time (drops and steps, in order), before they are displaced.
+    pub water_rest: Vec<(u32, u32)>,
+    pub water_steps: Vec<crate::gpu_types::WaterStepPush>,
     /// Water displaced to the frame's time: raster vertices (after `moves`), and BVH triangles.
     pub water_vertices: Vec<crate::gpu_types::WaterPush>,
     pub water_triangles: Vec<crate::gpu_types::WaterPush>,
@@ -75,6 +79,8 @@ impl SceneUpdate {
     fn is_empty(&self) -> bool {
         self.moves.is_empty()
             && self.instances.is_none()
+            && self.water_rest.is_empty()
+            && self.water_steps.is_empty()
             && self.water_vertices.is_empty()
             && self.water_triangles.is_empty()
             && self.morph_vertices.is_empty()
@@ -223,11 +229,25 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         update.write(rec.cmd, &sb.morph_weights, weights);
         rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
     }
+    if !up.water_rest.is_empty() || !up.water_steps.is_empty() {
+        rec.ts.mark(rec.cmd, "scene_update.water_steps");
+        if !up.water_rest.is_empty() {
+            rec.sync.buffer(&sb.heights, &[Access::TransferDst]);
+            rec.flush(d);
+            update.water_rest(rec.cmd, sb, &up.water_rest);
+        }
+        for job in &up.water_steps {
+            rec.sync.buffer(&sb.heights, &[Access::ComputeWrite]);
+            rec.flush(d);
+            update.water_step(rec.cmd, sb, job)?;
+        }
+    }
     rec.ts.mark(rec.cmd, "scene_update.vertices");
     if !up.moves.is_empty() || up.deforms_vertices() {
         rec.sync.buffer(&sb.object_vertices, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.object_indices, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.heights, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
@@ -259,6 +279,7 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.sync.buffer(&b.rest_normals, &[Access::ComputeRead]);
         rec.sync.buffer(&b.rest_corners, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.heights, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
         rec.sync.buffer(&b.triangles, &[Access::ComputeWrite]);

@@ -2,12 +2,13 @@
 //! object's vertices and triangles are placed in the world-space buffers the rasterizer draws (one dispatch of
 //! scene_update.comp per object, from its object-space copies), the BVH's instance records, which carry the
 //! transforms exact transport and the eye view's glass trace read, are written from the host's copy in the command
-//! buffer, and each deforming object is deformed to the frame's time (water.comp for water, morph.comp for morph
+//! buffer, each simulated water surface is stepped to the frame's time (water_step.comp: its drops, then one
+//! dispatch per step, each after the one before), and each deforming object is deformed to the frame's time (water.comp for water, morph.comp for morph
 //! targets, with the frame's weights written first: its raster vertices, and its BVH triangles) and its
 //! bottom-level BVH refit bottom-up (refit.comp). Nothing is rebuilt, nothing waits: the
 //! frame's barriers order the writes after the last frame's reads.
 
-use crate::gpu_types::{MorphPush, RefitPush, SceneUpdatePush, WaterPush};
+use crate::gpu_types::{MorphPush, RefitPush, SceneUpdatePush, WaterPush, WaterStepPush};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::LINEAR_WG;
@@ -21,6 +22,7 @@ pub struct SceneUpdatePass {
     place: LazyPipeline,
     water: LazyPipeline,
     water_bvh: LazyPipeline,
+    water_step: LazyPipeline,
     morph: LazyPipeline,
     morph_bvh: LazyPipeline,
     refit: LazyPipeline,
@@ -43,15 +45,22 @@ impl SceneUpdatePass {
             device,
             "water",
             shaders::WATER_COMP.words(),
-            &[BindKind::Storage; 3],
+            &[BindKind::Storage; 4],
             size(std::mem::size_of::<WaterPush>()),
         );
         let water_bvh = LazyPipeline::compute(
             device,
             "water (BVH triangles)",
             shaders::WATER_COMP_BVH.words(),
-            &[BindKind::Storage; 5],
+            &[BindKind::Storage; 6],
             size(std::mem::size_of::<WaterPush>()),
+        );
+        let water_step = LazyPipeline::compute(
+            device,
+            "water step",
+            shaders::WATER_STEP_COMP.words(),
+            &[BindKind::Storage; 1],
+            size(std::mem::size_of::<WaterStepPush>()),
         );
         let morph = LazyPipeline::compute(
             device,
@@ -74,7 +83,7 @@ impl SceneUpdatePass {
             &[BindKind::Storage; 8],
             size(std::mem::size_of::<RefitPush>()),
         );
-        SceneUpdatePass { device: device.clone(), place, water, water_bvh, morph, morph_bvh, refit }
+        SceneUpdatePass { device: device.clone(), place, water, water_bvh, water_step, morph, morph_bvh, refit }
     }
 
     /// Dispatch `groups` work groups of LINEAR_WG in rows (lavapipe caps a dimension at 65535 groups).
@@ -124,7 +133,12 @@ impl SceneUpdatePass {
 
     /// Displace water's raster vertices (each job one object, to world space).
     pub fn water_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
-        let binds = [Bind::Storage(&sb.waves), Bind::Storage(&sb.object_vertices), Bind::Storage(&sb.vertices)];
+        let binds = [
+            Bind::Storage(&sb.waves),
+            Bind::Storage(&sb.object_vertices),
+            Bind::Storage(&sb.vertices),
+            Bind::Storage(&sb.heights),
+        ];
         self.run(cmd, &self.water, &binds, jobs, |j| j.count)
     }
 
@@ -137,8 +151,22 @@ impl SceneUpdatePass {
             Bind::Storage(&b.rest_normals),
             Bind::Storage(&b.triangles),
             Bind::Storage(&b.normals),
+            Bind::Storage(&sb.heights),
         ];
         self.run(cmd, &self.water_bvh, &binds, jobs, |j| j.count)
+    }
+
+    /// One job of a simulated water surface (a drop, or a step) over its nodes. The caller orders each job after
+    /// the one before.
+    pub fn water_step(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, job: &WaterStepPush) -> VkResult<()> {
+        self.run(cmd, &self.water_step, &[Bind::Storage(&sb.heights)], std::slice::from_ref(job), |j| j.nodes * j.nodes)
+    }
+
+    /// Put simulated surfaces back at rest: each range of `sb.heights` (first float, count) zeroed.
+    pub fn water_rest(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, ranges: &[(u32, u32)]) {
+        for &(first, count) in ranges {
+            unsafe { self.device.cmd_fill_buffer(cmd, sb.heights.raw, first as u64 * 4, count as u64 * 4, 0) };
+        }
     }
 
     /// Morph the raster vertices of morphing objects (each job one object, to world space), with the weights in

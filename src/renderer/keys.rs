@@ -41,9 +41,9 @@ impl TargetsKey {
 pub(crate) struct CausticKey {
     pub lights: Vec<Light>,
     pub scene_generation: u64,
-    /// Every object's transform (moving one needs no new generation), and the scene's time (its bits) when
-    /// water deforms with it.
-    pub transforms: (Vec<glam::Mat4>, Option<u32>),
+    /// Every object's transform (moving one needs no new generation), and the scene's time (its bits) with the
+    /// drops into simulated water so far, when something deforms.
+    pub transforms: (Vec<glam::Mat4>, Option<(u32, u64)>),
     pub settings: ResolvedSettings,
     pub targets: Option<TargetsKey>,
 }
@@ -52,7 +52,7 @@ impl CausticKey {
     pub fn new(
         lights: &[Light],
         scene_generation: u64,
-        transforms: (Vec<glam::Mat4>, Option<u32>),
+        transforms: (Vec<glam::Mat4>, Option<(u32, u64)>),
         s: &ResolvedSettings,
         targets: Option<TargetsKey>,
     ) -> Self {

@@ -11,6 +11,9 @@ mod refit_tests;
 mod scene_api;
 mod uniforms;
 mod views;
+mod water;
+#[cfg(test)]
+mod water_tests;
 
 pub use crate::frame::{Aov, AovData, FrameReport, SlotVerdict};
 pub use estimate::FrameEstimate;
@@ -147,6 +150,8 @@ pub struct Renderer {
     caches: Caches,
     /// The frame-in-flight slot of the last frame recorded (a continuation reads its states from there).
     last_slot: usize,
+    /// What stepping the simulated water surfaces keeps between frames.
+    water: water::WaterSims,
 }
 
 /// Which passes of the last frame a continuation finishes, and the slot holding their states.
@@ -246,6 +251,7 @@ impl Renderer {
             instances,
             caches: Caches::default(),
             last_slot: 0,
+            water: Default::default(),
             device,
         })
     }
@@ -556,8 +562,10 @@ impl Renderer {
         use crate::scene_gpu::Deformer;
         let moved = self.instances.take_moved();
         let mut deformed: std::collections::BTreeSet<usize> = self.instances.take_deformed().into_iter().collect();
-        let sb = &mut self.scene_buffers;
         let mut up = SceneUpdate::default();
+        self.step_water(&mut up, &mut deformed);
+        let heights: Vec<Option<u32>> = (0..self.scene.objects.len()).map(|i| self.heights_now(i)).collect();
+        let sb = &mut self.scene_buffers;
         let mut bvh_moved = false;
         for &(i, transform) in &moved {
             up.moves.push(crate::gpu_types::SceneUpdatePush::new(transform, &sb.objects[i]));
@@ -574,8 +582,8 @@ impl Renderer {
         for &i in &deformed {
             let transform = self.instances.transform_of(i);
             match sb.deformers[i] {
-                Some(Deformer::Water(first, count)) => {
-                    up.water_vertices.push(WaterPush::raster(transform, &sb.objects[i], time, (first, count)))
+                Some(Deformer::Water(w)) => {
+                    up.water_vertices.push(WaterPush::raster(transform, &sb.objects[i], time, &w, heights[i]))
                 }
                 Some(Deformer::Morph(m)) => up.morph_vertices.push(MorphPush::raster(transform, &sb.objects[i], &m)),
                 None => {}
@@ -585,13 +593,13 @@ impl Renderer {
         // GPU holds their rest state (just built, or a layout just uploaded).
         let stale = std::mem::take(&mut sb.bvh.stale_deform);
         let mut refit_meshes = std::collections::BTreeSet::new();
-        for i in 0..sb.deformers.len() {
+        for (i, &heights) in heights.iter().enumerate() {
             let Some(deformer) = sb.deformers[i] else { continue };
             let mesh = self.instances.mesh_of(i);
             let Some(r) = sb.bvh.refit_mesh(mesh) else { continue };
             if (stale || deformed.contains(&i)) && refit_meshes.insert(mesh) {
                 match deformer {
-                    Deformer::Water(first, count) => up.water_triangles.push(WaterPush::bvh(&r, time, (first, count))),
+                    Deformer::Water(w) => up.water_triangles.push(WaterPush::bvh(&r, time, &w, heights)),
                     Deformer::Morph(m) => up.morph_triangles.push(MorphPush::bvh(&r, &m)),
                 }
                 up.refits.push(crate::gpu_types::RefitPush {
@@ -615,6 +623,13 @@ impl Renderer {
             up.morph_weights = Some(weights);
         }
         up
+    }
+
+    /// What the caustic maps depend on beyond the transforms when something deforms: the scene's time (its bits)
+    /// and the drops into simulated water so far.
+    fn deform_key(&self) -> Option<(u32, u64)> {
+        let deforms = self.scene_buffers.deformers.iter().any(|w| w.is_some());
+        deforms.then_some((self.scene.time.to_bits(), self.water.events))
     }
 
     /// Record a frame into `host_cmd` (the host's command buffer; the host submits it) or into the next slot's own
@@ -680,7 +695,7 @@ impl Renderer {
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
         // Water changes with the scene's time; rigid motion is in the transforms.
-        let deform_time = self.scene_buffers.deformers.iter().any(|w| w.is_some()).then_some(self.scene.time.to_bits());
+        let deform_time = self.deform_key();
         let key = CausticKey::new(
             &self.scene.lights,
             self.scene_generation,

@@ -106,6 +106,11 @@ impl Instances {
         &self.meshes[m]
     }
 
+    /// Deform object `i` again in the next frame's scene update.
+    pub fn mark_deformed(&mut self, i: usize) {
+        self.deformed.insert(i);
+    }
+
     /// Object `i`'s transform.
     pub fn transform_of(&self, i: usize) -> Mat4 {
         self.of_object[i].1

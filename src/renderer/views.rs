@@ -21,8 +21,19 @@ impl Views {
     /// The views of light `index`.
     pub fn new(scene: &Scene, settings: &ResolvedSettings, camera: &CameraView, index: usize) -> Result<Views> {
         let light = &scene.lights[index];
-        let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied());
-        let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied());
+        // A simulated water surface is not on the host (its heights live on the GPU): its block's bounds stand in.
+        let envelope = |o: &crate::scene::Object| {
+            let a = o.animation.as_ref().filter(|a| a.water.as_ref().is_some_and(|w| w.simulation.is_some()));
+            let corners = a.and_then(|a| Some((a.deform_bounds()?, a.transform_at(scene.time))));
+            corners.into_iter().flat_map(|((lo, hi), m)| {
+                (0..8).map(move |i| {
+                    let c = |k: usize, l: f32, h: f32| if i & k == 0 { l } else { h };
+                    m.transform_point3(glam::Vec3::new(c(1, lo.x, hi.x), c(2, lo.y, hi.y), c(4, lo.z, hi.z)))
+                })
+            })
+        };
+        let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied().chain(envelope(o)));
+        let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied().chain(envelope(o)));
         let recv = || scene.receivers().flat_map(|o| o.mesh.positions.iter().copied());
         let behind = |o: &&crate::scene::Object| {
             o.mesh

@@ -198,10 +198,11 @@ impl ObjectAnimation {
         self.local_mesh_at(t).transformed(self.transform_at(t))
     }
 
-    /// Its triangles in object space at time `t`: the water displaced, the morph targets weighted.
+    /// Its triangles in object space at time `t`: the water displaced by its waves (a simulated surface is the
+    /// scene's: [`Scene::set_time`] adds it), the morph targets weighted.
     pub fn local_mesh_at(&self, t: f32) -> Mesh {
         match (&self.water, &self.morph) {
-            (Some(w), _) => w.displaced(&self.mesh, t),
+            (Some(w), _) => w.displaced(&self.mesh, t, None),
             (None, Some(m)) => m.apply(&self.mesh, &m.weights_at(t)),
             (None, None) => self.mesh.clone(),
         }
@@ -398,15 +399,40 @@ impl Scene {
         objects.chain(self.movers.iter().map(|m| m.animation.duration())).fold(0.0, f32::max)
     }
 
-    /// Place every animated object, camera and light where it stands at time `t` (s).
+    /// Place every animated object, camera and light where it stands at time `t` (s), a simulated water surface
+    /// stepped from rest to `t` with its drops and the objects moving through it.
     pub fn set_time(&mut self, t: f32) {
-        for o in &mut self.objects {
-            if let Some(a) = o.animation.as_ref().filter(|a| a.changes()) {
-                o.mesh = a.mesh_at(t);
-            }
+        for i in 0..self.objects.len() {
+            let Some(a) = self.objects[i].animation.clone().filter(|a| a.changes()) else { continue };
+            self.objects[i].mesh = match &a.water {
+                Some(w) if w.simulation.is_some() => {
+                    let spheres = self.body_spheres();
+                    let field = w.simulate(t, &|t0, t1| self.water_bodies(i, t0, t1, &spheres));
+                    w.displaced(&a.mesh, t, field.as_ref()).transformed(a.transform_at(t))
+                }
+                _ => a.mesh_at(t),
+            };
         }
         self.time = t;
         self.place_movers();
+    }
+
+    /// Each object's sphere in its own space when it moves on keyframes and is not water (it may disturb water).
+    pub fn body_spheres(&self) -> Vec<Option<(Vec3, f32)>> {
+        let moves = |o: &Object| o.animation.as_ref().filter(|a| a.water.is_none() && a.animation.is_some()).cloned();
+        self.objects.iter().map(|o| moves(o).map(|a| water::bounding_sphere(&a.mesh))).collect()
+    }
+
+    /// The bodies that disturb water object `w` in a step from `t0` to `t1` s: the other objects that move on
+    /// keyframes, each as its bounding sphere (`spheres`, from [`Scene::body_spheres`]; [`water::bodies_in`]).
+    pub fn water_bodies(&self, w: usize, t0: f32, t1: f32, spheres: &[Option<(Vec3, f32)>]) -> Vec<water::Body> {
+        let Some(wa) = self.objects[w].animation.as_ref() else { return Vec::new() };
+        let Some(water) = &wa.water else { return Vec::new() };
+        let moving = self.objects.iter().zip(spheres).filter_map(|(o, s)| {
+            let (a, s) = (o.animation.as_ref()?, (*s)?);
+            Some((water::place_sphere(s, a.transform_at(t0)), water::place_sphere(s, a.transform_at(t1))))
+        });
+        water::bodies_in(water, wa.transform_at(t1).inverse(), moving)
     }
 
     /// The cameras and lights that animations move, placed at the scene's time (directional lights' beams start

@@ -81,6 +81,11 @@ pub struct ObjectDef {
     pub grid: Option<S<i64>>,
     #[serde(default)]
     pub waves: Vec<S<WaveDef>>,
+    /// Water: a simulated surface.
+    pub simulation: Option<S<SimulationDef>>,
+    /// Water: drops into its simulated surface.
+    #[serde(default)]
+    pub drops: Vec<S<DropDef>>,
     /// A room's sides left out.
     pub open: Option<S<Vec<String>>>,
     /// A lathe's profile: (radius, height) points.
@@ -105,6 +110,23 @@ pub struct WaveDef {
     pub wavelength: S<f32>,
     pub direction_deg: Option<S<f32>>,
     pub speed: Option<S<f32>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationDef {
+    pub speed: Option<S<f32>>,
+    pub damping: Option<S<f32>>,
+    pub limit: Option<S<f32>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct DropDef {
+    pub time: S<f32>,
+    pub at: S<[f32; 2]>,
+    pub radius: Option<S<f32>>,
+    pub depth: Option<S<f32>>,
 }
 
 #[derive(Deserialize, Debug)]

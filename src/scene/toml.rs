@@ -271,6 +271,61 @@ fn positive_size(cx: &Ctx, field: String, v: &S<::toml::Value>, n: usize) -> Res
     Ok(if n == 2 { Vec3::new(vals[0], 0.0, vals[1]) } else { Vec3::new(vals[0], vals[1], vals[2]) })
 }
 
+/// A water object's simulated surface and its drops (docs/scenes.md, "simulation"): drops alone simulate with
+/// the defaults.
+fn simulation_def(
+    cx: &Ctx,
+    d: &ObjectDef,
+    f: &dyn Fn(&str) -> String,
+) -> Result<Option<water::Simulation>, SceneError> {
+    let sim = d.simulation.as_ref();
+    if sim.is_none() && d.drops.is_empty() {
+        return Ok(None);
+    }
+    let get = |v: Option<&S<f32>>, field: &str, default: f32, ok: &dyn Fn(f32) -> bool, rule: &str| match v {
+        Some(v) if !ok(*v.get_ref()) => {
+            Err(cx.err(v.span(), f(&format!("simulation.{field}")), format!("{rule} (got {})", v.get_ref())))
+        }
+        Some(v) => Ok(*v.get_ref()),
+        None => Ok(default),
+    };
+    let s = sim.map(|s| s.get_ref());
+    let speed = get(s.and_then(|s| s.speed.as_ref()), "speed", 0.4, &|v| v.is_finite() && v > 0.0, "must be > 0 m/s")?;
+    let damping =
+        get(s.and_then(|s| s.damping.as_ref()), "damping", 0.5, &|v| v.is_finite() && v >= 0.0, "must be >= 0 per s")?;
+    let limit = get(s.and_then(|s| s.limit.as_ref()), "limit", 0.05, &|v| v.is_finite() && v > 0.0, "must be > 0 m")?;
+    let mut drops = Vec::new();
+    let mut last = f32::NEG_INFINITY;
+    for (k, dd) in d.drops.iter().enumerate() {
+        let df = |field: &str| f(&format!("drops[{k}].{field}"));
+        let dd = dd.get_ref();
+        let t = *dd.time.get_ref();
+        if !(t.is_finite() && t >= last && t >= 0.0) {
+            return Err(cx.err(
+                dd.time.span(),
+                df("time"),
+                format!("must be finite, >= 0 and not before the drop before it (got {t})"),
+            ));
+        }
+        last = t;
+        let at = *dd.at.get_ref();
+        if !at.iter().all(|v| v.is_finite()) {
+            return Err(cx.err(dd.at.span(), df("at"), FINITE));
+        }
+        let pos = |v: Option<&S<f32>>, field: &str, default: f32| match v {
+            Some(v) if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) => {
+                Err(cx.err(v.span(), df(field), format!("must be > 0 m (got {})", v.get_ref())))
+            }
+            Some(v) => Ok(*v.get_ref()),
+            None => Ok(default),
+        };
+        let radius = pos(dd.radius.as_ref(), "radius", 0.06)?;
+        let depth = pos(dd.depth.as_ref(), "depth", 0.01)?;
+        drops.push(water::Drop { time: t, at: glam::Vec2::from(at), radius, depth });
+    }
+    Ok(Some(water::Simulation { speed, damping, limit, drops }))
+}
+
 /// A water object's block and waves (docs/scenes.md, "waves").
 fn water_def(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<water::Water, SceneError> {
     let d = o.get_ref();
@@ -333,7 +388,8 @@ fn water_def(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<w
             speed,
         });
     }
-    let w = water::Water { size: glam::Vec2::new(size.x, size.z), depth, grid, waves };
+    let simulation = simulation_def(cx, d, f)?;
+    let w = water::Water { size: glam::Vec2::new(size.x, size.z), depth, grid, waves, simulation };
     if w.max_height() >= depth {
         let span = d.waves.first().map_or(o.span(), |v| v.span());
         return Err(cx.err(
@@ -579,7 +635,7 @@ fn shape(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<(Mesh
         "sphere" => &["radius", "subdivisions"],
         "cube" => &["size"],
         "mesh" => &["path"],
-        "water" => &["size", "depth", "grid", "waves"],
+        "water" => &["size", "depth", "grid", "waves", "simulation", "drops"],
         "room" => &["size", "open"],
         "lathe" => &["profile", "segments"],
         other => {
@@ -590,7 +646,7 @@ fn shape(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<(Mesh
             ))
         }
     };
-    let present: [(&str, Option<std::ops::Range<usize>>); 10] = [
+    let present: [(&str, Option<std::ops::Range<usize>>); 12] = [
         ("open", d.open.as_ref().map(|v| v.span())),
         ("profile", d.profile.as_ref().map(|v| v.span())),
         ("segments", d.segments.as_ref().map(|v| v.span())),
@@ -601,6 +657,8 @@ fn shape(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<(Mesh
         ("depth", d.depth.as_ref().map(|v| v.span())),
         ("grid", d.grid.as_ref().map(|v| v.span())),
         ("waves", d.waves.first().map(|v| v.span())),
+        ("simulation", d.simulation.as_ref().map(|v| v.span())),
+        ("drops", d.drops.first().map(|v| v.span())),
     ];
     for (field, span) in present {
         if let Some(span) = span {

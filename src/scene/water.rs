@@ -1,6 +1,8 @@
 //! Water: a height field over a rectangle, closed into a watertight block, displaced over time by a sum of
-//! directional sine waves. The same formula runs on the GPU (glsl/water.comp, every frame) and here (the CPU
-//! reference and the renderer's host copy), so any time of an animation can be checked.
+//! directional sine waves and, where the scene asks, a simulated surface: the damped wave equation stepped on the
+//! grid's nodes, disturbed by drops and by the objects that move through it ([`Simulation`]). The same formulas
+//! run on the GPU (glsl/water.comp and glsl/water_step.comp, every frame) and here (the CPU reference), so any time
+//! of an animation can be checked.
 //!
 //! In object space the surface rests at y = 0 over [-x/2, x/2] × [-z/2, z/2] and the block's bottom at y = -depth.
 //! At time t a surface point (x, z) rises to
@@ -43,7 +45,8 @@ pub const MAX_WAVES: usize = 8;
 /// The largest grid side (cells per side).
 pub const MAX_GRID: u32 = 4096;
 
-/// A water block: `grid`×`grid` cells over `size` (x, z) m, `depth` m deep, displaced by `waves`.
+/// A water block: `grid`×`grid` cells over `size` (x, z) m, `depth` m deep, displaced by `waves` and by its
+/// `simulation` when it has one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Water {
     /// Extent in x and z, m.
@@ -54,9 +57,303 @@ pub struct Water {
     pub grid: u32,
     /// At most MAX_WAVES waves.
     pub waves: Vec<Wave>,
+    /// The simulated surface, added to the waves.
+    pub simulation: Option<Simulation>,
+}
+
+/// A drop: at `time` s the surface at (x, z) = `at` (object space, m) sinks by `depth` m at its center, in a
+/// raised-cosine dimple of `radius` m, depth · (1 + cos(π r / radius)) / 2, at rest (the height and the height
+/// one step before both change).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drop {
+    /// When it lands, s.
+    pub time: f32,
+    /// Where, (x, z) in the water's object space, m.
+    pub at: Vec2,
+    /// The dimple's radius, m.
+    pub radius: f32,
+    /// How far its center sinks, m.
+    pub depth: f32,
+}
+
+/// A simulated surface: the damped wave equation
+///
+/// ```text
+/// ∂²h/∂t² = c² ∇²h − γ ∂h/∂t
+/// ```
+///
+/// on the grid's (grid + 1)² nodes, stepped `rate` times a second by the explicit leapfrog scheme
+///
+/// ```text
+/// h⁺ = h + (1 − γ Δt)(h − h⁻) + Cx (h_e + h_w − 2h) + Cz (h_n + h_s − 2h),   Cx = (c Δt / Δx)², Cz = (c Δt / Δz)²
+/// ```
+///
+/// which is stable while Cx + Cz ≤ 1 ([`Simulation::rate`] keeps it at most 1/4). The walls reflect: a node
+/// outside the grid mirrors the one inside (∂h/∂n = 0). Heights are held within ±`limit` m, the bound the light
+/// views and the BVH's bounds rely on. Before each step the drops whose time falls in it are added, and each
+/// moving body adds to every node the change of its submerged length in that node's column (the volume it takes
+/// from the column rises on top of it; the wave equation spreads it as a ring).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Simulation {
+    /// c, m/s.
+    pub speed: f32,
+    /// γ, 1/s.
+    pub damping: f32,
+    /// The largest |h|, m.
+    pub limit: f32,
+    /// Scripted drops, in time order.
+    pub drops: Vec<Drop>,
+}
+
+/// A moving body as the water sees it: a sphere in the water's object space (center, radius m) at the start and
+/// at the end of a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Body {
+    /// At the step's start.
+    pub from: (Vec3, f32),
+    /// At its end.
+    pub to: (Vec3, f32),
+}
+
+/// The most bodies that disturb one water object in a step (the first ones found in the scene's order).
+pub const MAX_BODIES: usize = 2;
+
+/// A sphere around `mesh`: (center, radius), about its box's center.
+pub fn bounding_sphere(mesh: &Mesh) -> (Vec3, f32) {
+    let (lo, hi) = mesh.bounds();
+    let c = (lo + hi) * 0.5;
+    (c, mesh.positions.iter().map(|p| (*p - c).length()).fold(0.0, f32::max))
+}
+
+/// Sphere `(c, r)` placed by `m` (a sphere around what it bounds, placed).
+pub fn place_sphere((c, r): (Vec3, f32), m: glam::Mat4) -> (Vec3, f32) {
+    (m.transform_point3(c), r * max_scale(m))
+}
+
+/// The largest factor by which `m` stretches a length.
+fn max_scale(m: glam::Mat4) -> f32 {
+    m.x_axis.truncate().length().max(m.y_axis.truncate().length()).max(m.z_axis.truncate().length())
+}
+
+/// The bodies that disturb `water` during a step: of the world-space spheres `moving` (at the step's start and
+/// end), the first [`MAX_BODIES`] that reach into the block at either end, in the water's object space
+/// (`object_from_world`, the inverse of its placement).
+pub fn bodies_in(
+    water: &Water,
+    object_from_world: glam::Mat4,
+    moving: impl Iterator<Item = ((Vec3, f32), (Vec3, f32))>,
+) -> Vec<Body> {
+    let s = max_scale(object_from_world);
+    let local = |(c, r): (Vec3, f32)| (object_from_world.transform_point3(c), r * s);
+    let reaches = |(c, r): (Vec3, f32)| {
+        c.x.abs() < water.size.x * 0.5 + r && c.z.abs() < water.size.y * 0.5 + r && c.y < r && c.y > -water.depth - r
+    };
+    moving
+        .map(|(a, b)| Body { from: local(a), to: local(b) })
+        .filter(|b| b.from != b.to && (reaches(b.from) || reaches(b.to)))
+        .take(MAX_BODIES)
+        .collect()
+}
+
+/// The coefficients of one simulation's step, computed once on the host for the CPU and the GPU alike.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepCoefficients {
+    /// Nodes per side (grid + 1).
+    pub nodes: u32,
+    /// Steps per second.
+    pub rate: u32,
+    /// 1 − γ Δt.
+    pub keep: f32,
+    /// (c Δt / Δx)².
+    pub cx: f32,
+    /// (c Δt / Δz)².
+    pub cz: f32,
+    /// The largest |h|, m.
+    pub limit: f32,
+    /// Node spacing in x and z, m.
+    pub dx: f32,
+    /// See `dx`.
+    pub dz: f32,
+    /// The water's depth below the rest surface, m (where a body's column ends).
+    pub depth: f32,
+}
+
+/// The submerged length of sphere (c, r) in the water column at (x, z): its chord there, cut to [−depth, 0].
+pub fn column_length(x: f32, z: f32, (c, r): (Vec3, f32), depth: f32) -> f32 {
+    let d2 = (x - c.x) * (x - c.x) + (z - c.z) * (z - c.z);
+    let s2 = r * r - d2;
+    if s2 <= 0.0 {
+        return 0.0;
+    }
+    let s = s2.sqrt();
+    ((c.y + s).min(0.0) - (c.y - s).max(-depth)).max(0.0)
+}
+
+/// A drop's dimple at (x, z): −depth · (1 + cos(π r / radius)) / 2 within its radius.
+pub fn drop_height(x: f32, z: f32, d: &Drop) -> f32 {
+    let r = ((x - d.at.x) * (x - d.at.x) + (z - d.at.y) * (z - d.at.y)).sqrt();
+    if r >= d.radius {
+        return 0.0;
+    }
+    -d.depth * 0.5 * (1.0 + (std::f32::consts::PI * r / d.radius).cos())
+}
+
+/// The state of a simulated surface: its heights now and one step before, on (grid + 1)² nodes (row-major in z,
+/// then x), after `steps` steps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeightField {
+    /// Its step.
+    pub k: StepCoefficients,
+    /// Heights now, m.
+    pub h: Vec<f32>,
+    /// Heights one step before, m.
+    pub prev: Vec<f32>,
+    /// Steps taken since rest.
+    pub steps: u64,
+}
+
+impl HeightField {
+    /// At rest.
+    pub fn new(k: StepCoefficients) -> Self {
+        let n = (k.nodes * k.nodes) as usize;
+        HeightField { k, h: vec![0.0; n], prev: vec![0.0; n], steps: 0 }
+    }
+
+    /// Node (i, j)'s object-space (x, z).
+    pub fn node_xz(&self, i: u32, j: u32, size: Vec2) -> (f32, f32) {
+        let n = self.k.nodes - 1;
+        (Water::coord(size.x, i, n), Water::coord(size.y, j, n))
+    }
+
+    /// Add a drop to both the heights and the heights before (it lands at rest).
+    pub fn add_drop(&mut self, d: &Drop, size: Vec2) {
+        for j in 0..self.k.nodes {
+            for i in 0..self.k.nodes {
+                let (x, z) = self.node_xz(i, j, size);
+                let b = drop_height(x, z, d);
+                let at = (j * self.k.nodes + i) as usize;
+                self.h[at] = (self.h[at] + b).clamp(-self.k.limit, self.k.limit);
+                self.prev[at] = (self.prev[at] + b).clamp(-self.k.limit, self.k.limit);
+            }
+        }
+    }
+
+    /// One step, with `bodies` moving through the water during it.
+    pub fn step(&mut self, bodies: &[Body], size: Vec2) {
+        let k = self.k;
+        let n = k.nodes;
+        let at = |i: u32, j: u32| (j * n + i) as usize;
+        // The mirror of a node outside the grid (a grid of one node is still).
+        let m = |i: i64| -> u32 {
+            let last = n as i64 - 1;
+            (if i < 0 {
+                -i
+            } else if i > last {
+                2 * last - i
+            } else {
+                i
+            })
+            .clamp(0, last) as u32
+        };
+        let mut next = vec![0.0; self.h.len()];
+        for j in 0..n {
+            for i in 0..n {
+                let (ii, jj) = (i as i64, j as i64);
+                let h = self.h[at(i, j)];
+                let lap_x = self.h[at(m(ii + 1), j)] + self.h[at(m(ii - 1), j)] - 2.0 * h;
+                let lap_z = self.h[at(i, m(jj + 1))] + self.h[at(i, m(jj - 1))] - 2.0 * h;
+                let mut v = h + k.keep * (h - self.prev[at(i, j)]) + k.cx * lap_x + k.cz * lap_z;
+                let (x, z) = self.node_xz(i, j, size);
+                for b in bodies {
+                    v += column_length(x, z, b.to, k.depth) - column_length(x, z, b.from, k.depth);
+                }
+                next[at(i, j)] = v.clamp(-k.limit, k.limit);
+            }
+        }
+        self.prev = std::mem::replace(&mut self.h, next);
+        self.steps += 1;
+    }
+
+    /// The height at node (i, j) and its gradient (∂h/∂x, ∂h/∂z) by central differences (zero across a wall).
+    pub fn at(&self, i: u32, j: u32) -> (f32, Vec2) {
+        let n = self.k.nodes;
+        let h = |i: u32, j: u32| self.h[(j * n + i) as usize];
+        if n < 2 {
+            return (h(i, j), Vec2::ZERO);
+        }
+        let (il, ir) = (i.saturating_sub(1), (i + 1).min(n - 1));
+        let (jl, jr) = (j.saturating_sub(1), (j + 1).min(n - 1));
+        let gx = if i == 0 || i == n - 1 { 0.0 } else { (h(ir, j) - h(il, j)) / (2.0 * self.k.dx) };
+        let gz = if j == 0 || j == n - 1 { 0.0 } else { (h(i, jr) - h(i, jl)) / (2.0 * self.k.dz) };
+        (h(i, j), Vec2::new(gx, gz))
+    }
+}
+
+impl Simulation {
+    /// Steps per second for `water`: at least 60, and enough that Cx + Cz ≤ 1/4.
+    pub fn rate(&self, water: &Water) -> u32 {
+        let (dx, dz) = water.spacing();
+        let need = 2.0 * self.speed * (1.0 / (dx * dx) + 1.0 / (dz * dz)).sqrt();
+        (need.ceil() as u32).max(60)
+    }
+
+    /// The steps taken by time `t` s (none before 0).
+    pub fn steps_at(rate: u32, t: f32) -> u64 {
+        if t <= 0.0 {
+            0
+        } else {
+            (t as f64 * rate as f64 + 1e-6).floor() as u64
+        }
+    }
+
+    /// The drops that land in step `s` (between its start and its end).
+    pub fn drops_in(&self, rate: u32, s: u64) -> impl Iterator<Item = &Drop> {
+        self.drops.iter().filter(move |d| Self::steps_at(rate, d.time) == s)
+    }
 }
 
 impl Water {
+    /// Node spacing (x, z), m.
+    pub fn spacing(&self) -> (f32, f32) {
+        (self.size.x / self.grid as f32, self.size.y / self.grid as f32)
+    }
+
+    /// The coefficients of its simulation's step (None without one).
+    pub fn step_coefficients(&self) -> Option<StepCoefficients> {
+        let sim = self.simulation.as_ref()?;
+        let rate = sim.rate(self);
+        let dt = 1.0 / rate as f32;
+        let (dx, dz) = self.spacing();
+        let c = |d: f32| (sim.speed * dt / d) * (sim.speed * dt / d);
+        Some(StepCoefficients {
+            nodes: self.grid + 1,
+            rate,
+            keep: 1.0 - sim.damping * dt,
+            cx: c(dx),
+            cz: c(dz),
+            limit: sim.limit,
+            dx,
+            dz,
+            depth: self.depth,
+        })
+    }
+
+    /// Its simulated surface at time `t`: stepped from rest, with its drops and with `bodies(t0, t1)` moving
+    /// through it during each step from t0 to t1 (None without a simulation).
+    pub fn simulate(&self, t: f32, bodies: &dyn Fn(f32, f32) -> Vec<Body>) -> Option<HeightField> {
+        let sim = self.simulation.as_ref()?;
+        let mut f = HeightField::new(self.step_coefficients()?);
+        let rate = f.k.rate;
+        for s in 0..Simulation::steps_at(rate, t) {
+            for d in sim.drops_in(rate, s) {
+                f.add_drop(d, self.size);
+            }
+            let (t0, t1) = (s as f32 / rate as f32, (s + 1) as f32 / rate as f32);
+            f.step(&bodies(t0, t1), self.size);
+        }
+        Some(f)
+    }
+
     /// The surface's height and its gradient (∂h/∂x, ∂h/∂z) at (x, z) and time t.
     pub fn height(&self, x: f32, z: f32, t: f32) -> (f32, Vec2) {
         let mut h = 0.0;
@@ -70,9 +367,10 @@ impl Water {
         (h, g)
     }
 
-    /// The highest the surface can rise (and the lowest it can sink): Σ |a_i|.
+    /// The highest the surface can rise (and the lowest it can sink): Σ |a_i|, and the simulation's limit.
     pub fn max_height(&self) -> f32 {
-        self.waves.iter().map(|w| w.amplitude.abs()).sum()
+        let sim = self.simulation.as_ref().map_or(0.0, |s| s.limit);
+        self.waves.iter().map(|w| w.amplitude.abs()).sum::<f32>() + sim
     }
 
     /// Bounds of the block at any time, in object space.
@@ -161,12 +459,24 @@ impl Water {
         m
     }
 
-    /// A vertex of the rest mesh at time t: (position, normal).
-    pub fn displace(&self, p: Vec3, n: Vec3, t: f32) -> (Vec3, Vec3) {
+    /// The grid node nearest (x, z).
+    fn node(&self, x: f32, z: f32) -> (u32, u32) {
+        let f = |v: f32, s: f32| ((v / s + 0.5) * self.grid as f32).round().clamp(0.0, self.grid as f32) as u32;
+        (f(x, self.size.x), f(z, self.size.y))
+    }
+
+    /// A vertex of the rest mesh at time t: (position, normal), with the simulated surface `field` added.
+    pub fn displace(&self, p: Vec3, n: Vec3, t: f32, field: Option<&HeightField>) -> (Vec3, Vec3) {
         if p.y != 0.0 {
             return (p, n);
         }
-        let (h, g) = self.height(p.x, p.z, t);
+        let (mut h, mut g) = self.height(p.x, p.z, t);
+        if let Some(f) = field {
+            let (i, j) = self.node(p.x, p.z);
+            let (fh, fg) = f.at(i, j);
+            h += fh;
+            g += fg;
+        }
         let q = Vec3::new(p.x, h, p.z);
         if n == Vec3::Y {
             (q, Vec3::new(-g.x, 1.0, -g.y).normalize())
@@ -175,11 +485,11 @@ impl Water {
         }
     }
 
-    /// The rest mesh `rest` displaced to time t.
-    pub fn displaced(&self, rest: &Mesh, t: f32) -> Mesh {
+    /// The rest mesh `rest` displaced to time t, with the simulated surface `field` added.
+    pub fn displaced(&self, rest: &Mesh, t: f32, field: Option<&HeightField>) -> Mesh {
         let mut m = rest.clone();
         for (p, n) in m.positions.iter_mut().zip(m.normals.iter_mut()) {
-            (*p, *n) = self.displace(*p, *n, t);
+            (*p, *n) = self.displace(*p, *n, t, field);
         }
         m
     }
@@ -198,6 +508,7 @@ mod tests {
                 Wave { amplitude: 0.02, wavelength: 0.5, direction: Vec2::X, speed: 0.3 },
                 Wave { amplitude: 0.01, wavelength: 0.3, direction: Vec2::new(0.6, 0.8), speed: 0.2 },
             ],
+            simulation: None,
         }
     }
 
@@ -207,7 +518,7 @@ mod tests {
         let rest = w.rest_mesh();
         assert_eq!(rest.triangle_count(), 2 * 64 + 2 * 32 + 32);
         for t in [0.0, 0.37, 5.0] {
-            let m = w.displaced(&rest, t);
+            let m = w.displaced(&rest, t, None);
             // Every edge is shared by exactly two triangles, by position (the walls have their own vertices).
             let key = |p: Vec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
             let mut edges = std::collections::HashMap::new();
