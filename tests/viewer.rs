@@ -628,3 +628,43 @@ fn the_n_key_switches_gltf_animations() {
         assert_eq!(s["scene_animation"], playing, "after {presses} presses of N");
     }
 }
+
+/// A click on the simulated water drops into it where the cursor is: the frame differs from the same frames
+/// without the click around the click's point, and hardly elsewhere. A click beside the pool drops nothing.
+#[test]
+fn a_click_drops_into_the_water_under_it() {
+    let dir = out_dir("viewer_drop");
+    let x = Xvfb::start();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/pool_drops.toml");
+    let run = |name: &str, steps: &str| {
+        let script = dir.join(format!("{name}.txt"));
+        std::fs::write(&script, steps).unwrap();
+        let png = dir.join(format!("{name}.png"));
+        let mut args = vec!["--scene", scene, "--camera", "top", "--size", "160x160", "--frame-dt", "0.1"];
+        args.extend(["--time", "3", "--script", script.to_str().unwrap(), "--screenshot", png.to_str().unwrap()]);
+        args.extend_from_slice(FAST);
+        (view_ok(&dir, name, &x.display, &args), luma(&png).2)
+    };
+    // Beside the pool (its floor's corner), then at (0.3, 0.7) of the window: x = -0.44 m, z = 0.44 m.
+    let (s, clicked) = run("click", "1 still\n1 click 0.02 0.02\n1 click 0.3 0.7\n5 still\n");
+    let (_, still) = run("still", "1 still\n1 still\n1 still\n5 still\n");
+    assert_eq!(s["counters"]["water_drops"], 1, "{}", s["counters"]);
+    // Mean |difference| within 0.12 of the window's side of the click, and beyond 0.3 of it.
+    let (mut near, mut far) = ((0.0, 0), (0.0, 0));
+    for (i, (a, b)) in clicked.iter().zip(&still).enumerate() {
+        let (px, py) = ((i % 160) as f64 / 160.0 - 0.3, (i / 160) as f64 / 160.0 - 0.7);
+        let r = px.hypot(py);
+        let acc = if r < 0.12 {
+            &mut near
+        } else if r > 0.3 {
+            &mut far
+        } else {
+            continue;
+        };
+        acc.0 += (a - b).abs();
+        acc.1 += 1;
+    }
+    let (near, far) = (near.0 / near.1 as f64, far.0 / far.1 as f64);
+    eprintln!("mean |click - still| near the click {near:.3}, far from it {far:.3} (of 255)");
+    assert!(near > 2.0 && near > 10.0 * far, "near {near}, far {far}");
+}

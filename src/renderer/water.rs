@@ -52,30 +52,38 @@ impl WaterSims {
 }
 
 impl Renderer {
-    /// Drop into the water at world point `at` (its x and z pick the spot on the surface of the first simulated
-    /// water object whose block lies under or over it): a dimple `radius` m wide and `depth` m deep, landing
-    /// before the next frame's steps. Returns the water object's index, or None where no simulated surface lies
-    /// under `at`.
-    pub fn drop_into_water(&mut self, at: Vec3, radius: f32, depth: f32) -> Result<Option<usize>> {
-        if !(at.is_finite() && radius.is_finite() && radius > 0.0 && depth.is_finite() && depth > 0.0) {
+    /// Drop into the first simulated water surface (at rest) that the ray from `origin` along `direction` (world
+    /// space) meets: a dimple `radius` m wide and `depth` m deep, landing before the next frame's steps (the
+    /// viewer's click). Returns the water object's index, or None where the ray meets no simulated surface.
+    pub fn drop_into_water(&mut self, origin: Vec3, direction: Vec3, radius: f32, depth: f32) -> Result<Option<usize>> {
+        if !(origin.is_finite() && direction.is_finite() && direction != Vec3::ZERO)
+            || !(radius.is_finite() && radius > 0.0 && depth.is_finite() && depth > 0.0)
+        {
             return Err(Error::BadInput(format!(
-                "drop at {at} (radius {radius} m, depth {depth} m): the point must be finite and both sizes > 0"
+                "drop from {origin} along {direction} (radius {radius} m, depth {depth} m): the ray must be finite and \
+                 not zero, and both sizes > 0"
             )));
         }
+        let mut hit: Option<(f32, usize, glam::Vec2)> = None;
         for (i, o) in self.scene.objects.iter().enumerate() {
             let Some(w) = o.animation.as_ref().and_then(|a| a.water.as_ref()) else { continue };
             if w.simulation.is_none() {
                 continue;
             }
-            let p = self.instances.transform_of(i).inverse().transform_point3(at);
-            if p.x.abs() <= w.size.x * 0.5 && p.z.abs() <= w.size.y * 0.5 {
-                let time = self.scene.time;
-                self.water.drops.push((i, Drop { time, at: glam::Vec2::new(p.x, p.z), radius, depth }));
-                self.instances.mark_deformed(i);
-                return Ok(Some(i));
+            let m = self.instances.transform_of(i);
+            let inv = m.inverse();
+            let (o, d) = (inv.transform_point3(origin), inv.transform_vector3(direction));
+            let t = -o.y / d.y;
+            let p = o + d * t;
+            let dist = (m.transform_point3(p) - origin).length();
+            if t > 0.0 && p.x.abs() <= w.size.x * 0.5 && p.z.abs() <= w.size.y * 0.5 && hit.is_none_or(|h| dist < h.0) {
+                hit = Some((dist, i, glam::Vec2::new(p.x, p.z)));
             }
         }
-        Ok(None)
+        let Some((_, i, at)) = hit else { return Ok(None) };
+        self.water.drops.push((i, Drop { time: self.scene.time, at, radius, depth }));
+        self.instances.mark_deformed(i);
+        Ok(Some(i))
     }
 
     /// Step every simulated surface to the scene's time in `up` (its drops and steps; back to rest first when the

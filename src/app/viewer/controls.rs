@@ -49,6 +49,7 @@ pub struct Control {
 
 pub const CONTROLS: &[Control] = &[
     Control { input: "left drag", help: "orbit the camera around its target", keys: &[] },
+    Control { input: "left click", help: "drop into the simulated water under the cursor", keys: &[] },
     Control { input: "scroll", help: "zoom", keys: &[] },
     Control { input: "right drag", help: "move the light in the horizontal plane (relative to the view)", keys: &[] },
     Control {

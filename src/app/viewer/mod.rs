@@ -393,6 +393,8 @@ struct Counters {
     eye_reused_frames: u64,
     preview_frames: u64,
     max_images_per_swapchain: u64,
+    /// Clicks that dropped into simulated water.
+    water_drops: u64,
 }
 
 /// What the viewer keeps of a frame until its report arrives.
@@ -421,7 +423,17 @@ struct Input {
     pick: Option<(f64, f64)>,
     /// Glass drag in pixels (x right, y down).
     glass_drag: (f32, f32),
+    /// How far the cursor went since the left button went down (pixels): a short one is a click.
+    travel: f32,
+    /// A click at this cursor position: a drop into the water under it.
+    drop: Option<(f64, f64)>,
 }
+
+/// A click's drop into simulated water: its radius and depth, m.
+const DROP_RADIUS: f32 = 0.08;
+const DROP_DEPTH: f32 = 0.02;
+/// A left press and release within this many pixels is a click.
+const CLICK_PIXELS: f32 = 4.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Step {
@@ -699,6 +711,11 @@ impl Viewer {
                 let down = state == ElementState::Pressed;
                 match button {
                     MouseButton::Left => {
+                        if down {
+                            self.input.travel = 0.0;
+                        } else if self.input.left && !self.input.shift && self.input.travel < CLICK_PIXELS {
+                            self.input.drop = self.input.cursor;
+                        }
                         self.input.left = down;
                         if down && self.input.shift {
                             self.input.pick = self.input.cursor;
@@ -711,6 +728,9 @@ impl Viewer {
             WindowEvent::CursorMoved { position, .. } => {
                 if let Some((x, y)) = self.input.cursor {
                     let (dx, dy) = ((position.x - x) as f32, (position.y - y) as f32);
+                    if self.input.left {
+                        self.input.travel += dx.abs() + dy.abs();
+                    }
                     if self.input.left && self.grab.is_some() {
                         self.input.glass_drag.0 += dx;
                         self.input.glass_drag.1 += dy;
@@ -1012,6 +1032,14 @@ impl Viewer {
         if !input.left {
             self.grab = None;
         }
+        if let Some((x, y)) = input.drop {
+            let (o, d) = view.ray(glam::Vec2::new(x as f32, y as f32));
+            match self.renderer.drop_into_water(o, d, DROP_RADIUS, DROP_DEPTH) {
+                Ok(Some(_)) => self.counters.water_drops += 1,
+                Ok(None) => {}
+                Err(e) => eprintln!("{e}"),
+            }
+        }
         let mut moved = false;
         if let Some(i) = self.grab {
             let drag = right * input.glass_drag.0 * per_pixel - away * input.glass_drag.1 * per_pixel;
@@ -1214,6 +1242,10 @@ impl Viewer {
                 self.input.light_drag.1 += dy;
             }
             Verb::Key(action) if first => self.act(action)?,
+            Verb::Click(fx, fy) => {
+                let e = self.swapchain.as_ref().map_or(vk::Extent2D { width: 1, height: 1 }, |s| s.extent);
+                self.input.drop = Some((fx as f64 * e.width as f64, fy as f64 * e.height as f64));
+            }
             Verb::Key(_) | Verb::Still => {}
         }
         Ok(())

@@ -5,6 +5,7 @@
 //! |---|---|
 //! | `N orbit DEG` | orbits the camera by DEG degrees (as a left-button drag) |
 //! | `N drag DX DY` | drags the light by DX, DY pixels (as a right-button drag: x right, y down) |
+//! | `N click FX FY` | clicks at FX, FY (fractions of the window's width and height from its top left): a drop into the water there |
 //! | `N key NAME` | presses the key NAME of the controls table (`]`, `ArrowLeft`, `Space`, ...) on its first frame |
 //! | `N still` | nothing: the viewer refines what the last change left |
 //!
@@ -23,6 +24,7 @@ pub enum Verb {
     Orbit(f32),
     Drag(f32, f32),
     Key(Action),
+    Click(f32, f32),
     Still,
 }
 
@@ -87,7 +89,7 @@ impl Script {
                 bad(path, line, &format!("`{count}`: a step starts with its frame count (1 to 1000000)"))
             })?;
             let verb_word =
-                words.next().ok_or_else(|| bad(path, line, "missing the verb (orbit, drag, key, still)"))?;
+                words.next().ok_or_else(|| bad(path, line, "missing the verb (orbit, drag, click, key, still)"))?;
             let verb = match verb_word {
                 "orbit" => Verb::Orbit(number(path, line, "the orbit angle (degrees per frame)", words.next())?),
                 "drag" => {
@@ -110,12 +112,20 @@ impl Script {
                     }
                     Verb::Key(action)
                 }
+                "click" => {
+                    let fx = number(path, line, "the click's x (a fraction of the width)", words.next())?;
+                    let fy = number(path, line, "the click's y (a fraction of the height)", words.next())?;
+                    if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
+                        return Err(bad(path, line, &format!("click {fx} {fy}: both must lie in 0..=1")));
+                    }
+                    Verb::Click(fx, fy)
+                }
                 "still" => Verb::Still,
                 other => {
                     return Err(bad(
                         path,
                         line,
-                        &format!("unknown verb `{other}` (expected orbit, drag, key or still)"),
+                        &format!("unknown verb `{other}` (expected orbit, drag, click, key or still)"),
                     ))
                 }
             };
