@@ -93,8 +93,9 @@ fn refit_equals_rebuild() {
         BvhObject { mesh: 1, transform: transforms[1], material: &materials[1] },
     ];
     let fresh = SceneBvh::build(&[&floor, &displaced], &objects, &[]);
-    // The GPU's host-side displacement agrees with the host's (sin and cos to float rounding).
-    let host = r.scene.objects[water].mesh.bounds();
+    // The GPU's displacement agrees with the host's (sin and cos to float rounding).
+    let a = r.scene.objects[water].animation.clone().unwrap();
+    let host = a.mesh_at(r.scene.time).bounds();
     let gpu_world = displaced.clone().transformed(transforms[1]).bounds();
     assert!((host.0 - gpu_world.0).abs().max_element() < 1e-4 && (host.1 - gpu_world.1).abs().max_element() < 1e-4);
 

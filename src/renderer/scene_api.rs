@@ -253,12 +253,12 @@ impl Renderer {
     }
 
     /// The host copy of object `i` (its world-space triangles) placed by `transform`: its mesh, deformed to the
-    /// scene's time when it deforms (water, morph targets).
+    /// scene's time when morph targets deform it (water's stays at rest: its heights live on the GPU).
     fn place_host(&mut self, i: usize, transform: Mat4) {
         let m = self.instances.meshes[self.instances.of_object[i].0].clone();
         let o = &mut self.scene.objects[i];
         o.mesh = match o.animation.as_ref() {
-            Some(a) if a.deforms() => a.local_mesh_at(self.scene.time).transformed(transform),
+            Some(a) if a.deforms() && a.water.is_none() => a.local_mesh_at(self.scene.time).transformed(transform),
             _ => (*m).clone().transformed(transform),
         };
     }
@@ -291,9 +291,11 @@ impl Renderer {
             let m = a.transform_at(t);
             let current = self.instances.of_object[i].1;
             if a.deforms() && t != old {
-                // Displaced on the GPU by the next frame; the host copy follows (views, bounds, the reference).
+                // Deformed on the GPU by the next frame. The host copy of a morphing mesh follows (views, bounds);
+                // water's stays at rest, and the light views fit its block's bounds (views.rs): no O(vertices) work
+                // per frame for it.
                 self.instances.deformed.insert(i);
-                if m == current {
+                if m == current && a.water.is_none() {
                     self.place_host(i, current);
                 }
             }

@@ -21,9 +21,9 @@ impl Views {
     /// The views of light `index`.
     pub fn new(scene: &Scene, settings: &ResolvedSettings, camera: &CameraView, index: usize) -> Result<Views> {
         let light = &scene.lights[index];
-        // A simulated water surface is not on the host (its heights live on the GPU): its block's bounds stand in.
+        // Water's displaced surface is not on the host (the GPU displaces it): its block's bounds stand in.
         let envelope = |o: &crate::scene::Object| {
-            let a = o.animation.as_ref().filter(|a| a.water.as_ref().is_some_and(|w| w.simulation.is_some()));
+            let a = o.animation.as_ref().filter(|a| a.water.is_some());
             let corners = a.and_then(|a| Some((a.deform_bounds()?, a.transform_at(scene.time))));
             corners.into_iter().flat_map(|((lo, hi), m)| {
                 (0..8).map(move |i| {
