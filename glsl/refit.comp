@@ -1,23 +1,20 @@
 #version 460
 #include "generated/gpu_structs.glsl"
-// The GPU refit of a deforming mesh's bottom-level BVH (src/bvh/ builds its tree once, at rest): one invocation
-// per leaf bounds the leaf's triangles, then climbs its parent links. At each inner node the first of the two
-// children to arrive stops (an atomic counter per node, zeroed before the dispatch); the second reads both
-// children's boxes and goes on up, so every node is bounded exactly once, after both its children. Each box is
-// written to the scratch (read by the parent) and into every layout on the GPU: its single and threaded node, and
-// its slot in its parent's pair node.
+// The GPU refit of a deforming mesh's bottom-level BVH (src/bvh/ builds its tree once, at rest), one height per
+// dispatch, lowest first (src/bvh/refit.rs groups the nodes by height): a leaf bounds its triangles, an inner node
+// unions its children's boxes, bounded by an earlier dispatch. Each box is written to the scratch (read by the
+// parent) and into every layout on the GPU: its single and threaded node, and its slot in its parent's pair node.
 #include "common/bvh_types.glsl"
 layout(local_size_x = LINEAR_WG) in;
 
 const uint NONE = 0xffffffffu;
 layout(std430, set = 0, binding = 0) readonly buffer Nodes { RefitNode nodes[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Leaves { uint leaves[]; };
-layout(std430, set = 0, binding = 2) coherent buffer Boxes { vec4 boxes[]; };
-layout(std430, set = 0, binding = 3) buffer Counters { uint counters[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Tris { vec4 tris[]; };
-layout(std430, set = 0, binding = 5) buffer Pair { PairNode pair_nodes[]; };
-layout(std430, set = 0, binding = 6) buffer Single { SingleNode single_nodes[]; };
-layout(std430, set = 0, binding = 7) buffer Threaded { SingleNode threaded_nodes[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Order { uint order[]; };
+layout(std430, set = 0, binding = 2) buffer Boxes { vec4 boxes[]; };
+layout(std430, set = 0, binding = 3) readonly buffer Tris { vec4 tris[]; };
+layout(std430, set = 0, binding = 4) buffer Pair { PairNode pair_nodes[]; };
+layout(std430, set = 0, binding = 5) buffer Single { SingleNode single_nodes[]; };
+layout(std430, set = 0, binding = 6) buffer Threaded { SingleNode threaded_nodes[]; };
 
 layout(push_constant) uniform RefitPushBlock { RefitPush pc; };
 
@@ -46,14 +43,11 @@ void store(uint k, RefitNode n, vec3 lo, vec3 hi) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * LINEAR_WG;
-    // Every invocation, in range or not, runs the same number of climbing steps (the tree's depth) and so the same
-    // memory barriers: lavapipe loses arrivals when invocations leave a loop that has barriers in it.
-    bool climbing = i < pc.leaf_count;
-    uint k = NONE;
-    if (climbing) {
-        k = leaves[pc.first_leaf + i];
-        RefitNode n = nodes[k];
-        vec3 lo = vec3(1e30), hi = vec3(-1e30);
+    if (i >= pc.count) return;
+    uint k = order[pc.first + i];
+    RefitNode n = nodes[k];
+    vec3 lo = vec3(1e30), hi = vec3(-1e30);
+    if (n.tri_count > 0u) {
         for (uint t = n.first_tri; t < n.first_tri + n.tri_count; t++) {
             for (uint c = 0u; c < 3u; c++) {
                 vec3 p = tris[3u * t + c].xyz;
@@ -61,27 +55,9 @@ void main() {
                 hi = max(hi, p);
             }
         }
-        store(k, n, lo, hi);
-        k = n.parent;
-        climbing = k != NONE;
+    } else {
+        lo = min(boxes[2u * n.left].xyz, boxes[2u * n.right].xyz);
+        hi = max(boxes[2u * n.left + 1u].xyz, boxes[2u * n.right + 1u].xyz);
     }
-    for (uint d = 0u; d < pc.depth; d++) {
-        // Release this subtree's boxes, then arrive; the second arrival acquires its sibling's.
-        memoryBarrierBuffer();
-        uint arrived = 0u;
-        if (climbing) arrived = atomicAdd(counters[k], 1u);
-        memoryBarrierBuffer();
-        if (climbing) {
-            if (arrived == 0u) {
-                climbing = false;
-            } else {
-                RefitNode n = nodes[k];
-                vec3 lo = min(boxes[2u * n.left].xyz, boxes[2u * n.right].xyz);
-                vec3 hi = max(boxes[2u * n.left + 1u].xyz, boxes[2u * n.right + 1u].xyz);
-                store(k, n, lo, hi);
-                k = n.parent;
-                climbing = k != NONE;
-            }
-        }
-    }
+    store(k, n, lo, hi);
 }

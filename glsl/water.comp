@@ -1,30 +1,35 @@
 #version 460
 #include "generated/gpu_structs.glsl"
 // Water (src/scene/water.rs, which runs the same formula on the host): displace a water object's vertices to
-// the frame's time, adding its simulated surface's heights (glsl/water_step.comp) where it has one. The plain build writes its raster vertices in world space (from the object-space rest
-// copies, through the instance's transform); the WATER_BVH build writes its BVH triangles and vertex normals in
-// object space (from their rest copies, in leaf order), which the refit (refit.comp) then bounds. A vertex at y = 0 rises to
-//   h = sum_i a_i sin(k_i (d_i . (x, z)) - w_i t),
+// the frame's time, adding its simulated surface's heights (glsl/water_step.comp) where it has one. The plain build
+// displaces each vertex once, in object space (from the object-space rest copies), keeps it in `displaced`, and
+// writes its raster vertex in world space through the instance's transform; the WATER_BVH build then gathers each
+// BVH triangle's corners (in leaf order, by their vertex indices in `rest_corners`) from `displaced`, and the
+// refit (refit.comp) bounds them. A vertex at y = 0 rises to
+//   h = sum_i a_i sin(k_i (d_i . (x, z)) - w_i t) (+ the simulated height at its node),
 // and where its rest normal is +y (the surface, not the walls' top edges) its normal becomes
 // normalize(-dh/dx, 1, -dh/dz).
 layout(local_size_x = LINEAR_WG) in;
 
+#ifdef WATER_BVH
+layout(std430, set = 0, binding = 0) readonly buffer Displaced { vec4 displaced[]; };
+layout(std430, set = 0, binding = 1) readonly buffer RestCorners { uint rest_corners[]; };
+layout(std430, set = 0, binding = 2) readonly buffer RestTris { vec4 rest_tris[]; };
+layout(std430, set = 0, binding = 3) readonly buffer RestNormals { vec4 rest_normals[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = 5) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
+#else
 // Two per wave: (direction x, direction z, k, omega), (amplitude, 0, 0, 0).
 layout(std430, set = 0, binding = 0) readonly buffer Waves { vec4 waves[]; };
-#ifdef WATER_BVH
-layout(std430, set = 0, binding = 1) readonly buffer RestTris { vec4 rest_tris[]; };
-layout(std430, set = 0, binding = 2) readonly buffer RestNormals { vec4 rest_normals[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
-layout(std430, set = 0, binding = 5) readonly buffer Heights { float heights[]; };
-#else
 layout(std430, set = 0, binding = 1) readonly buffer ObjectVertices { Vertex object_vertices[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer WorldVertices { Vertex world_vertices[]; };
 layout(std430, set = 0, binding = 3) readonly buffer Heights { float heights[]; };
+layout(std430, set = 0, binding = 4) writeonly buffer Displaced { vec4 displaced[]; };
 #endif
 
 layout(push_constant) uniform WaterPushBlock { WaterPush pc; };
 
+#ifndef WATER_BVH
 void displace(inout vec3 p, inout vec3 n) {
     if (p.y != 0.0) return;
     float h = 0.0;
@@ -53,6 +58,8 @@ void displace(inout vec3 p, inout vec3 n) {
     if (n == vec3(0.0, 1.0, 0.0)) n = normalize(vec3(-g.x, 1.0, -g.y));
 }
 
+#endif
+
 void main() {
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * LINEAR_WG;
     if (i >= pc.count) return;
@@ -61,6 +68,8 @@ void main() {
         Vertex v = object_vertices[pc.src + i];
         vec3 p = v.position.xyz, n = v.normal.xyz;
         displace(p, n);
+        displaced[2u * (pc.displaced + i)] = vec4(p, 0.0);
+        displaced[2u * (pc.displaced + i) + 1u] = vec4(n, 0.0);
         vec4 q = vec4(p, 1.0);
         v.position.xyz = vec3(dot(pc.rows[0], q), dot(pc.rows[1], q), dot(pc.rows[2], q));
         vec3 m = vec3(dot(pc.nrows[0].xyz, n), dot(pc.nrows[1].xyz, n), dot(pc.nrows[2].xyz, n));
@@ -71,10 +80,10 @@ void main() {
 #else
     {
         for (uint c = 0u; c < 3u; c++) {
-            vec3 p = rest_tris[3u * (pc.src + i) + c].xyz, n = rest_normals[3u * (pc.src + i) + c].xyz;
-            displace(p, n);
-            bvh_tris[3u * (pc.dst + i) + c] = vec4(p, 0.0);
-            bvh_normals[3u * (pc.dst + i) + c] = vec4(n, 0.0);
+            uint t = 3u * (pc.src + i) + c;
+            uint k = pc.displaced + rest_corners[t];
+            bvh_tris[3u * (pc.dst + i) + c] = vec4(displaced[2u * k].xyz, rest_tris[t].w);
+            bvh_normals[3u * (pc.dst + i) + c] = vec4(displaced[2u * k + 1u].xyz, rest_normals[t].w);
         }
     }
 #endif

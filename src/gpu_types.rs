@@ -429,8 +429,8 @@ pub struct SceneUpdatePush {
     pub index_count: u32,
 }
 
-/// Push constants of water.comp: one water object's displacement (mode 0: its raster vertices to world space;
-/// mode 1: its BVH triangles, in object space).
+/// Push constants of water.comp: one water object's displacement (the plain build: its vertices, in object space
+/// and, placed, as raster vertices in world space; the BVH build: its BVH triangles, gathered from those vertices).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct WaterPush {
@@ -445,7 +445,9 @@ pub struct WaterPush {
     pub heights: u32,
     pub first_wave: u32,
     pub wave_count: u32,
-    /// First vertex (mode 0) or rest triangle (mode 1) read, first vertex or BVH triangle written, and how many.
+    /// Its first vertex in `SceneBuffers::displaced`: written by the raster build, read by the BVH build.
+    pub displaced: u32,
+    /// First vertex (raster) or rest triangle (BVH) read, first vertex or BVH triangle written, and how many.
     pub src: u32,
     pub dst: u32,
     pub count: u32,
@@ -499,16 +501,15 @@ pub struct MorphPush {
     pub count: u32,
 }
 
-/// Push constants of refit.comp: one deforming mesh's leaves, and the layouts on the GPU (1 pair, 2 single,
-/// 4 threaded).
+/// Push constants of refit.comp: one height of a deforming mesh's nodes (`count` of them from `first` in the refit
+/// order), and the layouts on the GPU (1 pair, 2 single, 4 threaded).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RefitPush {
-    pub first_leaf: u32,
-    pub leaf_count: u32,
+    pub first: u32,
+    pub count: u32,
     pub layouts: u32,
-    /// The most parent links from one of its leaves to its root.
-    pub depth: u32,
+    pub pad: u32,
 }
 
 /// Push constants of coverage.comp.

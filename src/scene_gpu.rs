@@ -48,6 +48,8 @@ pub struct WaterRange {
     /// Its first wave (two vec4 each) and how many.
     pub first_wave: u32,
     pub wave_count: u32,
+    /// Its first vertex in `SceneBuffers::displaced`.
+    pub first_displaced: u32,
     /// Its simulated surface: the first of its heights' two slots of nodes² floats in `SceneBuffers::heights`,
     /// and its step (its nodes and spacing are also in `waves`, the record after its waves).
     pub simulation: Option<(u32, crate::scene::water::StepCoefficients)>,
@@ -67,13 +69,17 @@ pub struct SimulationState {
 struct DeformData {
     waves: Vec<[f32; 4]>,
     heights: u32,
+    displaced: u32,
     morphs: Vec<[f32; 4]>,
     weights: u32,
 }
 
 impl DeformData {
-    /// Water `w`'s waves, and its simulated surface's record and heights.
-    fn water(&mut self, w: &crate::scene::water::Water) -> WaterRange {
+    /// Water `w` (`vertices` vertices): its waves, its simulated surface's record and heights, and its displaced
+    /// vertices.
+    fn water(&mut self, w: &crate::scene::water::Water, vertices: u32) -> WaterRange {
+        let first_displaced = self.displaced;
+        self.displaced += vertices;
         let first_wave = self.waves.len() as u32 / 2;
         for wave in &w.waves {
             let k = std::f32::consts::TAU / wave.wavelength;
@@ -87,7 +93,7 @@ impl DeformData {
             self.heights += 2 * k.nodes * k.nodes;
             (base, k)
         });
-        WaterRange { first_wave, wave_count: w.waves.len() as u32, simulation }
+        WaterRange { first_wave, wave_count: w.waves.len() as u32, first_displaced, simulation }
     }
 
     /// A morphing mesh's base (`base`, object space) and targets.
@@ -148,6 +154,9 @@ pub struct SceneBuffers {
     pub waves: Buffer,
     /// Every simulated water surface's heights (m), two slots each ([`WaterRange::simulation`]).
     pub heights: Buffer,
+    /// Every water object's vertices displaced to the frame's time, in object space (position, normal: two vec4
+    /// each), written with its raster vertices and read by its BVH triangles (each vertex displaced once).
+    pub displaced: Buffer,
     /// Per scene object: where its simulated surface stands on the GPU (what the recorded frames stepped it to).
     pub simulations: Vec<Option<SimulationState>>,
     /// Every morphing object's base vertices and morph targets (glsl/morph.comp), and their weights (the frame's
@@ -247,9 +256,8 @@ pub struct BvhBuffers {
     /// The deforming meshes' refit nodes, leaves, box scratch (two vec4 per node), arrival counters (one per
     /// node), and triangles at rest (positions, vertex normals).
     pub refit_nodes: Buffer,
-    pub refit_leaves: Buffer,
+    pub refit_order: Buffer,
     pub refit_boxes: Buffer,
-    pub refit_counters: Buffer,
     pub rest_tris: Buffer,
     pub rest_normals: Buffer,
     /// Per rest triangle, its vertices' indices in its mesh (three u32).
@@ -305,7 +313,6 @@ impl BvhBuffers {
     /// Placeholders: one element per binding, no BVH built.
     pub fn placeholders(device: &Arc<Device>, recorder: &mut Recorder) -> VkResult<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let transfer_storage = storage | vk::BufferUsageFlags::TRANSFER_DST;
         let readable = storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         let zeros = [[0u32; 4]; 4];
         Ok(BvhBuffers {
@@ -324,9 +331,8 @@ impl BvhBuffers {
                 FLOAT4,
             )?,
             refit_nodes: upload_buffer(device, recorder, "refit nodes (none)", &zeros, storage)?,
-            refit_leaves: upload_buffer(device, recorder, "refit leaves (none)", &zeros, storage)?,
+            refit_order: upload_buffer(device, recorder, "refit order (none)", &zeros, storage)?,
             refit_boxes: upload_buffer(device, recorder, "refit boxes (none)", &zeros, storage)?,
-            refit_counters: upload_buffer(device, recorder, "refit counters (none)", &zeros, transfer_storage)?,
             rest_tris: upload_buffer(device, recorder, "rest triangles (none)", &zeros, storage)?,
             rest_normals: upload_buffer(device, recorder, "rest normals (none)", &zeros, storage)?,
             rest_corners: upload_buffer(device, recorder, "rest corners (none)", &zeros, storage)?,
@@ -407,12 +413,9 @@ impl BvhBuffers {
             if !bvh.refit_nodes.is_empty() {
                 let n = bvh.refit_nodes.len();
                 self.refit_nodes = upload_buffer(device, recorder, "refit nodes", &bvh.refit_nodes, storage)?;
-                self.refit_leaves = upload_buffer(device, recorder, "refit leaves", &bvh.refit_leaves, storage)?;
+                self.refit_order = upload_buffer(device, recorder, "refit order", &bvh.refit_order, storage)?;
                 let boxes = vec![[0f32; 4]; 2 * n];
                 self.refit_boxes = upload_buffer(device, recorder, "refit boxes", &boxes, storage)?;
-                let counters = vec![0u32; n];
-                let usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
-                self.refit_counters = upload_buffer(device, recorder, "refit counters", &counters, usage)?;
                 self.rest_tris = upload_buffer(device, recorder, "rest triangles", &bvh.rest_tris, storage)?;
                 self.rest_normals = upload_buffer(device, recorder, "rest normals", &bvh.rest_normals, storage)?;
                 self.rest_corners = upload_buffer(device, recorder, "rest corners", &bvh.rest_corners, storage)?;
@@ -464,7 +467,7 @@ impl BvhBuffers {
     /// Whether some instance deforms (water): it is refit every frame and has no wide nodes, so the wide walk
     /// takes its pair nodes.
     pub fn deforms(&self) -> bool {
-        self.host.as_ref().is_some_and(|h| !h.refit_leaves.is_empty())
+        self.host.as_ref().is_some_and(|h| !h.refit_order.is_empty())
     }
 
     /// Move object `i` (once the BVH is built): its instance record on the host, which the frame's scene update
@@ -507,6 +510,12 @@ impl BvhBuffers {
     /// Mesh `mesh`'s refit data, when it deforms and the BVH is built.
     pub(crate) fn refit_mesh(&self, mesh: usize) -> Option<crate::bvh::RefitMesh> {
         self.host.as_ref().and_then(|b| b.refit_meshes.get(mesh).copied().flatten())
+    }
+
+    /// The heights of refit mesh `r`'s nodes, lowest first: each `[first, count]` in the refit order.
+    pub(crate) fn refit_levels(&self, r: &crate::bvh::RefitMesh) -> Vec<[u32; 2]> {
+        let levels = self.host.as_ref().map_or(&[][..], |b| &b.refit_levels[..]);
+        levels[r.first_level as usize..(r.first_level + r.levels) as usize].to_vec()
     }
 
     /// The layouts on the GPU the refit writes, as its mask: 1 pair, 2 single, 4 threaded (the wide layout has
@@ -612,14 +621,17 @@ impl SceneBuffers {
             .map(|(i, o)| {
                 let a = o.animation.as_ref()?;
                 if let Some(w) = &a.water {
-                    return Some(Deformer::Water(data.water(w)));
+                    let vertices = instances.meshes[instances.objects[i].0].positions.len() as u32;
+                    return Some(Deformer::Water(data.water(w, vertices)));
                 }
                 let m = a.morph.as_ref().filter(|m| m.is_animated())?;
                 // The mesh the GPU holds for it: its base, in object space.
                 Some(Deformer::Morph(data.morph(&instances.meshes[instances.objects[i].0], m)))
             })
             .collect();
-        let DeformData { waves, heights, morphs, weights } = data;
+        let DeformData { waves, heights, displaced, morphs, weights } = data;
+        let displaced = vec![[0f32; 4]; 2 * displaced.max(1) as usize];
+        let displaced = upload_buffer(device, recorder, "water vertices (displaced)", &displaced, storage)?;
         let waves = upload_buffer(device, recorder, "water waves", &nonempty(&waves), storage)?;
         let simulations = deformers
             .iter()
@@ -645,6 +657,7 @@ impl SceneBuffers {
             images,
             waves,
             heights,
+            displaced,
             simulations,
             morphs,
             morph_weights,
@@ -701,24 +714,17 @@ impl WaterPush {
             heights: heights.map_or(0, |h| h + 1),
             first_wave: water.first_wave,
             wave_count: water.wave_count,
+            displaced: water.first_displaced,
             src: range.first_vertex,
             dst: range.first_vertex,
             count: range.vertex_count,
         }
     }
 
-    /// The BVH triangles of a deforming mesh (`r`), at `time`, as [`WaterPush::raster`].
-    pub fn bvh(
-        r: &crate::bvh::RefitMesh,
-        time: f32,
-        water: &crate::scene_gpu::WaterRange,
-        heights: Option<u32>,
-    ) -> Self {
+    /// The BVH triangles of a water mesh (`r`), from its vertices displaced by the raster job before.
+    pub fn bvh(r: &crate::bvh::RefitMesh, water: &crate::scene_gpu::WaterRange) -> Self {
         WaterPush {
-            time,
-            heights: heights.map_or(0, |h| h + 1),
-            first_wave: water.first_wave,
-            wave_count: water.wave_count,
+            displaced: water.first_displaced,
             src: r.rest_first,
             dst: r.first_tri,
             count: r.tri_count,

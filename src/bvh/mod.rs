@@ -53,17 +53,15 @@ const EMPTY: u32 = u32::MAX;
 /// A deforming mesh's part of the refit arrays and of the triangles.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RefitMesh {
-    /// Its leaves: `refit_leaves[first_leaf..first_leaf + leaf_count]`.
-    pub first_leaf: u32,
-    pub leaf_count: u32,
+    /// Its nodes by height: `refit_levels[first_level..first_level + levels]`, each a run of `refit_order`.
+    pub first_level: u32,
+    pub levels: u32,
     /// Its first node in the refit arrays.
     pub first_node: u32,
     /// Its triangles in the BVH's triangles (leaf order) and, at rest, in `rest_tris`.
     pub first_tri: u32,
     pub rest_first: u32,
     pub tri_count: u32,
-    /// The most parent links from a leaf to the root.
-    pub depth: u32,
 }
 
 /// The host side of the scene BVH: everything the GPU buffers hold, plus build statistics.
@@ -87,10 +85,11 @@ pub struct SceneBvh {
     local_bounds: Vec<(Vec3, Vec3)>,
     /// Bottom-level BVHs built (one per distinct mesh).
     pub blas_builds: usize,
-    /// The deforming meshes' trees, for the GPU refit: nodes, leaves (node indices), and their triangles at rest
-    /// (positions and vertex normals, in leaf order).
+    /// The deforming meshes' trees, for the GPU refit: nodes, their indices by height (each height a run, `[first,
+    /// count]` in `refit_levels`), and their triangles at rest (positions and vertex normals, in leaf order).
     pub refit_nodes: Vec<RefitNode>,
-    pub refit_leaves: Vec<u32>,
+    pub refit_order: Vec<u32>,
+    pub refit_levels: Vec<[u32; 2]>,
     pub rest_tris: Vec<GpuTriangle>,
     pub rest_normals: Vec<GpuTriangle>,
     /// Per rest triangle: the indices of its vertices in its mesh (a morphing mesh's triangles are read by them).

@@ -1,4 +1,6 @@
-//! What the GPU refit of a deforming mesh's tree needs: its nodes' parents, children and places in each layout.
+//! What the GPU refit of a deforming mesh's tree needs: its nodes' children and places in each layout, and its
+//! nodes grouped by height (a leaf's is 0, an inner node's one more than its higher child's), so that the refit
+//! bounds one height per dispatch, each after the one below.
 
 use super::*;
 
@@ -14,7 +16,6 @@ impl SceneBvh {
         pos: &[u32],
     ) {
         let first_node = self.refit_nodes.len() as u32;
-        let first_leaf = self.refit_leaves.len() as u32;
         let mut parent = vec![EMPTY; b2.nodes.len()];
         for (k, n) in b2.nodes.iter().enumerate() {
             if n.prim_count == 0 {
@@ -25,9 +26,6 @@ impl SceneBvh {
         let abs = |k: u32| if k == EMPTY { EMPTY } else { first_node + k };
         for (k, n) in b2.nodes.iter().enumerate() {
             let leaf = n.prim_count > 0;
-            if leaf {
-                self.refit_leaves.push(first_node + k as u32);
-            }
             self.refit_nodes.push(RefitNode {
                 parent: abs(parent[k]),
                 left: if leaf { EMPTY } else { first_node + n.first_index },
@@ -43,26 +41,32 @@ impl SceneBvh {
         let rest_first = self.rest_tris.len() as u32;
         self.rest_tris.extend_from_slice(&self.triangles[tri_base as usize..]);
         self.rest_normals.extend_from_slice(&self.normals[tri_base as usize..]);
-        let mut depth = vec![0u32; b2.nodes.len()];
-        let mut stack = vec![0usize];
-        while let Some(k) = stack.pop() {
+        // Heights, children before parents (the reverse of a breadth-first order from the root).
+        let mut order = vec![0usize];
+        let mut k = 0;
+        while k < order.len() {
+            let n = &b2.nodes[order[k]];
+            if n.prim_count == 0 {
+                order.extend([n.first_index as usize, n.first_index as usize + 1]);
+            }
+            k += 1;
+        }
+        let mut height = vec![0u32; b2.nodes.len()];
+        for &k in order.iter().rev() {
             let n = &b2.nodes[k];
             if n.prim_count == 0 {
-                for c in [n.first_index as usize, n.first_index as usize + 1] {
-                    depth[c] = depth[k] + 1;
-                    stack.push(c);
-                }
+                height[k] = 1 + height[n.first_index as usize].max(height[n.first_index as usize + 1]);
             }
         }
-        self.refit_meshes[mesh] = Some(RefitMesh {
-            depth: depth.iter().copied().max().unwrap_or(0),
-            first_leaf,
-            leaf_count: self.refit_leaves.len() as u32 - first_leaf,
-            first_node,
-            first_tri: tri_base,
-            rest_first,
-            tri_count,
-        });
+        let first_level = self.refit_levels.len() as u32;
+        let levels = height.iter().copied().max().map_or(0, |h| h + 1);
+        for h in 0..levels {
+            let first = self.refit_order.len() as u32;
+            self.refit_order.extend((0..b2.nodes.len()).filter(|&k| height[k] == h).map(|k| first_node + k as u32));
+            self.refit_levels.push([first, self.refit_order.len() as u32 - first]);
+        }
+        self.refit_meshes[mesh] =
+            Some(RefitMesh { first_level, levels, first_node, first_tri: tri_base, rest_first, tri_count });
     }
 
     /// Record each node's pair-layout slot in the refit nodes of mesh `refit` (just added).

@@ -71,8 +71,10 @@ pub(crate) struct SceneUpdate {
     /// Morphing objects weighted to the frame's time: raster vertices (after `moves`), and BVH triangles.
     pub morph_vertices: Vec<crate::gpu_types::MorphPush>,
     pub morph_triangles: Vec<crate::gpu_types::MorphPush>,
-    /// The deforming meshes' BVHs to refit (after their triangles).
+    /// The deforming meshes' BVHs to refit (after their triangles), one height of one mesh each, and how many
+    /// meshes.
     pub refits: Vec<crate::gpu_types::RefitPush>,
+    pub refit_meshes: u32,
 }
 
 impl SceneUpdate {
@@ -250,6 +252,7 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.sync.buffer(&sb.heights, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.displaced, &[Access::ComputeWrite]);
         rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
         rec.sync.buffer(&sb.indices, &[Access::ComputeWrite]);
         rec.flush(d);
@@ -278,29 +281,30 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.sync.buffer(&b.rest_tris, &[Access::ComputeRead]);
         rec.sync.buffer(&b.rest_normals, &[Access::ComputeRead]);
         rec.sync.buffer(&b.rest_corners, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.heights, &[Access::ComputeRead]);
+        rec.sync.buffer(&sb.displaced, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
         rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
         rec.sync.buffer(&b.triangles, &[Access::ComputeWrite]);
         rec.sync.buffer(&b.normals, &[Access::ComputeWrite]);
-        rec.sync.buffer(&b.refit_counters, &[Access::TransferDst]);
         rec.flush(d);
         rec.ts.mark(rec.cmd, "scene_update.triangles");
         update.water_triangles(rec.cmd, sb, &up.water_triangles)?;
         update.morph_triangles(rec.cmd, sb, &up.morph_triangles)?;
-        unsafe { d.cmd_fill_buffer(rec.cmd, b.refit_counters.raw, 0, vk::WHOLE_SIZE, 0) };
         // The wide layout's variants read them as texels.
         rec.sync.buffer(&b.triangles, &[Access::ComputeRead, Access::ComputeTexels]);
         rec.sync.buffer(&b.normals, &[Access::ComputeRead, Access::ComputeTexels]);
-        for buf in [&b.refit_counters, &b.refit_boxes, &b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
+        for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
             rec.sync.buffer(buf, &[Access::ComputeWrite]);
         }
         rec.sync.buffer(&b.refit_nodes, &[Access::ComputeRead]);
-        rec.sync.buffer(&b.refit_leaves, &[Access::ComputeRead]);
-        rec.flush(d);
+        rec.sync.buffer(&b.refit_order, &[Access::ComputeRead]);
         rec.ts.mark(rec.cmd, "scene_update.refit");
-        update.refit(rec.cmd, sb, &up.refits)?;
+        // One height per dispatch, each after the one below (its boxes are read).
+        for job in &up.refits {
+            rec.sync.buffer(&b.refit_boxes, &[Access::ComputeWrite]);
+            rec.flush(d);
+            update.refit(rec.cmd, sb, job)?;
+        }
         for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
             rec.sync.buffer(buf, &[Access::ComputeRead]);
         }

@@ -45,7 +45,7 @@ impl SceneUpdatePass {
             device,
             "water",
             shaders::WATER_COMP.words(),
-            &[BindKind::Storage; 4],
+            &[BindKind::Storage; 5],
             size(std::mem::size_of::<WaterPush>()),
         );
         let water_bvh = LazyPipeline::compute(
@@ -80,7 +80,7 @@ impl SceneUpdatePass {
             device,
             "refit",
             shaders::REFIT_COMP.words(),
-            &[BindKind::Storage; 8],
+            &[BindKind::Storage; 7],
             size(std::mem::size_of::<RefitPush>()),
         );
         SceneUpdatePass { device: device.clone(), place, water, water_bvh, water_step, morph, morph_bvh, refit }
@@ -138,20 +138,21 @@ impl SceneUpdatePass {
             Bind::Storage(&sb.object_vertices),
             Bind::Storage(&sb.vertices),
             Bind::Storage(&sb.heights),
+            Bind::Storage(&sb.displaced),
         ];
         self.run(cmd, &self.water, &binds, jobs, |j| j.count)
     }
 
-    /// Displace water's BVH triangles (each job one deforming mesh, in object space).
+    /// Gather water's BVH triangles from its displaced vertices (each job one water mesh, in object space).
     pub fn water_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
         let b = &sb.bvh;
         let binds = [
-            Bind::Storage(&sb.waves),
+            Bind::Storage(&sb.displaced),
+            Bind::Storage(&b.rest_corners),
             Bind::Storage(&b.rest_tris),
             Bind::Storage(&b.rest_normals),
             Bind::Storage(&b.triangles),
             Bind::Storage(&b.normals),
-            Bind::Storage(&sb.heights),
         ];
         self.run(cmd, &self.water_bvh, &binds, jobs, |j| j.count)
     }
@@ -196,20 +197,19 @@ impl SceneUpdatePass {
         self.run(cmd, &self.morph_bvh, &binds, jobs, |j| j.count)
     }
 
-    /// Refit each deforming mesh's bottom-level BVH (its arrival counters zeroed before).
-    pub fn refit(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[RefitPush]) -> VkResult<()> {
+    /// Bound one height of a deforming mesh's bottom-level BVH (the heights below it bounded before).
+    pub fn refit(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, job: &RefitPush) -> VkResult<()> {
         let b = &sb.bvh;
         let binds = [
             Bind::Storage(&b.refit_nodes),
-            Bind::Storage(&b.refit_leaves),
+            Bind::Storage(&b.refit_order),
             Bind::Storage(&b.refit_boxes),
-            Bind::Storage(&b.refit_counters),
             Bind::Storage(&b.triangles),
             Bind::Storage(&b.pair_nodes),
             Bind::Storage(&b.single_nodes),
             Bind::Storage(&b.threaded_nodes),
         ];
-        self.run(cmd, &self.refit, &binds, jobs, |j| j.leaf_count)
+        self.run(cmd, &self.refit, &binds, std::slice::from_ref(job), |j| j.count)
     }
 
     /// Write `data` at the start of `buffer` from the command buffer (in chunks vkCmdUpdateBuffer takes).

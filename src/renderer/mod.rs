@@ -566,6 +566,11 @@ impl Renderer {
         self.step_water(&mut up, &mut deformed);
         let heights: Vec<Option<u32>> = (0..self.scene.objects.len()).map(|i| self.heights_now(i)).collect();
         let sb = &mut self.scene_buffers;
+        // Water's BVH triangles are gathered from the vertices its raster job displaces: when they are all
+        // written (the GPU holds their rest state), so are those.
+        if sb.bvh.stale_deform {
+            deformed.extend((0..sb.deformers.len()).filter(|&i| matches!(sb.deformers[i], Some(Deformer::Water(_)))));
+        }
         let mut bvh_moved = false;
         for &(i, transform) in &moved {
             up.moves.push(crate::gpu_types::SceneUpdatePush::new(transform, &sb.objects[i]));
@@ -593,21 +598,23 @@ impl Renderer {
         // GPU holds their rest state (just built, or a layout just uploaded).
         let stale = std::mem::take(&mut sb.bvh.stale_deform);
         let mut refit_meshes = std::collections::BTreeSet::new();
-        for (i, &heights) in heights.iter().enumerate() {
+        for i in 0..sb.deformers.len() {
             let Some(deformer) = sb.deformers[i] else { continue };
             let mesh = self.instances.mesh_of(i);
             let Some(r) = sb.bvh.refit_mesh(mesh) else { continue };
             if (stale || deformed.contains(&i)) && refit_meshes.insert(mesh) {
                 match deformer {
-                    Deformer::Water(w) => up.water_triangles.push(WaterPush::bvh(&r, time, &w, heights)),
+                    Deformer::Water(w) => up.water_triangles.push(WaterPush::bvh(&r, &w)),
                     Deformer::Morph(m) => up.morph_triangles.push(MorphPush::bvh(&r, &m)),
                 }
-                up.refits.push(crate::gpu_types::RefitPush {
-                    first_leaf: r.first_leaf,
-                    leaf_count: r.leaf_count,
+                up.refit_meshes += 1;
+                let levels = sb.bvh.refit_levels(&r);
+                up.refits.extend(levels.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
+                    first,
+                    count,
                     layouts: sb.bvh.layout_mask(),
-                    depth: r.depth,
-                });
+                    pad: 0,
+                }));
             }
         }
         // The weights at the frame's time, for every morphing object (a few floats each).
@@ -680,7 +687,7 @@ impl Renderer {
             moved_objects: scene_update.moves.len() as u32,
             instance_bytes: scene_update.instances.as_ref().map_or(0, |r| std::mem::size_of_val(&r[..]) as u64),
             blas_builds: (self.scene_buffers.bvh.blas_builds - builds) as u32,
-            blas_refits: scene_update.refits.len() as u32,
+            blas_refits: scene_update.refit_meshes,
             deformed_objects: (scene_update.water_vertices.len() + scene_update.morph_vertices.len()) as u32,
             rebuilt,
             blocking_submits: self.recorder.blocking_submits - submits,

@@ -131,15 +131,6 @@ fn refit_equals_rebuild() {
                 bad += 1;
             }
         }
-        let counters: Vec<u32> = crate::vk::cmd::download_buffer(
-            &r.device,
-            &mut r.recorder,
-            &r.scene_buffers.bvh.refit_counters,
-            nodes.len(),
-        )
-        .unwrap();
-        let twice = (0..nodes.len()).filter(|&k| nodes[k].tri_count == 0).all(|k| counters[k] == 2);
-        assert!(twice, "every inner node was reached by both its children");
         assert_eq!(bad, 0, "single boxes that are not their triangles' bounds");
     }
     let mut state = 0x9e3779b9u32;

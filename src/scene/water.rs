@@ -88,7 +88,8 @@ pub struct Drop {
 /// h⁺ = h + (1 − γ Δt)(h − h⁻) + Cx (h_e + h_w − 2h) + Cz (h_n + h_s − 2h),   Cx = (c Δt / Δx)², Cz = (c Δt / Δz)²
 /// ```
 ///
-/// which is stable while Cx + Cz ≤ 1 ([`Simulation::rate`] keeps it at most 1/4). The walls reflect: a node
+/// which is stable while Cx + Cz ≤ 1 ([`Simulation::rate`] keeps it at most 1/2: a Courant number
+/// c Δt √(1/Δx² + 1/Δz²) of at most 0.7). The walls reflect: a node
 /// outside the grid mirrors the one inside (∂h/∂n = 0). Heights are held within ±`limit` m, the bound the light
 /// views and the BVH's bounds rely on. Before each step the drops whose time falls in it are added, and each
 /// moving body adds to every node the change of its submerged length in that node's column (the volume it takes
@@ -290,10 +291,10 @@ impl HeightField {
 }
 
 impl Simulation {
-    /// Steps per second for `water`: at least 60, and enough that Cx + Cz ≤ 1/4.
+    /// Steps per second for `water`: at least 60, and enough that its Courant number stays at most 0.7.
     pub fn rate(&self, water: &Water) -> u32 {
         let (dx, dz) = water.spacing();
-        let need = 2.0 * self.speed * (1.0 / (dx * dx) + 1.0 / (dz * dz)).sqrt();
+        let need = self.speed * (1.0 / (dx * dx) + 1.0 / (dz * dz)).sqrt() / 0.7;
         (need.ceil() as u32).max(60)
     }
 
