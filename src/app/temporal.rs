@@ -43,6 +43,9 @@ pub struct TemporalArgs {
     /// Orbit step between frames, degrees.
     #[arg(long, default_value_t = 1.0)]
     pub step_deg: f32,
+    /// Play the scene's animation instead (its water, its keyframes): frame k at time k / FPS s, the light still.
+    #[arg(long)]
+    pub fps: Option<f32>,
     /// Light transport.
     #[arg(long, value_enum, default_value_t = Transport::TwoInterface)]
     pub transport: Transport,
@@ -106,6 +109,12 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     if args.frames < 2 {
         return Err(Error::BadInput("--frames: at least 2".into()));
     }
+    if let Some(fps) = args.fps.filter(|f| !(f.is_finite() && *f > 0.0)) {
+        return Err(Error::BadInput(format!("--fps {fps}: must be > 0")));
+    }
+    // Frame k: the light turned by k steps, or the scene at time k / fps.
+    let time = |k: u32| args.fps.map_or(0.0, |f| k as f32 / f);
+    let step = if args.fps.is_some() { 0.0 } else { args.step_deg };
     for p in [&args.json, &args.markdown].into_iter().flatten() {
         image_io::check_output_dir(p)?;
     }
@@ -166,7 +175,8 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     let t = Instant::now();
     let mut refs = Vec::new();
     for k in 0..args.frames {
-        let scene = orbit(&scene0, d, k as f32 * args.step_deg);
+        let scene = orbit(&scene0, d, k as f32 * step);
+        let params = RefParams { time: time(k), ..params.clone() };
         refs.push(plane64(&reference_at(&session.scene_path, &scene, &params)?));
     }
     eprintln!("temporal: {} references ready in {:.1} s", refs.len(), t.elapsed().as_secs_f64());
@@ -183,7 +193,8 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         let mut planes = Vec::new();
         let mut ms = Vec::new();
         for k in 0..args.frames {
-            session.renderer.set_scene(orbit(&scene0, d, k as f32 * args.step_deg))?;
+            session.renderer.set_scene(orbit(&scene0, d, k as f32 * step))?;
+            session.renderer.set_time(time(k))?;
             if k == 0 {
                 session.frame(None)?; // warm-up: lavapipe compiles shaders on first use
             }
@@ -219,14 +230,14 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     }
     crate::app::commands::validation_verdict(&session)?;
     let mut md = format!(
-        "{} on {}, {} transport, {} frames, light orbit step {}°, 64² against the {} reference ({} photons); \
+        "{} on {}, {} transport, {} frames, {}, 64² against the {} reference ({} photons); \
          the reference's own frame-to-frame change is {:.4}\n\n\
          | method | level | GPU ms | mean rel-L1 | max rel-L1 | flicker | max flicker | frame change |\n|---|--:|--:|--:|--:|--:|--:|--:|\n",
         session.scene_path.display(),
         session.device().info.name,
         if args.transport == Transport::Exact { "exact" } else { "two-interface" },
         args.frames,
-        args.step_deg,
+        args.fps.map_or(format!("light orbit step {}°", args.step_deg), |f| format!("the scene's time at {f} fps")),
         args.paths,
         args.reference_photons,
         ref_change
@@ -251,7 +262,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     if let Some(p) = &args.json {
         let doc = json!({
             "device": session.device().info.name, "scene": session.scene_path.display().to_string(),
-            "frames": args.frames, "step_deg": args.step_deg, "half_height": half_height,
+            "frames": args.frames, "step_deg": step, "fps": args.fps, "half_height": half_height,
             "reference_photons": args.reference_photons, "paths": args.paths, "reference_change": ref_change,
             "rows": rows,
         });
