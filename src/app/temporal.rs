@@ -229,32 +229,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         }));
     }
     crate::app::commands::validation_verdict(&session)?;
-    let mut md = format!(
-        "{} on {}, {} transport, {} frames, {}, 64² against the {} reference ({} photons); \
-         the reference's own frame-to-frame change is {:.4}\n\n\
-         | method | level | GPU ms | mean rel-L1 | max rel-L1 | flicker | max flicker | frame change |\n|---|--:|--:|--:|--:|--:|--:|--:|\n",
-        session.scene_path.display(),
-        session.device().info.name,
-        if args.transport == Transport::Exact { "exact" } else { "two-interface" },
-        args.frames,
-        args.fps.map_or(format!("light orbit step {}°", args.step_deg), |f| format!("the scene's time at {f} fps")),
-        args.paths,
-        args.reference_photons,
-        ref_change
-    );
-    for r in &rows {
-        md += &format!(
-            "| {} | {} | {:.1} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
-            r["method"].as_str().unwrap_or(""),
-            r["level"],
-            r["gpu_ms_mean"].as_f64().unwrap_or(f64::NAN),
-            r["mean_rel_l1"].as_f64().unwrap_or(f64::NAN),
-            r["max_rel_l1"].as_f64().unwrap_or(f64::NAN),
-            r["flicker"].as_f64().unwrap_or(f64::NAN),
-            r["max_flicker"].as_f64().unwrap_or(f64::NAN),
-            r["frame_change"].as_f64().unwrap_or(f64::NAN),
-        );
-    }
+    let md = markdown(args, &session, ref_change, &rows);
     print!("{md}");
     if let Some(p) = &args.markdown {
         image_io::write_text(p, &md)?;
@@ -269,4 +244,35 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         image_io::write_text(p, &serde_json::to_string_pretty(&doc).unwrap_or_default())?;
     }
     Ok(())
+}
+
+/// The results as a markdown table, with a line naming what was run.
+fn markdown(args: &TemporalArgs, session: &Session, ref_change: f64, rows: &[serde_json::Value]) -> String {
+    let mut md = format!(
+        "{} on {}, {} transport, {} frames, {}, 64² against the {} reference ({} photons); \
+         the reference's own frame-to-frame change is {:.4}\n\n\
+         | method | level | GPU ms | mean rel-L1 | max rel-L1 | flicker | max flicker | frame change |\n|---|--:|--:|--:|--:|--:|--:|--:|\n",
+        session.scene_path.display(),
+        session.device().info.name,
+        if args.transport == Transport::Exact { "exact" } else { "two-interface" },
+        args.frames,
+        args.fps.map_or(format!("light orbit step {}°", args.step_deg), |f| format!("the scene's time at {f} fps")),
+        args.paths,
+        args.reference_photons,
+        ref_change
+    );
+    for r in rows {
+        md += &format!(
+            "| {} | {} | {:.1} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+            r["method"].as_str().unwrap_or(""),
+            r["level"],
+            r["gpu_ms_mean"].as_f64().unwrap_or(f64::NAN),
+            r["mean_rel_l1"].as_f64().unwrap_or(f64::NAN),
+            r["max_rel_l1"].as_f64().unwrap_or(f64::NAN),
+            r["flicker"].as_f64().unwrap_or(f64::NAN),
+            r["max_flicker"].as_f64().unwrap_or(f64::NAN),
+            r["frame_change"].as_f64().unwrap_or(f64::NAN),
+        );
+    }
+    md
 }
