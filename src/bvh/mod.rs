@@ -141,9 +141,8 @@ impl SceneBvh {
         let Some(i) = self.object_instance[object] else {
             return;
         };
-        let (llo, lhi) = self.local_bounds[i];
-        let (wlo, whi) = (0..8)
-            .map(|k| Vec3::new([llo.x, lhi.x][k & 1], [llo.y, lhi.y][(k >> 1) & 1], [llo.z, lhi.z][k >> 2]))
+        let (wlo, whi) = crate::scene::mesh::box_corners(self.local_bounds[i])
+            .into_iter()
             .map(|c| world_from_object.transform_point3(c))
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), p| (a.min(p), b.max(p)));
         let inst = &mut self.instances[i];

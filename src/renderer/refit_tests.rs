@@ -4,11 +4,12 @@
 
 use super::{FrameDesc, Renderer};
 use crate::bvh::{BvhLayout, BvhObject, SceneBvh};
-use crate::scene::{Mesh, Scene};
+use crate::scene::{CameraView, Mesh, Scene};
 use crate::settings::{Method, Quality, Settings, Transport};
 use glam::Vec3;
 
-const SCENE: &str = r#"
+/// A light, the `top` camera and a floor, which the renderer's tests add their objects to.
+pub(super) const BASE: &str = r#"
 [[light]]
 kind = "directional"
 position = [-0.5, 2.5, -0.3]
@@ -28,7 +29,10 @@ name = "floor"
 shape = "plane"
 size = [2.0, 2.0]
 material = { kind = "diffuse" }
+"#;
 
+/// The water this test refits.
+const WATER: &str = r#"
 [[object]]
 name = "water"
 shape = "water"
@@ -58,16 +62,25 @@ fn soup(b: &SceneBvh, first: u32, count: u32) -> Mesh {
     m
 }
 
-#[test]
-fn refit_equals_rebuild() {
+/// A renderer on `scene` (TOML text, named `name` in messages) on its own lavapipe device under validation (its
+/// messages logged), exact transport at dense level 1, with its settings and a 16² view from the `top` camera.
+pub(super) fn test_renderer(scene: &str, name: &str) -> (Renderer, Settings, CameraView) {
+    #[cfg(feature = "apps")]
+    let _ = env_logger::builder().is_test(true).try_init();
     let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
     let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
-    let scene = Scene::parse(SCENE, std::path::Path::new("refit.toml")).unwrap();
+    let scene = Scene::parse(scene, std::path::Path::new(name)).unwrap();
     let quality = Quality { transport: Transport::Exact, method: Method::Dense, level: Some(1), ..Quality::default() };
-    let mut settings = Settings { quality, ..Settings::default() };
-    let mut r = Renderer::new(device, scene, settings.clone()).unwrap();
+    let settings = Settings { quality, ..Settings::default() };
+    let r = Renderer::new(device, scene, settings.clone()).unwrap();
     let top = r.scene().camera(Some("top")).unwrap().clone();
     let view = r.camera_view(&top, 16, 16);
+    (r, settings, view)
+}
+
+#[test]
+fn refit_equals_rebuild() {
+    let (mut r, mut settings, view) = test_renderer(&format!("{BASE}{WATER}"), "refit.toml");
     r.render(&FrameDesc::new(&view, None)).unwrap();
     // Displaced twice after the build, with both layouts on the GPU the second time.
     r.set_time(0.73).unwrap();

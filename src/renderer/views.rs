@@ -2,6 +2,7 @@
 //! receivers: caustic map, receiver g-buffer and shadow map), and the eye camera.
 
 use crate::error::{Error, Result};
+use crate::scene::mesh::box_corners;
 use crate::scene::view::{CameraView, LightView, Window};
 use crate::scene::{LightKind, Scene};
 use crate::settings::ResolvedSettings;
@@ -25,12 +26,7 @@ impl Views {
         let envelope = |o: &crate::scene::Object| {
             let a = o.animation.as_ref().filter(|a| a.water.is_some());
             let corners = a.and_then(|a| Some((a.deform_bounds()?, a.transform_at(scene.time))));
-            corners.into_iter().flat_map(|((lo, hi), m)| {
-                (0..8).map(move |i| {
-                    let c = |k: usize, l: f32, h: f32| if i & k == 0 { l } else { h };
-                    m.transform_point3(glam::Vec3::new(c(1, lo.x, hi.x), c(2, lo.y, hi.y), c(4, lo.z, hi.z)))
-                })
-            })
+            corners.into_iter().flat_map(|(b, m)| box_corners(b).map(|c| m.transform_point3(c)))
         };
         let all = || scene.objects.iter().flat_map(|o| o.mesh.positions.iter().copied().chain(envelope(o)));
         let refr = || scene.refractors().flat_map(|o| o.mesh.positions.iter().copied().chain(envelope(o)));

@@ -14,14 +14,14 @@ use glam::{Mat4, Vec3};
 use std::collections::BTreeSet;
 
 /// What the renderer keeps between frames to step its water: the bodies' spheres (object space, per scene
-/// object; none for water), each object's transform at the last step, and the drops asked for.
+/// object; none for water), each object's transform when the surfaces were last stepped, and the drops asked for.
 #[derive(Default)]
 pub(super) struct WaterSims {
     /// The scene generation the spheres were computed for.
     generation: Option<u64>,
     spheres: Vec<Option<(Vec3, f32)>>,
-    /// Each object's transform and the scene's time when the surfaces were last stepped.
-    last: Option<(Vec<Mat4>, f32)>,
+    /// Each object's transform when the surfaces were last stepped.
+    last: Option<Vec<Mat4>>,
     /// Drops asked for, per water object, not yet recorded.
     drops: Vec<(usize, Drop)>,
     /// Drops recorded so far (part of the caustic maps' key: a drop changes the surface at the same time).
@@ -107,7 +107,7 @@ impl Renderer {
         }
         let time = self.scene.time;
         let now: Vec<Mat4> = (0..n).map(|i| self.instances.transform_of(i)).collect();
-        let before = self.water.last.clone().map_or_else(|| now.clone(), |(m, _)| m);
+        let before = self.water.last.take().unwrap_or_else(|| now.clone());
         for w in 0..n {
             let (Some(Deformer::Water(range)), Some(state)) = (sb.deformers[w], sb.simulations[w].as_mut()) else {
                 continue;
@@ -164,7 +164,7 @@ impl Renderer {
             }
         }
         self.water.drops.clear();
-        self.water.last = Some((now, time));
+        self.water.last = Some(now);
     }
 
     /// The first float of simulated water object `i`'s heights now in `SceneBuffers::heights` (None: it has no

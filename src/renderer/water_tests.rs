@@ -3,31 +3,11 @@
 //! time, forward again, and back (from rest), and after each frame its heights are read back and compared node by
 //! node with `Water::simulate` at the same time, bodies placed by the same keyframes.
 
+use super::refit_tests::BASE;
 use super::{FrameDesc, Renderer};
-use crate::scene::Scene;
-use crate::settings::{Method, Quality, Settings, Transport};
 
-const SCENE: &str = r#"
-[[light]]
-kind = "directional"
-position = [-0.5, 2.5, -0.3]
-target = [0.0, 0.3, 0.0]
-intensity = 1.0
-
-[[camera]]
-name = "top"
-kind = "orthographic"
-position = [0.0, 3.0, 0.0]
-target = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, -1.0]
-half_height = 1.0
-
-[[object]]
-name = "floor"
-shape = "plane"
-size = [2.0, 2.0]
-material = { kind = "diffuse" }
-
+/// A ball and the water, added to the tests' base scene.
+const OBJECTS: &str = r#"
 [[object]]
 name = "ball"
 shape = "sphere"
@@ -80,15 +60,7 @@ fn compare(r: &mut Renderer, w: usize) -> (f32, f32) {
 
 #[test]
 fn gpu_steps_agree_with_the_host() {
-    #[cfg(feature = "apps")]
-    let _ = env_logger::builder().is_test(true).try_init();
-    let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
-    let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
-    let scene = Scene::parse(SCENE, std::path::Path::new("water.toml")).unwrap();
-    let quality = Quality { transport: Transport::Exact, method: Method::Dense, level: Some(1), ..Quality::default() };
-    let mut r = Renderer::new(device, scene, Settings { quality, ..Settings::default() }).unwrap();
-    let top = r.scene().camera(Some("top")).unwrap().clone();
-    let view = r.camera_view(&top, 16, 16);
+    let (mut r, _, view) = super::refit_tests::test_renderer(&format!("{BASE}{OBJECTS}"), "water.toml");
     let water = 2;
     // Forward in two frames (the ball enters the water at about 0.35 s), then back to a time before the second
     // drop: the surface starts again from rest.

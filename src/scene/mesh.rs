@@ -67,6 +67,11 @@ impl Mesh {
     }
 }
 
+/// The eight corners of the box `(lo, hi)`: bit 0 of the index picks x's end, bit 1 y's, bit 2 z's.
+pub fn box_corners((lo, hi): (Vec3, Vec3)) -> [Vec3; 8] {
+    std::array::from_fn(|k| Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][k >> 2]))
+}
+
 /// The xz-plane at the origin, facing +y, `sx` by `sz`.
 pub fn plane(sx: f32, sz: f32) -> Mesh {
     let (x, z) = (sx * 0.5, sz * 0.5);

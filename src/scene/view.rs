@@ -244,12 +244,7 @@ impl CameraView {
     /// Fit the near and far planes to `bounds`.
     pub fn fit_depth(&mut self, (lo, hi): (Vec3, Vec3)) {
         let (mut dmin, mut dmax) = (f32::INFINITY, f32::NEG_INFINITY);
-        for i in 0..8 {
-            let c = Vec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            );
+        for c in super::mesh::box_corners((lo, hi)) {
             let d = (c - self.position).dot(self.forward);
             dmin = dmin.min(d);
             dmax = dmax.max(d);

@@ -279,13 +279,8 @@ impl HeightField {
     pub fn at(&self, i: u32, j: u32) -> (f32, Vec2) {
         let n = self.k.nodes;
         let h = |i: u32, j: u32| self.h[(j * n + i) as usize];
-        if n < 2 {
-            return (h(i, j), Vec2::ZERO);
-        }
-        let (il, ir) = (i.saturating_sub(1), (i + 1).min(n - 1));
-        let (jl, jr) = (j.saturating_sub(1), (j + 1).min(n - 1));
-        let gx = if i == 0 || i == n - 1 { 0.0 } else { (h(ir, j) - h(il, j)) / (2.0 * self.k.dx) };
-        let gz = if j == 0 || j == n - 1 { 0.0 } else { (h(i, jr) - h(i, jl)) / (2.0 * self.k.dz) };
+        let gx = if i == 0 || i + 1 >= n { 0.0 } else { (h(i + 1, j) - h(i - 1, j)) / (2.0 * self.k.dx) };
+        let gz = if j == 0 || j + 1 >= n { 0.0 } else { (h(i, j + 1) - h(i, j - 1)) / (2.0 * self.k.dz) };
         (h(i, j), Vec2::new(gx, gz))
     }
 }
