@@ -294,7 +294,7 @@ pub fn parse(
 /// The GPU structs that travel as `uvec4` words, in queues a pass may read as texels (a ray queue): build.rs writes
 /// `T T_from_words(uvec4 w0, ...)` and `void T_to_words(T v, out uvec4 w0, ...)` for each, so that the packing
 /// follows the one definition. Each must be a whole number of 16-byte words of 4-byte scalars and vectors.
-pub const WORD_STRUCTS: &[&str] = &["GpuRay"];
+pub const WORD_STRUCTS: &[&str] = &["GpuRay", "GpuRayMedium"];
 
 /// The components of a field of a word struct: (the GLSL type of its bits, components, whether they are floats).
 fn word_components(glsl_type: &str) -> Option<(&'static str, u32, bool)> {

@@ -15,6 +15,7 @@ layout(constant_id = GLASS_LIGHT_COUNT_ID) const uint GLASS_LIGHT_COUNT = 1u;
 layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.disperses)
 layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.environment)
 layout(constant_id = GLASS_TEXTURED_ID) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
+layout(constant_id = GLASS_MEDIA_ID) const bool GLASS_MEDIA = true;  // absorbing media (ResolvedSettings::media)
 #define ENVIRONMENT_MAP GLASS_ENVIRONMENT
 // The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
 // environment comes with u_frame: a later pass's first light carries none.)
@@ -78,8 +79,11 @@ const float EYE_THRESHOLD = 0.05;
 const int EYE_STACK = 8;
 
 // Radiance along the eye ray ro + t rd (which reaches glass first), through every interface, with the IORs of
-// channel c (0: the d line, for glass that does not disperse), under every light and the environment. Absorption inside the glass is per channel (Beer–Lambert with the red, green
-// and blue coefficients), so the colors of absorbing glass show in every trace. A receiver reached through the
+// channel c (0: the d line, for glass that does not disperse), under every light and the environment. Each branch
+// knows the medium it travels in (the eye is in air; docs/design.md "Media"), and each segment is absorbed by it per
+// channel (Beer–Lambert with the red, green and blue coefficients), so the colors of absorbing glass, and of a floor
+// seen through a liquid, show in every trace. A segment in an absorbing medium that meets nothing is absorbed
+// entirely: the medium has no end there. A receiver reached through the
 // glass takes its caustic irradiance averaged over the pixel's footprint there: the pixel's width at the distance
 // the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
 vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
@@ -89,22 +93,24 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     float pixel = cam.window.z * cam.extent.z;
     bool ortho = view_is_ortho(cam);
     vec3 so[EYE_STACK], sd[EYE_STACK], sw[EYE_STACK];
-    uint sn[EYE_STACK];
+    uint sn[EYE_STACK], sm[EYE_STACK];
     float sl[EYE_STACK];
     int sp = 0;
-    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u; sl[0] = 0.0;
+    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u; sl[0] = 0.0; sm[0] = AIR;
     sp = 1;
     vec3 L = vec3(0.0);
     while (sp > 0) {
         sp--;
         vec3 o = so[sp], d = sd[sp], w = sw[sp];
-        uint depth = sn[sp];
+        uint depth = sn[sp], m = GLASS_MEDIA ? sm[sp] : AIR;
         float run = sl[sp];
+        vec3 sigma = GLASS_MEDIA ? medium_sigma_rgb(m) : vec3(0.0);
         SceneHit hit;
         if (!bvh_closest(o, d, 1.0 / 0.0, hit)) {
-            L += w * environment(d);
+            L += w * vec3(equal(sigma, vec3(0.0))) * environment(d);
             continue;
         }
+        if (GLASS_MEDIA) w *= exp(-sigma * hit.t);
         vec3 p = bvh_hit_point(hit);
         vec3 ng, ns;
         bvh_normals(hit, ng, ns);
@@ -142,19 +148,19 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             L += w * albedo / RECV_PI * e;
             continue;
         }
-        // The segment that reached an exit from the inside ran through the glass: Beer–Lambert, per channel.
-        if (dot(d, ng) > 0.0) w *= exp(-I.sigma_rgb.xyz * hit.t);
         if (depth >= cap) {
             L += w * environment(d);
             continue;
         }
-        Split s = split_interface(d, p, ng, ns, inst_ior_in(hit.inst, c), inst_is_mirror(hit.inst));
+        Split s = split_at_instance(d, p, ng, ns, hit.inst, c);
+        // The reflection stays in the branch's medium; the refraction crosses the surface.
+        uint m_refr = refracted_medium(hit.inst, dot(d, ng) < 0.0);
         if (!s.ok) continue;
         vec3 wr = w * s.F, wt = w * (1.0 - s.F);
         if (s.F < 1.0) {
             if (max(wt.r, max(wt.g, wt.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
                 so[sp] = s.p_refr; sd[sp] = normalize(s.refr); sw[sp] = wt; sn[sp] = depth + 1u;
-                sl[sp] = run + hit.t;
+                sl[sp] = run + hit.t; sm[sp] = m_refr;
                 sp++;
             } else {
                 L += wt * environment(normalize(s.refr));
@@ -162,7 +168,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         }
         if (max(wr.r, max(wr.g, wr.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
             so[sp] = s.p_refl; sd[sp] = normalize(s.refl); sw[sp] = wr; sn[sp] = depth + 1u;
-            sl[sp] = run + hit.t;
+            sl[sp] = run + hit.t; sm[sp] = m;
             sp++;
         } else {
             L += wr * environment(normalize(s.refl));

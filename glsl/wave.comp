@@ -28,6 +28,9 @@ layout(local_size_x = LINEAR_WG) in;
 // code it runs: a CPU driver such as lavapipe runs both sides of every branch under a mask.
 layout(constant_id = WAVE_PRIMARY_ID) const bool WAVE_PRIMARY = false;
 layout(constant_id = WAVE_DIFFERENTIAL_ID) const bool WAVE_DIFFERENTIAL = false;
+// The rays carry the medium they travel in (the scene has absorbing media, docs/design.md "Media"): a segment is
+// attenuated by its medium's absorption whatever it meets. Without media nothing absorbs.
+layout(constant_id = WAVE_MEDIA_ID) const bool WAVE_MEDIA = false;
 // The most subgroups a work group can have on this device (LINEAR_WG over its least subgroup size).
 layout(constant_id = WAVE_SUBGROUPS_ID) const uint WAVE_SUBGROUPS = LINEAR_WG;
 
@@ -55,6 +58,7 @@ struct Child {
     GpuRay ray;
     RayDiff diff;
     bool inside;
+    uint medium;  // the medium it travels in (WAVE_MEDIA)
 };
 
 // What one invocation produces: up to two child rays and one splat record. The children are named, not an array:
@@ -81,20 +85,26 @@ struct Traced {
     uint depth;   // the ray's interactions so far: the wave's own index, since wave k traces what wave k - 1
                   // appended (wave 0 the photons), so every ray of a wave has the same
     bool lod;     // a weak branch carried for the photon's block
+    uint medium;  // the medium it travels in (WAVE_MEDIA; wave 0's rays start in air)
 };
 
 // The invocation's shares of the account's terms (ACC_*), summed per work group at the end.
 float acc[ACC_TERMS];
 
 // A queue entry (GpuRay, src/gpu_types.rs): the ray's words, then with differential footprints their packed
-// word (diff_pack, glsl/common/transport.glsl).
+// word (diff_pack, glsl/common/transport.glsl), then with media its GpuRayMedium, last.
 void store_ray(uint k, uint stride, Child c, float side) {
     uint b = stride * k;
     uvec4 w0, w1;
     GpuRay_to_words(c.ray, w0, w1);
     rays_out[b] = w0;
     rays_out[b + 1u] = w1;
-    if (stride > RAY_VEC4S_CELL) rays_out[b + 2u] = diff_pack(c.diff, c.ray.dir, side);
+    if (WAVE_DIFFERENTIAL) rays_out[b + 2u] = diff_pack(c.diff, c.ray.dir, side);
+    if (WAVE_MEDIA) {
+        uvec4 m;
+        GpuRayMedium_to_words(GpuRayMedium(vec3(0.0), c.medium), m);
+        rays_out[b + stride - 1u] = m;
+    }
 }
 
 // Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.weak_fraction of its
@@ -168,9 +178,9 @@ bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
     return (mine & (1u << findLSB(counted))) != 0u;
 }
 
-// The terms a photon rarely meets (the interaction cap, a numerical dead end, absorption in tinted glass): an
-// invocation adds its own to the account, without a work-group sum.
-bool rare_term(uint k) { return k == ACC_CAP || k == ACC_LOST || k == ACC_ABSORBED; }
+// The terms a photon rarely meets (the interaction cap, a numerical dead end): an invocation adds its own to the
+// account, without a work-group sum.
+bool rare_term(uint k) { return k == ACC_CAP || k == ACC_LOST; }
 
 // Whether a wave of this kind sums row k of s_acc: the terms its invocations can add to, but for the rare ones, and
 // the records' rows (wave 0's rays reach a receiver only directly, a bounce wave's only after an interaction). The
@@ -178,6 +188,7 @@ bool rare_term(uint k) { return k == ACC_CAP || k == ACC_LOST || k == ACC_ABSORB
 bool wave_row(uint k) {
     if (k == ACC_CAUSTIC || k == ACC_OVERFLOW || k == ACC_ONE_EVENT) return false;  // the pending rows hold them
     if (rare_term(k)) return false;
+    if (k == ACC_ABSORBED) return WAVE_MEDIA;
     if (k == ACC_EMITTED || k == ACC_DIRECT) return WAVE_PRIMARY;
     if (k == ACC_UNSEEN) return !WAVE_PRIMARY;
     if (k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE) return !WAVE_PRIMARY;
@@ -219,6 +230,7 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     Traced t;
     t.diff.dpx = t.diff.dpy = t.diff.ddx = t.diff.ddy = vec3(0.0);
     t.lod = false;
+    t.medium = AIR;
     if (WAVE_PRIMARY) {
         t.pidx = capacity - in_count + i;
         t.cell = photon_at(t.pidx);
@@ -234,6 +246,7 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
         t.depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
         t.lod = (m & LOD_RAY) != 0u;
         t.cell = photon_at(t.pidx);
+        if (WAVE_MEDIA) t.medium = GpuRayMedium_from_words(ray_word_in(stride * i + stride - 1u)).medium;
     }
     t.phi = cell_measure(cell_level(t.cell), cell_xy(t.cell));
     t.side = diff ? cell_side(cell_level(t.cell)) : 1.0;
@@ -284,7 +297,7 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
               inout Outcome o) {
     const bool diff = WAVE_DIFFERENTIAL;
     vec3 rd = t.ray.dir;
-    Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
+    Split s = split_at_instance(rd, p, ng, ns, hit.inst, color_channel());
     if (!s.ok) {
         acc[ACC_LOST] += t.phi * w;
         return;
@@ -302,8 +315,10 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
     bool keep_t = branch_kept(t.phi, wt, cut, weak, carrier, scale);
     bool carried_r = wr < weak, carried_t = wt < weak;
     uint m_r = carried_r ? meta | LOD_RAY : meta, m_t = carried_t ? meta | LOD_RAY : meta;
-    Child r = Child(GpuRay(s.p_refl, carried_r ? wr * scale : wr, normalize(s.refl), m_r), rdf, false);
-    Child tr = Child(GpuRay(s.p_refr, carried_t ? wt * scale : wt, normalize(s.refr), m_t), rdf, false);
+    // The reflection stays in the ray's medium; the refraction crosses the surface.
+    Child r = Child(GpuRay(s.p_refl, carried_r ? wr * scale : wr, normalize(s.refl), m_r), rdf, false, t.medium);
+    Child tr = Child(GpuRay(s.p_refr, carried_t ? wt * scale : wt, normalize(s.refr), m_t), rdf, false,
+                     refracted_medium(hit.inst, dot(rd, ng) < 0.0));
     if (diff) {
         // Both children inherit dP; their dD follow their branch, with the interpolated normal's derivative where
         // the branch used it.
@@ -325,7 +340,7 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
 }
 
 // Trace the ray t: it escapes, reaches a receiver (a record in a bounce wave), meets the interaction cap, or splits
-// at a dielectric; absorption in tinted glass first takes its share of a segment that ran through the glass.
+// at a dielectric; absorption in the ray's medium first takes its share of the segment.
 void interact(Traced t, uint capacity, inout Outcome o) {
     const bool diff = WAVE_DIFFERENTIAL;
     vec3 ro = t.ray.origin, rd = t.ray.dir;
@@ -343,10 +358,9 @@ void interact(Traced t, uint capacity, inout Outcome o) {
     if (specular || (diff && t.depth > 0u)) bvh_normals(hit, ng, ns);
     // The differentials move to the hit, in the plane of its triangle.
     if (diff) diff_transfer(rdf, rd, dot(p - ro, rd), ng);
-    float sigma = inst_sigma(hit.inst);
-    if (specular && sigma > 0.0 && dot(rd, ng) > 0.0) {
-        // A segment that meets this glass's surface from inside ran through it: Beer–Lambert attenuation, exactly
-        // (no sampling).
+    float sigma = WAVE_MEDIA ? medium_sigma_in(t.medium, color_channel()) : 0.0;
+    if (sigma > 0.0) {
+        // The segment ran through an absorbing medium: Beer–Lambert attenuation, exactly (no sampling).
         float keep = exp(-sigma * distance(p, ro));
         acc[ACC_ABSORBED] += t.phi * w * (1.0 - keep);
         w *= keep;
@@ -439,7 +453,7 @@ void add_shares(uint lid, bool rays_ok, bool recs_ok) {
 void main() {
     uint lid = gl_LocalInvocationIndex;
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + lid;
-    uint stride = WAVE_DIFFERENTIAL ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL;
+    uint stride = (WAVE_DIFFERENTIAL ? RAY_VEC4S_DIFFERENTIAL : RAY_VEC4S_CELL) + (WAVE_MEDIA ? RAY_VEC4S_MEDIUM : 0u);
     bool can_abort = pc.may_abort != 0u;
     // The transport state's scalars, read outside any branch: there a CPU driver loads a storage buffer's word once
     // for the SIMD group, inside a branch lane by lane.
@@ -452,7 +466,7 @@ void main() {
 
     RayDiff none;
     none.dpx = none.dpy = none.ddx = none.ddy = vec3(0.0);
-    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false);
+    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false, AIR);
     Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0.0, false);
     float phi = 0.0, side = 1.0;
     uint depth = 0u;

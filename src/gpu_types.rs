@@ -295,6 +295,18 @@ pub struct GpuRay {
     pub meta: u32,
 }
 
+/// The medium part of a queue entry, after the ray (and its differentials), when the scene has absorbing media
+/// (`Scene::has_media`, RAY_VEC4S_MEDIUM more words): which medium the ray travels in, so that absorption follows
+/// it to whatever it meets, a receiver standing in a liquid included (docs/design.md "Media").
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuRayMedium {
+    /// Zero: the room a ray's sampled wavelengths take in spectral transport.
+    pub spare: [f32; 3],
+    /// 0: air; else the dielectric instance + 1 whose inside it is in (glsl/common/interface.glsl).
+    pub medium: u32,
+}
+
 /// A splat record: where one photon path lands on a receiver, and what it deposits there (glsl/splat.comp,
 /// glsl/splat.vert). One per emitted photon in the two-interface model (the same index), appended per record in
 /// exact transport.
@@ -311,6 +323,7 @@ pub struct GpuSplat {
 
 const _: () = assert!(size_of::<GpuRay>() == 16 * RAY_VEC4S_CELL as usize);
 const _: () = assert!(RAY_VEC4S_DIFFERENTIAL == RAY_VEC4S_CELL + 1);
+const _: () = assert!(size_of::<GpuRayMedium>() == 16 * RAY_VEC4S_MEDIUM as usize);
 
 // Push constants of the photon passes: one struct per pass, each field with one meaning. The pipelines of the
 // photon passes share one layout, whose push range is the largest of these (PHOTON_PUSH_BYTES).

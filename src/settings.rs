@@ -353,6 +353,9 @@ pub struct ResolvedSettings {
     pub debug_min_level: u32,
     /// Bytes one storage-buffer binding may span on the device (its maxStorageBufferRange, at most 2 GiB).
     pub binding_limit: u64,
+    /// The scene has absorbing media (`Scene::has_media`): exact transport's rays carry their medium. The
+    /// renderer sets it from its scene each frame; [`Settings::resolve`] leaves it off.
+    pub media: bool,
 }
 
 impl Default for ResolvedSettings {
@@ -579,6 +582,7 @@ impl Settings {
             debug_photons: t.debug_photons,
             debug_min_level: t.debug_min_level,
             binding_limit,
+            media: false,
         })
     }
 }
@@ -660,7 +664,13 @@ impl ResolvedSettings {
 
     /// Bytes per ray in the exact transport's queues.
     pub fn ray_bytes(&self) -> u32 {
-        16 * self.footprint.ray_vec4s()
+        16 * self.ray_vec4s()
+    }
+
+    /// vec4s per ray in the exact transport's queues: the ray, its differentials with that footprint, and its
+    /// medium where the scene has media.
+    pub fn ray_vec4s(&self) -> u32 {
+        self.footprint.ray_vec4s() + if self.media { RAY_VEC4S_MEDIUM } else { 0 }
     }
 
     /// Photons one batch may emit (a dense band, or an adaptive batch's photons; an adaptive batch's candidates

@@ -87,6 +87,8 @@ pub const RAY_VEC4S_CELL: u32 = 2;
 /// vec4s per ray with ray differentials: one more, dP/dx, dP/dy, dD/dx and dD/dy across the ray as half-float pairs
 /// (`diff_pack`, glsl/common/transport.glsl).
 pub const RAY_VEC4S_DIFFERENTIAL: u32 = 3;
+/// vec4s a ray's medium adds, last in its entry, when the scene has absorbing media: a `GpuRayMedium`.
+pub const RAY_VEC4S_MEDIUM: u32 = 1;
 /// A ray's meta word holds its photon's index (counted from the photon buffer's top) in this many low bits, and
 /// its interactions above them: a batch holds at most 2^PHOTON_INDEX_BITS photons.
 pub const PHOTON_INDEX_BITS: u32 = 24;
@@ -275,5 +277,9 @@ pub const GLASS_DISPERSIVE_ID: u32 = 4;
 pub const GLASS_ENVIRONMENT_ID: u32 = 5;
 /// glsl/glass.comp: some receiver has an albedo texture.
 pub const GLASS_TEXTURED_ID: u32 = 6;
+/// glsl/wave.comp: the rays carry their medium (the scene has absorbing media).
+pub const WAVE_MEDIA_ID: u32 = 7;
+/// glsl/glass.comp: the scene has absorbing media.
+pub const GLASS_MEDIA_ID: u32 = 7;
 /// glsl/coverage.comp: the pass builds mip 0 from the g-buffers.
 pub const COVERAGE_MIP0_ID: u32 = 0;

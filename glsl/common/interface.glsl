@@ -39,11 +39,12 @@ struct Split {
     float eta;      // n_incident / n_transmitted
 };
 
-// A mirror (`mirror`) reflects everything (F = 1), with the same normal choices.
-Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) {
+// The surface separates the medium of IOR n_in (behind the geometric normal ng) from n_out (in front of it). A
+// mirror (`mirror`) reflects everything (F = 1), with the same normal choices.
+Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float n_in, float n_out, bool mirror) {
     Split s;
     bool entering = dot(d, ng) < 0.0;
-    float eta = entering ? 1.0 / ior : ior;
+    float eta = entering ? n_out / n_in : n_in / n_out;
     vec3 ng_f = entering ? ng : -ng;  // faces the incident side
     vec3 ns_f = dot(ns, ng) > 0.0 ? (entering ? ns : -ns) : ng_f;
     bool use_ns = dot(ns, ng) > 0.0 && -dot(d, ns_f) > 0.0;
@@ -66,7 +67,7 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float ior, bool mirror) 
     s.ok = s.ok && dot(s.refl, ng_f) > 0.0;
     s.refr = vec3(0.0);
     if (s.ok) {
-        float n1 = entering ? 1.0 : ior, n2 = entering ? ior : 1.0;
+        float n1 = entering ? n_out : n_in, n2 = entering ? n_in : n_out;
         s.F = mirror ? 1.0 : fresnel_dielectric(cos_i, n1, n2);
         vec3 t;
         if (s.F < 1.0 && refract_dir(d, n, eta, t)) {
@@ -107,6 +108,25 @@ float inst_sigma_in(uint inst, uint c) {
     return c == 0u ? bvh_instance(inst).material.z : bvh_instance(inst).sigma_rgb[c - 1u];
 }
 float inst_ior(uint inst) { return inst_ior_in(inst, color_channel()); }
-float inst_sigma(uint inst) { return inst_sigma_in(inst, color_channel()); }
+
+// Media (docs/design.md "Media"): a medium is 0 for air (IOR 1, no absorption), else a dielectric instance + 1,
+// whose IOR and absorption it has. A dielectric's surface separates its own medium (behind its geometric normal)
+// from the one its record names beyond it (`sigma_rgb.w`, src/bvh/mod.rs `set_media`).
+const uint AIR = 0u;
+uint inst_medium(uint inst) { return inst + 1u; }
+uint inst_outside(uint inst) { return uint(bvh_instance(inst).sigma_rgb.w); }
+float medium_ior_in(uint m, uint c) { return m == AIR ? 1.0 : inst_ior_in(m - 1u, c); }
+float medium_sigma_in(uint m, uint c) { return m == AIR ? 0.0 : inst_sigma_in(m - 1u, c); }
+vec3 medium_sigma_rgb(uint m) { return m == AIR ? vec3(0.0) : bvh_instance(m - 1u).sigma_rgb.xyz; }
+
+// The split at a hit on instance `inst` in channel c: its own IOR inside, its outside medium's beyond.
+Split split_at_instance(vec3 d, vec3 p, vec3 ng, vec3 ns, uint inst, uint c) {
+    return split_interface(d, p, ng, ns, inst_ior_in(inst, c), medium_ior_in(inst_outside(inst), c),
+                           inst_is_mirror(inst));
+}
+
+// The medium a branch of a split at `inst` travels in: a reflection stays in the ray's own medium `m`; a refraction
+// crosses into the instance (entering: the ray met the front of its surface) or out to the medium beyond it.
+uint refracted_medium(uint inst, bool entering) { return entering ? inst_medium(inst) : inst_outside(inst); }
 
 #endif

@@ -213,7 +213,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
         if (k == MAX_INTERACTIONS) break;
         vec3 ng, ns;
         bvh_normals(hit, ng, ns);
-        Split s = split_interface(rd, p, ng, ns, inst_ior(hit.inst), inst_is_mirror(hit.inst));
+        Split s = split_at_instance(rd, p, ng, ns, hit.inst, color_channel());
         if (!s.ok) break;
         bool refl = s.F >= 0.5;
         throughput *= refl ? s.F : 1.0 - s.F;

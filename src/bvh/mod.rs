@@ -134,6 +134,17 @@ impl SceneBvh {
         SceneBvh::build(&meshes, &objects, &[])
     }
 
+    /// The medium beyond each dielectric's surface (`Object::outside`: an object index, None for air), into its
+    /// instance's `sigma_rgb.w`: the outside object's instance + 1, 0 for air (glsl/common/interface.glsl). An
+    /// outside object without triangles has no instance: its medium is then air's.
+    pub fn set_media(&mut self, outside: impl Iterator<Item = Option<usize>>) {
+        for (object, o) in outside.enumerate() {
+            let Some(i) = self.object_instance.get(object).copied().flatten() else { continue };
+            let m = o.and_then(|j| self.object_instance.get(j).copied().flatten()).map_or(0, |k| k + 1);
+            self.instances[i].sigma_rgb[3] = m as f32;
+        }
+    }
+
     /// Move object `object` rigidly: `world_from_object` maps its BVH space (its mesh's object space) to world. Its
     /// instance's world bounds become the transformed corners of its BVH-space box (the identity keeps them
     /// exact). An object with no triangle has no instance to move.

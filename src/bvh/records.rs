@@ -83,8 +83,8 @@ pub struct GpuInstance {
     /// transform's first row. w: root node index bits in the wide layout (`EMPTY`: a deforming mesh, whose
     /// instances the wide variant walks in the pair layout, which the refit keeps).
     pub ior_rgb: [f32; 4],
-    /// Dielectric: absorption coefficient per channel (1/m); a textured receiver: its uv transform's second row.
-    /// w unused.
+    /// Dielectric: absorption coefficient per channel (1/m), and in w the medium beyond its surface (the outside
+    /// object's instance + 1, 0: air; `SceneBvh::set_media`); a textured receiver: its uv transform's second row.
     pub sigma_rgb: [f32; 4],
 }
 

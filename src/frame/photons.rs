@@ -4,7 +4,7 @@
 use super::{Ctx, Rec};
 use crate::bvh::BvhLayout;
 use crate::gpu_types::{TransportState, TraversalState};
-use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape};
+use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape, WaveRays};
 use crate::settings::{Driven, Footprint, Method, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{Targets, CANARY, PHOTON_GUARD};
@@ -333,7 +333,8 @@ impl Ctx<'_> {
             if wave >= 1 {
                 rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
             }
-            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, self.s.footprint == Footprint::Differential)?;
+            let rays = WaveRays { differential: self.s.footprint == Footprint::Differential, media: self.s.media };
+            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, rays)?;
             step(rec);
             ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;
         }

@@ -249,6 +249,7 @@ impl Ctx<'_> {
             wide: self.s.bvh_layout == crate::bvh::BvhLayout::Wide,
             dispersive: self.data.disperses > 0.5,
             environment: self.data.environment > 0.5,
+            media: self.s.media,
         }
     }
 

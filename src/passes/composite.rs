@@ -28,8 +28,8 @@ pub struct CompositePass {
 
 /// What a glass pass's pipeline is specialized for (glsl/glass.comp's specialization constants, src/shader_consts.rs). A CPU
 /// driver runs both sides of every branch under a mask, so the pass compiles no code for what the frame lacks:
-/// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, or (on the
-/// wide layout) the wide walk's pair fallback for a deforming mesh.
+/// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, absorbing
+/// media, or (on the wide layout) the wide walk's pair fallback for a deforming mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlassKey {
     /// Walk the wide layout (else the pair layout).
@@ -41,20 +41,23 @@ pub struct GlassKey {
     pub dispersive: bool,
     pub environment: bool,
     pub textured: bool,
+    /// The scene has absorbing media: the trace follows the medium each branch is in.
+    pub media: bool,
 }
 
 impl GlassKey {
-    const COUNT: usize = 2 * 2 * GLASS_LIGHTS as usize * 2 * 2 * 2;
+    const COUNT: usize = 2 * 2 * GLASS_LIGHTS as usize * 2 * 2 * 2 * 2;
 
     fn index(self) -> usize {
-        let bits = [self.wide, self.fallback && self.wide, self.dispersive, self.environment, self.textured];
+        let bits =
+            [self.wide, self.fallback && self.wide, self.dispersive, self.environment, self.textured, self.media];
         let flags = bits.iter().fold(0, |k, &b| 2 * k + usize::from(b));
         flags * GLASS_LIGHTS as usize + (self.lights as usize - 1)
     }
 
     fn of_index(k: usize) -> GlassKey {
         let (flags, lights) = (k / GLASS_LIGHTS as usize, k % GLASS_LIGHTS as usize);
-        let bit = |i: usize| flags >> (4 - i) & 1 == 1;
+        let bit = |i: usize| flags >> (5 - i) & 1 == 1;
         GlassKey {
             wide: bit(0),
             fallback: bit(1),
@@ -62,16 +65,18 @@ impl GlassKey {
             dispersive: bit(2),
             environment: bit(3),
             textured: bit(4),
+            media: bit(5),
         }
     }
 
-    fn spec(self) -> [(u32, u32); 5] {
+    fn spec(self) -> [(u32, u32); 6] {
         [
             (BVH_PAIR_FALLBACK_ID, self.fallback as u32),
             (GLASS_LIGHT_COUNT_ID, self.lights),
             (GLASS_DISPERSIVE_ID, self.dispersive as u32),
             (GLASS_ENVIRONMENT_ID, self.environment as u32),
             (GLASS_TEXTURED_ID, self.textured as u32),
+            (GLASS_MEDIA_ID, self.media as u32),
         ]
     }
 }
@@ -121,6 +126,8 @@ pub struct CompositeInputs<'a> {
     pub dispersive: bool,
     /// The scene has an environment map (`FrameData.environment`).
     pub environment: bool,
+    /// The scene has absorbing media (`ResolvedSettings::media`).
+    pub media: bool,
 }
 
 /// The composite's and the glass pass's bindings (glsl/common/composite_bindings.glsl declares each with the same
@@ -195,6 +202,7 @@ impl CompositePass {
             dispersive: i.dispersive,
             environment: i.environment,
             textured: i.images.textured,
+            media: i.media,
         };
         let pipeline = self.glass[key.index()].get()?;
         self.bind(cmd, pipeline, i)?;

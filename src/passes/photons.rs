@@ -52,15 +52,37 @@ const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTAN
 const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
 /// glsl/wave.comp's specialization constants (src/shader_consts.rs): `WAVE_PRIMARY`, `WAVE_DIFFERENTIAL`,
-/// `BVH_PAIR_FALLBACK` and `WAVE_SUBGROUPS` (`subgroups`).
+/// `BVH_PAIR_FALLBACK`, `WAVE_MEDIA` and `WAVE_SUBGROUPS` (`subgroups`).
 /// A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
-fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 4] {
+fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 5] {
     [
         (WAVE_PRIMARY_ID, (variant & 1) as u32),
         (WAVE_DIFFERENTIAL_ID, (variant >> 1 & 1) as u32),
         (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32),
+        (WAVE_MEDIA_ID, (variant >> 3 & 1) as u32),
         (WAVE_SUBGROUPS_ID, subgroups),
     ]
+}
+
+/// A wave pipeline's name in messages and timings: its layout and specialization.
+fn wave_name(layout: &str, spec: &[(u32, u32); 5]) -> String {
+    let [(_, primary), (_, diff), (_, fallback), (_, media), _] = *spec;
+    format!(
+        "transport wave {}{}{}{} ({layout} BVH nodes)",
+        if primary != 0 { "0" } else { "k > 0" },
+        if diff != 0 { ", ray differentials" } else { "" },
+        if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
+        if media != 0 { ", media" } else { "" },
+    )
+}
+
+/// What a queue entry of exact transport holds besides its ray ([`crate::settings::ResolvedSettings::ray_vec4s`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WaveRays {
+    /// Ray differentials (`--footprint differential`).
+    pub differential: bool,
+    /// The ray's medium (the scene has absorbing media).
+    pub media: bool,
 }
 
 /// The most subgroups a work group of `LINEAR_WG` invocations can have on a device whose least subgroup size is
@@ -74,8 +96,8 @@ fn wave_subgroups(min_subgroup_size: u32) -> u32 {
 const _: () = assert!(2 * LINEAR_WG < 1 << 10);
 
 /// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
-fn wave_variant(primary: bool, diff: bool, pair_fallback: bool) -> usize {
-    primary as usize | (diff as usize) << 1 | (pair_fallback as usize) << 2
+fn wave_variant(primary: bool, rays: WaveRays, pair_fallback: bool) -> usize {
+    primary as usize | (rays.differential as usize) << 1 | (pair_fallback as usize) << 2 | (rays.media as usize) << 3
 }
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
@@ -191,8 +213,8 @@ pub struct PhotonPasses {
     trace: LazyPipeline,
     /// Exact transport's waves, per BVH layout (pair, single, threaded, wide) and per specialization
     /// ([`wave_spec`]): wave 0 or a bounce wave, with or without ray differentials, with or without the wide walk's
-    /// pair fallback.
-    waves: [[LazyPipeline; 8]; 4],
+    /// pair fallback, with or without the rays' media.
+    waves: [[LazyPipeline; 16]; 4],
     transport: LazyPipeline,
     splat: LazyPipeline,
     /// None when the device has no float atomics on buffers.
@@ -333,14 +355,14 @@ impl PhotonPasses {
                 // Only the wide walk has a pair fallback: the other layouts' fallback slots are never used (wave()).
                 std::array::from_fn(|k| {
                     let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
-                    let [(_, primary), (_, diff), (_, fallback), _] = spec;
-                    let name = format!(
-                        "transport wave {}{}{} ({layout} BVH nodes)",
-                        if primary != 0 { "0" } else { "k > 0" },
-                        if diff != 0 { ", ray differentials" } else { "" },
-                        if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
-                    );
-                    LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &spec)
+                    LazyPipeline::compute_specialized(
+                        device,
+                        &wave_name(layout, &spec),
+                        spv.words(),
+                        binds,
+                        push,
+                        &spec,
+                    )
                 })
             }),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
@@ -461,7 +483,7 @@ impl PhotonPasses {
     }
 
     /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
-    /// `diff`: the rays carry ray differentials (`--footprint differential`).
+    /// `rays`: what the rays carry besides themselves.
     pub fn wave(
         &self,
         cmd: vk::CommandBuffer,
@@ -469,7 +491,7 @@ impl PhotonPasses {
         wave: u32,
         may_abort: bool,
         layout: BvhLayout,
-        diff: bool,
+        rays: WaveRays,
     ) -> VkResult<()> {
         let l = match layout {
             // The settings resolve `auto`; pair is its fallback.
@@ -480,7 +502,7 @@ impl PhotonPasses {
         };
         // Only the wide walk has a pair fallback (for the instances of deforming meshes).
         let fallback = layout == BvhLayout::Wide && b.bvh.deforms();
-        let p = self.waves[l][wave_variant(wave == 0, diff, fallback)].get()?;
+        let p = self.waves[l][wave_variant(wave == 0, rays, fallback)].get()?;
         // Wave k reads the queue wave k - 1 appended to and appends to the other.
         let mut binds = b.binds();
         if wave % 2 == 1 {

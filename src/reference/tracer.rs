@@ -213,6 +213,8 @@ pub(crate) struct Tracer<'a> {
     pub ior: Vec<[f64; 3]>,
     /// Absorption coefficient inside each dielectric per color channel, 1/m (0 elsewhere).
     pub absorption: Vec<[f64; 3]>,
+    /// The medium beyond each dielectric's surface (`Object::outside`; None: air).
+    pub outside: Vec<Option<usize>>,
     /// Some glass disperses or absorbs colors unequally: each photon carries one color channel, drawn at
     /// random, and its caustic lands in that channel only, with 3 times its flux (docs/design.md "Color").
     pub spectral: bool,
@@ -223,16 +225,17 @@ enum Interaction {
     Refracted { dir: DVec3 },
 }
 
-/// Reflect or refract at a dielectric interface, chosen by Russian roulette with probability F (`xi` uniform in
-/// [0, 1)). Inside/outside comes from the geometric normal; the interpolated normal gives F and the directions,
-/// unless it faces away from the ray or sends the photon to the wrong side of the surface, in which case the
-/// geometric normal is used (the `bool` tells).
-fn interact(d: DVec3, hit: &Hit, ior: f64, xi: f64) -> Option<(Interaction, bool)> {
+/// Reflect or refract at a dielectric interface between IOR `ior` (behind the geometric normal) and `outside` (in
+/// front of it), chosen by Russian roulette with probability F (`xi` uniform in [0, 1)). Inside/outside comes
+/// from the geometric normal; the interpolated normal gives F and the directions, unless it faces away from the
+/// ray or sends the photon to the wrong side of the surface, in which case the geometric normal is used (the
+/// `bool` tells).
+fn interact(d: DVec3, hit: &Hit, ior: f64, outside: f64, xi: f64) -> Option<(Interaction, bool)> {
     if ior == MIRROR {
         return mirror(d, hit);
     }
     let entering = d.dot(hit.ng) < 0.0;
-    let eta = if entering { 1.0 / ior } else { ior };
+    let eta = if entering { outside / ior } else { ior / outside };
     let ng_f = if entering { hit.ng } else { -hit.ng };
     let ns = if hit.ns.dot(hit.ng) > 0.0 { hit.ns } else { hit.ng };
     let ns_f = if entering { ns } else { -ns };
@@ -316,6 +319,8 @@ impl Tracer<'_> {
             radial_center: p.radial_center.map(|c| c.as_dvec3()),
             ior,
             absorption,
+            // (A scene built in code may name no dielectric: the renderer refuses it, the reference takes air.)
+            outside: (0..scene.objects.len()).map(|i| scene.outside_of(i)).collect(),
             spectral: scene.color_channels() == 3,
         }
     }
@@ -349,33 +354,38 @@ impl Tracer<'_> {
         t.flux_emitted += phi;
         let (mut refr, mut refl) = (0u32, 0u32);
         let mut skip = None;
+        // The medium the photon travels in (None: air, where lights are): the object it is inside.
+        let mut medium: Option<usize> = None;
         loop {
             let Some(hit) = self.geo.intersect(o, d, f64::INFINITY, skip, Filter::All) else {
                 t.photons_escaped += 1;
                 t.flux_escaped += phi;
                 return;
             };
-            if hit.receiver {
-                // Light that met no glass is the same in every channel.
-                let ch = if refr + refl == 0 { 3 } else { channel };
-                self.deposit(li, &hit, d, refr, refl, phi, ch, out);
-                return;
-            }
-            let sigma = self.absorption[hit.object as usize][c];
-            if sigma > 0.0 && d.dot(hit.ng) > 0.0 {
-                // The segment that ends here ran inside this glass: Beer–Lambert, by Russian roulette.
+            let sigma = medium.map_or(0.0, |m| self.absorption[m][c]);
+            if sigma > 0.0 {
+                // The segment that ends here ran through an absorbing medium: Beer–Lambert, by Russian roulette.
                 if rng.next_f64() >= (-sigma * (hit.pos - o).length()).exp() {
                     t.photons_absorbed += 1;
                     t.flux_absorbed += phi;
                     return;
                 }
             }
+            if hit.receiver {
+                // Light that met no glass is the same in every channel.
+                let ch = if refr + refl == 0 { 3 } else { channel };
+                self.deposit(li, &hit, d, refr, refl, phi, ch, out);
+                return;
+            }
             if refr + refl >= BOUNCE_CAP {
                 t.photons_cut += 1;
                 t.flux_cut += phi;
                 return;
             }
-            let Some((event, fallback)) = interact(d, &hit, self.ior[hit.object as usize][c], rng.next_f64()) else {
+            let k = hit.object as usize;
+            let outside = self.outside[k];
+            let n_out = outside.map_or(1.0, |j| self.ior[j][c]);
+            let Some((event, fallback)) = interact(d, &hit, self.ior[k][c], n_out, rng.next_f64()) else {
                 t.photons_lost += 1;
                 t.flux_lost += phi;
                 return;
@@ -392,6 +402,8 @@ impl Tracer<'_> {
                     d = dir;
                 }
                 Interaction::Refracted { dir } => {
+                    // Across the surface: into the object, or out to the medium beyond it.
+                    medium = if d.dot(hit.ng) < 0.0 { Some(k) } else { outside };
                     refr += 1;
                     t.refractions += 1;
                     o = hit.pos - toward_incident * eps;
@@ -445,6 +457,45 @@ impl Tracer<'_> {
                 channel: channel as u8,
                 e: phi * cos / self.binner.pixel_area,
             });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{interact, Interaction};
+    use crate::reference::geometry::Hit;
+    use glam::DVec3;
+
+    /// Total internal reflection at a glass | water interface (IOR 1.5 inside, water's 1.33 beyond it): from the
+    /// glass side beyond the critical angle asin(1.33 / 1.5) = 62.46°, and only there; from the water side never,
+    /// and against air (the default outside) already beyond asin(1 / 1.5) = 41.81°.
+    #[test]
+    fn glass_against_water_reflects_totally_only_beyond_its_critical_angle() {
+        let hit = Hit { prim: 0, pos: DVec3::ZERO, ng: DVec3::Y, ns: DVec3::Y, object: 0, receiver: false };
+        let critical = (1.33f64 / 1.5).asin().to_degrees();
+        // A ray at `deg` from the normal, from inside the glass (going up through the surface) or from outside.
+        let ray = |deg: f64, from_inside: bool| {
+            let (s, c) = deg.to_radians().sin_cos();
+            DVec3::new(s, if from_inside { c } else { -c }, 0.0)
+        };
+        // xi = 1 - 1e-12: refraction wherever it exists (it is taken when xi >= F).
+        let tir = |d: DVec3, outside: f64| match interact(d, &hit, 1.5, outside, 1.0 - 1e-12) {
+            Some((Interaction::Reflected { tir, .. }, _)) => tir,
+            Some((Interaction::Refracted { .. }, _)) => false,
+            None => panic!("no direction"),
+        };
+        for deg in [10.0, 40.0, 45.0, 60.0, critical - 0.05, critical + 0.05, 70.0, 85.0] {
+            assert_eq!(tir(ray(deg, true), 1.33), deg > critical, "glass to water at {deg}°");
+            assert!(!tir(ray(deg, false), 1.33), "water to glass at {deg}°");
+            assert_eq!(tir(ray(deg, true), 1.0), deg > 41.81, "glass to air at {deg}°");
+        }
+        // Refraction out into water bends by Snell's law with the two media's IORs.
+        if let Some((Interaction::Refracted { dir }, _)) = interact(ray(40.0, true), &hit, 1.5, 1.33, 1.0 - 1e-12) {
+            let sin_t = dir.x.hypot(dir.z);
+            assert!((sin_t - 1.5 / 1.33 * 40f64.to_radians().sin()).abs() < 1e-12, "sin θt {sin_t}");
+        } else {
+            panic!("40° from glass into water refracts");
         }
     }
 }

@@ -174,13 +174,14 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
     }
     // (what the object does and what that needs, what the two-interface model lacks, whether an object does it)
     type Needs = (&'static str, &'static str, fn(&crate::scene::Object) -> bool);
-    let needs: [Needs; 3] = [
+    let needs: [Needs; 4] = [
         (
             "absorbs: absorption needs",
             "has none",
             |o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0),
         ),
         ("is a mirror: mirrors need", "only refracts", |o| o.is_mirror()),
+        ("has another medium outside it (`outside`): media need", "has air around all glass", |o| o.outside.is_some()),
         (
             "disperses (`abbe`): dispersion needs",
             "has one IOR per texel",
@@ -198,6 +199,19 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Each `outside` names another dielectric (the scene parsers enforce it; scenes built in code are checked here).
+fn check_media(scene: &Scene) -> Result<()> {
+    match scene.bad_outside() {
+        Some(i) => Err(Error::BadInput(format!(
+            "{}: object `{}` has outside = object {:?}: a dielectric's outside must be another dielectric object",
+            scene.path.display(),
+            scene.objects[i].name,
+            scene.objects[i].outside
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// 1..=MAX_LIGHTS lights (the scene parsers enforce it; scenes built in code are checked here).
@@ -219,6 +233,7 @@ impl Renderer {
         let config = settings.resolve(&device.info)?;
         check_transport(&scene, &config)?;
         check_lights(&scene)?;
+        check_media(&scene)?;
         let mut recorder = Recorder::new(&device)?;
         let t0 = Instant::now();
         let instances = scene_api::Instances::of(&scene);
@@ -528,6 +543,15 @@ impl Renderer {
         Ok(())
     }
 
+    /// The settings of the frame `desc`: at its level (progressive refinement renders below the chosen one), with
+    /// the rays' media where the scene has any now.
+    fn frame_settings(&self, desc: &FrameDesc) -> ResolvedSettings {
+        let mut s = self.config.clone();
+        s.level = desc.level.map_or(s.level, |l| l.min(s.level));
+        s.media = s.transport == Transport::Exact && self.scene.has_media();
+        s
+    }
+
     /// Record and submit a frame without waiting for it: its report comes later from
     /// [`Renderer::take_completed`], once a later frame needs its slot or [`Renderer::finish_frames`] is called.
     /// `finish` appends commands to its last command buffer and `sync` gives that submission its semaphores.
@@ -655,9 +679,7 @@ impl Renderer {
         let rebuilt = self.update_scene()?;
         let slot = self.next_slot()?;
         self.last_slot = slot;
-        // The settings at this frame's level (progressive refinement renders below the chosen one).
-        let mut s = self.config.clone();
-        s.level = desc.level.map_or(s.level, |l| l.min(s.level));
+        let s = self.frame_settings(desc);
         let camera = desc.camera;
         // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
         let aa = match desc.aov {

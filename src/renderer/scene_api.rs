@@ -8,7 +8,7 @@
 //! instance or changing a material rebuilds the scene's GPU buffers (and its BVH, once a frame needs it) before the
 //! next frame; the meshes' own data is kept, so a mesh is never read from its file again.
 
-use super::{check_transport, Renderer};
+use super::{check_media, check_transport, Renderer};
 use crate::error::{Error, Result};
 use crate::scene::{mesh::MAX_COORDINATE, Material, Mesh, Object};
 use crate::scene_gpu::SceneInstances;
@@ -232,7 +232,7 @@ impl Renderer {
         check_transform(&transform)?;
         check_map(&self.scene, &material, &m)?;
         self.scene.objects.push(Object::new(name, material, (*m).clone().transformed(transform)));
-        if let Err(e) = check_transport(&self.scene, &self.config) {
+        if let Err(e) = check_transport(&self.scene, &self.config).and_then(|_| check_media(&self.scene)) {
             self.scene.objects.pop();
             return Err(e);
         }
@@ -269,7 +269,7 @@ impl Renderer {
         self.instance(id)?;
         check_map(&self.scene, &material, self.instances.mesh_at(self.instances.mesh_of(id.index())))?;
         let old = std::mem::replace(&mut self.scene.objects[id.index()].material, material);
-        if let Err(e) = check_transport(&self.scene, &self.config) {
+        if let Err(e) = check_transport(&self.scene, &self.config).and_then(|_| check_media(&self.scene)) {
             self.scene.objects[id.index()].material = old;
             return Err(e);
         }

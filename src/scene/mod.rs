@@ -168,6 +168,9 @@ pub struct Object {
     pub mesh: Mesh,
     /// Where it moves or how it deforms over time (None: it stands still).
     pub animation: Option<std::sync::Arc<ObjectAnimation>>,
+    /// A dielectric's surface is an interface between two media (docs/design.md "Media"): its own inside, and
+    /// outside it air (None) or the inside of the dielectric object at this index (`outside` in a scene file).
+    pub outside: Option<usize>,
 }
 
 /// An object placed from its own space: its mesh there, its placement (keyframed, or fixed), and how it deforms
@@ -238,7 +241,7 @@ impl ObjectAnimation {
 impl Object {
     /// A still object.
     pub fn new(name: impl Into<String>, material: Material, mesh: Mesh) -> Object {
-        Object { name: name.into(), material, mesh, animation: None }
+        Object { name: name.into(), material, mesh, animation: None, outside: None }
     }
 }
 
@@ -288,6 +291,14 @@ impl Object {
     /// A perfect mirror.
     pub fn is_mirror(&self) -> bool {
         matches!(self.material, Material::Mirror)
+    }
+
+    /// Its Beer–Lambert absorption coefficients (1/m, R, G, B): a dielectric's, else none.
+    pub fn absorption(&self) -> Vec3 {
+        match self.material {
+            Material::Dielectric { absorption, .. } => absorption,
+            _ => Vec3::ZERO,
+        }
     }
 }
 
@@ -582,6 +593,25 @@ impl Scene {
         }
     }
 
+    /// Whether light is absorbed along its way through some medium: each ray then carries the medium it travels in
+    /// (docs/design.md "Media"), so that a receiver standing in an absorbing liquid receives what is left.
+    pub fn has_media(&self) -> bool {
+        self.objects.iter().any(|o| o.absorption().max_element() > 0.0)
+    }
+
+    /// Object `i`'s `outside`, where it names another dielectric and `i` is one (None: air).
+    pub fn outside_of(&self, i: usize) -> Option<usize> {
+        let dielectric =
+            |k: usize| self.objects.get(k).is_some_and(|x| matches!(x.material, Material::Dielectric { .. }));
+        self.objects[i].outside.filter(|&j| j != i && dielectric(i) && dielectric(j))
+    }
+
+    /// An object whose `outside` names something other than another dielectric, or is not one itself (a scene
+    /// built in code can; the parsers refuse it).
+    pub fn bad_outside(&self) -> Option<usize> {
+        (0..self.objects.len()).find(|&i| self.objects[i].outside.is_some() && self.outside_of(i).is_none())
+    }
+
     /// World-space bounds of every object.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.objects
@@ -708,6 +738,44 @@ material = { kind = "dielectric", ior = 1.5 }
             let e = parse(&text).unwrap_err().to_string();
             assert!(e.starts_with("test.toml:29: object[1] \"glass\".material.ior"), "{e}");
         }
+    }
+
+    /// Media: `outside` and `inside` name another dielectric object of the file (before or after it); anything
+    /// else is refused with the file, line and field.
+    #[test]
+    fn media_name_other_dielectrics() {
+        let water = "\n[[object]]\nname = \"water\"\nshape = \"cube\"\nsize = 0.2\ntranslate = [0.0, 0.5, 0.0]\n";
+        let scene = |m: &str| format!("{BASE}{water}material = {{ kind = \"dielectric\", {m} }}\n");
+        let s = parse(&scene("ior = 1.33, absorption = 0.1, outside = \"glass\"")).unwrap();
+        assert_eq!((s.objects[2].outside, s.outside_of(2), s.objects[1].outside), (Some(1), Some(1), None));
+        assert!(s.has_media() && s.bad_outside().is_none());
+        // `inside` takes the named object's medium: its IOR, absorption and dispersion.
+        let s = parse(&scene("inside = \"glass\"")).unwrap();
+        assert_eq!(s.objects[2].material, s.objects[1].material);
+        let bad = [
+            ("ior = 1.33, outside = \"nope\"", "material.outside", "no object is named `nope`"),
+            ("ior = 1.33, outside = \"water\"", "material.outside", "names the object itself"),
+            ("ior = 1.33, outside = \"floor\"", "material.outside", "`floor` must be a dielectric"),
+            ("inside = \"glass\", ior = 1.2", "material.ior", "takes `ior` from that object"),
+            ("inside = \"floor\"", "material.inside", "`floor` must be a dielectric"),
+        ];
+        for (m, field, message) in bad {
+            let e = parse(&scene(m)).unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!("test.toml:36: object[2] \"water\".{field}")) && e.contains(message),
+                "{m}: {e}"
+            );
+        }
+        let e = parse(&BASE.replace("albedo = 0.8 }", "albedo = 0.8, outside = \"glass\" }")).unwrap_err().to_string();
+        assert!(e.contains("object[0] \"floor\".material.outside") && e.contains("only a dielectric"), "{e}");
+        // A chain of `inside` is refused: the medium must be the named object's own.
+        let chained = format!("{}\n[[object]]\nname = \"ice\"\nshape = \"cube\"\nsize = 0.1\nmaterial = {{ kind = \"dielectric\", inside = \"water\" }}\n", scene("inside = \"glass\""));
+        let e = parse(&chained).unwrap_err().to_string();
+        assert!(
+            e.contains("object[3] \"ice\".material.inside")
+                && e.contains("`water` must be a dielectric with a medium of its own"),
+            "{e}"
+        );
     }
 
     #[test]

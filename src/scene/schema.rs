@@ -146,6 +146,10 @@ pub struct MaterialDef {
     pub ior: Option<S<f32>>,
     pub absorption: Option<S<ScalarOr3>>,
     pub abbe: Option<S<f32>>,
+    /// A dielectric's surface: the object whose medium lies outside it (default: air).
+    pub outside: Option<S<String>>,
+    /// A dielectric's surface: the object whose medium lies inside it, its IOR and absorption (default: its own).
+    pub inside: Option<S<String>>,
     /// A diffuse material's albedo image (PNG or JPEG, sRGB), relative to the scene file.
     pub albedo_texture: Option<S<String>>,
     /// A diffuse material's procedural checkerboard: `albedo` and this one's `albedo` alternate.

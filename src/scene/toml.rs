@@ -78,6 +78,7 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
     if objects.is_empty() {
         return Err(cx.err(0..0, "object", "the scene needs at least one [[object]]"));
     }
+    media(&cx, &file.object, &mut objects)?;
     let environment = match &file.environment {
         Some(e) => Some(environment_def(&cx, e)?),
         None => None,
@@ -621,7 +622,7 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>, textures: &mut Textures) -> Resu
     let (mesh, water) = shape(cx, o, &f)?;
     let (mesh, animation) = placement(cx, o, &f, mesh, water)?;
     let material = material(cx, o, &f, textures, &mesh)?;
-    Ok(Object { name, material, mesh, animation })
+    Ok(Object { name, material, mesh, animation, outside: None })
 }
 
 /// The object's mesh in its own space, as its shape and the shape's fields say (and its water, for a water
@@ -892,6 +893,13 @@ fn material(
 ) -> Result<Material, SceneError> {
     let m = o.get_ref().material.get_ref();
     let mf = |field: &str| f(&format!("material.{field}"));
+    if m.kind.get_ref() != "dielectric" {
+        let media_fields =
+            [("outside", m.outside.as_ref().map(|x| x.span())), ("inside", m.inside.as_ref().map(|x| x.span()))];
+        if let Some((field, Some(span))) = media_fields.into_iter().find(|(_, s)| s.is_some()) {
+            return Err(cx.err(span, mf(field), format!("only a dielectric's surface has `{field}`")));
+        }
+    }
     if m.kind.get_ref() != "diffuse" {
         let texture_fields = [
             ("albedo_texture", m.albedo_texture.as_ref().map(|x| x.span())),
@@ -971,11 +979,60 @@ fn diffuse(
     })
 }
 
+/// The media on either side of each dielectric surface (docs/scenes.md "Media"): `inside` takes the named
+/// object's dielectric, `outside` names the object whose medium lies beyond the surface. Each name must be another
+/// object of the file, a dielectric whose own medium is its own (`inside` does not chain).
+fn media(cx: &Ctx, defs: &[S<ObjectDef>], objects: &mut [Object]) -> Result<(), SceneError> {
+    let find = |i: usize, field: &str, name: &S<String>| -> Result<usize, SceneError> {
+        let f = format!("object[{i}] \"{}\".material.{field}", defs[i].get_ref().name.get_ref());
+        let n = name.get_ref();
+        let j = defs
+            .iter()
+            .position(|o| o.get_ref().name.get_ref() == n)
+            .ok_or_else(|| cx.err(name.span(), f.clone(), format!("no object is named `{n}`")))?;
+        let m = defs[j].get_ref().material.get_ref();
+        if j == i {
+            return Err(cx.err(name.span(), f, "names the object itself"));
+        }
+        if m.kind.get_ref() != "dielectric" || m.inside.is_some() {
+            return Err(cx.err(
+                name.span(),
+                f,
+                format!("`{n}` must be a dielectric with a medium of its own (an `ior`, no `inside`)"),
+            ));
+        }
+        Ok(j)
+    };
+    for (i, d) in defs.iter().enumerate() {
+        let m = d.get_ref().material.get_ref();
+        if let Some(name) = &m.inside {
+            let j = find(i, "inside", name)?;
+            objects[i].material = objects[j].material;
+        }
+        if let Some(name) = &m.outside {
+            objects[i].outside = Some(find(i, "outside", name)?);
+        }
+    }
+    Ok(())
+}
+
 fn dielectric(cx: &Ctx, o: &S<ObjectDef>, mf: &dyn Fn(&str) -> String) -> Result<Material, SceneError> {
     let d = o.get_ref();
     let m = d.material.get_ref();
     if let Some(x) = &m.albedo {
         return Err(cx.err(x.span(), mf("albedo"), "a dielectric material has no `albedo`"));
+    }
+    if m.inside.is_some() {
+        // Its medium is another object's (resolved by `media` once every object is read).
+        let own = [
+            ("ior", m.ior.as_ref().map(|x| x.span())),
+            ("absorption", m.absorption.as_ref().map(|x| x.span())),
+            ("abbe", m.abbe.as_ref().map(|x| x.span())),
+        ];
+        if let Some((field, Some(span))) = own.into_iter().find(|(_, s)| s.is_some()) {
+            return Err(cx.err(span, mf(field), format!("a surface with `inside` takes `{field}` from that object")));
+        }
+        return Ok(Material::Dielectric { ior: 1.0, absorption: Vec3::ZERO, abbe: 0.0 });
     }
     let ior = m.ior.as_ref().ok_or_else(|| cx.err(d.material.span(), mf("ior"), "a dielectric needs `ior`"))?;
     let v = *ior.get_ref();
