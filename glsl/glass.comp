@@ -94,15 +94,17 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     bool ortho = view_is_ortho(cam);
     vec3 so[EYE_STACK], sd[EYE_STACK], sw[EYE_STACK];
     uint sn[EYE_STACK], sm[EYE_STACK];
+    uvec2 sv[EYE_STACK];
     float sl[EYE_STACK];
     int sp = 0;
-    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u; sl[0] = 0.0; sm[0] = AIR;
+    so[0] = ro; sd[0] = rd; sw[0] = vec3(1.0); sn[0] = 0u; sl[0] = 0.0; sm[0] = AIR; sv[0] = uvec2(0u);
     sp = 1;
     vec3 L = vec3(0.0);
     while (sp > 0) {
         sp--;
         vec3 o = so[sp], d = sd[sp], w = sw[sp];
         uint depth = sn[sp], m = GLASS_MEDIA ? sm[sp] : AIR;
+        uvec2 nested = GLASS_MEDIA ? sv[sp] : uvec2(0u);
         float run = sl[sp];
         vec3 sigma = GLASS_MEDIA ? medium_sigma_rgb(m) : vec3(0.0);
         SceneHit hit;
@@ -152,15 +154,22 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             L += w * environment(d);
             continue;
         }
-        Split s = split_at_instance(d, p, ng, ns, hit.inst, c);
+        Crossing x = crossing_at(hit.inst, dot(d, ng) < 0.0, m, nested, c, GLASS_MEDIA);
+        if (GLASS_MEDIA && x.through) {
+            // A volume's surface inside one of higher priority: no interface; the branch goes on beyond it.
+            so[sp] = offset_ray(p, dot(d, ng) > 0.0 ? ng : -ng); sd[sp] = d; sw[sp] = w; sn[sp] = depth + 1u;
+            sl[sp] = run + hit.t; sm[sp] = x.m_refr; sv[sp] = x.l_refr;
+            sp++;
+            continue;
+        }
+        Split s = split_interface(d, p, ng, ns, x.n_in, x.n_out, inst_is_mirror(hit.inst));
         // The reflection stays in the branch's medium; the refraction crosses the surface.
-        uint m_refr = refracted_medium(hit.inst, dot(d, ng) < 0.0);
         if (!s.ok) continue;
         vec3 wr = w * s.F, wt = w * (1.0 - s.F);
         if (s.F < 1.0) {
             if (max(wt.r, max(wt.g, wt.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
                 so[sp] = s.p_refr; sd[sp] = normalize(s.refr); sw[sp] = wt; sn[sp] = depth + 1u;
-                sl[sp] = run + hit.t; sm[sp] = m_refr;
+                sl[sp] = run + hit.t; sm[sp] = x.m_refr; sv[sp] = x.l_refr;
                 sp++;
             } else {
                 L += wt * environment(normalize(s.refr));
@@ -168,7 +177,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
         }
         if (max(wr.r, max(wr.g, wr.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {
             so[sp] = s.p_refl; sd[sp] = normalize(s.refl); sw[sp] = wr; sn[sp] = depth + 1u;
-            sl[sp] = run + hit.t; sm[sp] = m;
+            sl[sp] = run + hit.t; sm[sp] = m; sv[sp] = nested;
             sp++;
         } else {
             L += wr * environment(normalize(s.refl));

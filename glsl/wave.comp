@@ -59,6 +59,7 @@ struct Child {
     RayDiff diff;
     bool inside;
     uint medium;  // the medium it travels in (WAVE_MEDIA)
+    uvec2 nested; // the volumes with a priority it is inside (WAVE_MEDIA; glsl/common/interface.glsl)
 };
 
 // What one invocation produces: up to two child rays and one splat record. The children are named, not an array:
@@ -86,6 +87,7 @@ struct Traced {
                   // appended (wave 0 the photons), so every ray of a wave has the same
     bool lod;     // a weak branch carried for the photon's block
     uint medium;  // the medium it travels in (WAVE_MEDIA; wave 0's rays start in air)
+    uvec2 nested; // the volumes with a priority it is inside (WAVE_MEDIA)
 };
 
 // The invocation's shares of the account's terms (ACC_*), summed per work group at the end.
@@ -102,7 +104,7 @@ void store_ray(uint k, uint stride, Child c, float side) {
     if (WAVE_DIFFERENTIAL) rays_out[b + 2u] = diff_pack(c.diff, c.ray.dir, side);
     if (WAVE_MEDIA) {
         uvec4 m;
-        GpuRayMedium_to_words(GpuRayMedium(vec3(0.0), c.medium), m);
+        GpuRayMedium_to_words(GpuRayMedium(c.nested, 0.0, c.medium), m);
         rays_out[b + stride - 1u] = m;
     }
 }
@@ -231,6 +233,7 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     t.diff.dpx = t.diff.dpy = t.diff.ddx = t.diff.ddy = vec3(0.0);
     t.lod = false;
     t.medium = AIR;
+    t.nested = uvec2(0u);
     if (WAVE_PRIMARY) {
         t.pidx = capacity - in_count + i;
         t.cell = photon_at(t.pidx);
@@ -246,7 +249,11 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
         t.depth = (m >> PHOTON_INDEX_BITS) & 0x3Fu;
         t.lod = (m & LOD_RAY) != 0u;
         t.cell = photon_at(t.pidx);
-        if (WAVE_MEDIA) t.medium = GpuRayMedium_from_words(ray_word_in(stride * i + stride - 1u)).medium;
+        if (WAVE_MEDIA) {
+            GpuRayMedium m = GpuRayMedium_from_words(ray_word_in(stride * i + stride - 1u));
+            t.medium = m.medium;
+            t.nested = m.inside;
+        }
     }
     t.phi = cell_measure(cell_level(t.cell), cell_xy(t.cell));
     t.side = diff ? cell_side(cell_level(t.cell)) : 1.0;
@@ -291,13 +298,34 @@ bool branch_kept(float phi, float wb, float cut, float weak, bool carrier, float
     return true;
 }
 
+// A volume's surface inside one of higher priority (WAVE_MEDIA): no interface, so the ray t (weight w) goes on as one
+// child on the surface's other side, unbent, inside the volumes beyond it; cut below the flux threshold.
+void pass_through(Traced t, RayDiff rdf, vec3 p, vec3 ng, float w, uint capacity, Crossing x, inout Outcome o) {
+    float widen = weak_widen(t.cell);
+    if (w < u_frame.flux_threshold * (t.lod ? widen * widen : 1.0)) {
+        acc[ACC_THRESHOLD] += t.phi * w;
+        return;
+    }
+    vec3 rd = t.ray.dir;
+    uint meta = (capacity - 1u - t.pidx) | ((t.depth + 1u) << PHOTON_INDEX_BITS) | (t.lod ? LOD_RAY : 0u);
+    vec3 beyond = dot(rd, ng) > 0.0 ? ng : -ng;
+    o.n_child = 1u;
+    o.c0 = Child(GpuRay(offset_ray(p, beyond), w, rd, meta), rdf, dot(rd, ng) < 0.0, x.m_refr, x.l_refr);
+}
+
 // The Fresnel split of the ray t (weight w) at a dielectric hit at p: its reflected and refracted children, each
 // traced, cut, or left to its block's carrier (a carried one holds its block's share).
 void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, float w, uint capacity,
               inout Outcome o) {
     const bool diff = WAVE_DIFFERENTIAL;
     vec3 rd = t.ray.dir;
-    Split s = split_at_instance(rd, p, ng, ns, hit.inst, color_channel());
+    bool entering = dot(rd, ng) < 0.0;
+    Crossing x = crossing_at(hit.inst, entering, t.medium, t.nested, color_channel(), WAVE_MEDIA);
+    if (WAVE_MEDIA && x.through) {
+        pass_through(t, rdf, p, ng, w, capacity, x, o);
+        return;
+    }
+    Split s = split_interface(rd, p, ng, ns, x.n_in, x.n_out, inst_is_mirror(hit.inst));
     if (!s.ok) {
         acc[ACC_LOST] += t.phi * w;
         return;
@@ -316,9 +344,10 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
     bool carried_r = wr < weak, carried_t = wt < weak;
     uint m_r = carried_r ? meta | LOD_RAY : meta, m_t = carried_t ? meta | LOD_RAY : meta;
     // The reflection stays in the ray's medium; the refraction crosses the surface.
-    Child r = Child(GpuRay(s.p_refl, carried_r ? wr * scale : wr, normalize(s.refl), m_r), rdf, false, t.medium);
-    Child tr = Child(GpuRay(s.p_refr, carried_t ? wt * scale : wt, normalize(s.refr), m_t), rdf, false,
-                     refracted_medium(hit.inst, dot(rd, ng) < 0.0));
+    Child r = Child(GpuRay(s.p_refl, carried_r ? wr * scale : wr, normalize(s.refl), m_r), rdf, false, t.medium,
+                    t.nested);
+    Child tr = Child(GpuRay(s.p_refr, carried_t ? wt * scale : wt, normalize(s.refr), m_t), rdf, false, x.m_refr,
+                     x.l_refr);
     if (diff) {
         // Both children inherit dP; their dD follow their branch, with the interpolated normal's derivative where
         // the branch used it.
@@ -466,7 +495,7 @@ void main() {
 
     RayDiff none;
     none.dpx = none.dpy = none.ddx = none.ddy = vec3(0.0);
-    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false, AIR);
+    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false, AIR, uvec2(0u));
     Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0.0, false);
     float phi = 0.0, side = 1.0;
     uint depth = 0u;

@@ -296,14 +296,17 @@ pub struct GpuRay {
 }
 
 /// The medium part of a queue entry, after the ray (and its differentials), when the scene has absorbing media
-/// (`Scene::has_media`, RAY_VEC4S_MEDIUM more words): which medium the ray travels in, so that absorption follows
-/// it to whatever it meets, a receiver standing in a liquid included (docs/design.md "Media").
+/// or overlap (`Scene::has_media`, RAY_VEC4S_MEDIUM more words): which medium the ray travels in, so that
+/// absorption follows it to whatever it meets, a receiver standing in a liquid included, and which volumes it is
+/// inside, so that where volumes overlap the higher priority's medium is the one there (docs/design.md "Media").
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuRayMedium {
-    /// Zero: the room a ray's sampled wavelengths take in spectral transport.
-    pub spare: [f32; 3],
-    /// 0: air; else the dielectric instance + 1 whose inside it is in (glsl/common/interface.glsl).
+    /// The volumes with a priority it is inside: up to MAX_NESTED instances + 1 in 16-bit slots (0: empty).
+    pub inside: [u32; 2],
+    /// Zero: room for a ray's sampled wavelength in spectral transport.
+    pub spare: f32,
+    /// 0: air; else the dielectric instance + 1 whose medium it is in (glsl/common/interface.glsl).
     pub medium: u32,
 }
 

@@ -403,7 +403,7 @@ impl BvhBuffers {
                 .collect();
             cache.retain(instances.meshes);
             let mut bvh = SceneBvh::build_cached(instances.meshes, &objects, instances.deforming, cache);
-            bvh.set_media((0..scene.objects.len()).map(|i| scene.outside_of(i)));
+            bvh.set_media((0..scene.objects.len()).map(|i| (scene.outside_of(i), scene.objects[i].priority)));
             log::info!("scene BVH: {} triangles, built in {:.0} ms", bvh.triangles.len(), bvh.build_ms);
             let tris = upload_buffer(device, recorder, "bvh triangles", &nonempty(&bvh.triangles), readable)?;
             self.triangles = texels(tris, FLOAT4)?;

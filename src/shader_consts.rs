@@ -87,8 +87,11 @@ pub const RAY_VEC4S_CELL: u32 = 2;
 /// vec4s per ray with ray differentials: one more, dP/dx, dP/dy, dD/dx and dD/dy across the ray as half-float pairs
 /// (`diff_pack`, glsl/common/transport.glsl).
 pub const RAY_VEC4S_DIFFERENTIAL: u32 = 3;
-/// vec4s a ray's medium adds, last in its entry, when the scene has absorbing media: a `GpuRayMedium`.
+/// vec4s a ray's medium adds, last in its entry, when the scene has absorbing or overlapping media: a
+/// `GpuRayMedium`.
 pub const RAY_VEC4S_MEDIUM: u32 = 1;
+/// The most volumes with a priority a ray can be inside at once (`GpuRayMedium::inside`): one more is not entered.
+pub const MAX_NESTED: u32 = 4;
 /// A ray's meta word holds its photon's index (counted from the photon buffer's top) in this many low bits, and
 /// its interactions above them: a batch holds at most 2^PHOTON_INDEX_BITS photons.
 pub const PHOTON_INDEX_BITS: u32 = 24;

@@ -129,4 +129,68 @@ Split split_at_instance(vec3 d, vec3 p, vec3 ng, vec3 ns, uint inst, uint c) {
 // crosses into the instance (entering: the ray met the front of its surface) or out to the medium beyond it.
 uint refracted_medium(uint inst, bool entering) { return entering ? inst_medium(inst) : inst_outside(inst); }
 
+// Volumes with a priority (`priority`, material.w; 0 for an explicit interface): a ray keeps those it is inside, up
+// to MAX_NESTED, as instance + 1 in the 16-bit slots of a uvec2 (0: empty; GpuRayMedium.inside), and the medium
+// where volumes overlap is the highest priority's (ties: the higher instance). Schmidt and Budge 2002.
+uint inst_priority(uint inst) { return uint(bvh_instance(inst).material.w); }
+uint nested_slot(uvec2 l, uint k) { return (l[k >> 1] >> ((k & 1u) * 16u)) & 0xFFFFu; }
+uvec2 nested_set(uvec2 l, uint k, uint v) {
+    uint sh = (k & 1u) * 16u;
+    l[k >> 1] = (l[k >> 1] & ~(0xFFFFu << sh)) | (v << sh);
+    return l;
+}
+uvec2 nested_add(uvec2 l, uint m) {
+    for (uint k = 0u; k < MAX_NESTED; k++) {
+        if (nested_slot(l, k) == 0u) return nested_set(l, k, m);
+    }
+    return l;  // full: not entered
+}
+uvec2 nested_remove(uvec2 l, uint m) {
+    for (uint k = 0u; k < MAX_NESTED; k++) {
+        if (nested_slot(l, k) == m) return nested_set(l, k, 0u);
+    }
+    return l;
+}
+uint nested_top(uvec2 l) {
+    uint best = AIR, best_p = 0u;
+    for (uint k = 0u; k < MAX_NESTED; k++) {
+        uint m = nested_slot(l, k);
+        uint p = m != 0u ? inst_priority(m - 1u) : 0u;
+        if (m != 0u && (p > best_p || (p == best_p && m > best))) {
+            best = m;
+            best_p = p;
+        }
+    }
+    return best;
+}
+
+// What a ray in medium m, inside the volumes l, meets at a hit on instance `inst` in channel c (`media`: the scene
+// has media, so the ray carries m and l; else every surface is an explicit interface).
+struct Crossing {
+    bool through;        // a volume's surface inside one of higher priority: no interface there, the ray goes on
+    float n_in, n_out;   // the IORs behind the surface (its inside) and in front of it
+    uint m_refr;         // the medium beyond it
+    uvec2 l_refr;        // the volumes the ray is inside beyond it
+};
+
+Crossing crossing_at(uint inst, bool entering, uint m, uvec2 l, uint c, bool media) {
+    Crossing x;
+    x.through = false;
+    x.l_refr = l;
+    uint pr = media ? inst_priority(inst) : 0u;
+    if (pr == 0u) {
+        x.n_in = inst_ior_in(inst, c);
+        x.n_out = medium_ior_in(inst_outside(inst), c);
+        x.m_refr = refracted_medium(inst, entering);
+        return x;
+    }
+    x.l_refr = entering ? nested_add(l, inst_medium(inst)) : nested_remove(l, inst_medium(inst));
+    x.m_refr = nested_top(x.l_refr);
+    x.through = x.m_refr == m;
+    float before = medium_ior_in(m, c), after = medium_ior_in(x.m_refr, c);
+    x.n_in = entering ? after : before;
+    x.n_out = entering ? before : after;
+    return x;
+}
+
 #endif

@@ -134,14 +134,18 @@ impl SceneBvh {
         SceneBvh::build(&meshes, &objects, &[])
     }
 
-    /// The medium beyond each dielectric's surface (`Object::outside`: an object index, None for air), into its
-    /// instance's `sigma_rgb.w`: the outside object's instance + 1, 0 for air (glsl/common/interface.glsl). An
-    /// outside object without triangles has no instance: its medium is then air's.
-    pub fn set_media(&mut self, outside: impl Iterator<Item = Option<usize>>) {
-        for (object, o) in outside.enumerate() {
+    /// Each dielectric's media: the medium beyond its surface (`Object::outside`: an object index, None for air)
+    /// into its instance's `sigma_rgb.w`, the outside object's instance + 1, 0 for air; and its priority
+    /// (`Object::priority`) into `material.w` (glsl/common/interface.glsl). An outside object without triangles
+    /// has no instance: its medium is then air's.
+    pub fn set_media(&mut self, media: impl Iterator<Item = (Option<usize>, u32)>) {
+        for (object, (o, priority)) in media.enumerate() {
             let Some(i) = self.object_instance.get(object).copied().flatten() else { continue };
             let m = o.and_then(|j| self.object_instance.get(j).copied().flatten()).map_or(0, |k| k + 1);
             self.instances[i].sigma_rgb[3] = m as f32;
+            if self.instances[i].material[1] == 1.0 {
+                self.instances[i].material[3] = priority as f32;
+            }
         }
     }
 

@@ -74,7 +74,8 @@ pub struct GpuInstance {
     /// `hi.w`: root node index bits in the single layout.
     pub hi: [f32; 4],
     /// x: IOR (dielectric) or albedo (receiver); y: 1 dielectric, 2 mirror, 0 diffuse receiver; z: absorption
-    /// coefficient inside a dielectric (1/m); w: a receiver's albedo texture layer + 1 (0: none).
+    /// coefficient inside a dielectric (1/m); w: a receiver's albedo texture layer + 1 (0: none), a dielectric's
+    /// medium priority (0: an explicit interface; `SceneBvh::set_media`).
     pub material: [f32; 4],
     /// x: root node index bits in the threaded layout; y, z, w: a diffuse receiver's rgb albedo (the eye-view
     /// ray tracer shades with it).

@@ -6,6 +6,7 @@ use super::optics::{fresnel, reflect, refract};
 use super::sampling::{Emission, Rng, Strata};
 use super::{Aov, Paths, BOUNCE_CAP};
 use crate::scene::{CameraView, Material, Scene};
+use crate::shaders::consts::MAX_NESTED;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -215,9 +216,21 @@ pub(crate) struct Tracer<'a> {
     pub absorption: Vec<[f64; 3]>,
     /// The medium beyond each dielectric's surface (`Object::outside`; None: air).
     pub outside: Vec<Option<usize>>,
+    /// Each object's medium priority (`Object::priority`; 0: an explicit interface).
+    pub priority: Vec<u32>,
     /// Some glass disperses or absorbs colors unequally: each photon carries one color channel, drawn at
     /// random, and its caustic lands in that channel only, with 3 times its flux (docs/design.md "Color").
     pub spectral: bool,
+}
+
+/// A dielectric hit as the medium rules see it: whether it is an interface at all (`through`: no), the IORs behind
+/// and in front of the surface, and the medium and volumes beyond it.
+struct Crossing {
+    through: bool,
+    n_in: f64,
+    n_out: f64,
+    medium: Option<usize>,
+    nested: Vec<usize>,
 }
 
 enum Interaction {
@@ -321,6 +334,7 @@ impl Tracer<'_> {
             absorption,
             // (A scene built in code may name no dielectric: the renderer refuses it, the reference takes air.)
             outside: (0..scene.objects.len()).map(|i| scene.outside_of(i)).collect(),
+            priority: scene.objects.iter().map(|o| if o.is_mirror() { 0 } else { o.priority }).collect(),
             spectral: scene.color_channels() == 3,
         }
     }
@@ -354,8 +368,10 @@ impl Tracer<'_> {
         t.flux_emitted += phi;
         let (mut refr, mut refl) = (0u32, 0u32);
         let mut skip = None;
-        // The medium the photon travels in (None: air, where lights are): the object it is inside.
+        // The medium the photon travels in (None: air, where lights are): the object it is inside; and the volumes
+        // with a priority it is inside.
         let mut medium: Option<usize> = None;
+        let mut nested: Vec<usize> = Vec::new();
         loop {
             let Some(hit) = self.geo.intersect(o, d, f64::INFINITY, skip, Filter::All) else {
                 t.photons_escaped += 1;
@@ -383,15 +399,21 @@ impl Tracer<'_> {
                 return;
             }
             let k = hit.object as usize;
-            let outside = self.outside[k];
-            let n_out = outside.map_or(1.0, |j| self.ior[j][c]);
-            let Some((event, fallback)) = interact(d, &hit, self.ior[k][c], n_out, rng.next_f64()) else {
+            let x = self.crossing(k, d.dot(hit.ng) < 0.0, medium, &nested, c);
+            let toward_incident = if d.dot(hit.ng) < 0.0 { hit.ng } else { -hit.ng };
+            if x.through {
+                // A volume's surface inside one of higher priority: no interface, the photon goes on beyond it.
+                o = hit.pos - toward_incident * offset_scale(hit.pos);
+                (medium, nested) = (x.medium, x.nested);
+                skip = Some(hit.prim);
+                continue;
+            }
+            let Some((event, fallback)) = interact(d, &hit, x.n_in, x.n_out, rng.next_f64()) else {
                 t.photons_lost += 1;
                 t.flux_lost += phi;
                 return;
             };
             t.shading_normal_fallbacks += fallback as u64;
-            let toward_incident = if d.dot(hit.ng) < 0.0 { hit.ng } else { -hit.ng };
             let eps = offset_scale(hit.pos);
             match event {
                 Interaction::Reflected { dir, tir } => {
@@ -403,7 +425,7 @@ impl Tracer<'_> {
                 }
                 Interaction::Refracted { dir } => {
                     // Across the surface: into the object, or out to the medium beyond it.
-                    medium = if d.dot(hit.ng) < 0.0 { Some(k) } else { outside };
+                    (medium, nested) = (x.medium, x.nested);
                     refr += 1;
                     t.refractions += 1;
                     o = hit.pos - toward_incident * eps;
@@ -413,6 +435,34 @@ impl Tracer<'_> {
             t.max_specular_depth = t.max_specular_depth.max(refr + refl);
             skip = Some(hit.prim);
         }
+    }
+
+    /// What a photon in `medium`, inside the volumes `nested`, meets at a hit on object `k` (glsl/common/interface.glsl
+    /// `crossing_at`, docs/design.md "Media").
+    fn crossing(&self, k: usize, entering: bool, medium: Option<usize>, nested: &[usize], c: usize) -> Crossing {
+        let ior = |m: Option<usize>| m.map_or(1.0, |j| self.ior[j][c]);
+        if self.priority[k] == 0 {
+            let outside = self.outside[k];
+            let medium = if entering { Some(k) } else { outside };
+            return Crossing {
+                through: false,
+                n_in: self.ior[k][c],
+                n_out: ior(outside),
+                medium,
+                nested: nested.to_vec(),
+            };
+        }
+        let mut after = nested.to_vec();
+        if entering && after.len() < MAX_NESTED as usize {
+            after.push(k);
+        } else if let Some(i) = after.iter().position(|&j| j == k).filter(|_| !entering) {
+            after.remove(i);
+        }
+        // The highest priority's medium (ties: the later object), air when none.
+        let top = after.iter().copied().max_by_key(|&j| (self.priority[j], j));
+        let (n_before, n_after) = (ior(medium), ior(top));
+        let (n_in, n_out) = if entering { (n_after, n_before) } else { (n_before, n_after) };
+        Crossing { through: top == medium, n_in, n_out, medium: top, nested: after }
     }
 
     #[allow(clippy::too_many_arguments)]

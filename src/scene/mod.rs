@@ -171,7 +171,14 @@ pub struct Object {
     /// A dielectric's surface is an interface between two media (docs/design.md "Media"): its own inside, and
     /// outside it air (None) or the inside of the dielectric object at this index (`outside` in a scene file).
     pub outside: Option<usize>,
+    /// 0: its surface is an explicit interface (above). 1 to [`MAX_PRIORITY`]: it is a volume of its medium that
+    /// may overlap other such volumes, and where they overlap the higher priority's medium is the one there
+    /// (Schmidt and Budge 2002; docs/design.md "Media").
+    pub priority: u32,
 }
+
+/// The highest medium priority (`priority` in a scene file).
+pub const MAX_PRIORITY: u32 = 255;
 
 /// An object placed from its own space: its mesh there, its placement (keyframed, or fixed), and how it deforms
 /// (water's waves, morph targets). A TOML object has one when it moves or is water; a glTF object always has one
@@ -241,7 +248,7 @@ impl ObjectAnimation {
 impl Object {
     /// A still object.
     pub fn new(name: impl Into<String>, material: Material, mesh: Mesh) -> Object {
-        Object { name: name.into(), material, mesh, animation: None, outside: None }
+        Object { name: name.into(), material, mesh, animation: None, outside: None, priority: 0 }
     }
 }
 
@@ -593,10 +600,11 @@ impl Scene {
         }
     }
 
-    /// Whether light is absorbed along its way through some medium: each ray then carries the medium it travels in
-    /// (docs/design.md "Media"), so that a receiver standing in an absorbing liquid receives what is left.
+    /// Whether light is absorbed along its way through some medium, or media overlap: each ray then carries the
+    /// medium it travels in and the volumes it is inside (docs/design.md "Media"), so that a receiver standing in
+    /// an absorbing liquid receives what is left, and an overlap's surfaces know which medium is on either side.
     pub fn has_media(&self) -> bool {
-        self.objects.iter().any(|o| o.absorption().max_element() > 0.0)
+        self.objects.iter().any(|o| o.absorption().max_element() > 0.0 || o.priority > 0)
     }
 
     /// Object `i`'s `outside`, where it names another dielectric and `i` is one (None: air).
@@ -759,6 +767,13 @@ material = { kind = "dielectric", ior = 1.5 }
             ("inside = \"glass\", ior = 1.2", "material.ior", "takes `ior` from that object"),
             ("inside = \"floor\"", "material.inside", "`floor` must be a dielectric"),
         ];
+        let s = parse(&scene("ior = 1.33, priority = 3")).unwrap();
+        assert_eq!((s.objects[2].priority, s.objects[1].priority), (3, 0));
+        assert!(s.has_media());
+        let bad = bad.into_iter().chain([
+            ("ior = 1.33, priority = 0", "material.priority", "must lie in 1..=255"),
+            ("ior = 1.33, priority = 2, outside = \"glass\"", "material.priority", "no `outside` or `inside`"),
+        ]);
         for (m, field, message) in bad {
             let e = parse(&scene(m)).unwrap_err().to_string();
             assert!(

@@ -150,6 +150,8 @@ pub struct MaterialDef {
     pub outside: Option<S<String>>,
     /// A dielectric's surface: the object whose medium lies inside it, its IOR and absorption (default: its own).
     pub inside: Option<S<String>>,
+    /// A dielectric volume that may overlap others: the higher priority's medium wins where they do.
+    pub priority: Option<S<i64>>,
     /// A diffuse material's albedo image (PNG or JPEG, sRGB), relative to the scene file.
     pub albedo_texture: Option<S<String>>,
     /// A diffuse material's procedural checkerboard: `albedo` and this one's `albedo` alternate.

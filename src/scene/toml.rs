@@ -622,7 +622,7 @@ fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>, textures: &mut Textures) -> Resu
     let (mesh, water) = shape(cx, o, &f)?;
     let (mesh, animation) = placement(cx, o, &f, mesh, water)?;
     let material = material(cx, o, &f, textures, &mesh)?;
-    Ok(Object { name, material, mesh, animation, outside: None })
+    Ok(Object { name, material, mesh, animation, outside: None, priority: 0 })
 }
 
 /// The object's mesh in its own space, as its shape and the shape's fields say (and its water, for a water
@@ -894,8 +894,11 @@ fn material(
     let m = o.get_ref().material.get_ref();
     let mf = |field: &str| f(&format!("material.{field}"));
     if m.kind.get_ref() != "dielectric" {
-        let media_fields =
-            [("outside", m.outside.as_ref().map(|x| x.span())), ("inside", m.inside.as_ref().map(|x| x.span()))];
+        let media_fields = [
+            ("outside", m.outside.as_ref().map(|x| x.span())),
+            ("inside", m.inside.as_ref().map(|x| x.span())),
+            ("priority", m.priority.as_ref().map(|x| x.span())),
+        ];
         if let Some((field, Some(span))) = media_fields.into_iter().find(|(_, s)| s.is_some()) {
             return Err(cx.err(span, mf(field), format!("only a dielectric's surface has `{field}`")));
         }
@@ -1011,6 +1014,18 @@ fn media(cx: &Ctx, defs: &[S<ObjectDef>], objects: &mut [Object]) -> Result<(), 
         }
         if let Some(name) = &m.outside {
             objects[i].outside = Some(find(i, "outside", name)?);
+        }
+        if let Some(p) = &m.priority {
+            let f = format!("object[{i}] \"{}\".material.priority", d.get_ref().name.get_ref());
+            let v = *p.get_ref();
+            if !(1..=MAX_PRIORITY as i64).contains(&v) {
+                return Err(cx.err(p.span(), f, format!("must lie in 1..={MAX_PRIORITY} (got {v})")));
+            }
+            if m.outside.is_some() || m.inside.is_some() {
+                let why = "a volume with a `priority` finds the medium beyond it by overlap: no `outside` or `inside`";
+                return Err(cx.err(p.span(), f, why));
+            }
+            objects[i].priority = v as u32;
         }
     }
     Ok(())

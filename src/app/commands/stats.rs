@@ -95,6 +95,7 @@ pub(super) fn transport_json(session: &Session, report: &FrameReport) -> Value {
         return Value::Null;
     }
     let bvh = &r.scene_buffers().bvh;
+    let queues = caustics::settings::ResolvedSettings { media: r.scene().has_media(), ..r.config().clone() };
     let mut v = json!({
         "bvh": {
             "layout": r.config().bvh_layout,
@@ -107,7 +108,10 @@ pub(super) fn transport_json(session: &Session, report: &FrameReport) -> Value {
         "weak_branches": r.config().weak_branches,
         "weak_block": r.config().weak_block(),
         "max_interactions": MAX_INTERACTIONS,
-        "ray_queue_capacity": r.config().ray_queue_capacity(),
+        // The queues as the frames size them: with the rays' media where the scene has any.
+        "ray_queue_capacity": queues.ray_queue_capacity(),
+        "ray_bytes": queues.ray_bytes(),
+        "media": queues.media,
     });
     if let Some(ts) = report.transport {
         if let Value::Object(m) = &mut v {
