@@ -181,7 +181,9 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
             |o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0),
         ),
         ("is a mirror: mirrors need", "only refracts", |o| o.is_mirror()),
-        ("has another medium outside it (`outside`): media need", "has air around all glass", |o| o.outside.is_some()),
+        ("has another medium beside it (`outside`, `priority`): media need", "has air around all glass", |o| {
+            o.outside.is_some() || o.priority > 0
+        }),
         (
             "disperses (`abbe`): dispersion needs",
             "has one IOR per texel",
