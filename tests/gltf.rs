@@ -173,6 +173,14 @@ fn gltf_and_glb_load_like_toml() {
     negative["materials"][1]["extensions"]["KHR_materials_volume"]["attenuationDistance"] = json!(-1.0);
     let e = Scene::load(&write(&dir, "negative.gltf", embedded(negative, &bin))).unwrap_err().to_string();
     assert!(e.contains("attenuationDistance") && e.contains("> 0"), "{e}");
+    // A glass material's extras.priority makes its objects volumes by priority; a bad one names its path.
+    let mut nested = doc.clone();
+    nested["materials"][1]["extras"] = json!({"priority": 3});
+    let n = Scene::load(&write(&dir, "nested.gltf", embedded(nested.clone(), &bin))).unwrap();
+    assert_eq!((n.objects[1].priority, n.objects[0].priority), (3, 0));
+    nested["materials"][1]["extras"] = json!({"priority": 1.5});
+    let e = Scene::load(&write(&dir, "nested_bad.gltf", embedded(nested, &bin))).unwrap_err().to_string();
+    assert!(e.contains("materials[1].extras.priority") && e.contains("integer in 1..=255"), "{e}");
     // GLB: the same JSON with the buffer in the BIN chunk.
     let b = Scene::load(&write(&dir, "twin.glb", glb(&doc, &bin))).unwrap();
     assert_same(&b, &toml);

@@ -12,6 +12,7 @@ import math
 import os
 import sys
 
+import bmesh
 import bpy
 from mathutils import Vector
 
@@ -179,9 +180,11 @@ def facts(name, frames):
     FACTS[name] = out
 
 
-def export(name, apply_modifiers=False, animations=True):
+def export(name, apply_modifiers=False, animations=True, extras=False):
     path = os.path.join(OUT, name + ".glb")
     bpy.ops.export_scene.gltf(
+        # Custom properties as extras (the media's priorities), where a scene has them.
+        export_extras=extras,
         filepath=path,
         export_format="GLB",
         export_cameras=True,
@@ -395,6 +398,45 @@ def scene_skinned():
     export("skinned")
 
 
+def scene_glass_of_water():
+    """A glass of water as an artist models it: a tumbler (a cylinder without its top face, given 4 cm walls and base
+    by a Solidify modifier) and the water in it, a cylinder reaching 1 cm into the glass's wall and base. Glass has
+    no nesting of its own in glTF: each material carries a custom property `priority` (exported as its extras with
+    the exporter's "Custom Properties"), the glass's 2 and the water's 1, so that where they overlap the glass is
+    there. A spot to the side sends light through the wall and the water onto the floor."""
+    reset()
+    floor()
+    bpy.ops.mesh.primitive_cylinder_add(vertices=96, radius=0.4, depth=1.0, location=(0, 0, 0.501))
+    g = active()
+    g.name = "Glass"
+    bm = bmesh.new()
+    bm.from_mesh(g.data)
+    bmesh.ops.delete(bm, geom=[f for f in bm.faces if f.normal.z > 0.9], context="FACES_ONLY")
+    bm.to_mesh(g.data)
+    bm.free()
+    solid = g.modifiers.new("Solidify", "SOLIDIFY")
+    solid.thickness = 0.04
+    solid.use_even_offset = True
+    glass_material = glass("Glass", 1.5)
+    glass_material["priority"] = 2
+    smooth(give(g, glass_material))
+    g.data.use_auto_smooth = True
+    bpy.ops.mesh.primitive_cylinder_add(vertices=96, radius=0.37, depth=0.67, location=(0, 0, 0.366))
+    w = active()
+    w.name = "Water"
+    water_material = glass("Water", 1.33)
+    water_material["priority"] = 1
+    smooth(give(w, water_material))
+    w.data.use_auto_smooth = True
+    # A wide cone: the caustic map holds what the light sees, and the caustic reaches far behind the glass.
+    s = spot(location=(-1.6, 0.3, 1.6), power=120.0, size_deg=100.0)
+    direction = Vector((0, 0, 0.35)) - s.location
+    s.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
+    cameras(main_location=(1.8, -2.2, 1.6), target=(0.3, 0, 0.3))
+    facts("glass_of_water", [1])
+    export("glass_of_water", apply_modifiers=True, extras=True)
+
+
 os.makedirs(OUT, exist_ok=True)
 scene_glass_modifiers()
 scene_two_objects()
@@ -404,6 +446,7 @@ scene_mirror(False)
 scene_mirror(True)
 scene_colored_glass()
 scene_skinned()
+scene_glass_of_water()
 with open(os.path.join(OUT, "blender.json"), "w") as f:
     json.dump(FACTS, f, indent=1, sort_keys=True)
     f.write("\n")

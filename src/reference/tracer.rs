@@ -366,7 +366,9 @@ impl Tracer<'_> {
         let c = if channel == 3 { 1 } else { channel };
         t.photons_traced += 1;
         t.flux_emitted += phi;
-        let (mut refr, mut refl) = (0u32, 0u32);
+        // Surfaces met: refractions, reflections, and volumes' surfaces passed through (no interface there), which
+        // count towards the cap as the waves count them (a wave per surface met).
+        let (mut refr, mut refl, mut through) = (0u32, 0u32, 0u32);
         let mut skip = None;
         // The medium the photon travels in (None: air, where lights are): the object it is inside; and the volumes
         // with a priority it is inside.
@@ -393,7 +395,7 @@ impl Tracer<'_> {
                 self.deposit(li, &hit, d, refr, refl, phi, ch, out);
                 return;
             }
-            if refr + refl >= BOUNCE_CAP {
+            if refr + refl + through >= BOUNCE_CAP {
                 t.photons_cut += 1;
                 t.flux_cut += phi;
                 return;
@@ -406,6 +408,7 @@ impl Tracer<'_> {
                 o = hit.pos - toward_incident * offset_scale(hit.pos);
                 (medium, nested) = (x.medium, x.nested);
                 skip = Some(hit.prim);
+                through += 1;
                 continue;
             }
             let Some((event, fallback)) = interact(d, &hit, x.n_in, x.n_out, rng.next_f64()) else {

@@ -58,22 +58,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     parse(&bytes, path, options)
 }
 
-/// Parse glTF JSON or GLB bytes; `path` locates the file for messages and external buffers.
-pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
-    let cx = Cx { file: path.display().to_string() };
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
-        gltf::Error::Deserialize(j) => SceneError::Syntax {
-            file: cx.file.clone(),
-            line: j.line(),
-            column: j.column(),
-            message: format!("not valid glTF JSON: {j}"),
-        },
-        gltf::Error::Binary(b) => cx.err("(GLB container)", format!("not a valid GLB file: {b}")),
-        other => cx.err("(file)", format!("not a valid glTF file: {other}")),
-    })?;
-    let root = document.as_json();
-
-    // Extensions first: a required extension we cannot honor makes everything else meaningless.
+/// Refuse a required extension this renderer does not support; warn of a used one it ignores.
+fn check_extensions(cx: &Cx, root: &gltf::json::Root) -> Result<(), SceneError> {
     let known = |e: &str| SUPPORTED.contains(&e);
     for (i, e) in root.extensions_required.iter().enumerate() {
         if !known(e) {
@@ -91,6 +77,26 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
             cx.warn(&format!("extensionsUsed[{i}]"), &format!("extension `{e}` is not supported and is ignored"));
         }
     }
+    Ok(())
+}
+
+/// Parse glTF JSON or GLB bytes; `path` locates the file for messages and external buffers.
+pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+    let cx = Cx { file: path.display().to_string() };
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
+        gltf::Error::Deserialize(j) => SceneError::Syntax {
+            file: cx.file.clone(),
+            line: j.line(),
+            column: j.column(),
+            message: format!("not valid glTF JSON: {j}"),
+        },
+        gltf::Error::Binary(b) => cx.err("(GLB container)", format!("not a valid GLB file: {b}")),
+        other => cx.err("(file)", format!("not a valid glTF file: {other}")),
+    })?;
+    let root = document.as_json();
+
+    // Extensions first: a required extension we cannot honor makes everything else meaningless.
+    check_extensions(&cx, root)?;
 
     // The crate's validation: indices in range, required fields present, enums valid. Required extensions were
     // checked above (the crate does not know the ones we ignore).
@@ -127,6 +133,8 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .unzip();
+    // Per material: the priority of a glass volume (`extras.priority`; 0: none).
+    let priorities = document.materials().map(|m| priority(&cx, &m, &materials)).collect::<Result<Vec<_>, _>>()?;
     // The glTF default material: white, metallic 1, roughness 1 → diffuse white.
     let default_material = Material::diffuse(Vec3::ONE);
 
@@ -165,6 +173,7 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
         buffers: &buffers,
         materials: &materials,
         tex_coords: &tex_coords,
+        priorities: &priorities,
         default_material,
         tracks: &tracks,
         period,
@@ -361,6 +370,25 @@ fn base_color_map(
     Ok((map, set))
 }
 
+/// A glass material's medium priority (docs/scenes.md "Media"): glTF has none of its own, so the material's
+/// `extras.priority` (a Blender material's custom property `priority`, exported with the exporter's "Custom
+/// Properties") carries it: an integer in 1..=MAX_PRIORITY, on a transmissive material. 0 when absent.
+fn priority(cx: &Cx, m: &gltf::Material, materials: &[Material]) -> Result<u32, SceneError> {
+    let i = m.index().unwrap_or(0);
+    let Some(extras) = m.extras() else { return Ok(0) };
+    let value: serde_json::Value = serde_json::from_str(extras.get()).unwrap_or(serde_json::Value::Null);
+    let Some(p) = value.get("priority") else { return Ok(0) };
+    let at = format!("materials[{i}].extras.priority");
+    let v = p.as_f64().filter(|v| v.fract() == 0.0 && (1.0..=super::MAX_PRIORITY as f64).contains(v));
+    let max = super::MAX_PRIORITY;
+    let v = v.ok_or_else(|| cx.err(at.clone(), format!("must be an integer in 1..={max} (got {p})")))?;
+    if !matches!(materials[i], Material::Dielectric { .. }) {
+        cx.warn(&at, "only a transmissive (glass) material is a volume with a priority: ignored");
+        return Ok(0);
+    }
+    Ok(v as u32)
+}
+
 fn material(
     cx: &Cx,
     m: &gltf::Material,
@@ -460,6 +488,8 @@ struct Globals<'a> {
     materials: &'a [Material],
     /// Per material: the TEXCOORD set its base color texture reads (None: untextured).
     tex_coords: &'a [Option<u32>],
+    /// Per material: its medium priority (`Object::priority`; 0: none).
+    priorities: &'a [u32],
     default_material: Material,
     /// Per node: its tracks, from the animations that play.
     tracks: &'a [NodeTracks],
@@ -996,10 +1026,8 @@ fn mesh_objects(
             cx.warn(&p_at, &format!("mesh \"{base_name}\" has no triangles and is skipped"));
             continue;
         }
-        let material = match p.material().index() {
-            Some(i) => materials[i],
-            None => g.default_material,
-        };
+        let (material, priority) =
+            p.material().index().map_or((g.default_material, 0), |i| (materials[i], g.priorities[i]));
         // A textured material reads its TEXCOORD set (the texture coordinates are not transformed with the node).
         if let Some(set) = p.material().index().and_then(|i| g.tex_coords[i]) {
             let a = p.get(&gltf::Semantic::TexCoords(set)).ok_or_else(|| {
@@ -1058,7 +1086,7 @@ fn mesh_objects(
         if placed.positions.iter().any(|v| !v.is_finite()) {
             return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
         }
-        out.objects.push(Object { animation: Some(anim), ..Object::new(name, material, placed) });
+        out.objects.push(Object { animation: Some(anim), priority, ..Object::new(name, material, placed) });
     }
     Ok(())
 }
