@@ -15,7 +15,7 @@ layout(constant_id = GLASS_LIGHT_COUNT_ID) const uint GLASS_LIGHT_COUNT = 1u;
 layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.disperses)
 layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.environment)
 layout(constant_id = GLASS_TEXTURED_ID) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
-layout(constant_id = GLASS_MEDIA_ID) const bool GLASS_MEDIA = true;  // absorbing media (ResolvedSettings::media)
+layout(constant_id = GLASS_MEDIA_ID) const bool GLASS_MEDIA = true;  // absorbing or overlapping media (ResolvedSettings::media)
 #define ENVIRONMENT_MAP GLASS_ENVIRONMENT
 // The pass's second and third lights: uniforms, shadow map, caustic map, receivers from the light. (The
 // environment comes with u_frame: a later pass's first light carries none.)
@@ -163,8 +163,8 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             continue;
         }
         Split s = split_interface(d, p, ng, ns, x.n_in, x.n_out, inst_is_mirror(hit.inst));
-        // The reflection stays in the branch's medium; the refraction crosses the surface.
         if (!s.ok) continue;
+        // The refraction crosses the surface (x's medium and volumes); the reflection stays in the branch's.
         vec3 wr = w * s.F, wt = w * (1.0 - s.F);
         if (s.F < 1.0) {
             if (max(wt.r, max(wt.g, wt.b)) >= EYE_THRESHOLD && sp < EYE_STACK) {

@@ -28,8 +28,9 @@ layout(local_size_x = LINEAR_WG) in;
 // code it runs: a CPU driver such as lavapipe runs both sides of every branch under a mask.
 layout(constant_id = WAVE_PRIMARY_ID) const bool WAVE_PRIMARY = false;
 layout(constant_id = WAVE_DIFFERENTIAL_ID) const bool WAVE_DIFFERENTIAL = false;
-// The rays carry the medium they travel in (the scene has absorbing media, docs/design.md "Media"): a segment is
-// attenuated by its medium's absorption whatever it meets. Without media nothing absorbs.
+// The rays carry the medium they travel in and the volumes they are inside (the scene has absorbing or overlapping
+// media, docs/design.md "Media"): a segment is attenuated by its medium's absorption whatever it meets. Without media
+// nothing absorbs and every surface is an explicit interface.
 layout(constant_id = WAVE_MEDIA_ID) const bool WAVE_MEDIA = false;
 // The most subgroups a work group can have on this device (LINEAR_WG over its least subgroup size).
 layout(constant_id = WAVE_SUBGROUPS_ID) const uint WAVE_SUBGROUPS = LINEAR_WG;
@@ -298,16 +299,27 @@ bool branch_kept(float phi, float wb, float cut, float weak, bool carrier, float
     return true;
 }
 
+// The flux threshold a child of the ray t is cut below: a carried weak branch holds its block's share, so it is cut
+// where its siblings' would be.
+float child_cut(Traced t) {
+    float widen = weak_widen(t.cell);
+    return u_frame.flux_threshold * (t.lod ? widen * widen : 1.0);
+}
+
+// A child's meta word (GpuRay.meta): its photon's entry, one interaction more, and the ray's weak-branch flag.
+uint child_meta(Traced t, uint capacity) {
+    return (capacity - 1u - t.pidx) | ((t.depth + 1u) << PHOTON_INDEX_BITS) | (t.lod ? LOD_RAY : 0u);
+}
+
 // A volume's surface inside one of higher priority (WAVE_MEDIA): no interface, so the ray t (weight w) goes on as one
 // child on the surface's other side, unbent, inside the volumes beyond it; cut below the flux threshold.
 void pass_through(Traced t, RayDiff rdf, vec3 p, vec3 ng, float w, uint capacity, Crossing x, inout Outcome o) {
-    float widen = weak_widen(t.cell);
-    if (w < u_frame.flux_threshold * (t.lod ? widen * widen : 1.0)) {
+    if (w < child_cut(t)) {
         acc[ACC_THRESHOLD] += t.phi * w;
         return;
     }
     vec3 rd = t.ray.dir;
-    uint meta = (capacity - 1u - t.pidx) | ((t.depth + 1u) << PHOTON_INDEX_BITS) | (t.lod ? LOD_RAY : 0u);
+    uint meta = child_meta(t, capacity);
     vec3 beyond = dot(rd, ng) > 0.0 ? ng : -ng;
     o.n_child = 1u;
     o.c0 = Child(GpuRay(offset_ray(p, beyond), w, rd, meta), rdf, dot(rd, ng) < 0.0, x.m_refr, x.l_refr);
@@ -319,8 +331,7 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
               inout Outcome o) {
     const bool diff = WAVE_DIFFERENTIAL;
     vec3 rd = t.ray.dir;
-    bool entering = dot(rd, ng) < 0.0;
-    Crossing x = crossing_at(hit.inst, entering, t.medium, t.nested, color_channel(), WAVE_MEDIA);
+    Crossing x = crossing_at(hit.inst, dot(rd, ng) < 0.0, t.medium, t.nested, color_channel(), WAVE_MEDIA);
     if (WAVE_MEDIA && x.through) {
         pass_through(t, rdf, p, ng, w, capacity, x, o);
         return;
@@ -331,14 +342,12 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
         return;
     }
     float wr = w * s.F, wt = w * (1.0 - s.F);
-    // A carried weak branch holds its block's share: it is cut where its siblings' would be.
-    float widen = weak_widen(t.cell);
-    float cut = u_frame.flux_threshold * (t.lod ? widen * widen : 1.0);
+    float widen = weak_widen(t.cell), cut = child_cut(t);
     float weak = !t.lod && weak_branches_apply(t.cell) ? u_frame.weak_fraction : 0.0;
     float scale = 1.0;
     bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak) ? weak_carrier(t.cell, t.phi, t.depth, scale)
                                                                          : false;
-    uint meta = (capacity - 1u - t.pidx) | ((t.depth + 1u) << PHOTON_INDEX_BITS) | (t.lod ? LOD_RAY : 0u);
+    uint meta = child_meta(t, capacity);
     bool keep_r = branch_kept(t.phi, wr, cut, weak, carrier, scale);
     bool keep_t = branch_kept(t.phi, wt, cut, weak, carrier, scale);
     bool carried_r = wr < weak, carried_t = wt < weak;

@@ -295,8 +295,8 @@ pub struct GpuRay {
     pub meta: u32,
 }
 
-/// The medium part of a queue entry, after the ray (and its differentials), when the scene has absorbing media
-/// or overlap (`Scene::has_media`, RAY_VEC4S_MEDIUM more words): which medium the ray travels in, so that
+/// The medium part of a queue entry, after the ray (and its differentials), when the scene has absorbing or
+/// overlapping media (`Scene::has_media`, RAY_VEC4S_MEDIUM more words): which medium the ray travels in, so that
 /// absorption follows it to whatever it meets, a receiver standing in a liquid included, and which volumes it is
 /// inside, so that where volumes overlap the higher priority's medium is the one there (docs/design.md "Media").
 #[repr(C)]

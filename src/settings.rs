@@ -353,8 +353,9 @@ pub struct ResolvedSettings {
     pub debug_min_level: u32,
     /// Bytes one storage-buffer binding may span on the device (its maxStorageBufferRange, at most 2 GiB).
     pub binding_limit: u64,
-    /// The scene has absorbing media (`Scene::has_media`): exact transport's rays carry their medium. The
-    /// renderer sets it from its scene each frame; [`Settings::resolve`] leaves it off.
+    /// The scene has absorbing or overlapping media (`Scene::has_media`): exact transport's rays carry their
+    /// medium. The renderer sets it from its scene ([`Renderer::scene_settings`](crate::Renderer::scene_settings));
+    /// [`Settings::resolve`] leaves it off.
     pub media: bool,
 }
 

@@ -280,9 +280,9 @@ pub const GLASS_DISPERSIVE_ID: u32 = 4;
 pub const GLASS_ENVIRONMENT_ID: u32 = 5;
 /// glsl/glass.comp: some receiver has an albedo texture.
 pub const GLASS_TEXTURED_ID: u32 = 6;
-/// glsl/wave.comp: the rays carry their medium (the scene has absorbing media).
+/// glsl/wave.comp: the rays carry their medium (the scene has absorbing or overlapping media).
 pub const WAVE_MEDIA_ID: u32 = 7;
-/// glsl/glass.comp: the scene has absorbing media.
+/// glsl/glass.comp: the scene has absorbing or overlapping media.
 pub const GLASS_MEDIA_ID: u32 = 7;
 /// glsl/coverage.comp: the pass builds mip 0 from the g-buffers.
 pub const COVERAGE_MIP0_ID: u32 = 0;

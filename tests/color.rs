@@ -33,6 +33,20 @@ fn exact(dir: &Path, name: &str, scene: &str, size: &str, level: &str) -> (serde
     (s, read_exr(&out).unwrap())
 }
 
+/// The linear beauty of the scene `text` (written as NAME.toml in `dir`) through `camera` at 64², one sample a
+/// pixel, level 2, with `extra` options; its run printed no validation message.
+fn beauty(dir: &Path, name: &str, text: &str, camera: &str, extra: &[&str]) -> RgbImage {
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join(format!("{name}.exr"));
+    let stats = dir.join(format!("{name}.json"));
+    let args = ["render", "--scene", scene.to_str().unwrap(), "--camera", camera, "--size", "64x64", "--aa", "1"];
+    let more = ["--level", "2", "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
+    ok(&[&args[..], extra, &more].concat());
+    assert_validation_clean(&read_json(&stats));
+    read_exr(&out).unwrap()
+}
+
 /// Beer–Lambert per channel, exactly: each channel of the amber sphere's caustic equals the caustic of the same
 /// sphere with gray absorption at that channel's coefficient (the same rays, the same splats). Measured on
 /// lavapipe: equal to 1e-6 relative; the test allows 1e-4. A gray scene runs one pass per light.
@@ -141,9 +155,9 @@ fn color_matches_reference() {
 #[test]
 fn colored_glass_tints_the_beauty_by_beer_lambert() {
     let dir = out_dir("color_beauty");
-    let scene = dir.join("slab.toml");
-    std::fs::write(
-        &scene,
+    let img = beauty(
+        &dir,
+        "slab",
         r#"[[light]]
 kind = "directional"
 position = [0.0, 2.0, 0.0]
@@ -171,14 +185,9 @@ size = [0.6, 0.6, 0.1]
 translate = [0.0, 0.5, 0.0]
 material = { kind = "dielectric", ior = 1.5, absorption = [0.3, 1.2, 3.0] }
 "#,
-    )
-    .unwrap();
-    let out = dir.join("beauty.exr");
-    let stats = dir.join("beauty.json");
-    let args = ["render", "--scene", scene.to_str().unwrap(), "--camera", "side", "--size", "64x64", "--aa", "1"];
-    ok(&[&args[..], &["--level", "2", "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()]].concat());
-    assert_validation_clean(&read_json(&stats));
-    let img = read_exr(&out).unwrap();
+        "side",
+        &[],
+    );
     // The center pixel looks through the slab (|x|, |y - 0.5| < 0.3 m); a corner one at the sky alone.
     let (through, sky) = (img.at(32, 32), img.at(2, 2));
     for (c, sigma) in [0.3f64, 1.2, 3.0].iter().enumerate() {
@@ -247,28 +256,14 @@ material = {{ kind = "diffuse", albedo = 0.8 }}
 "#
         )
     };
-    let beauty = |name: &str, absorption: &str| {
-        let scene = dir.join(format!("{name}.toml"));
-        let text = tank(absorption);
-        // By priority: the same media as two overlapping volumes (the water's wins where they overlap).
-        let text = match name {
-            "priority" => {
-                text.replace("ior = 1.5 }", "ior = 1.5, priority = 1 }").replace(r#"outside = "tank""#, "priority = 2")
-            }
-            _ => text,
-        };
-        std::fs::write(&scene, text).unwrap();
-        let out = dir.join(format!("{name}.exr"));
-        let stats = dir.join(format!("{name}.json"));
-        // No sky: its light on the tile comes from every side, not through the water along the light's one way.
-        let args = ["render", "--scene", scene.to_str().unwrap(), "--camera", "top", "--size", "64x64", "--aa", "1"];
-        let more = ["--sky", "0", "--level", "2", "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
-        ok(&[&args[..], &more].concat());
-        assert_validation_clean(&read_json(&stats));
-        read_exr(&out).unwrap()
-    };
-    let (murky, clear) = (beauty("murky", "[1.0, 0.5, 0.1]"), beauty("clear", "0.0"));
-    let by_priority = beauty("priority", "[1.0, 0.5, 0.1]");
+    // No sky: its light on the tile comes from every side, not through the water along the light's one way.
+    let render = |name: &str, text: &str| beauty(&dir, name, text, "top", &["--sky", "0"]);
+    let (murky, clear) = (render("murky", &tank("[1.0, 0.5, 0.1]")), render("clear", &tank("0.0")));
+    // By priority: the same media as two overlapping volumes (the water's wins where they overlap).
+    let overlapping = tank("[1.0, 0.5, 0.1]")
+        .replace("ior = 1.5 }", "ior = 1.5, priority = 1 }")
+        .replace(r#"outside = "tank""#, "priority = 2");
+    let by_priority = render("priority", &overlapping);
     // The center pixel sees the tile (|x|, |z| < 0.2 m of the 0.5 m half-window).
     let (m, c) = (murky.at(32, 32), clear.at(32, 32));
     assert!(c.iter().all(|&v| v > 0.0), "the tile is lit through clear water: {c:?}");

@@ -107,8 +107,6 @@ float inst_ior_in(uint inst, uint c) {
 float inst_sigma_in(uint inst, uint c) {
     return c == 0u ? bvh_instance(inst).material.z : bvh_instance(inst).sigma_rgb[c - 1u];
 }
-float inst_ior(uint inst) { return inst_ior_in(inst, color_channel()); }
-
 // Media (docs/design.md "Media"): a medium is 0 for air (IOR 1, no absorption), else a dielectric instance + 1,
 // whose IOR and absorption it has. A dielectric's surface separates its own medium (behind its geometric normal)
 // from the one its record names beyond it (`sigma_rgb.w`, src/bvh/mod.rs `set_media`).
@@ -118,12 +116,6 @@ uint inst_outside(uint inst) { return uint(bvh_instance(inst).sigma_rgb.w); }
 float medium_ior_in(uint m, uint c) { return m == AIR ? 1.0 : inst_ior_in(m - 1u, c); }
 float medium_sigma_in(uint m, uint c) { return m == AIR ? 0.0 : inst_sigma_in(m - 1u, c); }
 vec3 medium_sigma_rgb(uint m) { return m == AIR ? vec3(0.0) : bvh_instance(m - 1u).sigma_rgb.xyz; }
-
-// The split at a hit on instance `inst` in channel c: its own IOR inside, its outside medium's beyond.
-Split split_at_instance(vec3 d, vec3 p, vec3 ng, vec3 ns, uint inst, uint c) {
-    return split_interface(d, p, ng, ns, inst_ior_in(inst, c), medium_ior_in(inst_outside(inst), c),
-                           inst_is_mirror(inst));
-}
 
 // The medium a branch of a split at `inst` travels in: a reflection stays in the ray's own medium `m`; a refraction
 // crosses into the instance (entering: the ray met the front of its surface) or out to the medium beyond it.

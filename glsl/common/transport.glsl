@@ -213,7 +213,9 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
         if (k == MAX_INTERACTIONS) break;
         vec3 ng, ns;
         bvh_normals(hit, ng, ns);
-        Split s = split_at_instance(rd, p, ng, ns, hit.inst, color_channel());
+        // (The dominant path carries no medium: each surface is an explicit interface.)
+        Crossing x = crossing_at(hit.inst, dot(rd, ng) < 0.0, AIR, uvec2(0u), color_channel(), false);
+        Split s = split_interface(rd, p, ng, ns, x.n_in, x.n_out, inst_is_mirror(hit.inst));
         if (!s.ok) break;
         bool refl = s.F >= 0.5;
         throughput *= refl ? s.F : 1.0 - s.F;

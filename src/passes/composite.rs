@@ -28,8 +28,8 @@ pub struct CompositePass {
 
 /// What a glass pass's pipeline is specialized for (glsl/glass.comp's specialization constants, src/shader_consts.rs). A CPU
 /// driver runs both sides of every branch under a mask, so the pass compiles no code for what the frame lacks:
-/// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, absorbing
-/// media, or (on the wide layout) the wide walk's pair fallback for a deforming mesh.
+/// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, absorbing or
+/// overlapping media, or (on the wide layout) the wide walk's pair fallback for a deforming mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlassKey {
     /// Walk the wide layout (else the pair layout).
@@ -41,7 +41,7 @@ pub struct GlassKey {
     pub dispersive: bool,
     pub environment: bool,
     pub textured: bool,
-    /// The scene has absorbing media: the trace follows the medium each branch is in.
+    /// The scene has absorbing or overlapping media: the trace follows the medium each branch is in.
     pub media: bool,
 }
 
@@ -126,7 +126,7 @@ pub struct CompositeInputs<'a> {
     pub dispersive: bool,
     /// The scene has an environment map (`FrameData.environment`).
     pub environment: bool,
-    /// The scene has absorbing media (`ResolvedSettings::media`).
+    /// The scene has absorbing or overlapping media (`ResolvedSettings::media`).
     pub media: bool,
 }
 

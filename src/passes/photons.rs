@@ -81,7 +81,7 @@ fn wave_name(layout: &str, spec: &[(u32, u32); 5]) -> String {
 pub struct WaveRays {
     /// Ray differentials (`--footprint differential`).
     pub differential: bool,
-    /// The ray's medium (the scene has absorbing media).
+    /// The ray's medium and volumes (the scene has absorbing or overlapping media).
     pub media: bool,
 }
 

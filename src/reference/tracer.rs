@@ -314,14 +314,7 @@ impl Tracer<'_> {
                 Material::Diffuse { .. } => [0.0; 3],
             })
             .collect();
-        let absorption = scene
-            .objects
-            .iter()
-            .map(|o| match o.material {
-                Material::Dielectric { absorption, .. } => absorption.to_array().map(|x| x as f64),
-                _ => [0.0; 3],
-            })
-            .collect();
+        let absorption = scene.objects.iter().map(|o| o.absorption().to_array().map(|x| x as f64)).collect();
         Tracer {
             geo,
             lights,
@@ -400,9 +393,9 @@ impl Tracer<'_> {
                 t.flux_cut += phi;
                 return;
             }
-            let k = hit.object as usize;
-            let x = self.crossing(k, d.dot(hit.ng) < 0.0, medium, &nested, c);
-            let toward_incident = if d.dot(hit.ng) < 0.0 { hit.ng } else { -hit.ng };
+            let entering = d.dot(hit.ng) < 0.0;
+            let x = self.crossing(hit.object as usize, entering, medium, &nested, c);
+            let toward_incident = if entering { hit.ng } else { -hit.ng };
             if x.through {
                 // A volume's surface inside one of higher priority: no interface, the photon goes on beyond it.
                 o = hit.pos - toward_incident * offset_scale(hit.pos);

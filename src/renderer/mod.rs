@@ -175,11 +175,7 @@ fn check_transport(scene: &Scene, settings: &ResolvedSettings) -> Result<()> {
     // (what the object does and what that needs, what the two-interface model lacks, whether an object does it)
     type Needs = (&'static str, &'static str, fn(&crate::scene::Object) -> bool);
     let needs: [Needs; 4] = [
-        (
-            "absorbs: absorption needs",
-            "has none",
-            |o| matches!(o.material, Material::Dielectric { absorption, .. } if absorption.max_element() > 0.0),
-        ),
+        ("absorbs: absorption needs", "has none", |o| o.absorption().max_element() > 0.0),
         ("is a mirror: mirrors need", "only refracts", |o| o.is_mirror()),
         ("has another medium beside it (`outside`, `priority`): media need", "has air around all glass", |o| {
             o.outside.is_some() || o.priority > 0
@@ -545,12 +541,19 @@ impl Renderer {
         Ok(())
     }
 
-    /// The settings of the frame `desc`: at its level (progressive refinement renders below the chosen one), with
-    /// the rays' media where the scene has any now.
-    fn frame_settings(&self, desc: &FrameDesc) -> ResolvedSettings {
+    /// The resolved settings as the frames apply them to the scene now: with the rays' media (and so their bytes
+    /// in the queues) where exact transport meets absorbing or overlapping media.
+    pub fn scene_settings(&self) -> ResolvedSettings {
         let mut s = self.config.clone();
-        s.level = desc.level.map_or(s.level, |l| l.min(s.level));
         s.media = s.transport == Transport::Exact && self.scene.has_media();
+        s
+    }
+
+    /// The settings of the frame `desc`: the scene's, at its level (progressive refinement renders below the
+    /// chosen one).
+    fn frame_settings(&self, desc: &FrameDesc) -> ResolvedSettings {
+        let mut s = self.scene_settings();
+        s.level = desc.level.map_or(s.level, |l| l.min(s.level));
         s
     }
 

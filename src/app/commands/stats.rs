@@ -95,7 +95,7 @@ pub(super) fn transport_json(session: &Session, report: &FrameReport) -> Value {
         return Value::Null;
     }
     let bvh = &r.scene_buffers().bvh;
-    let queues = caustics::settings::ResolvedSettings { media: r.scene().has_media(), ..r.config().clone() };
+    let queues = r.scene_settings();
     let mut v = json!({
         "bvh": {
             "layout": r.config().bvh_layout,
@@ -108,7 +108,7 @@ pub(super) fn transport_json(session: &Session, report: &FrameReport) -> Value {
         "weak_branches": r.config().weak_branches,
         "weak_block": r.config().weak_block(),
         "max_interactions": MAX_INTERACTIONS,
-        // The queues as the frames size them: with the rays' media where the scene has any.
+        // The queues as the frames size them.
         "ray_queue_capacity": queues.ray_queue_capacity(),
         "ray_bytes": queues.ray_bytes(),
         "media": queues.media,
