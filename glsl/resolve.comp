@@ -13,23 +13,33 @@ layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
 // would add it into level 0 (splat_parents and splat_share, glsl/common/splat_levels.glsl), which saves that pass
 // over the whole map and the copy into the flux image.
 layout(set = 0, binding = 1) uniform samplerBuffer t_flux;
+// Color photons: the texels hold a plane per channel (red, green, blue; glsl/splat.comp).
+layout(constant_id = RESOLVE_COLOR_ID) const bool RESOLVE_COLOR = false;
 
-float flux_at(ivec2 q, ivec2 size) {
-    float f = texelFetch(t_flux, q.y * size.x + q.x).r;
+// The flux at texel q of the plane that starts at texel `base`.
+float flux_at(ivec2 q, ivec2 size, int base) {
+    float f = texelFetch(t_flux, base + q.y * size.x + q.x).r;
     if (splat_levels(size) == 0u) return f;
     ivec2 coarse = size >> 1, p, n;
     splat_parents(q, coarse, p, n);
-    int cb = int(splat_level_offset(size, 1u));
+    int cb = base + int(splat_level_offset(size, 1u));
     float a = texelFetch(t_flux, cb + p.y * coarse.x + p.x).r, b = texelFetch(t_flux, cb + p.y * coarse.x + n.x).r;
     float c = texelFetch(t_flux, cb + n.y * coarse.x + p.x).r, d = texelFetch(t_flux, cb + n.y * coarse.x + n.x).r;
     float v = splat_share(a, b, c, d);
     return v != 0.0 ? f + v : f;
 }
+
+// The flux per channel, or the one gray flux in each.
+vec3 flux_rgb(ivec2 q, ivec2 size) {
+    if (!RESOLVE_COLOR) return vec3(flux_at(q, size, 0));
+    int plane = int(flux_plane(size));
+    return vec3(flux_at(q, size, 0), flux_at(q, size, plane), flux_at(q, size, 2 * plane));
+}
 #else
 // The flux image (the raster splat's target, or the compute splat's level 0 copied into it).
 layout(set = 0, binding = 1) uniform sampler2D t_flux;
 
-float flux_at(ivec2 q, ivec2 size) { return texelFetch(t_flux, q, 0).r; }
+vec3 flux_rgb(ivec2 q, ivec2 size) { return vec3(texelFetch(t_flux, q, 0).r); }
 #endif
 layout(set = 0, binding = 2) uniform usampler2D t_recv;
 layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
@@ -57,15 +67,17 @@ void main() {
         if (!view_is_ortho(v)) area *= r.w * r.w;
         // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
         vec3 tint = u_frame.light_intensity > 0.0 ? u_frame.light_power / u_frame.light_intensity : vec3(0.0);
-        e = flux_at(p, size) * tint / area;
+        e = flux_rgb(p, size) * tint / area;
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
     // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
-    // both sides of a branch, and an image store is a loop over the lanes for each channel.
+    // both sides of a branch, and an image store is a loop over the lanes for each channel. A gray pass and color
+    // photons write all three.
     uint c = u_frame.channel;
+    bool all_channels = c == 0u || c == CHANNEL_RGB;
     bool add = pc.add != 0u;
-    vec4 prev = add || c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
-    bvec3 mine = c == 0u ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));
+    vec4 prev = add || !all_channels && c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
+    bvec3 mine = all_channels ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));
     vec3 rgb = mix(prev.rgb, (add ? prev.rgb : vec3(0.0)) + e, mine);
     imageStore(o_irradiance, p, vec4(rgb, 0.0));
 }

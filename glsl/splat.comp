@@ -16,14 +16,32 @@
 // instead (glsl/common/splat_levels.glsl), at most SPLAT_FINE_RADIUS wide there, with its weights normalized to
 // sum to 1; splat_collapse.comp adds the levels back into the map. So a record costs at most about (2
 // SPLAT_FINE_RADIUS + 1)² taps, where a 64-texel tent took 129².
+//
+// SPLAT_COLOR (color photons, docs/design.md "Color"): a record's flux is its channels' mean and its tint their
+// ratios to it (splat_tints); each tap adds its share of each channel to that channel's plane of the flux texels.
 #extension GL_EXT_shader_atomic_float : require
 #include "common/photon_bindings.glsl"
 #include "common/splat_levels.glsl"
 
 layout(local_size_x = LINEAR_WG) in;
 
+layout(constant_id = SPLAT_COLOR_ID) const bool SPLAT_COLOR = false;
+const uint SPLAT_PLANES = SPLAT_COLOR ? 3u : 1u;
+
+// Add v (W) to flux texel k, tinted: each channel's share to its plane (`plane` texels apart).
+void flux_add(uint k, float v, vec3 tint, uint plane) {
+    if (SPLAT_COLOR) {
+        atomicAdd(flux_texels[k], v * tint.r);
+        atomicAdd(flux_texels[k + plane], v * tint.g);
+        atomicAdd(flux_texels[k + 2u * plane], v * tint.b);
+    } else {
+        atomicAdd(flux_texels[k], v);
+    }
+}
+
 #ifdef SPLAT_TILED
-shared float s_tile[SPLAT_TILE * SPLAT_TILE];
+// The window, one plane after another.
+shared float s_tile[SPLAT_TILE * SPLAT_TILE * SPLAT_PLANES];
 shared int s_lo_x, s_lo_y, s_hi_x, s_hi_y;
 shared ivec2 s_first;
 #endif
@@ -41,7 +59,7 @@ uint splat_level(vec2 e, ivec2 size) {
 // A record's tent centred at c0 (texels of level 0), at coarse level m: radii r / 2^m (at least 1) and the same
 // shear, its weights over the level's texels normalized to sum to 1 (radii that are not integers do not sum to it
 // by themselves, and at an edge the taps off the map are given back to the ones on it, as at level 0).
-void splat_coarse(vec2 c0, float flux, SplatShape k0, ivec2 size, uint m) {
+void splat_coarse(vec2 c0, float flux, vec3 tint, SplatShape k0, ivec2 size, uint m) {
     float scale = exp2(-float(m));
     vec2 c = c0 * scale;
     SplatShape k = SplatShape(max(k0.r * scale, vec2(1.0)), k0.s, k0.shear_y);
@@ -49,7 +67,7 @@ void splat_coarse(vec2 c0, float flux, SplatShape k0, ivec2 size, uint m) {
     float sum = splat_sum(c, k, n);
     if (!(sum > 0.0)) return;
     float f = flux / sum;
-    uint base = splat_level_offset(size, m);
+    uint base = splat_level_offset(size, m), plane = flux_plane(size);
     vec2 e = splat_extent(k);
     ivec2 lo = max(ivec2(ceil(c - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(c + e - 0.5)), n - 1);
     // Line by line (rows, or columns when the shear runs along y), each over its own taps.
@@ -59,7 +77,7 @@ void splat_coarse(vec2 c0, float flux, SplatShape k0, ivec2 size, uint m) {
         for (int i = line.x; i <= line.y; i++) {
             ivec2 q = sy ? ivec2(j, i) : ivec2(i, j);
             float w = splat_weight(q, c, k);
-            if (w != 0.0) atomicAdd(flux_texels[base + uint(q.y * n.x + q.x)], f * w);
+            if (w != 0.0) flux_add(base + uint(q.y * n.x + q.x), f * w, tint, plane);
         }
     }
 }
@@ -68,9 +86,12 @@ void main() {
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + gl_LocalInvocationIndex;
     ivec2 size = ivec2(u_frame.receiver_view.extent.xy);
     GpuSplat s = GpuSplat(vec2(0.0), 0.0, 0.0);
+    vec3 tint = vec3(1.0);
+    uint plane = flux_plane(size);
     bool valid = false;
     if (i < draw_cmd.x) {
         s = splats[draw_cmd.z + i];
+        if (SPLAT_COLOR) tint = tint_unpack(splat_tints[draw_cmd.z + i]);
         valid = s.shape > 0.0 && all(greaterThanEqual(s.texel, vec2(0.0))) && all(lessThanEqual(s.texel, vec2(size)));
     }
     SplatShape k = splat_shape(s.shape);
@@ -78,7 +99,7 @@ void main() {
     if (valid) {
         uint m = splat_level(e, size);
         if (m > 0u) {
-            splat_coarse(s.texel, s.flux, k, size, m);
+            splat_coarse(s.texel, s.flux, tint, k, size, m);
             valid = false;  // splatted: the level-0 taps (and the tiled window) leave it out
         }
     }
@@ -97,7 +118,7 @@ void main() {
         s_hi_x = s_hi_y = -1;
         s_first = ivec2(-1 << 30);
     }
-    for (uint k = t; k < SPLAT_TILE * SPLAT_TILE; k += LINEAR_WG) s_tile[k] = 0.0;
+    for (uint k = t; k < SPLAT_TILE * SPLAT_TILE * SPLAT_PLANES; k += LINEAR_WG) s_tile[k] = 0.0;
     barrier();
     if (valid && hi.x >= lo.x && hi.y >= lo.y) {
         atomicMin(s_lo_x, lo.x);
@@ -127,22 +148,30 @@ void main() {
 #ifdef SPLAT_TILED
             ivec2 q = p - org;
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(SPLAT_TILE)))) {
-                atomicAdd(s_tile[q.y * SPLAT_TILE + q.x], v);
+                uint b = uint(q.y * SPLAT_TILE + q.x);
+                if (SPLAT_COLOR) {
+                    atomicAdd(s_tile[b], v * tint.r);
+                    atomicAdd(s_tile[b + SPLAT_TILE * SPLAT_TILE], v * tint.g);
+                    atomicAdd(s_tile[b + 2u * SPLAT_TILE * SPLAT_TILE], v * tint.b);
+                } else {
+                    atomicAdd(s_tile[b], v);
+                }
                 continue;
             }
 #endif
-            atomicAdd(flux_texels[p.y * size.x + p.x], v);
+            flux_add(uint(p.y * size.x + p.x), v, tint, plane);
         }
     }
 #ifdef SPLAT_TILED
     barrier();
     ivec2 wsz = whi - wlo + 1;
     uint n = uint(max(wsz.x, 0) * max(wsz.y, 0));
-    for (uint k = t; k < n; k += LINEAR_WG) {
-        ivec2 p = wlo + ivec2(int(k) % wsz.x, int(k) / wsz.x);
+    for (uint k = t; k < n * SPLAT_PLANES; k += LINEAR_WG) {
+        uint j = k % n, c = k / n;
+        ivec2 p = wlo + ivec2(int(j) % wsz.x, int(j) / wsz.x);
         ivec2 q = p - org;
-        float v = s_tile[q.y * SPLAT_TILE + q.x];
-        if (v != 0.0) atomicAdd(flux_texels[p.y * size.x + p.x], v);
+        float v = s_tile[c * SPLAT_TILE * SPLAT_TILE + uint(q.y * SPLAT_TILE + q.x)];
+        if (v != 0.0) atomicAdd(flux_texels[c * plane + uint(p.y * size.x + p.x)], v);
     }
 #endif
 }

@@ -32,6 +32,10 @@ layout(constant_id = WAVE_DIFFERENTIAL_ID) const bool WAVE_DIFFERENTIAL = false;
 // media, docs/design.md "Media"): a segment is attenuated by its medium's absorption whatever it meets. Without media
 // nothing absorbs and every surface is an explicit interface.
 layout(constant_id = WAVE_MEDIA_ID) const bool WAVE_MEDIA = false;
+// Color photons (with WAVE_MEDIA; docs/design.md "Color"): a ray carries its color as a tint (tint_pack, in its
+// medium word), absorption takes each channel's share, and a record carries the ray's color (splat_tints). The
+// throughput is the channels' mean weight, so the account and the flux threshold see the mean.
+layout(constant_id = WAVE_COLOR_ID) const bool WAVE_COLOR = false;
 // The most subgroups a work group can have on this device (LINEAR_WG over its least subgroup size).
 layout(constant_id = WAVE_SUBGROUPS_ID) const uint WAVE_SUBGROUPS = LINEAR_WG;
 
@@ -61,6 +65,7 @@ struct Child {
     bool inside;
     uint medium;  // the medium it travels in (WAVE_MEDIA)
     uvec2 nested; // the volumes with a priority it is inside (WAVE_MEDIA; glsl/common/interface.glsl)
+    vec3 tint;    // its color (WAVE_COLOR)
 };
 
 // What one invocation produces: up to two child rays and one splat record. The children are named, not an array:
@@ -71,6 +76,7 @@ struct Outcome {
     Child c0, c1;
     bool rec;          // a splat record
     GpuSplat record;
+    uint rec_tint;     // its color, packed (WAVE_COLOR)
     float rec_flux;    // its flux, relative to the light's intensity (the account's unit)
     bool one_event;    // its path met exactly one interaction
 };
@@ -89,6 +95,7 @@ struct Traced {
     bool lod;     // a weak branch carried for the photon's block
     uint medium;  // the medium it travels in (WAVE_MEDIA; wave 0's rays start in air)
     uvec2 nested; // the volumes with a priority it is inside (WAVE_MEDIA)
+    vec3 tint;    // its color (WAVE_COLOR; white at the light)
 };
 
 // The invocation's shares of the account's terms (ACC_*), summed per work group at the end.
@@ -105,7 +112,7 @@ void store_ray(uint k, uint stride, Child c, float side) {
     if (WAVE_DIFFERENTIAL) rays_out[b + 2u] = diff_pack(c.diff, c.ray.dir, side);
     if (WAVE_MEDIA) {
         uvec4 m;
-        GpuRayMedium_to_words(GpuRayMedium(c.nested, 0.0, c.medium), m);
+        GpuRayMedium_to_words(GpuRayMedium(c.nested, WAVE_COLOR ? tint_pack(c.tint) : 0u, c.medium), m);
         rays_out[b + stride - 1u] = m;
     }
 }
@@ -235,6 +242,7 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     t.lod = false;
     t.medium = AIR;
     t.nested = uvec2(0u);
+    t.tint = vec3(1.0);
     if (WAVE_PRIMARY) {
         t.pidx = capacity - in_count + i;
         t.cell = photon_at(t.pidx);
@@ -254,6 +262,7 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
             GpuRayMedium m = GpuRayMedium_from_words(ray_word_in(stride * i + stride - 1u));
             t.medium = m.medium;
             t.nested = m.inside;
+            if (WAVE_COLOR) t.tint = tint_unpack(m.tint);
         }
     }
     t.phi = cell_measure(cell_level(t.cell), cell_xy(t.cell));
@@ -278,26 +287,33 @@ void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
     float shape = WAVE_DIFFERENTIAL ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
                                     : float(r);
     o.record = GpuSplat(uv * rv.extent.xy, flux * u_frame.light_intensity, shape);
+    o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : 0u;
     o.rec = true;
     o.rec_flux = flux;
     o.one_event = t.depth == 1u;
 }
 
 // Whether a Fresnel branch of weight wb is traced: cut below the flux threshold, left to its block's carrier when
-// it is weak (`weak`: the weak fraction) and this photon does not carry it, else kept.
-bool branch_kept(float phi, float wb, float cut, float weak, bool carrier, float scale) {
+// it is weak (`weak`: the weak fraction) and this photon does not carry it, else kept. Both tests weigh its
+// brightest channel (`bright`: that channel's weight over the mean, 1 without color), so a color photon keeps a
+// branch as long as its brightest channel's own pass would; the account takes the mean weight.
+bool branch_kept(float phi, float wb, float bright, float cut, float weak, bool carrier, float scale) {
     if (!(wb > 0.0)) return false;
-    if (wb < cut) {
+    float wm = wb * bright;
+    if (wm < cut) {
         acc[ACC_THRESHOLD] += phi * wb;
         return false;
     }
-    if (wb < weak && !carrier) {
+    if (wm < weak && !carrier) {
         acc[ACC_WEAK_LEFT] += phi * wb;
         return false;
     }
-    if (wb < weak) acc[ACC_WEAK_CARRIED] += phi * wb * (scale - 1.0);
+    if (wm < weak) acc[ACC_WEAK_CARRIED] += phi * wb * (scale - 1.0);
     return true;
 }
+
+// The brightest channel's weight over the mean (tint_unpack's ratios): 1 without color.
+float brightest(Traced t) { return WAVE_COLOR ? max(t.tint.r, max(t.tint.g, t.tint.b)) : 1.0; }
 
 // The flux threshold a child of the ray t is cut below: a carried weak branch holds its block's share, so it is cut
 // where its siblings' would be.
@@ -314,7 +330,7 @@ uint child_meta(Traced t, uint capacity) {
 // A volume's surface inside one of higher priority (WAVE_MEDIA): no interface, so the ray t (weight w) goes on as one
 // child on the surface's other side, unbent, inside the volumes beyond it; cut below the flux threshold.
 void pass_through(Traced t, RayDiff rdf, vec3 p, vec3 ng, float w, uint capacity, Crossing x, inout Outcome o) {
-    if (w < child_cut(t)) {
+    if (w * brightest(t) < child_cut(t)) {
         acc[ACC_THRESHOLD] += t.phi * w;
         return;
     }
@@ -322,7 +338,7 @@ void pass_through(Traced t, RayDiff rdf, vec3 p, vec3 ng, float w, uint capacity
     uint meta = child_meta(t, capacity);
     vec3 beyond = dot(rd, ng) > 0.0 ? ng : -ng;
     o.n_child = 1u;
-    o.c0 = Child(GpuRay(offset_ray(p, beyond), w, rd, meta), rdf, dot(rd, ng) < 0.0, x.m_refr, x.l_refr);
+    o.c0 = Child(GpuRay(offset_ray(p, beyond), w, rd, meta), rdf, dot(rd, ng) < 0.0, x.m_refr, x.l_refr, t.tint);
 }
 
 // The Fresnel split of the ray t (weight w) at a dielectric hit at p: its reflected and refracted children, each
@@ -344,19 +360,20 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
     float wr = w * s.F, wt = w * (1.0 - s.F);
     float widen = weak_widen(t.cell), cut = child_cut(t);
     float weak = !t.lod && weak_branches_apply(t.cell) ? u_frame.weak_fraction : 0.0;
-    float scale = 1.0;
-    bool carrier = (wr >= cut && wr < weak) || (wt >= cut && wt < weak) ? weak_carrier(t.cell, t.phi, t.depth, scale)
+    float scale = 1.0, bright = brightest(t);
+    float br = wr * bright, bt = wt * bright;
+    bool carrier = (br >= cut && br < weak) || (bt >= cut && bt < weak) ? weak_carrier(t.cell, t.phi, t.depth, scale)
                                                                          : false;
     uint meta = child_meta(t, capacity);
-    bool keep_r = branch_kept(t.phi, wr, cut, weak, carrier, scale);
-    bool keep_t = branch_kept(t.phi, wt, cut, weak, carrier, scale);
-    bool carried_r = wr < weak, carried_t = wt < weak;
+    bool keep_r = branch_kept(t.phi, wr, bright, cut, weak, carrier, scale);
+    bool keep_t = branch_kept(t.phi, wt, bright, cut, weak, carrier, scale);
+    bool carried_r = br < weak, carried_t = bt < weak;
     uint m_r = carried_r ? meta | LOD_RAY : meta, m_t = carried_t ? meta | LOD_RAY : meta;
     // The reflection stays in the ray's medium; the refraction crosses the surface.
     Child r = Child(GpuRay(s.p_refl, carried_r ? wr * scale : wr, normalize(s.refl), m_r), rdf, false, t.medium,
-                    t.nested);
+                    t.nested, t.tint);
     Child tr = Child(GpuRay(s.p_refr, carried_t ? wt * scale : wt, normalize(s.refr), m_t), rdf, false, x.m_refr,
-                     x.l_refr);
+                     x.l_refr, t.tint);
     if (diff) {
         // Both children inherit dP; their dD follow their branch, with the interpolated normal's derivative where
         // the branch used it.
@@ -396,12 +413,25 @@ void interact(Traced t, uint capacity, inout Outcome o) {
     if (specular || (diff && t.depth > 0u)) bvh_normals(hit, ng, ns);
     // The differentials move to the hit, in the plane of its triangle.
     if (diff) diff_transfer(rdf, rd, dot(p - ro, rd), ng);
-    float sigma = WAVE_MEDIA ? medium_sigma_in(t.medium, color_channel()) : 0.0;
-    if (sigma > 0.0) {
-        // The segment ran through an absorbing medium: Beer–Lambert attenuation, exactly (no sampling).
-        float keep = exp(-sigma * distance(p, ro));
-        acc[ACC_ABSORBED] += t.phi * w * (1.0 - keep);
-        w *= keep;
+    if (WAVE_COLOR) {
+        // Each channel keeps its own share (Beer–Lambert, exactly); the throughput becomes their mean and the tint
+        // their ratios to it.
+        vec3 sigma = medium_sigma_rgb(t.medium);
+        if (any(greaterThan(sigma, vec3(0.0)))) {
+            vec3 c = w * t.tint * exp(-sigma * distance(p, ro));
+            float kept = (c.r + c.g + c.b) / 3.0;
+            acc[ACC_ABSORBED] += t.phi * (w - kept);
+            t.tint = kept > 0.0 ? c / kept : vec3(1.0);
+            w = kept;
+        }
+    } else {
+        float sigma = WAVE_MEDIA ? medium_sigma_in(t.medium, color_channel()) : 0.0;
+        if (sigma > 0.0) {
+            // The segment ran through an absorbing medium: Beer–Lambert attenuation, exactly (no sampling).
+            float keep = exp(-sigma * distance(p, ro));
+            acc[ACC_ABSORBED] += t.phi * w * (1.0 - keep);
+            w *= keep;
+        }
     }
     if (!specular) {
         if (WAVE_PRIMARY) {
@@ -504,8 +534,8 @@ void main() {
 
     RayDiff none;
     none.dpx = none.dpy = none.ddx = none.ddy = vec3(0.0);
-    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false, AIR, uvec2(0u));
-    Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0.0, false);
+    Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false, AIR, uvec2(0u), vec3(1.0));
+    Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0u, 0.0, false);
     float phi = 0.0, side = 1.0;
     uint depth = 0u;
     if (i < in_count && !(can_abort && aborted)) {
@@ -538,6 +568,7 @@ void main() {
     if (rays_ok && o.n_child >= 1u) store_ray(k0, stride, o.c0, side);
     if (rays_ok && o.n_child == 2u) store_ray(k1, stride, o.c1, side);
     if (o.rec && recs_ok) splats[rec_base + rec_slot] = o.record;
+    if (WAVE_COLOR && o.rec && recs_ok) splat_tints[rec_base + rec_slot] = o.rec_tint;
     add_shares(lid, rays_ok, recs_ok);
     if (lid == 0u && i < in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, in_count - i));
 }

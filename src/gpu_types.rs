@@ -68,7 +68,8 @@ pub struct FrameData {
     pub exact: u32,
     pub queue_rays: u32,
     pub record_capacity: u32,
-    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue.
+    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`: photons that carry
+    /// their color.
     pub channel: u32,
     /// 1: differential footprints (rays carry their differentials: 3 vec4s each, else 2).
     pub differential: u32,
@@ -304,8 +305,10 @@ pub struct GpuRay {
 pub struct GpuRayMedium {
     /// The volumes with a priority it is inside: up to MAX_NESTED instances + 1 in 16-bit slots (0: empty).
     pub inside: [u32; 2],
-    /// Zero: room for a ray's sampled wavelength in spectral transport.
-    pub spare: f32,
+    /// The ray's color where the photons carry theirs (`WAVE_COLOR`; else 0): its weight's red and green shares
+    /// as two unorm16 (low, high) of three times the mean, which the throughput holds; blue is the rest
+    /// (`tint_unpack`, glsl/common/interface.glsl). Splat records carry theirs the same way.
+    pub tint: u32,
     /// 0: air; else the dielectric instance + 1 whose medium it is in (glsl/common/interface.glsl).
     pub medium: u32,
 }

@@ -357,6 +357,12 @@ pub struct ResolvedSettings {
     /// medium. The renderer sets it from its scene ([`Renderer::scene_settings`](crate::Renderer::scene_settings));
     /// [`Settings::resolve`] leaves it off.
     pub media: bool,
+    /// The photons carry their color (docs/design.md "Color"): some medium absorbs colors unequally and no glass
+    /// disperses, so one pass per light takes red, green and blue through the same paths, each ray with its RGB
+    /// tint, each record with its color, into three planes of flux texels. It needs exact transport with media and
+    /// a compute splat whose resolve reads the texels; elsewhere such a scene takes one pass per channel. Set by
+    /// the renderer like `media`.
+    pub rgb: bool,
 }
 
 impl Default for ResolvedSettings {
@@ -584,6 +590,7 @@ impl Settings {
             debug_min_level: t.debug_min_level,
             binding_limit,
             media: false,
+            rgb: false,
         })
     }
 }

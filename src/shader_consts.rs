@@ -90,6 +90,9 @@ pub const RAY_VEC4S_DIFFERENTIAL: u32 = 3;
 /// vec4s a ray's medium adds, last in its entry, when the scene has absorbing or overlapping media: a
 /// `GpuRayMedium`.
 pub const RAY_VEC4S_MEDIUM: u32 = 1;
+/// `FrameData::channel` of a pass whose photons carry their color (red, green and blue at once; glsl/wave.comp
+/// `WAVE_COLOR`): 0 is one gray pass, 1-3 one channel each.
+pub const CHANNEL_RGB: u32 = 4;
 /// The most volumes with a priority a ray can be inside at once (`GpuRayMedium::inside`): one more is not entered.
 pub const MAX_NESTED: u32 = 4;
 /// A ray's meta word holds its photon's index (counted from the photon buffer's top) in this many low bits, and
@@ -143,8 +146,10 @@ pub const PB_BVH_THREADED: u32 = 20;
 pub const PB_BVH_WIDE: u32 = 21;
 /// Binding: the wide layout's triangle list.
 pub const PB_BVH_WIDE_PRIMS: u32 = 22;
+/// Binding: each splat record's color (color photons, `GpuRayMedium::tint`'s encoding).
+pub const PB_SPLAT_TINTS: u32 = 23;
 /// Bindings of the layout.
-pub const PB_COUNT: u32 = 23;
+pub const PB_COUNT: u32 = 24;
 
 // Binding indices of the composite and the glass pass (glsl/common/composite_bindings.glsl, src/passes/composite.rs).
 /// Binding: the frame uniforms.
@@ -284,5 +289,13 @@ pub const GLASS_TEXTURED_ID: u32 = 6;
 pub const WAVE_MEDIA_ID: u32 = 7;
 /// glsl/glass.comp: the scene has absorbing or overlapping media.
 pub const GLASS_MEDIA_ID: u32 = 7;
+/// glsl/wave.comp: the rays carry their color (an RGB tint in their medium word), so that one pass takes a light's
+/// photons through glass that absorbs colors unequally (docs/design.md "Color").
+pub const WAVE_COLOR_ID: u32 = 8;
+/// glsl/splat.comp and glsl/resolve.comp: the records carry their color, and the flux texels hold three planes
+/// (red, green, blue).
+pub const SPLAT_COLOR_ID: u32 = 0;
+/// glsl/resolve.comp: the same.
+pub const RESOLVE_COLOR_ID: u32 = 0;
 /// glsl/coverage.comp: the pass builds mip 0 from the g-buffers.
 pub const COVERAGE_MIP0_ID: u32 = 0;

@@ -95,6 +95,8 @@ pub struct PhotonBuffers {
     pub debug: Buffer,
     /// One splat record (16 bytes) per photon-buffer entry.
     pub splats: Buffer,
+    /// Color photons (`ResolvedSettings::rgb`): each record's color (4 bytes).
+    pub splat_tints: Buffer,
     /// Exact transport: the wave state and energy account, and two ray queues (32 bytes a ray).
     pub transport: Buffer,
     pub queues: [Buffer; 2],
@@ -159,19 +161,7 @@ impl Targets {
                     m,
                     color | U::TRANSFER_SRC | U::TRANSFER_DST,
                 )?,
-                // The resolve reads it through a texel view (a device whose texel buffers are too short for it
-                // gets none, and the resolve samples the flux image instead).
-                flux_texels: Buffer::new(
-                    device,
-                    "caustic flux texels",
-                    4 * splat_texels(s.caustic_res),
-                    vk::BufferUsageFlags::STORAGE_BUFFER
-                        | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-                        | vk::BufferUsageFlags::TRANSFER_SRC
-                        | vk::BufferUsageFlags::TRANSFER_DST,
-                    MemoryLocation::GpuOnly,
-                )?
-                .with_texel_view(vk::Format::R32_SFLOAT, 4)?,
+                flux_texels: flux_texels(device, s)?,
                 irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
             })
         };
@@ -180,6 +170,7 @@ impl Targets {
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
+        let tints = if s.rgb { capacity } else { 4 };
         let mips = s.gbuffer_level() + 1;
         let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_side(), mips);
         let debug_bytes = 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
@@ -229,6 +220,8 @@ impl Targets {
                 gpu,
             )?,
             splats: Buffer::new(device, "splat records", 16 * capacity as u64, B::STORAGE_BUFFER, gpu)?,
+            // Color photons: a record's color, one word each; else never read.
+            splat_tints: Buffer::new(device, "splat record colors", 4 * tints as u64, B::STORAGE_BUFFER, gpu)?,
             transport: Buffer::new(
                 device,
                 "transport state",
@@ -329,7 +322,26 @@ pub fn splat_levels(res: u32) -> u32 {
     crate::shaders::consts::SPLAT_LEVELS.min(res.trailing_zeros())
 }
 
-/// Texels of a `res`² map's flux texels with their coarse levels.
+/// The compute splat's flux texels, every plane. The resolve reads them through a texel view (a device whose texel
+/// buffers are too short for them gets none, and the resolve samples the flux image instead).
+fn flux_texels(device: &Arc<Device>, s: &Settings) -> VkResult<Buffer> {
+    use vk::BufferUsageFlags as B;
+    let usage = B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER | B::TRANSFER_SRC | B::TRANSFER_DST;
+    let bytes = 4 * splat_texels(s.caustic_res) * flux_planes(s);
+    Buffer::new(device, "caustic flux texels", bytes, usage, MemoryLocation::GpuOnly)?
+        .with_texel_view(vk::Format::R32_SFLOAT, 4)
+}
+
+/// Planes of the flux texels: red, green and blue where the photons carry their color, else one.
+pub fn flux_planes(s: &Settings) -> u64 {
+    if s.rgb {
+        3
+    } else {
+        1
+    }
+}
+
+/// Texels of a `res`² map's flux texels with their coarse levels (one plane).
 pub fn splat_texels(res: u32) -> u64 {
     (0..=splat_levels(res)).map(|m| ((res >> m) as u64).pow(2)).sum()
 }

@@ -16,6 +16,10 @@ uint splat_level_offset(ivec2 size, uint m) {
     return o;
 }
 
+// The flux texels' planes (red, green and blue for color photons, else one) each hold a map's level 0 and its
+// coarse levels: plane k starts k flux_plane(size) texels in.
+uint flux_plane(ivec2 size) { return splat_level_offset(size, splat_levels(size) + 1u); }
+
 // Texel q of level m - 1 takes a share of four texels of level m (`coarse` its size): its parent p and, along
 // each axis, the second-nearest n (below for an even q, above for an odd one; clamped to the level, which folds the
 // weight that would fall off back onto the edge). splat_share weighs their values a (p), b (n.x, p.y), c (p.x,

@@ -21,4 +21,12 @@ uvec2 with_siblings(uvec2 c, uint mask) { return uvec2(c.x, (c.y & 0x1FFFFFFFu) 
 uvec2 cell_xy(uvec2 c) { return uvec2(c.x & 0xFFFFFFu, c.y & 0xFFFFFFu); }
 uint cell_radius(uvec2 c) { return c.x >> 24; }
 
+// A color photon's tint (docs/design.md "Color"): its weight per channel over their mean, so that the three sum to
+// 3, packed as the red and green shares of that 3 in two unorm16 (GpuRayMedium.tint); blue is the rest.
+uint tint_pack(vec3 c) { return packUnorm2x16(c.rg / 3.0); }
+vec3 tint_unpack(uint w) {
+    vec2 rg = unpackUnorm2x16(w) * 3.0;
+    return vec3(rg, max(3.0 - rg.x - rg.y, 0.0));
+}
+
 #endif

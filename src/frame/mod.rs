@@ -107,7 +107,7 @@ pub(crate) struct FramePlan<'a> {
     pub data: &'a [FrameData],
     /// Per light: whether a refractor lies in its light (its caustic stages run).
     pub caustics: &'a [bool],
-    /// Color channels per light: 1, or 3 when some glass needs color.
+    /// Color passes per light: 1, or 3 when some glass needs color and the photons cannot carry it.
     pub channels: usize,
     /// The first light's photon view (for the report).
     pub photon_view: Option<LightView>,

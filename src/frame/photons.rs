@@ -112,6 +112,7 @@ impl Ctx<'_> {
             queues: [&t.photon.queues[0], &t.photon.queues[1]],
             bvh: &self.sb.bvh,
             flux_texels: &self.r.flux_texels,
+            splat_tints: &t.photon.splat_tints,
         }
     }
 
@@ -181,6 +182,7 @@ impl Ctx<'_> {
         rec.sync.buffer(&t.photon.debug, &[Access::ComputeWrite]);
         rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
         rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
+        rec.sync.buffer(&t.photon.splat_tints, &[Access::ComputeWrite]);
         rec.sync.buffer(&t.photon.coverage, &[Access::ComputeRead, Access::ComputeTexels]);
         if self.compute_splat {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
@@ -219,7 +221,7 @@ impl Ctx<'_> {
         for level in (finest..=crate::targets::splat_levels(res)).rev() {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeRead, Access::ComputeWrite]);
             rec.flush(self.d);
-            self.p.photons.splat_collapse(rec.cmd, &b, level, res)?;
+            self.p.photons.splat_collapse(rec.cmd, &b, level, res, crate::targets::flux_planes(self.s) as u32)?;
         }
         Ok(())
     }
@@ -259,6 +261,7 @@ impl Ctx<'_> {
             rec.sync.image(&self.r.flux, &[Access::ColorAttachment]);
         }
         rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
+        rec.sync.buffer(&t.photon.splat_tints, &[Access::ComputeWrite]);
         for buf in [&t.photon.photons, &t.photon.state, &t.photon.indirect] {
             rec.sync.buffer(buf, &TRAVERSAL);
         }
@@ -280,12 +283,13 @@ impl Ctx<'_> {
         }
         let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
         rec.sync.buffer(&t.photon.splats, &[reader]);
+        rec.sync.buffer(&t.photon.splat_tints, &[reader]);
         // The compute splat reads its record range from the draw command as well as dispatching from it.
         rec.sync.buffer(&t.photon.indirect, &[Access::IndirectRead, Access::ComputeRead]);
         rec.flush(self.d);
         rec.ts.mark(rec.cmd, "splat");
         if self.compute_splat {
-            ph.splat_compute(rec.cmd, &b, self.tiled_splat)
+            ph.splat_compute(rec.cmd, &b, self.tiled_splat, self.s.rgb)
         } else {
             ph.splat(rec.cmd, &b, &self.r.flux, clear)
         }
@@ -319,6 +323,7 @@ impl Ctx<'_> {
                 rec.sync.buffer(buf, &TRAVERSAL);
             }
             rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
+            rec.sync.buffer(&t.photon.splat_tints, &[Access::ComputeWrite]);
             for q in &t.photon.queues {
                 rec.sync.buffer(q, &RAY_QUEUE);
             }
@@ -333,7 +338,11 @@ impl Ctx<'_> {
             if wave >= 1 {
                 rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
             }
-            let rays = WaveRays { differential: self.s.footprint == Footprint::Differential, media: self.s.media };
+            let rays = WaveRays {
+                differential: self.s.footprint == Footprint::Differential,
+                media: self.s.media,
+                color: self.s.rgb,
+            };
             ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, rays)?;
             step(rec);
             ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;

@@ -114,7 +114,11 @@ impl Ctx<'_> {
         }
         let flux = if self.resolve_texels {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeTexels]);
-            FluxSource::Texels(&self.r.flux_texels)
+            if self.s.rgb {
+                FluxSource::ColorTexels(&self.r.flux_texels)
+            } else {
+                FluxSource::Texels(&self.r.flux_texels)
+            }
         } else {
             rec.sync.image(&self.r.flux, &[Access::ComputeSampled]);
             FluxSource::Image(&self.r.flux)

@@ -40,6 +40,7 @@ const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
     (PB_BVH_THREADED, BindKind::Storage),
     (PB_BVH_WIDE, BindKind::Storage),
     (PB_BVH_WIDE_PRIMS, BindKind::Storage),
+    (PB_SPLAT_TINTS, BindKind::Storage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
@@ -52,27 +53,29 @@ const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTAN
 const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
 /// glsl/wave.comp's specialization constants (src/shader_consts.rs): `WAVE_PRIMARY`, `WAVE_DIFFERENTIAL`,
-/// `BVH_PAIR_FALLBACK`, `WAVE_MEDIA` and `WAVE_SUBGROUPS` (`subgroups`).
+/// `BVH_PAIR_FALLBACK`, `WAVE_MEDIA`, `WAVE_COLOR` and `WAVE_SUBGROUPS` (`subgroups`).
 /// A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
-fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 5] {
+fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 6] {
     [
         (WAVE_PRIMARY_ID, (variant & 1) as u32),
         (WAVE_DIFFERENTIAL_ID, (variant >> 1 & 1) as u32),
         (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32),
         (WAVE_MEDIA_ID, (variant >> 3 & 1) as u32),
+        (WAVE_COLOR_ID, (variant >> 4 & 1) as u32),
         (WAVE_SUBGROUPS_ID, subgroups),
     ]
 }
 
 /// A wave pipeline's name in messages and timings: its layout and specialization.
-fn wave_name(layout: &str, spec: &[(u32, u32); 5]) -> String {
-    let [(_, primary), (_, diff), (_, fallback), (_, media), _] = *spec;
+fn wave_name(layout: &str, spec: &[(u32, u32); 6]) -> String {
+    let [(_, primary), (_, diff), (_, fallback), (_, media), (_, color), _] = *spec;
     format!(
-        "transport wave {}{}{}{} ({layout} BVH nodes)",
+        "transport wave {}{}{}{}{} ({layout} BVH nodes)",
         if primary != 0 { "0" } else { "k > 0" },
         if diff != 0 { ", ray differentials" } else { "" },
         if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
         if media != 0 { ", media" } else { "" },
+        if color != 0 { ", color" } else { "" },
     )
 }
 
@@ -83,6 +86,8 @@ pub struct WaveRays {
     pub differential: bool,
     /// The ray's medium and volumes (the scene has absorbing or overlapping media).
     pub media: bool,
+    /// The ray's color, in its medium word (color photons; only with `media`).
+    pub color: bool,
 }
 
 /// The most subgroups a work group of `LINEAR_WG` invocations can have on a device whose least subgroup size is
@@ -95,9 +100,42 @@ fn wave_subgroups(min_subgroup_size: u32) -> u32 {
 // one word: each at most two per invocation.
 const _: () = assert!(2 * LINEAR_WG < 1 << 10);
 
+/// One BVH layout's wave pipelines, every specialization ([`wave_spec`]). Only the wide walk has a pair fallback:
+/// the other layouts' fallback slots are never used ([`PhotonPasses::wave`]).
+fn wave_variants(
+    device: &Arc<Device>,
+    layout: &str,
+    spv: &'static shaders::Spv,
+    binds: &[BindKind],
+    push: u32,
+) -> [LazyPipeline; 32] {
+    std::array::from_fn(|k| {
+        let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
+        LazyPipeline::compute_specialized(device, &wave_name(layout, &spec), spv.words(), binds, push, &spec)
+    })
+}
+
+/// A compute splat's pipelines: for gray records, then for colored ones (`SPLAT_COLOR`).
+fn splat_variants(
+    device: &Arc<Device>,
+    name: &str,
+    spv: &'static [u32],
+    binds: &[BindKind],
+    push: u32,
+) -> [LazyPipeline; 2] {
+    [false, true].map(|color| {
+        let name = if color { format!("{name}, color") } else { name.to_string() };
+        LazyPipeline::compute_specialized(device, &name, spv, binds, push, &[(SPLAT_COLOR_ID, color as u32)])
+    })
+}
+
 /// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
 fn wave_variant(primary: bool, rays: WaveRays, pair_fallback: bool) -> usize {
-    primary as usize | (rays.differential as usize) << 1 | (pair_fallback as usize) << 2 | (rays.media as usize) << 3
+    primary as usize
+        | (rays.differential as usize) << 1
+        | (pair_fallback as usize) << 2
+        | (rays.media as usize) << 3
+        | (rays.color as usize) << 4
 }
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
@@ -126,6 +164,7 @@ pub struct PhotonBindings<'a> {
     pub queues: [&'a Buffer; 2],
     pub bvh: &'a crate::scene_gpu::BvhBuffers,
     pub flux_texels: &'a Buffer,
+    pub splat_tints: &'a Buffer,
 }
 
 impl PhotonBindings<'_> {
@@ -154,6 +193,7 @@ impl PhotonBindings<'_> {
             (PB_BVH_THREADED, Bind::Storage(&self.bvh.threaded_nodes)),
             (PB_BVH_WIDE, Bind::Storage(&self.bvh.wide_nodes)),
             (PB_BVH_WIDE_PRIMS, Bind::Storage(&self.bvh.wide_prims)),
+            (PB_SPLAT_TINTS, Bind::Storage(self.splat_tints)),
         ])
     }
 }
@@ -213,14 +253,14 @@ pub struct PhotonPasses {
     trace: LazyPipeline,
     /// Exact transport's waves, per BVH layout (pair, single, threaded, wide) and per specialization
     /// ([`wave_spec`]): wave 0 or a bounce wave, with or without ray differentials, with or without the wide walk's
-    /// pair fallback, with or without the rays' media.
-    waves: [[LazyPipeline; 16]; 4],
+    /// pair fallback, with or without the rays' media, with or without their color.
+    waves: [[LazyPipeline; 32]; 4],
     transport: LazyPipeline,
     splat: LazyPipeline,
-    /// None when the device has no float atomics on buffers.
-    splat_compute: Option<LazyPipeline>,
+    /// None when the device has no float atomics on buffers. Gray records, then colored ones (SPLAT_COLOR).
+    splat_compute: Option<[LazyPipeline; 2]>,
     /// The same with a work group's taps gathered in shared memory first (SPLAT_TILED).
-    splat_compute_tiled: Option<LazyPipeline>,
+    splat_compute_tiled: Option<[LazyPipeline; 2]>,
     /// Adds a coarse level of the flux texels into the one below it (glsl/splat_collapse.comp).
     splat_collapse: LazyPipeline,
 }
@@ -337,6 +377,7 @@ impl PhotonPasses {
             ]
         });
         let atomics = device.info.float_atomic_add;
+        let splat_color = |name: &str, spv: &'static [u32]| splat_variants(device, name, spv, &binds, push);
         Ok(PhotonPasses {
             device: device.clone(),
             init: compute("init", shaders::INIT_COMP.words())?,
@@ -351,23 +392,11 @@ impl PhotonPasses {
                 ("threaded", WAVE_COMP_THREADED, &binds),
                 ("wide", WAVE_COMP_WIDE, &wave_texel_binds),
             ]
-            .map(|(layout, spv, binds)| {
-                // Only the wide walk has a pair fallback: the other layouts' fallback slots are never used (wave()).
-                std::array::from_fn(|k| {
-                    let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
-                    LazyPipeline::compute_specialized(
-                        device,
-                        &wave_name(layout, &spec),
-                        spv.words(),
-                        binds,
-                        push,
-                        &spec,
-                    )
-                })
-            }),
+            .map(|(layout, spv, binds)| wave_variants(device, layout, spv, binds, push)),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
-            splat_compute: atomics.then(|| lazy("compute splat", shaders::SPLAT_COMP.words())),
-            splat_compute_tiled: atomics.then(|| lazy("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
+            splat_compute: atomics.then(|| splat_color("compute splat", shaders::SPLAT_COMP.words())),
+            splat_compute_tiled: atomics
+                .then(|| splat_color("compute splat (tiled)", shaders::SPLAT_COMP_TILED.words())),
             splat_collapse: lazy("splat levels collapse", shaders::SPLAT_COLLAPSE_COMP.words()),
             splat,
         })
@@ -516,22 +545,31 @@ impl PhotonPasses {
 
     /// Splat the records into the flux texels with a compute pass dispatched indirectly (float atomics). Settings
     /// resolve `--splat` to raster on a device without them, so the pipeline exists whenever this is called.
-    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool) -> VkResult<()> {
+    /// `color`: the records carry their color, into the texels' three planes.
+    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool, color: bool) -> VkResult<()> {
         let p = if tiled { &self.splat_compute_tiled } else { &self.splat_compute };
         let Some(p) = p.as_ref() else { return Ok(()) };
-        let p = p.get()?;
+        let p = p[color as usize].get()?;
         p.bind(cmd, &b.binds());
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
         Ok(())
     }
 
-    /// Add coarse level `level` of the flux texels of a `res`² map into the level below it.
-    pub fn splat_collapse(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, res: u32) -> VkResult<()> {
+    /// Add coarse level `level` of the flux texels of a `res`² map into the level below it, in each of the
+    /// texels' `planes`.
+    pub fn splat_collapse(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        level: u32,
+        res: u32,
+        planes: u32,
+    ) -> VkResult<()> {
         let p = self.splat_collapse.get()?;
         p.bind(cmd, &b.binds());
         p.push(cmd, &SplatCollapsePush { level });
         let groups = (res >> (level - 1)).div_ceil(TILE_WG);
-        unsafe { self.device.cmd_dispatch(cmd, groups, groups, 1) };
+        unsafe { self.device.cmd_dispatch(cmd, groups, groups, planes) };
         Ok(())
     }
 

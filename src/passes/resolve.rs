@@ -14,12 +14,15 @@ pub enum FluxSource<'a> {
     /// The compute splat's flux texels through their texel view, once the coarse levels from 2 up are collapsed:
     /// the resolve adds level 1's share itself (glsl/resolve.comp, `RESOLVE_TEXELS`).
     Texels(&'a Buffer),
+    /// The same in three planes, red, green and blue: the records of color photons.
+    ColorTexels(&'a Buffer),
 }
 
 pub struct ResolvePass {
     device: Arc<Device>,
     pipeline: Pipeline,
-    texels: LazyPipeline,
+    /// Gray flux texels, then three planes (RESOLVE_COLOR).
+    texels: [LazyPipeline; 2],
 }
 
 impl ResolvePass {
@@ -31,13 +34,16 @@ impl ResolvePass {
             &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::StorageImage],
             4,
         )?;
-        let texels = LazyPipeline::compute(
-            device,
-            "resolve (flux texels)",
-            shaders::RESOLVE_COMP_TEXELS.words(),
-            &[BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage],
-            4,
-        );
+        let texels = [false, true].map(|color| {
+            LazyPipeline::compute_specialized(
+                device,
+                if color { "resolve (flux texels, color)" } else { "resolve (flux texels)" },
+                shaders::RESOLVE_COMP_TEXELS.words(),
+                &[BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage],
+                4,
+                &[(shaders::consts::RESOLVE_COLOR_ID, color as u32)],
+            )
+        });
         Ok(ResolvePass { device: device.clone(), pipeline, texels })
     }
 
@@ -62,8 +68,8 @@ impl ResolvePass {
                 );
                 &self.pipeline
             }
-            FluxSource::Texels(buf) => {
-                let p = self.texels.get()?;
+            FluxSource::Texels(buf) | FluxSource::ColorTexels(buf) => {
+                let p = self.texels[matches!(flux, FluxSource::ColorTexels(_)) as usize].get()?;
                 p.bind_checked(
                     cmd,
                     &[Bind::Uniform(ubo), Bind::Storage(buf), Bind::Sampled(recv, s), Bind::StorageImage(out)],

@@ -16,6 +16,7 @@ pub(crate) struct TargetsKey {
     pub ray_queue_capacity: u32,
     pub passes: usize,
     pub ray_bytes: u32,
+    pub rgb: bool,
     pub frames_in_flight: usize,
 }
 
@@ -29,6 +30,7 @@ impl TargetsKey {
             ray_queue_capacity: s.ray_queue_capacity(),
             passes,
             ray_bytes: s.ray_bytes(),
+            rgb: s.rgb,
             frames_in_flight,
         }
     }

@@ -516,7 +516,7 @@ impl Renderer {
     fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> Result<()> {
         self.tracker.prune();
         let lights = self.scene.lights.len();
-        let passes = lights * self.scene.color_channels();
+        let passes = lights * self.color_passes(s);
         let key = TargetsKey::new(s, passes, self.queue.frames_in_flight());
         let same_key = self.targets_key == Some(key);
         let same_size = self.targets.as_ref().is_some_and(|t| (t.width, t.height, t.aa) == (width, height, aa));
@@ -546,7 +546,26 @@ impl Renderer {
     pub fn scene_settings(&self) -> ResolvedSettings {
         let mut s = self.config.clone();
         s.media = s.transport == Transport::Exact && self.scene.has_media();
+        // Color photons: the channels take the same paths (no dispersion), the rays carry their medium, the
+        // compute splat adds the records' colors and the resolve reads its three planes as texels.
+        let planes = 3 * crate::targets::splat_texels(s.caustic_res);
+        s.rgb = s.media
+            && self.scene.color_channels() == 3
+            && !self.scene.disperses()
+            && s.splat.is_compute()
+            && crate::passes::flux_format(&self.device) == ash::vk::Format::R32_SFLOAT
+            && planes <= self.device.info.limits.max_texel_buffer_elements as u64;
         s
+    }
+
+    /// Photon passes per light under the settings `s`: 3 (red, green, blue) where colour changes the paths, or
+    /// the photons cannot carry it, 1 otherwise (gray, or color photons).
+    fn color_passes(&self, s: &ResolvedSettings) -> usize {
+        if s.rgb {
+            1
+        } else {
+            self.scene.color_channels()
+        }
     }
 
     /// The settings of the frame `desc`: the scene's, at its level (progressive refinement renders below the
@@ -721,8 +740,9 @@ impl Renderer {
             wait_idles: self.device.wait_idle_count() - idles,
         };
         let nl = self.scene.lights.len();
-        // Color: 3 passes per light (red, green, blue) when some glass disperses or absorbs unequally, else 1.
-        let nc = self.scene.color_channels();
+        // Color: 3 passes per light (red, green, blue) when some glass disperses, or absorbs unequally and the
+        // photons cannot carry their color, else 1.
+        let nc = self.color_passes(&s);
         let views = (0..nl).map(|i| Views::new(&self.scene, &s, camera, i)).collect::<Result<Vec<_>>>()?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
@@ -740,20 +760,7 @@ impl Renderer {
         let reused =
             continuation.is_none() && self.reuse && self.caches.caustic.as_ref().is_some_and(|(k, _)| *k == key);
         let targets = self.targets.as_mut().expect("targets");
-        let channel = |c: usize| if nc == 1 { 0 } else { c as u32 + 1 };
-        let data: Vec<_> = (0..nl * nc)
-            .map(|p| {
-                uniforms::frame_data(
-                    &self.scene,
-                    &self.scene_buffers,
-                    &s,
-                    &views[p / nc],
-                    targets,
-                    p / nc,
-                    channel(p % nc),
-                )
-            })
-            .collect();
+        let data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &views, targets, nc);
         // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
         // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
         let eye_key = EyeKey {

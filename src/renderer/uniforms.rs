@@ -12,8 +12,28 @@ use crate::shaders::consts::*;
 use crate::targets::Targets;
 use glam::Vec3;
 
+/// The uniforms of every pass, light-major: `nc` color passes per light (`views` per light).
+pub(crate) fn pass_data(
+    scene: &Scene,
+    scene_buffers: &SceneBuffers,
+    s: &ResolvedSettings,
+    views: &[Views],
+    targets: &Targets,
+    nc: usize,
+) -> Vec<FrameData> {
+    // One gray pass, one pass of color photons, or a pass per channel.
+    let channel = |c: usize| match (s.rgb, nc) {
+        (true, _) => CHANNEL_RGB,
+        (false, 1) => 0,
+        _ => c as u32 + 1,
+    };
+    (0..views.len() * nc)
+        .map(|p| frame_data(scene, scene_buffers, s, &views[p / nc], targets, p / nc, channel(p % nc)))
+        .collect()
+}
+
 /// The uniforms of one pass: light `index` (its views and power; the exposure follows the first light) and
-/// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue).
+/// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue; CHANNEL_RGB: color photons).
 pub(crate) fn frame_data(
     scene: &Scene,
     scene_buffers: &SceneBuffers,
