@@ -74,7 +74,7 @@ void main() {
     // both sides of a branch, and an image store is a loop over the lanes for each channel. A gray pass and color
     // photons write all three.
     uint c = u_frame.channel;
-    bool all_channels = c == 0u || c == CHANNEL_RGB;
+    bool all_channels = c == 0u || c >= CHANNEL_RGB;
     bool add = pc.add != 0u;
     vec4 prev = add || !all_channels && c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
     bvec3 mine = all_channels ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));

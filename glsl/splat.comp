@@ -17,20 +17,23 @@
 // sum to 1; splat_collapse.comp adds the levels back into the map. So a record costs at most about (2
 // SPLAT_FINE_RADIUS + 1)² taps, where a 64-texel tent took 129².
 //
-// SPLAT_COLOR (color photons, docs/design.md "Color"): a record's flux is its channels' mean and its tint their
-// ratios to it (splat_tints); each tap adds its share of each channel to that channel's plane of the flux texels.
+// SPLAT_COLOR (docs/design.md "Color"): 1, color photons: a record's flux is its channels' mean and its tint their
+// ratios to it (splat_tints); 2, spectral photons: a record's word is its wavelength, whose RGB (spectrum_rgb) the
+// flux is spread over. Either way each tap adds its share of each channel to that channel's plane of the texels.
 #extension GL_EXT_shader_atomic_float : require
 #include "common/photon_bindings.glsl"
 #include "common/splat_levels.glsl"
+#include "common/spectrum.glsl"
 
 layout(local_size_x = LINEAR_WG) in;
 
-layout(constant_id = SPLAT_COLOR_ID) const bool SPLAT_COLOR = false;
-const uint SPLAT_PLANES = SPLAT_COLOR ? 3u : 1u;
+layout(constant_id = SPLAT_COLOR_ID) const uint SPLAT_COLOR = 0u;
+const bool SPLAT_RGB = SPLAT_COLOR != 0u;
+const uint SPLAT_PLANES = SPLAT_RGB ? 3u : 1u;
 
 // Add v (W) to flux texel k, tinted: each channel's share to its plane (`plane` texels apart).
 void flux_add(uint k, float v, vec3 tint, uint plane) {
-    if (SPLAT_COLOR) {
+    if (SPLAT_RGB) {
         atomicAdd(flux_texels[k], v * tint.r);
         atomicAdd(flux_texels[k + plane], v * tint.g);
         atomicAdd(flux_texels[k + 2u * plane], v * tint.b);
@@ -91,7 +94,10 @@ void main() {
     bool valid = false;
     if (i < draw_cmd.x) {
         s = splats[draw_cmd.z + i];
-        if (SPLAT_COLOR) tint = tint_unpack(splat_tints[draw_cmd.z + i]);
+        if (SPLAT_RGB) {
+            uint w = splat_tints[draw_cmd.z + i];
+            tint = SPLAT_COLOR == 2u ? spectrum_rgb(uintBitsToFloat(w)) : tint_unpack(w);
+        }
         valid = s.shape > 0.0 && all(greaterThanEqual(s.texel, vec2(0.0))) && all(lessThanEqual(s.texel, vec2(size)));
     }
     SplatShape k = splat_shape(s.shape);
@@ -149,7 +155,7 @@ void main() {
             ivec2 q = p - org;
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(SPLAT_TILE)))) {
                 uint b = uint(q.y * SPLAT_TILE + q.x);
-                if (SPLAT_COLOR) {
+                if (SPLAT_RGB) {
                     atomicAdd(s_tile[b], v * tint.r);
                     atomicAdd(s_tile[b + SPLAT_TILE * SPLAT_TILE], v * tint.g);
                     atomicAdd(s_tile[b + 2u * SPLAT_TILE * SPLAT_TILE], v * tint.b);

@@ -36,6 +36,10 @@ layout(constant_id = WAVE_MEDIA_ID) const bool WAVE_MEDIA = false;
 // medium word), absorption takes each channel's share, and a record carries the ray's color (splat_tints). The
 // throughput is the channels' mean weight, so the account and the flux threshold see the mean.
 layout(constant_id = WAVE_COLOR_ID) const bool WAVE_COLOR = false;
+// Spectral photons (some glass disperses; docs/design.md "Color"): each photon traces one wavelength, stratified
+// over the cells (photon_wavelength, glsl/common/spectrum.glsl), at which every IOR and absorption coefficient
+// is taken, and a record carries it (splat_tints) for the splat to turn into RGB.
+layout(constant_id = WAVE_SPECTRAL_ID) const bool WAVE_SPECTRAL = false;
 // The most subgroups a work group can have on this device (LINEAR_WG over its least subgroup size).
 layout(constant_id = WAVE_SUBGROUPS_ID) const uint WAVE_SUBGROUPS = LINEAR_WG;
 
@@ -287,7 +291,7 @@ void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
     float shape = WAVE_DIFFERENTIAL ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
                                     : float(r);
     o.record = GpuSplat(uv * rv.extent.xy, flux * u_frame.light_intensity, shape);
-    o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : 0u;
+    o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : WAVE_SPECTRAL ? floatBitsToUint(ray_nm) : 0u;
     o.rec = true;
     o.rec_flux = flux;
     o.one_event = t.depth == 1u;
@@ -540,6 +544,7 @@ void main() {
     uint depth = 0u;
     if (i < in_count && !(can_abort && aborted)) {
         Traced t = traced_ray(i, stride, in_count, capacity);
+        if (WAVE_SPECTRAL) ray_nm = photon_wavelength(cell_xy(t.cell), cell_level(t.cell));
         phi = t.phi;
         side = t.side;
         depth = t.depth;
@@ -568,7 +573,7 @@ void main() {
     if (rays_ok && o.n_child >= 1u) store_ray(k0, stride, o.c0, side);
     if (rays_ok && o.n_child == 2u) store_ray(k1, stride, o.c1, side);
     if (o.rec && recs_ok) splats[rec_base + rec_slot] = o.record;
-    if (WAVE_COLOR && o.rec && recs_ok) splat_tints[rec_base + rec_slot] = o.rec_tint;
+    if ((WAVE_COLOR || WAVE_SPECTRAL) && o.rec && recs_ok) splat_tints[rec_base + rec_slot] = o.rec_tint;
     add_shares(lid, rays_ok, recs_ok);
     if (lid == 0u && i < in_count) atomicAdd(tstate.rays_traced, min(LINEAR_WG, in_count - i));
 }

@@ -68,8 +68,8 @@ pub struct FrameData {
     pub exact: u32,
     pub queue_rays: u32,
     pub record_capacity: u32,
-    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`: photons that carry
-    /// their color.
+    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`, `CHANNEL_SPECTRAL`:
+    /// photons that carry their color, or their wavelength.
     pub channel: u32,
     /// 1: differential footprints (rays carry their differentials: 3 vec4s each, else 2).
     pub differential: u32,

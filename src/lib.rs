@@ -55,6 +55,7 @@ pub mod metrics;
 pub mod reference;
 pub mod scene;
 pub mod settings;
+pub mod spectrum;
 
 mod bvh;
 mod frame;

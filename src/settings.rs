@@ -363,6 +363,9 @@ pub struct ResolvedSettings {
     /// a compute splat whose resolve reads the texels; elsewhere such a scene takes one pass per channel. Set by
     /// the renderer like `media`.
     pub rgb: bool,
+    /// Spectral photons (with `rgb`; docs/design.md "Color"): some glass disperses, so each photon traces one
+    /// wavelength, stratified over the cells, and its record deposits that wavelength's RGB. Set by the renderer.
+    pub spectral: bool,
 }
 
 impl Default for ResolvedSettings {
@@ -591,6 +594,7 @@ impl Settings {
             binding_limit,
             media: false,
             rgb: false,
+            spectral: false,
         })
     }
 }

@@ -93,6 +93,9 @@ pub const RAY_VEC4S_MEDIUM: u32 = 1;
 /// `FrameData::channel` of a pass whose photons carry their color (red, green and blue at once; glsl/wave.comp
 /// `WAVE_COLOR`): 0 is one gray pass, 1-3 one channel each.
 pub const CHANNEL_RGB: u32 = 4;
+/// `FrameData::channel` of a pass of spectral photons (each a wavelength, its RGB deposited; glsl/wave.comp
+/// `WAVE_SPECTRAL`).
+pub const CHANNEL_SPECTRAL: u32 = 5;
 /// The most volumes with a priority a ray can be inside at once (`GpuRayMedium::inside`): one more is not entered.
 pub const MAX_NESTED: u32 = 4;
 /// A ray's meta word holds its photon's index (counted from the photon buffer's top) in this many low bits, and
@@ -292,8 +295,10 @@ pub const GLASS_MEDIA_ID: u32 = 7;
 /// glsl/wave.comp: the rays carry their color (an RGB tint in their medium word), so that one pass takes a light's
 /// photons through glass that absorbs colors unequally (docs/design.md "Color").
 pub const WAVE_COLOR_ID: u32 = 8;
-/// glsl/splat.comp and glsl/resolve.comp: the records carry their color, and the flux texels hold three planes
-/// (red, green, blue).
+/// glsl/wave.comp: each photon traces one wavelength (some glass disperses; docs/design.md "Color").
+pub const WAVE_SPECTRAL_ID: u32 = 9;
+/// glsl/splat.comp: the records carry their color (1: an RGB tint, 2: a wavelength), and the flux texels hold three
+/// planes (red, green, blue).
 pub const SPLAT_COLOR_ID: u32 = 0;
 /// glsl/resolve.comp: the same.
 pub const RESOLVE_COLOR_ID: u32 = 0;

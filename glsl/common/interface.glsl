@@ -6,6 +6,11 @@
 #define INTERFACE_GLSL
 #include "common/optics.glsl"
 #include "common/bvh.glsl"
+#include "common/spectrum.glsl"
+
+// A spectral photon's wavelength (nm; glsl/wave.comp, WAVE_SPECTRAL), else 0: every IOR and absorption coefficient
+// is then the material's at that wavelength, whatever the channel.
+float ray_nm = 0.0;
 
 // Offset a hit point off its surface along the geometric normal `n` (pointing to the side the new ray leaves
 // on), by a few ulps of the point's coordinates (Waechter and Binder, "A Fast and Robust Method for Avoiding
@@ -93,19 +98,22 @@ bool inst_is_dielectric(uint inst) { return bvh_instance(inst).material.y > 0.5;
 bool inst_is_mirror(uint inst) { return bvh_instance(inst).material.y > 1.5; }
 // The color channel whose IORs this pass traces: 0 for one gray pass, 1..3 for red, green, blue
 // (FrameData.channel). Color photons (CHANNEL_RGB) meet no dispersion: they take the gray pass's paths, and carry
-// their colour in their tint (glsl/wave.comp, WAVE_COLOR). The eye view (glass.comp, GRAY_MATERIALS) names its
+// their colour in their tint (glsl/wave.comp, WAVE_COLOR); spectral photons (CHANNEL_SPECTRAL) take their
+// wavelength's (ray_nm), and wherever they do not say (the traversal's checks) the d line's. The eye view (glass.comp, GRAY_MATERIALS) names its
 // channels itself: its uniforms are a photon pass's, whose channel is not the eye's.
 #ifdef GRAY_MATERIALS
 uint color_channel() { return 0u; }
 #else
-uint color_channel() { return u_frame.channel == CHANNEL_RGB ? 0u : u_frame.channel; }
+uint color_channel() { return u_frame.channel >= CHANNEL_RGB ? 0u : u_frame.channel; }
 #endif
 // A dielectric's IOR and absorption coefficient (1/m) in channel c (0: the gray pass's d-line IOR and mean
 // absorption).
 float inst_ior_in(uint inst, uint c) {
+    if (ray_nm > 0.0) return cauchy_ior(bvh_instance(inst).ior_rgb.xyz, ray_nm);
     return c == 0u ? bvh_instance(inst).material.x : bvh_instance(inst).ior_rgb[c - 1u];
 }
 float inst_sigma_in(uint inst, uint c) {
+    if (ray_nm > 0.0) return sigma_at(bvh_instance(inst).sigma_rgb.xyz, ray_nm);
     return c == 0u ? bvh_instance(inst).material.z : bvh_instance(inst).sigma_rgb[c - 1u];
 }
 // Media (docs/design.md "Media"): a medium is 0 for air (IOR 1, no absorption), else a dielectric instance + 1,

@@ -289,7 +289,8 @@ impl Ctx<'_> {
         rec.flush(self.d);
         rec.ts.mark(rec.cmd, "splat");
         if self.compute_splat {
-            ph.splat_compute(rec.cmd, &b, self.tiled_splat, self.s.rgb)
+            let color = if self.s.spectral { 2 } else { self.s.rgb as u32 };
+            ph.splat_compute(rec.cmd, &b, self.tiled_splat, color)
         } else {
             ph.splat(rec.cmd, &b, &self.r.flux, clear)
         }
@@ -341,7 +342,8 @@ impl Ctx<'_> {
             let rays = WaveRays {
                 differential: self.s.footprint == Footprint::Differential,
                 media: self.s.media,
-                color: self.s.rgb,
+                color: self.s.rgb && !self.s.spectral,
+                spectral: self.s.spectral,
             };
             ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, rays)?;
             step(rec);

@@ -55,27 +55,29 @@ const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 /// glsl/wave.comp's specialization constants (src/shader_consts.rs): `WAVE_PRIMARY`, `WAVE_DIFFERENTIAL`,
 /// `BVH_PAIR_FALLBACK`, `WAVE_MEDIA`, `WAVE_COLOR` and `WAVE_SUBGROUPS` (`subgroups`).
 /// A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
-fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 6] {
+fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 7] {
     [
         (WAVE_PRIMARY_ID, (variant & 1) as u32),
         (WAVE_DIFFERENTIAL_ID, (variant >> 1 & 1) as u32),
         (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32),
         (WAVE_MEDIA_ID, (variant >> 3 & 1) as u32),
         (WAVE_COLOR_ID, (variant >> 4 & 1) as u32),
+        (WAVE_SPECTRAL_ID, (variant >> 5 & 1) as u32),
         (WAVE_SUBGROUPS_ID, subgroups),
     ]
 }
 
 /// A wave pipeline's name in messages and timings: its layout and specialization.
-fn wave_name(layout: &str, spec: &[(u32, u32); 6]) -> String {
-    let [(_, primary), (_, diff), (_, fallback), (_, media), (_, color), _] = *spec;
+fn wave_name(layout: &str, spec: &[(u32, u32); 7]) -> String {
+    let [(_, primary), (_, diff), (_, fallback), (_, media), (_, color), (_, spectral), _] = *spec;
     format!(
-        "transport wave {}{}{}{}{} ({layout} BVH nodes)",
+        "transport wave {}{}{}{}{}{} ({layout} BVH nodes)",
         if primary != 0 { "0" } else { "k > 0" },
         if diff != 0 { ", ray differentials" } else { "" },
         if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
         if media != 0 { ", media" } else { "" },
         if color != 0 { ", color" } else { "" },
+        if spectral != 0 { ", spectral" } else { "" },
     )
 }
 
@@ -88,6 +90,8 @@ pub struct WaveRays {
     pub media: bool,
     /// The ray's color, in its medium word (color photons; only with `media`).
     pub color: bool,
+    /// The ray's wavelength, its photon's (spectral photons).
+    pub spectral: bool,
 }
 
 /// The most subgroups a work group of `LINEAR_WG` invocations can have on a device whose least subgroup size is
@@ -108,24 +112,25 @@ fn wave_variants(
     spv: &'static shaders::Spv,
     binds: &[BindKind],
     push: u32,
-) -> [LazyPipeline; 32] {
+) -> [LazyPipeline; 64] {
     std::array::from_fn(|k| {
         let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
         LazyPipeline::compute_specialized(device, &wave_name(layout, &spec), spv.words(), binds, push, &spec)
     })
 }
 
-/// A compute splat's pipelines: for gray records, then for colored ones (`SPLAT_COLOR`).
+/// A compute splat's pipelines, per `SPLAT_COLOR`: gray records, records with an RGB tint, records with a
+/// wavelength.
 fn splat_variants(
     device: &Arc<Device>,
     name: &str,
     spv: &'static [u32],
     binds: &[BindKind],
     push: u32,
-) -> [LazyPipeline; 2] {
-    [false, true].map(|color| {
-        let name = if color { format!("{name}, color") } else { name.to_string() };
-        LazyPipeline::compute_specialized(device, &name, spv, binds, push, &[(SPLAT_COLOR_ID, color as u32)])
+) -> [LazyPipeline; 3] {
+    [0u32, 1, 2].map(|color| {
+        let name = format!("{name}{}", ["", ", color", ", spectral"][color as usize]);
+        LazyPipeline::compute_specialized(device, &name, spv, binds, push, &[(SPLAT_COLOR_ID, color)])
     })
 }
 
@@ -136,6 +141,7 @@ fn wave_variant(primary: bool, rays: WaveRays, pair_fallback: bool) -> usize {
         | (pair_fallback as usize) << 2
         | (rays.media as usize) << 3
         | (rays.color as usize) << 4
+        | (rays.spectral as usize) << 5
 }
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
@@ -253,14 +259,15 @@ pub struct PhotonPasses {
     trace: LazyPipeline,
     /// Exact transport's waves, per BVH layout (pair, single, threaded, wide) and per specialization
     /// ([`wave_spec`]): wave 0 or a bounce wave, with or without ray differentials, with or without the wide walk's
-    /// pair fallback, with or without the rays' media, with or without their color.
-    waves: [[LazyPipeline; 32]; 4],
+    /// pair fallback, with or without the rays' media, their color, their wavelength.
+    waves: [[LazyPipeline; 64]; 4],
     transport: LazyPipeline,
     splat: LazyPipeline,
-    /// None when the device has no float atomics on buffers. Gray records, then colored ones (SPLAT_COLOR).
-    splat_compute: Option<[LazyPipeline; 2]>,
+    /// None when the device has no float atomics on buffers. Per `SPLAT_COLOR`: gray records, records with an RGB
+    /// tint, records with a wavelength.
+    splat_compute: Option<[LazyPipeline; 3]>,
     /// The same with a work group's taps gathered in shared memory first (SPLAT_TILED).
-    splat_compute_tiled: Option<[LazyPipeline; 2]>,
+    splat_compute_tiled: Option<[LazyPipeline; 3]>,
     /// Adds a coarse level of the flux texels into the one below it (glsl/splat_collapse.comp).
     splat_collapse: LazyPipeline,
 }
@@ -545,8 +552,9 @@ impl PhotonPasses {
 
     /// Splat the records into the flux texels with a compute pass dispatched indirectly (float atomics). Settings
     /// resolve `--splat` to raster on a device without them, so the pipeline exists whenever this is called.
-    /// `color`: the records carry their color, into the texels' three planes.
-    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool, color: bool) -> VkResult<()> {
+    /// `color` (`SPLAT_COLOR`): 0 gray records; 1 or 2, records with their color (an RGB tint, a wavelength), into
+    /// the texels' three planes.
+    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool, color: u32) -> VkResult<()> {
         let p = if tiled { &self.splat_compute_tiled } else { &self.splat_compute };
         let Some(p) = p.as_ref() else { return Ok(()) };
         let p = p[color as usize].get()?;

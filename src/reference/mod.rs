@@ -517,13 +517,8 @@ fn run_chunks(
             for d in &out.deposits {
                 let c = tracer.lights[d.light as usize].color;
                 let px = &mut image[d.pixel as usize];
-                if d.channel < 3 {
-                    let k = d.channel as usize;
-                    px[k] += 3.0 * d.e * c[k];
-                } else {
-                    for k in 0..3 {
-                        px[k] += d.e * c[k];
-                    }
+                for k in 0..3 {
+                    px[k] += d.e * d.rgb[k] as f64 * c[k];
                 }
             }
             if let Some(p) = profile.as_mut() {

@@ -134,8 +134,9 @@ impl Tally {
 pub(crate) struct Deposit {
     pub pixel: u32,
     pub light: u32,
-    /// 0, 1, 2: the photon's color channel (it carries 3 times its flux there); 3: every channel.
-    pub channel: u8,
+    /// What it deposits in each channel per unit of `e` (docs/design.md "Color"): 1 in each for a gray photon, 3
+    /// in its own channel for a channel's, its wavelength's RGB for a spectral one.
+    pub rgb: [f32; 3],
     pub e: f64,
 }
 
@@ -218,9 +219,46 @@ pub(crate) struct Tracer<'a> {
     pub outside: Vec<Option<usize>>,
     /// Each object's medium priority (`Object::priority`; 0: an explicit interface).
     pub priority: Vec<u32>,
-    /// Some glass disperses or absorbs colors unequally: each photon carries one color channel, drawn at
-    /// random, and its caustic lands in that channel only, with 3 times its flux (docs/design.md "Color").
-    pub spectral: bool,
+    /// How photons carry color (docs/design.md "Color").
+    pub color: PhotonColor,
+}
+
+/// How the reference's photons carry color.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhotonColor {
+    /// No glass depends on it: every photon lands in every channel.
+    Gray,
+    /// Some medium absorbs colors unequally: each photon traces one channel, drawn at random, and its caustic lands
+    /// in that channel only, with 3 times its flux.
+    Channels,
+    /// Some glass disperses: each photon traces one wavelength, drawn uniformly over the range, and its caustic
+    /// lands as that wavelength's RGB (`spectrum_rgb`), as the GPU's spectral photons do.
+    Spectral,
+}
+
+/// The light one photon traces: a color channel's IORs and absorption (1: the d line, for gray), or a wavelength's.
+#[derive(Clone, Copy, Debug)]
+enum Band {
+    Channel(usize),
+    Wavelength(f64),
+}
+
+impl Band {
+    /// An IOR given at the C, d and F lines, in this band.
+    fn ior(self, n: &[f64; 3]) -> f64 {
+        match self {
+            Band::Channel(c) => n[c],
+            Band::Wavelength(nm) => crate::spectrum::cauchy_ior(*n, nm),
+        }
+    }
+
+    /// An absorption coefficient given per channel, in this band.
+    fn sigma(self, s: &[f64; 3]) -> f64 {
+        match self {
+            Band::Channel(c) => s[c],
+            Band::Wavelength(nm) => crate::spectrum::sigma_at(*s, nm),
+        }
+    }
 }
 
 /// A dielectric hit as the medium rules see it: whether it is an interface at all (`through`: no), the IORs behind
@@ -328,7 +366,11 @@ impl Tracer<'_> {
             // (A scene built in code may name no dielectric: the renderer refuses it, the reference takes air.)
             outside: (0..scene.objects.len()).map(|i| scene.outside_of(i)).collect(),
             priority: scene.objects.iter().map(|o| if o.is_mirror() { 0 } else { o.priority }).collect(),
-            spectral: scene.color_channels() == 3,
+            color: match (scene.disperses(), scene.color_channels()) {
+                (true, _) => PhotonColor::Spectral,
+                (false, 3) => PhotonColor::Channels,
+                _ => PhotonColor::Gray,
+            },
         }
     }
 
@@ -354,9 +396,19 @@ impl Tracer<'_> {
             return;
         };
         let phi = light.phi;
-        // The color channel this photon traces (3: all of them, for a scene without color).
-        let channel = if self.spectral { ((rng.next_f64() * 3.0) as usize).min(2) } else { 3 };
-        let c = if channel == 3 { 1 } else { channel };
+        // The band this photon traces, and what its caustic deposits per channel.
+        let (band, rgb) = match self.color {
+            PhotonColor::Gray => (Band::Channel(1), [1.0; 3]),
+            PhotonColor::Channels => {
+                let k = ((rng.next_f64() * 3.0) as usize).min(2);
+                (Band::Channel(k), std::array::from_fn(|c| if c == k { 3.0 } else { 0.0 }))
+            }
+            PhotonColor::Spectral => {
+                use crate::spectrum::{spectrum_rgb, SPECTRUM_MAX_NM, SPECTRUM_MIN_NM};
+                let nm = SPECTRUM_MIN_NM + (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM) * rng.next_f64();
+                (Band::Wavelength(nm), spectrum_rgb(nm).map(|x| x as f32))
+            }
+        };
         t.photons_traced += 1;
         t.flux_emitted += phi;
         // Surfaces met: refractions, reflections, and volumes' surfaces passed through (no interface there), which
@@ -373,7 +425,7 @@ impl Tracer<'_> {
                 t.flux_escaped += phi;
                 return;
             };
-            let sigma = medium.map_or(0.0, |m| self.absorption[m][c]);
+            let sigma = medium.map_or(0.0, |m| band.sigma(&self.absorption[m]));
             if sigma > 0.0 {
                 // The segment that ends here ran through an absorbing medium: Beer–Lambert, by Russian roulette.
                 if rng.next_f64() >= (-sigma * (hit.pos - o).length()).exp() {
@@ -384,8 +436,8 @@ impl Tracer<'_> {
             }
             if hit.receiver {
                 // Light that met no glass is the same in every channel.
-                let ch = if refr + refl == 0 { 3 } else { channel };
-                self.deposit(li, &hit, d, refr, refl, phi, ch, out);
+                let rgb = if refr + refl == 0 { [1.0; 3] } else { rgb };
+                self.deposit(li, &hit, d, refr, refl, phi, rgb, out);
                 return;
             }
             if refr + refl + through >= BOUNCE_CAP {
@@ -394,7 +446,7 @@ impl Tracer<'_> {
                 return;
             }
             let entering = d.dot(hit.ng) < 0.0;
-            let x = self.crossing(hit.object as usize, entering, medium, &nested, c);
+            let x = self.crossing(hit.object as usize, entering, medium, &nested, band);
             let toward_incident = if entering { hit.ng } else { -hit.ng };
             if x.through {
                 // A volume's surface inside one of higher priority: no interface, the photon goes on beyond it.
@@ -435,14 +487,14 @@ impl Tracer<'_> {
 
     /// What a photon in `medium`, inside the volumes `nested`, meets at a hit on object `k` (glsl/common/interface.glsl
     /// `crossing_at`, docs/design.md "Media").
-    fn crossing(&self, k: usize, entering: bool, medium: Option<usize>, nested: &[usize], c: usize) -> Crossing {
-        let ior = |m: Option<usize>| m.map_or(1.0, |j| self.ior[j][c]);
+    fn crossing(&self, k: usize, entering: bool, medium: Option<usize>, nested: &[usize], band: Band) -> Crossing {
+        let ior = |m: Option<usize>| m.map_or(1.0, |j| band.ior(&self.ior[j]));
         if self.priority[k] == 0 {
             let outside = self.outside[k];
             let medium = if entering { Some(k) } else { outside };
             return Crossing {
                 through: false,
-                n_in: self.ior[k][c],
+                n_in: band.ior(&self.ior[k]),
                 n_out: ior(outside),
                 medium,
                 nested: nested.to_vec(),
@@ -470,7 +522,7 @@ impl Tracer<'_> {
         refr: u32,
         refl: u32,
         phi: f64,
-        channel: usize,
+        rgb: [f32; 3],
         out: &mut ChunkOut,
     ) {
         let t = &mut out.tally;
@@ -497,12 +549,7 @@ impl Tracer<'_> {
             t.photons_in_image += 1;
             t.flux_in_image += phi;
             t.image_flux += phi * cos;
-            out.deposits.push(Deposit {
-                pixel,
-                light: li as u32,
-                channel: channel as u8,
-                e: phi * cos / self.binner.pixel_area,
-            });
+            out.deposits.push(Deposit { pixel, light: li as u32, rgb, e: phi * cos / self.binner.pixel_area });
         }
     }
 }

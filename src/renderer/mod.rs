@@ -546,15 +546,16 @@ impl Renderer {
     pub fn scene_settings(&self) -> ResolvedSettings {
         let mut s = self.config.clone();
         s.media = s.transport == Transport::Exact && self.scene.has_media();
-        // Color photons: the channels take the same paths (no dispersion), the rays carry their medium, the
-        // compute splat adds the records' colors and the resolve reads its three planes as texels.
+        // Photons carry their color where the compute splat adds the records' colors and the resolve reads its
+        // three planes as texels: spectral photons where some glass disperses, else color photons, whose tint
+        // rides in their medium word, where some medium absorbs colors unequally.
         let planes = 3 * crate::targets::splat_texels(s.caustic_res);
-        s.rgb = s.media
-            && self.scene.color_channels() == 3
-            && !self.scene.disperses()
+        let capable = s.transport == Transport::Exact
             && s.splat.is_compute()
             && crate::passes::flux_format(&self.device) == ash::vk::Format::R32_SFLOAT
             && planes <= self.device.info.limits.max_texel_buffer_elements as u64;
+        s.spectral = capable && self.scene.disperses();
+        s.rgb = capable && self.scene.color_channels() == 3 && (s.spectral || s.media);
         s
     }
 

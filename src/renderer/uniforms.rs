@@ -22,9 +22,10 @@ pub(crate) fn pass_data(
     nc: usize,
 ) -> Vec<FrameData> {
     // One gray pass, one pass of color photons, or a pass per channel.
-    let channel = |c: usize| match (s.rgb, nc) {
-        (true, _) => CHANNEL_RGB,
-        (false, 1) => 0,
+    let channel = |c: usize| match (s.spectral, s.rgb, nc) {
+        (true, ..) => CHANNEL_SPECTRAL,
+        (_, true, _) => CHANNEL_RGB,
+        (_, _, 1) => 0,
         _ => c as u32 + 1,
     };
     (0..views.len() * nc)
@@ -33,7 +34,8 @@ pub(crate) fn pass_data(
 }
 
 /// The uniforms of one pass: light `index` (its views and power; the exposure follows the first light) and
-/// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue; CHANNEL_RGB: color photons).
+/// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue; CHANNEL_RGB: color photons; CHANNEL_SPECTRAL:
+/// spectral photons).
 pub(crate) fn frame_data(
     scene: &Scene,
     scene_buffers: &SceneBuffers,

@@ -159,8 +159,8 @@ pub(super) fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
         .iter()
         .map(|rep| {
             let l = &r.scene().lights[rep.light];
-            // CHANNEL_RGB: color photons, all three channels in one pass.
-            let channel = ["gray", "red", "green", "blue", "rgb"][rep.channel.min(4) as usize];
+            // CHANNEL_RGB, CHANNEL_SPECTRAL: color or spectral photons, all three channels in one pass.
+            let channel = ["gray", "red", "green", "blue", "rgb", "spectral"][rep.channel.min(5) as usize];
             let mut row = json!({
                 "light": rep.light,
                 "channel": channel,
