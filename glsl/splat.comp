@@ -47,6 +47,17 @@ void flux_add(uint k, float v, vec3 tint, uint plane) {
 shared float s_tile[SPLAT_TILE * SPLAT_TILE * SPLAT_PLANES];
 shared int s_lo_x, s_lo_y, s_hi_x, s_hi_y;
 shared ivec2 s_first;
+
+// Add v to window texel b, tinted, as flux_add does to the map.
+void tile_add(uint b, float v, vec3 tint) {
+    if (SPLAT_RGB) {
+        atomicAdd(s_tile[b], v * tint.r);
+        atomicAdd(s_tile[b + SPLAT_TILE * SPLAT_TILE], v * tint.g);
+        atomicAdd(s_tile[b + 2u * SPLAT_TILE * SPLAT_TILE], v * tint.b);
+    } else {
+        atomicAdd(s_tile[b], v);
+    }
+}
 #endif
 
 // The coarse level a record of the given extent (half-widths, texels) splats at: the first where both are at most
@@ -154,14 +165,7 @@ void main() {
 #ifdef SPLAT_TILED
             ivec2 q = p - org;
             if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(SPLAT_TILE)))) {
-                uint b = uint(q.y * SPLAT_TILE + q.x);
-                if (SPLAT_RGB) {
-                    atomicAdd(s_tile[b], v * tint.r);
-                    atomicAdd(s_tile[b + SPLAT_TILE * SPLAT_TILE], v * tint.g);
-                    atomicAdd(s_tile[b + 2u * SPLAT_TILE * SPLAT_TILE], v * tint.b);
-                } else {
-                    atomicAdd(s_tile[b], v);
-                }
+                tile_add(uint(q.y * SPLAT_TILE + q.x), v, tint);
                 continue;
             }
 #endif
@@ -172,12 +176,14 @@ void main() {
     barrier();
     ivec2 wsz = whi - wlo + 1;
     uint n = uint(max(wsz.x, 0) * max(wsz.y, 0));
-    for (uint k = t; k < n * SPLAT_PLANES; k += LINEAR_WG) {
-        uint j = k % n, c = k / n;
-        ivec2 p = wlo + ivec2(int(j) % wsz.x, int(j) / wsz.x);
-        ivec2 q = p - org;
-        float v = s_tile[c * SPLAT_TILE * SPLAT_TILE + uint(q.y * SPLAT_TILE + q.x)];
-        if (v != 0.0) atomicAdd(flux_texels[c * plane + uint(p.y * size.x + p.x)], v);
+    // Plane by plane (a constant count: one loop for gray records).
+    for (uint c = 0u; c < SPLAT_PLANES; c++) {
+        for (uint k = t; k < n; k += LINEAR_WG) {
+            ivec2 p = wlo + ivec2(int(k) % wsz.x, int(k) / wsz.x);
+            ivec2 q = p - org;
+            float v = s_tile[c * SPLAT_TILE * SPLAT_TILE + uint(q.y * SPLAT_TILE + q.x)];
+            if (v != 0.0) atomicAdd(flux_texels[c * plane + uint(p.y * size.x + p.x)], v);
+        }
     }
 #endif
 }

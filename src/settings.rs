@@ -357,15 +357,37 @@ pub struct ResolvedSettings {
     /// medium. The renderer sets it from its scene ([`Renderer::scene_settings`](crate::Renderer::scene_settings));
     /// [`Settings::resolve`] leaves it off.
     pub media: bool,
-    /// The photons carry their color (docs/design.md "Color"): some medium absorbs colors unequally and no glass
-    /// disperses, so one pass per light takes red, green and blue through the same paths, each ray with its RGB
-    /// tint, each record with its color, into three planes of flux texels. It needs exact transport with media and
-    /// a compute splat whose resolve reads the texels; elsewhere such a scene takes one pass per channel. Set by
-    /// the renderer like `media`.
-    pub rgb: bool,
-    /// Spectral photons (with `rgb`; docs/design.md "Color"): some glass disperses, so each photon traces one
-    /// wavelength, stratified over the cells, and its record deposits that wavelength's RGB. Set by the renderer.
-    pub spectral: bool,
+    /// What the photons carry of their color (docs/design.md "Color"). Set by the renderer like `media`.
+    pub carried_color: CarriedColor,
+}
+
+/// What a frame's photons carry of their color (docs/design.md "Color"). Carried color takes one pass per light
+/// through exact transport and a compute splat whose resolve reads the flux texels, in three planes; elsewhere a
+/// scene whose light depends on color takes one pass per channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CarriedColor {
+    /// None: one gray pass, or one pass per color channel.
+    #[default]
+    None,
+    /// Color photons: some medium absorbs colors unequally and no glass disperses, so red, green and blue take the
+    /// same paths, each ray with its RGB tint (in its medium word) and each record with its color.
+    Tint,
+    /// Spectral photons: some glass disperses, so each photon traces one wavelength, stratified over the cells, and
+    /// its record deposits that wavelength's RGB.
+    Wavelength,
+}
+
+impl CarriedColor {
+    /// Whether the photons carry color: the records carry it and the flux texels hold three planes.
+    pub fn carried(self) -> bool {
+        self != CarriedColor::None
+    }
+
+    /// glsl/splat.comp's `SPLAT_COLOR`: 0 gray records, 1 records with an RGB tint, 2 with a wavelength.
+    pub fn splat_code(self) -> u32 {
+        self as u32
+    }
 }
 
 impl Default for ResolvedSettings {
@@ -593,8 +615,7 @@ impl Settings {
             debug_min_level: t.debug_min_level,
             binding_limit,
             media: false,
-            rgb: false,
-            spectral: false,
+            carried_color: CarriedColor::None,
         })
     }
 }

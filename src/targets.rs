@@ -95,7 +95,7 @@ pub struct PhotonBuffers {
     pub debug: Buffer,
     /// One splat record (16 bytes) per photon-buffer entry.
     pub splats: Buffer,
-    /// Color photons (`ResolvedSettings::rgb`): each record's color (4 bytes).
+    /// Photons that carry their color (`ResolvedSettings::carried_color`): each record's color or wavelength (4 bytes).
     pub splat_tints: Buffer,
     /// Exact transport: the wave state and energy account, and two ray queues (32 bytes a ray).
     pub transport: Buffer,
@@ -120,6 +120,14 @@ pub struct Targets {
     pub height: u32,
     /// Eye-view supersampling factor per side (the eye buffers are `aa` times the output size).
     pub aa: u32,
+}
+
+impl PhotonBuffers {
+    /// The splat records and their colors: whatever writes or reads one does the other (the colors only where the
+    /// photons carry them).
+    pub fn records(&self) -> [&Buffer; 2] {
+        [&self.splats, &self.splat_tints]
+    }
 }
 
 fn ext(w: u32, h: u32) -> vk::Extent2D {
@@ -170,7 +178,7 @@ impl Targets {
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
-        let tints = if s.rgb { capacity } else { 4 };
+        let tints = if s.carried_color.carried() { capacity } else { 4 };
         let mips = s.gbuffer_level() + 1;
         let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_side(), mips);
         let debug_bytes = 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
@@ -334,7 +342,7 @@ fn flux_texels(device: &Arc<Device>, s: &Settings) -> VkResult<Buffer> {
 
 /// Planes of the flux texels: red, green and blue where the photons carry their color, else one.
 pub fn flux_planes(s: &Settings) -> u64 {
-    if s.rgb {
+    if s.carried_color.carried() {
         3
     } else {
         1

@@ -99,8 +99,9 @@ bool inst_is_mirror(uint inst) { return bvh_instance(inst).material.y > 1.5; }
 // The color channel whose IORs this pass traces: 0 for one gray pass, 1..3 for red, green, blue
 // (FrameData.channel). Color photons (CHANNEL_RGB) meet no dispersion: they take the gray pass's paths, and carry
 // their colour in their tint (glsl/wave.comp, WAVE_COLOR); spectral photons (CHANNEL_SPECTRAL) take their
-// wavelength's (ray_nm), and wherever they do not say (the traversal's checks) the d line's. The eye view (glass.comp, GRAY_MATERIALS) names its
-// channels itself: its uniforms are a photon pass's, whose channel is not the eye's.
+// wavelength's (ray_nm), and wherever they do not say (the traversal's checks) the d line's. The eye view
+// (glass.comp, GRAY_MATERIALS) names its channels itself: its uniforms are a photon pass's, whose channel is not
+// the eye's.
 #ifdef GRAY_MATERIALS
 uint color_channel() { return 0u; }
 #else

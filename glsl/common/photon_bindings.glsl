@@ -153,7 +153,8 @@ layout(std430, set = 0, binding = PB_BVH_INSTANCES) readonly buffer BvhInstances
 // The compute splat's target: the caustic flux map as one float per texel (row-major), added to atomically, then
 // copied into the flux image that the resolve reads.
 layout(std430, set = 0, binding = PB_FLUX_TEXELS) buffer FluxBuf { float flux_texels[]; };
-// Color photons: each splat record's color (tint_pack, glsl/common/types.glsl), at its record's index.
+// Photons that carry their color: each splat record's color (tint_pack, glsl/common/types.glsl) or wavelength (its
+// float bits), at its record's index.
 layout(std430, set = 0, binding = PB_SPLAT_TINTS) buffer SplatTintBuf { uint splat_tints[]; };
 // The threaded layout (src/bvh/): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
 layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { SingleNode bvh_nodes_threaded[]; };

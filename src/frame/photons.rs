@@ -5,7 +5,7 @@ use super::{Ctx, Rec};
 use crate::bvh::BvhLayout;
 use crate::gpu_types::{TransportState, TraversalState};
 use crate::passes::photons::{init_mode, stats_mode, PhotonBindings, TraverseShape, WaveRays};
-use crate::settings::{Driven, Footprint, Method, Transport};
+use crate::settings::{CarriedColor, Driven, Footprint, Method, Transport};
 use crate::shaders::consts::*;
 use crate::targets::{Targets, CANARY, PHOTON_GUARD};
 use crate::vk::{Access, VkResult};
@@ -181,8 +181,9 @@ impl Ctx<'_> {
         }
         rec.sync.buffer(&t.photon.debug, &[Access::ComputeWrite]);
         rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
-        rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
-        rec.sync.buffer(&t.photon.splat_tints, &[Access::ComputeWrite]);
+        for buf in t.photon.records() {
+            rec.sync.buffer(buf, &[Access::ComputeWrite]);
+        }
         rec.sync.buffer(&t.photon.coverage, &[Access::ComputeRead, Access::ComputeTexels]);
         if self.compute_splat {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
@@ -260,8 +261,9 @@ impl Ctx<'_> {
         } else {
             rec.sync.image(&self.r.flux, &[Access::ColorAttachment]);
         }
-        rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
-        rec.sync.buffer(&t.photon.splat_tints, &[Access::ComputeWrite]);
+        for buf in t.photon.records() {
+            rec.sync.buffer(buf, &[Access::ComputeWrite]);
+        }
         for buf in [&t.photon.photons, &t.photon.state, &t.photon.indirect] {
             rec.sync.buffer(buf, &TRAVERSAL);
         }
@@ -282,15 +284,15 @@ impl Ctx<'_> {
             ph.trace(rec.cmd, &b, self.debug())?;
         }
         let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
-        rec.sync.buffer(&t.photon.splats, &[reader]);
-        rec.sync.buffer(&t.photon.splat_tints, &[reader]);
+        for buf in t.photon.records() {
+            rec.sync.buffer(buf, &[reader]);
+        }
         // The compute splat reads its record range from the draw command as well as dispatching from it.
         rec.sync.buffer(&t.photon.indirect, &[Access::IndirectRead, Access::ComputeRead]);
         rec.flush(self.d);
         rec.ts.mark(rec.cmd, "splat");
         if self.compute_splat {
-            let color = if self.s.spectral { 2 } else { self.s.rgb as u32 };
-            ph.splat_compute(rec.cmd, &b, self.tiled_splat, color)
+            ph.splat_compute(rec.cmd, &b, self.tiled_splat, self.s.carried_color)
         } else {
             ph.splat(rec.cmd, &b, &self.r.flux, clear)
         }
@@ -323,8 +325,9 @@ impl Ctx<'_> {
             for buf in [&t.photon.transport, &t.photon.indirect, &t.photon.state] {
                 rec.sync.buffer(buf, &TRAVERSAL);
             }
-            rec.sync.buffer(&t.photon.splats, &[Access::ComputeWrite]);
-            rec.sync.buffer(&t.photon.splat_tints, &[Access::ComputeWrite]);
+            for buf in t.photon.records() {
+                rec.sync.buffer(buf, &[Access::ComputeWrite]);
+            }
             for q in &t.photon.queues {
                 rec.sync.buffer(q, &RAY_QUEUE);
             }
@@ -342,8 +345,8 @@ impl Ctx<'_> {
             let rays = WaveRays {
                 differential: self.s.footprint == Footprint::Differential,
                 media: self.s.media,
-                color: self.s.rgb && !self.s.spectral,
-                spectral: self.s.spectral,
+                color: self.s.carried_color == CarriedColor::Tint,
+                spectral: self.s.carried_color == CarriedColor::Wavelength,
             };
             ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, rays)?;
             step(rec);

@@ -114,7 +114,7 @@ impl Ctx<'_> {
         }
         let flux = if self.resolve_texels {
             rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeTexels]);
-            if self.s.rgb {
+            if self.s.carried_color.carried() {
                 FluxSource::ColorTexels(&self.r.flux_texels)
             } else {
                 FluxSource::Texels(&self.r.flux_texels)

@@ -552,12 +552,17 @@ impl PhotonPasses {
 
     /// Splat the records into the flux texels with a compute pass dispatched indirectly (float atomics). Settings
     /// resolve `--splat` to raster on a device without them, so the pipeline exists whenever this is called.
-    /// `color` (`SPLAT_COLOR`): 0 gray records; 1 or 2, records with their color (an RGB tint, a wavelength), into
-    /// the texels' three planes.
-    pub fn splat_compute(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, tiled: bool, color: u32) -> VkResult<()> {
+    /// `color`: what the records carry of their color (`SPLAT_COLOR`), into the texels' three planes.
+    pub fn splat_compute(
+        &self,
+        cmd: vk::CommandBuffer,
+        b: &PhotonBindings,
+        tiled: bool,
+        color: crate::settings::CarriedColor,
+    ) -> VkResult<()> {
         let p = if tiled { &self.splat_compute_tiled } else { &self.splat_compute };
         let Some(p) = p.as_ref() else { return Ok(()) };
-        let p = p[color as usize].get()?;
+        let p = p[color.splat_code() as usize].get()?;
         p.bind(cmd, &b.binds());
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
         Ok(())

@@ -16,7 +16,7 @@ pub(crate) struct TargetsKey {
     pub ray_queue_capacity: u32,
     pub passes: usize,
     pub ray_bytes: u32,
-    pub rgb: bool,
+    pub carried_color: bool,
     pub frames_in_flight: usize,
 }
 
@@ -30,7 +30,7 @@ impl TargetsKey {
             ray_queue_capacity: s.ray_queue_capacity(),
             passes,
             ray_bytes: s.ray_bytes(),
-            rgb: s.rgb,
+            carried_color: s.carried_color.carried(),
             frames_in_flight,
         }
     }

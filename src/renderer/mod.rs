@@ -27,7 +27,7 @@ use crate::passes::Passes;
 use crate::scene::view::CameraView;
 use crate::scene::{Camera, Material, Scene, MAX_LIGHTS};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{ResolvedSettings, Settings, Transport};
+use crate::settings::{CarriedColor, ResolvedSettings, Settings, Transport};
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, SubmitSync, Tracker};
 use ash::vk;
@@ -554,15 +554,18 @@ impl Renderer {
             && s.splat.is_compute()
             && crate::passes::flux_format(&self.device) == ash::vk::Format::R32_SFLOAT
             && planes <= self.device.info.limits.max_texel_buffer_elements as u64;
-        s.spectral = capable && self.scene.disperses();
-        s.rgb = capable && self.scene.color_channels() == 3 && (s.spectral || s.media);
+        s.carried_color = match (capable, self.scene.disperses(), self.scene.color_channels() == 3 && s.media) {
+            (true, true, _) => CarriedColor::Wavelength,
+            (true, false, true) => CarriedColor::Tint,
+            _ => CarriedColor::None,
+        };
         s
     }
 
     /// Photon passes per light under the settings `s`: 3 (red, green, blue) where colour changes the paths, or
     /// the photons cannot carry it, 1 otherwise (gray, or color photons).
     fn color_passes(&self, s: &ResolvedSettings) -> usize {
-        if s.rgb {
+        if s.carried_color.carried() {
             1
         } else {
             self.scene.color_channels()

@@ -7,7 +7,7 @@ use crate::scene::view::{CameraView, LightView};
 use crate::scene::Projection;
 use crate::scene::{LightKind, Material, Scene};
 use crate::scene_gpu::SceneBuffers;
-use crate::settings::{Footprint, ResolvedSettings, Transport};
+use crate::settings::{CarriedColor, Footprint, ResolvedSettings, Transport};
 use crate::shaders::consts::*;
 use crate::targets::Targets;
 use glam::Vec3;
@@ -22,10 +22,10 @@ pub(crate) fn pass_data(
     nc: usize,
 ) -> Vec<FrameData> {
     // One gray pass, one pass of color photons, or a pass per channel.
-    let channel = |c: usize| match (s.spectral, s.rgb, nc) {
-        (true, ..) => CHANNEL_SPECTRAL,
-        (_, true, _) => CHANNEL_RGB,
-        (_, _, 1) => 0,
+    let channel = |c: usize| match (s.carried_color, nc) {
+        (CarriedColor::Wavelength, _) => CHANNEL_SPECTRAL,
+        (CarriedColor::Tint, _) => CHANNEL_RGB,
+        (CarriedColor::None, 1) => 0,
         _ => c as u32 + 1,
     };
     (0..views.len() * nc)
