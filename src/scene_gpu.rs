@@ -258,6 +258,9 @@ pub struct BvhBuffers {
     pub refit_nodes: Buffer,
     pub refit_order: Buffer,
     pub refit_boxes: Buffer,
+    /// The deforming meshes' wide nodes by height, and a box scratch for them (two vec4 per wide node).
+    pub wide_refit_order: Buffer,
+    pub wide_refit_boxes: Buffer,
     pub rest_tris: Buffer,
     pub rest_normals: Buffer,
     /// Per rest triangle, its vertices' indices in its mesh (three u32).
@@ -333,6 +336,8 @@ impl BvhBuffers {
             refit_nodes: upload_buffer(device, recorder, "refit nodes (none)", &zeros, storage)?,
             refit_order: upload_buffer(device, recorder, "refit order (none)", &zeros, storage)?,
             refit_boxes: upload_buffer(device, recorder, "refit boxes (none)", &zeros, storage)?,
+            wide_refit_order: upload_buffer(device, recorder, "wide refit order (none)", &zeros, storage)?,
+            wide_refit_boxes: upload_buffer(device, recorder, "wide refit boxes (none)", &zeros, storage)?,
             rest_tris: upload_buffer(device, recorder, "rest triangles (none)", &zeros, storage)?,
             rest_normals: upload_buffer(device, recorder, "rest normals (none)", &zeros, storage)?,
             rest_corners: upload_buffer(device, recorder, "rest corners (none)", &zeros, storage)?,
@@ -417,6 +422,10 @@ impl BvhBuffers {
                 self.refit_order = upload_buffer(device, recorder, "refit order", &bvh.refit_order, storage)?;
                 let boxes = vec![[0f32; 4]; 2 * n];
                 self.refit_boxes = upload_buffer(device, recorder, "refit boxes", &boxes, storage)?;
+                let order = &bvh.wide_refit_order;
+                self.wide_refit_order = upload_buffer(device, recorder, "wide refit order", order, storage)?;
+                let boxes = vec![[0f32; 4]; 2 * bvh.wide_nodes.len()];
+                self.wide_refit_boxes = upload_buffer(device, recorder, "wide refit boxes", &boxes, storage)?;
                 self.rest_tris = upload_buffer(device, recorder, "rest triangles", &bvh.rest_tris, storage)?;
                 self.rest_normals = upload_buffer(device, recorder, "rest normals", &bvh.rest_normals, storage)?;
                 self.rest_corners = upload_buffer(device, recorder, "rest corners", &bvh.rest_corners, storage)?;
@@ -465,12 +474,6 @@ impl BvhBuffers {
 }
 
 impl BvhBuffers {
-    /// Whether some instance deforms (water): it is refit every frame and has no wide nodes, so the wide walk
-    /// takes its pair nodes.
-    pub fn deforms(&self) -> bool {
-        self.host.as_ref().is_some_and(|h| !h.refit_order.is_empty())
-    }
-
     /// Move object `i` (once the BVH is built): its instance record on the host, which the frame's scene update
     /// then writes to the GPU. Returns whether there is a BVH to update.
     pub(crate) fn set_transform(&mut self, i: usize, world_from_object: Mat4) -> bool {
@@ -505,7 +508,26 @@ impl BvhBuffers {
         if self.uploaded[1] {
             b.single_nodes = download_buffer(device, recorder, &self.single_nodes, b.single_nodes.len())?;
         }
+        if self.uploaded[3] {
+            b.wide_nodes = download_buffer(device, recorder, &self.wide_nodes, b.wide_nodes.len())?;
+        }
         Ok(Some(b))
+    }
+
+    #[cfg(test)]
+    /// The wide triangle list as the GPU holds it now (`SceneBvh::wide_triangle_records`' layout), when uploaded.
+    pub(crate) fn download_wide_records(
+        &self,
+        device: &Arc<Device>,
+        recorder: &mut Recorder,
+    ) -> VkResult<Option<Vec<[u32; 4]>>> {
+        use crate::vk::cmd::download_buffer;
+        match &self.host {
+            Some(host) if self.uploaded[3] => {
+                Ok(Some(download_buffer(device, recorder, &self.wide_prims, 3 * host.wide_prims.len())?))
+            }
+            _ => Ok(None),
+        }
     }
 
     /// Mesh `mesh`'s refit data, when it deforms and the BVH is built.
@@ -519,8 +541,15 @@ impl BvhBuffers {
         levels[r.first_level as usize..(r.first_level + r.levels) as usize].to_vec()
     }
 
-    /// The layouts on the GPU the refit writes, as its mask: 1 pair, 2 single, 4 threaded (the wide layout has
-    /// no deforming mesh's nodes).
+    /// The heights of refit mesh `r`'s wide nodes, lowest first, when the wide layout is on the GPU (else none):
+    /// each `[first, count]` in the wide refit order.
+    pub(crate) fn wide_refit_levels(&self, r: &crate::bvh::RefitMesh) -> Vec<[u32; 2]> {
+        let levels = self.host.as_ref().filter(|_| self.uploaded[3]).map_or(&[][..], |b| &b.wide_refit_levels[..]);
+        levels.get(r.wide_first_level as usize..(r.wide_first_level + r.wide_levels) as usize).unwrap_or(&[]).to_vec()
+    }
+
+    /// The binary layouts on the GPU the refit writes, as its mask: 1 pair, 2 single, 4 threaded (the wide layout
+    /// has a pass of its own).
     pub(crate) fn layout_mask(&self) -> u32 {
         self.uploaded[..3].iter().enumerate().filter(|(_, &u)| u).map(|(k, _)| 1u32 << k).sum()
     }

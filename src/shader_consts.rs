@@ -276,8 +276,6 @@ pub const TRANSPORT_COMMIT: u32 = 3;
 pub const WAVE_PRIMARY_ID: u32 = 0;
 /// glsl/wave.comp: the rays carry ray differentials.
 pub const WAVE_DIFFERENTIAL_ID: u32 = 1;
-/// glsl/common/bvh.glsl: the wide walk's pair fallback (some instance has no wide nodes: a deforming mesh).
-pub const BVH_PAIR_FALLBACK_ID: u32 = 2;
 /// glsl/wave.comp: the most subgroups a work group can have (the bound of its loop over them).
 pub const WAVE_SUBGROUPS_ID: u32 = 3;
 /// glsl/glass.comp: the lights whose maps are bound (1-3).

@@ -23,7 +23,6 @@ const OVER: &[(&str, &str, usize)] = &[
     ("src/scene/gltf.rs", "mesh_objects", 139),
     ("src/scene/gltf.rs", "parse", 139),
     ("src/scene_gpu.rs", "new", 136),
-    ("src/passes/photons.rs", "new", 132),
 ];
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {

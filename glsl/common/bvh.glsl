@@ -230,11 +230,6 @@ void bvh_walk_single(uint root, uint ii, vec3 o, vec3 inv, Shear sh, inout Scene
 #if defined(BVH_LAYOUT_WIDE)
 const uint BVH_WIDE_STACK = 32u;
 
-// Specialization constant 2: whether some instance has no wide nodes (a deforming mesh, which the walk then takes
-// through its pair nodes). A pipeline that knows the scene has none (the waves and the checks: src/passes/photons.rs) compiles
-// without the pair walk, which a CPU driver would otherwise run, masked, for every instance a ray meets.
-layout(constant_id = BVH_PAIR_FALLBACK_ID) const bool BVH_PAIR_FALLBACK = true;
-
 // The children of wide node n that the ray enters before tmax, as the hit mask of Ylitie, Karras and Laine
 // (2017): an inner child sets bit 24 + (slot ^ oct) (so the highest set bit is the child nearest in the ray's
 // octant order), a leaf its triangles' bits (offsets from the node's first triangle-list entry) in the low 24.
@@ -350,13 +345,7 @@ bool bvh_closest(vec3 ro, vec3 rd, float tmax, out SceneHit hit) {
 #elif defined(BVH_LAYOUT_SINGLE)
         bvh_walk_single(floatBitsToUint(I.hi.w), ii, o, 1.0 / d, sh, hit, found);
 #elif defined(BVH_LAYOUT_WIDE)
-        // A deforming mesh has no wide nodes (the refit keeps only the binary layouts): its pair nodes instead.
-        uint wide_root = floatBitsToUint(I.ior_rgb.w);
-        if (!BVH_PAIR_FALLBACK || wide_root != BVH_EMPTY) {
-            bvh_walk_wide(wide_root, ii, o, d, sh, hit, found);
-        } else {
-            bvh_walk_pair(floatBitsToUint(I.lo.w), ii, o, 1.0 / d, sh, hit, found);
-        }
+        bvh_walk_wide(floatBitsToUint(I.ior_rgb.w), ii, o, d, sh, hit, found);
 #else
         bvh_walk_pair(floatBitsToUint(I.lo.w), ii, o, 1.0 / d, sh, hit, found);
 #endif

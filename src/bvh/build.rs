@@ -97,8 +97,8 @@ impl SceneBvh {
     }
 
     /// Add one bottom-level BVH over `tris` from its tree `b2` (all four layouts, and the triangles in leaf
-    /// order); with `refit` (the mesh's index), also its refit nodes and rest triangles, and no wide nodes (the
-    /// refit does not requantize them). Returns the pair, single and wide roots (wide: `EMPTY` when none).
+    /// order); with `refit` (the mesh's index), also its refit nodes, its wide nodes by height, and its rest
+    /// triangles. Returns the pair, single and wide roots.
     /// `refit`: a deforming mesh's index, with each triangle's vertex indices.
     pub(super) fn add_blas(
         &mut self,
@@ -121,7 +121,8 @@ impl SceneBvh {
         };
         let b4 = |v: Vec3, w: u32| [v.x, v.y, v.z, f32::from_bits(w)];
 
-        let wide_root = if refit.is_some() { EMPTY } else { self.add_wide(tris, b2, tri_base) };
+        let wide_first = self.wide_nodes.len() as u32;
+        let wide_root = self.add_wide(tris, b2, tri_base);
 
         // Single layout: copy obvhs' nodes (children already adjacent), in the same order.
         let single_base = self.single_nodes.len() as u32;
@@ -153,6 +154,7 @@ impl SceneBvh {
         let mut pair_slot = vec![EMPTY; nodes.len()];
         if let Some((mesh, corners)) = refit {
             self.add_refit(mesh, b2, tri_base, single_base, threaded_base, &pos);
+            self.add_wide_refit(mesh, wide_first);
             self.rest_corners.extend(b2.primitive_indices.iter().map(|&i| corners[i as usize]));
         }
         let child = |k: usize| -> ([f32; 4], [f32; 4], Option<usize>) {

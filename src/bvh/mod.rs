@@ -17,8 +17,8 @@
 //! in docs/experiments.md, "BVH layouts"). The eye view's glass pass and exact transport's traversal checks walk
 //! the wide layout where the waves do and the pair layout otherwise; the wide layout's shaders read the BVH
 //! through texel views of its buffers (docs/design.md, "4. Transport").
-//! A deforming mesh has no wide nodes (the GPU refit rewrites only the binary layouts' boxes): the wide walk
-//! takes its instances' pair nodes.
+//! A deforming mesh's layouts are refit on the GPU every frame it deforms: the binary ones' boxes bottom-up, then
+//! its wide nodes requantized over the new boxes and its wide triangle list rewritten (glsl/refit_wide.comp).
 //!
 //! Triangles are stored in leaf order with their positions (the watertight test reads only these) and, separately,
 //! their per-vertex normals (read once per closest hit). Degenerate triangles are dropped, as in the CPU reference.
@@ -56,6 +56,9 @@ pub struct RefitMesh {
     /// Its nodes by height: `refit_levels[first_level..first_level + levels]`, each a run of `refit_order`.
     pub first_level: u32,
     pub levels: u32,
+    /// Its wide nodes by height: `wide_refit_levels[wide_first_level..wide_first_level + wide_levels]`.
+    pub wide_first_level: u32,
+    pub wide_levels: u32,
     /// Its first node in the refit arrays.
     pub first_node: u32,
     /// Its triangles in the BVH's triangles (leaf order) and, at rest, in `rest_tris`.
@@ -90,6 +93,9 @@ pub struct SceneBvh {
     pub refit_nodes: Vec<RefitNode>,
     pub refit_order: Vec<u32>,
     pub refit_levels: Vec<[u32; 2]>,
+    /// The deforming meshes' wide nodes by height, as `refit_order` and `refit_levels` hold their binary nodes.
+    pub wide_refit_order: Vec<u32>,
+    pub wide_refit_levels: Vec<[u32; 2]>,
     pub rest_tris: Vec<GpuTriangle>,
     pub rest_normals: Vec<GpuTriangle>,
     /// Per rest triangle: the indices of its vertices in its mesh (a morphing mesh's triangles are read by them).

@@ -65,8 +65,39 @@ impl SceneBvh {
             self.refit_order.extend((0..b2.nodes.len()).filter(|&k| height[k] == h).map(|k| first_node + k as u32));
             self.refit_levels.push([first, self.refit_order.len() as u32 - first]);
         }
-        self.refit_meshes[mesh] =
-            Some(RefitMesh { first_level, levels, first_node, first_tri: tri_base, rest_first, tri_count });
+        self.refit_meshes[mesh] = Some(RefitMesh {
+            first_level,
+            levels,
+            first_node,
+            first_tri: tri_base,
+            rest_first,
+            tri_count,
+            ..RefitMesh::default()
+        });
+    }
+
+    /// The wide nodes of mesh `mesh` (just added, from `first` on; its refit data added before) grouped by height,
+    /// so that the GPU requantizes each after its inner children (glsl/refit_wide.comp). Children follow their
+    /// parent in the wide layout (obvhs' conversion appends them), so one backward pass finds every height.
+    pub(super) fn add_wide_refit(&mut self, mesh: usize, first: u32) {
+        let nodes = &self.wide_nodes[first as usize..];
+        let mut height = vec![0u32; nodes.len()];
+        for k in (0..nodes.len()).rev() {
+            let (imask, base) = (nodes[k].w0[3] >> 24, nodes[k].w1[0] - first);
+            height[k] = (0..imask.count_ones()).map(|c| 1 + height[(base + c) as usize]).max().unwrap_or(0);
+        }
+        let first_level = self.wide_refit_levels.len() as u32;
+        let levels = height.iter().copied().max().map_or(0, |h| h + 1);
+        for h in 0..levels {
+            let at = self.wide_refit_order.len() as u32;
+            self.wide_refit_order
+                .extend((0..nodes.len() as u32).filter(|&k| height[k as usize] == h).map(|k| first + k));
+            self.wide_refit_levels.push([at, self.wide_refit_order.len() as u32 - at]);
+        }
+        if let Some(r) = self.refit_meshes[mesh].as_mut() {
+            r.wide_first_level = first_level;
+            r.wide_levels = levels;
+        }
     }
 
     /// Record each node's pair-layout slot in the refit nodes of mesh `refit` (just added).

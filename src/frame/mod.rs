@@ -72,8 +72,9 @@ pub(crate) struct SceneUpdate {
     pub morph_vertices: Vec<crate::gpu_types::MorphPush>,
     pub morph_triangles: Vec<crate::gpu_types::MorphPush>,
     /// The deforming meshes' BVHs to refit (after their triangles), one height of one mesh each, and how many
-    /// meshes.
+    /// meshes; then their wide nodes, one height of one mesh each, when the wide layout is on the GPU.
     pub refits: Vec<crate::gpu_types::RefitPush>,
+    pub wide_refits: Vec<crate::gpu_types::RefitPush>,
     pub refit_meshes: u32,
 }
 
@@ -307,6 +308,21 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         }
         for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
             rec.sync.buffer(buf, &[Access::ComputeRead]);
+        }
+        if !up.wide_refits.is_empty() {
+            rec.sync.buffer(&b.wide_refit_order, &[Access::ComputeRead]);
+            for buf in [&b.wide_nodes, &b.wide_prims] {
+                rec.sync.buffer(buf, &[Access::ComputeWrite]);
+            }
+            for job in &up.wide_refits {
+                rec.sync.buffer(&b.wide_refit_boxes, &[Access::ComputeWrite]);
+                rec.flush(d);
+                update.refit_wide(rec.cmd, sb, job)?;
+            }
+            // The wide layout's variants read them as texels.
+            for buf in [&b.wide_nodes, &b.wide_prims] {
+                rec.sync.buffer(buf, &[Access::ComputeRead, Access::ComputeTexels]);
+            }
         }
     }
     rec.flush(d);

@@ -89,7 +89,6 @@ impl Ctx<'_> {
             metric: self.s.metric,
             coop: self.s.coop_traversal(),
             wide: self.s.transport == Transport::Exact && self.s.bvh_layout == BvhLayout::Wide,
-            pair_fallback: self.sb.bvh.deforms(),
         }
     }
 

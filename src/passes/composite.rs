@@ -29,13 +29,11 @@ pub struct CompositePass {
 /// What a glass pass's pipeline is specialized for (glsl/glass.comp's specialization constants, src/shader_consts.rs). A CPU
 /// driver runs both sides of every branch under a mask, so the pass compiles no code for what the frame lacks:
 /// a second or third light, dispersion (three traces per sample), an environment map, albedo textures, absorbing or
-/// overlapping media, or (on the wide layout) the wide walk's pair fallback for a deforming mesh.
+/// overlapping media.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlassKey {
     /// Walk the wide layout (else the pair layout).
     pub wide: bool,
-    /// The wide walk's pair fallback: some mesh deforms.
-    pub fallback: bool,
     /// The pass's lights, 1 to [`GLASS_LIGHTS`].
     pub lights: u32,
     pub dispersive: bool,
@@ -46,32 +44,29 @@ pub struct GlassKey {
 }
 
 impl GlassKey {
-    const COUNT: usize = 2 * 2 * GLASS_LIGHTS as usize * 2 * 2 * 2 * 2;
+    const COUNT: usize = 2 * GLASS_LIGHTS as usize * 2 * 2 * 2 * 2;
 
     fn index(self) -> usize {
-        let bits =
-            [self.wide, self.fallback && self.wide, self.dispersive, self.environment, self.textured, self.media];
+        let bits = [self.wide, self.dispersive, self.environment, self.textured, self.media];
         let flags = bits.iter().fold(0, |k, &b| 2 * k + usize::from(b));
         flags * GLASS_LIGHTS as usize + (self.lights as usize - 1)
     }
 
     fn of_index(k: usize) -> GlassKey {
         let (flags, lights) = (k / GLASS_LIGHTS as usize, k % GLASS_LIGHTS as usize);
-        let bit = |i: usize| flags >> (5 - i) & 1 == 1;
+        let bit = |i: usize| flags >> (4 - i) & 1 == 1;
         GlassKey {
             wide: bit(0),
-            fallback: bit(1),
             lights: lights as u32 + 1,
-            dispersive: bit(2),
-            environment: bit(3),
-            textured: bit(4),
-            media: bit(5),
+            dispersive: bit(1),
+            environment: bit(2),
+            textured: bit(3),
+            media: bit(4),
         }
     }
 
-    fn spec(self) -> [(u32, u32); 6] {
+    fn spec(self) -> [(u32, u32); 5] {
         [
-            (BVH_PAIR_FALLBACK_ID, self.fallback as u32),
             (GLASS_LIGHT_COUNT_ID, self.lights),
             (GLASS_DISPERSIVE_ID, self.dispersive as u32),
             (GLASS_ENVIRONMENT_ID, self.environment as u32),
@@ -197,7 +192,6 @@ impl CompositePass {
         assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
         let key = GlassKey {
             wide: i.wide,
-            fallback: i.wide && i.bvh.deforms(),
             lights: 1 + i.more_lights.len() as u32,
             dispersive: i.dispersive,
             environment: i.environment,
@@ -274,20 +268,16 @@ impl CompositePass {
 mod tests {
     use super::GlassKey;
 
-    /// Every key a frame can ask for has its own pipeline (a key on the pair layout ignores the fallback).
+    /// Every key a frame can ask for has its own pipeline.
     #[test]
     fn glass_keys_index_their_own_pipelines() {
         let mut seen = std::collections::HashSet::new();
         for k in 0..GlassKey::COUNT {
             let key = GlassKey::of_index(k);
             assert!((1..=3).contains(&key.lights));
-            if !key.wide && key.fallback {
-                assert_eq!(GlassKey { fallback: false, ..key }.index(), key.index());
-                continue;
-            }
             assert_eq!(key.index(), k, "{key:?}");
             assert!(seen.insert(k));
         }
-        assert_eq!(seen.len(), GlassKey::COUNT * 3 / 4);
+        assert_eq!(seen.len(), GlassKey::COUNT);
     }
 }

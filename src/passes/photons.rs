@@ -53,28 +53,26 @@ const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTAN
 const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
 /// glsl/wave.comp's specialization constants (src/shader_consts.rs): `WAVE_PRIMARY`, `WAVE_DIFFERENTIAL`,
-/// `BVH_PAIR_FALLBACK`, `WAVE_MEDIA`, `WAVE_COLOR` and `WAVE_SUBGROUPS` (`subgroups`).
+/// `WAVE_MEDIA`, `WAVE_COLOR`, `WAVE_SPECTRAL` and `WAVE_SUBGROUPS` (`subgroups`).
 /// A CPU driver runs both sides of every branch, so each wave compiles only the code it runs.
-fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 7] {
+fn wave_spec(variant: usize, subgroups: u32) -> [(u32, u32); 6] {
     [
         (WAVE_PRIMARY_ID, (variant & 1) as u32),
         (WAVE_DIFFERENTIAL_ID, (variant >> 1 & 1) as u32),
-        (BVH_PAIR_FALLBACK_ID, (variant >> 2 & 1) as u32),
-        (WAVE_MEDIA_ID, (variant >> 3 & 1) as u32),
-        (WAVE_COLOR_ID, (variant >> 4 & 1) as u32),
-        (WAVE_SPECTRAL_ID, (variant >> 5 & 1) as u32),
+        (WAVE_MEDIA_ID, (variant >> 2 & 1) as u32),
+        (WAVE_COLOR_ID, (variant >> 3 & 1) as u32),
+        (WAVE_SPECTRAL_ID, (variant >> 4 & 1) as u32),
         (WAVE_SUBGROUPS_ID, subgroups),
     ]
 }
 
 /// A wave pipeline's name in messages and timings: its layout and specialization.
-fn wave_name(layout: &str, spec: &[(u32, u32); 7]) -> String {
-    let [(_, primary), (_, diff), (_, fallback), (_, media), (_, color), (_, spectral), _] = *spec;
+fn wave_name(layout: &str, spec: &[(u32, u32); 6]) -> String {
+    let [(_, primary), (_, diff), (_, media), (_, color), (_, spectral), _] = *spec;
     format!(
-        "transport wave {}{}{}{}{}{} ({layout} BVH nodes)",
+        "transport wave {}{}{}{}{} ({layout} BVH nodes)",
         if primary != 0 { "0" } else { "k > 0" },
         if diff != 0 { ", ray differentials" } else { "" },
-        if fallback != 0 && layout == "wide" { ", pair fallback" } else { "" },
         if media != 0 { ", media" } else { "" },
         if color != 0 { ", color" } else { "" },
         if spectral != 0 { ", spectral" } else { "" },
@@ -104,15 +102,14 @@ fn wave_subgroups(min_subgroup_size: u32) -> u32 {
 // one word: each at most two per invocation.
 const _: () = assert!(2 * LINEAR_WG < 1 << 10);
 
-/// One BVH layout's wave pipelines, every specialization ([`wave_spec`]). Only the wide walk has a pair fallback:
-/// the other layouts' fallback slots are never used ([`PhotonPasses::wave`]).
+/// One BVH layout's wave pipelines, every specialization ([`wave_spec`]).
 fn wave_variants(
     device: &Arc<Device>,
     layout: &str,
     spv: &'static shaders::Spv,
     binds: &[BindKind],
     push: u32,
-) -> [LazyPipeline; 64] {
+) -> [LazyPipeline; 32] {
     std::array::from_fn(|k| {
         let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
         LazyPipeline::compute_specialized(device, &wave_name(layout, &spec), spv.words(), binds, push, &spec)
@@ -135,13 +132,12 @@ fn splat_variants(
 }
 
 /// The index of a wave's pipeline among its layout's variants ([`wave_spec`]).
-fn wave_variant(primary: bool, rays: WaveRays, pair_fallback: bool) -> usize {
+fn wave_variant(primary: bool, rays: WaveRays) -> usize {
     primary as usize
         | (rays.differential as usize) << 1
-        | (pair_fallback as usize) << 2
-        | (rays.media as usize) << 3
-        | (rays.color as usize) << 4
-        | (rays.spectral as usize) << 5
+        | (rays.media as usize) << 2
+        | (rays.color as usize) << 3
+        | (rays.spectral as usize) << 4
 }
 
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
@@ -248,19 +244,19 @@ const PHOTON_PUSH_BYTES: usize = {
 pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
-    /// Per BVH layout the checks walk (pair, wide, wide without the pair fallback), per metric (indexed by `Metric::code`), per work-group side:
+    /// Per BVH layout the checks walk (pair, wide), per metric (indexed by `Metric::code`), per work-group side:
     /// max-level (TRAVERSE_MAX_LEVEL: no metric code, the last level fused into the one before), max-error and
     /// flux-error (TRAVERSE_METRIC: that metric's code only).
-    traverse: [[Vec<(u32, LazyPipeline)>; 3]; 3],
+    traverse: [[Vec<(u32, LazyPipeline)>; 3]; 2],
     /// Per layout, max-error's and flux-error's 8x8 traversal with four lanes per candidate (TRAVERSE_COOP).
-    traverse_coop: [[LazyPipeline; 2]; 3],
+    traverse_coop: [[LazyPipeline; 2]; 2],
     stats: Pipeline,
     dense_emit: LazyPipeline,
     trace: LazyPipeline,
     /// Exact transport's waves, per BVH layout (pair, single, threaded, wide) and per specialization
-    /// ([`wave_spec`]): wave 0 or a bounce wave, with or without ray differentials, with or without the wide walk's
-    /// pair fallback, with or without the rays' media, their color, their wavelength.
-    waves: [[LazyPipeline; 64]; 4],
+    /// ([`wave_spec`]): wave 0 or a bounce wave, with or without ray differentials, with or without the rays'
+    /// media, their color, their wavelength.
+    waves: [[LazyPipeline; 32]; 4],
     transport: LazyPipeline,
     splat: LazyPipeline,
     /// None when the device has no float atomics on buffers. Per `SPLAT_COLOR`: gray records, records with an RGB
@@ -274,15 +270,13 @@ pub struct PhotonPasses {
 
 /// How traversal runs: the work-group side its dispatches count candidates in
 /// ([`crate::settings::Settings::traverse_dispatch_wg`]), the metric, whether the checks are cooperative,
-/// whether exact transport's checks walk the wide BVH layout (where the waves do) instead of the pair layout, and
-/// whether the wide walk needs its pair fallback (some mesh deforms).
+/// and whether exact transport's checks walk the wide BVH layout (where the waves do) instead of the pair layout.
 #[derive(Clone, Copy, Debug)]
 pub struct TraverseShape {
     pub wg: u32,
     pub metric: Metric,
     pub coop: bool,
     pub wide: bool,
-    pub pair_fallback: bool,
 }
 
 impl PhotonPasses {
@@ -297,9 +291,8 @@ impl PhotonPasses {
         // One traversal pipeline per BVH layout the checks walk (pair; wide: texel reads), metric (llvmpipe pays
         // for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
-        // Each layout index: 0 pair, 1 wide, 2 wide without the pair fallback (no mesh deforms).
-        let layout_name = |l: usize| ["", ", wide BVH", ", wide BVH, no pair fallback"][l];
-        let fallback_spec = |l: usize| [(BVH_PAIR_FALLBACK_ID, (l != 2) as u32)];
+        // Each layout index: 0 pair, 1 wide.
+        let layout_name = |l: usize| ["", ", wide BVH"][l];
         let variant = |metric: Metric, l: usize, spv: [&'static Spv; 5]| -> Vec<(u32, LazyPipeline)> {
             let binds = if l > 0 { &texel_binds } else { &binds };
             sides
@@ -307,7 +300,7 @@ impl PhotonPasses {
                 .zip(spv)
                 .map(|(&s, spv)| {
                     let name = format!("traverse {metric:?} {s}x{s}{}", layout_name(l));
-                    (s, LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &fallback_spec(l)))
+                    (s, LazyPipeline::compute(device, &name, spv.words(), binds, push))
                 })
                 .collect()
         };
@@ -350,7 +343,7 @@ impl PhotonPasses {
                 ),
             ]
         };
-        let traverse = [traverse_layout(0), traverse_layout(1), traverse_layout(2)];
+        let traverse = [traverse_layout(0), traverse_layout(1)];
         let splat = {
             let (device, binds) = (device.clone(), binds.to_vec());
             LazyPipeline::new(move || {
@@ -375,9 +368,9 @@ impl PhotonPasses {
         let coop = |metric: &str, pair: &'static Spv, wide: &'static Spv, l: usize| {
             let (binds, spv) = if l > 0 { (&texel_binds, wide) } else { (&binds, pair) };
             let name = format!("traverse {metric} 8x8, four lanes a candidate{}", layout_name(l));
-            LazyPipeline::compute_specialized(device, &name, spv.words(), binds, push, &fallback_spec(l))
+            LazyPipeline::compute(device, &name, spv.words(), binds, push)
         };
-        let traverse_coop = [0, 1, 2].map(|l| {
+        let traverse_coop = [0, 1].map(|l| {
             [
                 coop("MaxError", TRAVERSE_COMP_MAX_ERROR_COOP, TRAVERSE_COMP_MAX_ERROR_COOP_WIDE, l),
                 coop("FluxError", TRAVERSE_COMP_FLUX_ERROR_COOP, TRAVERSE_COMP_FLUX_ERROR_COOP_WIDE, l),
@@ -412,11 +405,7 @@ impl PhotonPasses {
     /// The traversal pipeline of `metric` with work groups of `wg`×`wg` (8×8 for a side not built); `coop`: the
     /// cooperative checks' 8x8 pipeline of max-error or flux-error, whose groups take 4x4 candidates (`wg` is 4).
     fn traverse_pipeline(&self, shape: TraverseShape) -> VkResult<&Pipeline> {
-        let layout = match (shape.wide, shape.pair_fallback) {
-            (false, _) => 0,
-            (true, true) => 1,
-            (true, false) => 2,
-        };
+        let layout = shape.wide as usize;
         let wg = shape.wg;
         match (shape.coop, shape.metric) {
             (true, Metric::MaxError) => return self.traverse_coop[layout][0].get(),
@@ -536,9 +525,7 @@ impl PhotonPasses {
             BvhLayout::Threaded => 2,
             BvhLayout::Wide => 3,
         };
-        // Only the wide walk has a pair fallback (for the instances of deforming meshes).
-        let fallback = layout == BvhLayout::Wide && b.bvh.deforms();
-        let p = self.waves[l][wave_variant(wave == 0, rays, fallback)].get()?;
+        let p = self.waves[l][wave_variant(wave == 0, rays)].get()?;
         // Wave k reads the queue wave k - 1 appended to and appends to the other.
         let mut binds = b.binds();
         if wave % 2 == 1 {

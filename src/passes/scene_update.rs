@@ -5,7 +5,7 @@
 //! buffer, each simulated water surface is stepped to the frame's time (water_step.comp: its drops, then one
 //! dispatch per step, each after the one before), and each deforming object is deformed to the frame's time (water.comp for water, morph.comp for morph
 //! targets, with the frame's weights written first: its raster vertices, and its BVH triangles) and its
-//! bottom-level BVH refit bottom-up (refit.comp). Nothing is rebuilt, nothing waits: the
+//! bottom-level BVH refit bottom-up (refit.comp, then refit_wide.comp for its wide nodes). Nothing is rebuilt, nothing waits: the
 //! frame's barriers order the writes after the last frame's reads.
 
 use crate::gpu_types::{MorphPush, RefitPush, SceneUpdatePush, WaterPush, WaterStepPush};
@@ -26,6 +26,7 @@ pub struct SceneUpdatePass {
     morph: LazyPipeline,
     morph_bvh: LazyPipeline,
     refit: LazyPipeline,
+    refit_wide: LazyPipeline,
 }
 
 /// The largest vkCmdUpdateBuffer.
@@ -83,7 +84,24 @@ impl SceneUpdatePass {
             &[BindKind::Storage; 7],
             size(std::mem::size_of::<RefitPush>()),
         );
-        SceneUpdatePass { device: device.clone(), place, water, water_bvh, water_step, morph, morph_bvh, refit }
+        let refit_wide = LazyPipeline::compute(
+            device,
+            "refit (wide nodes)",
+            shaders::REFIT_WIDE_COMP.words(),
+            &[BindKind::Storage; 5],
+            size(std::mem::size_of::<RefitPush>()),
+        );
+        SceneUpdatePass {
+            device: device.clone(),
+            place,
+            water,
+            water_bvh,
+            water_step,
+            morph,
+            morph_bvh,
+            refit,
+            refit_wide,
+        }
     }
 
     /// Dispatch `groups` work groups of LINEAR_WG in rows (lavapipe caps a dimension at 65535 groups).
@@ -210,6 +228,20 @@ impl SceneUpdatePass {
             Bind::Storage(&b.threaded_nodes),
         ];
         self.run(cmd, &self.refit, &binds, std::slice::from_ref(job), |j| j.count)
+    }
+
+    /// Requantize one height of a deforming mesh's wide nodes over its refit triangles (the heights below it
+    /// done before), rewriting its wide triangle list.
+    pub fn refit_wide(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, job: &RefitPush) -> VkResult<()> {
+        let b = &sb.bvh;
+        let binds = [
+            Bind::Storage(&b.wide_refit_order),
+            Bind::Storage(&b.wide_refit_boxes),
+            Bind::Storage(&b.triangles),
+            Bind::Storage(&b.wide_nodes),
+            Bind::Storage(&b.wide_prims),
+        ];
+        self.run(cmd, &self.refit_wide, &binds, std::slice::from_ref(job), |j| j.count)
     }
 
     /// Write `data` at the start of `buffer` from the command buffer (in chunks vkCmdUpdateBuffer takes).

@@ -667,6 +667,13 @@ impl Renderer {
                     layouts: sb.bvh.layout_mask(),
                     pad: 0,
                 }));
+                let wide = sb.bvh.wide_refit_levels(&r);
+                up.wide_refits.extend(wide.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
+                    first,
+                    count,
+                    layouts: 0,
+                    pad: 0,
+                }));
             }
         }
         // The weights at the frame's time, for every morphing object (a few floats each).

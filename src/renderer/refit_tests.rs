@@ -1,6 +1,6 @@
 //! The GPU refit against a fresh build: a water block displaced and refit on the GPU (lavapipe, validation on)
-//! is read back, and 10,000 rays find the same closest hits through it as through a BVH built on the host from
-//! the very triangles the GPU displaced.
+//! is read back, and 10,000 rays find the same closest hits through each of its layouts (pair, single, and the
+//! requantized wide nodes) as through a BVH built on the host from the very triangles the GPU displaced.
 
 use super::{FrameDesc, Renderer};
 use crate::bvh::{BvhLayout, BvhObject, SceneBvh};
@@ -157,7 +157,7 @@ fn refit_equals_rebuild() {
     for i in 0..10_000 {
         let o = Vec3::new(rnd() * 2.4 - 1.2, 0.2 + rnd() * 1.2, rnd() * 2.4 - 1.2);
         let d = Vec3::new(rnd() - 0.5, -rnd() - 0.05, rnd() - 0.5).normalize();
-        for layout in [BvhLayout::Pair, BvhLayout::Single] {
+        for layout in [BvhLayout::Pair, BvhLayout::Single, BvhLayout::Wide] {
             let a = gpu.intersect(layout, o, d, f32::INFINITY);
             let b = fresh.intersect(BvhLayout::Pair, o, d, f32::INFINITY);
             match (a, b) {
@@ -184,5 +184,16 @@ fn refit_equals_rebuild() {
     let rest = &r.scene_buffers.bvh.host().expect("built").pair_nodes;
     let bytes = |n: &[crate::bvh::PairNode]| bytemuck::cast_slice::<_, u8>(n).to_vec();
     assert_ne!(bytes(&gpu.pair_nodes), bytes(rest), "the refit wrote the pair layout");
+    let rest_wide = &r.scene_buffers.bvh.host().expect("built").wide_nodes;
+    let wide_bytes = |n: &[crate::bvh::WideNode]| bytemuck::cast_slice::<_, u8>(n).to_vec();
+    assert_ne!(wide_bytes(&gpu.wide_nodes), wide_bytes(rest_wide), "the refit requantized the wide layout");
+    // Every entry of the GPU's wide triangle list holds its triangle's displaced vertices.
+    let records = r.scene_buffers.bvh.download_wide_records(&r.device, &mut r.recorder).unwrap().expect("wide");
+    for (e, rec) in records.chunks(3).enumerate() {
+        let t = &gpu.triangles[rec[0][3] as usize];
+        for (v, (got, want)) in rec.iter().zip(&t.p).enumerate() {
+            assert_eq!(got[..3], want.map(f32::to_bits)[..3], "wide triangle-list entry {e}, vertex {v}");
+        }
+    }
     assert_eq!(crate::vk::debug::validation_message_count(), 0, "validation messages");
 }

@@ -1426,6 +1426,7 @@ impl Viewer {
             "photon_buffer_bytes": st.map(|x| 8 * x.peak_used as u64).unwrap_or(0),
             "profiled_frames": frames.len(),
             "gpu_ms": profiler::gpu_json(&summaries),
+            "gpu_substages_ms": profiler::summaries_json(&profiler::substage_summaries(&frames)),
             "wall_ms": profiler::summary_json(&summaries, "frame_wall"),
             "gpu_total_ms": stage("gpu_total"),
             "frame_ms": stage("frame_wall"),
