@@ -268,6 +268,9 @@ pub struct BvhBuffers {
     /// The deforming meshes' triangles and boxes on the GPU are the rest ones (just built or a layout just
     /// uploaded from the host copy): the next frame displaces and refits them whatever moved.
     pub stale_deform: bool,
+    /// The layout the frames trace (None before an exact-transport frame): a deforming mesh's refit keeps only
+    /// the nodes they read current ([`BvhBuffers::trace_with`]).
+    traced: Option<BvhLayout>,
     /// The host BVH once built (the layouts not uploaded yet come from it).
     host: Option<SceneBvh>,
     /// Which layouts are uploaded: pair, single, threaded, wide.
@@ -342,6 +345,7 @@ impl BvhBuffers {
             rest_normals: upload_buffer(device, recorder, "rest normals (none)", &zeros, storage)?,
             rest_corners: upload_buffer(device, recorder, "rest corners (none)", &zeros, storage)?,
             stale_deform: false,
+            traced: None,
             host: None,
             uploaded: [false; 4],
             build_ms: 0.0,
@@ -541,17 +545,43 @@ impl BvhBuffers {
         levels[r.first_level as usize..(r.first_level + r.levels) as usize].to_vec()
     }
 
-    /// The heights of refit mesh `r`'s wide nodes, lowest first, when the wide layout is on the GPU (else none):
-    /// each `[first, count]` in the wide refit order.
+    /// This frame traces `layout` (exact transport). The refit writes only what such frames read: the wide
+    /// layout's nodes when it is traced (the waves, the checks and the glass pass all walk it), else the traced
+    /// binary layout's and the pair layout's (the checks and the glass pass walk pair). So when the traced layout
+    /// changes, the deforming meshes' nodes it reads may be stale: every one is displaced and refit again.
+    pub(crate) fn trace_with(&mut self, layout: BvhLayout) {
+        if self.traced.is_some_and(|t| t != layout) && self.deforms() {
+            self.stale_deform = true;
+        }
+        self.traced = Some(layout);
+    }
+
+    /// Whether some mesh deforms (is refit on the GPU).
+    fn deforms(&self) -> bool {
+        self.host.as_ref().is_some_and(|h| !h.refit_order.is_empty())
+    }
+
+    /// Whether the refit writes the wide layout: it is on the GPU and traced (or no frame has traced yet).
+    fn refits_wide(&self) -> bool {
+        self.uploaded[3] && self.traced.is_none_or(|t| t == BvhLayout::Wide)
+    }
+
+    /// The heights of refit mesh `r`'s wide nodes, lowest first, when the refit writes the wide layout (else
+    /// none): each `[first, count]` in the wide refit order.
     pub(crate) fn wide_refit_levels(&self, r: &crate::bvh::RefitMesh) -> Vec<[u32; 2]> {
-        let levels = self.host.as_ref().filter(|_| self.uploaded[3]).map_or(&[][..], |b| &b.wide_refit_levels[..]);
+        let levels = self.host.as_ref().filter(|_| self.refits_wide()).map_or(&[][..], |b| &b.wide_refit_levels[..]);
         levels.get(r.wide_first_level as usize..(r.wide_first_level + r.wide_levels) as usize).unwrap_or(&[]).to_vec()
     }
 
-    /// The binary layouts on the GPU the refit writes, as its mask: 1 pair, 2 single, 4 threaded (the wide layout
-    /// has a pass of its own).
+    /// The binary layouts the refit writes, as its mask: 1 pair, 2 single, 4 threaded; those on the GPU that
+    /// frames read (none when they trace the wide layout, which has a pass of its own). 0: no binary refit.
     pub(crate) fn layout_mask(&self) -> u32 {
-        self.uploaded[..3].iter().enumerate().filter(|(_, &u)| u).map(|(k, _)| 1u32 << k).sum()
+        let read = |k: usize| match self.traced {
+            None => true,
+            Some(BvhLayout::Wide) => false,
+            Some(t) => k == 0 || k == Self::slot(t),
+        };
+        (0..3).filter(|&k| self.uploaded[k] && read(k)).map(|k| 1u32 << k).sum()
     }
 
     /// The instance records as the GPU buffer holds them (None before the BVH is built).

@@ -294,20 +294,22 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         // The wide layout's variants read them as texels.
         rec.sync.buffer(&b.triangles, &[Access::ComputeRead, Access::ComputeTexels]);
         rec.sync.buffer(&b.normals, &[Access::ComputeRead, Access::ComputeTexels]);
-        for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
-            rec.sync.buffer(buf, &[Access::ComputeWrite]);
-        }
-        rec.sync.buffer(&b.refit_nodes, &[Access::ComputeRead]);
-        rec.sync.buffer(&b.refit_order, &[Access::ComputeRead]);
         rec.ts.mark(rec.cmd, "scene_update.refit");
-        // One height per dispatch, each after the one below (its boxes are read).
-        for job in &up.refits {
-            rec.sync.buffer(&b.refit_boxes, &[Access::ComputeWrite]);
-            rec.flush(d);
-            update.refit(rec.cmd, sb, job)?;
-        }
-        for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
-            rec.sync.buffer(buf, &[Access::ComputeRead]);
+        if !up.refits.is_empty() {
+            for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
+                rec.sync.buffer(buf, &[Access::ComputeWrite]);
+            }
+            rec.sync.buffer(&b.refit_nodes, &[Access::ComputeRead]);
+            rec.sync.buffer(&b.refit_order, &[Access::ComputeRead]);
+            // One height per dispatch, each after the one below (its boxes are read).
+            for job in &up.refits {
+                rec.sync.buffer(&b.refit_boxes, &[Access::ComputeWrite]);
+                rec.flush(d);
+                update.refit(rec.cmd, sb, job)?;
+            }
+            for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
+                rec.sync.buffer(buf, &[Access::ComputeRead]);
+            }
         }
         if !up.wide_refits.is_empty() {
             rec.sync.buffer(&b.wide_refit_order, &[Access::ComputeRead]);

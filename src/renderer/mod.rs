@@ -660,13 +660,16 @@ impl Renderer {
                     Deformer::Morph(m) => up.morph_triangles.push(MorphPush::bvh(&r, &m)),
                 }
                 up.refit_meshes += 1;
-                let levels = sb.bvh.refit_levels(&r);
-                up.refits.extend(levels.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
-                    first,
-                    count,
-                    layouts: sb.bvh.layout_mask(),
-                    pad: 0,
-                }));
+                let layouts = sb.bvh.layout_mask();
+                if layouts != 0 {
+                    let levels = sb.bvh.refit_levels(&r);
+                    up.refits.extend(levels.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
+                        first,
+                        count,
+                        layouts,
+                        pad: 0,
+                    }));
+                }
                 let wide = sb.bvh.wide_refit_levels(&r);
                 up.wide_refits.extend(wide.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
                     first,
@@ -736,6 +739,9 @@ impl Renderer {
                 s.bvh_layout,
                 &mut self.blas_cache,
             )?;
+        }
+        if s.transport == Transport::Exact {
+            self.scene_buffers.bvh.trace_with(s.bvh_layout);
         }
         let scene_update = self.take_scene_update();
         // A rebuilt scene's BVH counts from zero.
