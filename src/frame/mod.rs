@@ -279,6 +279,9 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
     }
     if !up.water_triangles.is_empty() || !up.morph_triangles.is_empty() || !up.refits.is_empty() {
         let b = &sb.bvh;
+        // Marked before the barrier, not after it: lavapipe takes a timestamp's time at its next flush, so a mark
+        // between a barrier and a dispatch would charge the dispatch to the stage before it.
+        rec.ts.mark(rec.cmd, "scene_update.triangles");
         rec.sync.buffer(&b.rest_tris, &[Access::ComputeRead]);
         rec.sync.buffer(&b.rest_normals, &[Access::ComputeRead]);
         rec.sync.buffer(&b.rest_corners, &[Access::ComputeRead]);
@@ -288,7 +291,6 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.sync.buffer(&b.triangles, &[Access::ComputeWrite]);
         rec.sync.buffer(&b.normals, &[Access::ComputeWrite]);
         rec.flush(d);
-        rec.ts.mark(rec.cmd, "scene_update.triangles");
         update.water_triangles(rec.cmd, sb, &up.water_triangles)?;
         update.morph_triangles(rec.cmd, sb, &up.morph_triangles)?;
         // The wide layout's variants read them as texels.

@@ -275,13 +275,17 @@ impl Ctx<'_> {
     fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) -> VkResult<()> {
         let t = self.t;
         let (b, ph) = (self.bindings(), &self.p.photons);
+        // Each mark goes before the barrier that opens its stage: lavapipe takes a timestamp's time at its next
+        // flush, so a mark between a barrier and a dispatch would charge the dispatch to the stage before it.
+        let exact = self.s.transport == Transport::Exact;
+        rec.ts.mark(rec.cmd, if exact { "transport_primary" } else { "photon_trace" });
         self.traversal_step(rec);
-        if self.s.transport == Transport::Exact {
+        if exact {
             self.exact_transport(rec, commit)?;
         } else {
-            rec.ts.mark(rec.cmd, "photon_trace");
             ph.trace(rec.cmd, &b, self.debug())?;
         }
+        rec.ts.mark(rec.cmd, "splat");
         let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
         for buf in t.photon.records() {
             rec.sync.buffer(buf, &[reader]);
@@ -289,7 +293,6 @@ impl Ctx<'_> {
         // The compute splat reads its record range from the draw command as well as dispatching from it.
         rec.sync.buffer(&t.photon.indirect, &[Access::IndirectRead, Access::ComputeRead]);
         rec.flush(self.d);
-        rec.ts.mark(rec.cmd, "splat");
         if self.compute_splat {
             ph.splat_compute(rec.cmd, &b, self.tiled_splat, self.s.carried_color)
         } else {
@@ -334,13 +337,12 @@ impl Ctx<'_> {
             rec.sync.buffer(&t.photon.photons, &[Access::ComputeTexels]);
             rec.flush(self.d);
         };
-        rec.ts.mark(rec.cmd, "transport_primary");
         ph.transport(rec.cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort, 0)?;
         for wave in 0..=MAX_INTERACTIONS {
-            step(rec);
             if wave >= 1 {
                 rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
             }
+            step(rec);
             let rays = WaveRays {
                 differential: self.s.footprint == Footprint::Differential,
                 media: self.s.media,
@@ -351,8 +353,8 @@ impl Ctx<'_> {
             step(rec);
             ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;
         }
-        step(rec);
         rec.ts.mark(rec.cmd, "stats");
+        step(rec);
         if commit {
             ph.stats(rec.cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg());
             step(rec);
