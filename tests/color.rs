@@ -44,11 +44,16 @@ fn exact(
 /// The linear beauty of the scene `text` (written as NAME.toml in `dir`) through `camera` at 64², one sample a
 /// pixel, level 2, with `extra` options; its run printed no validation message.
 fn beauty(dir: &Path, name: &str, text: &str, camera: &str, extra: &[&str]) -> RgbImage {
+    beauty_aa(dir, name, text, camera, "1", extra)
+}
+
+/// [`beauty`] at `aa`×`aa` samples a pixel.
+fn beauty_aa(dir: &Path, name: &str, text: &str, camera: &str, aa: &str, extra: &[&str]) -> RgbImage {
     let scene = dir.join(format!("{name}.toml"));
     std::fs::write(&scene, text).unwrap();
     let out = dir.join(format!("{name}.exr"));
     let stats = dir.join(format!("{name}.json"));
-    let args = ["render", "--scene", scene.to_str().unwrap(), "--camera", camera, "--size", "64x64", "--aa", "1"];
+    let args = ["render", "--scene", scene.to_str().unwrap(), "--camera", camera, "--size", "64x64", "--aa", aa];
     let more = ["--level", "2", "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
     ok(&[&args[..], extra, &more].concat());
     assert_validation_clean(&read_json(&stats));
@@ -215,18 +220,22 @@ fn color_matches_reference() {
 
 /// Colored glass in the beauty image: an orthographic eye looks straight through an amber slab 0.1 m thick
 /// (absorption 0.3, 1.2 and 3.0 per meter in red, green and blue) at the sky. Through the slab the linear radiance
-/// of each channel is the sky's times 0.04 + 0.96·exp(−σ·0.1): the eye tracer's own path at normal incidence, a
+/// of each channel is the sky's times F + (1 − F)·exp(−σ·0.1): the eye tracer's own path at normal incidence, a
 /// front reflection of F = 0.04 (taken from the sky: below the eye's branch threshold), then the transmitted ray
-/// absorbed along the slab, whose back surface reflects 0.04 of it (to the sky) and transmits the rest twice by
-/// 0.96 (docs/design.md "Eye view"). Tracing the glass gray (the channels' mean absorption) gives 0.866 in every
+/// absorbed along the slab, whose back surface reflects F of it (to the sky) and transmits the rest twice by
+/// 1 − F (docs/design.md "Eye view"). Tracing the glass gray (the channels' mean absorption) gives 0.866 in every
 /// channel, where this gives 0.972, 0.891 and 0.751. The tolerance, 1e-3 relative, is float rounding.
+///
+/// The same slab made dispersive (Abbe number 10) is traced per channel, at its channel's IOR (F from 0.0381 in
+/// red to 0.0444 in blue): at one sample a pixel three traces a sample, and at 2×2 samples one trace a sample in a
+/// mosaic of channels whose pixel means every sample takes (glsl/glass.comp); a channel taken from the wrong
+/// sample would be off by its absorption.
 #[test]
 fn colored_glass_tints_the_beauty_by_beer_lambert() {
     let dir = out_dir("color_beauty");
-    let img = beauty(
-        &dir,
-        "slab",
-        r#"[[light]]
+    let slab = |abbe: f64| {
+        format!(
+            r#"[[light]]
 kind = "directional"
 position = [0.0, 2.0, 0.0]
 target = [0.0, 0.0, 0.0]
@@ -244,27 +253,42 @@ half_height = 0.5
 name = "floor"
 shape = "plane"
 size = [2.0, 2.0]
-material = { kind = "diffuse", albedo = 0.8 }
+material = {{ kind = "diffuse", albedo = 0.8 }}
 
 [[object]]
 name = "amber"
 shape = "cube"
 size = [0.6, 0.6, 0.1]
 translate = [0.0, 0.5, 0.0]
-material = { kind = "dielectric", ior = 1.5, absorption = [0.3, 1.2, 3.0] }
+material = {{ kind = "dielectric", ior = 1.5, absorption = [0.3, 1.2, 3.0]{dispersion} }}
 "#,
-        "side",
-        &[],
-    );
-    // The center pixel looks through the slab (|x|, |y - 0.5| < 0.3 m); a corner one at the sky alone.
-    let (through, sky) = (img.at(32, 32), img.at(2, 2));
-    for (c, sigma) in [0.3f64, 1.2, 3.0].iter().enumerate() {
-        let expected = 0.04 + 0.96 * (-sigma * 0.1).exp();
-        let measured = through[c] as f64 / sky[c] as f64;
-        assert!(
-            (measured / expected - 1.0).abs() < 1e-3,
-            "channel {c}: through the slab {measured:.5} of the sky, Beer–Lambert {expected:.5} (sky {sky:?}, through {through:?})"
-        );
+            dispersion = if abbe > 0.0 { format!(", abbe = {abbe}") } else { String::new() }
+        )
+    };
+    // Cauchy through n_d = 1.5 at the C, d and F lines (src/scene/mod.rs, Material::ior_rgb).
+    let iors = |abbe: f64| -> [f64; 3] {
+        if abbe == 0.0 {
+            return [1.5; 3];
+        }
+        let inv2 = |nm: f64| 1.0 / (nm * nm);
+        let b = 0.5 / (abbe * (inv2(486.1) - inv2(656.3)));
+        let a = 1.5 - b * inv2(587.6);
+        [656.3, 587.6, 486.1].map(|nm| a + b * inv2(nm))
+    };
+    for (name, abbe, aa) in [("slab", 0.0, "1"), ("dispersive", 10.0, "1"), ("dispersive_mosaic", 10.0, "2")] {
+        let img = beauty_aa(&dir, name, &slab(abbe), "side", aa, &[]);
+        // The center pixel looks through the slab (|x|, |y - 0.5| < 0.3 m); a corner one at the sky alone.
+        let (through, sky) = (img.at(32, 32), img.at(2, 2));
+        for (c, sigma) in [0.3f64, 1.2, 3.0].iter().enumerate() {
+            let n = iors(abbe)[c];
+            let f = ((n - 1.0) / (n + 1.0)).powi(2);
+            let expected = f + (1.0 - f) * (-sigma * 0.1).exp();
+            let measured = through[c] as f64 / sky[c] as f64;
+            assert!(
+                (measured / expected - 1.0).abs() < 1e-3,
+                "{name}, channel {c}: through the slab {measured:.5} of the sky, Beer–Lambert {expected:.5} (sky {sky:?}, through {through:?})"
+            );
+        }
     }
 }
 
