@@ -186,104 +186,25 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     return L;
 }
 
-// Dispersive glass seen at 2×2 or 4×4 samples a pixel (--aa 2, 4): a pixel whose every sample sees glass traces
-// each sample at one channel's IOR, in a mosaic of red, green, blue, green (a Bayer pattern, rotated per pixel by
-// a hash so that no channel keeps one place in the pixel), and every sample of the pixel takes the pixel's mean
-// of each channel: one trace a sample instead of three. A pixel that only partly sees glass (its silhouette), and
-// a pixel of one or nine samples, traces every channel at every sample. The samples of a pixel lie in one work
-// group (TILE_WG is a multiple of 2 and 4), which shares them. Where a channel's samples in the pixel disagree, or
-// its mean and a neighbouring pixel's (an edge seen through the glass), each sample traces its other two channels
-// as well, so that edges keep their anti-aliasing.
-const uint MOSAIC[4] = uint[4](1u, 2u, 3u, 2u);
-shared uint s_glass[TILE_WG * TILE_WG];
-shared float s_value[TILE_WG * TILE_WG];
-shared vec3 s_mean[TILE_WG * TILE_WG];
-
-// The radiance of dispersive glass at sample q (local index li) where `glass` (every invocation of the group
-// calls it: it shares the samples through barriers).
-vec3 dispersive_sample(ivec2 q, uint li, bool glass, vec3 ro, vec3 rd) {
-    int aa = max(int(u_frame.camera.extent.x) / imageSize(o_beauty).x, 1);
-    s_glass[li] = glass ? 1u : 0u;
-    barrier();
-    ivec2 lq = ivec2(gl_LocalInvocationID.xy), b0 = (lq / aa) * aa;
-    bool mosaic = aa == 2 || aa == 4;
-    for (int j = 0; j < aa && mosaic; j++) {
-        for (int i = 0; i < aa; i++) mosaic = mosaic && s_glass[uint(b0.y + j) * TILE_WG + uint(b0.x + i)] != 0u;
-    }
-    uint rot = spectrum_hash(uint(q.x / aa) ^ spectrum_hash(uint(q.y / aa)));
-    uint k = uint(lq.x - b0.x) + uint(aa) * uint(lq.y - b0.y);
-    vec3 L = vec3(0.0), lo = vec3(0.0), hi = vec3(0.0);
-    float v = 0.0;
-    if (glass && mosaic) {
-        uint c = MOSAIC[(k + rot) & 3u];
-        v = trace_glass(ro, rd, c)[c - 1u];
-    } else if (glass) {
-        L = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
-    }
-    s_value[li] = v;
-    barrier();
-    if (glass && mosaic) {
-        vec3 sum = vec3(0.0), n = vec3(0.0);
-        lo = vec3(1.0 / 0.0);
-        for (int j = 0; j < aa; j++) {
-            for (int i = 0; i < aa; i++) {
-                uint c = MOSAIC[(uint(i) + uint(aa) * uint(j) + rot) & 3u] - 1u;
-                float x = s_value[uint(b0.y + j) * TILE_WG + uint(b0.x + i)];
-                sum[c] += x;
-                n[c] += 1.0;
-                lo[c] = min(lo[c], x);
-                hi[c] = max(hi[c], x);
-            }
-        }
-        L = sum / n;
-    }
-    // An edge seen through the glass, inside the pixel (a channel's samples disagree by more than a tenth) or
-    // between it and a neighbour in the group (a channel's means do), would alias in the channels the mosaic
-    // samples once or twice: there every sample traces its other two channels too.
-    s_mean[li] = glass && mosaic ? L : vec3(-1.0);
-    barrier();
-    if (glass && mosaic) {
-        bool edge = false;
-        for (uint c = 0u; c < 3u; c++) edge = edge || hi[c] - lo[c] > 0.1 * hi[c] + 1e-6;
-        const ivec2 NEIGHBOURS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
-        for (int d = 0; d < 4; d++) {
-            ivec2 nq = lq + NEIGHBOURS[d] * aa;
-            if (any(lessThan(nq, ivec2(0))) || any(greaterThanEqual(nq, ivec2(TILE_WG)))) continue;
-            vec3 m = s_mean[uint(nq.y) * TILE_WG + uint(nq.x)];
-            if (m.x < 0.0) continue;
-            edge = edge || any(greaterThan(abs(m - L), 0.1 * max(m, L) + 1e-6));
-        }
-        if (edge) {
-            uint own = MOSAIC[(k + rot) & 3u];
-            for (uint c = 1u; c <= 3u; c++) L[c - 1u] = c == own ? v : trace_glass(ro, rd, c)[c - 1u];
-        }
-    }
-    return L;
-}
-
 // One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under every light.
 void main() {
     GpuView cam = u_frame.camera;
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
-    bool inside = q.x < imageSize(o_glass).x && q.y < imageSize(o_glass).y;
-    bool glass = false;
-    if (inside) {
-        vec4 rad = texelFetch(t_radiance, q, 0);
-        vec4 front = geo_fetch(t_front, q);
-        glass = front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w);
-    }
-    vec3 ro, rd;
-    view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+    if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
+    vec4 rad = texelFetch(t_radiance, q, 0);
+    vec4 front = geo_fetch(t_front, q);
     vec4 L = vec4(0.0);
-    // Dispersive glass (FrameData.disperses, uniform: every invocation takes the same side, as the barriers
-    // inside need): each channel follows its own IOR's path.
-    if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
-        L.rgb = dispersive_sample(q, gl_LocalInvocationIndex, glass, ro, rd);
-    } else if (glass) {
-        L.rgb = trace_glass(ro, rd, 0u);
+    if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
+        vec3 ro, rd;
+        view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+        // Dispersive glass (FrameData.disperses): each channel follows its own IOR's path.
+        if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
+            L.rgb = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
+        } else {
+            L.rgb = trace_glass(ro, rd, 0u);
+        }
+        L.a = 1.0;
     }
-    if (!inside) return;
-    L.a = glass ? 1.0 : 0.0;
     if (pc.add != 0u) L.rgb += imageLoad(o_glass, q).rgb;
     imageStore(o_glass, q, L);
 }

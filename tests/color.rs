@@ -227,9 +227,8 @@ fn color_matches_reference() {
 /// channel, where this gives 0.972, 0.891 and 0.751. The tolerance, 1e-3 relative, is float rounding.
 ///
 /// The same slab made dispersive (Abbe number 10) is traced per channel, at its channel's IOR (F from 0.0381 in
-/// red to 0.0444 in blue): at one sample a pixel three traces a sample, and at 2×2 samples one trace a sample in a
-/// mosaic of channels whose pixel means every sample takes (glsl/glass.comp); a channel taken from the wrong
-/// sample would be off by its absorption.
+/// red to 0.0444 in blue), at one and at 2×2 samples a pixel: a channel traced at another's IOR, or taken from
+/// another's trace, would be off by its absorption.
 #[test]
 fn colored_glass_tints_the_beauty_by_beer_lambert() {
     let dir = out_dir("color_beauty");
@@ -275,7 +274,7 @@ material = {{ kind = "dielectric", ior = 1.5, absorption = [0.3, 1.2, 3.0]{dispe
         let a = 1.5 - b * inv2(587.6);
         [656.3, 587.6, 486.1].map(|nm| a + b * inv2(nm))
     };
-    for (name, abbe, aa) in [("slab", 0.0, "1"), ("dispersive", 10.0, "1"), ("dispersive_mosaic", 10.0, "2")] {
+    for (name, abbe, aa) in [("slab", 0.0, "1"), ("dispersive", 10.0, "1"), ("dispersive_aa2", 10.0, "2")] {
         let img = beauty_aa(&dir, name, &slab(abbe), "side", aa, &[]);
         // The center pixel looks through the slab (|x|, |y - 0.5| < 0.3 m); a corner one at the sky alone.
         let (through, sky) = (img.at(32, 32), img.at(2, 2));
