@@ -186,25 +186,84 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     return L;
 }
 
-// One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under every light.
-void main() {
-    GpuView cam = u_frame.camera;
-    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
-    if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
+// Whether eye sample q sees glass first, and its eye ray.
+bool sees_glass(ivec2 q, out vec3 ro, out vec3 rd) {
+    view_ray(u_frame.camera, (vec2(q) + 0.5) * u_frame.camera.extent.zw, ro, rd);
     vec4 rad = texelFetch(t_radiance, q, 0);
     vec4 front = geo_fetch(t_front, q);
-    vec4 L = vec4(0.0);
-    if (front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w)) {
-        vec3 ro, rd;
-        view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
+    return front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w);
+}
+
+// Write sample q's glass radiance (alpha: it sees glass), onto what an earlier pass wrote where pc.add says.
+void store_glass(ivec2 q, vec3 L, bool glass) {
+    if (pc.add != 0u) L += imageLoad(o_glass, q).rgb;
+    imageStore(o_glass, q, vec4(L, glass ? 1.0 : 0.0));
+}
+
+// Dispersive glass at 2×2 samples a pixel (pc.pixels): one invocation traces pixel p's four samples. Where all four
+// see glass, each channel is traced at the two samples of one diagonal of the pixel (red and blue on one, green on
+// the other, which diagonal a hash of the pixel picks): six traces, not twelve, and every sample takes the pixel's
+// mean of each channel. Where a channel's two samples differ by more than a tenth (an edge seen through the glass,
+// which any line through the pixel between its samples makes one diagonal straddle), and where only some samples
+// see glass (its silhouette), every sample that sees glass traces all three. The traces run in one loop over
+// (sample, channel) jobs, so that the trace is compiled once.
+void glass_pixel(ivec2 p) {
+    bool glass[4];
+    uint seen = 0u;
+    for (int k = 0; k < 4; k++) {
+        vec3 o, d;
+        glass[k] = sees_glass(2 * p + ivec2(k & 1, k >> 1), o, d);
+        seen += glass[k] ? 1u : 0u;
+    }
+    // Jobs as (sample, channel) bits: sample k, channel c (1-3) traced where bit 4 (k) + c - 1 of `todo` is set.
+    uint diag = spectrum_hash(uint(p.x) ^ spectrum_hash(uint(p.y))) & 1u;
+    uint a0 = diag, a1 = 3u - diag, g0 = 1u - diag, g1 = 2u + diag;
+    uint mosaic = (5u << (4u * a0)) | (5u << (4u * a1)) | (2u << (4u * g0)) | (2u << (4u * g1));
+    uint everything = 0u;
+    for (uint k = 0u; k < 4u; k++) everything |= glass[k] ? 7u << (4u * k) : 0u;
+    uint todo = seen == 4u ? mosaic : everything;
+    vec3 L[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    for (int pass = 0; pass < 2; pass++) {
+        while (todo != 0u) {
+            uint bit = uint(findLSB(todo));
+            todo &= todo - 1u;
+            uint k = bit >> 2, c = (bit & 3u) + 1u;
+            vec3 o, d;
+            view_ray(u_frame.camera, (vec2(2 * p + ivec2(k & 1u, k >> 1)) + 0.5) * u_frame.camera.extent.zw, o, d);
+            L[k][c - 1u] = trace_glass(o, d, c)[c - 1u];
+        }
+        if (pass == 1 || seen != 4u) break;
+        vec3 r = vec3(L[a0].r, L[g0].g, L[a0].b), s = vec3(L[a1].r, L[g1].g, L[a1].b);
+        if (any(greaterThan(abs(r - s), 0.1 * max(r, s) + 1e-6))) {
+            // An edge: every sample's other channels too.
+            todo = everything & ~mosaic;
+        } else {
+            vec3 mean = 0.5 * (r + s);
+            for (int k = 0; k < 4; k++) L[k] = mean;
+            break;
+        }
+    }
+    for (int k = 0; k < 4; k++) store_glass(2 * p + ivec2(k & 1, k >> 1), L[k], glass[k]);
+}
+
+// One eye sample (eye-buffer texel) per invocation: where glass is in front, its radiance under every light.
+void main() {
+    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+    if (GLASS_DISPERSIVE && pc.pixels != 0u) {
+        if (2 * q.x < imageSize(o_glass).x && 2 * q.y < imageSize(o_glass).y) glass_pixel(q);
+        return;
+    }
+    if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
+    vec3 ro, rd;
+    bool glass = sees_glass(q, ro, rd);
+    vec3 L = vec3(0.0);
+    if (glass) {
         // Dispersive glass (FrameData.disperses): each channel follows its own IOR's path.
         if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
-            L.rgb = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
+            L = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
         } else {
-            L.rgb = trace_glass(ro, rd, 0u);
+            L = trace_glass(ro, rd, 0u);
         }
-        L.a = 1.0;
     }
-    if (pc.add != 0u) L.rgb += imageLoad(o_glass, q).rgb;
-    imageStore(o_glass, q, L);
+    store_glass(q, L, glass);
 }

@@ -26,6 +26,7 @@ layout(set = 0, binding = CB_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_te
 layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
 
 layout(push_constant) uniform Push {
+    uint pixels;  // glass.comp: 1 when an invocation traces a pixel's 2×2 samples of dispersive glass
     uint add;  // glass.comp: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights)
 } pc;
 #endif

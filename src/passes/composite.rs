@@ -79,11 +79,14 @@ impl GlassKey {
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct CompositePush {
+    /// The glass pass: 1 when each invocation traces a pixel's 2×2 samples of dispersive glass (glsl/glass.comp,
+    /// `glass_pixel`), dispatched over the pixels; 0: one sample an invocation.
+    pixels: u32,
     /// The glass pass: add to what an earlier pass wrote. (Its number of lights is a specialization constant,
     /// [`GlassKey::lights`].)
     add: u32,
 }
-const _: () = assert!(std::mem::size_of::<CompositePush>() == 4);
+const _: () = assert!(std::mem::size_of::<CompositePush>() == 8);
 
 /// One light's uniforms and maps, as the glass pass reads them.
 #[derive(Clone, Copy)]
@@ -200,8 +203,14 @@ impl CompositePass {
         };
         let pipeline = self.glass[key.index()].get()?;
         self.bind(cmd, pipeline, i)?;
-        pipeline.push(cmd, &CompositePush { add: add as u32 });
-        let (gx, gy) = groups_2d(i.glass.extent.width, i.glass.extent.height);
+        // Dispersive glass at 2×2 samples a pixel: one invocation a pixel (its samples share their traces).
+        let pixels = i.dispersive && i.glass.extent.width == 2 * i.beauty.extent.width;
+        pipeline.push(cmd, &CompositePush { pixels: pixels as u32, add: add as u32 });
+        let (gx, gy) = if pixels {
+            groups_2d(i.beauty.extent.width, i.beauty.extent.height)
+        } else {
+            groups_2d(i.glass.extent.width, i.glass.extent.height)
+        };
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
     }
@@ -216,7 +225,7 @@ impl CompositePass {
         }
         .get()?;
         self.bind(cmd, pipeline, i)?;
-        pipeline.push(cmd, &CompositePush { add: 0 });
+        pipeline.push(cmd, &CompositePush { pixels: 0, add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
