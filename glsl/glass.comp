@@ -186,9 +186,13 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
     return L;
 }
 
-// Whether eye sample q sees glass first, and its eye ray.
-bool sees_glass(ivec2 q, out vec3 ro, out vec3 rd) {
+// Eye sample q's ray.
+void sample_ray(ivec2 q, out vec3 ro, out vec3 rd) {
     view_ray(u_frame.camera, (vec2(q) + 0.5) * u_frame.camera.extent.zw, ro, rd);
+}
+
+// Whether eye sample q sees glass first.
+bool sees_glass(ivec2 q) {
     vec4 rad = texelFetch(t_radiance, q, 0);
     vec4 front = geo_fetch(t_front, q);
     return front.w > 0.0 && (rad.w <= 0.0 || front.w < rad.w);
@@ -211,8 +215,7 @@ void glass_pixel(ivec2 p) {
     bool glass[4];
     uint seen = 0u;
     for (int k = 0; k < 4; k++) {
-        vec3 o, d;
-        glass[k] = sees_glass(2 * p + ivec2(k & 1, k >> 1), o, d);
+        glass[k] = sees_glass(2 * p + ivec2(k & 1, k >> 1));
         seen += glass[k] ? 1u : 0u;
     }
     // Jobs as (sample, channel) bits: sample k, channel c (1-3) traced where bit 4 (k) + c - 1 of `todo` is set.
@@ -229,7 +232,7 @@ void glass_pixel(ivec2 p) {
             todo &= todo - 1u;
             uint k = bit >> 2, c = (bit & 3u) + 1u;
             vec3 o, d;
-            view_ray(u_frame.camera, (vec2(2 * p + ivec2(k & 1u, k >> 1)) + 0.5) * u_frame.camera.extent.zw, o, d);
+            sample_ray(2 * p + ivec2(k & 1u, k >> 1), o, d);
             L[k][c - 1u] = trace_glass(o, d, c)[c - 1u];
         }
         if (pass == 1 || seen != 4u) break;
@@ -254,10 +257,11 @@ void main() {
         return;
     }
     if (q.x >= imageSize(o_glass).x || q.y >= imageSize(o_glass).y) return;
-    vec3 ro, rd;
-    bool glass = sees_glass(q, ro, rd);
+    bool glass = sees_glass(q);
     vec3 L = vec3(0.0);
     if (glass) {
+        vec3 ro, rd;
+        sample_ray(q, ro, rd);
         // Dispersive glass (FrameData.disperses): each channel follows its own IOR's path.
         if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
             L = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);

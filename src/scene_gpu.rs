@@ -542,7 +542,7 @@ impl BvhBuffers {
     /// The heights of refit mesh `r`'s nodes, lowest first: each `[first, count]` in the refit order.
     pub(crate) fn refit_levels(&self, r: &crate::bvh::RefitMesh) -> Vec<[u32; 2]> {
         let levels = self.host.as_ref().map_or(&[][..], |b| &b.refit_levels[..]);
-        levels[r.first_level as usize..(r.first_level + r.levels) as usize].to_vec()
+        levels_of(levels, r.first_level, r.levels)
     }
 
     /// This frame traces `layout` (exact transport). The refit writes only what such frames read: the wide
@@ -570,7 +570,7 @@ impl BvhBuffers {
     /// none): each `[first, count]` in the wide refit order.
     pub(crate) fn wide_refit_levels(&self, r: &crate::bvh::RefitMesh) -> Vec<[u32; 2]> {
         let levels = self.host.as_ref().filter(|_| self.refits_wide()).map_or(&[][..], |b| &b.wide_refit_levels[..]);
-        levels.get(r.wide_first_level as usize..(r.wide_first_level + r.wide_levels) as usize).unwrap_or(&[]).to_vec()
+        levels_of(levels, r.wide_first_level, r.wide_levels)
     }
 
     /// The binary layouts the refit writes, as its mask: 1 pair, 2 single, 4 threaded; those on the GPU that
@@ -588,6 +588,11 @@ impl BvhBuffers {
     pub(crate) fn instance_records(&self) -> Option<&[GpuInstance]> {
         self.host.as_ref().filter(|b| !b.instances.is_empty()).map(|b| &b.instances[..])
     }
+}
+
+/// A mesh's run of `count` heights from `first` in a refit's height list (none where the list is empty).
+fn levels_of(levels: &[[u32; 2]], first: u32, count: u32) -> Vec<[u32; 2]> {
+    levels.get(first as usize..(first + count) as usize).unwrap_or(&[]).to_vec()
 }
 
 /// A refractor's gray index of refraction as the light and eye views' IOR buffers hold it. A negative IOR marks a

@@ -660,23 +660,20 @@ impl Renderer {
                     Deformer::Morph(m) => up.morph_triangles.push(MorphPush::bvh(&r, &m)),
                 }
                 up.refit_meshes += 1;
-                let layouts = sb.bvh.layout_mask();
-                if layouts != 0 {
-                    let levels = sb.bvh.refit_levels(&r);
-                    up.refits.extend(levels.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
+                // One job a height; `layouts` names the binary layouts refit.comp writes (none: no binary refit).
+                let jobs = |levels: Vec<[u32; 2]>, layouts: u32| {
+                    levels.into_iter().map(move |[first, count]| crate::gpu_types::RefitPush {
                         first,
                         count,
                         layouts,
                         pad: 0,
-                    }));
+                    })
+                };
+                let layouts = sb.bvh.layout_mask();
+                if layouts != 0 {
+                    up.refits.extend(jobs(sb.bvh.refit_levels(&r), layouts));
                 }
-                let wide = sb.bvh.wide_refit_levels(&r);
-                up.wide_refits.extend(wide.iter().map(|&[first, count]| crate::gpu_types::RefitPush {
-                    first,
-                    count,
-                    layouts: 0,
-                    pad: 0,
-                }));
+                up.wide_refits.extend(jobs(sb.bvh.wide_refit_levels(&r), 0));
             }
         }
         // The weights at the frame's time, for every morphing object (a few floats each).
