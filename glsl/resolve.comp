@@ -65,8 +65,10 @@ void main() {
         float side = v.window.z * v.extent.z;
         float area = view_cell_measure(v, xy, side) / cos_t;
         if (!view_is_ortho(v)) area *= r.w * r.w;
-        // The map holds flux for a white light; the light's color (per unit intensity) tints it here.
+        // The map holds flux for a white light; the light's color (per unit intensity) tints it here. Spectral
+        // photons carried it (glsl/splat.comp, spectral_tint).
         vec3 tint = u_frame.light_intensity > 0.0 ? u_frame.light_power / u_frame.light_intensity : vec3(0.0);
+        if (u_frame.channel == CHANNEL_SPECTRAL) tint = vec3(1.0);
         e = flux_rgb(p, size) * tint / area;
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green

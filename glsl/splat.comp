@@ -18,8 +18,8 @@
 // SPLAT_FINE_RADIUS + 1)² taps, where a 64-texel tent took 129².
 //
 // SPLAT_COLOR (docs/design.md "Color"): 1, color photons: a record's flux is its channels' mean and its tint their
-// ratios to it (splat_tints); 2, spectral photons: a record's word is its wavelength, whose RGB (spectrum_rgb) the
-// flux is spread over. Either way each tap adds its share of each channel to that channel's plane of the texels.
+// ratios to it (splat_tints); 2, spectral photons: a record's word is its wavelength, whose RGB (spectrum_rgb)
+// times the light's color at it (spectral_tint) the flux is spread over. Either way each tap adds its share of each channel to that channel's plane of the texels.
 #extension GL_EXT_shader_atomic_float : require
 #include "common/photon_bindings.glsl"
 #include "common/splat_levels.glsl"
@@ -32,6 +32,14 @@ const bool SPLAT_RGB = SPLAT_COLOR != 0u;
 const uint SPLAT_PLANES = SPLAT_RGB ? 3u : 1u;
 
 // Add v (W) to flux texel k, tinted: each channel's share to its plane (`plane` texels apart).
+// A spectral photon's RGB per watt: its wavelength's, times the pass's light color as a spectrum there (white:
+// 1; FrameData.light_spectrum_c*, src/spectrum.rs RgbSpectrum), so that its mean over the wavelengths is that color.
+vec3 spectral_tint(float nm) {
+    vec3 color = u_frame.light_intensity > 0.0 ? u_frame.light_power / u_frame.light_intensity : vec3(0.0);
+    vec3 c = vec3(u_frame.light_spectrum_c0, u_frame.light_spectrum_c1, u_frame.light_spectrum_c2);
+    return spectrum_rgb(nm) * rgb_spectrum(color, c, nm);
+}
+
 void flux_add(uint k, float v, vec3 tint, uint plane) {
     if (SPLAT_RGB) {
         atomicAdd(flux_texels[k], v * tint.r);
@@ -107,7 +115,7 @@ void main() {
         s = splats[draw_cmd.z + i];
         if (SPLAT_RGB) {
             uint w = splat_tints[draw_cmd.z + i];
-            tint = SPLAT_COLOR == 2u ? spectrum_rgb(uintBitsToFloat(w)) : tint_unpack(w);
+            tint = SPLAT_COLOR == 2u ? spectral_tint(uintBitsToFloat(w)) : tint_unpack(w);
         }
         valid = s.shape > 0.0 && all(greaterThanEqual(s.texel, vec2(0.0))) && all(lessThanEqual(s.texel, vec2(size)));
     }

@@ -93,10 +93,11 @@ pub struct FrameData {
     /// Exact transport's weak-branch fraction (0: off), and the weak-branch block's side in cells.
     pub weak_fraction: f32,
     pub weak_block: f32,
-    /// To 16 bytes, the size std140 gives the block (scalars: std140 would align an array to 16 bytes).
-    pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
+    /// The light's color as a spectrum for photons that carry a wavelength: its `RgbSpectrum` coefficients (the
+    /// scale is twice its color's largest channel). Scalars: std140 would align an array to 16 bytes.
+    pub light_spectrum_c0: f32,
+    pub light_spectrum_c1: f32,
+    pub light_spectrum_c2: f32,
 }
 
 /// One traversal level's counts.

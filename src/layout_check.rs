@@ -87,13 +87,14 @@ fn a_shader_that_reads_a_struct_with_another_layout_fails_the_check() {
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
     assert!(e.contains("FrameData.pyramid has an array stride of 16 bytes in SPIR-V, 8 in Rust"), "{e}");
     // A member the shader does not have.
-    let wrong = real_structs(Some(("    pub pad2: u32,\n}", "    pub pad2: u32,\n    pub more: u32,\n}")));
+    let last = "    pub light_spectrum_c2: f32,\n}";
+    let wrong = real_structs(Some((last, "    pub light_spectrum_c2: f32,\n    pub more: u32,\n}")));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
     assert!(e.contains("struct FrameData has 38 members in SPIR-V, 39 in Rust"), "{e}");
     // The build's own check of such a struct is stricter: compiled from it, std140 would align the array to 16
     // bytes (byte 688) where Rust packs it at 676, and the build fails there. Against these shaders, the members
     // no longer match.
-    let pads = "    pub pad0: u32,\n    pub pad1: u32,\n    pub pad2: u32,";
+    let pads = "    pub light_spectrum_c0: f32,\n    pub light_spectrum_c1: f32,\n    pub light_spectrum_c2: f32,";
     let wrong = real_structs(Some((pads, "    pub pad: [u32; 3],")));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
     assert!(e.contains("struct FrameData has 38 members in SPIR-V, 36 in Rust"), "{e}");

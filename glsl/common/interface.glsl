@@ -114,7 +114,7 @@ float inst_ior_in(uint inst, uint c) {
     return c == 0u ? bvh_instance(inst).material.x : bvh_instance(inst).ior_rgb[c - 1u];
 }
 float inst_sigma_in(uint inst, uint c) {
-    if (ray_nm > 0.0) return sigma_at(bvh_instance(inst).sigma_rgb.xyz, ray_nm);
+    if (ray_nm > 0.0) return rgb_spectrum(bvh_instance(inst).sigma_rgb.xyz, bvh_instance(inst).pad.yzw, ray_nm);
     return c == 0u ? bvh_instance(inst).material.z : bvh_instance(inst).sigma_rgb[c - 1u];
 }
 // Media (docs/design.md "Media"): a medium is 0 for air (IOR 1, no absorption), else a dielectric instance + 1,

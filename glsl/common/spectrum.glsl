@@ -15,9 +15,24 @@ const vec4 CIE_LOBES[7] = vec4[7](
 // XYZ to linear sRGB (its D65 primaries), rows as GLSL reads a matrix's columns.
 const mat3 XYZ_TO_SRGB = mat3(3.2404542, -0.9692660, 0.0556434, -1.5371385, 1.8760108, -0.2040259, -0.4985314,
                               0.0415560, 1.0572252);
-// Each channel's scale: (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM) over the integral of its response over the range, so
-// that an equal-energy spectrum, sampled uniformly, deposits (1, 1, 1) per watt (white balanced to illuminant E).
-const vec3 SPECTRUM_WHITE = vec3(3.116211, 3.939409, 4.120958);
+// CIE standard illuminant D65, relative power at 5 nm steps from 380 to 780 nm (linear between them): white light.
+const float SPECTRUM_D65[81] = float[81](
+    49.9755, 52.3118, 54.6482, 68.7015, 82.7549, 87.1204, 91.486, 92.4589, 93.4318, 90.057, 86.6823, 95.7736,
+    104.865, 110.936, 117.008, 117.41, 117.812, 116.336, 114.861, 115.392, 115.923, 112.367, 108.811, 109.082,
+    109.354, 108.578, 107.802, 106.296, 104.79, 106.239, 107.689, 106.047, 104.405, 104.225, 104.046, 102.023,
+    100.0, 98.1671, 96.3342, 96.0611, 95.788, 92.2368, 88.6856, 89.3459, 90.0062, 89.8026, 89.5991, 88.6489,
+    87.6987, 85.4936, 83.2886, 83.4939, 83.6992, 81.863, 80.0268, 80.1207, 80.2146, 81.2462, 82.2778, 80.281,
+    78.2842, 74.0027, 69.7213, 70.6652, 71.6091, 72.979, 74.349, 67.9765, 61.604, 65.7448, 69.8856, 72.4863, 75.087,
+    69.3398, 63.5927, 55.0054, 46.4182, 56.6118, 66.8054, 65.0941, 63.3828);
+// Each channel's scale: one over the mean of its response times D65 over the range, so that D65, sampled
+// uniformly, deposits (1, 1, 1) per watt.
+const vec3 SPECTRUM_WHITE = vec3(0.037859876, 0.037839598, 0.037864591);
+
+float d65(float nm) {
+    float u = clamp((nm - SPECTRUM_MIN_NM) / 5.0, 0.0, 80.0);
+    uint i = min(uint(u), 79u);
+    return mix(SPECTRUM_D65[i], SPECTRUM_D65[i + 1u], u - float(i));
+}
 
 float cie_lobe(float nm, vec4 l) {
     float t = (nm - l.y) / (nm < l.y ? l.z : l.w);
@@ -30,9 +45,9 @@ vec3 cie_xyz(float nm) {
                 cie_lobe(nm, CIE_LOBES[5]) + cie_lobe(nm, CIE_LOBES[6]));
 }
 
-// The RGB a photon of wavelength nm deposits per watt of its flux (some channels negative: spectral colours lie
-// outside sRGB's gamut); the mean over the range is (1, 1, 1).
-vec3 spectrum_rgb(float nm) { return SPECTRUM_WHITE * (XYZ_TO_SRGB * cie_xyz(nm)); }
+// The RGB a photon of wavelength nm deposits per watt of white light (D65; some channels negative: spectral
+// colours lie outside sRGB's gamut); the mean over the range is (1, 1, 1).
+vec3 spectrum_rgb(float nm) { return SPECTRUM_WHITE * d65(nm) * (XYZ_TO_SRGB * cie_xyz(nm)); }
 
 // An integer hash (Wellons' lowbias32).
 uint spectrum_hash(uint x) {
@@ -62,11 +77,13 @@ float cauchy_ior(vec3 n_cdf, float nm) {
     return n_cdf.x + b * (1.0 / (nm * nm) - C2);
 }
 
-// An absorption coefficient given per channel as at the C, d and F lines (red, green, blue), at wavelength nm:
-// linear between them, constant beyond.
-float sigma_at(vec3 s_rgb, float nm) {
-    if (nm >= 587.6) return mix(s_rgb.g, s_rgb.r, clamp((nm - 587.6) / (656.3 - 587.6), 0.0, 1.0));
-    return mix(s_rgb.b, s_rgb.g, clamp((nm - 486.1) / (587.6 - 486.1), 0.0, 1.0));
+// The smooth spectrum of a non-negative RGB color (src/spectrum.rs RgbSpectrum: Jakob and Hanika 2019), at
+// wavelength nm: 2·max(rgb) times the sigmoid of the quadratic with coefficients c in the normalized wavelength.
+float rgb_spectrum(vec3 rgb, vec3 c, float nm) {
+    float x = (nm - SPECTRUM_MIN_NM) / (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM);
+    float y = (c.x * x + c.y) * x + c.z;
+    float s = isinf(y) ? step(0.0, y) : 0.5 + 0.5 * y * inversesqrt(1.0 + y * y);
+    return 2.0 * max(rgb.r, max(rgb.g, rgb.b)) * s;
 }
 
 #endif

@@ -303,8 +303,12 @@ pub(super) fn material_words(m: &Material) -> ([f32; 4], [f32; 3], [f32; 4], [f3
             [albedo.max_element(), 0.0, 0.0, map.map_or(0.0, |m| m.texture as f32 + 1.0)]
         }
     };
+    // A dielectric's absorption as a spectrum, for photons that carry a wavelength: its upsampled coefficients.
     let albedo = match *m {
         Material::Diffuse { albedo, .. } => albedo.to_array(),
+        Material::Dielectric { absorption, .. } => {
+            crate::spectrum::RgbSpectrum::fit_f32(absorption.to_array()).coeffs_f32()
+        }
         _ => [0.0; 3],
     };
     // A textured receiver's uv transform rows, in the words a dielectric's IORs and absorption take.

@@ -78,7 +78,7 @@ pub struct GpuInstance {
     /// medium priority (0: an explicit interface; `SceneBvh::set_media`).
     pub material: [f32; 4],
     /// x: root node index bits in the threaded layout; y, z, w: a diffuse receiver's rgb albedo (the eye-view
-    /// ray tracer shades with it).
+    /// ray tracer shades with it), a dielectric's absorption spectrum (`RgbSpectrum` coefficients of `sigma_rgb`).
     pub pad: [f32; 4],
     /// Dielectric: IOR of the red, green and blue channels (`Material::ior_rgb`); a textured receiver: its uv
     /// transform's first row. w: root node index bits in the wide layout (`EMPTY`: a deforming mesh, whose

@@ -403,6 +403,7 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
             let (right, down, fwd) = (right.as_dvec3(), down.as_dvec3(), fwd.as_dvec3());
             let pos = light.position.as_dvec3();
             let color = light.color.as_dvec3().to_array();
+            let spectrum = crate::spectrum::RgbSpectrum::fit(color);
             let none = |kind: &str| {
                 let info = LightInfo {
                     kind: kind.into(),
@@ -413,7 +414,7 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
                     flux_per_photon: 0.0,
                     color,
                 };
-                (LightSetup { emission: None, strata: Strata::new(1), photons: 0, phi: 0.0, color }, info)
+                (LightSetup { emission: None, strata: Strata::new(1), photons: 0, phi: 0.0, color, spectrum }, info)
             };
             let (emission, sampling, half) = match light.kind {
                 LightKind::Spot | LightKind::Point => {
@@ -469,7 +470,14 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
                 color,
             };
             (
-                LightSetup { emission: Some(emission), strata: Strata::new(p.photons), photons: p.photons, phi, color },
+                LightSetup {
+                    emission: Some(emission),
+                    strata: Strata::new(p.photons),
+                    photons: p.photons,
+                    phi,
+                    color,
+                    spectrum,
+                },
                 info,
             )
         })
@@ -515,7 +523,11 @@ fn run_chunks(
         for out in outs {
             tally.add(&out.tally);
             for d in &out.deposits {
-                let c = tracer.lights[d.light as usize].color;
+                // Spectral photons carry their light's color in their deposits.
+                let c = match tracer.color {
+                    tracer::PhotonColor::Spectral => [1.0; 3],
+                    _ => tracer.lights[d.light as usize].color,
+                };
                 let px = &mut image[d.pixel as usize];
                 for k in 0..3 {
                     px[k] += d.e * d.rgb[k] as f64 * c[k];

@@ -7,6 +7,7 @@ use super::sampling::{Emission, Rng, Strata};
 use super::{Aov, Paths, BOUNCE_CAP};
 use crate::scene::{CameraView, Material, Scene};
 use crate::shaders::consts::MAX_NESTED;
+use crate::spectrum::RgbSpectrum;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +21,8 @@ pub(crate) struct LightSetup {
     /// Flux of each photon, W, before the light color: I·Ω/N (spot) or E·A/N (directional).
     pub phi: f64,
     pub color: [f64; 3],
+    /// Its color as a spectrum (D65 times its upsampled color), for photons that carry a wavelength.
+    pub spectrum: crate::spectrum::RgbSpectrum,
 }
 
 /// Counts and flux sums (W, before light color) of one chunk of photons, or of the whole run. Every traced
@@ -214,7 +217,7 @@ pub(crate) struct Tracer<'a> {
     /// IOR of each scene object per color channel (0 for receivers); the three are equal without dispersion.
     pub ior: Vec<[f64; 3]>,
     /// Absorption coefficient inside each dielectric per color channel, 1/m (0 elsewhere).
-    pub absorption: Vec<[f64; 3]>,
+    pub absorption: Vec<([f64; 3], RgbSpectrum)>,
     /// The medium beyond each dielectric's surface (`Object::outside`; None: air).
     pub outside: Vec<Option<usize>>,
     /// Each object's medium priority (`Object::priority`; 0: an explicit interface).
@@ -252,11 +255,11 @@ impl Band {
         }
     }
 
-    /// An absorption coefficient given per channel, in this band.
-    fn sigma(self, s: &[f64; 3]) -> f64 {
+    /// An absorption coefficient given per channel (and as its spectrum), in this band.
+    fn sigma(self, s: &([f64; 3], RgbSpectrum)) -> f64 {
         match self {
-            Band::Channel(c) => s[c],
-            Band::Wavelength(nm) => crate::spectrum::sigma_at(*s, nm),
+            Band::Channel(c) => s.0[c],
+            Band::Wavelength(nm) => s.1.at(nm),
         }
     }
 }
@@ -352,7 +355,14 @@ impl Tracer<'_> {
                 Material::Diffuse { .. } => [0.0; 3],
             })
             .collect();
-        let absorption = scene.objects.iter().map(|o| o.absorption().to_array().map(|x| x as f64)).collect();
+        let absorption = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let s = o.absorption().to_array().map(|x| x as f64);
+                (s, RgbSpectrum::fit(s))
+            })
+            .collect();
         Tracer {
             geo,
             lights,
@@ -406,7 +416,8 @@ impl Tracer<'_> {
             PhotonColor::Spectral => {
                 use crate::spectrum::{spectrum_rgb, SPECTRUM_MAX_NM, SPECTRUM_MIN_NM};
                 let nm = SPECTRUM_MIN_NM + (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM) * rng.next_f64();
-                (Band::Wavelength(nm), spectrum_rgb(nm).map(|x| x as f32))
+                let s = light.spectrum.at(nm);
+                (Band::Wavelength(nm), spectrum_rgb(nm).map(|x| (x * s) as f32))
             }
         };
         t.photons_traced += 1;
@@ -435,8 +446,13 @@ impl Tracer<'_> {
                 }
             }
             if hit.receiver {
-                // Light that met no glass is the same in every channel.
-                let rgb = if refr + refl == 0 { [1.0; 3] } else { rgb };
+                // Light that met no glass is the same in every channel (spectral photons carry the light's color:
+                // there it is that color, their mean).
+                let rgb = match (refr + refl, self.color) {
+                    (0, PhotonColor::Spectral) => light.color.map(|c| c as f32),
+                    (0, _) => [1.0; 3],
+                    _ => rgb,
+                };
                 self.deposit(li, &hit, d, refr, refl, phi, rgb, out);
                 return;
             }

@@ -82,6 +82,10 @@ pub(crate) fn frame_data(
     let mut camera = GpuView::from_camera(&views.camera);
     let aa = targets.aa as f32;
     camera.extent = [camera.extent[0] * aa, camera.extent[1] * aa, camera.extent[2] / aa, camera.extent[3] / aa];
+    let light_spectrum = match channel {
+        CHANNEL_SPECTRAL => crate::spectrum::RgbSpectrum::fit_f32(light.color.to_array()).coeffs_f32(),
+        _ => [0.0; 3],
+    };
     FrameData {
         photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
         receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
@@ -120,9 +124,9 @@ pub(crate) fn frame_data(
         shared_ior: scene_buffers.shared_ior.unwrap_or(0.0),
         weak_fraction: s.weak_branches,
         weak_block: s.weak_block as f32,
-        pad0: 0,
-        pad1: 0,
-        pad2: 0,
+        light_spectrum_c0: light_spectrum[0],
+        light_spectrum_c1: light_spectrum[1],
+        light_spectrum_c2: light_spectrum[2],
     }
 }
 
