@@ -204,13 +204,36 @@ void store_glass(ivec2 q, vec3 L, bool glass) {
     imageStore(o_glass, q, vec4(L, glass ? 1.0 : 0.0));
 }
 
-// Dispersive glass at 2×2 samples a pixel (pc.pixels): one invocation traces pixel p's four samples. Where all four
-// see glass, each channel is traced at the two samples of one diagonal of the pixel (red and blue on one, green on
-// the other, which diagonal a hash of the pixel picks): six traces, not twelve, and every sample takes the pixel's
-// mean of each channel. Where a channel's two samples differ by more than a tenth (an edge seen through the glass,
-// which any line through the pixel between its samples makes one diagonal straddle), and where only some samples
-// see glass (its silhouette), every sample that sees glass traces all three. The traces run in one loop over
-// (sample, channel) jobs, so that the trace is compiled once.
+// The spread of eye bin wavelengths at pixel p, in [0, 1): the R2 lattice over pixels, shifted by a hash of the
+// pixel's 4×4 block (as photon_wavelength spreads the photons'), so that neighbouring pixels spread over each bin.
+float eye_jitter(ivec2 p) {
+    uvec2 xy = uvec2(p);
+    uint h = spectrum_hash((xy.x >> 2) ^ spectrum_hash(xy.y >> 2));
+    return fract(float(xy.x & 3u) * 0.7548776662 + float(xy.y & 3u) * 0.5698402910 + float(h >> 8) * exp2(-24.0));
+}
+
+// Sample q's radiance through dispersive glass: one trace at a wavelength in each eye bin (spread by u), each
+// channel the bins' traces weighed by their shares of its response (EYE_BIN_SHARES).
+vec3 trace_spectral(ivec2 q, float u) {
+    vec3 o, d, L = vec3(0.0);
+    sample_ray(q, o, d);
+    for (uint b = 0u; b < EYE_BINS; b++) {
+        ray_nm = eye_wavelength(b, u);
+        L += EYE_BIN_SHARES[b] * trace_glass(o, d, 0u);
+    }
+    ray_nm = 0.0;
+    return L;
+}
+
+// Dispersive glass at 2×2 samples a pixel (pc.pixels): one invocation traces pixel p's four samples, spectrally:
+// a wavelength in each of the EYE_BINS bins (spread over the pixels by eye_jitter), each channel the bins' traces
+// weighed by their shares of its response. Where all four samples see glass, the samples of one diagonal (a hash of
+// the pixel picks which) trace bins 0 and 2, and 2 and 4, those of the other 1 and 3, and 3 and 5: eight traces,
+// and every sample takes the pixel's result, each bin's traces averaged. Bin 2 is traced at both samples of one
+// diagonal and bin 3 at both of the other, so an edge seen through the glass (any line through the pixel between
+// its samples makes one diagonal straddle it) shows as the two traces of one wavelength differing by more than a
+// tenth; there, and where only some samples see glass (its silhouette), every sample that sees glass traces every
+// bin. The traces run in one loop over (sample, bin) jobs, so that the trace is compiled once.
 void glass_pixel(ivec2 p) {
     bool glass[4];
     uint seen = 0u;
@@ -218,31 +241,41 @@ void glass_pixel(ivec2 p) {
         glass[k] = sees_glass(2 * p + ivec2(k & 1, k >> 1));
         seen += glass[k] ? 1u : 0u;
     }
-    // Jobs as (sample, channel) bits: sample k, channel c (1-3) traced where bit 4 (k) + c - 1 of `todo` is set.
+    // Jobs as (sample, bin) bits: sample k, bin b traced where bit EYE_BINS k + b of `todo` is set.
     uint diag = spectrum_hash(uint(p.x) ^ spectrum_hash(uint(p.y))) & 1u;
     uint a0 = diag, a1 = 3u - diag, g0 = 1u - diag, g1 = 2u + diag;
-    uint mosaic = (5u << (4u * a0)) | (5u << (4u * a1)) | (2u << (4u * g0)) | (2u << (4u * g1));
+    uint mosaic = (5u << (EYE_BINS * a0)) | (20u << (EYE_BINS * a1)) | (10u << (EYE_BINS * g0)) |
+                  (40u << (EYE_BINS * g1));
     uint everything = 0u;
-    for (uint k = 0u; k < 4u; k++) everything |= glass[k] ? 7u << (4u * k) : 0u;
+    for (uint k = 0u; k < 4u; k++) everything |= glass[k] ? ((1u << EYE_BINS) - 1u) << (EYE_BINS * k) : 0u;
     uint todo = seen == 4u ? mosaic : everything;
+    float u = eye_jitter(p);
     vec3 L[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    // The two traces of bin 2 (at a0, a1) and of bin 3 (at g0, g1).
+    vec3 probe[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     for (int pass = 0; pass < 2; pass++) {
         while (todo != 0u) {
             uint bit = uint(findLSB(todo));
             todo &= todo - 1u;
-            uint k = bit >> 2, c = (bit & 3u) + 1u;
+            uint k = bit / EYE_BINS, b = bit % EYE_BINS;
             vec3 o, d;
             sample_ray(2 * p + ivec2(k & 1u, k >> 1), o, d);
-            L[k][c - 1u] = trace_glass(o, d, c)[c - 1u];
+            ray_nm = eye_wavelength(b, u);
+            vec3 t = trace_glass(o, d, 0u);
+            L[k] += EYE_BIN_SHARES[b] * t;
+            if (b == 2u || b == 3u) probe[(b - 2u) * 2u + (k == a0 || k == g0 ? 0u : 1u)] = t;
         }
+        ray_nm = 0.0;
         if (pass == 1 || seen != 4u) break;
-        vec3 r = vec3(L[a0].r, L[g0].g, L[a0].b), s = vec3(L[a1].r, L[g1].g, L[a1].b);
-        if (any(greaterThan(abs(r - s), 0.1 * max(r, s) + 1e-6))) {
-            // An edge: every sample's other channels too.
+        vec3 r = vec3(probe[0]), s = vec3(probe[1]), g = vec3(probe[2]), h = vec3(probe[3]);
+        if (any(greaterThan(abs(r - s), 0.1 * max(r, s) + 1e-6)) ||
+            any(greaterThan(abs(g - h), 0.1 * max(g, h) + 1e-6))) {
+            // An edge: every sample's other bins too.
             todo = everything & ~mosaic;
         } else {
-            vec3 mean = 0.5 * (r + s);
-            for (int k = 0; k < 4; k++) L[k] = mean;
+            // Each bin once: the probes' two traces averaged.
+            vec3 pixel = L[0] + L[1] + L[2] + L[3] - 0.5 * EYE_BIN_SHARES[2] * (r + s) - 0.5 * EYE_BIN_SHARES[3] * (g + h);
+            for (int k = 0; k < 4; k++) L[k] = pixel;
             break;
         }
     }
@@ -260,12 +293,12 @@ void main() {
     bool glass = sees_glass(q);
     vec3 L = vec3(0.0);
     if (glass) {
-        vec3 ro, rd;
-        sample_ray(q, ro, rd);
-        // Dispersive glass (FrameData.disperses): each channel follows its own IOR's path.
+        // Dispersive glass (FrameData.disperses): each wavelength follows its own IOR's path.
         if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
-            L = vec3(trace_glass(ro, rd, 1u).r, trace_glass(ro, rd, 2u).g, trace_glass(ro, rd, 3u).b);
+            L = trace_spectral(q, eye_jitter(q));
         } else {
+            vec3 ro, rd;
+            sample_ray(q, ro, rd);
             L = trace_glass(ro, rd, 0u);
         }
     }

@@ -66,6 +66,86 @@ pub fn spectrum_rgb(nm: f64) -> [f64; 3] {
     std::array::from_fn(|r| SPECTRUM_WHITE[r] * d * (0..3).map(|c| XYZ_TO_SRGB[r][c] * xyz[c]).sum::<f64>())
 }
 
+/// Wavelength bins of the eye view's dispersive glass (docs/design.md "Color"): each pixel traces one wavelength in
+/// each, drawn from the bin by the response mass below.
+pub const EYE_BINS: usize = 6;
+
+/// Steps of the response-mass table (`spectrum_quantiles`): a multiple of `EYE_BINS`, so that bins end on steps.
+pub const QUANTILE_STEPS: usize = 60;
+
+/// The response mass at `nm`: Σ_c |k_c(λ)|, k = `spectrum_rgb`, the density the eye view draws its wavelengths by.
+fn response_mass(nm: f64) -> f64 {
+    spectrum_rgb(nm).iter().map(|k| k.abs()).sum()
+}
+
+/// The wavelengths (nm) below which lie 0, 1/60, …, 1 of the response mass over the range (midpoint rule at
+/// 0.01 nm, linear within a step).
+pub fn spectrum_quantiles() -> [f64; QUANTILE_STEPS + 1] {
+    let n = 40_000;
+    let step = (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM) / n as f64;
+    let mass: Vec<f64> = (0..n).map(|i| response_mass(SPECTRUM_MIN_NM + (i as f64 + 0.5) * step)).collect();
+    let total: f64 = mass.iter().sum();
+    let mut out = [SPECTRUM_MAX_NM; QUANTILE_STEPS + 1];
+    out[0] = SPECTRUM_MIN_NM;
+    let (mut acc, mut j) = (0.0, 1);
+    for (i, m) in mass.iter().enumerate() {
+        while j < QUANTILE_STEPS && acc + m >= total * j as f64 / QUANTILE_STEPS as f64 {
+            let f = (total * j as f64 / QUANTILE_STEPS as f64 - acc) / m;
+            out[j] = SPECTRUM_MIN_NM + (i as f64 + f) * step;
+            j += 1;
+        }
+        acc += m;
+    }
+    out
+}
+
+/// Each eye bin's share of each channel's response, ∫_bin k_c / ∫ k_c (midpoint rule at 0.01 nm): a pixel's channel c
+/// is Σ_b `share[b][c]` times its trace at bin b's wavelength, so the shares of a channel sum to 1 and a pixel whose
+/// wavelengths all see the same takes exactly that. Some are negative (a channel's response has negative lobes).
+pub fn eye_bin_shares() -> [[f64; 3]; EYE_BINS] {
+    let q = spectrum_quantiles();
+    let n = 40_000;
+    let step = (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM) / n as f64;
+    let (mut share, mut total) = ([[0.0; 3]; EYE_BINS], [0.0; 3]);
+    for i in 0..n {
+        let nm = SPECTRUM_MIN_NM + (i as f64 + 0.5) * step;
+        let b = (1..EYE_BINS).take_while(|&b| nm >= q[b * QUANTILE_STEPS / EYE_BINS]).count();
+        let k = spectrum_rgb(nm);
+        for c in 0..3 {
+            share[b][c] += k[c];
+            total[c] += k[c];
+        }
+    }
+    share.map(|s| std::array::from_fn(|c| s[c] / total[c]))
+}
+
+/// An integer hash (Wellons' lowbias32), as glsl/common/spectrum.glsl's `spectrum_hash`.
+pub fn spectrum_hash(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846ca68b);
+    x ^= x >> 16;
+    x
+}
+
+/// Where in its eye bins pixel (x, y) draws its wavelengths, in [0, 1) (glsl/glass.comp `eye_jitter`): the R2
+/// lattice over pixels, shifted by a hash of the pixel's 4×4 block.
+pub fn eye_jitter(x: u32, y: u32) -> f64 {
+    let h = spectrum_hash((x >> 2) ^ spectrum_hash(y >> 2));
+    let v = (x & 3) as f32 * 0.754_877_7 + (y & 3) as f32 * 0.569_840_3 + (h >> 8) as f32 * (-24f32).exp2();
+    v.fract() as f64
+}
+
+/// Eye bin `b`'s wavelength at `u` (glsl/common/spectrum.glsl `eye_wavelength`): the response mass's quantile
+/// (b + u) / EYE_BINS, linear between the table's steps.
+pub fn eye_wavelength(b: usize, u: f64) -> f64 {
+    let q = spectrum_quantiles();
+    let x = (b as f64 + u) * (QUANTILE_STEPS / EYE_BINS) as f64;
+    let i = (x as usize).min(QUANTILE_STEPS - 1);
+    q[i] + (q[i + 1] - q[i]) * (x - i as f64)
+}
+
 /// Cauchy's n(λ) = A + B/λ² through a dielectric's IORs at the Fraunhofer C, d and F lines (red to blue,
 /// `Material::ior_rgb`), at `nm`.
 pub fn cauchy_ior(n_cdf: [f64; 3], nm: f64) -> f64 {
@@ -369,6 +449,29 @@ mod tests {
             let ours: Vec<f64> = (0..7).map(|k| s.at(400.0 + 50.0 * k as f64)).collect();
             let worst = (0..7).map(|k| (ours[k] - theirs[k]).abs() / s.scale).fold(0.0, f64::max);
             assert!(worst < 0.01, "{rgb:?}: ours {ours:.4?}, colour-science's {theirs:?}");
+        }
+    }
+
+    /// The shaders' eye bins are these: the quantiles to 0.01 nm, the shares to 1e-5, each channel's shares summing
+    /// to 1.
+    #[test]
+    fn the_eye_bins_are_the_shaders() {
+        let q = spectrum_quantiles();
+        let got = glsl_numbers("SPECTRUM_QUANTILES");
+        assert_eq!(got.len(), q.len());
+        for (a, b) in got.iter().zip(q) {
+            assert!((a - b).abs() < 0.01, "quantile {a} vs {b}");
+        }
+        assert!(q.windows(2).all(|w| w[1] > w[0]));
+        let shares = eye_bin_shares();
+        let got = glsl_numbers("EYE_BIN_SHARES");
+        assert_eq!(got.len(), 3 * EYE_BINS);
+        for (a, b) in got.iter().zip(shares.concat()) {
+            assert!((a - b).abs() < 1e-5, "share {a} vs {b}");
+        }
+        for c in 0..3 {
+            let sum: f64 = (0..EYE_BINS).map(|b| got[3 * b + c]).sum();
+            assert!((sum - 1.0).abs() < 2e-5, "channel {c}: shares sum to {sum}");
         }
     }
 }

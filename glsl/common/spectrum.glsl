@@ -69,6 +69,27 @@ float photon_wavelength(uvec2 xy, uint level) {
     return mix(SPECTRUM_MIN_NM, SPECTRUM_MAX_NM, u);
 }
 
+// The eye view's dispersive glass (src/spectrum.rs EYE_BINS): a pixel traces one wavelength in each of EYE_BINS
+// bins of equal response mass (the sum of |spectrum_rgb|), drawn within its bin by that mass: the wavelengths below
+// which lie 0, 1/60, ..., 1 of it (linear between), and each bin's share of each channel's response.
+const uint EYE_BINS = 6u;
+const float SPECTRUM_QUANTILES[61] = float[61](
+    380.00, 420.73, 427.45, 432.31, 436.16, 439.53, 442.65, 445.67, 448.64, 451.61, 454.69, 457.96, 461.48,
+    465.23, 469.36, 473.85, 478.71, 483.94, 489.45, 494.90, 499.97, 504.66, 508.98, 512.99, 516.75, 520.23,
+    523.49, 526.58, 529.60, 532.61, 535.70, 538.91, 542.32, 545.97, 550.02, 554.65, 559.08, 563.20, 567.09,
+    570.79, 574.32, 577.71, 580.99, 584.25, 587.51, 590.80, 594.07, 597.32, 600.56, 603.84, 607.20, 610.63,
+    614.11, 617.70, 621.49, 625.62, 630.31, 635.79, 642.64, 652.99, 780.00);
+const vec3 EYE_BIN_SHARES[6] = vec3[6](
+    vec3(0.074250, -0.072079, 0.595198), vec3(-0.127421, 0.083241, 0.502888), vec3(-0.293567, 0.414970, -0.002117),
+    vec3(0.066023, 0.489737, -0.059420), vec3(0.589547, 0.125233, -0.027645), vec3(0.691168, -0.041102, -0.008904));
+
+// Eye bin b's wavelength at u in [0, 1): the response mass's quantile (b + u) / EYE_BINS.
+float eye_wavelength(uint b, float u) {
+    float x = (float(b) + u) * (60.0 / float(EYE_BINS));
+    uint i = min(uint(x), 59u);
+    return mix(SPECTRUM_QUANTILES[i], SPECTRUM_QUANTILES[i + 1u], x - float(i));
+}
+
 // Cauchy's n(λ) = A + B/λ² through a dielectric's IORs at the Fraunhofer C, d and F lines (ior_rgb, red to blue):
 // the curve they were made from (src/scene/mod.rs, Material::ior_rgb).
 float cauchy_ior(vec3 n_cdf, float nm) {
