@@ -14,10 +14,8 @@ layout(local_size_x = LINEAR_WG) in;
 #ifdef WATER_BVH
 layout(std430, set = 0, binding = 0) readonly buffer Displaced { vec4 displaced[]; };
 layout(std430, set = 0, binding = 1) readonly buffer RestCorners { uint rest_corners[]; };
-layout(std430, set = 0, binding = 2) readonly buffer RestTris { vec4 rest_tris[]; };
-layout(std430, set = 0, binding = 3) readonly buffer RestNormals { vec4 rest_normals[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = 3) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
 #else
 // Two per wave: (direction x, direction z, k, omega), (amplitude, 0, 0, 0).
 layout(std430, set = 0, binding = 0) readonly buffer Waves { vec4 waves[]; };
@@ -82,8 +80,9 @@ void main() {
         for (uint c = 0u; c < 3u; c++) {
             uint t = 3u * (pc.src + i) + c;
             uint k = pc.displaced + rest_corners[t];
-            bvh_tris[3u * (pc.dst + i) + c] = vec4(displaced[2u * k].xyz, rest_tris[t].w);
-            bvh_normals[3u * (pc.dst + i) + c] = vec4(displaced[2u * k + 1u].xyz, rest_normals[t].w);
+            // The w lanes hold texture coordinates, which water's meshes have none of (src/scene/water.rs).
+            bvh_tris[3u * (pc.dst + i) + c] = vec4(displaced[2u * k].xyz, 0.0);
+            bvh_normals[3u * (pc.dst + i) + c] = vec4(displaced[2u * k + 1u].xyz, 0.0);
         }
     }
 #endif

@@ -53,7 +53,7 @@ impl SceneUpdatePass {
             device,
             "water (BVH triangles)",
             shaders::WATER_COMP_BVH.words(),
-            &[BindKind::Storage; 6],
+            &[BindKind::Storage; 4],
             size(std::mem::size_of::<WaterPush>()),
         );
         let water_step = LazyPipeline::compute(
@@ -167,8 +167,6 @@ impl SceneUpdatePass {
         let binds = [
             Bind::Storage(&sb.displaced),
             Bind::Storage(&b.rest_corners),
-            Bind::Storage(&b.rest_tris),
-            Bind::Storage(&b.rest_normals),
             Bind::Storage(&b.triangles),
             Bind::Storage(&b.normals),
         ];
