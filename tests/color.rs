@@ -265,35 +265,15 @@ fn spectral_photons_absorb_by_the_upsampled_spectrum() {
     use caustics::spectrum::{cauchy_ior, spectrum_rgb, RgbSpectrum, SPECTRUM_MAX_NM, SPECTRUM_MIN_NM};
     let dir = out_dir("color_spectral_absorption");
     let slab = |absorption: &str| {
-        format!(
-            r#"[[light]]
-kind = "directional"
-position = [0.0, 2.0, 0.0]
-target = [0.0, 0.0, 0.0]
-intensity = 1.0
-
-[[camera]]
-name = "top"
-kind = "orthographic"
-position = [0.0, 3.0, 0.0]
-target = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, -1.0]
-half_height = 1.0
-
-[[object]]
-name = "floor"
-shape = "plane"
-size = [2.0, 2.0]
-material = {{ kind = "diffuse", albedo = 0.8 }}
-
-[[object]]
+        under_a_beam(&format!(
+            r#"[[object]]
 name = "slab"
 shape = "cube"
 size = [0.6, 0.1, 0.6]
 translate = [0.0, 0.5, 0.0]
 material = {{ kind = "dielectric", ior = 1.5, abbe = 10.0{absorption} }}
 "#
-        )
+        ))
     };
     let mut images = Vec::new();
     for (name, absorption) in [("clear", ""), ("amber", ", absorption = [3.0, 12.0, 30.0]")] {

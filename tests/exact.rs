@@ -491,37 +491,17 @@ fn total_internal_reflection_at_glass_water_only_past_the_critical_angle() {
         // each face with its own normal.
         let (ya, yb) = (0.9, 0.9 - 0.14 * alpha.tan());
         let mut obj = String::new();
+        // A B C, then A' B' C'.
         for z in [0.095, -0.095] {
             obj += &format!("v 0.07 {ya} {z}\nv -0.07 {yb} {z}\nv 0.07 {yb} {z}\n");
-            // A B C, then A' B' C'
         }
         obj += &format!("vn 0 0 1\nvn 0 0 -1\nvn 0 -1 0\nvn 1 0 0\nvn {} {} 0\n", -alpha.sin(), alpha.cos());
         obj += "f 2//1 3//1 1//1\nf 5//2 4//2 6//2\nf 2//3 5//3 3//3\nf 3//3 5//3 6//3\n";
         obj += "f 3//4 6//4 1//4\nf 1//4 6//4 4//4\nf 1//5 4//5 2//5\nf 2//5 4//5 5//5\n";
         let mesh = dir.join(format!("wedge{alpha_deg}.obj"));
         std::fs::write(&mesh, obj).unwrap();
-        let scene = format!(
-            r#"[[light]]
-kind = "directional"
-position = [0.0, 2.0, 0.0]
-target = [0.0, 0.5, 0.0]
-intensity = 1.0
-
-[[camera]]
-name = "top"
-kind = "orthographic"
-position = [0.0, 3.0, 0.0]
-target = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, -1.0]
-half_height = 1.0
-
-[[object]]
-name = "floor"
-shape = "plane"
-size = [2.0, 2.0]
-material = {{ kind = "diffuse", albedo = 0.8 }}
-
-[[object]]
+        let scene = under_a_beam(&format!(
+            r#"[[object]]
 name = "block"
 shape = "cube"
 size = [0.275, 0.5, 0.2]
@@ -535,7 +515,7 @@ path = "{}"
 material = {{ kind = "dielectric", ior = {nw}, outside = "block" }}
 "#,
             mesh.display()
-        );
+        ));
         let path = dir.join(format!("tir{alpha_deg}.toml"));
         std::fs::write(&path, scene).unwrap();
         let path = path.to_str().unwrap().to_string();

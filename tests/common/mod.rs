@@ -15,6 +15,34 @@ pub fn scene(name: &str) -> String {
     format!("{}/assets/scenes/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A scene under a directional beam of 1 W/m² straight down, over a 2 × 2 m diffuse floor (albedo 0.8) that the
+/// `top` orthographic camera covers exactly (columns along +x, rows along +z), with `objects` (TOML) added.
+pub fn under_a_beam(objects: &str) -> String {
+    format!(
+        r#"[[light]]
+kind = "directional"
+position = [0.0, 2.0, 0.0]
+target = [0.0, 0.5, 0.0]
+intensity = 1.0
+
+[[camera]]
+name = "top"
+kind = "orthographic"
+position = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+half_height = 1.0
+
+[[object]]
+name = "floor"
+shape = "plane"
+size = [2.0, 2.0]
+material = {{ kind = "diffuse", albedo = 0.8 }}
+
+{objects}"#
+    )
+}
+
 /// A fresh directory for one test's outputs.
 pub fn out_dir(test: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(test);
