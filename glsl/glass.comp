@@ -204,14 +204,6 @@ void store_glass(ivec2 q, vec3 L, bool glass) {
     imageStore(o_glass, q, vec4(L, glass ? 1.0 : 0.0));
 }
 
-// The spread of eye bin wavelengths at pixel p, in [0, 1): the R2 lattice over pixels, shifted by a hash of the
-// pixel's 4×4 block (as photon_wavelength spreads the photons'), so that neighbouring pixels spread over each bin.
-float eye_jitter(ivec2 p) {
-    uvec2 xy = uvec2(p);
-    uint h = spectrum_hash((xy.x >> 2) ^ spectrum_hash(xy.y >> 2));
-    return fract(float(xy.x & 3u) * 0.7548776662 + float(xy.y & 3u) * 0.5698402910 + float(h >> 8) * exp2(-24.0));
-}
-
 // Sample q's radiance through dispersive glass: one trace at a wavelength in each eye bin (spread by u), each
 // channel the bins' traces weighed by their shares of its response (EYE_BIN_SHARES).
 vec3 trace_spectral(ivec2 q, float u) {

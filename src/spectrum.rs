@@ -79,8 +79,13 @@ fn response_mass(nm: f64) -> f64 {
 }
 
 /// The wavelengths (nm) below which lie 0, 1/60, …, 1 of the response mass over the range (midpoint rule at
-/// 0.01 nm, linear within a step).
+/// 0.01 nm, linear within a step), integrated once.
 pub fn spectrum_quantiles() -> [f64; QUANTILE_STEPS + 1] {
+    static TABLE: std::sync::OnceLock<[f64; QUANTILE_STEPS + 1]> = std::sync::OnceLock::new();
+    *TABLE.get_or_init(integrate_quantiles)
+}
+
+fn integrate_quantiles() -> [f64; QUANTILE_STEPS + 1] {
     let n = 40_000;
     let step = (SPECTRUM_MAX_NM - SPECTRUM_MIN_NM) / n as f64;
     let mass: Vec<f64> = (0..n).map(|i| response_mass(SPECTRUM_MIN_NM + (i as f64 + 0.5) * step)).collect();

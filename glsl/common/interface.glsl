@@ -127,9 +127,8 @@ float medium_ior_in(uint m, uint c) { return m == AIR ? 1.0 : inst_ior_in(m - 1u
 float medium_sigma_in(uint m, uint c) { return m == AIR ? 0.0 : inst_sigma_in(m - 1u, c); }
 vec3 medium_sigma_rgb(uint m) {
     if (m == AIR) return vec3(0.0);
-    GpuInstance I = bvh_instance(m - 1u);
     // A ray of one wavelength: the absorption's spectrum there, in every channel.
-    return ray_nm > 0.0 ? vec3(rgb_spectrum(I.sigma_rgb.xyz, I.pad.yzw, ray_nm)) : I.sigma_rgb.xyz;
+    return ray_nm > 0.0 ? vec3(inst_sigma_in(m - 1u, 0u)) : bvh_instance(m - 1u).sigma_rgb.xyz;
 }
 
 // The medium a branch of a split at `inst` travels in: a reflection stays in the ray's own medium `m`; a refraction

@@ -59,14 +59,19 @@ uint spectrum_hash(uint x) {
     return x;
 }
 
+// A point in [0, 1) for cell (x, y) of a grid, so that any few neighbours spread evenly: the R2 lattice (Roberts
+// 2018), frac(x·a1 + y·a2), whose every small patch of cells spreads evenly, shifted by `block`, a hash of the
+// cell's 4×4 block (a Cranley–Patterson rotation per block). The lattice alone is a fixed pattern, which shows as
+// diagonal moiré where the glass maps the cells onto the receivers.
+float r2_spread(uvec2 xy, uint block) {
+    return fract(float(xy.x & 3u) * 0.7548776662 + float(xy.y & 3u) * 0.5698402910 + float(block >> 8) * exp2(-24.0));
+}
+
 // The wavelength of the photon of cell (x, y) of its level, stratified so that any few neighbours spread over the
-// range: the R2 lattice (Roberts 2018), frac(x·a1 + y·a2), whose every small patch of cells spreads evenly, shifted
-// by a hash of the cell's 4×4 block (a Cranley–Patterson rotation per block). The lattice alone is a fixed pattern,
-// which shows as diagonal moiré where the glass maps the cells onto the receivers.
+// range (r2_spread, its block hash salted by the level).
 float photon_wavelength(uvec2 xy, uint level) {
     uint h = spectrum_hash((xy.x >> 2) ^ spectrum_hash((xy.y >> 2) ^ spectrum_hash(level)));
-    float u = fract(float(xy.x & 3u) * 0.7548776662 + float(xy.y & 3u) * 0.5698402910 + float(h >> 8) * exp2(-24.0));
-    return mix(SPECTRUM_MIN_NM, SPECTRUM_MAX_NM, u);
+    return mix(SPECTRUM_MIN_NM, SPECTRUM_MAX_NM, r2_spread(xy, h));
 }
 
 // The eye view's dispersive glass (src/spectrum.rs EYE_BINS): a pixel traces one wavelength in each of EYE_BINS
@@ -82,6 +87,13 @@ const float SPECTRUM_QUANTILES[61] = float[61](
 const vec3 EYE_BIN_SHARES[6] = vec3[6](
     vec3(0.074250, -0.072079, 0.595198), vec3(-0.127421, 0.083241, 0.502888), vec3(-0.293567, 0.414970, -0.002117),
     vec3(0.066023, 0.489737, -0.059420), vec3(0.589547, 0.125233, -0.027645), vec3(0.691168, -0.041102, -0.008904));
+
+// Where in its eye bins pixel p draws its wavelengths, in [0, 1) (src/spectrum.rs eye_jitter): r2_spread over the
+// pixels, so that neighbouring pixels spread over each bin.
+float eye_jitter(ivec2 p) {
+    uvec2 xy = uvec2(p);
+    return r2_spread(xy, spectrum_hash((xy.x >> 2) ^ spectrum_hash(xy.y >> 2)));
+}
 
 // Eye bin b's wavelength at u in [0, 1): the response mass's quantile (b + u) / EYE_BINS.
 float eye_wavelength(uint b, float u) {
