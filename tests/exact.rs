@@ -6,6 +6,7 @@ mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
 use caustics::reference::{Aov, Paths};
+use caustics::settings::{BvhLayout, CoopChecks, Metric, Settings};
 use common::*;
 
 const SIZE: u32 = 256;
@@ -15,17 +16,27 @@ fn reference_all(scene: &str, photons: u64) -> RgbImage {
 }
 
 /// The account closes (emitted = every destination) to 1e-5, nothing overflowed, no host readback happened,
-/// the waves' ray counts add up to the rays traced, and the AOV is finite.
-fn assert_sound(name: &str, s: &serde_json::Value, img: &RgbImage) {
-    let t = &s["exact_transport"];
-    let waves: Vec<u64> = t["wave_rays"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
-    assert_eq!(waves.iter().sum::<u64>(), t["rays_traced"].as_u64().unwrap(), "{name}: rays per wave {waves:?}");
-    assert!(waves.len() <= 33 && waves.len() as u64 <= t["waves"].as_u64().unwrap(), "{name}: {waves:?}");
-    let residual = s["exact_transport"]["energy"]["residual"].as_f64().unwrap();
-    assert!(residual < 1e-5, "{name}: energy account residual {residual}");
-    assert_eq!(energy(s, "overflow"), 0.0, "{name}: overflow");
-    assert_eq!(s["host_readbacks_per_frame"], 0, "{name}: host readbacks");
-    assert!(img.data.iter().flatten().all(|v| v.is_finite()), "{name}: non-finite caustics");
+/// the waves' ray counts add up to the rays traced, the AOV is finite, and validation stayed silent.
+fn assert_sound(name: &str, s: &Shot) {
+    let t = s.transport();
+    let waves = t.wave_rays();
+    assert_eq!(waves.iter().map(|&n| n as u64).sum::<u64>(), t.rays_traced as u64, "{name}: rays per wave {waves:?}");
+    assert!(waves.len() <= 33 && waves.len() as u32 <= t.waves, "{name}: {waves:?}");
+    assert!(t.residual() < 1e-5, "{name}: energy account residual {}", t.residual());
+    assert_eq!(s.energy("overflow"), 0.0, "{name}: overflow");
+    assert_eq!(s.report.host_readbacks, 0, "{name}: host readbacks");
+    assert!(s.img.data.iter().flatten().all(|v| v.is_finite()), "{name}: non-finite caustics");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{name}: validation messages");
+}
+
+/// Exact transport's account as the stats print it.
+fn account(s: &Shot) -> serde_json::Map<String, serde_json::Value> {
+    s.transport().account_json(s.intensity)
+}
+
+fn with(mut settings: Settings, f: impl FnOnce(&mut Settings)) -> Settings {
+    f(&mut settings);
+    settings
 }
 
 fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
@@ -38,20 +49,20 @@ fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
 /// reflection comes mostly from the grazing rim). With a 1024² g-buffer: 206,104 photons, 0.111306 W, 0.005043 W.
 #[test]
 fn sphere_all_paths_flux_matches_analytic() {
-    let dir = out_dir("exact_sphere_flux");
-    let (s, img) = exact(&dir, "sphere", SPHERE, &["--method", "dense", "--level", "3"]);
-    assert_sound("sphere", &s, &img);
-    assert_eq!(s["photons_splatted"], 206336);
-    let caustics = energy(&s, "caustics");
-    let aov = s["aov_flux_w"].as_f64().unwrap();
-    eprintln!("sphere exact: caustics {caustics:.6} W, AOV {aov:.6} W, {}", s["exact_transport"]);
+    let (_gpu, device) = gpu();
+    let s = shot(&device, SPHERE, dense(3));
+    assert_sound("sphere", &s);
+    assert_eq!(s.photons(), 206336);
+    let caustics = s.energy("caustics");
+    let aov = s.aov_flux;
+    eprintln!("sphere exact: caustics {caustics:.6} W, AOV {aov:.6} W, {:?}", account(&s));
     assert!((caustics / 0.111370 - 1.0).abs() < 0.005, "caustic flux {caustics} W");
     assert!((aov / 0.111370 - 1.0).abs() < 0.005, "AOV flux {aov} W");
-    let one = energy(&s, "caustics_one_interaction");
+    let one = s.energy("caustics_one_interaction");
     assert!((one / 0.005078 - 1.0).abs() < 0.015, "single external reflection {one} W");
     // Emitted = what the sphere intercepts (0.126946 W) plus the cells at its silhouette whose rays miss it.
-    let emitted = energy(&s, "emitted");
-    let direct = energy(&s, "direct");
+    let emitted = s.energy("emitted");
+    let direct = s.energy("direct");
     assert!((emitted - direct - 0.126946).abs() < 0.001, "intercepted {} W", emitted - direct);
 }
 
@@ -83,12 +94,12 @@ fn exact_matches_all_paths_reference() {
         // Media: water in a glass, three kinds of interface (glass | air, water | glass, water | air).
         Case { scene: "glass_of_water.toml", rel_l1: 0.0328, ratio: 0.9971 },
     ];
-    let dir = out_dir("exact_reference");
+    let (_gpu, device) = gpu();
     for c in &cases {
         let path = scene(c.scene);
-        let (s, img) = exact(&dir, c.scene, &path, &["--method", "dense", "--level", "3"]);
-        assert_sound(c.scene, &s, &img);
-        let m = score(&img, &reference_all(&path, 4_000_000));
+        let s = shot(&device, &path, dense(3));
+        assert_sound(c.scene, &s);
+        let m = score(&s.img, &reference_all(&path, 4_000_000));
         eprintln!("{}: {m:?} (measured rel-L1 {}, flux ratio {})", c.scene, c.rel_l1, c.ratio);
         assert!(m.rel_l1 < c.rel_l1 * 1.15 + 0.002, "{}: rel-L1 {}", c.scene, m.rel_l1);
         assert!((m.flux_ratio - c.ratio).abs() < 0.003, "{}: flux ratio {}", c.scene, m.flux_ratio);
@@ -100,7 +111,7 @@ fn exact_matches_all_paths_reference() {
 /// reference 0.105849 W (all paths). Measured here at dense level 2: see the eprintln.
 #[test]
 fn hard_cases_close_the_account() {
-    let dir = out_dir("exact_hard");
+    let (_gpu, device) = gpu();
     for name in [
         "ior24.toml",
         "oblique.toml",
@@ -112,13 +123,13 @@ fn hard_cases_close_the_account() {
         "open_mesh.toml",
     ] {
         let path = scene(name);
-        let (s, img) = exact(&dir, name, &path, &["--method", "dense", "--level", "2"]);
-        assert_sound(name, &s, &img);
-        let flux = s["aov_flux_w"].as_f64().unwrap();
-        eprintln!("{name}: AOV {flux:.6} W, {}", s["exact_transport"]["energy"]);
+        let s = shot(&device, &path, dense(2));
+        assert_sound(name, &s);
+        let flux = s.aov_flux;
+        eprintln!("{name}: AOV {flux:.6} W, {:?}", account(&s));
         assert!(flux > 0.0, "{name}: no caustic");
         if name == "open_mesh.toml" {
-            let m = score(&img, &reference_all(&path, 1_000_000));
+            let m = score(&s.img, &reference_all(&path, 1_000_000));
             eprintln!("open dome vs all paths: {m:?}");
             assert!((m.flux_ratio - 1.0).abs() < 0.01, "open dome flux ratio {}", m.flux_ratio);
         }
@@ -129,18 +140,17 @@ fn hard_cases_close_the_account() {
 /// batches too) gives the same image and the same account as a large one.
 #[test]
 fn tiny_budget_gives_the_same_image() {
-    let dir = out_dir("exact_budget");
-    let args = ["--method", "adaptive", "--metric", "max-level", "--level", "2"];
-    let (big, big_img) = exact(&dir, "big", SPHERE, &args);
-    let mut small_args = args.to_vec();
-    small_args.extend_from_slice(&["--photon-budget", "0.05"]);
-    let (small, small_img) = exact(&dir, "small", SPHERE, &small_args);
-    assert_sound("small budget", &small, &small_img);
-    assert_eq!(big["photons_splatted"], small["photons_splatted"]);
-    assert!(small["batches"].as_u64().unwrap() >= 4, "batches {}", small["batches"]);
-    let m = compare(&small_img, &big_img, 256, 2.0);
+    let (_gpu, device) = gpu();
+    let settings = adaptive(2, Metric::MaxLevel);
+    let big = shot(&device, SPHERE, settings.clone());
+    let small = shot(&device, SPHERE, with(settings, |s| s.quality.photon_budget_mib = 0.05));
+    assert_sound("small budget", &small);
+    assert_eq!(big.photons(), small.photons());
+    let batches = small.traversal().batches_committed;
+    assert!(batches >= 4, "batches {batches}");
+    let m = compare(&small.img, &big.img, 256, 2.0);
     assert!(m.rel_l1 <= 1e-4, "tiny budget rel-L1 {}", m.rel_l1);
-    let (a, b) = (energy(&big, "caustics"), energy(&small, "caustics"));
+    let (a, b) = (big.energy("caustics"), small.energy("caustics"));
     assert!((a / b - 1.0).abs() < 1e-5, "caustic flux {a} vs {b} W");
 }
 
@@ -151,13 +161,14 @@ fn tiny_budget_gives_the_same_image() {
 /// one batch. When photons and candidates shared the quarter, it overflowed once and ran in four.
 #[test]
 fn candidates_do_not_count_against_a_batchs_photons() {
-    let dir = out_dir("exact_batch_photons");
-    let args = ["--method", "adaptive", "--metric", "max-level", "--level", "3", "--photon-budget", "7"];
-    let (s, img) = exact(&dir, "budget7", SPHERE, &args);
-    assert_sound("7 MiB", &s, &img);
-    assert_eq!(s["photons_splatted"], 206_336);
-    assert_eq!((s["batches"].as_u64(), s["overflow_events"].as_u64()), (Some(1), Some(0)), "{s}");
-    let peak = s["photon_buffer_bytes"].as_u64().unwrap() / 8;
+    let (_gpu, device) = gpu();
+    let s = shot(&device, SPHERE, with(adaptive(3, Metric::MaxLevel), |s| s.quality.photon_budget_mib = 7.0));
+    assert_sound("7 MiB", &s);
+    assert_eq!(s.photons(), 206_336);
+    let st = s.traversal();
+    let overflows = st.batches_aborted + (st.overflow_dropped > 0) as u32;
+    assert_eq!((st.batches_committed, overflows), (1, 0), "batches and overflows");
+    let peak = st.peak_used;
     assert!(peak > 229_376 && peak <= 917_504, "peak entries {peak}: photons and candidates past a quarter");
 }
 
@@ -169,7 +180,7 @@ fn candidates_do_not_count_against_a_batchs_photons() {
 /// default (`auto`), which no other lavapipe test traces; lavapipe resolves `auto` to wide.
 #[test]
 fn bvh_layouts_trace_the_same_paths() {
-    let dir = out_dir("exact_bvh_layouts");
+    let (_gpu, device) = gpu();
     let scenes = [
         ("sphere", SPHERE.to_string()),
         ("bunny", BUNNY.to_string()),
@@ -179,29 +190,32 @@ fn bvh_layouts_trace_the_same_paths() {
         ("pool", scene("pool.toml")),
     ];
     for (name, path) in &scenes {
-        let run = |layout: &str| {
-            let args = ["--method", "dense", "--level", "2", "--time", "0.7", "--bvh-layout", layout];
-            exact(&dir, &format!("{name}_{layout}"), path, &args)
+        let run = |layout: BvhLayout| {
+            let settings = with(dense(2), |s| s.tuning.bvh_layout = layout);
+            shot_at(&device, path, settings, 0.7, caustics::Aov::Caustics, 256)
         };
         if *name == "bunny" {
-            let (auto, _) = run("auto");
-            assert_eq!(auto["exact_transport"]["bvh"]["layout"], "wide", "auto on a CPU device");
-            assert_eq!(auto["settings"]["bvh_layout"], "wide", "the settings report the resolved layout");
+            let auto = run(BvhLayout::Auto);
+            assert_eq!(auto.config.bvh_layout, BvhLayout::Wide, "auto on a CPU device resolves to wide");
         }
-        let (pair, pair_img) = run("pair");
-        let layouts: &[&str] = if *name == "bunny" { &["single", "threaded", "wide"] } else { &["wide"] };
+        let pair = run(BvhLayout::Pair);
+        let layouts: &[BvhLayout] = if *name == "bunny" {
+            &[BvhLayout::Single, BvhLayout::Threaded, BvhLayout::Wide]
+        } else {
+            &[BvhLayout::Wide]
+        };
         for &layout in layouts {
-            let (s, img) = run(layout);
-            assert_sound(layout, &s, &img);
-            assert_eq!(s["exact_transport"]["bvh"]["layout"], layout);
-            let rays = &s["exact_transport"]["rays_traced"];
-            assert_eq!(rays, &pair["exact_transport"]["rays_traced"], "{name} {layout}: rays traced");
-            assert_eq!(s["photons_splatted"], pair["photons_splatted"], "{name} {layout}: photons");
-            let (a, b) = (energy(&pair, "caustics"), energy(&s, "caustics"));
-            assert!((a / b - 1.0).abs() < 1e-6, "{name} {layout}: caustic flux {b} W against pair's {a} W");
-            let m = compare(&img, &pair_img, 256, 2.0);
-            eprintln!("{name} {layout}: rel-L1 {:.2e}, caustics {b} W (pair {a} W), {rays} rays", m.rel_l1);
-            assert!(m.rel_l1 <= 1e-6, "{name} {layout}: rel-L1 {} against pair", m.rel_l1);
+            let s = run(layout);
+            assert_sound(&format!("{layout:?}"), &s);
+            assert_eq!(s.config.bvh_layout, layout);
+            let rays = s.transport().rays_traced;
+            assert_eq!(rays, pair.transport().rays_traced, "{name} {layout:?}: rays traced");
+            assert_eq!(s.photons(), pair.photons(), "{name} {layout:?}: photons");
+            let (a, b) = (pair.energy("caustics"), s.energy("caustics"));
+            assert!((a / b - 1.0).abs() < 1e-6, "{name} {layout:?}: caustic flux {b} W against pair's {a} W");
+            let m = compare(&s.img, &pair.img, 256, 2.0);
+            eprintln!("{name} {layout:?}: rel-L1 {:.2e}, caustics {b} W (pair {a} W), {rays} rays", m.rel_l1);
+            assert!(m.rel_l1 <= 1e-6, "{name} {layout:?}: rel-L1 {} against pair", m.rel_l1);
         }
     }
 }
@@ -221,40 +235,41 @@ fn bvh_layouts_trace_the_same_paths() {
 /// path the error rises by 0.004, 0.042, 0.048, 0.004 and 0.0005 points.
 #[test]
 fn weak_branches_are_traced_once_per_block() {
-    let dir = out_dir("exact_weak_branches");
-    let merging =
-        |metric: &'static str| vec!["--method", "adaptive", "--metric", metric, "--level", "3", "--check-level", "2"];
+    let (_gpu, device) = gpu();
+    let merging = |metric| with(adaptive(3, metric), |s| s.tuning.check_level = Some(2));
     let cases = [
-        ("sphere", SPHERE.to_string(), vec!["--method", "dense", "--level", "3"]),
-        ("bunny", scene("bunny.toml"), vec!["--method", "dense", "--level", "3"]),
-        ("bunny_max_error", scene("bunny.toml"), merging("max-error")),
-        ("sphere_flux_error", SPHERE.to_string(), merging("flux-error")),
+        ("sphere", SPHERE.to_string(), dense(3)),
+        ("bunny", scene("bunny.toml"), dense(3)),
+        ("bunny_max_error", scene("bunny.toml"), merging(Metric::MaxError)),
+        ("sphere_flux_error", SPHERE.to_string(), merging(Metric::FluxError)),
         // 2×2 blocks of the maximal level: the clusters of level 2 share with their siblings instead.
-        ("sphere_flux_error_siblings", SPHERE.to_string(), [merging("flux-error"), vec!["--weak-block", "2"]].concat()),
+        (
+            "sphere_flux_error_siblings",
+            SPHERE.to_string(),
+            with(merging(Metric::FluxError), |s| s.tuning.weak_block = 2),
+        ),
     ];
-    for (name, path, args) in cases {
+    for (name, path, settings) in cases {
         let block = if name.ends_with("siblings") { 2 } else { 4 };
-        let (son, ion) = exact(&dir, &format!("{name}_on"), &path, &args);
-        let mut off_args = args.to_vec();
-        off_args.extend_from_slice(&["--weak-branches", "0"]);
-        let (soff, ioff) = exact(&dir, &format!("{name}_off"), &path, &off_args);
-        assert_sound(name, &son, &ion);
-        assert_eq!(son["exact_transport"]["weak_branches"].as_f64().unwrap() as f32, 0.05);
-        assert_eq!(son["exact_transport"]["weak_block"], block, "{name}: block side");
-        assert_eq!(son["photons_splatted"], soff["photons_splatted"], "{name}: the same photons");
+        let son = shot(&device, &path, settings.clone());
+        let soff = shot(&device, &path, with(settings, |s| s.tuning.weak_branches = 0.0));
+        assert_sound(name, &son);
+        assert_eq!(son.config.weak_branches, 0.05);
+        assert_eq!(son.config.weak_block(), block, "{name}: block side");
+        assert_eq!(son.photons(), soff.photons(), "{name}: the same photons");
         if name.contains("error") {
             // Clusters of level 2 share blocks with level-3 photons, or their siblings' turns.
-            let early = son["levels"][2]["emitted"].as_u64().unwrap();
+            let early = son.levels()[2].emitted;
             assert!(early > 1000, "{name}: {early} clusters of level 2");
         }
-        assert_eq!(energy(&soff, "weak_left"), 0.0, "{name}: weak branches off");
-        let (left, carried) = (energy(&son, "weak_left"), energy(&son, "weak_carried"));
-        let rays = |s: &serde_json::Value| s["exact_transport"]["rays_traced"].as_f64().unwrap();
+        assert_eq!(soff.energy("weak_left"), 0.0, "{name}: weak branches off");
+        let (left, carried) = (son.energy("weak_left"), son.energy("weak_carried"));
+        let rays = |s: &Shot| s.transport().rays_traced as f64;
         let (ron, roff) = (rays(&son), rays(&soff));
         let r = reference_all(&path, 4_000_000);
-        let (mon, moff) = (score(&ion, &r), score(&ioff, &r));
-        let between = compare(&ion, &ioff, 64, 2.0);
-        let (con, coff) = (energy(&son, "caustics"), energy(&soff, "caustics"));
+        let (mon, moff) = (score(&son.img, &r), score(&soff.img, &r));
+        let between = compare(&son.img, &soff.img, 64, 2.0);
+        let (con, coff) = (son.energy("caustics"), soff.energy("caustics"));
         eprintln!(
             "{name}: weak left {left:.6} W, carried {carried:.6} W; rays {ron} against {roff} ({:.3}); caustics \
              {con:.6} against {coff:.6} W; vs every path {mon:?} against {moff:?}; on against off {between:?}",
@@ -272,18 +287,14 @@ fn weak_branches_are_traced_once_per_block() {
 /// max-level for about the same error against every path. Measured on the sphere: see the eprintln.
 #[test]
 fn max_error_follows_dominant_paths() {
-    let dir = out_dir("exact_max_error");
-    let common = ["--method", "adaptive", "--level", "4", "--check-level", "2"];
-    let mut ml = common.to_vec();
-    ml.extend_from_slice(&["--metric", "max-level"]);
-    let mut me = common.to_vec();
-    me.extend_from_slice(&["--metric", "max-error"]);
-    let (sl, il) = exact(&dir, "ml", SPHERE, &ml);
-    let (se, ie) = exact(&dir, "me", SPHERE, &me);
-    assert_sound("max-error", &se, &ie);
+    let (_gpu, device) = gpu();
+    let settings = |metric| with(adaptive(4, metric), |s| s.tuning.check_level = Some(2));
+    let sl = shot(&device, SPHERE, settings(Metric::MaxLevel));
+    let se = shot(&device, SPHERE, settings(Metric::MaxError));
+    assert_sound("max-error", &se);
     let r = reference_all(SPHERE, 4_000_000);
-    let (a, b) = (score(&il, &r), score(&ie, &r));
-    let (pa, pb) = (sl["photons_splatted"].as_u64().unwrap(), se["photons_splatted"].as_u64().unwrap());
+    let (a, b) = (score(&sl.img, &r), score(&se.img, &r));
+    let (pa, pb) = (sl.photons(), se.photons());
     eprintln!("max-level {pa} photons {a:?}\nmax-error {pb} photons {b:?}");
     assert!((pb as f64) < 0.6 * pa as f64, "max-error {pb} photons vs max-level {pa}");
     assert!(b.rel_l1 < a.rel_l1 + 0.01, "max-error rel-L1 {} vs max-level {}", b.rel_l1, a.rel_l1);
@@ -298,38 +309,29 @@ fn max_error_follows_dominant_paths() {
 /// 4.4e-8).
 #[test]
 fn coop_checks_give_the_same_photons() {
-    let dir = out_dir("exact_coop_checks");
-    for metric in ["max-error", "flux-error"] {
-        let run = |coop: &str| {
-            let name = format!("{metric}_{coop}");
-            let args = [
-                "--method",
-                "adaptive",
-                "--metric",
-                metric,
-                "--level",
-                "3",
-                "--check-level",
-                "1",
-                "--coop-checks",
-                coop,
-            ];
-            exact(&dir, &name, BUNNY, &args)
+    let (_gpu, device) = gpu();
+    for metric in [Metric::MaxError, Metric::FluxError] {
+        let run = |coop: CoopChecks| {
+            let settings = with(adaptive(3, metric), |s| {
+                s.tuning.check_level = Some(1);
+                s.tuning.coop_checks = coop;
+            });
+            shot(&device, BUNNY, settings)
         };
-        let (off, off_img) = run("off");
-        let (on, on_img) = run("on");
-        assert_sound(metric, &on, &on_img);
-        assert_eq!(off["settings"]["coop_checks"], "off");
-        assert_eq!(on["settings"]["coop_checks"], "on");
-        assert_eq!(on["photons_splatted"], off["photons_splatted"], "{metric}: photons");
-        assert_eq!(on["levels"], off["levels"], "{metric}: every level's candidates, refinements, photons, skips");
-        let m = compare(&on_img, &off_img, 256, 2.0);
-        eprintln!("{metric}: {} photons both ways, rel-L1 {:.2e}", on["photons_splatted"], m.rel_l1);
-        assert!(m.rel_l1 <= 1e-6, "{metric}: rel-L1 {} between the two", m.rel_l1);
+        let off = run(CoopChecks::Off);
+        let on = run(CoopChecks::On);
+        assert_sound(&format!("{metric:?}"), &on);
+        assert_eq!(off.config.coop_checks, CoopChecks::Off);
+        assert_eq!(on.config.coop_checks, CoopChecks::On);
+        assert_eq!(on.photons(), off.photons(), "{metric:?}: photons");
+        assert_eq!(on.levels(), off.levels(), "{metric:?}: every level's candidates, refinements, photons, skips");
+        let m = compare(&on.img, &off.img, 256, 2.0);
+        eprintln!("{metric:?}: {} photons both ways, rel-L1 {:.2e}", on.photons(), m.rel_l1);
+        assert!(m.rel_l1 <= 1e-6, "{metric:?}: rel-L1 {} between the two", m.rel_l1);
     }
     // The default on lavapipe: one lane.
-    let (s, _) = exact(&dir, "auto", BUNNY, &["--metric", "max-error", "--level", "2"]);
-    assert_eq!(s["settings"]["coop_checks"], "off", "auto on a CPU device");
+    let s = renderer(&device, BUNNY, adaptive(2, Metric::MaxError));
+    assert_eq!(s.config().coop_checks, CoopChecks::Off, "auto on a CPU device");
 }
 
 /// The two-interface model only refracts: a scene with a mirror is refused with exit code 2, naming the object.
@@ -359,24 +361,24 @@ fn absorption_follows_beer_lambert() {
     let text = std::fs::read_to_string(&tinted).unwrap();
     let clear = dir.join("clear_slab.toml");
     std::fs::write(&clear, text.replace(", absorption = 2.0 }", " }")).unwrap();
-    let args = ["--method", "dense", "--level", "2"];
-    let (st, it) = exact(&dir, "tinted", &tinted, &args);
-    let (sc, ic) = exact(&dir, "clear", clear.to_str().unwrap(), &args);
-    assert_sound("tinted", &st, &it);
-    assert_sound("clear", &sc, &ic);
-    assert_eq!(energy(&sc, "absorbed"), 0.0);
+    let (_gpu, device) = gpu();
+    let st = shot(&device, &tinted, dense(2));
+    let sc = shot(&device, clear.to_str().unwrap(), dense(2));
+    assert_sound("tinted", &st);
+    assert_sound("clear", &sc);
+    assert_eq!(sc.energy("absorbed"), 0.0);
     // The deepest deposited path: in, reflected inside at the bottom and then at the top (F² = 0.0016 of the flux,
     // above the 1e-3 cut), out: four interactions; two more reflections (F⁴) are cut. The waves count it once per
     // work group.
     for (name, s) in [("tinted", &st), ("clear", &sc)] {
-        assert_eq!(s["exact_transport"]["max_depth"], 4, "{name}: max_depth");
+        assert_eq!(s.transport().max_depth, 4, "{name}: max_depth");
     }
-    let ratio = energy(&st, "caustics") / energy(&sc, "caustics");
+    let ratio = st.energy("caustics") / sc.energy("caustics");
     let f: f64 = 0.04;
     let want = (-0.1f64).exp() * (1.0 + f * f * (-0.2f64).exp()) / (1.0 + f * f);
-    eprintln!("absorbing slab: ratio {ratio}, expected {want}, account {}", st["exact_transport"]["energy"]);
+    eprintln!("absorbing slab: ratio {ratio}, expected {want}, account {:?}", account(&st));
     assert!((ratio - want).abs() < 2e-4, "flux ratio {ratio}, Beer–Lambert gives {want}");
-    let m = score(&it, &reference_all(&tinted, 2_000_000));
+    let m = score(&st.img, &reference_all(&tinted, 2_000_000));
     eprintln!("absorbing slab vs reference: {m:?}");
     assert!((m.flux_ratio - 1.0).abs() < 0.003, "flux ratio {}", m.flux_ratio);
     assert!(m.rel_l1 < 0.02, "rel-L1 {}", m.rel_l1);
@@ -397,12 +399,12 @@ fn a_water_tank_transmits_as_its_stacked_interfaces() {
     let text = std::fs::read_to_string(&tank).unwrap();
     let glass = dir.join("glass_tank.toml");
     std::fs::write(&glass, text.replace("ior = 1.33, absorption = 0.5, outside", "ior = 1.5, outside")).unwrap();
-    let args = ["--method", "dense", "--level", "2"];
-    let (sw, iw) = exact(&dir, "water", &tank, &args);
-    let (sg, ig) = exact(&dir, "glass", glass.to_str().unwrap(), &args);
-    assert_sound("water", &sw, &iw);
-    assert_sound("glass", &sg, &ig);
-    assert_eq!(energy(&sg, "absorbed"), 0.0);
+    let (_gpu, device) = gpu();
+    let sw = shot(&device, &tank, dense(2));
+    let sg = shot(&device, glass.to_str().unwrap(), dense(2));
+    assert_sound("water", &sw);
+    assert_sound("glass", &sg);
+    assert_eq!(sg.energy("absorbed"), 0.0);
     // Incoherent stacking: (front reflectance, back reflectance, transmittance) of an interface, and of two elements
     // with a layer of internal transmittance t between them.
     let interface = |n1: f64, n2: f64| {
@@ -420,14 +422,14 @@ fn a_water_tank_transmits_as_its_stacked_interfaces() {
     );
     let solid = stack(interface(1.0, 1.5), 1.0, interface(1.5, 1.0));
     let want = water.2 / solid.2;
-    let ratio = energy(&sw, "caustics") / energy(&sg, "caustics");
-    let passed = |s: &serde_json::Value| energy(s, "caustics") + energy(s, "cut_threshold");
+    let ratio = sw.energy("caustics") / sg.energy("caustics");
+    let passed = |s: &Shot| s.energy("caustics") + s.energy("cut_threshold");
     let with_cut = passed(&sw) / passed(&sg);
     eprintln!("water tank: ratio {ratio}, with the cut flux {with_cut}, stacked interfaces give {want}");
     assert!((ratio - want).abs() < 1e-3, "flux ratio {ratio}, the stacked interfaces give {want}");
     assert!((with_cut - want).abs() < 3e-4, "flux ratio with the cut flux {with_cut}, the stack gives {want}");
-    assert!(energy(&sw, "absorbed") > 0.05, "the water absorbs: {}", energy(&sw, "absorbed"));
-    let m = score(&iw, &reference_all(&tank, 2_000_000));
+    assert!(sw.energy("absorbed") > 0.05, "the water absorbs: {}", sw.energy("absorbed"));
+    let m = score(&sw.img, &reference_all(&tank, 2_000_000));
     eprintln!("water tank vs reference: {m:?}");
     assert!((m.flux_ratio - 1.0).abs() < 0.003, "flux ratio {}", m.flux_ratio);
     assert!(m.rel_l1 < 0.02, "rel-L1 {}", m.rel_l1);
@@ -443,16 +445,17 @@ fn a_water_tank_transmits_as_its_stacked_interfaces() {
 /// slope it stood out of the glass near the base, and the references differed by 11%: the test sees geometry.
 #[test]
 fn overlapping_volumes_resolve_by_priority() {
-    let dir = out_dir("exact_overlap");
+    let (_gpu, device) = gpu();
     let overlap = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/glass_of_water_overlap.toml");
     let explicit = scene("glass_of_water.toml");
-    let (s, img) = exact(&dir, "overlap", overlap, &["--method", "dense", "--level", "3"]);
-    assert_sound("overlap", &s, &img);
+    let s = shot(&device, overlap, dense(3));
+    assert_sound("overlap", &s);
+    let img = &s.img;
     let r_explicit = reference_all(&explicit, 4_000_000);
     let r_overlap = reference_all(overlap, 4_000_000);
     let refs = score(&r_overlap, &r_explicit);
-    let m = score(&img, &r_explicit);
-    let own = score(&img, &r_overlap);
+    let m = score(img, &r_explicit);
+    let own = score(img, &r_overlap);
     eprintln!("overlap vs explicit reference: {m:?}\noverlap vs its own reference: {own:?}\nreferences: {refs:?}");
     assert!(refs.rel_l1 < 0.035 && (refs.flux_ratio - 1.0).abs() < 0.005, "the references differ: {refs:?}");
     assert!(m.rel_l1 < 0.0328 * 1.15 + 0.002, "rel-L1 {}", m.rel_l1);
@@ -473,6 +476,7 @@ fn overlapping_volumes_resolve_by_priority() {
 #[test]
 fn total_internal_reflection_at_glass_water_only_past_the_critical_angle() {
     let dir = out_dir("exact_tir_water");
+    let (_gpu, device) = gpu();
     let fresnel = |n1: f64, n2: f64, cos_i: f64| {
         let sin_t = n1 / n2 * (1.0 - cos_i * cos_i).max(0.0).sqrt();
         if sin_t >= 1.0 {
@@ -519,8 +523,9 @@ material = {{ kind = "dielectric", ior = {nw}, outside = "block" }}
         let path = dir.join(format!("tir{alpha_deg}.toml"));
         std::fs::write(&path, scene).unwrap();
         let path = path.to_str().unwrap().to_string();
-        let (s, img) = exact(&dir, &format!("tir{alpha_deg}"), &path, &["--method", "dense", "--level", "4"]);
-        assert_sound(&format!("tir{alpha_deg}"), &s, &img);
+        let s = shot(&device, &path, dense(4));
+        assert_sound(&format!("tir{alpha_deg}"), &s);
+        let img = &s.img;
         // The floor's flux over x in [-0.38, -0.22] m (columns along +x over [-1, 1] m): light that went through
         // the water, and nothing else (light through the glass alone lands at x in [-0.2, 0.075] m).
         let region = |img: &RgbImage| {
@@ -548,7 +553,7 @@ material = {{ kind = "dielectric", ior = {nw}, outside = "block" }}
                 * (1.0 - fresnel(nw, ng, theta_w.cos()))
                 * (1.0 - fresnel(ng, 1.0, theta_g.cos()))
         };
-        let (got, r) = (region(&img), region(&reference_all(&path, 1_000_000)));
+        let (got, r) = (region(img), region(&reference_all(&path, 1_000_000)));
         eprintln!(
             "α = {alpha_deg}°: {got:.6} W through the water, the interfaces give {expected:.6}, reference {r:.6}"
         );

@@ -116,11 +116,25 @@ impl<'a> FrameDesc<'a> {
     }
 }
 
-/// The renderer: it owns the pipelines, the scene on the GPU, the targets and the frames in flight, and renders
+/// The compiled pipelines of the renderers on one device. Renderers on a device share their pipelines while one
+/// of them, or a `Pipelines`, holds them: a second renderer (another scene, a scene reloaded) compiles nothing that
+/// the first compiled. Hold one to keep them between renderers that do not overlap.
+#[derive(Clone)]
+pub struct Pipelines(Arc<Passes>);
+
+impl Pipelines {
+    /// The pipelines of `device`'s renderers, created (not yet compiled: each compiles when a frame first needs it)
+    /// if no holder has them.
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
+        Ok(Pipelines(device.shared(|| Passes::new(device))?))
+    }
+}
+
+/// The renderer: it shares the pipelines of its device ([`Pipelines`]), owns the scene on the GPU, the targets and the frames in flight, and renders
 /// frames from [`FrameDesc`]s (see the crate's documentation).
 pub struct Renderer {
     device: Arc<Device>,
-    passes: Passes,
+    passes: Pipelines,
     scene: Scene,
     scene_buffers: SceneBuffers,
     /// The meshes' BVH trees, kept across rebuilds of the scene's buffers: adding an object builds only its mesh's.
@@ -237,7 +251,7 @@ impl Renderer {
         let instances = scene_api::Instances::of(&scene);
         let scene_buffers = SceneBuffers::new(&device, &mut recorder, &scene, &instances.view())?;
         let t1 = Instant::now();
-        let passes = Passes::new(&device)?;
+        let passes = Pipelines::new(&device)?;
         log::info!(
             "renderer ready: scene buffers {:.0} ms, pipelines {:.0} ms",
             (t1 - t0).as_secs_f64() * 1e3,
@@ -809,7 +823,7 @@ impl Renderer {
         };
         let res = FrameResources {
             device: &self.device,
-            passes: &self.passes,
+            passes: &self.passes.0,
             scene: &self.scene_buffers,
             nearest: &self.nearest,
             linear: &self.linear,

@@ -207,6 +207,8 @@ pub struct Device {
     wait_idles: std::sync::atomic::AtomicU64,
     /// The barrier trackers' lists of destroyed buffers and images ([`Device::retired_ids`]).
     retired: Mutex<Vec<std::sync::Weak<Mutex<Vec<u64>>>>>,
+    /// What the users of this device share while one of them holds it, one object per type ([`Device::shared`]).
+    shared: Mutex<Vec<std::sync::Weak<dyn std::any::Any + Send + Sync>>>,
 }
 
 impl std::ops::Deref for Device {
@@ -498,7 +500,26 @@ impl Device {
             owned: true,
             wait_idles: Default::default(),
             retired: Default::default(),
+            shared: Default::default(),
         }))
+    }
+
+    /// The `T` that a user of this device made and still holds, or a new one from `make`, which later callers get
+    /// for as long as some holder keeps it (the renderers' pipelines: a second renderer compiles nothing). Held
+    /// weakly: the objects hold the device, and a device that held them would never be dropped.
+    pub(crate) fn shared<T: std::any::Any + Send + Sync>(
+        &self,
+        make: impl FnOnce() -> VkResult<T>,
+    ) -> VkResult<Arc<T>> {
+        let mut list = self.shared.lock().unwrap_or_else(|e| e.into_inner());
+        list.retain(|w| w.strong_count() > 0);
+        if let Some(t) = list.iter().filter_map(|w| w.upgrade()?.downcast::<T>().ok()).next() {
+            return Ok(t);
+        }
+        let t = Arc::new(make()?);
+        let any: Arc<dyn std::any::Any + Send + Sync> = t.clone();
+        list.push(Arc::downgrade(&any));
+        Ok(t)
     }
 
     pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
@@ -667,6 +688,7 @@ impl Context {
             owned: false,
             wait_idles: Default::default(),
             retired: Default::default(),
+            shared: Default::default(),
         });
         Ok(Context { device })
     }

@@ -212,25 +212,121 @@ pub fn camera_aov(
     }
 }
 
+/// One in-process frame: an AOV from the scene's `top` camera with its frame report, the settings as the renderer
+/// resolved them, and the figures the CLI's stats would derive from them.
+pub struct Shot {
+    pub img: caustics::image_io::RgbImage,
+    pub report: caustics::FrameReport,
+    pub config: caustics::settings::ResolvedSettings,
+    /// The first light's intensity (W/sr, or W/m² for a directional light): the energy account's unit.
+    pub intensity: f64,
+    /// The AOV's flux in W: its texels' first channel times the orthographic camera's texel area.
+    pub aov_flux: f64,
+}
+
+impl Shot {
+    /// Photons splatted, every light's.
+    pub fn photons(&self) -> u64 {
+        self.report.photons()
+    }
+
+    /// Exact transport's state: rays, waves, the energy account.
+    pub fn transport(&self) -> &caustics::TransportState {
+        self.report.transport.as_ref().expect("an exact-transport frame")
+    }
+
+    /// The photon traversal's state: batches, levels, the photon buffer's peak.
+    pub fn traversal(&self) -> &caustics::TraversalState {
+        self.report.state.as_ref().expect("a frame with photons")
+    }
+
+    /// One term of exact transport's energy account (`caustics`, `emitted`, ...: [`caustics::ACCOUNT_TERMS`]), W.
+    pub fn energy(&self, term: &str) -> f64 {
+        let k = caustics::ACCOUNT_TERMS.iter().position(|t| *t == term).unwrap_or_else(|| panic!("term {term}"));
+        self.transport().account()[k] * self.intensity
+    }
+
+    /// Every level's counts up to the frame's level.
+    pub fn levels(&self) -> Vec<caustics::LevelCounters> {
+        self.traversal().levels[..=self.config.level as usize].to_vec()
+    }
+}
+
+/// Render `scene_path` at `time` s with `settings` on the shared device, and read `aov` back from its `top` camera
+/// at `side`².
+pub fn shot_at(
+    device: &std::sync::Arc<caustics::gpu::Device>,
+    scene_path: &str,
+    settings: caustics::settings::Settings,
+    time: f32,
+    aov: caustics::Aov,
+    side: u32,
+) -> Shot {
+    let mut r = renderer(device, scene_path, settings);
+    if time != 0.0 {
+        r.set_time(time).expect("set_time");
+    }
+    let (img, report) = top_aov(&mut r, side, aov);
+    let half_height = match r.scene().camera(Some("top")).expect("a top camera").projection {
+        caustics::scene::Projection::Orthographic { half_height } => half_height as f64,
+        _ => panic!("the top camera is orthographic"),
+    };
+    let texel = 2.0 * half_height / side as f64;
+    let aov_flux = img.data.iter().map(|p| p[0] as f64).sum::<f64>() * texel * texel;
+    let intensity = r.scene().lights[0].intensity as f64;
+    Shot { img, report, config: r.config().clone(), intensity, aov_flux }
+}
+
+/// The caustics AOV of `scene_path` from its `top` camera at 256², in process ([`shot_at`]).
+pub fn shot(
+    device: &std::sync::Arc<caustics::gpu::Device>,
+    scene_path: &str,
+    settings: caustics::settings::Settings,
+) -> Shot {
+    shot_at(device, scene_path, settings, 0.0, caustics::Aov::Caustics, 256)
+}
+
+/// Settings of a `--method`, `--level` and `--metric`, the rest default.
+pub fn quality(
+    method: caustics::settings::Method,
+    level: u32,
+    metric: caustics::settings::Metric,
+) -> caustics::settings::Settings {
+    let quality = caustics::settings::Quality { method, level: Some(level), metric, ..Default::default() };
+    caustics::settings::Settings { quality, ..Default::default() }
+}
+
+/// Dense photons at `level`.
+pub fn dense(level: u32) -> caustics::settings::Settings {
+    quality(caustics::settings::Method::Dense, level, caustics::settings::Metric::FluxError)
+}
+
+/// Adaptive photons at `level` under `metric`.
+pub fn adaptive(level: u32, metric: caustics::settings::Metric) -> caustics::settings::Settings {
+    quality(caustics::settings::Method::Adaptive, level, metric)
+}
+
 /// In-process GPU tests share one device per test binary (instance and device creation with validation cost about
-/// 0.3 s each): `gpu()` returns it with a lock held, because the renderers on it submit to its one queue, which
+/// 0.3 s each) and its renderers' pipelines (about 0.5 s a renderer on lavapipe): `gpu()` returns it with a lock held, because the renderers on it submit to its one queue, which
 /// Vulkan requires to be used from one thread at a time. Validation (with synchronization validation) is on.
 pub fn gpu() -> (std::sync::MutexGuard<'static, ()>, std::sync::Arc<caustics::gpu::Device>) {
     use std::sync::{Mutex, OnceLock};
     static LOCK: Mutex<()> = Mutex::new(());
-    static DEVICE: OnceLock<std::sync::Arc<caustics::gpu::Device>> = OnceLock::new();
+    static DEVICE: OnceLock<(std::sync::Arc<caustics::gpu::Device>, caustics::Pipelines)> = OnceLock::new();
     // A test that failed while holding the lock poisons it; the device is still usable by the next test.
     let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
     // Validation messages (and the library's warnings) on stderr, shown with a failing test's output.
     let _ =
         env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).is_test(true).try_init();
-    let device = DEVICE
-        .get_or_init(|| {
-            let desc = caustics::gpu::ContextDesc { validation: true, ..caustics::gpu::ContextDesc::from_env() };
-            caustics::gpu::Context::headless(&desc).expect("a Vulkan device (tools/setup installs lavapipe)").device
-        })
-        .clone();
-    (guard, device)
+    let (device, _) = DEVICE.get_or_init(|| {
+        let desc = caustics::gpu::ContextDesc { validation: true, ..caustics::gpu::ContextDesc::from_env() };
+        let device =
+            caustics::gpu::Context::headless(&desc).expect("a Vulkan device (tools/setup installs lavapipe)").device;
+        // Held for the binary's life: every renderer of every test shares the pipelines the first compiled.
+        let pipelines = caustics::Pipelines::new(&device).expect("pipelines");
+        (device, pipelines)
+    });
+    (guard, device.clone())
 }
 
 /// A renderer for `scene_path` on the shared device ([`gpu`]), with `settings`.
