@@ -1,4 +1,4 @@
-//! Footprint-aware splats (`--footprint differential`): under exact transport each ray carries its ray
+//! Footprint-aware splats (`--footprint differential`, rendered in process): under exact transport each ray carries its ray
 //! differentials (Igehy 1999) for one cell width of its emitting cell, and the splat radii per map axis come from
 //! the parallelogram the cell covers where it lands, as a sheared tent of integer radii fitted to the lattice of
 //! landings (docs/design.md step 5), so flux is conserved exactly; only where it goes changes.
@@ -7,10 +7,20 @@ mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
 use caustics::reference::{Aov, Paths};
+use caustics::settings::{Footprint, Metric, Settings, Splat};
 use common::*;
 
 fn reference_all(scene: &str, photons: u64) -> RgbImage {
     top_reference(scene, Aov::Caustics, Paths::All, photons, 256)
+}
+
+fn with(mut settings: Settings, f: impl FnOnce(&mut Settings)) -> Settings {
+    f(&mut settings);
+    settings
+}
+
+fn footprint(settings: &Settings, footprint: Footprint) -> Settings {
+    with(settings.clone(), |s| s.tuning.footprint = footprint)
 }
 
 /// The differential footprint moves no flux: the same photons, the same energy account (residual below 1e-5, the
@@ -27,38 +37,37 @@ fn reference_all(scene: &str, photons: u64) -> RgbImage {
 /// level 2, E = 0.0158: clusters of levels 2 and 3; AOV flux measured 5.0e-4 from the cell footprint's).
 #[test]
 fn differential_conserves_flux_and_the_splats_agree() {
-    for (tag, base) in [
-        ("dense", vec!["--method", "dense", "--level", "2"]),
-        ("flux_error", vec!["--metric", "flux-error", "--target-error", "0.0158", "--level", "3"]),
-    ] {
-        conserves_flux_and_the_splats_agree(tag, &base);
+    let (_gpu, device) = gpu();
+    let flux_error = with(adaptive(3, Metric::FluxError), |s| s.quality.target_error = 0.0158);
+    for (tag, base) in [("dense", dense(2)), ("flux_error", flux_error)] {
+        conserves_flux_and_the_splats_agree(&device, tag, &base);
     }
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
 
-fn conserves_flux_and_the_splats_agree(tag: &str, base: &[&str]) {
-    let dir = out_dir(&format!("footprint_flux_{tag}"));
-    let (cell, cell_img) = exact(&dir, "cell", SPHERE, &[base, &["--footprint", "cell"]].concat());
+fn conserves_flux_and_the_splats_agree(device: &std::sync::Arc<caustics::gpu::Device>, tag: &str, base: &Settings) {
+    let cell = shot(device, SPHERE, footprint(base, Footprint::Cell));
     let mut runs = Vec::new();
-    for how in ["raster", "compute", "tiled"] {
-        let args = [base, &["--footprint", "differential", "--splat", how]].concat();
-        let (s, img) = exact(&dir, &format!("diff-{how}"), SPHERE, &args);
-        assert_eq!(s["footprint"], "differential");
-        assert_eq!(s["splat"], how);
-        assert_eq!(s["photons_splatted"], cell["photons_splatted"], "{tag} {how}: photons");
-        assert_eq!(s["host_readbacks_per_frame"], 0, "{tag} {how}: readbacks");
-        let residual = s["exact_transport"]["energy"]["residual"].as_f64().unwrap();
-        assert!(residual < 1e-5, "{tag} {how}: energy account residual {residual}");
-        assert_eq!(energy(&s, "overflow"), 0.0, "{tag} {how}: overflow");
-        let (a, b) = (energy(&s, "caustics"), energy(&cell, "caustics"));
-        assert!((a / b - 1.0).abs() < 1e-5, "{tag} {how}: caustic flux {a} vs {b} W (cell)");
-        let (fa, fb) = (s["aov_flux_w"].as_f64().unwrap(), cell["aov_flux_w"].as_f64().unwrap());
-        assert!(fa > 0.0 && (fa / fb - 1.0).abs() < 1e-4, "{tag} {how}: AOV flux {fa} vs {fb} W (cell)");
-        assert!(img.data.iter().flatten().all(|v| v.is_finite()), "{tag} {how}: non-finite caustics");
-        if how == "raster" {
+    for how in [Splat::Raster, Splat::Compute, Splat::Tiled] {
+        let s = shot(device, SPHERE, with(footprint(base, Footprint::Differential), |s| s.tuning.splat = how));
+        assert_eq!(s.config.footprint, Footprint::Differential);
+        assert_eq!(s.config.splat, how);
+        assert_eq!(s.photons(), cell.photons(), "{tag} {how:?}: photons");
+        assert_eq!(s.report.host_readbacks, 0, "{tag} {how:?}: readbacks");
+        let residual = s.transport().residual();
+        assert!(residual < 1e-5, "{tag} {how:?}: energy account residual {residual}");
+        assert_eq!(s.energy("overflow"), 0.0, "{tag} {how:?}: overflow");
+        let (a, b) = (s.energy("caustics"), cell.energy("caustics"));
+        assert!((a / b - 1.0).abs() < 1e-5, "{tag} {how:?}: caustic flux {a} vs {b} W (cell)");
+        let (fa, fb) = (s.aov_flux, cell.aov_flux);
+        assert!(fa > 0.0 && (fa / fb - 1.0).abs() < 1e-4, "{tag} {how:?}: AOV flux {fa} vs {fb} W (cell)");
+        assert!(s.img.data.iter().flatten().all(|v| v.is_finite()), "{tag} {how:?}: non-finite caustics");
+        if how == Splat::Raster {
             eprintln!("{tag}: AOV flux {fa} W against {fb} W (cell)");
         }
-        runs.push((how, img));
+        runs.push((how, s.img));
     }
+    let cell_img = cell.img;
     // The footprint changed the image (else this test checks nothing).
     let d = compare(&runs[0].1, &cell_img, 256, 2.0);
     assert!(d.rel_l1 > 0.01, "{tag}: differential vs cell rel-L1 {}", d.rel_l1);
@@ -79,16 +88,14 @@ fn conserves_flux_and_the_splats_agree(tag: &str, base: &[&str]) {
 /// test asks the differential footprint to win by half the measured margin and to stay within 15% of its measure.
 #[test]
 fn differential_lowers_the_error_where_light_spreads() {
-    let dir = out_dir("footprint_error");
+    let (_gpu, device) = gpu();
     for (name, level, cell_l1, diff_l1) in
-        [("sphere.toml", "1", 0.2211, 0.0456), ("mirror_sphere.toml", "3", 0.8596, 0.1379)]
+        [("sphere.toml", 1, 0.2211, 0.0456), ("mirror_sphere.toml", 3, 0.8596, 0.1379)]
     {
         let path = scene(name);
         let r = reference_all(&path, 4_000_000);
-        let base = ["--method", "dense", "--level", level];
-        let (_, cell) = exact(&dir, &format!("{name}-cell"), &path, &[&base[..], &["--footprint", "cell"]].concat());
-        let args = [&base[..], &["--footprint", "differential"]].concat();
-        let (_, diff) = exact(&dir, &format!("{name}-diff"), &path, &args);
+        let cell = shot(&device, &path, footprint(&dense(level), Footprint::Cell)).img;
+        let diff = shot(&device, &path, footprint(&dense(level), Footprint::Differential)).img;
         let (mc, md) = (compare(&cell, &r, 256, 2.0), compare(&diff, &r, 256, 2.0));
         eprintln!("{name} level {level}, 256²: cell {mc:?}, differential {md:?} (measured {cell_l1}, {diff_l1})");
         let margin = 0.5 * (cell_l1 - diff_l1);
@@ -106,16 +113,16 @@ fn differential_lowers_the_error_where_light_spreads() {
 /// the fringes) and the differential one's below 0.25.
 #[test]
 fn differential_leaves_no_moire() {
-    let dir = out_dir("footprint_moire");
+    let (_gpu, device) = gpu();
     let path = scene("mirror_sphere.toml");
     let r = reference_all(&path, 16_000_000);
     let mut shares = Vec::new();
-    for footprint in ["cell", "differential"] {
-        let (s, img) = exact(&dir, footprint, &path, &["--level", "3", "--footprint", footprint]);
-        assert_eq!(s["footprint"], footprint);
-        let share = caustics::metrics::periodic_share(&img, &r, 256);
-        let m = compare(&img, &r, 256, 2.0);
-        eprintln!("mirror sphere level 3, {footprint}: periodic share {share:.4}, rel-L1 256² {:.4}", m.rel_l1);
+    for kind in [Footprint::Cell, Footprint::Differential] {
+        let s = shot(&device, &path, footprint(&adaptive(3, Metric::FluxError), kind));
+        assert_eq!(s.config.footprint, kind);
+        let share = caustics::metrics::periodic_share(&s.img, &r, 256);
+        let m = compare(&s.img, &r, 256, 2.0);
+        eprintln!("mirror sphere level 3, {kind:?}: periodic share {share:.4}, rel-L1 256² {:.4}", m.rel_l1);
         shares.push(share);
     }
     assert!(shares[0] > 0.30, "cell footprint: periodic share {} (the measure should see its fringes)", shares[0]);
@@ -126,16 +133,16 @@ fn differential_leaves_no_moire() {
 /// same image and account with the differential footprint as a large one.
 #[test]
 fn differential_with_tiny_budget_gives_the_same_image() {
-    let dir = out_dir("footprint_budget");
-    let args = ["--method", "adaptive", "--metric", "max-level", "--level", "2", "--footprint", "differential"];
-    let (big, big_img) = exact(&dir, "big", SPHERE, &args);
-    let small_args = [&args[..], &["--photon-budget", "0.05"]].concat();
-    let (small, small_img) = exact(&dir, "small", SPHERE, &small_args);
-    assert_eq!(big["photons_splatted"], small["photons_splatted"]);
-    assert!(small["batches"].as_u64().unwrap() >= 4, "batches {}", small["batches"]);
-    assert_eq!(energy(&small, "overflow"), 0.0);
-    let m = compare(&small_img, &big_img, 256, 2.0);
+    let (_gpu, device) = gpu();
+    let settings = footprint(&adaptive(2, Metric::MaxLevel), Footprint::Differential);
+    let big = shot(&device, SPHERE, settings.clone());
+    let small = shot(&device, SPHERE, with(settings, |s| s.quality.photon_budget_mib = 0.05));
+    assert_eq!(big.photons(), small.photons());
+    let batches = small.traversal().batches_committed;
+    assert!(batches >= 4, "batches {batches}");
+    assert_eq!(small.energy("overflow"), 0.0);
+    let m = compare(&small.img, &big.img, 256, 2.0);
     assert!(m.rel_l1 <= 1e-4, "tiny budget rel-L1 {}", m.rel_l1);
-    let (a, b) = (energy(&big, "caustics"), energy(&small, "caustics"));
+    let (a, b) = (big.energy("caustics"), small.energy("caustics"));
     assert!((a / b - 1.0).abs() < 1e-5, "caustic flux {a} vs {b} W");
 }

@@ -306,10 +306,22 @@ pub fn adaptive(level: u32, metric: caustics::settings::Metric) -> caustics::set
     quality(caustics::settings::Method::Adaptive, level, metric)
 }
 
+/// The shared device's lock, held for a test's use of it. A test that ends without panicking asserts, when it
+/// lets go of the device, that the validation layers (synchronization validation included) said nothing.
+pub struct Gpu(#[allow(dead_code)] std::sync::MutexGuard<'static, ()>);
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages (see the test's output)");
+        }
+    }
+}
+
 /// In-process GPU tests share one device per test binary (instance and device creation with validation cost about
 /// 0.3 s each) and its renderers' pipelines (about 0.5 s a renderer on lavapipe): `gpu()` returns it with a lock held, because the renderers on it submit to its one queue, which
 /// Vulkan requires to be used from one thread at a time. Validation (with synchronization validation) is on.
-pub fn gpu() -> (std::sync::MutexGuard<'static, ()>, std::sync::Arc<caustics::gpu::Device>) {
+pub fn gpu() -> (Gpu, std::sync::Arc<caustics::gpu::Device>) {
     use std::sync::{Mutex, OnceLock};
     static LOCK: Mutex<()> = Mutex::new(());
     static DEVICE: OnceLock<(std::sync::Arc<caustics::gpu::Device>, caustics::Pipelines)> = OnceLock::new();
@@ -326,7 +338,7 @@ pub fn gpu() -> (std::sync::MutexGuard<'static, ()>, std::sync::Arc<caustics::gp
         let pipelines = caustics::Pipelines::new(&device).expect("pipelines");
         (device, pipelines)
     });
-    (guard, device.clone())
+    (Gpu(guard), device.clone())
 }
 
 /// A renderer for `scene_path` on the shared device ([`gpu`]), with `settings`.
