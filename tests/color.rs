@@ -6,11 +6,13 @@
 //! law (the prism's channels land where the per-channel IOR sends them), and against the CPU reference.
 
 mod common;
-use caustics::image_io::{read_exr, RgbImage};
+use caustics::image_io::RgbImage;
 use caustics::metrics::compare;
 use caustics::reference::{Aov, Paths};
+use caustics::settings::{Metric, Settings, Splat};
 use common::*;
 use std::path::Path;
+use std::sync::Arc;
 
 const COLORED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/colored_glass.toml");
 const PRISM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/prism.toml");
@@ -28,36 +30,71 @@ fn flux(img: &RgbImage, c: usize) -> f64 {
     img.data.iter().map(|p| p[c] as f64).sum()
 }
 
+/// The caustics AOV of `scene`'s `top` camera at `side`² under exact transport at `level` (adaptive flux-error,
+/// the default method), with the settings changed by `f`, rendered in process on the shared device; validation
+/// stayed silent.
 fn exact(
-    dir: &Path,
-    name: &str,
+    device: &Arc<caustics::gpu::Device>,
     scene: &str,
-    size: &str,
-    level: &str,
-    extra: &[&str],
-) -> (serde_json::Value, RgbImage) {
-    let args = ["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", size, "--level", level];
-    let (s, out) = render(dir, name, scene, &[&args[..], extra].concat());
-    (s, read_exr(&out).unwrap())
+    side: u32,
+    level: u32,
+    f: impl FnOnce(&mut Settings),
+) -> Shot {
+    let s = shot_at(device, scene, with(adaptive(level, Metric::FluxError), f), 0.0, caustics::Aov::Caustics, side);
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
+    s
+}
+
+/// The channel of each pass of a frame, as the stats name it: `gray`, `red`, `green`, `blue`, `rgb` (color
+/// photons) or `spectral`.
+fn passes(s: &Shot) -> Vec<&'static str> {
+    s.report
+        .lights
+        .iter()
+        .map(|l| ["gray", "red", "green", "blue", "rgb", "spectral"][l.channel.min(5) as usize])
+        .collect()
+}
+
+/// The energy account's residual of each pass of a frame.
+fn residuals(s: &Shot) -> Vec<f64> {
+    s.report.lights.iter().map(|l| l.transport.expect("an exact-transport pass").residual()).collect()
 }
 
 /// The linear beauty of the scene `text` (written as NAME.toml in `dir`) through `camera` at 64², one sample a
-/// pixel, level 2, with `extra` options; its run printed no validation message.
-fn beauty(dir: &Path, name: &str, text: &str, camera: &str, extra: &[&str]) -> RgbImage {
-    beauty_aa(dir, name, text, camera, "1", extra)
+/// pixel, level 2, with the settings changed by `f`, rendered in process on the shared device; validation stayed
+/// silent.
+fn beauty(
+    device: &Arc<caustics::gpu::Device>,
+    dir: &Path,
+    name: &str,
+    text: &str,
+    camera: &str,
+    f: impl FnOnce(&mut Settings),
+) -> RgbImage {
+    beauty_aa(device, dir, name, text, camera, 1, f)
 }
 
 /// [`beauty`] at `aa`×`aa` samples a pixel.
-fn beauty_aa(dir: &Path, name: &str, text: &str, camera: &str, aa: &str, extra: &[&str]) -> RgbImage {
+fn beauty_aa(
+    device: &Arc<caustics::gpu::Device>,
+    dir: &Path,
+    name: &str,
+    text: &str,
+    camera: &str,
+    aa: u32,
+    f: impl FnOnce(&mut Settings),
+) -> RgbImage {
     let scene = dir.join(format!("{name}.toml"));
     std::fs::write(&scene, text).unwrap();
-    let out = dir.join(format!("{name}.exr"));
-    let stats = dir.join(format!("{name}.json"));
-    let args = ["render", "--scene", scene.to_str().unwrap(), "--camera", camera, "--size", "64x64", "--aa", aa];
-    let more = ["--level", "2", "--out", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()];
-    ok(&[&args[..], extra, &more].concat());
-    assert_validation_clean(&read_json(&stats));
-    read_exr(&out).unwrap()
+    let settings = with(Settings::default(), |s| {
+        s.quality.aa = aa;
+        s.quality.level = Some(2);
+        f(s);
+    });
+    let mut r = renderer(device, scene.to_str().unwrap(), settings);
+    let (img, _) = camera_aov(&mut r, camera, (64, 64), caustics::Aov::BeautyHdr);
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{name}: validation messages");
+    img
 }
 
 /// Beer–Lambert per channel in one pass: the amber sphere's photons carry their color (one "rgb" pass), and each
@@ -71,26 +108,27 @@ fn beauty_aa(dir: &Path, name: &str, text: &str, camera: &str, aa: &str, extra: 
 /// passes, which cut 1.16e-3 and 1.17e-3; the channel passes equal to 8e-8. A gray scene runs one gray pass.
 #[test]
 fn colored_absorption_is_exact_per_channel() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("color_absorption");
-    let no_weak = ["--weak-branches", "0"];
-    let (s, img) = exact(&dir, "amber", COLORED, "128x128", "2", &no_weak);
-    let passes = |s: &serde_json::Value| -> Vec<String> {
-        s["lights"].as_array().unwrap().iter().map(|r| r["channel"].as_str().unwrap().to_string()).collect()
+    let no_weak = |s: &mut Settings| s.tuning.weak_branches = 0.0;
+    let raster = |s: &mut Settings| {
+        s.tuning.weak_branches = 0.0;
+        s.tuning.splat = Splat::Raster;
     };
-    assert_eq!(passes(&s), ["rgb"], "one pass of color photons");
-    assert_eq!(s["host_readbacks_per_frame"], 0);
-    let residuals = |s: &serde_json::Value| {
-        for r in s["lights"].as_array().unwrap() {
-            let res = r["energy"]["residual"].as_f64().unwrap();
-            assert!(res.abs() < 1e-6, "{}: energy residual {res}", r["channel"]);
+    let amber = exact(&device, COLORED, 128, 2, no_weak);
+    assert_eq!(passes(&amber), ["rgb"], "one pass of color photons");
+    assert_eq!(amber.report.host_readbacks, 0);
+    let closes = |s: &Shot| {
+        for (channel, res) in passes(s).iter().zip(residuals(s)) {
+            assert!(res.abs() < 1e-6, "{channel}: energy residual {res}");
         }
     };
-    residuals(&s);
-    let args = ["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "128x128", "--level", "2"];
-    let (rs, out) = render(&dir, "amber_raster", COLORED, &[&args[..], &no_weak, &["--splat", "raster"]].concat());
-    assert_eq!(passes(&rs), ["red", "green", "blue"], "the point draw: three channel passes");
-    residuals(&rs);
-    let rimg = read_exr(&out).unwrap();
+    closes(&amber);
+    let img = &amber.img;
+    let amber_raster = exact(&device, COLORED, 128, 2, raster);
+    assert_eq!(passes(&amber_raster), ["red", "green", "blue"], "the point draw: three channel passes");
+    closes(&amber_raster);
+    let rimg = &amber_raster.img;
     let text = std::fs::read_to_string(COLORED).unwrap();
     let mut fluxes = Vec::new();
     for (c, sigma) in ["0.3", "1.2", "3.0"].iter().enumerate() {
@@ -99,13 +137,13 @@ fn colored_absorption_is_exact_per_channel() {
         let path = dir.join(format!("gray{c}.toml"));
         std::fs::write(&path, gray.replace("../meshes/", concat!(env!("CARGO_MANIFEST_DIR"), "/assets/meshes/")))
             .unwrap();
-        let (gs, gimg) = exact(&dir, &format!("gray{c}"), path.to_str().unwrap(), "128x128", "2", &no_weak);
+        let gs = exact(&device, path.to_str().unwrap(), 128, 2, no_weak);
         assert_eq!(passes(&gs), ["gray"], "a gray scene: one gray pass");
         // The share of the gray pass's caustic flux that its threshold cut.
-        let e = &gs["lights"][0]["energy"];
-        let cut = e["cut_threshold_w"].as_f64().unwrap() / e["caustics_w"].as_f64().unwrap();
-        let (a, b) = (flux(&img, c), flux(&gimg, c));
-        let m = compare(&channel(&img, c), &channel(&gimg, c), 64, 2.0);
+        let cut = gs.energy("cut_threshold") / gs.energy("caustics");
+        let gimg = &gs.img;
+        let (a, b) = (flux(img, c), flux(gimg, c));
+        let m = compare(&channel(img, c), &channel(gimg, c), 64, 2.0);
         eprintln!(
             "channel {c}: one pass {a:.6e}, gray sigma {sigma} {b:.6e} (ratio - 1: {:.2e}, its cut {cut:.2e}), rel-L1 {:.2e}",
             a / b - 1.0,
@@ -115,10 +153,9 @@ fn colored_absorption_is_exact_per_channel() {
         assert!(a / b > 1.0 - 1e-5 && a / b < 1.0 + slack, "channel {c}: {a} vs {b} (cut {cut})");
         assert!(m.rel_l1 < slack, "channel {c}: rel-L1 {} (cut {cut})", m.rel_l1);
         // The channel pass against the gray one, both drawn as points.
-        let raster = [&no_weak[..], &["--splat", "raster"]].concat();
-        let (_, gr) = exact(&dir, &format!("gray{c}_raster"), path.to_str().unwrap(), "128x128", "2", &raster);
-        let mr = compare(&channel(&rimg, c), &channel(&gr, c), 64, 2.0);
-        let (ar, br) = (flux(&rimg, c), flux(&gr, c));
+        let gr = exact(&device, path.to_str().unwrap(), 128, 2, raster).img;
+        let mr = compare(&channel(rimg, c), &channel(&gr, c), 64, 2.0);
+        let (ar, br) = (flux(rimg, c), flux(&gr, c));
         eprintln!("channel {c}: its own pass {ar:.6e}, gray {br:.6e}, rel-L1 {:.2e}", mr.rel_l1);
         assert!((ar / br - 1.0).abs() < 1e-4 && mr.rel_l1 < 1e-4, "channel {c}: {ar} vs {br}, rel-L1 {}", mr.rel_l1);
         fluxes.push(a);
@@ -181,13 +218,12 @@ fn prism_snell_centroids(light: impl Fn(f64) -> f64) -> [f64; 3] {
 /// point draw), three channel passes land at Snell's law of their lines.
 #[test]
 fn prism_disperses_by_snell() {
-    let dir = out_dir("color_prism");
-    let (s, img) = exact(&dir, "prism", PRISM, "512x512", "3", &[]);
-    assert_eq!(s["lights"].as_array().unwrap().len(), 1, "one pass of spectral photons");
-    assert_eq!(s["lights"][0]["channel"], "spectral");
-    assert!(s["lights"][0]["energy"]["residual"].as_f64().unwrap().abs() < 1e-6);
+    let (_gpu, device) = gpu();
+    let s = exact(&device, PRISM, 512, 3, |_| ());
+    assert_eq!(passes(&s), ["spectral"], "one pass of spectral photons");
+    assert!(residuals(&s)[0].abs() < 1e-6);
     let expect = prism_snell_centroids(|_| 1.0);
-    let got: Vec<f64> = (0..3).map(|c| prism_centroid(&img, c)).collect();
+    let got: Vec<f64> = (0..3).map(|c| prism_centroid(&s.img, c)).collect();
     eprintln!("prism centroids (m): got {got:?}, Snell per wavelength {expect:?}");
     for c in 0..3 {
         assert!((got[c] - expect[c]).abs() < 5e-4, "channel {c}: {} vs {}", got[c], expect[c]);
@@ -196,11 +232,10 @@ fn prism_disperses_by_snell() {
     assert!(sep_expect > 0.005 && (sep - sep_expect).abs() < 3e-4, "separation {sep} vs {sep_expect}");
     // The point draw's one-channel map: three passes, each refracting at its channel's line, landing where Snell's
     // law with that line's IOR says. Measured: within 5 µm in each.
-    let (rs, rimg) = exact(&dir, "prism_raster", PRISM, "512x512", "3", &["--splat", "raster"]);
-    let passes: Vec<&str> = rs["lights"].as_array().unwrap().iter().map(|r| r["channel"].as_str().unwrap()).collect();
-    assert_eq!(passes, ["red", "green", "blue"]);
+    let rs = exact(&device, PRISM, 512, 3, |s| s.tuning.splat = Splat::Raster);
+    assert_eq!(passes(&rs), ["red", "green", "blue"]);
     for c in 0..3 {
-        let (got, expect) = (prism_centroid(&rimg, c), prism_land(caustics::scene::CHANNEL_NM[c] as f64));
+        let (got, expect) = (prism_centroid(&rs.img, c), prism_land(caustics::scene::CHANNEL_NM[c] as f64));
         eprintln!("prism channel pass {c}: centroid {got}, Snell at its line {expect}");
         assert!((got - expect).abs() < 5e-4, "channel pass {c}: {got} vs {expect}");
     }
@@ -226,16 +261,17 @@ fn orange_prism(dir: &Path) -> String {
 /// 1% per flux. `color_matches_reference` holds the same scene against the CPU reference.
 #[test]
 fn a_colored_light_is_a_spectrum() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("color_light_spectrum");
     let orange = [1.0, 0.45, 0.1];
     let path = orange_prism(&dir);
-    let (s, img) = exact(&dir, "orange", &path, "512x512", "3", &[]);
-    assert_eq!(s["lights"][0]["channel"], "spectral");
-    let (_, white) = exact(&dir, "white", PRISM, "512x512", "3", &[]);
+    let s = exact(&device, &path, 512, 3, |_| ());
+    assert_eq!(passes(&s)[0], "spectral");
+    let (img, white) = (&s.img, exact(&device, PRISM, 512, 3, |_| ()).img);
     let spectrum = caustics::spectrum::RgbSpectrum::fit(orange);
     let expect = prism_snell_centroids(|nm| spectrum.at(nm));
     let white_expect = prism_snell_centroids(|_| 1.0);
-    let got: Vec<f64> = (0..3).map(|c| prism_centroid(&img, c)).collect();
+    let got: Vec<f64> = (0..3).map(|c| prism_centroid(img, c)).collect();
     eprintln!("orange light: centroids {got:?}, Snell weighed by its spectrum {expect:?}, by white {white_expect:?}");
     for c in 0..3 {
         assert!((got[c] - expect[c]).abs() < 5e-4, "channel {c}: {} vs {}", got[c], expect[c]);
@@ -244,7 +280,7 @@ fn a_colored_light_is_a_spectrum() {
     // brightest) by ten times the tolerance.
     assert!((expect[2] - white_expect[2]).abs() > 5e-3, "{expect:?} vs {white_expect:?}");
     for (c, &k) in orange.iter().enumerate() {
-        let ratio = flux(&img, c) / flux(&white, c);
+        let ratio = flux(img, c) / flux(&white, c);
         eprintln!("channel {c}: flux {ratio:.5} of white's, color {k}");
         assert!((ratio / k - 1.0).abs() < 0.01, "channel {c}: {ratio} of white's flux, color {k}");
     }
@@ -263,6 +299,7 @@ fn a_colored_light_is_a_spectrum() {
 #[test]
 fn spectral_photons_absorb_by_the_upsampled_spectrum() {
     use caustics::spectrum::{cauchy_ior, spectrum_rgb, RgbSpectrum, SPECTRUM_MAX_NM, SPECTRUM_MIN_NM};
+    let (_gpu, device) = gpu();
     let dir = out_dir("color_spectral_absorption");
     let slab = |absorption: &str| {
         under_a_beam(&format!(
@@ -279,9 +316,9 @@ material = {{ kind = "dielectric", ior = 1.5, abbe = 10.0{absorption} }}
     for (name, absorption) in [("clear", ""), ("amber", ", absorption = [3.0, 12.0, 30.0]")] {
         let path = dir.join(format!("{name}.toml"));
         std::fs::write(&path, slab(absorption)).unwrap();
-        let (s, img) = exact(&dir, name, path.to_str().unwrap(), "128x128", "5", &[]);
-        assert_eq!(s["lights"][0]["channel"], "spectral");
-        images.push(img);
+        let s = exact(&device, path.to_str().unwrap(), 128, 5, |_| ());
+        assert_eq!(passes(&s)[0], "spectral");
+        images.push(s.img);
     }
     let rgb = [3.0, 12.0, 30.0];
     let sigma = RgbSpectrum::fit(rgb);
@@ -347,10 +384,11 @@ material = {{ kind = "dielectric", ior = 1.5, abbe = 10.0{absorption} }}
 /// rel-L1 0.09 and flux ratios within 1.5%.
 #[test]
 fn color_matches_reference() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("color_reference");
     let orange = orange_prism(&dir);
-    for (name, scene, level) in [("amber", COLORED, "3"), ("prism", PRISM, "3"), ("orange prism", &orange, "3")] {
-        let (_, img) = exact(&dir, &name.replace(' ', "_"), scene, "256x256", level, &[]);
+    for (name, scene, level) in [("amber", COLORED, 3), ("prism", PRISM, 3), ("orange prism", &orange, 3)] {
+        let img = exact(&device, scene, 256, level, |_| ()).img;
         let r = top_reference(scene, Aov::Caustics, Paths::All, 3_000_000, 256);
         for c in 0..3 {
             let m = compare(&channel(&img, c), &channel(&r, c), 64, 2.0);
@@ -375,6 +413,7 @@ fn color_matches_reference() {
 /// weighed by another's share, would be off by the absorption's change between them.
 #[test]
 fn colored_glass_tints_the_beauty_by_beer_lambert() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("color_beauty");
     let slab = |abbe: f64| {
         format!(
@@ -436,8 +475,8 @@ material = {{ kind = "dielectric", ior = 1.5, absorption = [0.3, 1.2, 3.0]{dispe
         }
         out
     };
-    for (name, abbe, aa) in [("slab", 0.0, "1"), ("dispersive", 10.0, "1"), ("dispersive_aa2", 10.0, "2")] {
-        let img = beauty_aa(&dir, name, &slab(abbe), "side", aa, &[]);
+    for (name, abbe, aa) in [("slab", 0.0, 1), ("dispersive", 10.0, 1), ("dispersive_aa2", 10.0, 2)] {
+        let img = beauty_aa(&device, &dir, name, &slab(abbe), "side", aa, |_| ());
         // The center pixel looks through the slab (|x|, |y - 0.5| < 0.3 m); a corner one at the sky alone.
         let (through, sky) = (img.at(32, 32), img.at(2, 2));
         let rgb_model: [f64; 3] = std::array::from_fn(|c| through_at(iors(abbe)[c], [0.3, 1.2, 3.0][c]));
@@ -469,6 +508,7 @@ material = {{ kind = "dielectric", ior = 1.5, absorption = [0.3, 1.2, 3.0]{dispe
 /// the glass block, give the same pixel to 1e-4.
 #[test]
 fn a_tile_under_water_is_absorbed_along_both_ways() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("color_media");
     let tank = |absorption: &str| {
         format!(
@@ -516,7 +556,7 @@ material = {{ kind = "diffuse", albedo = 0.8 }}
         )
     };
     // No sky: its light on the tile comes from every side, not through the water along the light's one way.
-    let render = |name: &str, text: &str| beauty(&dir, name, text, "top", &["--sky", "0"]);
+    let render = |name: &str, text: &str| beauty(&device, &dir, name, text, "top", |s| s.quality.sky = Some(0.0));
     let (murky, clear) = (render("murky", &tank("[1.0, 0.5, 0.1]")), render("clear", &tank("0.0")));
     // By priority: the same media as two overlapping volumes (the water's wins where they overlap).
     let overlapping = tank("[1.0, 0.5, 0.1]")

@@ -6,7 +6,7 @@ mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
 use caustics::reference::{Aov, Paths};
-use caustics::settings::{BvhLayout, CoopChecks, Metric, Settings};
+use caustics::settings::{BvhLayout, CoopChecks, Metric};
 use common::*;
 
 const SIZE: u32 = 256;
@@ -32,11 +32,6 @@ fn assert_sound(name: &str, s: &Shot) {
 /// Exact transport's account as the stats print it.
 fn account(s: &Shot) -> serde_json::Map<String, serde_json::Value> {
     s.transport().account_json(s.intensity)
-}
-
-fn with(mut settings: Settings, f: impl FnOnce(&mut Settings)) -> Settings {
-    f(&mut settings);
-    settings
 }
 
 fn score(img: &RgbImage, r: &RgbImage) -> Metrics {

@@ -14,11 +14,6 @@ fn reference_all(scene: &str, photons: u64) -> RgbImage {
     top_reference(scene, Aov::Caustics, Paths::All, photons, 256)
 }
 
-fn with(mut settings: Settings, f: impl FnOnce(&mut Settings)) -> Settings {
-    f(&mut settings);
-    settings
-}
-
 fn footprint(settings: &Settings, footprint: Footprint) -> Settings {
     with(settings.clone(), |s| s.tuning.footprint = footprint)
 }

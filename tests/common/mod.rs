@@ -296,6 +296,15 @@ pub fn quality(
     caustics::settings::Settings { quality, ..Default::default() }
 }
 
+/// `settings` changed by `f`.
+pub fn with(
+    mut settings: caustics::settings::Settings,
+    f: impl FnOnce(&mut caustics::settings::Settings),
+) -> caustics::settings::Settings {
+    f(&mut settings);
+    settings
+}
+
 /// Dense photons at `level`.
 pub fn dense(level: u32) -> caustics::settings::Settings {
     quality(caustics::settings::Method::Dense, level, caustics::settings::Metric::FluxError)
