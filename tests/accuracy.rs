@@ -1,16 +1,19 @@
 //! The GPU methods against the exact CPU reference (src/reference), with the project's metric
 //! (src/metrics.rs): box-filtered rel-L1, flux ratio. Numbers in comments were measured on lavapipe with the
-//! same settings (`caustics bench --methods dense --levels 3-4 --reference-photons 4000000` and the like).
+//! same settings (`caustics bench --methods dense --levels 3-4 --reference-photons 4000000` and the like). The
+//! tests render in process on the test binary's shared device (`common::gpu`) and read its frame reports.
 //!
-//! These tests name the papers' two-interface model (`--transport two-interface`; exact transport, the default, is
-//! tested in tests/exact.rs). It models light refracted exactly twice (front surface in, back surface out), so its
-//! natural reference is `--paths two-refractions`; the gap to the all-paths reference is the light they cannot
-//! represent (internal reflections, more interfaces, single interfaces), and the tests state it.
+//! These tests name the papers' two-interface model (`Transport::TwoInterface`, the CLI's `--transport
+//! two-interface`; exact transport, the default, is tested in tests/exact.rs). It models light refracted exactly
+//! twice (front surface in, back surface out), so its natural reference is `--paths two-refractions`; the gap to
+//! the all-paths reference is the light they cannot represent (internal reflections, more interfaces, single
+//! interfaces), and the tests state it.
 
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
 use caustics::reference::{self, Aov, Paths, RefParams};
+use caustics::settings::{Metric, Settings, Transport};
 use common::*;
 use std::path::Path;
 
@@ -20,11 +23,18 @@ fn reference_image(scene: &str, paths: Paths, photons: u64) -> RgbImage {
     top_reference(scene, Aov::Caustics, paths, photons, SIZE)
 }
 
-fn gpu(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {
-    let mut args = vec!["--transport", "two-interface", "--camera", "top", "--aov", "caustics", "--size", "256x256"];
-    args.extend_from_slice(extra);
-    let (s, out) = render(dir, name, scene, &args);
-    (s, caustics::image_io::read_exr(&out).unwrap())
+/// `settings` under the two-interface model.
+fn two_interface(mut settings: Settings) -> Settings {
+    settings.quality.transport = Transport::TwoInterface;
+    settings
+}
+
+/// The caustics AOV of `scene` from its `top` camera at 256² under the two-interface model with `settings`, in
+/// process ([`shot`]), validation silent.
+fn caustics_aov(device: &std::sync::Arc<caustics::gpu::Device>, scene: &str, settings: Settings) -> Shot {
+    let s = shot(device, scene, two_interface(settings));
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
+    s
 }
 
 fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
@@ -35,10 +45,11 @@ fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
 /// against the two-refraction reference (4M photons, whose own noise is about 0.002 at 64²).
 #[test]
 fn dense_sphere_matches_reference() {
-    let dir = out_dir("acc_sphere");
-    let (s, img) = gpu(&dir, "sphere", SPHERE, &["--method", "dense", "--level", "4"]);
-    assert_eq!(s["photons_splatted"], 820324);
-    let m = score(&img, &reference_image(SPHERE, Paths::TwoRefractions, 4_000_000));
+    let (_gpu, device) = gpu();
+    let s = caustics_aov(&device, SPHERE, dense(4));
+    assert_eq!(s.photons(), 820324);
+    let img = &s.img;
+    let m = score(img, &reference_image(SPHERE, Paths::TwoRefractions, 4_000_000));
     eprintln!("sphere vs two refractions: {m:?}");
     assert!(m.rel_l1 < 0.01, "rel-L1 {}", m.rel_l1);
     assert!((m.flux_ratio - 1.0).abs() < 0.01, "flux ratio {}", m.flux_ratio);
@@ -47,7 +58,7 @@ fn dense_sphere_matches_reference() {
     assert!(m.peak_offset_m < 0.045, "peak offset {} m", m.peak_offset_m);
     // All paths: internal reflections and the external reflection add 0.111370 - 0.105980 W (4.8%) that no
     // two-interface method can reach. Measured ratio 0.9518.
-    let all = score(&img, &reference_image(SPHERE, Paths::All, 4_000_000));
+    let all = score(img, &reference_image(SPHERE, Paths::All, 4_000_000));
     assert!((all.flux_ratio - 0.105980 / 0.111370).abs() < 0.01, "all-paths flux ratio {}", all.flux_ratio);
 }
 
@@ -58,8 +69,8 @@ fn dense_sphere_matches_reference() {
 /// error is the method's, not the sampling's. The band documents it and fails if it grows.
 #[test]
 fn dense_bunny_documents_two_interface_error() {
-    let dir = out_dir("acc_bunny");
-    let (_, img) = gpu(&dir, "bunny", BUNNY, &["--method", "dense", "--level", "4"]);
+    let (_gpu, device) = gpu();
+    let img = caustics_aov(&device, BUNNY, dense(4)).img;
     let m = score(&img, &reference_image(BUNNY, Paths::TwoRefractions, 4_000_000));
     eprintln!("bunny vs two refractions: {m:?}");
     assert!(m.rel_l1 < 0.16, "rel-L1 {}", m.rel_l1);
@@ -73,12 +84,12 @@ fn dense_bunny_documents_two_interface_error() {
 /// 3,281,296 photons, max-error 761,375 (23%), both rel-L1 (64²) 0.0040 against the two-refraction reference.
 #[test]
 fn max_error_matches_max_level_with_fewer_photons() {
-    let dir = out_dir("acc_max_error");
-    let (ml, ml_img) = gpu(&dir, "ml", SPHERE, &["--method", "adaptive", "--metric", "max-level", "--level", "5"]);
-    let (me, me_img) = gpu(&dir, "me", SPHERE, &["--method", "adaptive", "--metric", "max-error", "--level", "5"]);
+    let (_gpu, device) = gpu();
+    let ml = caustics_aov(&device, SPHERE, adaptive(5, Metric::MaxLevel));
+    let me = caustics_aov(&device, SPHERE, adaptive(5, Metric::MaxError));
     let r = reference_image(SPHERE, Paths::TwoRefractions, 4_000_000);
-    let (a, b) = (score(&ml_img, &r), score(&me_img, &r));
-    let (pa, pb) = (ml["photons_splatted"].as_u64().unwrap(), me["photons_splatted"].as_u64().unwrap());
+    let (a, b) = (score(&ml.img, &r), score(&me.img, &r));
+    let (pa, pb) = (ml.photons(), me.photons());
     eprintln!("max-level {pa} photons {a:?}\nmax-error {pb} photons {b:?}");
     assert!((pb as f64) < 0.3 * pa as f64, "max-error {pb} photons vs max-level {pa}");
     assert!(b.rel_l1 <= a.rel_l1 + 0.002, "max-error rel-L1 {} vs max-level {}", b.rel_l1, a.rel_l1);
@@ -113,19 +124,15 @@ fn hard_cases_are_finite_bounded_and_close_to_reference() {
         Hard { scene: "slab.toml", ratio: 0.9999, why: "no silhouette inside the cone" },
         Hard { scene: "directional.toml", ratio: 0.9998, why: "directional light: an orthographic light frustum" },
     ];
-    let dir = out_dir("acc_hard");
+    let (_gpu, device) = gpu();
     for c in &cases {
         let path = scene(c.scene);
-        let (s, img) = gpu(&dir, c.scene, &path, &["--method", "dense", "--level", "3"]);
-        let (_, dout) = render(
-            &dir,
-            &format!("{}-direct", c.scene),
-            &path,
-            &["--transport", "two-interface", "--camera", "top", "--aov", "direct", "--size", "256x256"],
-        );
-        let (_, _, direct) = read_plane(&dout);
+        let s = caustics_aov(&device, &path, dense(3));
+        let img = &s.img;
+        let direct = shot_at(&device, &path, two_interface(dense(3)), 0.0, caustics::Aov::Direct, SIZE).img;
+        assert_eq!(caustics::gpu::validation_message_count(), 0, "{}: validation messages", c.scene);
         assert!(img.data.iter().flatten().all(|v| v.is_finite()), "{}: non-finite caustics", c.scene);
-        assert!(direct.iter().all(|v| v.is_finite()), "{}: non-finite direct", c.scene);
+        assert!(direct.data.iter().all(|v| v[0].is_finite()), "{}: non-finite direct", c.scene);
         // Intercepted flux: whatever the reference saw touch the glass (caustics deposited + escaped + cut).
         let scene_obj = caustics::scene::Scene::load(Path::new(&path)).unwrap();
         let p = RefParams {
@@ -137,9 +144,9 @@ fn hard_cases_are_finite_bounded_and_close_to_reference() {
         };
         let t = reference::trace(&scene_obj, &p).unwrap().stats.counts;
         let intercepted = t.flux_caustics + t.flux_escaped + t.flux_cut;
-        let flux = s["aov_flux_w"].as_f64().unwrap();
+        let flux = s.aov_flux;
         assert!(flux <= intercepted, "{}: caustic flux {flux} W > intercepted {intercepted} W", c.scene);
-        let m = score(&img, &reference_image(&path, Paths::TwoRefractions, 4_000_000));
+        let m = score(img, &reference_image(&path, Paths::TwoRefractions, 4_000_000));
         eprintln!(
             "{}: flux {flux:.6} W, intercepted {intercepted:.6} W, vs two refractions {m:?} ({})",
             c.scene, c.why
@@ -160,11 +167,11 @@ fn hard_cases_are_finite_bounded_and_close_to_reference() {
 /// gap rather than hiding it.
 #[test]
 fn open_mesh_is_beyond_a_two_interface_method() {
-    let dir = out_dir("acc_open");
+    let (_gpu, device) = gpu();
     let path = scene("open_mesh.toml");
-    let (s, img) = gpu(&dir, "open", &path, &["--method", "dense", "--level", "3"]);
-    assert!(img.data.iter().flatten().all(|v| v.is_finite()));
-    assert_eq!(s["aov_flux_w"].as_f64().unwrap(), 0.0);
+    let s = caustics_aov(&device, &path, dense(3));
+    assert!(s.img.data.iter().flatten().all(|v| v.is_finite()));
+    assert_eq!(s.aov_flux, 0.0);
     let all = reference_image(&path, Paths::All, 1_000_000);
     let flux: f64 = all.data.iter().map(|p| p[0] as f64).sum::<f64>() * 4.0 / (SIZE * SIZE) as f64;
     assert!(flux > 0.09, "reference through the open dome: {flux} W");

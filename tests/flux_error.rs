@@ -1,28 +1,49 @@
-//! The flux-error metric (`--metric flux-error`, docs/design.md "The flux-error metric"): against dense at the
-//! same maximal level on the sphere and the bunny (every path, exact transport), with batching under a tiny
-//! budget, GPU-driven under both transports, and the `--target-error` knob's monotonicity and calibration.
-//! Tolerances come from measurement on lavapipe with the same settings; each test states what it measured.
+//! The flux-error metric (`Metric::FluxError`, the CLI's `--metric flux-error`; docs/design.md "The flux-error
+//! metric"): against dense at the same maximal level on the sphere and the bunny (every path, exact transport),
+//! with batching under a tiny budget, GPU-driven under both transports, and the target error's (`--target-error`)
+//! monotonicity and calibration. The GPU tests render in process on the test binary's shared device
+//! (`common::gpu`) and read its frame reports. Tolerances come from measurement on lavapipe with the same
+//! settings; each test states what it measured.
 
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::metrics::{compare, Metrics};
 use caustics::reference::{Aov, Paths};
+use caustics::settings::{Method, Metric, ResolvedSettings, Settings, Transport};
 use common::*;
-use std::path::Path;
+use std::sync::Arc;
 
 fn reference_image(scene: &str, paths: Paths, photons: u64) -> RgbImage {
     top_reference(scene, Aov::Caustics, paths, photons, 256)
 }
 
-fn caustics_aov(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> (serde_json::Value, RgbImage) {
-    let mut args = vec!["--camera", "top", "--aov", "caustics", "--size", "256x256"];
-    args.extend_from_slice(extra);
-    let (s, out) = render(dir, name, scene, &args);
-    (s, caustics::image_io::read_exr(&out).unwrap())
+/// The caustics AOV of `scene` from its `top` camera at 256² with `settings`, in process ([`shot`]), validation
+/// silent.
+fn caustics_aov(device: &Arc<caustics::gpu::Device>, scene: &str, settings: Settings) -> Shot {
+    let s = shot(device, scene, settings);
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
+    s
 }
 
-fn photons(s: &serde_json::Value) -> u64 {
-    s["photons_splatted"].as_u64().unwrap()
+/// Adaptive flux-error at `level` under `transport`.
+fn flux_error(transport: Transport, level: u32) -> Settings {
+    with(adaptive(level, Metric::FluxError), |s| s.quality.transport = transport)
+}
+
+/// The target error and tau the stats report: flux-error's only (src/app/commands/stats.rs).
+fn reported_target(c: &ResolvedSettings) -> Option<(f32, f32)> {
+    (c.method == Method::Adaptive && c.metric == Metric::FluxError).then(|| (c.target_error, c.tau()))
+}
+
+/// The check level the stats report: adaptive max-error's and flux-error's only (src/app/commands/stats.rs).
+fn reported_check_level(c: &ResolvedSettings) -> Option<u32> {
+    (c.method == Method::Adaptive && c.metric != Metric::MaxLevel).then(|| c.check_level())
+}
+
+/// Photons emitted before the frame's last level.
+fn early_photons(s: &Shot) -> u64 {
+    let levels = s.levels();
+    levels[..levels.len() - 1].iter().map(|l| l.emitted as u64).sum()
 }
 
 fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
@@ -31,45 +52,45 @@ fn score(img: &RgbImage, r: &RgbImage) -> Metrics {
 
 /// The target error the calibration table maps to tau = 0.3, the threshold these tests' photon counts and error
 /// bounds are sized for.
-const TAU_03: &str = "0.0158";
+const TAU_03: f64 = 0.0158;
 
 /// Dense and flux-error at level `level` under exact transport, scored against the every-path reference.
-fn against_dense(name: &str, scene: &str, level: &str, target: &str) -> (u64, Metrics, u64, Metrics) {
-    let dir = out_dir(name);
-    let (sd, id) = caustics_aov(&dir, "dense", scene, &["--transport", "exact", "--method", "dense", "--level", level]);
-    let (sf, i_f) = caustics_aov(
-        &dir,
-        "flux",
+fn against_dense(name: &str, scene: &str, level: u32, target: f64) -> (u64, Metrics, u64, Metrics) {
+    let (_gpu, device) = gpu();
+    let sd = caustics_aov(&device, scene, dense(level));
+    let sf = caustics_aov(
+        &device,
         scene,
-        &["--transport", "exact", "--metric", "flux-error", "--target-error", target, "--level", level],
+        with(flux_error(Transport::Exact, level), |s| s.quality.target_error = target as f32),
     );
-    assert_eq!(sf["metric"], "flux-error");
-    assert_eq!(sf["tau"].as_f64().unwrap() as f32, 0.3, "the calibration maps {target} to tau 0.3");
-    assert_eq!(sf["host_readbacks_per_frame"], 0);
+    assert_eq!(sf.config.metric, Metric::FluxError);
+    let tau = reported_target(&sf.config).expect("flux-error reports its tau").1;
+    assert_eq!(tau, 0.3, "the calibration maps {target} to tau 0.3");
+    assert_eq!(sf.report.host_readbacks, 0);
     let r = reference_image(scene, Paths::All, 4_000_000);
-    let (a, b) = (score(&id, &r), score(&i_f, &r));
-    eprintln!("{name}: dense {} photons {a:?}\nflux-error {} photons {b:?}", photons(&sd), photons(&sf));
-    (photons(&sd), a, photons(&sf), b)
+    let (a, b) = (score(&sd.img, &r), score(&sf.img, &r));
+    eprintln!("{name}: dense {} photons {a:?}\nflux-error {} photons {b:?}", sd.photons(), sf.photons());
+    (sd.photons(), a, sf.photons(), b)
 }
 
-/// Sphere, exact transport, level 4, `--target-error 0.0158` (τ 0.3), every-path reference of 4M photons.
+/// Sphere, exact transport, level 4, target error 0.0158 (τ 0.3), every-path reference of 4M photons.
 /// Measured: dense 824,416 photons, rel-L1 (64²) 0.742%; flux-error 232,204 photons (28.2% of dense's), 0.765%.
 #[test]
 fn sphere_matches_dense_with_fewer_photons() {
-    let (pd, d, pf, f) = against_dense("flux_error_sphere", SPHERE, "4", TAU_03);
+    let (pd, d, pf, f) = against_dense("flux_error_sphere", SPHERE, 4, TAU_03);
     assert!((pf as f64) < 0.35 * pd as f64, "flux-error {pf} photons vs dense {pd}");
     assert!(f.rel_l1 <= d.rel_l1 + 0.002, "flux-error rel-L1 {} vs dense {}", f.rel_l1, d.rel_l1);
     assert!((f.flux_ratio - 1.0).abs() < 0.005, "flux ratio {}", f.flux_ratio);
 }
 
-/// Bunny, exact transport, level 4, `--target-error 0.0158` (τ 0.3). Its thin parts send the children's dominant
+/// Bunny, exact transport, level 4, target error 0.0158 (τ 0.3). Its thin parts send the children's dominant
 /// paths different ways (escapes, different interfaces) far more often than on the sphere, so fewer cells
 /// converge. Measured: dense 491,341 photons, rel-L1 3.28%; flux-error 254,110 (51.7%), 3.53% (251,887 before the
 /// checks' cap of 8 interactions; before cells whose four dominant paths all end the same other way had to fit the
 /// budget: 212,506 photons, 3.70%).
 #[test]
 fn bunny_matches_dense_with_fewer_photons() {
-    let (pd, d, pf, f) = against_dense("flux_error_bunny", BUNNY, "4", TAU_03);
+    let (pd, d, pf, f) = against_dense("flux_error_bunny", BUNNY, 4, TAU_03);
     assert!((pf as f64) < 0.55 * pd as f64, "flux-error {pf} photons vs dense {pd}");
     assert!(f.rel_l1 <= d.rel_l1 + 0.007, "flux-error rel-L1 {} vs dense {}", f.rel_l1, d.rel_l1);
 }
@@ -78,91 +99,83 @@ fn bunny_matches_dense_with_fewer_photons() {
 /// gives the same photons, the same per-level counts and the same image as 64 MiB.
 #[test]
 fn batches_gpu_driven_under_both_transports() {
-    let dir = out_dir("flux_error_batching");
+    let (_gpu, device) = gpu();
     // Exact transport with 2×2 weak-branch blocks: the clusters of level 2 share their siblings' turns, which the
     // traversal marks; batches must not change which do.
-    for (transport, level, block) in [("two-interface", "4", "4"), ("exact", "3", "4"), ("exact", "3", "2")] {
-        let common = [
-            "--transport",
-            transport,
-            "--metric",
-            "flux-error",
-            "--level",
-            level,
-            "--check-level",
-            "2",
-            "--weak-block",
-            block,
-        ];
-        let tag = format!("{transport}-{block}");
-        let (big, bi) = caustics_aov(&dir, &format!("{tag}-big"), SPHERE, &common);
-        let mut tiny_args = common.to_vec();
-        tiny_args.extend_from_slice(&["--photon-budget", "0.25"]);
-        let (tiny, ti) = caustics_aov(&dir, &format!("{tag}-tiny"), SPHERE, &tiny_args);
+    for (transport, level, block) in
+        [(Transport::TwoInterface, 4, 4), (Transport::Exact, 3, 4), (Transport::Exact, 3, 2)]
+    {
+        let common = with(flux_error(transport, level), |s| {
+            s.tuning.check_level = Some(2);
+            s.tuning.weak_block = block;
+        });
+        let tag = format!("{transport:?}-{block}");
+        let big = caustics_aov(&device, SPHERE, common.clone());
+        let tiny = caustics_aov(&device, SPHERE, with(common, |s| s.quality.photon_budget_mib = 0.25));
         for s in [&big, &tiny] {
-            assert_eq!(s["host_readbacks_per_frame"], 0, "{tag}");
-            assert_eq!(s["unfinished_tiles"], 0, "{tag}");
+            assert_eq!(s.report.host_readbacks, 0, "{tag}");
+            assert_eq!(s.report.unfinished_tiles, 0, "{tag}");
         }
-        assert!(tiny["batches"].as_u64().unwrap() >= 4, "{tag}: batches {}", tiny["batches"]);
-        assert_eq!(big["photons_splatted"], tiny["photons_splatted"], "{tag}");
-        assert_eq!(big["levels"], tiny["levels"], "{tag}: per-level counts do not depend on batching");
-        let m = compare(&ti, &bi, 64, 2.0);
+        let batches = tiny.traversal().batches_committed;
+        assert!(batches >= 4, "{tag}: batches {batches}");
+        assert_eq!(big.photons(), tiny.photons(), "{tag}");
+        assert_eq!(big.levels(), tiny.levels(), "{tag}: per-level counts do not depend on batching");
+        let m = compare(&tiny.img, &big.img, 64, 2.0);
         assert!(m.rel_l1 <= 1e-4, "{tag}: rel-L1 {}", m.rel_l1);
         // Some cells converged before the maximal level.
-        let levels = big["levels"].as_array().unwrap();
-        let early: u64 = levels[..levels.len() - 1].iter().map(|l| l["emitted"].as_u64().unwrap()).sum();
-        eprintln!("{tag}: {} photons, {early} before the last level", photons(&big));
+        let early = early_photons(&big);
+        eprintln!("{tag}: {} photons, {early} before the last level", big.photons());
         assert!(early > 0, "{tag}: nothing converged early");
     }
 }
 
-/// Flux-error at each target error and max-level at `level`: per target, the stats' tau, the photons and the
-/// error merging added: rel-L1 (64²) against max-level's image at the same level (the error `--target-error`
-/// bounds; against the reference, the differences at small targets would be below its noise).
-fn added_errors(name: &str, scene: &str, base: &[&str], targets: &[&str]) -> Vec<(f64, f64, u64, f64)> {
+/// Flux-error at each target error and max-level at the level of `base` (adaptive settings, whose metric and target
+/// error each run sets): per target, the reported tau, the photons and the error merging added: rel-L1 (64²)
+/// against max-level's image at the same level (the error the target error bounds; against the reference, the
+/// differences at small targets would be below its noise).
+fn added_errors(name: &str, scene: &str, base: &Settings, targets: &[f64]) -> Vec<(f64, f64, u64, f64)> {
     added_errors_and_skips(name, scene, base, targets)
         .into_iter()
         .map(|(e, tau, n, added, _)| (e, tau, n, added))
         .collect()
 }
 
-/// [`added_errors`], with the checks each run skipped by prediction (the stats' `levels[].checks_skipped`, summed).
-fn added_errors_and_skips(name: &str, scene: &str, base: &[&str], targets: &[&str]) -> Vec<(f64, f64, u64, f64, u64)> {
-    let dir = out_dir(name);
-    let mut ml_args = base.to_vec();
-    ml_args.extend_from_slice(&["--metric", "max-level"]);
-    let (sm, r) = caustics_aov(&dir, "max-level", scene, &ml_args);
-    assert!(sm["target_error"].is_null() && sm["tau"].is_null(), "max-level reports no target error");
-    let skipped = |s: &serde_json::Value| -> u64 {
-        s["levels"].as_array().unwrap().iter().map(|l| l["checks_skipped"].as_u64().unwrap()).sum()
-    };
+/// [`added_errors`], with the checks each run skipped by prediction (the levels' `checks_skipped`, summed).
+fn added_errors_and_skips(name: &str, scene: &str, base: &Settings, targets: &[f64]) -> Vec<(f64, f64, u64, f64, u64)> {
+    let (_gpu, device) = gpu();
+    let sm = caustics_aov(&device, scene, with(base.clone(), |s| s.quality.metric = Metric::MaxLevel));
+    let r = &sm.img;
+    assert!(reported_target(&sm.config).is_none(), "max-level reports no target error");
+    let skipped = |s: &Shot| -> u64 { s.levels().iter().map(|l| l.checks_skipped as u64).sum() };
     assert_eq!(skipped(&sm), 0, "max-level checks nothing");
     let mut out = Vec::new();
-    for target in targets {
-        let mut args = base.to_vec();
-        args.extend_from_slice(&["--metric", "flux-error", "--target-error", target]);
-        let (s, img) = caustics_aov(&dir, &format!("e{target}"), scene, &args);
-        let e: f64 = target.parse().unwrap();
-        assert_eq!(s["target_error"].as_f64().unwrap() as f32, e as f32, "the stats report the target error");
-        let tau = s["tau"].as_f64().unwrap();
-        let (n, added) = (photons(&s), score(&img, &r).rel_l1);
+    for &e in targets {
+        let settings = with(base.clone(), |s| {
+            s.quality.metric = Metric::FluxError;
+            s.quality.target_error = e as f32;
+        });
+        let s = caustics_aov(&device, scene, settings);
+        let (target, tau) = reported_target(&s.config).expect("flux-error reports its target error");
+        assert_eq!(target, e as f32, "the settings keep the target error");
+        let tau = tau as f64;
+        let (n, added) = (s.photons(), score(&s.img, r).rel_l1);
         eprintln!(
-            "{name}: target {target}: tau {tau:.4}, {n} photons (max-level {}), added rel-L1 64² {added:.6}",
-            photons(&sm)
+            "{name}: target {e}: tau {tau:.4}, {n} photons (max-level {}), added rel-L1 64² {added:.6}",
+            sm.photons()
         );
         out.push((e, tau, n, added, skipped(&s)));
     }
     out
 }
 
-/// `--target-error` is monotonic: over a sweep, a smaller target never gives a larger tau, more added error or
+/// The target error is monotonic: over a sweep, a smaller target never gives a larger tau, more added error or
 /// fewer photons. Sphere, two-interface, level 4; the targets map to tau 0.3, 0.15, 0.1, 0.02 and 0.001, measured:
 /// 222,778, 260,329, 289,234, 477,481 and 820,324 photons (max-level: 820,324), added rel-L1 0.156%, 0.062%,
 /// 0.038%, below 1e-6 and below 1e-6.
 #[test]
 fn target_error_is_monotonic() {
-    let base = ["--transport", "two-interface", "--level", "4"];
-    let sweep = added_errors("flux_error_monotonic", SPHERE, &base, &["0.02", "0.01", "0.005", "0.001", "0.0003"]);
+    let base = flux_error(Transport::TwoInterface, 4);
+    let sweep = added_errors("flux_error_monotonic", SPHERE, &base, &[0.02, 0.01, 0.005, 0.001, 0.0003]);
     for w in sweep.windows(2) {
         let ((e0, t0, n0, a0), (e1, t1, n1, a1)) = (w[0], w[1]);
         assert!(t1 <= t0, "target {e1}: tau {t1} above {t0} at {e0}");
@@ -177,7 +190,7 @@ fn target_error_is_monotonic() {
 }
 
 /// The calibration (src/calibration.rs): the error merging adds over max-level at the same level stays within
-/// `--target-error` E. Exact transport, level 4, the sphere and the bunny, E = 0.001 (the default; τ 0.02) and
+/// the target error E. Exact transport, level 4, the sphere and the bunny, E = 0.001 (the default; τ 0.02) and
 /// 0.005 (τ 0.1). Measured on lavapipe (both in their default 4×4 weak-branch blocks): sphere 0.0053% and 0.0583%
 /// (481,480 and 293,314 photons of max-level's 824,416), bunny 0.0044% and 0.343% (472,471 and 338,029 of 491,341;
 /// with prediction over one level only: 0.0053%, 0.0593%, 0.0053% and 0.406%). Margin 1 (the assertion is added ≤ E):
@@ -189,9 +202,9 @@ fn target_error_is_monotonic() {
 fn target_error_bounds_the_added_error() {
     // Both in the same (default) weak-branch blocks: E bounds what merging adds, and 4×4 blocks differ from 2×2 by
     // more (0.36% rel-L1 64² on the bunny at level 4, measured on lavapipe).
-    let base = ["--transport", "exact", "--level", "4"];
+    let base = flux_error(Transport::Exact, 4);
     for (name, scene) in [("flux_error_calibration_sphere", SPHERE), ("flux_error_calibration_bunny", BUNNY)] {
-        for (e, tau, _, added) in added_errors(name, scene, &base, &["0.001", "0.005"]) {
+        for (e, tau, _, added) in added_errors(name, scene, &base, &[0.001, 0.005]) {
             assert!(added <= e, "{name}: target {e} (tau {tau}): merging added rel-L1 {added}");
         }
     }
@@ -200,20 +213,20 @@ fn target_error_bounds_the_added_error() {
 /// Prediction (docs/design.md, "The flux-error metric"): the descendants of a cell whose merging error is over two
 /// budgets (2^(d-1) of them d levels down) skip their checks and refine. That never merges more, so the error merging
 /// adds over max-level stays within E. Sphere, level 4, check level 2 (so the early look-ahead at level 1 predicts
-/// for level 2, and level 2 for level 3), E = 0.001, both transports; the stats must show skipped checks. Measured
-/// on lavapipe: 110,960 checks skipped under each transport, 413,404 and 417,487 photons (411,268 and 415,321 with
-/// no prediction; 412,108 and 416,287 with prediction over one level), added rel-L1 1e-6 and 2.0e-4. One level of
-/// prediction skipped 88,880 and 88,928 checks: more than 100,000 shows the chains over two levels (from the early
-/// look-ahead at level 1 down to level 3) at work.
+/// for level 2, and level 2 for level 3), E = 0.001, both transports; the levels' counts must show skipped checks.
+/// Measured on lavapipe: 110,960 checks skipped under each transport, 413,404 and 417,487 photons (411,268 and
+/// 415,321 with no prediction; 412,108 and 416,287 with prediction over one level), added rel-L1 1e-6 and 2.0e-4.
+/// One level of prediction skipped 88,880 and 88,928 checks: more than 100,000 shows the chains over two levels
+/// (from the early look-ahead at level 1 down to level 3) at work.
 #[test]
 fn predicted_refinement_adds_no_error() {
-    for transport in ["two-interface", "exact"] {
-        let base = ["--transport", transport, "--level", "4", "--check-level", "2"];
-        let name = format!("flux_error_prediction_{transport}");
-        for (e, tau, n, added, skipped) in added_errors_and_skips(&name, SPHERE, &base, &["0.001"]) {
-            eprintln!("{transport}: {skipped} checks skipped");
-            assert!(skipped > 100_000, "{transport}: prediction skipped {skipped} checks (110,960 measured)");
-            assert!(added <= e, "{transport}: target {e} (tau {tau}), {n} photons: merging added rel-L1 {added}");
+    for transport in [Transport::TwoInterface, Transport::Exact] {
+        let base = with(flux_error(transport, 4), |s| s.tuning.check_level = Some(2));
+        let name = format!("flux_error_prediction_{transport:?}");
+        for (e, tau, n, added, skipped) in added_errors_and_skips(&name, SPHERE, &base, &[0.001]) {
+            eprintln!("{transport:?}: {skipped} checks skipped");
+            assert!(skipped > 100_000, "{transport:?}: prediction skipped {skipped} checks (110,960 measured)");
+            assert!(added <= e, "{transport:?}: target {e} (tau {tau}), {n} photons: merging added rel-L1 {added}");
         }
     }
 }
@@ -245,44 +258,47 @@ fn bad_target_error_exits_2() {
     }
 }
 
-/// The default check level (src/settings.rs, `Settings::check_level`): 3, and under flux-error at most `--level` - 1,
+/// The default check level (src/settings.rs, `default_check_level`): 3, and under flux-error at most the level - 1,
 /// so that the metric merges at levels 3 and below too instead of emitting max-level's photons through a traversal.
-/// Max-error keeps 3; `--check-level` overrides both. The stats report the level used. Sphere, two-interface.
+/// Max-error keeps 3; `Tuning::check_level` (`--check-level`) overrides both. The resolved settings give the level
+/// used, which the stats report. Sphere, two-interface.
 #[test]
 fn default_check_level_follows_the_level() {
-    let dir = out_dir("flux_error_check_level");
-    // (name, metric, --level, extra arguments, the check level expected)
-    let cases: [(&str, &str, &str, &[&str], u64); 4] = [
-        ("fe2", "flux-error", "2", &[], 1),
-        ("fe4", "flux-error", "4", &[], 3),
-        ("fe2_given", "flux-error", "2", &["--check-level", "2"], 2),
-        ("me2", "max-error", "2", &[], 3),
+    let (_gpu, device) = gpu();
+    // (name, metric, level, the check level given, the check level expected)
+    let cases = [
+        ("fe2", Metric::FluxError, 2, None, 1),
+        ("fe4", Metric::FluxError, 4, None, 3),
+        ("fe2_given", Metric::FluxError, 2, Some(2), 2),
+        ("me2", Metric::MaxError, 2, None, 3),
     ];
     let mut level2 = Vec::new();
-    for (name, metric, level, extra, want) in cases {
-        let base = ["--transport", "two-interface", "--method", "adaptive", "--metric", metric, "--level", level];
-        let (s, _) = caustics_aov(&dir, name, SPHERE, &[&base[..], extra].concat());
-        assert_eq!(s["check_level"].as_u64(), Some(want), "{name}: {}", s["check_level"]);
-        let levels = s["levels"].as_array().unwrap();
-        let early: u64 = levels[..levels.len() - 1].iter().map(|l| l["emitted"].as_u64().unwrap()).sum();
-        if level == "2" {
-            level2.push((name, photons(&s), early));
+    for (name, metric, level, given, want) in cases {
+        let settings = with(adaptive(level, metric), |s| {
+            s.quality.transport = Transport::TwoInterface;
+            s.tuning.check_level = given;
+        });
+        let s = caustics_aov(&device, SPHERE, settings);
+        let check_level = reported_check_level(&s.config);
+        assert_eq!(check_level, Some(want), "{name}: {check_level:?}");
+        if level == 2 {
+            level2.push((name, s.photons(), early_photons(&s)));
         }
     }
     assert_eq!(level2.len(), 3, "the three cases at level 2");
-    let (dense, _) =
-        caustics_aov(&dir, "dense2", SPHERE, &["--transport", "two-interface", "--method", "dense", "--level", "2"]);
-    assert!(dense["check_level"].is_null(), "dense checks nothing: {}", dense["check_level"]);
+    let dense = caustics_aov(&device, SPHERE, with(dense(2), |s| s.quality.transport = Transport::TwoInterface));
+    let check_level = reported_check_level(&dense.config);
+    assert!(check_level.is_none(), "dense checks nothing: {check_level:?}");
     // At level 2 flux-error merges (photons before the last level, fewer photons than dense); with the check level
     // at 2, and under max-error's 3, nothing is checked and the photons are dense's.
     for (name, n, early) in level2 {
         if name == "fe2" {
-            assert!(early > 0 && n < photons(&dense), "{name}: {n} photons ({early} early), dense {}", photons(&dense));
+            assert!(early > 0 && n < dense.photons(), "{name}: {n} photons ({early} early), dense {}", dense.photons());
         } else {
             assert!(
-                early == 0 && n == photons(&dense),
+                early == 0 && n == dense.photons(),
                 "{name}: {n} photons ({early} early), dense {}",
-                photons(&dense)
+                dense.photons()
             );
         }
     }
