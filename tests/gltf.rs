@@ -3,11 +3,13 @@
 
 mod common;
 use caustics::scene::{mesh, LightKind, Material, Projection, Scene};
+use caustics::settings::{Metric, Transport};
 use common::gltf_doc::*;
 use common::*;
 use glam::Vec3;
 use serde_json::{json, Value};
 use std::path::Path;
+use std::sync::Arc;
 
 /// The TOML twin of [`gltf_scene`]: the sphere scene's floor, light and `top` camera, with a 0.4 m glass cube.
 const TOML: &str = r#"[[light]]
@@ -216,14 +218,29 @@ fn gltf_and_glb_load_like_toml() {
     assert_eq!(s.camera(None).unwrap().name, "top");
 }
 
+/// The caustics AOV's flux in W of `scene`'s `top` camera at 64², level 1 (adaptive flux-error), under
+/// `transport` (`None`: the default): what `render --camera top --aov caustics --size 64x64 --level 1
+/// [--transport T]` reports as `aov_flux_w`, rendered in process on the shared device; validation stayed silent.
+fn top_flux(device: &Arc<caustics::gpu::Device>, scene: &Path, transport: Option<Transport>) -> f64 {
+    let settings = with(adaptive(1, Metric::FluxError), |s| {
+        if let Some(t) = transport {
+            s.quality.transport = t;
+        }
+    });
+    let shot = shot_at(device, scene.to_str().unwrap(), settings, 0.0, caustics::Aov::Caustics, 64);
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{}: validation messages", scene.display());
+    shot.aov_flux
+}
+
 #[test]
 fn gltf_renders_the_same_flux_as_toml() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("gltf_render");
     let (doc, bin) = gltf_scene();
     let g = write(&dir, "twin.gltf", embedded(doc, &bin));
     let t = write(&dir, "twin.toml", TOML);
     let args = ["--camera", "top", "--aov", "caustics", "--size", "64x64", "--level", "1"];
-    let (ts, _) = render(&dir, "toml", t.to_str().unwrap(), &args);
+    let ft = top_flux(&device, &t, None);
     // Through the CLI by hand, to see its warnings.
     let (out, stats) = (dir.join("gltf.exr"), dir.join("gltf.json"));
     let mut a = vec!["render", "--scene", g.to_str().unwrap(), "--out", out.to_str().unwrap()];
@@ -234,14 +251,11 @@ fn gltf_renders_the_same_flux_as_toml() {
     assert!(stderr.contains("EXT_made_up"), "{stderr}");
     let gs = read_json(&stats);
     assert_validation_clean(&gs);
-    let (fg, ft) = (gs["aov_flux_w"].as_f64().unwrap(), ts["aov_flux_w"].as_f64().unwrap());
+    let fg = gs["aov_flux_w"].as_f64().unwrap();
     assert!(ft > 0.01, "the TOML twin has a caustic: {ft}");
     assert!(((fg - ft) / ft).abs() < 1e-4, "glTF {fg} W vs TOML {ft} W");
     // The default transport (exact: every path) agrees too.
-    let exact = ["--camera", "top", "--aov", "caustics", "--size", "64x64", "--level", "1", "--transport", "exact"];
-    let (ge, _) = render(&dir, "gltf_exact", g.to_str().unwrap(), &exact);
-    let (te, _) = render(&dir, "toml_exact", t.to_str().unwrap(), &exact);
-    let (fg, ft) = (ge["aov_flux_w"].as_f64().unwrap(), te["aov_flux_w"].as_f64().unwrap());
+    let (fg, ft) = (top_flux(&device, &g, Some(Transport::Exact)), top_flux(&device, &t, Some(Transport::Exact)));
     assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "exact: glTF {fg} W vs TOML {ft} W");
     // A directional light (683 lux = 1 W/m²) on a node at the origin, inside the scene: the glTF light is at
     // infinity, so its beam must still light the whole scene, like the TOML light 2 m up.
@@ -250,9 +264,7 @@ fn gltf_renders_the_same_flux_as_toml() {
     doc["nodes"][3]["translation"] = json!([0.0, 0.0, 0.0]);
     let g = write(&dir, "dir.gltf", embedded(doc, &bin));
     let t = write(&dir, "dir.toml", TOML.replace("\"spot\"", "\"directional\"").replace("cone_deg = 40.0\n", ""));
-    let (gd, _) = render(&dir, "gltf_dir", g.to_str().unwrap(), &args);
-    let (td, _) = render(&dir, "toml_dir", t.to_str().unwrap(), &args);
-    let (fg, ft) = (gd["aov_flux_w"].as_f64().unwrap(), td["aov_flux_w"].as_f64().unwrap());
+    let (fg, ft) = (top_flux(&device, &g, None), top_flux(&device, &t, None));
     assert!(ft > 0.01 && ((fg - ft) / ft).abs() < 1e-4, "directional: glTF {fg} W vs TOML {ft} W");
 }
 
@@ -292,6 +304,7 @@ fn textured_gltf(dir: &Path) -> String {
 /// (the beauty varies across the floor as the blocks do).
 #[test]
 fn gltf_base_color_texture_renders_like_toml() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("gltf_texture");
     let g = write(&dir, "textured.gltf", textured_gltf(&dir));
     let toml = TOML.replace(
@@ -300,23 +313,20 @@ fn gltf_base_color_texture_renders_like_toml() {
     );
     let t = write(&dir, "textured.toml", toml);
     // The sky's radiance given: the automatic one follows the light's distance to its target, which a glTF light
-    // (a direction, no target) does not share with its TOML twin.
-    let args = [
-        "--camera",
-        "top",
-        "--size",
-        "96x96",
-        "--level",
-        "1",
-        "--transport",
-        "two-interface",
-        "--aa",
-        "1",
-        "--sky",
-        "0.02",
-    ];
-    let beauty = |scene: &Path, name: &str| render_exr(&dir, name, scene.to_str().unwrap(), &args);
-    let (bg, bt) = (beauty(&g, "gltf"), beauty(&t, "toml"));
+    // (a direction, no target) does not share with its TOML twin. The linear beauty of the `top` camera at 96²,
+    // level 1 (adaptive flux-error), two-interface transport, one sample a pixel, in process.
+    let settings = with(adaptive(1, Metric::FluxError), |s| {
+        s.quality.transport = Transport::TwoInterface;
+        s.quality.aa = 1;
+        s.quality.sky = Some(0.02);
+    });
+    let beauty = |scene: &Path| {
+        let mut r = renderer(&device, scene.to_str().unwrap(), settings.clone());
+        let (img, _) = top_aov(&mut r, 96, caustics::Aov::BeautyHdr);
+        assert_eq!(caustics::gpu::validation_message_count(), 0, "{}: validation messages", scene.display());
+        img
+    };
+    let (bg, bt) = (beauty(&g), beauty(&t));
     let (mut worst, mut diff, mut total) = (0.0f64, 0.0f64, 0.0f64);
     for (a, b) in bg.data.iter().zip(&bt.data) {
         for c in 0..3 {
@@ -497,14 +507,19 @@ fn gallery_gltf_is_the_tools_output() {
 fn gallery_gltf_matches_reference() {
     use caustics::metrics::compare;
     use caustics::reference::{Aov, Paths};
-    let dir = out_dir("gltf_gallery");
-    let args = ["--transport", "exact", "--camera", "top", "--aov", "caustics", "--size", "256x256", "--level", "4"];
-    let (s, out) = render(&dir, "gallery", GALLERY, &args);
-    let rows = s["lights"].as_array().unwrap();
-    let passes: Vec<&str> = rows.iter().map(|r| r["channel"].as_str().unwrap()).collect();
+    let (_gpu, device) = gpu();
+    // The `top` camera's caustics AOV at 256², exact transport, level 4 (adaptive flux-error), in process.
+    let s = shot(&device, GALLERY, with(adaptive(4, Metric::FluxError), |s| s.quality.transport = Transport::Exact));
+    // Each pass's channel, as the stats name it.
+    let passes: Vec<&str> = s
+        .report
+        .lights
+        .iter()
+        .map(|l| ["gray", "red", "green", "blue", "rgb", "spectral"][l.channel.min(5) as usize])
+        .collect();
     assert_eq!(passes, ["spectral", "spectral"], "two lights, one pass of spectral photons each");
     let r = top_reference(GALLERY, Aov::Caustics, Paths::All, 48_000_000, 256);
-    let m = compare(&caustics::image_io::read_exr(&out).unwrap(), &r, 64, 2.0);
+    let m = compare(&s.img, &r, 64, 2.0);
     eprintln!("gallery.gltf vs reference: {m:?}");
     assert!((m.flux_ratio - 1.0).abs() < 0.01, "flux ratio {}", m.flux_ratio);
     assert!(m.rel_l1 < 0.045, "rel-L1 {}", m.rel_l1);
@@ -731,6 +746,7 @@ fn exporters_gltf() -> (Value, Vec<u8>) {
 /// a `.glb` whose texture is an image in a bufferView. The file renders, and the warnings reach the user.
 #[test]
 fn what_exporters_write_loads_as_the_spec_says() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("gltf_exporters");
     let (doc, bin) = exporters_gltf();
     let path = write(&dir, "exporters.glb", glb(&doc, &bin));
@@ -773,12 +789,19 @@ fn what_exporters_write_loads_as_the_spec_says() {
     let t = Scene::load(&write(&dir, "textured.glb", glb(&doc, &bin))).unwrap();
     assert_eq!(t.textures.len(), 1);
     assert_eq!((t.textures[0].width, t.textures[0].height), (64, 64));
-    // The file renders, with each warning on one line.
-    let (stats, _) = render(&dir, "exporters", path.to_str().unwrap(), &["--level", "2", "--size", "64x64"]);
-    assert!(stats["photons_splatted"].as_u64().unwrap() > 10_000, "{}", stats["photons_splatted"]);
+    // The file renders (in process: its beauty through the default camera at 64², level 2, adaptive flux-error,
+    // exact transport), ...
+    let mut r = renderer(&device, path.to_str().unwrap(), adaptive(2, Metric::FluxError));
+    let camera = r.scene().camera(None).unwrap_or_else(|e| panic!("{e}")).clone();
+    let view = r.camera_view(&camera, 64, 64);
+    let frame = r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Beauty))).expect("frame");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
+    assert!(frame.report.photons() > 10_000, "{}", frame.report.photons());
     // One bottom-level BVH per distinct mesh, however many nodes instance it: the floor, the cube (four nodes),
     // and the raised cube (the sparse one and the morphed one hold the same triangles).
-    assert_eq!(stats["exact_transport"]["bvh"]["triangles"], 2 + 12 + 12, "{}", stats["exact_transport"]["bvh"]);
+    let bvh = &r.scene_buffers().bvh;
+    assert_eq!(bvh.triangle_count, 2 + 12 + 12, "{} instances", bvh.instance_count);
+    // ... and through the CLI, with each warning on one line.
     let o = caustics(&[
         "render",
         "--scene",

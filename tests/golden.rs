@@ -7,8 +7,10 @@
 //! blessing run is never taken for a passing one).
 
 mod common;
+use caustics::settings::{Metric, Settings, Transport};
 use common::*;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 struct Rgb {
     w: u32,
@@ -83,11 +85,31 @@ fn keep(name: &str, test: &Rgb, expected: &Rgb, map: &Rgb) -> PathBuf {
     dir
 }
 
-fn beauty(dir: &Path, name: &str, scene: &str, size: &str, level: &str, extra: &[&str]) -> Rgb {
-    let mut args = vec!["--camera", "main", "--size", size, "--level", level, "--transport", "exact"];
-    args.extend_from_slice(extra);
-    let (_, out) = render(dir, name, scene, &args);
-    read_rgb(&out)
+/// The beauty (tone-mapped, 8-bit sRGB, as the CLI writes it to a PNG) of `scene`'s `main` camera at
+/// `width`×`height`, level `level` (adaptive flux-error), exact transport, with the settings changed by `f`,
+/// rendered in process on the shared device; validation stayed silent.
+fn beauty(
+    device: &Arc<caustics::gpu::Device>,
+    scene: &str,
+    (width, height): (u32, u32),
+    level: u32,
+    f: impl FnOnce(&mut Settings),
+) -> Rgb {
+    let settings = with(adaptive(level, Metric::FluxError), |s| {
+        s.quality.transport = Transport::Exact;
+        f(s);
+    });
+    let mut r = renderer(device, scene, settings);
+    let cam = r.scene().camera(Some("main")).unwrap_or_else(|e| panic!("{e}")).clone();
+    let view = r.camera_view(&cam, width, height);
+    let frame = r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Beauty))).expect("frame");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
+    match frame.image {
+        Some(caustics::AovData::Rgba8 { width: w, height: h, rgba }) => {
+            Rgb { w, h, px: rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() }
+        }
+        _ => panic!("an 8-bit beauty"),
+    }
 }
 
 /// Anti-aliasing: the default beauty at 320x240 against a 4×4-supersampled render (1280x960 with one sample per
@@ -95,9 +117,9 @@ fn beauty(dir: &Path, name: &str, scene: &str, size: &str, level: &str, extra: &
 /// tail is what aliasing makes: its 99.9th percentile must be at most 0.2. Without supersampling the bound fails:
 /// with one sample per pixel it measured 0.43 (sphere) and 0.45 (bunny) on lavapipe.
 fn aa_case(name: &str, scene: &str) {
-    let dir = out_dir(&format!("golden_aa_{name}"));
-    let test = beauty(&dir, "aa", scene, "320x240", "4", &[]);
-    let reference = box_down(&beauty(&dir, "ss4", scene, "1280x960", "4", &["--aa", "1"]), 4);
+    let (_gpu, device) = gpu();
+    let test = beauty(&device, scene, (320, 240), 4, |_| ());
+    let reference = box_down(&beauty(&device, scene, (1280, 960), 4, |s| s.quality.aa = 1), 4);
     let (mean, p99, p999, map) = flip(&test, &reference);
     eprintln!("{name}: FLIP mean {mean:.4}, 99th {p99:.3}, 99.9th percentile {p999:.3}");
     if p999 > 0.2 {
@@ -120,8 +142,8 @@ fn antialiased_bunny_matches_supersampled() {
 /// renderer on the same device repeats itself to the bit; the thresholds leave room for another driver's
 /// rounding while a visible change fails (a tint of the glass, a lost reflection, a missing sky).
 fn golden_case(name: &str, scene: &str) {
-    let dir = out_dir(&format!("golden_{name}"));
-    let test = beauty(&dir, name, scene, "256x192", "3", &[]);
+    let (_gpu, device) = gpu();
+    let test = beauty(&device, scene, (256, 192), 3, |_| ());
     let golden_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"));
     if std::env::var_os("CAUSTICS_BLESS").is_some() {
         // Blessing writes the new image and still fails: a run that rewrote the goldens has checked nothing.

@@ -11,13 +11,16 @@
 //! | a non-manifold edge (more than two triangles) | rendered as surfaces; a warning for glass |
 //! | no triangle left | error at load (exit 2) |
 //!
-//! The repairs give the same caustic as the clean mesh (checked through the binary, on both transports), and no
-//! pathology panics at render time.
+//! The repairs give the same caustic as the clean mesh (rendered in process, on both transports, with the warnings
+//! the library logs), no pathology panics at render time, and a NaN vertex exits with code 2 through the binary.
 
 mod common;
 use caustics::scene::mesh::{self, MeshReport};
+use caustics::scene::Scene;
+use caustics::settings::{Metric, Transport};
 use common::*;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A 0.4 m cube's 8 corners (OBJ indices 1..8).
 const CUBE_V: &str = "v -0.2 -0.2 -0.2\nv 0.2 -0.2 -0.2\nv 0.2 0.2 -0.2\nv -0.2 0.2 -0.2\n\
@@ -165,7 +168,7 @@ fn shipped_meshes_are_clean_or_known_open() {
     }
 }
 
-// Through the binary: render each pathology over the floor and compare the caustic flux with the clean cube's.
+// Render each pathology over the floor and compare the caustic flux with the clean cube's.
 
 fn scene_with(dir: &Path, obj: &str) -> PathBuf {
     std::fs::write(dir.join("m.obj"), obj).unwrap();
@@ -178,10 +181,127 @@ fn scene_with(dir: &Path, obj: &str) -> PathBuf {
     p
 }
 
-/// (exit code, stderr, caustic flux in W when it rendered).
-fn render_obj(test: &str, obj: &str, transport: &str) -> (Option<i32>, String, Option<f64>) {
+std::thread_local! {
+    /// The warning and error lines logged on this thread since [`logged`] began collecting them.
+    static LOGGED: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The test binary's logger: every warning and error, printed as the CLI prints them (`warning: ...`,
+/// `error: ...`; shown with a failing test's output) and collected for [`logged`] on the thread that logged them.
+struct Collect;
+
+impl log::Log for Collect {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.level() <= log::Level::Warn
+    }
+
+    fn log(&self, r: &log::Record) {
+        if !self.enabled(r.metadata()) {
+            return;
+        }
+        let line = match r.level() {
+            log::Level::Error => format!("error: {}", r.args()),
+            _ => format!("warning: {}", r.args()),
+        };
+        eprintln!("{line}");
+        LOGGED.with(|l| {
+            if let Some(text) = l.borrow_mut().as_mut() {
+                text.push_str(&line);
+                text.push('\n');
+            }
+        });
+    }
+
+    fn flush(&self) {}
+}
+
+/// Install [`Collect`] as the logger; before [`gpu`], which would install its own.
+fn collect_logs() {
+    static COLLECT: Collect = Collect;
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        log::set_logger(&COLLECT).expect("the collecting logger is installed before common::gpu installs another");
+        log::set_max_level(log::LevelFilter::Warn);
+    });
+}
+
+/// `f`'s result, or `None` when it panicked, with the warnings and errors this thread logged while it ran.
+fn logged<T>(f: impl FnOnce() -> T) -> (Option<T>, String) {
+    LOGGED.with(|l| *l.borrow_mut() = Some(String::new()));
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).ok();
+    (out, LOGGED.with(|l| l.borrow_mut().take().unwrap_or_default()))
+}
+
+/// Render `obj` as the glass of [`scene_with`] in process on the shared device: the `top` camera's caustics AOV at
+/// 64², level 1 (adaptive flux-error) under `transport`. Returns the caustic flux in W (or why the scene did not
+/// load or render) and the warnings logged meanwhile; panics when it panicked.
+fn render_obj(
+    device: &Arc<caustics::gpu::Device>,
+    test: &str,
+    obj: &str,
+    transport: Transport,
+) -> (Result<f64, String>, String) {
     let dir = out_dir(test);
     let sc = scene_with(&dir, obj);
+    let settings = with(adaptive(1, Metric::FluxError), |s| s.quality.transport = transport);
+    let (out, log) = logged(|| -> Result<f64, String> {
+        let scene = Scene::load(&sc).map_err(|e| e.to_string())?;
+        let mut r = caustics::Renderer::new(device.clone(), scene, settings).map_err(|e| e.to_string())?;
+        let camera = r.scene().camera(Some("top"))?.clone();
+        let caustics::scene::Projection::Orthographic { half_height } = camera.projection else {
+            return Err("the top camera is orthographic".into());
+        };
+        let view = r.camera_view(&camera, 64, 64);
+        let frame =
+            r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Caustics))).map_err(|e| e.to_string())?;
+        let Some(caustics::AovData::Float { rgba, .. }) = frame.image else { return Err("no float image".into()) };
+        // The texel's area, as the CLI's stats weigh `aov_flux_w`.
+        let texel = 2.0 * half_height as f64 / 64.0;
+        Ok(rgba.iter().map(|p| p[0] as f64).sum::<f64>() * texel * texel)
+    });
+    let out = out.unwrap_or_else(|| panic!("{test}: panicked; logged:\n{log}"));
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{test}: validation messages");
+    (out, log)
+}
+
+#[test]
+fn pathologies_render_like_the_clean_mesh() {
+    collect_logs();
+    let (_gpu, device) = gpu();
+    for transport in [Transport::TwoInterface, Transport::Exact] {
+        let (clean, err) = render_obj(&device, &format!("mesh_render_clean_{transport:?}"), &cube_obj(), transport);
+        let clean = clean.unwrap_or_else(|e| panic!("{e}\n{err}"));
+        assert!(!err.contains("warning: "), "{err}");
+        assert!(clean > 1e-3, "clean cube caustic flux {clean}");
+        for (name, obj, needle) in [
+            ("inverted", inverted(), "inside out"),
+            ("flipped", one_flipped(), "reversed the winding of 2 triangles"),
+            ("degenerate", with_degenerate_and_duplicates(), "removed 2 degenerate"),
+        ] {
+            let (flux, err) = render_obj(&device, &format!("mesh_render_{name}_{transport:?}"), &obj, transport);
+            let flux = flux.unwrap_or_else(|e| panic!("{name}: {e}\n{err}"));
+            assert!(err.contains("object[1] \"glass\".path") && err.contains(needle), "{name}: {err}");
+            assert!((flux / clean - 1.0).abs() < 1e-3, "{name} ({transport:?}): flux {flux} W against {clean} W");
+        }
+    }
+    // Open and non-manifold glass renders (as surfaces), with a warning.
+    for (name, obj, needle) in
+        [("open", open(), "open mesh: 4 boundary edges"), ("fin", non_manifold(), "non-manifold")]
+    {
+        for transport in [Transport::TwoInterface, Transport::Exact] {
+            let (flux, err) = render_obj(&device, &format!("mesh_render_{name}_{transport:?}"), &obj, transport);
+            let flux = flux.unwrap_or_else(|e| panic!("{name}: {e}\n{err}"));
+            assert!(err.contains(needle), "{name}: {err}");
+            assert!(flux.is_finite());
+        }
+    }
+}
+
+/// A NaN vertex through the binary: exit 2 naming the scene's line, the object, the OBJ file and its line.
+#[test]
+fn a_nan_vertex_exits_2_through_the_binary() {
+    let dir = out_dir("bin_nan");
+    let sc = scene_with(&dir, &cube_obj().replace("v 0.2 0.2 0.2", "v 0.2 nan 0.2"));
     let (out, stats) = (dir.join("c.exr"), dir.join("s.json"));
     let o = caustics(&[
         "render",
@@ -192,7 +312,7 @@ fn render_obj(test: &str, obj: &str, transport: &str) -> (Option<i32>, String, O
         "--aov",
         "caustics",
         "--transport",
-        transport,
+        "two-interface",
         "--level",
         "1",
         "--size",
@@ -204,49 +324,7 @@ fn render_obj(test: &str, obj: &str, transport: &str) -> (Option<i32>, String, O
     ]);
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(!err.contains("panicked"), "{err}");
-    let flux = o.status.success().then(|| {
-        let s = read_json(&stats);
-        assert_validation_clean(&s);
-        s["aov_flux_w"].as_f64().unwrap()
-    });
-    (o.status.code(), err, flux)
-}
-
-#[test]
-fn pathologies_through_the_binary() {
-    for transport in ["two-interface", "exact"] {
-        let (code, err, clean) = render_obj(&format!("bin_clean_{transport}"), &cube_obj(), transport);
-        assert_eq!(code, Some(0), "{err}");
-        assert!(!err.contains("warning: "), "{err}");
-        let clean = clean.unwrap();
-        assert!(clean > 1e-3, "clean cube caustic flux {clean}");
-        for (name, obj, needle) in [
-            ("inverted", inverted(), "inside out"),
-            ("flipped", one_flipped(), "reversed the winding of 2 triangles"),
-            ("degenerate", with_degenerate_and_duplicates(), "removed 2 degenerate"),
-        ] {
-            let (code, err, flux) = render_obj(&format!("bin_{name}_{transport}"), &obj, transport);
-            assert_eq!(code, Some(0), "{name}: {err}");
-            assert!(err.contains("object[1] \"glass\".path") && err.contains(needle), "{name}: {err}");
-            let flux = flux.unwrap();
-            assert!((flux / clean - 1.0).abs() < 1e-3, "{name} ({transport}): flux {flux} W against {clean} W");
-        }
-    }
-    // Open and non-manifold glass renders (as surfaces), with a warning.
-    for (name, obj, needle) in
-        [("open", open(), "open mesh: 4 boundary edges"), ("fin", non_manifold(), "non-manifold")]
-    {
-        for transport in ["two-interface", "exact"] {
-            let (code, err, flux) = render_obj(&format!("bin_{name}_{transport}"), &obj, transport);
-            assert_eq!(code, Some(0), "{name}: {err}");
-            assert!(err.contains(needle), "{name}: {err}");
-            assert!(flux.unwrap().is_finite());
-        }
-    }
-    // NaN: exit 2 naming the scene's line, the object, the OBJ file and its line.
-    let text = cube_obj().replace("v 0.2 0.2 0.2", "v 0.2 nan 0.2");
-    let (code, err, _) = render_obj("bin_nan", &text, "two-interface");
-    assert_eq!(code, Some(2), "{err}");
+    assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("scene.toml:") && err.contains("object[1] \"glass\".path"), "{err}");
     assert!(err.contains("m.obj:7: vertex 7 has a non-finite coordinate `nan`"), "{err}");
 }
