@@ -379,7 +379,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         if let Some(cont) = plan.continuation {
             if cont.passes[pass] {
                 c.light_gbuffers(rec, caustics, first_channel);
-                c.coverage(rec);
+                c.coverage(rec)?;
                 c.photons(rec, plan.batch_slots, Some(cont.from_slot))?;
                 c.resolve(rec, true)?;
                 c.copy_light_state(rec);
@@ -393,7 +393,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         } else {
             c.light_gbuffers(rec, caustics, first_channel);
             if caustics {
-                c.coverage(rec);
+                c.coverage(rec)?;
                 c.photons(rec, plan.batch_slots, None)?;
                 c.resolve(rec, false)?;
                 c.copy_light_state(rec);

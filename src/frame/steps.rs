@@ -84,13 +84,9 @@ impl Ctx<'_> {
     }
 
     /// Step 2: the coverage pyramid.
-    pub(super) fn coverage(&self, rec: &mut Rec) {
+    pub(super) fn coverage(&self, rec: &mut Rec) -> VkResult<()> {
         let t = self.t;
         rec.ts.mark(rec.cmd, "coverage");
-        rec.sync.buffer(&t.photon.coverage, &[Access::ComputeWrite]);
-        rec.sync.image(&t.light.front, &[Access::ComputeSampled]);
-        rec.sync.image(&self.r.geo, &[Access::ComputeSampled]);
-        rec.flush(self.d);
         let mips = self.s.gbuffer_level() + 1;
         let inputs = CoverageInputs {
             ubo: self.ubo,
@@ -100,35 +96,23 @@ impl Ctx<'_> {
             sampler: self.nearest,
             mips,
         };
-        self.p.coverage.record(rec.cmd, &inputs);
+        self.p.coverage.record(rec.cmd, rec.sync, &inputs)
     }
 
     /// Step 6: caustic flux → irradiance. `add`: add to the map (a continuation's remaining batches).
     pub(super) fn resolve(&self, rec: &mut Rec, add: bool) -> VkResult<()> {
         rec.ts.mark(rec.cmd, "resolve");
-        // A light's later color passes write their channel and keep the earlier ones.
-        if self.channel == 0 && !add {
-            rec.sync.discard(&self.r.irradiance, &[Access::ComputeWrite]);
-        } else {
-            rec.sync.image(&self.r.irradiance, &[Access::ComputeWrite]);
-        }
-        let flux = if self.resolve_texels {
-            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeTexels]);
-            if self.s.carried_color.carried() {
-                FluxSource::ColorTexels(&self.r.flux_texels)
-            } else {
-                FluxSource::Texels(&self.r.flux_texels)
-            }
-        } else {
-            rec.sync.image(&self.r.flux, &[Access::ComputeSampled]);
+        let flux = if !self.resolve_texels {
             FluxSource::Image(&self.r.flux)
+        } else if self.s.carried_color.carried() {
+            FluxSource::ColorTexels(&self.r.flux_texels)
+        } else {
+            FluxSource::Texels(&self.r.flux_texels)
         };
-        rec.sync.image(&self.r.geo, &[Access::ComputeSampled]);
-        rec.flush(self.d);
-        self.p.resolve.record(rec.cmd, self.ubo, flux, &self.r.geo, &self.r.irradiance, self.nearest, add)?;
-        rec.sync.image(&self.r.irradiance, &EYE_READ);
-        rec.flush(self.d);
-        Ok(())
+        // A light's later color passes write their channel and keep the earlier ones.
+        let keep = self.channel != 0 || add;
+        let r = &self.r;
+        self.p.resolve.record(rec.cmd, rec.sync, self.ubo, flux, &r.geo, &r.irradiance, self.nearest, keep, add)
     }
 
     /// No refractor: the irradiance map is zero (no caustic pass is recorded).
@@ -166,20 +150,6 @@ impl Ctx<'_> {
             self.p.eye.record_gbuffer(rec.cmd, self.sb, &self.data.camera, &g);
             rec.ts.mark(rec.cmd, "eye.shade");
         }
-        rec.sync.image(&e.recv, &[Access::ComputeSampled]);
-        rec.sync.image(&e.albedo, &[Access::ComputeSampled]);
-        for img in out {
-            // A further light reads what the last one wrote, pixel by pixel.
-            if first {
-                rec.sync.discard(img, &[Access::ComputeWrite]);
-            } else {
-                rec.sync.image(img, &[Access::ComputeWrite]);
-            }
-        }
-        rec.sync.image(&self.r.shadow, &EYE_READ);
-        rec.sync.image(&self.r.irradiance, &EYE_READ);
-        rec.sync.image(&self.r.geo, &SAMPLED);
-        rec.flush(self.d);
         let inputs = EyeInputs {
             ubo: self.ubo,
             shadow: &self.r.shadow,
@@ -189,7 +159,7 @@ impl Ctx<'_> {
             linear: self.linear,
             images: &self.sb.images,
         };
-        self.p.eye.record_shade(rec.cmd, &inputs, &g, out, !first)
+        self.p.eye.record_shade(rec.cmd, rec.sync, &inputs, &g, out, !first)
     }
 
     /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.

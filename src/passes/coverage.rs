@@ -3,7 +3,7 @@
 use super::groups_2d;
 use crate::gpu_types::CoveragePush;
 use crate::shaders::{self, consts::COVERAGE_MIP0_ID};
-use crate::vk::{Access, Barriers, Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
+use crate::vk::{Access, Barriers, BindKind, Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -56,24 +56,27 @@ impl CoveragePass {
     }
 
     /// Build all mips of the pyramid over `front`; the coverage buffer ends in ComputeWrite.
-    pub fn record(&self, cmd: vk::CommandBuffer, i: &CoverageInputs) {
+    pub fn record(&self, cmd: vk::CommandBuffer, sync: &mut Tracker, i: &CoverageInputs) -> VkResult<()> {
         let (gbuffer_res, mips, coverage) = (i.front.extent.width, i.mips, i.coverage);
         let (offsets, _) = pyramid_layout(gbuffer_res, mips);
-        let binds = [
-            Bind::Uniform(i.ubo),
-            Bind::Storage(coverage),
-            Bind::Sampled(i.front, i.sampler),
-            Bind::Sampled(i.recv, i.sampler),
+        let uses = [
+            Use::Uniform(i.ubo),
+            Use::Write(coverage),
+            Use::Sampled(i.front, i.sampler),
+            Use::Sampled(i.recv, i.sampler),
         ];
         for m in 0..mips {
             if m > 0 {
+                // Each mip reads the one before it: an ordering inside the pass, which the tracker does not see.
                 Barriers::new()
                     .buffer(coverage, &[Access::ComputeWrite], &[Access::ComputeWrite])
                     .flush(&self.device, cmd);
             }
             let pipeline = if m == 0 { &self.mip0 } else { &self.reduce };
-            if m <= 1 {
-                pipeline.bind(cmd, &binds);
+            if m == 0 {
+                pipeline.bind_uses(cmd, sync, &uses)?;
+            } else if m == 1 {
+                pipeline.bind(cmd, &uses.map(Use::bind));
             }
             let res = gbuffer_res >> m;
             let push = CoveragePush {
@@ -86,5 +89,6 @@ impl CoveragePass {
             let (gx, gy) = groups_2d(res, res);
             unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         }
+        Ok(())
     }
 }

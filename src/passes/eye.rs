@@ -8,7 +8,9 @@ use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
 use crate::vk::pipeline::{kinds, LazyPipeline};
-use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
+use crate::vk::{
+    Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, Tracker, Use, VkResult,
+};
 use ash::vk;
 use std::sync::Arc;
 
@@ -127,27 +129,29 @@ impl EyePass {
     pub fn record_shade(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         i: &EyeInputs,
         g: &EyeGbuffer,
         out: &[&Image],
         add: bool,
     ) -> VkResult<()> {
         let pipeline = self.shade[(out.len() > 1) as usize].get()?;
-        let mut binds = vec![
-            (EB_FRAME, Bind::Uniform(i.ubo)),
-            (EB_SHADOW, Bind::Sampled(i.shadow, i.nearest)),
-            (EB_IRRADIANCE, Bind::Sampled(i.irradiance, i.linear)),
-            (EB_RECEIVERS, Bind::Sampled(i.recv, i.nearest)),
-            (EB_EYE, Bind::Sampled(g.geo, i.nearest)),
-            (EB_ALBEDO, Bind::Sampled(g.albedo, i.nearest)),
-            (EB_ENV, Bind::Sampled(&i.images.environment, &i.images.equirect)),
-            (EB_ENV_IRRADIANCE, Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect)),
+        let mut uses = vec![
+            (EB_FRAME, Use::Uniform(i.ubo)),
+            (EB_SHADOW, Use::Sampled(i.shadow, i.nearest)),
+            (EB_IRRADIANCE, Use::Sampled(i.irradiance, i.linear)),
+            (EB_RECEIVERS, Use::Sampled(i.recv, i.nearest)),
+            (EB_EYE, Use::Sampled(g.geo, i.nearest)),
+            (EB_ALBEDO, Use::Sampled(g.albedo, i.nearest)),
+            (EB_ENV, Use::Fixed(Bind::Sampled(&i.images.environment, &i.images.equirect))),
+            (EB_ENV_IRRADIANCE, Use::Fixed(Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect))),
         ];
-        binds
-            .extend(out.iter().zip([EB_RADIANCE, EB_CAUSTICS, EB_DIRECT]).map(|(img, b)| (b, Bind::StorageImage(img))));
-        assert!(crate::vk::pipeline::bindings_in_order(&binds), "the eye shading's bindings out of order");
-        let binds: Vec<Bind> = binds.into_iter().map(|(_, b)| b).collect();
-        pipeline.bind(cmd, &binds);
+        // A further light adds to what the last one wrote, pixel by pixel.
+        let write = |img| if add { Use::ImageWrite(img) } else { Use::ImageOverwrite(img) };
+        uses.extend(out.iter().zip([EB_RADIANCE, EB_CAUSTICS, EB_DIRECT]).map(|(img, b)| (b, write(img))));
+        assert!(crate::vk::pipeline::bindings_in_order(&uses), "the eye shading's bindings out of order");
+        let uses: Vec<Use> = uses.into_iter().map(|(_, u)| u).collect();
+        pipeline.bind_uses(cmd, sync, &uses)?;
         pipeline.push(cmd, &ShadePush { add: add as u32 });
         let (gx, gy) = groups_2d(out[0].extent.width, out[0].extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };

@@ -3,7 +3,7 @@
 use super::groups_2d;
 use crate::shaders;
 use crate::vk::pipeline::LazyPipeline;
-use crate::vk::{Bind, BindKind, Buffer, Device, Image, Pipeline, Sampler, VkResult};
+use crate::vk::{BindKind, Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -47,36 +47,30 @@ impl ResolvePass {
         Ok(ResolvePass { device: device.clone(), pipeline, texels })
     }
 
-    /// Resolve `flux` into `out` (its channel, for a color pass); `add`: add to what `out` holds instead (the rest of
-    /// a frame's batches, traced after the first submission ran out of batch slots).
+    /// Resolve `flux` into `out` (its channel, for a color pass); `keep`: keep what `out` holds (a light's later
+    /// channel passes); `add`: add to it instead (the rest of a frame's batches, traced after the first submission
+    /// ran out of batch slots).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         ubo: &Buffer,
         flux: FluxSource,
         recv: &Image,
         out: &Image,
         s: &Sampler,
+        keep: bool,
         add: bool,
     ) -> VkResult<()> {
-        let pipeline = match flux {
-            FluxSource::Image(img) => {
-                self.pipeline.bind(
-                    cmd,
-                    &[Bind::Uniform(ubo), Bind::Sampled(img, s), Bind::Sampled(recv, s), Bind::StorageImage(out)],
-                );
-                &self.pipeline
-            }
+        let out_use = if keep { Use::ImageWrite(out) } else { Use::ImageOverwrite(out) };
+        let (pipeline, flux_use) = match flux {
+            FluxSource::Image(img) => (&self.pipeline, Use::Sampled(img, s)),
             FluxSource::Texels(buf) | FluxSource::ColorTexels(buf) => {
-                let p = self.texels[matches!(flux, FluxSource::ColorTexels(_)) as usize].get()?;
-                p.bind_checked(
-                    cmd,
-                    &[Bind::Uniform(ubo), Bind::Storage(buf), Bind::Sampled(recv, s), Bind::StorageImage(out)],
-                )?;
-                p
+                (self.texels[matches!(flux, FluxSource::ColorTexels(_)) as usize].get()?, Use::Texels(buf))
             }
         };
+        pipeline.bind_uses(cmd, sync, &[Use::Uniform(ubo), flux_use, Use::Sampled(recv, s), out_use])?;
         pipeline.push(cmd, &(add as u32));
         let (gx, gy) = groups_2d(out.extent.width, out.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };

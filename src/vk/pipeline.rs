@@ -66,6 +66,7 @@ pub fn ordered<'a, const N: usize>(entries: [(u32, Bind<'a>); N]) -> [Bind<'a>; 
     entries.map(|(_, b)| b)
 }
 
+#[derive(Clone, Copy)]
 pub enum Bind<'a> {
     Uniform(&'a Buffer),
     Storage(&'a Buffer),
@@ -73,6 +74,74 @@ pub enum Bind<'a> {
     Sampled(&'a Image, &'a Sampler),
     /// Storage image in GENERAL.
     StorageImage(&'a Image),
+}
+
+/// A resource a compute pass binds, with how the pass uses it: the one declaration from which both the pass's
+/// descriptor and the barriers before it come ([`Pipeline::bind_uses`]).
+#[derive(Clone, Copy)]
+#[allow(dead_code)] // Read and ImageRead: no converted pass reads a storage resource without writing it yet.
+pub enum Use<'a> {
+    /// A uniform buffer, written by the host before the submission (ordered by it: no barrier).
+    Uniform(&'a Buffer),
+    /// A storage buffer the pass reads.
+    Read(&'a Buffer),
+    /// A storage buffer the pass writes, or reads and writes (atomics included).
+    Write(&'a Buffer),
+    /// A buffer the pass reads through its texel view.
+    Texels(&'a Buffer),
+    /// An image the pass samples.
+    Sampled(&'a Image, &'a Sampler),
+    /// A storage image the pass reads.
+    ImageRead(&'a Image),
+    /// A storage image the pass writes, or reads and writes, keeping what it held.
+    ImageWrite(&'a Image),
+    /// A storage image the pass writes whole: what it held before does not matter (no layout to keep).
+    ImageOverwrite(&'a Image),
+    /// A resource no frame writes (a scene texture, uploaded once; its upload's barrier made it readable): bound
+    /// with no barrier.
+    Fixed(Bind<'a>),
+}
+
+impl<'a> Use<'a> {
+    /// The descriptor.
+    pub fn bind(self) -> Bind<'a> {
+        match self {
+            Use::Uniform(b) => Bind::Uniform(b),
+            Use::Read(b) | Use::Write(b) | Use::Texels(b) => Bind::Storage(b),
+            Use::Sampled(i, s) => Bind::Sampled(i, s),
+            Use::ImageRead(i) | Use::ImageWrite(i) | Use::ImageOverwrite(i) => Bind::StorageImage(i),
+            Use::Fixed(b) => b,
+        }
+    }
+
+    /// Declare the use to `sync`, which then places the barriers it needs after the resource's earlier uses.
+    pub fn declare(self, sync: &mut super::Tracker) {
+        use super::Access::*;
+        match self {
+            Use::Uniform(_) | Use::Fixed(_) => {}
+            Use::Read(b) => {
+                sync.buffer(b, &[ComputeRead]);
+            }
+            Use::Write(b) => {
+                sync.buffer(b, &[ComputeWrite]);
+            }
+            Use::Texels(b) => {
+                sync.buffer(b, &[ComputeTexels]);
+            }
+            Use::Sampled(i, _) => {
+                sync.image(i, &[ComputeSampled]);
+            }
+            Use::ImageRead(i) => {
+                sync.image(i, &[ComputeRead]);
+            }
+            Use::ImageWrite(i) => {
+                sync.image(i, &[ComputeWrite]);
+            }
+            Use::ImageOverwrite(i) => {
+                sync.discard(i, &[ComputeWrite]);
+            }
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -412,6 +481,18 @@ impl Pipeline {
         }
         self.bind(cmd, binds);
         Ok(())
+    }
+
+    /// A compute pass's one declaration of its resources: declare each use to `sync` (binding i = uses[i]), record
+    /// the barriers they need, then bind the pipeline and push the descriptors the same uses name.
+    pub fn bind_uses(&self, cmd: vk::CommandBuffer, sync: &mut super::Tracker, uses: &[Use]) -> VkResult<()> {
+        debug_assert_eq!(self.bind_point, vk::PipelineBindPoint::COMPUTE, "declared uses are a compute pass's");
+        for u in uses {
+            u.declare(sync);
+        }
+        sync.flush(&self.device, cmd);
+        let binds: Vec<Bind> = uses.iter().map(|u| u.bind()).collect();
+        self.bind_checked(cmd, &binds)
     }
 
     /// Bind the pipeline and push its descriptors (binding i = binds[i]). A buffer bound where the pipeline's layout
