@@ -7,10 +7,11 @@
 //! decide. A two-interface frame under a second is mostly fixed cost, which the small probes' noise hides: that
 //! case is a level-6 frame (3-4 s).
 //!
-//! Mesa's shader cache is off in this binary, so that every renderer compiles its pipelines as on a machine that
-//! has never run this build: a CPU driver compiles a pipeline when it first runs it, inside a timed probe unless
-//! the estimate's first probe runs them all (a first render's estimate once said 59 s for a 1 s frame). The first
-//! case estimates such a cold renderer.
+//! Mesa's shader cache is off in this binary, so that the first renderer compiles its pipelines as on a machine
+//! that has never run this build: a CPU driver compiles a pipeline when it first runs it, inside a timed probe
+//! unless the estimate's first probe runs them all (a first render's estimate once said 59 s for a 1 s frame). The
+//! first case estimates such a cold renderer; the renderers after it share the device's pipelines
+//! (`caustics::Pipelines`) and compile only the variants their scenes add.
 
 mod common;
 use caustics::settings::{Method, Metric, Quality, Settings, Transport};
