@@ -232,29 +232,10 @@ impl Ctx<'_> {
     /// shaded with these lights' shadow and caustic maps (and the environment, with the first light's uniforms),
     /// and its radiance written (`add` false) or added into the glass image.
     pub(super) fn eye_glass(&self, rec: &mut Rec, more_lights: &[LightMaps], add: bool) -> VkResult<()> {
-        let e = &self.t.eye;
-        if add {
-            rec.sync.image(&e.glass, &[Access::ComputeWrite]);
-        } else {
+        if !add {
             rec.ts.mark(rec.cmd, "eye.glass");
-            rec.sync.discard(&e.glass, &[Access::ComputeWrite]);
         }
-        rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
-        for img in [&e.front, &e.front_aux, &e.back] {
-            rec.sync.image(img, &[Access::ComputeSampled]);
-        }
-        for (shadow, irradiance, recv) in std::iter::once((&self.r.shadow, &self.r.irradiance, &self.r.geo))
-            .chain(more_lights.iter().map(|l| (l.shadow, l.irradiance, l.recv)))
-        {
-            rec.sync.image(shadow, &EYE_READ);
-            rec.sync.image(irradiance, &EYE_READ);
-            rec.sync.image(recv, &SAMPLED);
-        }
-        // The glass pipeline's layout holds the beauty images; it writes neither.
-        rec.sync.image(&e.beauty, &[Access::ComputeWrite]);
-        rec.sync.image(&e.hdr, &[Access::ComputeWrite]);
-        rec.flush(self.d);
-        self.p.composite.record_glass(rec.cmd, &self.composite_inputs(more_lights), add)
+        self.p.composite.record_glass(rec.cmd, rec.sync, &self.composite_inputs(more_lights), add)
     }
 
     /// Step 8: the glass (read from the glass passes under exact transport; else deferred refraction), supersample
@@ -262,19 +243,7 @@ impl Ctx<'_> {
     pub(super) fn composite(&self, rec: &mut Rec) -> VkResult<()> {
         let e = &self.t.eye;
         rec.ts.mark(rec.cmd, "composite");
-        rec.sync.image(&e.glass, &[Access::ComputeRead]);
-        rec.sync.image(&e.radiance, &[Access::ComputeSampled]);
-        // The exact composite binds the refractors' IOR and back buffers but reads neither (nor draws them).
-        for img in [&e.front, &e.front_aux, &e.back] {
-            rec.sync.image(img, &[Access::ComputeSampled]);
-        }
-        rec.sync.discard(&e.beauty, &[Access::ComputeWrite]);
-        rec.sync.discard(&e.hdr, &[Access::ComputeWrite]);
-        rec.sync.image(&self.r.shadow, &EYE_READ);
-        rec.sync.image(&self.r.irradiance, &EYE_READ);
-        rec.sync.image(&self.r.geo, &SAMPLED);
-        rec.flush(self.d);
-        self.p.composite.record(rec.cmd, &self.composite_inputs(&[]))?;
+        self.p.composite.record(rec.cmd, rec.sync, &self.composite_inputs(&[]))?;
         rec.sync.image(&e.beauty, &[Access::TransferSrc]);
         rec.sync.image(&e.hdr, &[Access::TransferSrc]);
         rec.flush(self.d);

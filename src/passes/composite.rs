@@ -7,7 +7,7 @@ use crate::scene_gpu::BvhBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
 use crate::vk::pipeline::{kinds, ordered, with_texels, LazyPipeline};
-use crate::vk::{Bind, BindKind, Buffer, Device, Image, Sampler, VkResult};
+use crate::vk::{Bind, BindKind, Buffer, Device, Image, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -191,7 +191,13 @@ impl CompositePass {
 
     /// Exact transport: the glass's radiance per eye sample under the lights of `i` (at most [`GLASS_LIGHTS`]),
     /// into `i.glass`; `add`: onto what an earlier pass wrote.
-    pub fn record_glass(&self, cmd: vk::CommandBuffer, i: &CompositeInputs, add: bool) -> VkResult<()> {
+    pub fn record_glass(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        i: &CompositeInputs,
+        add: bool,
+    ) -> VkResult<()> {
         assert!(i.more_lights.len() < GLASS_LIGHTS as usize, "a glass pass shades with {GLASS_LIGHTS} lights");
         let key = GlassKey {
             wide: i.wide,
@@ -202,7 +208,9 @@ impl CompositePass {
             media: i.media,
         };
         let pipeline = self.glass[key.index()].get()?;
-        self.bind(cmd, pipeline, i)?;
+        // The layout holds the beauty images, which the glass pass does not write: declared as kept.
+        let glass = if add { Use::ImageWrite(i.glass) } else { Use::ImageOverwrite(i.glass) };
+        pipeline.bind_uses(cmd, sync, &Self::uses(i, glass, Use::ImageWrite, key.wide))?;
         // Dispersive glass at 2×2 samples a pixel: one invocation a pixel (its samples share their traces).
         let pixels = i.dispersive && i.glass.extent.width == 2 * i.beauty.extent.width;
         pipeline.push(cmd, &CompositePush { pixels: pixels as u32, add: add as u32 });
@@ -215,7 +223,7 @@ impl CompositePass {
         Ok(())
     }
 
-    pub fn record(&self, cmd: vk::CommandBuffer, i: &CompositeInputs) -> VkResult<()> {
+    pub fn record(&self, cmd: vk::CommandBuffer, sync: &mut Tracker, i: &CompositeInputs) -> VkResult<()> {
         let single = i.radiance.extent.width == i.beauty.extent.width;
         let pipeline = match (i.exact, single) {
             (true, true) => &self.exact_single,
@@ -224,52 +232,60 @@ impl CompositePass {
             (false, false) => &self.pipeline,
         }
         .get()?;
-        self.bind(cmd, pipeline, i)?;
+        pipeline.bind_uses(cmd, sync, &Self::uses(i, Use::ImageRead(i.glass), Use::ImageOverwrite, false))?;
         pipeline.push(cmd, &CompositePush { pixels: 0, add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())
     }
 
-    fn bind(&self, cmd: vk::CommandBuffer, pipeline: &crate::vk::Pipeline, i: &CompositeInputs) -> VkResult<()> {
+    /// The resources of both programs, which share one layout: `glass` as the glass image's use, `beauty` as the
+    /// beauty images'; `texels`: the BVH's triangles, instances and wide nodes read as texels (the wide layout's
+    /// glass pass). Every map is sampled, and the scene's textures are fixed.
+    fn uses<'a>(
+        i: &'a CompositeInputs,
+        glass: Use<'a>,
+        beauty: fn(&'a Image) -> Use<'a>,
+        texels: bool,
+    ) -> [Use<'a>; CB_COUNT as usize] {
         // Lights the scene lacks bind the first light's maps (the shader reads only `lights` of them).
         let first = LightMaps { ubo: i.ubo, shadow: i.shadow, irradiance: i.irradiance, recv: i.recv };
         let l = |k: usize| i.more_lights.get(k).copied().unwrap_or(first);
         let (l1, l2) = (l(0), l(1));
-        pipeline.bind_checked(
-            cmd,
-            &ordered([
-                (CB_FRAME, Bind::Uniform(i.ubo)),
-                (CB_RADIANCE, Bind::Sampled(i.radiance, i.nearest)),
-                (CB_FRONT, Bind::Sampled(i.front, i.nearest)),
-                (CB_FRONT_AUX, Bind::Sampled(i.front_aux, i.nearest)),
-                (CB_BACK, Bind::Sampled(i.back, i.nearest)),
-                (CB_RADIANCE_LINEAR, Bind::Sampled(i.radiance, i.linear)),
-                (CB_BEAUTY, Bind::StorageImage(i.beauty)),
-                (CB_HDR, Bind::StorageImage(i.hdr)),
-                (CB_SHADOW, Bind::Sampled(i.shadow, i.nearest)),
-                (CB_IRRADIANCE, Bind::Sampled(i.irradiance, i.linear)),
-                (CB_RECEIVERS, Bind::Sampled(i.recv, i.nearest)),
-                (CB_BVH_PAIR, Bind::Storage(&i.bvh.pair_nodes)),
-                (CB_BVH_TRIS, Bind::Storage(&i.bvh.triangles)),
-                (CB_BVH_NORMALS, Bind::Storage(&i.bvh.normals)),
-                (CB_BVH_INSTANCES, Bind::Storage(&i.bvh.instances)),
-                (CB_ALBEDO_TEXTURES, Bind::Sampled(&i.images.albedo, &i.images.repeat)),
-                (CB_ENV, Bind::Sampled(&i.images.environment, &i.images.equirect)),
-                (CB_ENV_IRRADIANCE, Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect)),
-                (CB_GLASS, Bind::StorageImage(i.glass)),
-                (CB_LIGHT1, Bind::Uniform(l1.ubo)),
-                (CB_SHADOW1, Bind::Sampled(l1.shadow, i.nearest)),
-                (CB_IRRADIANCE1, Bind::Sampled(l1.irradiance, i.linear)),
-                (CB_RECEIVERS1, Bind::Sampled(l1.recv, i.nearest)),
-                (CB_LIGHT2, Bind::Uniform(l2.ubo)),
-                (CB_SHADOW2, Bind::Sampled(l2.shadow, i.nearest)),
-                (CB_IRRADIANCE2, Bind::Sampled(l2.irradiance, i.linear)),
-                (CB_RECEIVERS2, Bind::Sampled(l2.recv, i.nearest)),
-                (CB_BVH_WIDE, Bind::Storage(&i.bvh.wide_nodes)),
-                (CB_BVH_WIDE_PRIMS, Bind::Storage(&i.bvh.wide_prims)),
-            ]),
-        )
+        let bvh = |b| if texels { Use::Texels(b) } else { Use::Read(b) };
+        let (near, lin) = (i.nearest, i.linear);
+        let fixed = |img, s| Use::Fixed(Bind::Sampled(img, s));
+        ordered([
+            (CB_FRAME, Use::Uniform(i.ubo)),
+            (CB_RADIANCE, Use::Sampled(i.radiance, near)),
+            (CB_FRONT, Use::Sampled(i.front, near)),
+            (CB_FRONT_AUX, Use::Sampled(i.front_aux, near)),
+            (CB_BACK, Use::Sampled(i.back, near)),
+            (CB_RADIANCE_LINEAR, Use::Sampled(i.radiance, lin)),
+            (CB_BEAUTY, beauty(i.beauty)),
+            (CB_HDR, beauty(i.hdr)),
+            (CB_SHADOW, Use::Sampled(i.shadow, near)),
+            (CB_IRRADIANCE, Use::Sampled(i.irradiance, lin)),
+            (CB_RECEIVERS, Use::Sampled(i.recv, near)),
+            (CB_BVH_PAIR, Use::Read(&i.bvh.pair_nodes)),
+            (CB_BVH_TRIS, bvh(&i.bvh.triangles)),
+            (CB_BVH_NORMALS, bvh(&i.bvh.normals)),
+            (CB_BVH_INSTANCES, bvh(&i.bvh.instances)),
+            (CB_ALBEDO_TEXTURES, fixed(&i.images.albedo, &i.images.repeat)),
+            (CB_ENV, fixed(&i.images.environment, &i.images.equirect)),
+            (CB_ENV_IRRADIANCE, fixed(&i.images.environment_irradiance, &i.images.equirect)),
+            (CB_GLASS, glass),
+            (CB_LIGHT1, Use::Uniform(l1.ubo)),
+            (CB_SHADOW1, Use::Sampled(l1.shadow, near)),
+            (CB_IRRADIANCE1, Use::Sampled(l1.irradiance, lin)),
+            (CB_RECEIVERS1, Use::Sampled(l1.recv, near)),
+            (CB_LIGHT2, Use::Uniform(l2.ubo)),
+            (CB_SHADOW2, Use::Sampled(l2.shadow, near)),
+            (CB_IRRADIANCE2, Use::Sampled(l2.irradiance, lin)),
+            (CB_RECEIVERS2, Use::Sampled(l2.recv, near)),
+            (CB_BVH_WIDE, bvh(&i.bvh.wide_nodes)),
+            (CB_BVH_WIDE_PRIMS, bvh(&i.bvh.wide_prims)),
+        ])
     }
 }
 

@@ -61,7 +61,7 @@ pub fn with_texels<const N: usize>(mut kinds: [BindKind; N], texels: &[u32]) -> 
 }
 
 /// The binds of a list in binding order, checked against its index constants.
-pub fn ordered<'a, const N: usize>(entries: [(u32, Bind<'a>); N]) -> [Bind<'a>; N] {
+pub fn ordered<T, const N: usize>(entries: [(u32, T); N]) -> [T; N] {
     assert!(bindings_in_order(&entries), "a binding list out of its index order");
     entries.map(|(_, b)| b)
 }
