@@ -264,3 +264,22 @@ fn textures_added_in_code_render_as_in_the_file() {
     let ratio = a.max(b) / a.min(b);
     assert!(a.min(b) > 0.0 && (ratio - 4.0).abs() < 0.04, "checker squares {a} and {b}: ratio {ratio}");
 }
+
+/// Renderers on one device share one set of pipelines (`caustics::Pipelines`), whatever their scenes and
+/// settings: a second renderer compiles nothing the first compiled. On a device of its own, a renderer gets its
+/// own, and a holder keeps them for the renderers after it.
+#[test]
+fn renderers_on_one_device_share_their_pipelines() {
+    let (_gpu, device) = common::gpu();
+    let a = common::renderer(&device, common::SPHERE, settings());
+    let b = common::renderer(&device, common::BUNNY, common::dense(1));
+    assert_eq!(a.pipelines(), b.pipelines(), "two renderers on one device");
+    assert_eq!(a.pipelines(), &caustics::Pipelines::new(&device).expect("pipelines"));
+    let desc = caustics::gpu::ContextDesc { validation: true, ..caustics::gpu::ContextDesc::from_env() };
+    let other = caustics::gpu::Context::headless(&desc).expect("a second device").device;
+    let held = caustics::Pipelines::new(&other).expect("pipelines");
+    assert_ne!(&held, a.pipelines(), "another device's");
+    let c = common::renderer(&other, common::SPHERE, settings());
+    assert_eq!(c.pipelines(), &held, "the held pipelines of that device");
+}
+

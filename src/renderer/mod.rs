@@ -130,6 +130,19 @@ impl Pipelines {
     }
 }
 
+/// The same pipelines, not equal ones.
+impl PartialEq for Pipelines {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl std::fmt::Debug for Pipelines {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Pipelines({:p})", Arc::as_ptr(&self.0))
+    }
+}
+
 /// The renderer: it shares the pipelines of its device ([`Pipelines`]), owns the scene on the GPU, the targets and the frames in flight, and renders
 /// frames from [`FrameDesc`]s (see the crate's documentation).
 pub struct Renderer {
@@ -363,6 +376,11 @@ impl Renderer {
     /// The settings asked for (automatic choices still automatic).
     pub fn settings(&self) -> &Settings {
         &self.settings
+    }
+
+    /// The pipelines this renderer shares with the other renderers of its device.
+    pub fn pipelines(&self) -> &Pipelines {
+        &self.passes
     }
 
     /// The settings as this device resolved them: what every frame renders with.
