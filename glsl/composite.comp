@@ -12,7 +12,7 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
 #ifndef EXACT_EYE
 vec3 behind(GpuView cam, vec3 o, vec3 dir) {
-    vec3 lo = u_frame.scene_min, hi = u_frame.scene_max;
+    vec3 lo = u_frame.frame.scene_min, hi = u_frame.frame.scene_max;
     vec3 pad = 1e-2 * max(hi - lo, vec3(1.0));
     vec3 hit;
     if (find_surface(cam, t_radiance, o, dir, ray_box_exit(o, dir, lo - pad, hi + pad), hit)) {
@@ -30,7 +30,7 @@ vec3 shade_glass(GpuView cam, vec3 ro, vec3 rd, vec4 front, float ior) {
     vec3 t1;
     if (!refract_dir(rd, n1, 1.0 / ior, t1)) return reflected;
     vec3 p2, n2;
-    if (!find_exit(cam, t_back, u_frame.refractor_diameter, p1, t1, p2, n2)) {
+    if (!find_exit(cam, t_back, u_frame.frame.refractor_diameter, p1, t1, p2, n2)) {
         return F1 * reflected + (1.0 - F1) * behind(cam, p1, t1);
     }
     if (dot(n2, t1) < 0.0) n2 = -n2;
@@ -73,14 +73,14 @@ vec3 shade_sample(GpuView cam, ivec2 q, vec2 uv) {
 }
 
 void main() {
-    GpuView cam = u_frame.camera;
+    GpuView cam = u_frame.frame.camera;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     ivec2 out_size = imageSize(o_beauty);
     if (p.x >= out_size.x || p.y >= out_size.y) return;
 #ifdef SINGLE_SAMPLE
     // One eye sample per pixel (--aa 1, and the viewer's previews): no averaging loop in the kernel at all.
     vec3 L = shade_sample(cam, p, (vec2(p) + 0.5) * cam.extent.zw);
-    imageStore(o_beauty, p, vec4(srgb_encode(aces(L * u_frame.exposure)), 1.0));
+    imageStore(o_beauty, p, vec4(srgb_encode(aces(L * u_frame.frame.exposure)), 1.0));
     imageStore(o_hdr, p, vec4(L, 1.0));
 #else
     int aa = max(int(cam.extent.x) / out_size.x, 1);
@@ -90,7 +90,7 @@ void main() {
             ivec2 q = p * aa + ivec2(i, j);
             vec3 L = shade_sample(cam, q, (vec2(q) + 0.5) * cam.extent.zw);
             sum += L;
-            mapped += aces(L * u_frame.exposure);
+            mapped += aces(L * u_frame.frame.exposure);
         }
     }
     float k = 1.0 / float(aa * aa);

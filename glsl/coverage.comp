@@ -14,8 +14,8 @@ layout(set = 0, binding = 3) uniform usampler2D t_recv;  // receivers from the l
 
 // Is the refractor surface at this texel in the light, or does a receiver stand between them?
 bool lit(ivec2 p, vec4 front) {
-    GpuView v = u_frame.photon_view;
-    GpuView rv = u_frame.receiver_view;
+    GpuView v = u_frame.light.photon_view;
+    GpuView rv = u_frame.light.receiver_view;
     vec2 uv = (vec2(p) + 0.5) / vec2(textureSize(t_front, 0));
     vec3 ro, rd;
     view_ray(v, uv, ro, rd);
@@ -40,7 +40,7 @@ void main() {
     if (COVERAGE_MIP0) {
         vec4 front = geo_fetch(t_front, ivec2(p));
         bits = front.w > 0.0 && lit(ivec2(p), front) ? 3u : 0u;
-        if (bits == 0u && u_frame.exact != 0u) {
+        if (bits == 0u && u_frame.frame.exact != 0u) {
             // Exact transport traces each cell's own ray, so a cell whose texel center misses the glass may still
             // hit it: dilate "any" by one texel so that silhouette cells are emitted (the ray decides; a miss
             // becomes direct light in the energy account).

@@ -60,7 +60,7 @@ vec3 on_plane(GpuView cam, ivec2 q, vec3 p, vec3 n) {
 }
 
 void main() {
-    GpuView cam = u_frame.camera;
+    GpuView cam = u_frame.frame.camera;
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = imageSize(o_radiance);
     if (q.x >= size.x || q.y >= size.y) return;
@@ -79,7 +79,7 @@ void main() {
     // Caustics, averaged over the pixel's footprint on the map: the uv offsets to where the next pixels' rays
     // meet the receiver's tangent plane (the screen-space derivatives of uv), so that a caustic sharper than a
     // pixel keeps its flux: sum E * pixel area stays the flux that landed under the pixel.
-    GpuView lv = u_frame.receiver_view;
+    GpuView lv = u_frame.light.receiver_view;
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, on_plane(cam, q + ivec2(1, 0), p, n)) - uv;
     vec2 dy = view_uv(lv, on_plane(cam, q + ivec2(0, 1), p, n)) - uv;

@@ -12,8 +12,8 @@
 // tested together with the uniform it mirrors.
 // The lights whose maps are bound, 1-3 (the first's at CB_FRAME, CB_SHADOW, ...).
 layout(constant_id = GLASS_LIGHT_COUNT_ID) const uint GLASS_LIGHT_COUNT = 1u;
-layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.disperses)
-layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.environment)
+layout(constant_id = GLASS_DISPERSIVE_ID) const bool GLASS_DISPERSIVE = true;  // some glass disperses (u_frame.frame.disperses)
+layout(constant_id = GLASS_ENVIRONMENT_ID) const bool GLASS_ENVIRONMENT = true;  // an environment map (u_frame.frame.environment)
 layout(constant_id = GLASS_TEXTURED_ID) const bool GLASS_TEXTURED = true;  // some receiver has an albedo texture
 layout(constant_id = GLASS_MEDIA_ID) const bool GLASS_MEDIA = true;  // absorbing or overlapping media (ResolvedSettings::media)
 #define ENVIRONMENT_MAP GLASS_ENVIRONMENT
@@ -60,14 +60,14 @@ vec3 light_irradiance(GpuView lv, vec3 power, float bias, sampler2D shadow, samp
 
 // The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
 vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
-    vec3 e = light_irradiance(u_frame.receiver_view, u_frame.light_power, u_frame.shadow_bias, t_shadow,
+    vec3 e = light_irradiance(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, t_shadow,
                               t_irradiance, t_recv, p, ns, t1, t2, width);
     if (GLASS_LIGHT_COUNT > 1u) {
-        e += light_irradiance(u_light1.receiver_view, u_light1.light_power, u_light1.shadow_bias, t_shadow1,
+        e += light_irradiance(u_light1.light.receiver_view, u_light1.light.light_power, u_light1.frame.shadow_bias, t_shadow1,
                               t_irradiance1, t_recv1, p, ns, t1, t2, width);
     }
     if (GLASS_LIGHT_COUNT > 2u) {
-        e += light_irradiance(u_light2.receiver_view, u_light2.light_power, u_light2.shadow_bias, t_shadow2,
+        e += light_irradiance(u_light2.light.receiver_view, u_light2.light.light_power, u_light2.frame.shadow_bias, t_shadow2,
                               t_irradiance2, t_recv2, p, ns, t1, t2, width);
     }
     return e;
@@ -87,8 +87,8 @@ const int EYE_STACK = 8;
 // glass takes its caustic irradiance averaged over the pixel's footprint there: the pixel's width at the distance
 // the ray has run (the glass's own magnification aside), across the receiver's tangent plane.
 vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
-    uint cap = uint(u_frame.eye_depth);
-    GpuView cam = u_frame.camera;
+    uint cap = uint(u_frame.frame.eye_depth);
+    GpuView cam = u_frame.frame.camera;
     // A pixel's width at unit distance (perspective) or its width (orthographic).
     float pixel = cam.window.z * cam.extent.z;
     bool ortho = view_is_ortho(cam);
@@ -188,7 +188,7 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
 
 // Eye sample q's ray.
 void sample_ray(ivec2 q, out vec3 ro, out vec3 rd) {
-    view_ray(u_frame.camera, (vec2(q) + 0.5) * u_frame.camera.extent.zw, ro, rd);
+    view_ray(u_frame.frame.camera, (vec2(q) + 0.5) * u_frame.frame.camera.extent.zw, ro, rd);
 }
 
 // Whether eye sample q sees glass first.
@@ -285,8 +285,8 @@ void main() {
     bool glass = sees_glass(q);
     vec3 L = vec3(0.0);
     if (glass) {
-        // Dispersive glass (FrameData.disperses): each wavelength follows its own IOR's path.
-        if (GLASS_DISPERSIVE && u_frame.disperses > 0.5) {
+        // Dispersive glass (FrameUniforms.disperses): each wavelength follows its own IOR's path.
+        if (GLASS_DISPERSIVE && u_frame.frame.disperses > 0.5) {
             L = trace_spectral(q, eye_jitter(q));
         } else {
             vec3 ro, rd;

@@ -15,10 +15,10 @@ void main() {
     if (pc.mode == INIT_FRAME || pc.mode == INIT_DENSE) {
         if (tid == 0u) {
             // The frame-start clear of the whole state is a vkCmdFillBuffer; here only the non-zero fields.
-            state.batching = u_frame.batching;
+            state.batching = u_frame.frame.batching;
             // A batching traversal may fill the whole buffer, its photons within traversal.w (traverse.comp checks
             // both); dense bands, and traversal without batching, use traversal.w entries at most.
-            state.capacity = pc.mode == INIT_FRAME && state.batching != 0u ? u_frame.record_capacity : u_frame.batch_photons;
+            state.capacity = pc.mode == INIT_FRAME && state.batching != 0u ? u_frame.frame.record_capacity : u_frame.frame.batch_photons;
             state.start_level = MAX_LEVELS;
             state.stack_size = 0u;
             state.emit_count = 0u;

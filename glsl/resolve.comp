@@ -50,7 +50,7 @@ layout(push_constant) uniform ResolvePush { uint add; } pc;
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
 void main() {
-    GpuView v = u_frame.receiver_view;
+    GpuView v = u_frame.light.receiver_view;
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(v.extent.xy);
     if (p.x >= size.x || p.y >= size.y) return;
@@ -67,15 +67,15 @@ void main() {
         if (!view_is_ortho(v)) area *= r.w * r.w;
         // The map holds flux for a white light; the light's color (per unit intensity) tints it here. Spectral
         // photons carried it (glsl/splat.comp, spectral_tint).
-        vec3 tint = u_frame.light_intensity > 0.0 ? u_frame.light_power / u_frame.light_intensity : vec3(0.0);
-        if (u_frame.channel == CHANNEL_SPECTRAL) tint = vec3(1.0);
+        vec3 tint = u_frame.light.light_intensity > 0.0 ? u_frame.light.light_power / u_frame.light.light_intensity : vec3(0.0);
+        if (u_frame.pass.channel == CHANNEL_SPECTRAL) tint = vec3(1.0);
         e = flux_rgb(p, size) * tint / area;
     }
     // A color pass (docs/design.md "Color") writes its own channel; the red pass starts the texel, the green
     // and blue passes keep what the earlier ones wrote. One store either way, chosen per channel: a CPU driver runs
     // both sides of a branch, and an image store is a loop over the lanes for each channel. A gray pass and color
     // photons write all three.
-    uint c = u_frame.channel;
+    uint c = u_frame.pass.channel;
     bool all_channels = c == 0u || c >= CHANNEL_RGB;
     bool add = pc.add != 0u;
     vec4 prev = add || !all_channels && c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);

@@ -33,10 +33,10 @@ const uint SPLAT_PLANES = SPLAT_RGB ? 3u : 1u;
 
 // Add v (W) to flux texel k, tinted: each channel's share to its plane (`plane` texels apart).
 // A spectral photon's RGB per watt: its wavelength's, times the pass's light color as a spectrum there (white:
-// 1; FrameData.light_spectrum_c*, src/spectrum.rs RgbSpectrum), so that its mean over the wavelengths is that color.
+// 1; LightUniforms.light_spectrum_c*, src/spectrum.rs RgbSpectrum), so that its mean over the wavelengths is that color.
 vec3 spectral_tint(float nm) {
-    vec3 color = u_frame.light_intensity > 0.0 ? u_frame.light_power / u_frame.light_intensity : vec3(0.0);
-    vec3 c = vec3(u_frame.light_spectrum_c0, u_frame.light_spectrum_c1, u_frame.light_spectrum_c2);
+    vec3 color = u_frame.light.light_intensity > 0.0 ? u_frame.light.light_power / u_frame.light.light_intensity : vec3(0.0);
+    vec3 c = vec3(u_frame.light.light_spectrum_c0, u_frame.light.light_spectrum_c1, u_frame.light.light_spectrum_c2);
     return spectrum_rgb(nm) * rgb_spectrum(color, c, nm);
 }
 
@@ -71,7 +71,7 @@ void tile_add(uint b, float v, vec3 tint) {
 // The coarse level a record of the given extent (half-widths, texels) splats at: the first where both are at most
 // SPLAT_FINE_RADIUS texels (the coarsest if none), or 0 for a record splatted as it is.
 uint splat_level(vec2 e, ivec2 size) {
-    if (u_frame.differential == 0u) return 0u;
+    if (u_frame.frame.differential == 0u) return 0u;
     float w = max(e.x, e.y);
     uint top = splat_levels(size), m = 0u;
     while (m < top && w > float(SPLAT_FINE_RADIUS << m)) m++;
@@ -106,7 +106,7 @@ void splat_coarse(vec2 c0, float flux, vec3 tint, SplatShape k0, ivec2 size, uin
 
 void main() {
     uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * LINEAR_WG + gl_LocalInvocationIndex;
-    ivec2 size = ivec2(u_frame.receiver_view.extent.xy);
+    ivec2 size = ivec2(u_frame.light.receiver_view.extent.xy);
     GpuSplat s = GpuSplat(vec2(0.0), 0.0, 0.0);
     vec3 tint = vec3(1.0);
     uint plane = flux_plane(size);

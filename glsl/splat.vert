@@ -9,7 +9,7 @@ layout(location = 2) flat out vec2 v_shear;  // shear, and 1 when it moves the c
 
 void main() {
     GpuSplat s = splats[gl_VertexIndex];
-    vec2 size = u_frame.receiver_view.extent.xy;
+    vec2 size = u_frame.light.receiver_view.extent.xy;
     SplatShape k = splat_shape(s.shape > 0.0 ? s.shape : 1.0);
     if (s.shape > 0.0) {
         gl_Position = vec4(s.texel / size * 2.0 - 1.0, 0.5, 1.0);

@@ -12,7 +12,7 @@ layout(push_constant) uniform SplatCollapsePushBlock { SplatCollapsePush pc; };
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
 void main() {
-    ivec2 size = ivec2(u_frame.receiver_view.extent.xy);
+    ivec2 size = ivec2(u_frame.light.receiver_view.extent.xy);
     uint m = pc.level;
     ivec2 fine = size >> (m - 1u), coarse = size >> m;
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);

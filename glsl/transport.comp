@@ -19,8 +19,8 @@ void main() {
         tstate.out_reserved = 0u;
         tstate.records = 0u;
         tstate.records_reserved = 0u;
-        tstate.queue_capacity = u_frame.queue_rays;
-        tstate.record_capacity = u_frame.record_capacity;
+        tstate.queue_capacity = u_frame.frame.queue_rays;
+        tstate.record_capacity = u_frame.frame.record_capacity;
         for (uint k = 0u; k < ACC_TERMS; k++) tstate.batch_account[k] = uvec2(0u);
         wave_cmd = dispatch_groups(tstate.in_count, LINEAR_WG);
         if (tstate.in_count > 0u) tstate.waves += 1u;

@@ -80,7 +80,7 @@ uint child_dominant(uint level, uvec2 xy, uint k, out vec2 p, out uint events, o
 #if defined(BVH_LAYOUT_WIDE)
 bool transport_exact() { return true; }
 #else
-bool transport_exact() { return u_frame.exact != 0u; }
+bool transport_exact() { return u_frame.frame.exact != 0u; }
 #endif
 
 const uint ACT_DROP = 0u;
@@ -95,7 +95,7 @@ const uint CHILD_ORDER[4] = uint[4](0u, 3u, 1u, 2u);
 // The photon view's rectangle of cell (level, xy).
 void cell_rect(uint level, uvec2 xy, out vec2 lo, out vec2 hi) {
     float side = cell_side(level);
-    lo = u_frame.photon_view.window.xy + vec2(xy) * side;
+    lo = u_frame.light.photon_view.window.xy + vec2(xy) * side;
     hi = lo + side;
 }
 
@@ -103,7 +103,7 @@ void cell_rect(uint level, uvec2 xy, out vec2 lo, out vec2 hi) {
 bool cell_in_play(uint level, uvec2 xy) {
     vec2 lo, hi;
     cell_rect(level, xy, lo, hi);
-    return cell_any_covered(level, xy) && view_rect_touches_cone(u_frame.photon_view, lo, hi);
+    return cell_any_covered(level, xy) && view_rect_touches_cone(u_frame.light.photon_view, lo, hi);
 }
 
 // Whether the cell lies wholly on the refractors and inside the cone: the metrics check only such cells, because
@@ -111,12 +111,12 @@ bool cell_in_play(uint level, uvec2 xy) {
 bool cell_inside(uint level, uvec2 xy) {
     vec2 lo, hi;
     cell_rect(level, xy, lo, hi);
-    return cell_all_covered(level, xy) && view_rect_inside_cone(u_frame.photon_view, lo, hi);
+    return cell_all_covered(level, xy) && view_rect_inside_cone(u_frame.light.photon_view, lo, hi);
 }
 
 // Flux-error's look-ahead level: one above the check level, when that is above the maximal level's.
 bool look_ahead_level(uint level) {
-    return level + 1u == u_frame.check_level && u_frame.check_level < u_frame.max_level;
+    return level + 1u == u_frame.frame.check_level && u_frame.frame.check_level < u_frame.frame.max_level;
 }
 
 #if !defined(TRAVERSE_MAX_LEVEL) && !defined(TRAVERSE_METRIC)
@@ -153,7 +153,7 @@ uint children_verdict_exact(uint level, uvec2 xy) {
         if (status[k] != DOM_OK) continue;
         if (events[k] != events[0]) return CHILDREN_REFINE;
         for (uint i = 0u; i < j; i++) {
-            if (distance(p[k], p[CHILD_ORDER[i]]) > u_frame.error_bound) return CHILDREN_REFINE;
+            if (distance(p[k], p[CHILD_ORDER[i]]) > u_frame.frame.error_bound) return CHILDREN_REFINE;
         }
     }
     if (status[0] != DOM_OK) return 0u;
@@ -178,7 +178,7 @@ uint children_verdict(uint level, uvec2 xy) {
         if (status[k] != status[0]) return CHILDREN_REFINE;
         if (status[k] != HIT_OK) continue;
         for (uint i = 0u; i < j; i++) {
-            if (distance(p[k], p[CHILD_ORDER[i]]) > u_frame.error_bound) return CHILDREN_REFINE;
+            if (distance(p[k], p[CHILD_ORDER[i]]) > u_frame.frame.error_bound) return CHILDREN_REFINE;
         }
     }
     if (status[0] != HIT_OK) return CHILDREN_DROP;
@@ -226,7 +226,7 @@ const float FE_PREDICT = 2.0;
 
 // The levels below `level` whose cells are checked: the last level's are not (they are leaves).
 uint checked_levels_below(uint level) {
-    return level + 2u <= u_frame.max_level ? u_frame.max_level - level - 1u : 0u;
+    return level + 2u <= u_frame.frame.max_level ? u_frame.frame.max_level - level - 1u : 0u;
 }
 
 // How many levels below a refining cell skip their checks, from its E over its budget (`ratio`): the d-th level down
@@ -252,16 +252,16 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     radius = 0u;
     skip = 0u;
     bool exact = transport_exact();
-    float intensity = u_frame.light_intensity;
+    float intensity = u_frame.light.light_intensity;
     vec2 p[4];
     float phi[4] = float[4](0.0, 0.0, 0.0, 0.0);
     uint status[4], events[4];
     float t_max = 0.0, t_min = 1.0, rest = 0.0;
     float cell_flux = intensity * cell_measure(level, xy);
-    float budget = u_frame.tau * cell_flux;
-    float w = float(u_frame.caustic_res) / 64.0;
+    float budget = u_frame.frame.tau * cell_flux;
+    float w = float(u_frame.frame.caustic_res) / 64.0;
     // A cell refines when E exceeds this (twice the budget where the look-ahead may still emit the children).
-    float refine_above = level + 1u < u_frame.max_level ? 2.0 * budget : budget;
+    float refine_above = level + 1u < u_frame.frame.max_level ? 2.0 * budget : budget;
     // Where the children would be checked, a cell that refines on the same-endings bound goes on tracing until
     // the bound also says how many levels below are predicted to refine (predicted_skip): their checks cost more
     // than these traces. `deepest`: the E from which every checked level below is.
@@ -354,7 +354,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     // Look-ahead: where the map is locally linear, each child's own children spread half as far as the children
     // do, with a quarter of the flux each, so a child's error is about e / 8 against a budget of budget / 4. The
     // children are final too when e <= 2 budget: emit them now instead of tracing their sixteen children next.
-    if (level + 1u < u_frame.max_level && e <= 2.0 * budget) {
+    if (level + 1u < u_frame.frame.max_level && e <= 2.0 * budget) {
         radius = uint(clamp(ceil(0.5 * spread), 1.0, float(MAX_SPLAT_RADIUS)));
         return FE_CHILDREN;
     }
@@ -369,8 +369,8 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
 // would be traced by decide itself (child_dominant), so the two need to agree only for speed.
 bool needs_checks(uint level, uvec2 cell) {
     uvec2 xy = cell_xy(cell);
-    if (!transport_exact() || !cell_in_play(level, xy) || level >= u_frame.max_level) return false;
-    bool checkable = level >= u_frame.check_level && cell_inside(level, xy);
+    if (!transport_exact() || !cell_in_play(level, xy) || level >= u_frame.frame.max_level) return false;
+    bool checkable = level >= u_frame.frame.check_level && cell_inside(level, xy);
 #if TRAVERSE_METRIC == 2
     if (checkable) return cell_radius(cell) == 0u;  // else predicted to refine: no check
     return look_ahead_level(level) && cell_inside(level, xy);
@@ -388,7 +388,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
     out_cell = pack_cell(level, xy.x, xy.y, 0u);
     no_check = 0u;
     if (!cell_in_play(level, xy)) return ACT_DROP;
-    if (level >= u_frame.max_level) {
+    if (level >= u_frame.frame.max_level) {
         // The same test as the dense method, so that max-level traversal emits exactly dense's photons.
         return leaf_emitted(level, xy) ? ACT_EMIT : ACT_DROP;
     }
@@ -397,7 +397,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
 #else
     // Only fully covered cells inside the cone are checked (cell_inside).
     bool checkable = false;
-    if (level >= u_frame.check_level) {
+    if (level >= u_frame.frame.check_level) {
         checkable = cell_inside(level, xy);
         if (!checkable) no_check = 2u;
     }
@@ -503,7 +503,7 @@ void main() {
         // The last level fused into the one before: a cell of level L - 1 that refines emits those of its four
         // children that dense emission would emit, instead of appending them as candidates of level L, whose
         // traversal then has nothing to do.
-        if (action == ACT_REFINE && level + 1u == u_frame.max_level) {
+        if (action == ACT_REFINE && level + 1u == u_frame.frame.max_level) {
             for (uint k = 0u; k < 4u; k++) {
                 if (leaf_emitted(level + 1u, 2u * cell_xy(cell) + uvec2(k & 1u, k >> 1))) leaves |= 1u << k;
             }
@@ -551,7 +551,7 @@ void main() {
 #endif
     if (lid == 0u) {
         // One reservation per work group for all its photons and children, against two bounds: the batch's entries
-        // (state.capacity) and its photons alone (u_frame.batch_photons). On overflow the batch is aborted (and later
+        // (state.capacity) and its photons alone (u_frame.frame.batch_photons). On overflow the batch is aborted (and later
         // split) or, with batching off, the group's entries are dropped and counted; either way nothing is written
         // past the buffer. Without batching state.capacity is traversal.w itself, and the photons, counted in
         // `used` too, cannot exceed it, so only the first bound can fail there.
@@ -562,7 +562,7 @@ void main() {
             bool fits = base + entries <= state.capacity;
             if (fits) {
                 s_emit_base = atomicAdd(state.emit_count, s_emit_n);
-                fits = s_emit_base + s_emit_n <= u_frame.batch_photons;
+                fits = s_emit_base + s_emit_n <= u_frame.frame.batch_photons;
             }
             if (fits) {
                 s_reserved = true;

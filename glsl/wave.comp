@@ -121,7 +121,7 @@ void store_ray(uint k, uint stride, Child c, float side) {
     }
 }
 
-// Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.weak_fraction of its
+// Weak branches (`--weak-branches`, docs/design.md step 4): a Fresnel branch below u_frame.frame.weak_fraction of its
 // photon's flux is traced once per block instead of by each photon in the block. At a split of depth d the block's
 // members take turns (member d mod n of the n, in raster order): the photon whose turn it is traces the weak branch
 // carrying the block's share (its weight times `scale`, the block's solid angle over its own), flagged LOD_RAY so
@@ -141,12 +141,12 @@ const uint LOD_RAY = 0x80000000u;
 bool weak_fine(uvec2 cell) { return !weak_by_siblings(cell_level(cell)); }
 
 bool weak_branches_apply(uvec2 cell) {
-    return u_frame.weak_fraction > 0.0 && (weak_fine(cell) || cell_siblings(cell) != 0u);
+    return u_frame.frame.weak_fraction > 0.0 && (weak_fine(cell) || cell_siblings(cell) != 0u);
 }
 
 // The block's side over the photon's cell's: how much wider a carried branch is than the photon's own.
 float weak_widen(uvec2 cell) {
-    return weak_fine(cell) ? exp2(float(weak_block_shift()) - float(u_frame.max_level - cell_level(cell))) : 2.0;
+    return weak_fine(cell) ? exp2(float(weak_block_shift()) - float(u_frame.frame.max_level - cell_level(cell))) : 2.0;
 }
 
 // Whether this photon (`own`: its cell's measure, the photon's phi) carries its block's weak branches at `depth`,
@@ -171,7 +171,7 @@ bool weak_carrier(uvec2 cell, float own, uint depth, out float scale) {
         scale = total / own;
         return depth % n == self_i;
     }
-    uint top = u_frame.max_level;
+    uint top = u_frame.frame.max_level;
     uint up = top - cell_level(cell);  // the photon's cell is 2^up cells of the maximal level a side
     uint side = weak_block(), shift = weak_block_shift();
     uvec2 b = (xy << up) & ~uvec2(side - 1u);
@@ -278,7 +278,7 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
 // A ray of a bounce wave reaches a diffuse receiver at p: its splat record, where the light's view sees p (else the
 // caustic map cannot hold it: ACC_UNSEEN). (Wave 0's rays have met nothing yet.)
 void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
-    GpuView rv = u_frame.receiver_view;
+    GpuView rv = u_frame.light.receiver_view;
     vec2 uv;
     if (!receiver_seen(rv, t_recv, p, uv)) {
         acc[ACC_UNSEEN] += flux;
@@ -290,7 +290,7 @@ void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
     // of the spread fits only where that is round.
     float shape = WAVE_DIFFERENTIAL ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
                                     : float(r);
-    o.record = GpuSplat(uv * rv.extent.xy, flux * u_frame.light_intensity, shape);
+    o.record = GpuSplat(uv * rv.extent.xy, flux * u_frame.light.light_intensity, shape);
     o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : WAVE_SPECTRAL ? floatBitsToUint(ray_nm) : 0u;
     o.rec = true;
     o.rec_flux = flux;
@@ -323,7 +323,7 @@ float brightest(Traced t) { return WAVE_COLOR ? max(t.tint.r, max(t.tint.g, t.ti
 // where its siblings' would be.
 float child_cut(Traced t) {
     float widen = weak_widen(t.cell);
-    return u_frame.flux_threshold * (t.lod ? widen * widen : 1.0);
+    return u_frame.frame.flux_threshold * (t.lod ? widen * widen : 1.0);
 }
 
 // A child's meta word (GpuRay.meta): its photon's entry, one interaction more, and the ray's weak-branch flag.
@@ -363,7 +363,7 @@ void split_at(Traced t, RayDiff rdf, SceneHit hit, vec3 p, vec3 ng, vec3 ns, flo
     }
     float wr = w * s.F, wt = w * (1.0 - s.F);
     float widen = weak_widen(t.cell), cut = child_cut(t);
-    float weak = !t.lod && weak_branches_apply(t.cell) ? u_frame.weak_fraction : 0.0;
+    float weak = !t.lod && weak_branches_apply(t.cell) ? u_frame.frame.weak_fraction : 0.0;
     float scale = 1.0, bright = brightest(t);
     float br = wr * bright, bt = wt * bright;
     bool carrier = (br >= cut && br < weak) || (bt >= cut && bt < weak) ? weak_carrier(t.cell, t.phi, t.depth, scale)

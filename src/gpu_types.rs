@@ -27,21 +27,13 @@ pub struct GpuView {
     pub extent: [f32; 4],
 }
 
-/// What every pass of a frame reads (a uniform buffer, std140): the frame's views, the pass's light, the scene,
-/// the targets, and the settings of the pass's photons, transport and eye view.
+/// The frame's part of the uniforms, the same in every pass: the eye, the scene, the targets, and the settings of
+/// the photons, transport and eye view.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct FrameData {
-    /// The light's view fitted to the refractors: the photon grid and the refractor g-buffers.
-    pub photon_view: GpuView,
-    /// The light's view over the receivers: the caustic map, the receiver g-buffer and the shadow map.
-    pub receiver_view: GpuView,
+pub struct FrameUniforms {
     /// The eye.
     pub camera: GpuView,
-    /// The pass's light: I·color, W/sr (W/m² for directional lights).
-    pub light_power: [f32; 3],
-    /// Its intensity I, W/sr (W/m²).
-    pub light_intensity: f32,
     /// The scene's bounds.
     pub scene_min: [f32; 3],
     /// The refractors' bounding diameter (m).
@@ -68,9 +60,6 @@ pub struct FrameData {
     pub exact: u32,
     pub queue_rays: u32,
     pub record_capacity: u32,
-    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`, `CHANNEL_SPECTRAL`:
-    /// photons that carry their color, or their wavelength.
-    pub channel: u32,
     /// 1: differential footprints (rays carry their differentials: 3 vec4s each, else 2).
     pub differential: u32,
     /// Max-error's bound (caustic-map texels), the shadow bias (texels), exact transport's flux threshold
@@ -79,8 +68,6 @@ pub struct FrameData {
     pub shadow_bias: f32,
     pub flux_threshold: f32,
     pub tau: f32,
-    /// The environment's sky radiance, W/(m²·sr) (0: off, and on every pass but the first light's).
-    pub sky: f32,
     /// The eye rays' depth cap (interfaces).
     pub eye_depth: f32,
     /// 1 when some glass disperses (the eye view traces each color channel with its own IOR), else 0.
@@ -93,11 +80,55 @@ pub struct FrameData {
     /// Exact transport's weak-branch fraction (0: off), and the weak-branch block's side in cells.
     pub weak_fraction: f32,
     pub weak_block: f32,
+    /// To a multiple of 16 bytes, as std140 places the struct.
+    pub pad: u32,
+}
+
+/// A light's part of the uniforms: its views, its power, and its color as a spectrum.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LightUniforms {
+    /// The light's view fitted to the refractors: the photon grid and the refractor g-buffers.
+    pub photon_view: GpuView,
+    /// The light's view over the receivers: the caustic map, the receiver g-buffer and the shadow map.
+    pub receiver_view: GpuView,
+    /// I·color, W/sr (W/m² for directional lights).
+    pub light_power: [f32; 3],
+    /// The intensity I, W/sr (W/m²).
+    pub light_intensity: f32,
     /// The light's color as a spectrum for photons that carry a wavelength: its `RgbSpectrum` coefficients (the
-    /// scale is twice its color's largest channel). Scalars: std140 would align an array to 16 bytes.
+    /// scale is twice its color's largest channel), or zeros. Scalars: std140 would align an array to 16 bytes.
     pub light_spectrum_c0: f32,
     pub light_spectrum_c1: f32,
     pub light_spectrum_c2: f32,
+    /// To a multiple of 16 bytes, as std140 places the struct.
+    pub pad: u32,
+}
+
+/// A pass's part of the uniforms: what differs between the passes of one light.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct PassUniforms {
+    /// The pass's color channel: 0 one gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`, `CHANNEL_SPECTRAL`:
+    /// photons that carry their color, or their wavelength.
+    pub channel: u32,
+    /// The environment's sky radiance, W/(m²·sr) (0: off, and on every pass but the first light's).
+    pub sky: f32,
+    /// To a multiple of 16 bytes, as std140 places the struct.
+    pub pad: [u32; 2],
+}
+
+/// What every pass of a frame reads (a uniform buffer, std140): the frame's part, the pass's light's, and the
+/// pass's own.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct FrameData {
+    /// The same in every pass of the frame.
+    pub frame: FrameUniforms,
+    /// The pass's light.
+    pub light: LightUniforms,
+    /// The pass's own.
+    pub pass: PassUniforms,
 }
 
 /// One traversal level's counts.

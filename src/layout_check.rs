@@ -39,14 +39,20 @@ fn the_real_structs_parse_with_the_offsets_rust_gives_them() {
     let found = real_structs(None);
     let frame = found.iter().find(|s| s.name == "FrameData").unwrap();
     assert_eq!(frame.size as usize, std::mem::size_of::<crate::gpu_types::FrameData>());
-    let sky = frame.fields.iter().find(|f| f.name == "sky").unwrap();
-    assert_eq!(sky.offset as usize, std::mem::offset_of!(crate::gpu_types::FrameData, sky));
+    let light = frame.fields.iter().find(|f| f.name == "light").unwrap();
+    assert_eq!(light.offset as usize, std::mem::offset_of!(crate::gpu_types::FrameData, light));
+    let pass = found.iter().find(|s| s.name == "PassUniforms").unwrap();
+    let sky = pass.fields.iter().find(|f| f.name == "sky").unwrap();
+    assert_eq!(sky.offset as usize, std::mem::offset_of!(crate::gpu_types::PassUniforms, sky));
     // A vec3 and the scalar in its last four bytes.
-    let intensity = frame.fields.iter().find(|f| f.name == "light_intensity").unwrap();
-    assert_eq!((intensity.offset, frame.size), (492, 688));
+    let light = found.iter().find(|s| s.name == "LightUniforms").unwrap();
+    let intensity = light.fields.iter().find(|f| f.name == "light_intensity").unwrap();
+    assert_eq!((intensity.offset, light.size, frame.size), (332, 352, 704));
     assert!(found.iter().any(|s| s.name == "GpuInstance" && s.size == 192));
     let asserts = structs::rust_asserts(&found);
-    assert!(asserts.contains("assert!(::std::mem::offset_of!(crate::gpu_types::FrameData, light_intensity) == 492);"));
+    assert!(
+        asserts.contains("assert!(::std::mem::offset_of!(crate::gpu_types::LightUniforms, light_intensity) == 332);")
+    );
 }
 
 #[test]
@@ -73,7 +79,8 @@ fn the_generated_glsl_carries_the_docs_and_constant_lengths() {
     let glsl = structs::glsl(&real_structs(None), &["src/gpu_types.rs"]);
     assert!(glsl.contains("struct TraversalState {"));
     assert!(glsl.contains("    LevelCounters levels[MAX_LEVELS];"));
-    assert!(glsl.contains("    // The eye.\n    GpuView camera;  // byte 320"));
+    assert!(glsl.contains("    // The eye.\n    GpuView camera;  // byte 0"));
+    assert!(glsl.contains("    // The pass's light.\n    LightUniforms light;  // byte 336"));
 }
 
 #[test]
@@ -85,19 +92,19 @@ fn a_shader_that_reads_a_struct_with_another_layout_fails_the_check() {
     let pyramid = "pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],";
     let wrong = real_structs(Some((pyramid, "pub pyramid: [[u32; 2]; (MAX_PYRAMID_MIPS / 2) as usize],")));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
-    assert!(e.contains("FrameData.pyramid has an array stride of 16 bytes in SPIR-V, 8 in Rust"), "{e}");
+    assert!(e.contains("FrameUniforms.pyramid has an array stride of 16 bytes in SPIR-V, 8 in Rust"), "{e}");
     // A member the shader does not have.
-    let last = "    pub light_spectrum_c2: f32,\n}";
-    let wrong = real_structs(Some((last, "    pub light_spectrum_c2: f32,\n    pub more: u32,\n}")));
+    let last = "    pub pad: [u32; 2],\n}";
+    let wrong = real_structs(Some((last, "    pub pad: u32,\n    pub more: u32,\n}")));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
-    assert!(e.contains("struct FrameData has 38 members in SPIR-V, 39 in Rust"), "{e}");
-    // The build's own check of such a struct is stricter: compiled from it, std140 would align the array to 16
-    // bytes (byte 688) where Rust packs it at 676, and the build fails there. Against these shaders, the members
-    // no longer match.
-    let pads = "    pub light_spectrum_c0: f32,\n    pub light_spectrum_c1: f32,\n    pub light_spectrum_c2: f32,";
-    let wrong = real_structs(Some((pads, "    pub pad: [u32; 3],")));
+    assert!(e.contains("struct PassUniforms has 3 members in SPIR-V, 4 in Rust"), "{e}");
+    // The build's own check of such a struct is stricter: compiled from it, std140 would stride the array by 16
+    // bytes where Rust packs it in 4, and the build fails there. Against these shaders, the members no longer
+    // match.
+    let scalars = "    pub light_spectrum_c0: f32,\n    pub light_spectrum_c1: f32,\n    pub light_spectrum_c2: f32,";
+    let wrong = real_structs(Some((scalars, "    pub light_spectrum: [f32; 3],")));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
-    assert!(e.contains("struct FrameData has 38 members in SPIR-V, 36 in Rust"), "{e}");
+    assert!(e.contains("struct LightUniforms has 8 members in SPIR-V, 6 in Rust"), "{e}");
 }
 
 #[test]

@@ -38,7 +38,7 @@ impl Metric {
         }
     }
 
-    /// The code the traverse shader reads (`FrameData.metric`).
+    /// The code the traverse shader reads (`FrameUniforms.metric`).
     pub fn code(self) -> u32 {
         match self {
             Metric::MaxLevel => 0,

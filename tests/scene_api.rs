@@ -282,4 +282,3 @@ fn renderers_on_one_device_share_their_pipelines() {
     let c = common::renderer(&other, common::SPHERE, settings());
     assert_eq!(c.pipelines(), &held, "the held pipelines of that device");
 }
-

@@ -5,10 +5,10 @@
 #define COVERAGE_GLSL
 #include "common/view.glsl"
 
-uint pyramid_offset(uint m) { return u_frame.pyramid[m >> 2][m & 3u]; }
+uint pyramid_offset(uint m) { return u_frame.frame.pyramid[m >> 2][m & 3u]; }
 
 uint coverage_bits(uint level, uvec2 xy) {
-    uint R = u_frame.gbuffer_res, g = u_frame.gbuffer_level;
+    uint R = u_frame.frame.gbuffer_res, g = u_frame.frame.gbuffer_level;
     if (level <= g) {
         uint m = g - level;
         uint res = R >> m;
@@ -24,7 +24,7 @@ bool cell_all_covered(uint level, uvec2 xy) { return (coverage_bits(level, xy) &
 // The base texel that contains the cell's center. Dense and adaptive both call this, so that adaptive
 // max-level at level L emits exactly dense's cells.
 uvec2 leaf_texel(uint level, uvec2 xy) {
-    uint g = u_frame.gbuffer_level;
+    uint g = u_frame.frame.gbuffer_level;
     if (level >= g) return xy >> (level - g);
     uint s = g - level;
     return ((2u * xy + 1u) << s) >> 1;
@@ -32,14 +32,14 @@ uvec2 leaf_texel(uint level, uvec2 xy) {
 
 bool leaf_covered(uint level, uvec2 xy) {
     uvec2 t = leaf_texel(level, xy);
-    return (coverage_at(pyramid_offset(0u) + t.y * u_frame.gbuffer_res + t.x) & 1u) != 0u;
+    return (coverage_at(pyramid_offset(0u) + t.y * u_frame.frame.gbuffer_res + t.x) & 1u) != 0u;
 }
 
 // Is the leaf cell (level, xy) a photon of the dense grid: its center's base texel is covered and its center lies
 // inside the cone. Dense emission and max-level traversal both decide by this one function, with the same float
 // arithmetic, so that max-level traversal emits exactly dense's cells.
 bool leaf_emitted(uint level, uvec2 xy) {
-    GpuView v = u_frame.photon_view;
+    GpuView v = u_frame.light.photon_view;
     float side = v.window.z / float(LEVEL0_RES << level);
     vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
     return leaf_covered(level, xy) && view_in_cone(v, center);

@@ -97,7 +97,7 @@ Split split_interface(vec3 d, vec3 p, vec3 ng, vec3 ns, float n_in, float n_out,
 bool inst_is_dielectric(uint inst) { return bvh_instance(inst).material.y > 0.5; }
 bool inst_is_mirror(uint inst) { return bvh_instance(inst).material.y > 1.5; }
 // The color channel whose IORs this pass traces: 0 for one gray pass, 1..3 for red, green, blue
-// (FrameData.channel). Color photons (CHANNEL_RGB) meet no dispersion: they take the gray pass's paths, and carry
+// (PassUniforms.channel). Color photons (CHANNEL_RGB) meet no dispersion: they take the gray pass's paths, and carry
 // their colour in their tint (glsl/wave.comp, WAVE_COLOR); spectral photons (CHANNEL_SPECTRAL) take their
 // wavelength's (ray_nm), and wherever they do not say (the traversal's checks) the d line's. The eye view
 // (glass.comp, GRAY_MATERIALS) names its channels itself: its uniforms are a photon pass's, whose channel is not
@@ -105,7 +105,7 @@ bool inst_is_mirror(uint inst) { return bvh_instance(inst).material.y > 1.5; }
 #ifdef GRAY_MATERIALS
 uint color_channel() { return 0u; }
 #else
-uint color_channel() { return u_frame.channel >= CHANNEL_RGB ? 0u : u_frame.channel; }
+uint color_channel() { return u_frame.pass.channel >= CHANNEL_RGB ? 0u : u_frame.pass.channel; }
 #endif
 // A dielectric's IOR and absorption coefficient (1/m) in channel c (0: the gray pass's d-line IOR and mean
 // absorption).

@@ -29,8 +29,8 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     h.flux = 0.0;
     h.map_px = vec2(-1e9);
     h.pos = vec3(0.0);
-    GpuView v = u_frame.photon_view;
-    GpuView rv = u_frame.receiver_view;
+    GpuView v = u_frame.light.photon_view;
+    GpuView rv = u_frame.light.receiver_view;
     vec2 xy = view_xy_of_uv(v, uv);
     if (!view_in_cone(v, xy)) { h.status = HIT_OUTSIDE_CONE; return h; }
     vec4 front;
@@ -46,12 +46,12 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     vec3 t1;
     if (!refract_dir(rd, n1, 1.0 / ior, t1)) { h.status = HIT_TIR; return h; }
     vec3 p2, n2;
-    if (!find_exit(v, t_back, u_frame.refractor_diameter, p1, t1, p2, n2)) { h.status = HIT_NO_EXIT; return h; }
+    if (!find_exit(v, t_back, u_frame.frame.refractor_diameter, p1, t1, p2, n2)) { h.status = HIT_NO_EXIT; return h; }
     if (dot(n2, t1) < 0.0) n2 = -n2;  // outward, along the ray
     float F2 = fresnel_dielectric(dot(t1, n2), ior, 1.0);
     vec3 t2;
     if (!refract_dir(t1, -n2, ior, t2)) { h.status = HIT_TIR; return h; }
-    vec3 lo = u_frame.scene_min, hi = u_frame.scene_max;
+    vec3 lo = u_frame.frame.scene_min, hi = u_frame.frame.scene_max;
     vec3 pad = 1e-3 * max(hi - lo, vec3(1.0));
     vec3 p3;
     if (!find_surface(rv, t_recv, p2, t2, ray_box_exit(p2, t2, lo - pad, hi + pad), p3)) {
@@ -60,18 +60,18 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     }
     h.pos = p3;
     h.map_px = view_uv(rv, p3) * rv.extent.xy;
-    h.flux = u_frame.light_intensity * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
+    h.flux = u_frame.light.light_intensity * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
     return h;
 }
 
-float cell_side(uint level) { return u_frame.photon_view.window.z / float(LEVEL0_RES << level); }
+float cell_side(uint level) { return u_frame.light.photon_view.window.z / float(LEVEL0_RES << level); }
 
 // Exact: (x + 0.5) needs at most 23 bits at level 16 and the divisor is a power of two.
 vec2 cell_center_uv(uint level, uvec2 xy) { return (vec2(xy) + 0.5) / float(LEVEL0_RES << level); }
 
 // A splat radius (caustic-map texels) for a light-view square of `side`: its size on the map.
 uint side_splat_radius(float side) {
-    float texel = u_frame.receiver_view.window.z * u_frame.receiver_view.extent.z;
+    float texel = u_frame.light.receiver_view.window.z * u_frame.light.receiver_view.extent.z;
     return uint(clamp(round(side / texel), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
@@ -85,13 +85,13 @@ uint cell_splat_radius(uvec2 cell) {
 // Weak branches (glsl/wave.comp, docs/design.md step 4): the maximal level's blocks are weak_block() (2 or 4) of
 // its cells a side. A photon at least as large as a block shares with its siblings instead, where traverse.comp
 // marks them.
-uint weak_block() { return uint(u_frame.weak_block); }
+uint weak_block() { return uint(u_frame.frame.weak_block); }
 uint weak_block_shift() { return findLSB(weak_block()); }
-bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame.max_level; }
+bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame.frame.max_level; }
 
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {
-    GpuView v = u_frame.photon_view;
+    GpuView v = u_frame.light.photon_view;
     return view_cell_measure(v, view_xy_of_uv(v, cell_center_uv(level, xy)), cell_side(level));
 }
 

@@ -79,10 +79,10 @@ vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, v
 
 // The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
 vec3 direct_irradiance(vec3 p, vec3 n) {
-    return direct_irradiance_in(u_frame.receiver_view, u_frame.light_power, u_frame.shadow_bias, t_shadow, p, n);
+    return direct_irradiance_in(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, t_shadow, p, n);
 }
 vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
-    return caustic_irradiance_in(u_frame.receiver_view, t_irradiance, t_recv, p, dx, dy);
+    return caustic_irradiance_in(u_frame.light.receiver_view, t_irradiance, t_recv, p, dx, dy);
 }
 
 // The environment (docs/design.md "Environment"), seen directly, in reflections and through glass. With a map
@@ -104,9 +104,9 @@ vec2 equirect_uv(vec3 d) {
 }
 
 vec3 environment(vec3 d) {
-    if (ENVIRONMENT_MAP && u_frame.environment > 0.5) return u_frame.sky * textureLod(t_env, equirect_uv(d), 0.0).rgb;
+    if (ENVIRONMENT_MAP && u_frame.frame.environment > 0.5) return u_frame.pass.sky * textureLod(t_env, equirect_uv(d), 0.0).rgb;
     float up = clamp(d.y, -1.0, 1.0);
-    return u_frame.sky * mix(GROUND_TINT, SKY_TINT, smoothstep(-0.05, 0.05, up));
+    return u_frame.pass.sky * mix(GROUND_TINT, SKY_TINT, smoothstep(-0.05, 0.05, up));
 }
 
 // Irradiance (W/m^2) of the environment on an unoccluded plane with unit normal n. With a map: its irradiance
@@ -114,15 +114,15 @@ vec3 environment(vec3 d) {
 // for the two hemispheres (the horizon band aside): a uniform upper hemisphere seen from a plane tilted by a
 // gives pi L (1 + cos a) / 2.
 vec3 environment_irradiance(vec3 n) {
-    if (ENVIRONMENT_MAP && u_frame.environment > 0.5) {
+    if (ENVIRONMENT_MAP && u_frame.frame.environment > 0.5) {
         // The irradiance map's rows run from pole to pole (src/scene/environment.rs): row j at v = j / (h - 1).
         vec2 uv = equirect_uv(n);
         float h = float(textureSize(t_env_irr, 0).y);
         uv.y = (uv.y * (h - 1.0) + 0.5) / h;
-        return u_frame.sky * textureLod(t_env_irr, uv, 0.0).rgb;
+        return u_frame.pass.sky * textureLod(t_env_irr, uv, 0.0).rgb;
     }
     float c = clamp(n.y, -1.0, 1.0);
-    return RECV_PI * u_frame.sky * (SKY_TINT * (1.0 + c) + GROUND_TINT * (1.0 - c)) * 0.5;
+    return RECV_PI * u_frame.pass.sky * (SKY_TINT * (1.0 + c) + GROUND_TINT * (1.0 - c)) * 0.5;
 }
 
 #endif

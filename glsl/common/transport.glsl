@@ -10,7 +10,7 @@
 
 // The photon ray of a cell: from the light through the cell's center.
 void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {
-    GpuView v = u_frame.photon_view;
+    GpuView v = u_frame.light.photon_view;
     view_ray_xy(v, view_xy_of_uv(v, cell_center_uv(level, xy)), ro, rd);
 }
 
@@ -27,7 +27,7 @@ struct RayDiff {
 // D = d/|d| with d = x right + y down + forward, so dD = (dd - D (D.dd)) / |d| with dd = one cell side along
 // right (or down). Orthographic (directional): dP = one cell side along right (or down), dD = 0.
 RayDiff cell_ray_diff(uint level, uvec2 xy, vec3 rd) {
-    GpuView v = u_frame.photon_view;
+    GpuView v = u_frame.light.photon_view;
     vec2 side = v.window.zw / float(LEVEL0_RES << level);
     vec3 ex = side.x * v.right.xyz, ey = side.y * v.down.xyz;
     RayDiff r;
@@ -206,7 +206,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
         if (!bvh_closest(ro, rd, 1.0 / 0.0, hit)) return DOM_ESCAPED;
         vec3 p = bvh_hit_point(hit);
         if (!inst_is_dielectric(hit.inst)) {
-            GpuView rv = u_frame.receiver_view;
+            GpuView rv = u_frame.light.receiver_view;
             map_px = view_uv(rv, p) * rv.extent.xy;
             return events == 0u ? DOM_DIRECT : DOM_OK;
         }

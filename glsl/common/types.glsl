@@ -5,7 +5,7 @@
 #include "generated/gpu_structs.glsl"
 
 // The front surface's index of refraction: shared by the scene's refractors, else from the IOR buffer's texel.
-#define FRONT_IOR(aux_texel) (u_frame.shared_ior != 0.0 ? u_frame.shared_ior : (aux_texel))
+#define FRONT_IOR(aux_texel) (u_frame.frame.shared_ior != 0.0 ? u_frame.frame.shared_ior : (aux_texel))
 
 // Photon encoding: a quadtree cell (level, x, y) with exact integer addressing.
 //   .x: bits 0..23 cell x, bits 24..31 splat radius in caustic-map texels (0: derive from the level)

@@ -404,7 +404,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         rec.report.lights.push(LightReport {
             light: c.light,
             // The pass's channel code, as its uniforms give it to the shaders.
-            channel: c.data.channel,
+            channel: c.data.pass.channel,
             caustics,
             first_segment,
             ..Default::default()

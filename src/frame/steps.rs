@@ -34,8 +34,8 @@ impl Ctx<'_> {
         }
         rec.flush(self.d);
         let cmd = rec.cmd;
-        let photon_view = &self.data.photon_view;
-        let receiver_view = &self.data.receiver_view;
+        let photon_view = &self.data.light.photon_view;
+        let receiver_view = &self.data.light.receiver_view;
         if caustics {
             // The IOR buffer is drawn only when the refractors' IORs differ (else the shaders read the uniform).
             let ior = self.sb.shared_ior.is_none().then_some(&t.light.front_aux);
@@ -147,7 +147,7 @@ impl Ctx<'_> {
             rec.sync.discard(&e.albedo, &[Access::ColorAttachment]);
             rec.sync.discard(&e.depth, &[Access::DepthAttachment]);
             rec.flush(self.d);
-            self.p.eye.record_gbuffer(rec.cmd, self.sb, &self.data.camera, &g);
+            self.p.eye.record_gbuffer(rec.cmd, self.sb, &self.data.frame.camera, &g);
             rec.ts.mark(rec.cmd, "eye.shade");
         }
         let inputs = EyeInputs {
@@ -166,7 +166,7 @@ impl Ctx<'_> {
     pub(super) fn eye_refractors(&self, rec: &mut Rec) {
         let e = &self.t.eye;
         let g = &self.p.geometry;
-        let cam = &self.data.camera;
+        let cam = &self.data.frame.camera;
         // The exact composite traces the glass through the BVH: it needs only where the front surface is.
         let exact = self.exact_eye();
         rec.sync.discard(&e.front, &[Access::ColorAttachment]);
@@ -221,8 +221,8 @@ impl Ctx<'_> {
             more_lights,
             exact: self.exact_eye(),
             wide: self.s.bvh_layout == crate::bvh::BvhLayout::Wide,
-            dispersive: self.data.disperses > 0.5,
-            environment: self.data.environment > 0.5,
+            dispersive: self.data.frame.disperses > 0.5,
+            environment: self.data.frame.environment > 0.5,
             media: self.s.media,
         }
     }

@@ -120,9 +120,9 @@ pub struct CompositeInputs<'a> {
     pub exact: bool,
     /// Trace it through the wide layout (uploaded: the waves trace it), else the pair layout.
     pub wide: bool,
-    /// Some glass disperses (`FrameData.disperses`): the glass pass traces each channel.
+    /// Some glass disperses (`FrameUniforms.disperses`): the glass pass traces each channel.
     pub dispersive: bool,
-    /// The scene has an environment map (`FrameData.environment`).
+    /// The scene has an environment map (`FrameUniforms.environment`).
     pub environment: bool,
     /// The scene has absorbing or overlapping media (`ResolvedSettings::media`).
     pub media: bool,

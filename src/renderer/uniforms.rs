@@ -2,7 +2,7 @@
 //! shaders read, and the exposure.
 
 use super::Views;
-use crate::gpu_types::{FrameData, GpuView};
+use crate::gpu_types::{FrameData, FrameUniforms, GpuView, LightUniforms, PassUniforms};
 use crate::scene::view::{CameraView, LightView};
 use crate::scene::Projection;
 use crate::scene::{LightKind, Material, Scene};
@@ -86,12 +86,8 @@ pub(crate) fn frame_data(
         CHANNEL_SPECTRAL => crate::spectrum::RgbSpectrum::fit_f32(light.color.to_array()).coeffs_f32(),
         _ => [0.0; 3],
     };
-    FrameData {
-        photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
-        receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
+    let frame = FrameUniforms {
         camera,
-        light_power: power.to_array(),
-        light_intensity: light.intensity,
         scene_min: lo.to_array(),
         refractor_diameter: diameter,
         scene_max: hi.to_array(),
@@ -109,25 +105,33 @@ pub(crate) fn frame_data(
         exact: (s.transport == Transport::Exact) as u32,
         queue_rays: s.ray_queue_capacity(),
         record_capacity: targets.photon.capacity,
-        channel,
         differential: (s.footprint == Footprint::Differential) as u32,
         error_bound: s.error_bound,
         shadow_bias: s.shadow_bias,
         flux_threshold: s.flux_threshold,
         tau: s.tau,
-        // The environment's light is added once: by the first light's eye shading (and the composite, which reads
-        // the first pass's uniforms).
-        sky: if index == 0 { sky } else { 0.0 },
         eye_depth: s.eye_depth as f32,
         disperses: scene.disperses() as u32 as f32,
         environment: scene.environment.is_some() as u32 as f32,
         shared_ior: scene_buffers.shared_ior.unwrap_or(0.0),
         weak_fraction: s.weak_branches,
         weak_block: s.weak_block as f32,
+        pad: 0,
+    };
+    let light = LightUniforms {
+        photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
+        receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
+        light_power: power.to_array(),
+        light_intensity: light.intensity,
         light_spectrum_c0: light_spectrum[0],
         light_spectrum_c1: light_spectrum[1],
         light_spectrum_c2: light_spectrum[2],
-    }
+        pad: 0,
+    };
+    // The environment's light is added once: by the first light's eye shading (and the composite, which reads the
+    // first pass's uniforms).
+    let pass = PassUniforms { channel, sky: if index == 0 { sky } else { 0.0 }, pad: [0; 2] };
+    FrameData { frame, light, pass }
 }
 
 // How the scene's views fill the GPU's (src/gpu_types.rs holds only the data).

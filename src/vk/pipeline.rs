@@ -79,7 +79,6 @@ pub enum Bind<'a> {
 /// A resource a compute pass binds, with how the pass uses it: the one declaration from which both the pass's
 /// descriptor and the barriers before it come ([`Pipeline::bind_uses`]).
 #[derive(Clone, Copy)]
-#[allow(dead_code)] // Read and ImageRead: no converted pass reads a storage resource without writing it yet.
 pub enum Use<'a> {
     /// A uniform buffer, written by the host before the submission (ordered by it: no barrier).
     Uniform(&'a Buffer),
