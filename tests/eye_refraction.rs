@@ -6,7 +6,32 @@
 //! expected image is computed by tracing the view rays through an exact sphere here, in f64.
 
 mod common;
+use caustics::settings::{Settings, Transport};
 use common::*;
+
+/// The tone-mapped beauty (8-bit sRGB RGBA, as the CLI writes it to a PNG) of the scene `text` (written as NAME.toml
+/// in `dir`) through its `top` camera at `side`², level `level`, with the settings changed by `f`, rendered in
+/// process on the shared device; validation stayed silent.
+fn beauty(
+    device: &std::sync::Arc<caustics::gpu::Device>,
+    name: &str,
+    text: &str,
+    side: u32,
+    level: u32,
+    f: impl FnOnce(&mut Settings),
+) -> (u32, u32, Vec<u8>) {
+    let dir = out_dir(name);
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(&scene, text).unwrap();
+    let settings = with(Settings::default(), |s| {
+        s.quality.level = Some(level);
+        f(s);
+    });
+    let mut r = renderer(device, scene.to_str().unwrap(), settings);
+    let beauty = camera_beauty(&mut r, "top", (side, side));
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{name}: validation messages");
+    beauty
+}
 
 const SCENE: &str = r#"
 # Lit from the side, so that the floor under the ball is in direct light (the ball's shadow falls near x = -1).
@@ -93,12 +118,8 @@ fn through_ball(x: f64, z: f64) -> Option<(f64, f64)> {
 
 #[test]
 fn floor_seen_through_the_ball_is_inverted_and_magnified() {
-    let dir = out_dir("eye_refraction");
-    let scene = dir.join("ball.toml");
-    std::fs::write(&scene, SCENE).unwrap();
-    let (_, out) =
-        render(&dir, "beauty", scene.to_str().unwrap(), &["--camera", "top", "--size", "512x512", "--level", "3"]);
-    let (w, h, rgba) = caustics::image_io::read_png(&out).unwrap();
+    let (_gpu, device) = gpu();
+    let (w, h, rgba) = beauty(&device, "eye_refraction", SCENE, 512, 3, |_| ());
     let (w, h) = (w as usize, h as usize);
     let m_per_px = 0.8 / w as f64; // the camera spans 0.8 m
     let pos = |i: usize, j: usize| ((i as f64 + 0.5) * m_per_px - 0.4, (j as f64 + 0.5) * m_per_px - 0.4);
@@ -238,17 +259,10 @@ fn through_two_balls(x: f64, z: f64) -> Option<(f64, f64)> {
 
 #[test]
 fn marker_through_two_balls_is_where_the_exact_trace_puts_it() {
-    let dir = out_dir("eye_refraction_two_balls");
-    let scene = dir.join("two_balls.toml");
-    std::fs::write(&scene, TWO_BALLS).unwrap();
+    let (_gpu, device) = gpu();
     let size = 256usize;
-    let (_, out) = render(
-        &dir,
-        "beauty",
-        scene.to_str().unwrap(),
-        &["--camera", "top", "--size", "256x256", "--level", "2", "--transport", "exact"],
-    );
-    let (w, _, rgba) = caustics::image_io::read_png(&out).unwrap();
+    let (w, _, rgba) =
+        beauty(&device, "eye_refraction_two_balls", TWO_BALLS, 256, 2, |s| s.quality.transport = Transport::Exact);
     assert_eq!(w as usize, size);
     let m_per_px = 0.3 / size as f64;
     let pos = |i: usize| (i as f64 + 0.5) * m_per_px - 0.15;

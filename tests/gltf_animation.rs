@@ -70,17 +70,6 @@ fn animated_gltf_renders_as_its_pose_renders_still() {
     }
 }
 
-/// The tone-mapped beauty of `r` through camera `camera` at `width`×`height`, as `render` writes it to a PNG:
-/// (width, height, RGBA8 bytes).
-fn beauty_png(r: &mut Renderer, camera: &str, (width, height): (u32, u32)) -> (u32, u32, Vec<u8>) {
-    let cam = r.scene().camera(Some(camera)).unwrap_or_else(|e| panic!("{e}")).clone();
-    let view = r.camera_view(&cam, width, height);
-    match r.render(&caustics::FrameDesc::new(&view, Some(Aov::Beauty))).expect("frame").image {
-        Some(caustics::AovData::Rgba8 { width, height, rgba }) => (width, height, rgba),
-        _ => panic!("an 8-bit beauty"),
-    }
-}
-
 /// `render --sequence` plays the rig as the renderer's scene update moves it, its camera included: the second of
 /// two frames from 0.25 s at 8 fps is the rig posed still at 0.375 s (rendered in process with the sequence's
 /// settings; measured: the same bytes).
@@ -97,6 +86,6 @@ fn a_sequence_plays_the_rig_as_its_poses_render() {
     // `--level 3`, the rest default: the settings of the other test's exact transport.
     let (_lock, device) = gpu();
     let mut r = Renderer::new(device.clone(), Scene::load(&stills[1]).unwrap(), settings(Transport::Exact)).unwrap();
-    let still = beauty_png(&mut r, "main", (128, 128));
+    let still = camera_beauty(&mut r, "main", (128, 128));
     assert!(played == still, "the sequence's second frame differs from the pose at 0.375 s");
 }

@@ -100,16 +100,9 @@ fn beauty(
         f(s);
     });
     let mut r = renderer(device, scene, settings);
-    let cam = r.scene().camera(Some("main")).unwrap_or_else(|e| panic!("{e}")).clone();
-    let view = r.camera_view(&cam, width, height);
-    let frame = r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Beauty))).expect("frame");
+    let (w, h, rgba) = camera_beauty(&mut r, "main", (width, height));
     assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
-    match frame.image {
-        Some(caustics::AovData::Rgba8 { width: w, height: h, rgba }) => {
-            Rgb { w, h, px: rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() }
-        }
-        _ => panic!("an 8-bit beauty"),
-    }
+    Rgb { w, h, px: rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() }
 }
 
 /// Anti-aliasing: the default beauty at 320x240 against a 4×4-supersampled render (1280x960 with one sample per

@@ -7,6 +7,7 @@ mod common;
 use caustics::metrics::compare;
 use caustics::reference::{Aov, Paths};
 use caustics::scene::Scene;
+use caustics::settings::Transport;
 use common::*;
 use std::path::{Path, PathBuf};
 
@@ -40,17 +41,16 @@ fn the_ior_is_shared_only_when_every_refractor_agrees() {
 /// buffer read wrongly, or a shared IOR applied to both, fails the test.
 #[test]
 fn different_iors_are_read_per_texel() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("ior_per_texel");
     let mixed = two_spheres(&dir, 1.33);
     let same = two_spheres(&dir, 1.5);
     let r = top_reference(mixed.to_str().unwrap(), Aov::Caustics, Paths::TwoRefractions, 4_000_000, 256);
-    let args = ["--camera", "top", "--aov", "caustics", "--size", "256x256", "--transport", "two-interface"];
-    let args = [&args[..], &["--method", "dense", "--level", "3"]].concat();
-    let (s, out) = render(&dir, "mixed", mixed.to_str().unwrap(), &args);
-    assert_validation_clean(&s);
-    let m = compare(&caustics::image_io::read_exr(&out).unwrap(), &r, 64, 2.0);
-    let (_, out) = render(&dir, "same", same.to_str().unwrap(), &args);
-    let wrong = compare(&caustics::image_io::read_exr(&out).unwrap(), &r, 64, 2.0);
+    // The caustics AOV from the top camera at 256², two-interface, dense level 3, in process.
+    let settings = with(dense(3), |s| s.quality.transport = Transport::TwoInterface);
+    let m = compare(&shot(&device, mixed.to_str().unwrap(), settings.clone()).img, &r, 64, 2.0);
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
+    let wrong = compare(&shot(&device, same.to_str().unwrap(), settings).img, &r, 64, 2.0);
     eprintln!("per texel: rel-L1 {:.4}, flux {:.4}; both 1.5: rel-L1 {:.4}", m.rel_l1, m.flux_ratio, wrong.rel_l1);
     assert!(m.rel_l1 < 0.05, "IORs 1.5 and 1.33: rel-L1 {}", m.rel_l1);
     assert!(wrong.rel_l1 > 3.0 * m.rel_l1, "a wrong IOR must show: {} against {}", wrong.rel_l1, m.rel_l1);

@@ -6,6 +6,7 @@
 mod common;
 use caustics::image_io::RgbImage;
 use caustics::scene::EnvironmentMap;
+use caustics::settings::{Settings, Transport};
 use common::*;
 use glam::{Vec2, Vec3};
 use std::path::Path;
@@ -24,13 +25,24 @@ fn textured_scene(dir: &Path, environment: &str) -> String {
     path.to_str().unwrap().to_string()
 }
 
-/// The frame's AOV `aov` from the top camera at 128² (two-interface, level 2, one sample a pixel), as RGB.
-fn top(dir: &Path, name: &str, scene: &str, aov: &str, extra: &[&str]) -> RgbImage {
-    let mut args =
-        vec!["--camera", "top", "--size", "128x128", "--level", "2", "--transport", "two-interface", "--aa", "1"];
-    args.extend_from_slice(&["--aov", aov]);
-    args.extend_from_slice(extra);
-    render_exr(dir, name, scene, &args)
+/// The frame's float AOV `aov` (the linear beauty, caustics or direct) from the top camera at 128² (two-interface,
+/// level 2, one sample a pixel), with the settings changed by `f`, as RGB, rendered in process on the shared
+/// device; validation stayed silent.
+fn top(
+    device: &std::sync::Arc<caustics::gpu::Device>,
+    scene: &str,
+    aov: caustics::Aov,
+    f: impl FnOnce(&mut Settings),
+) -> RgbImage {
+    let settings = with(Settings::default(), |s| {
+        s.quality.level = Some(2);
+        s.quality.transport = Transport::TwoInterface;
+        s.quality.aa = 1;
+        f(s);
+    });
+    let (img, _) = top_aov(&mut renderer(device, scene, settings), 128, aov);
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene} {aov:?}: validation messages");
+    img
 }
 
 /// The floor point under pixel (x, y) of the top camera at 128² (columns +x, rows +z over [-1, 1]²), and its
@@ -67,12 +79,13 @@ fn checked_floor() -> Vec<(u32, u32, Vec2, Vec3)> {
 /// a channel).
 #[test]
 fn textured_floor_beauty_is_albedo_times_irradiance() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("textures_floor");
     let scene = textured_scene(&dir, "");
-    let off = ["--sky", "0"];
-    let beauty = top(&dir, "beauty", &scene, "beauty", &off);
-    let direct = top(&dir, "direct", &scene, "direct", &off);
-    let caustics = top(&dir, "caustics", &scene, "caustics", &off);
+    let off = |s: &mut Settings| s.quality.sky = Some(0.0);
+    let beauty = top(&device, &scene, caustics::Aov::BeautyHdr, off);
+    let direct = top(&device, &scene, caustics::Aov::Direct, off);
+    let caustics = top(&device, &scene, caustics::Aov::Caustics, off);
     let (mut n, mut worst, mut lit) = (0, 0.0f64, 0);
     let mut blocks = std::collections::HashSet::new();
     for (x, y, uv, albedo) in checked_floor() {
@@ -102,6 +115,7 @@ fn textured_floor_beauty_is_albedo_times_irradiance() {
 /// rel-L1 2e-8 to 2e-7, the order in which photons land; the bound is 1e-6).
 #[test]
 fn environment_map_lights_the_receivers_by_its_irradiance() {
+    let (_gpu, device) = gpu();
     let dir = out_dir("textures_environment");
     let sky = EnvironmentMap::procedural_sky(256);
     sky.write_hdr(&dir.join("sky.hdr")).expect("write map");
@@ -110,11 +124,11 @@ fn environment_map_lights_the_receivers_by_its_irradiance() {
     // The file holds RGBE: integrate what was written.
     let map = EnvironmentMap::load(&dir.join("sky.hdr")).expect("read map back");
     let want_e = map.irradiance(Vec3::Y) * intensity;
-    let beauty = top(&dir, "beauty", &lit, "beauty", &[]);
-    let direct = top(&dir, "direct", &lit, "direct", &[]);
-    let caustics = top(&dir, "caustics", &lit, "caustics", &[]);
+    let beauty = top(&device, &lit, caustics::Aov::BeautyHdr, |_| ());
+    let direct = top(&device, &lit, caustics::Aov::Direct, |_| ());
+    let caustics = top(&device, &lit, caustics::Aov::Caustics, |_| ());
     let unlit = textured_scene(&dir, "");
-    let caustics_without = top(&dir, "caustics_without", &unlit, "caustics", &[]);
+    let caustics_without = top(&device, &unlit, caustics::Aov::Caustics, |_| ());
     let (mut diff, mut total) = (0.0f64, 0.0f64);
     for (a, b) in caustics.data.iter().zip(&caustics_without.data) {
         for c in 0..3 {

@@ -212,6 +212,17 @@ pub fn camera_aov(
     }
 }
 
+/// The tone-mapped 8-bit beauty of an in-process renderer through its scene's camera `camera` at
+/// `width`×`height`, as `render` writes it to a PNG: (width, height, RGBA8 bytes).
+pub fn camera_beauty(r: &mut caustics::Renderer, camera: &str, (width, height): (u32, u32)) -> (u32, u32, Vec<u8>) {
+    let cam = r.scene().camera(Some(camera)).unwrap_or_else(|e| panic!("{e}")).clone();
+    let view = r.camera_view(&cam, width, height);
+    match r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Beauty))).expect("frame").image {
+        Some(caustics::AovData::Rgba8 { width, height, rgba }) => (width, height, rgba),
+        _ => panic!("an 8-bit beauty"),
+    }
+}
+
 /// One in-process frame: an AOV from the scene's `top` camera with its frame report, the settings as the renderer
 /// resolved them, and the figures the CLI's stats would derive from them.
 pub struct Shot {
