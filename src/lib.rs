@@ -70,7 +70,7 @@ mod targets;
 mod vk;
 
 pub use error::{Error, Result};
-pub use frame::{Aov, AovData, FrameReport, LightReport, SceneUpdateReport, SlotVerdict, HOST_ROUNDTRIP};
+pub use frame::{Aov, AovData, DebugPhoton, FrameReport, LightReport, SceneUpdateReport, SlotVerdict, HOST_ROUNDTRIP};
 pub use gpu_types::{LevelCounters, TransportState, TraversalState, ACCOUNT_TERMS};
 pub use renderer::{
     BvhStats, Finish, Frame, FrameDesc, FrameEstimate, FrameOutput, InstanceId, MeshId, Pipelines, RecordTarget,

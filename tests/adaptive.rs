@@ -7,48 +7,15 @@ use caustics::metrics::compare;
 use caustics::settings::{Driven, Metric, Settings, Transport};
 use common::*;
 
-/// The caustics AOV of `scene` from its `top` camera at 256² with `settings`, in process ([`shot`]), validation
-/// silent.
-fn caustics_aov(device: &std::sync::Arc<caustics::gpu::Device>, scene: &str, settings: Settings) -> Shot {
-    let s = shot(device, scene, settings);
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
-    s
-}
-
 /// The default settings (exact transport, adaptive flux-error) at `level`.
 fn level(level: u32) -> Settings {
     adaptive(level, Metric::FluxError)
 }
 
-/// One photon of a frame's debug dump (`Tuning::debug_photons`), decoded as the CLI's stats do
-/// (src/app/commands/stats.rs, `debug_photons_json`).
-struct DebugPhoton {
-    x: u32,
-    y: u32,
-    level: u32,
-    status: u32,
-    /// The cell center's light-view texture coordinates, as the GPU computed them.
-    uv: [f32; 2],
-    /// Where the photon landed.
-    hit: [f32; 3],
-}
-
-/// The photons a debug run dumped: three rows each.
-fn debug_photons(s: &Shot) -> Vec<DebugPhoton> {
+/// The photons a debug run dumped.
+fn debug_photons(s: &Shot) -> Vec<caustics::DebugPhoton> {
     assert!(s.report.guard_intact.is_some(), "a debug run");
-    let f = f32::from_bits;
-    s.report
-        .debug_rows
-        .chunks_exact(3)
-        .map(|r| DebugPhoton {
-            x: r[0][0],
-            y: r[0][1],
-            level: r[0][2] & 0xFF,
-            status: (r[0][2] >> 8) & 0xFF,
-            uv: [f(r[1][0]), f(r[1][1])],
-            hit: [f(r[2][0]), f(r[2][1]), f(r[2][2])],
-        })
-        .collect()
+    s.report.debug_photons()
 }
 
 /// Adaptive max-level at level L emits exactly the cells dense emits at 64·2^L, so the images agree.
@@ -56,8 +23,8 @@ fn debug_photons(s: &Shot) -> Vec<DebugPhoton> {
 fn adaptive_max_level_matches_dense() {
     let (_gpu, device) = gpu();
     for level in 1..=3 {
-        let d = caustics_aov(&device, SPHERE, dense(level));
-        let a = caustics_aov(&device, SPHERE, adaptive(level, Metric::MaxLevel));
+        let d = shot(&device, SPHERE, dense(level));
+        let a = shot(&device, SPHERE, adaptive(level, Metric::MaxLevel));
         assert_eq!(d.photons(), a.photons(), "level {level}: photon counts");
         let m = compare(&a.img, &d.img, 64, 2.0);
         // Same photons, same splats: only the order of the float additions differs (measured rel-L1 < 1e-6).
@@ -95,7 +62,7 @@ fn max_level_emits_exactly_dense_cells() {
             s.quality.transport = Transport::TwoInterface;
             s.tuning.debug_photons = 200_000;
         };
-        let dense = cells(&caustics_aov(&device, scene, with(dense(2), common)));
+        let dense = cells(&shot(&device, scene, with(dense(2), common)));
         assert!(dense.len() > 1000, "{name}: {} photons", dense.len());
         assert!(dense.iter().all(|c| c.0 == 2));
         for (tag, budget) in [("one", 64.0), ("tiny", 0.125)] {
@@ -103,7 +70,7 @@ fn max_level_emits_exactly_dense_cells() {
                 common(s);
                 s.quality.photon_budget_mib = budget;
             });
-            let a = caustics_aov(&device, scene, settings);
+            let a = shot(&device, scene, settings);
             if tag == "tiny" {
                 let batches = a.traversal().batches_committed;
                 assert!(batches > 1, "{name}: batches {batches}");
@@ -118,8 +85,8 @@ fn max_level_emits_exactly_dense_cells() {
 #[test]
 fn gpu_driven_and_cpu_driven_agree() {
     let (_gpu, device) = gpu();
-    let g = caustics_aov(&device, SPHERE, with(level(4), |s| s.tuning.driven = Driven::Gpu));
-    let c = caustics_aov(&device, SPHERE, with(level(4), |s| s.tuning.driven = Driven::Cpu));
+    let g = shot(&device, SPHERE, with(level(4), |s| s.tuning.driven = Driven::Gpu));
+    let c = shot(&device, SPHERE, with(level(4), |s| s.tuning.driven = Driven::Cpu));
     assert_eq!(g.report.host_readbacks, 0);
     // One readback per traversal level (after init, then after levels 0..3), plus one after the batch that finds
     // no tile left.
@@ -134,8 +101,8 @@ fn gpu_driven_and_cpu_driven_agree() {
 #[test]
 fn tiny_budget_batches_to_the_same_image() {
     let (_gpu, device) = gpu();
-    let big = caustics_aov(&device, SPHERE, level(4));
-    let tiny = caustics_aov(&device, SPHERE, with(level(4), |s| s.quality.photon_budget_mib = 0.25));
+    let big = shot(&device, SPHERE, level(4));
+    let tiny = shot(&device, SPHERE, with(level(4), |s| s.quality.photon_budget_mib = 0.25));
     let (b, t) = (big.traversal(), tiny.traversal());
     assert_eq!(b.batches_committed, 1);
     assert!(t.batches_committed >= 4, "batches {}", t.batches_committed);
@@ -157,8 +124,8 @@ fn tiny_budget_batches_to_the_same_image() {
 fn a_frame_out_of_batch_slots_is_finished_not_rendered_again() {
     let (_gpu, device) = gpu();
     let base = with(level(3), |s| s.quality.transport = Transport::Exact);
-    let one = caustics_aov(&device, SPHERE, base.clone());
-    let cont = caustics_aov(
+    let one = shot(&device, SPHERE, base.clone());
+    let cont = shot(
         &device,
         SPHERE,
         with(base, |s| {
@@ -185,13 +152,13 @@ fn a_frame_out_of_batch_slots_is_finished_not_rendered_again() {
 #[test]
 fn overflow_without_batching_is_counted_and_bounded() {
     let (_gpu, device) = gpu();
-    let full = caustics_aov(&device, SPHERE, level(4));
+    let full = shot(&device, SPHERE, level(4));
     let settings = with(level(4), |s| {
         s.quality.photon_budget_mib = 0.25;
         s.tuning.batching = false;
         s.tuning.debug_photons = 16;
     });
-    let s = caustics_aov(&device, SPHERE, settings);
+    let s = shot(&device, SPHERE, settings);
     let st = s.traversal();
     assert!(st.overflow_dropped > 0);
     assert!(st.batches_aborted + (st.overflow_dropped > 0) as u32 > 0);
@@ -214,7 +181,7 @@ fn deep_levels_have_exact_positions() {
         s.tuning.debug_photons = 20000;
         s.tuning.debug_min_level = 12;
     });
-    let s = caustics_aov(&device, &slab, settings);
+    let s = shot(&device, &slab, settings);
     let levels = s.levels();
     assert_eq!(levels.len(), 13);
     assert!(levels[12].emitted > 1000, "level 12 emitted {}", levels[12].emitted);

@@ -21,11 +21,7 @@ fn frame(
         f(s);
     });
     let mut r = renderer(device, SPHERE, settings);
-    let cam = r.scene().camera(Some(camera)).unwrap_or_else(|e| panic!("{e}")).clone();
-    let view = r.camera_view(&cam, side, side);
-    let frame = r.render(&caustics::FrameDesc::new(&view, Some(aov))).expect("frame");
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "{aov:?}: validation messages");
-    frame.image.expect("an image")
+    camera_frame(&mut r, camera, (side, side), aov).image.expect("an image")
 }
 
 /// Channel 0 of a float AOV as a row-major plane.

@@ -40,19 +40,7 @@ fn exact(
     level: u32,
     f: impl FnOnce(&mut Settings),
 ) -> Shot {
-    let s = shot_at(device, scene, with(adaptive(level, Metric::FluxError), f), 0.0, caustics::Aov::Caustics, side);
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
-    s
-}
-
-/// The channel of each pass of a frame, as the stats name it: `gray`, `red`, `green`, `blue`, `rgb` (color
-/// photons) or `spectral`.
-fn passes(s: &Shot) -> Vec<&'static str> {
-    s.report
-        .lights
-        .iter()
-        .map(|l| ["gray", "red", "green", "blue", "rgb", "spectral"][l.channel.min(5) as usize])
-        .collect()
+    shot_at(device, scene, with(adaptive(level, Metric::FluxError), f), 0.0, caustics::Aov::Caustics, side)
 }
 
 /// The energy account's residual of each pass of a frame.
@@ -93,7 +81,6 @@ fn beauty_aa(
     });
     let mut r = renderer(device, scene.to_str().unwrap(), settings);
     let (img, _) = camera_aov(&mut r, camera, (64, 64), caustics::Aov::BeautyHdr);
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "{name}: validation messages");
     img
 }
 
@@ -116,17 +103,17 @@ fn colored_absorption_is_exact_per_channel() {
         s.tuning.splat = Splat::Raster;
     };
     let amber = exact(&device, COLORED, 128, 2, no_weak);
-    assert_eq!(passes(&amber), ["rgb"], "one pass of color photons");
+    assert_eq!(amber.passes(), ["rgb"], "one pass of color photons");
     assert_eq!(amber.report.host_readbacks, 0);
     let closes = |s: &Shot| {
-        for (channel, res) in passes(s).iter().zip(residuals(s)) {
+        for (channel, res) in s.passes().iter().zip(residuals(s)) {
             assert!(res.abs() < 1e-6, "{channel}: energy residual {res}");
         }
     };
     closes(&amber);
     let img = &amber.img;
     let amber_raster = exact(&device, COLORED, 128, 2, raster);
-    assert_eq!(passes(&amber_raster), ["red", "green", "blue"], "the point draw: three channel passes");
+    assert_eq!(amber_raster.passes(), ["red", "green", "blue"], "the point draw: three channel passes");
     closes(&amber_raster);
     let rimg = &amber_raster.img;
     let text = std::fs::read_to_string(COLORED).unwrap();
@@ -138,7 +125,7 @@ fn colored_absorption_is_exact_per_channel() {
         std::fs::write(&path, gray.replace("../meshes/", concat!(env!("CARGO_MANIFEST_DIR"), "/assets/meshes/")))
             .unwrap();
         let gs = exact(&device, path.to_str().unwrap(), 128, 2, no_weak);
-        assert_eq!(passes(&gs), ["gray"], "a gray scene: one gray pass");
+        assert_eq!(gs.passes(), ["gray"], "a gray scene: one gray pass");
         // The share of the gray pass's caustic flux that its threshold cut.
         let cut = gs.energy("cut_threshold") / gs.energy("caustics");
         let gimg = &gs.img;
@@ -220,7 +207,7 @@ fn prism_snell_centroids(light: impl Fn(f64) -> f64) -> [f64; 3] {
 fn prism_disperses_by_snell() {
     let (_gpu, device) = gpu();
     let s = exact(&device, PRISM, 512, 3, |_| ());
-    assert_eq!(passes(&s), ["spectral"], "one pass of spectral photons");
+    assert_eq!(s.passes(), ["spectral"], "one pass of spectral photons");
     assert!(residuals(&s)[0].abs() < 1e-6);
     let expect = prism_snell_centroids(|_| 1.0);
     let got: Vec<f64> = (0..3).map(|c| prism_centroid(&s.img, c)).collect();
@@ -233,7 +220,7 @@ fn prism_disperses_by_snell() {
     // The point draw's one-channel map: three passes, each refracting at its channel's line, landing where Snell's
     // law with that line's IOR says. Measured: within 5 µm in each.
     let rs = exact(&device, PRISM, 512, 3, |s| s.tuning.splat = Splat::Raster);
-    assert_eq!(passes(&rs), ["red", "green", "blue"]);
+    assert_eq!(rs.passes(), ["red", "green", "blue"]);
     for c in 0..3 {
         let (got, expect) = (prism_centroid(&rs.img, c), prism_land(caustics::scene::CHANNEL_NM[c] as f64));
         eprintln!("prism channel pass {c}: centroid {got}, Snell at its line {expect}");
@@ -266,7 +253,7 @@ fn a_colored_light_is_a_spectrum() {
     let orange = [1.0, 0.45, 0.1];
     let path = orange_prism(&dir);
     let s = exact(&device, &path, 512, 3, |_| ());
-    assert_eq!(passes(&s)[0], "spectral");
+    assert_eq!(s.passes()[0], "spectral");
     let (img, white) = (&s.img, exact(&device, PRISM, 512, 3, |_| ()).img);
     let spectrum = caustics::spectrum::RgbSpectrum::fit(orange);
     let expect = prism_snell_centroids(|nm| spectrum.at(nm));
@@ -317,7 +304,7 @@ material = {{ kind = "dielectric", ior = 1.5, abbe = 10.0{absorption} }}
         let path = dir.join(format!("{name}.toml"));
         std::fs::write(&path, slab(absorption)).unwrap();
         let s = exact(&device, path.to_str().unwrap(), 128, 5, |_| ());
-        assert_eq!(passes(&s)[0], "spectral");
+        assert_eq!(s.passes()[0], "spectral");
         images.push(s.img);
     }
     let rgb = [3.0, 12.0, 30.0];

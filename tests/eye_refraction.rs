@@ -28,9 +28,7 @@ fn beauty(
         f(s);
     });
     let mut r = renderer(device, scene.to_str().unwrap(), settings);
-    let beauty = camera_beauty(&mut r, "top", (side, side));
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "{name}: validation messages");
-    beauty
+    camera_beauty(&mut r, "top", (side, side))
 }
 
 const SCENE: &str = r#"

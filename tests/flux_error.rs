@@ -11,18 +11,9 @@ use caustics::metrics::{compare, Metrics};
 use caustics::reference::{Aov, Paths};
 use caustics::settings::{Method, Metric, ResolvedSettings, Settings, Transport};
 use common::*;
-use std::sync::Arc;
 
 fn reference_image(scene: &str, paths: Paths, photons: u64) -> RgbImage {
     top_reference(scene, Aov::Caustics, paths, photons, 256)
-}
-
-/// The caustics AOV of `scene` from its `top` camera at 256² with `settings`, in process ([`shot`]), validation
-/// silent.
-fn caustics_aov(device: &Arc<caustics::gpu::Device>, scene: &str, settings: Settings) -> Shot {
-    let s = shot(device, scene, settings);
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "{scene}: validation messages");
-    s
 }
 
 /// Adaptive flux-error at `level` under `transport`.
@@ -57,12 +48,9 @@ const TAU_03: f64 = 0.0158;
 /// Dense and flux-error at level `level` under exact transport, scored against the every-path reference.
 fn against_dense(name: &str, scene: &str, level: u32, target: f64) -> (u64, Metrics, u64, Metrics) {
     let (_gpu, device) = gpu();
-    let sd = caustics_aov(&device, scene, dense(level));
-    let sf = caustics_aov(
-        &device,
-        scene,
-        with(flux_error(Transport::Exact, level), |s| s.quality.target_error = target as f32),
-    );
+    let sd = shot(&device, scene, dense(level));
+    let sf =
+        shot(&device, scene, with(flux_error(Transport::Exact, level), |s| s.quality.target_error = target as f32));
     assert_eq!(sf.config.metric, Metric::FluxError);
     let tau = reported_target(&sf.config).expect("flux-error reports its tau").1;
     assert_eq!(tau, 0.3, "the calibration maps {target} to tau 0.3");
@@ -110,8 +98,8 @@ fn batches_gpu_driven_under_both_transports() {
             s.tuning.weak_block = block;
         });
         let tag = format!("{transport:?}-{block}");
-        let big = caustics_aov(&device, SPHERE, common.clone());
-        let tiny = caustics_aov(&device, SPHERE, with(common, |s| s.quality.photon_budget_mib = 0.25));
+        let big = shot(&device, SPHERE, common.clone());
+        let tiny = shot(&device, SPHERE, with(common, |s| s.quality.photon_budget_mib = 0.25));
         for s in [&big, &tiny] {
             assert_eq!(s.report.host_readbacks, 0, "{tag}");
             assert_eq!(s.report.unfinished_tiles, 0, "{tag}");
@@ -143,7 +131,7 @@ fn added_errors(name: &str, scene: &str, base: &Settings, targets: &[f64]) -> Ve
 /// [`added_errors`], with the checks each run skipped by prediction (the levels' `checks_skipped`, summed).
 fn added_errors_and_skips(name: &str, scene: &str, base: &Settings, targets: &[f64]) -> Vec<(f64, f64, u64, f64, u64)> {
     let (_gpu, device) = gpu();
-    let sm = caustics_aov(&device, scene, with(base.clone(), |s| s.quality.metric = Metric::MaxLevel));
+    let sm = shot(&device, scene, with(base.clone(), |s| s.quality.metric = Metric::MaxLevel));
     let r = &sm.img;
     assert!(reported_target(&sm.config).is_none(), "max-level reports no target error");
     let skipped = |s: &Shot| -> u64 { s.levels().iter().map(|l| l.checks_skipped as u64).sum() };
@@ -154,7 +142,7 @@ fn added_errors_and_skips(name: &str, scene: &str, base: &Settings, targets: &[f
             s.quality.metric = Metric::FluxError;
             s.quality.target_error = e as f32;
         });
-        let s = caustics_aov(&device, scene, settings);
+        let s = shot(&device, scene, settings);
         let (target, tau) = reported_target(&s.config).expect("flux-error reports its target error");
         assert_eq!(target, e as f32, "the settings keep the target error");
         let tau = tau as f64;
@@ -278,7 +266,7 @@ fn default_check_level_follows_the_level() {
             s.quality.transport = Transport::TwoInterface;
             s.tuning.check_level = given;
         });
-        let s = caustics_aov(&device, SPHERE, settings);
+        let s = shot(&device, SPHERE, settings);
         let check_level = reported_check_level(&s.config);
         assert_eq!(check_level, Some(want), "{name}: {check_level:?}");
         if level == 2 {
@@ -286,7 +274,7 @@ fn default_check_level_follows_the_level() {
         }
     }
     assert_eq!(level2.len(), 3, "the three cases at level 2");
-    let dense = caustics_aov(&device, SPHERE, with(dense(2), |s| s.quality.transport = Transport::TwoInterface));
+    let dense = shot(&device, SPHERE, with(dense(2), |s| s.quality.transport = Transport::TwoInterface));
     let check_level = reported_check_level(&dense.config);
     assert!(check_level.is_none(), "dense checks nothing: {check_level:?}");
     // At level 2 flux-error merges (photons before the last level, fewer photons than dense); with the check level

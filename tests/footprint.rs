@@ -37,7 +37,6 @@ fn differential_conserves_flux_and_the_splats_agree() {
     for (tag, base) in [("dense", dense(2)), ("flux_error", flux_error)] {
         conserves_flux_and_the_splats_agree(&device, tag, &base);
     }
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
 
 fn conserves_flux_and_the_splats_agree(device: &std::sync::Arc<caustics::gpu::Device>, tag: &str, base: &Settings) {

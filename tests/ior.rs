@@ -49,7 +49,6 @@ fn different_iors_are_read_per_texel() {
     // The caustics AOV from the top camera at 256², two-interface, dense level 3, in process.
     let settings = with(dense(3), |s| s.quality.transport = Transport::TwoInterface);
     let m = compare(&shot(&device, mixed.to_str().unwrap(), settings.clone()).img, &r, 64, 2.0);
-    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
     let wrong = compare(&shot(&device, same.to_str().unwrap(), settings).img, &r, 64, 2.0);
     eprintln!("per texel: rel-L1 {:.4}, flux {:.4}; both 1.5: rel-L1 {:.4}", m.rel_l1, m.flux_ratio, wrong.rel_l1);
     assert!(m.rel_l1 < 0.05, "IORs 1.5 and 1.33: rel-L1 {}", m.rel_l1);

@@ -248,16 +248,13 @@ fn render_obj(
         let scene = Scene::load(&sc).map_err(|e| e.to_string())?;
         let mut r = caustics::Renderer::new(device.clone(), scene, settings).map_err(|e| e.to_string())?;
         let camera = r.scene().camera(Some("top"))?.clone();
-        let caustics::scene::Projection::Orthographic { half_height } = camera.projection else {
-            return Err("the top camera is orthographic".into());
-        };
+        // The texel's area, as the CLI's stats weigh `aov_flux_w`.
+        let area = camera.pixel_area(64, 64).ok_or("the top camera is orthographic")?;
         let view = r.camera_view(&camera, 64, 64);
         let frame =
             r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Caustics))).map_err(|e| e.to_string())?;
         let Some(caustics::AovData::Float { rgba, .. }) = frame.image else { return Err("no float image".into()) };
-        // The texel's area, as the CLI's stats weigh `aov_flux_w`.
-        let texel = 2.0 * half_height as f64 / 64.0;
-        Ok(rgba.iter().map(|p| p[0] as f64).sum::<f64>() * texel * texel)
+        Ok(rgba.iter().map(|p| p[0] as f64).sum::<f64>() * area)
     });
     let out = out.unwrap_or_else(|| panic!("{test}: panicked; logged:\n{log}"));
     assert_eq!(caustics::gpu::validation_message_count(), 0, "{test}: validation messages");

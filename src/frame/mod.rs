@@ -33,7 +33,7 @@ use crate::settings::{ResolvedSettings, Splat};
 use crate::targets::{ReceiverTargets, Targets};
 use crate::vk::{Access, Buffer, Device, Recorder, Sampler, Timestamps, Tracker, VkResult};
 use ash::vk;
-pub use report::{Aov, AovData, FrameReport, LightReport, SceneUpdateReport, SlotVerdict};
+pub use report::{Aov, AovData, DebugPhoton, FrameReport, LightReport, SceneUpdateReport, SlotVerdict};
 use std::time::Instant;
 
 /// Stage label of the CPU-driven traversal's host round trips (GPU idle while the host reads and records).

@@ -38,7 +38,8 @@ impl std::str::FromStr for Aov {
 pub struct LightReport {
     /// The light's index in the scene.
     pub light: usize,
-    /// 0: the gray pass; 1, 2, 3: red, green, blue.
+    /// 0: the gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`, `CHANNEL_SPECTRAL`: photons that carry their
+    /// color or a wavelength ([`LightReport::channel_name`]).
     pub channel: u32,
     /// Whether this light's caustic stages ran (a refractor lies in its light).
     pub caustics: bool,
@@ -50,6 +51,38 @@ pub struct LightReport {
     pub gpu_ms: f64,
     /// Index of its first timed interval in the frame's segments.
     pub first_segment: usize,
+}
+
+impl LightReport {
+    /// The pass's channel in words: `gray`, `red`, `green`, `blue`, `rgb` (photons that carry their color) or
+    /// `spectral` (photons that carry a wavelength).
+    pub fn channel_name(&self) -> &'static str {
+        // CHANNEL_RGB, CHANNEL_SPECTRAL after the three channels.
+        ["gray", "red", "green", "blue", "rgb", "spectral"][self.channel.min(5) as usize]
+    }
+}
+
+/// One photon of a debug run's dump (`Tuning::debug_photons`): its three rows (glsl/common/photon_bindings.glsl).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DebugPhoton {
+    /// Its cell's column at its level.
+    pub x: u32,
+    /// Its cell's row at its level.
+    pub y: u32,
+    /// Its level.
+    pub level: u32,
+    /// Its status code.
+    pub status: u32,
+    /// Its splat radius (texels).
+    pub radius: u32,
+    /// Its flux's first channel.
+    pub flux_r: f32,
+    /// The cell center's light-view texture coordinates, as the GPU computed them.
+    pub uv: [f32; 2],
+    /// Where it lands in the caustic map (texels).
+    pub map_px: [f32; 2],
+    /// Where it landed (m, world space).
+    pub hit: [f32; 3],
 }
 
 /// A frame's scene update: the objects it moved on the GPU, and what the host did to the scene's buffers before it.
@@ -184,6 +217,25 @@ impl FrameReport {
             self.debug_rows = next.debug_rows;
             self.guard_intact = next.guard_intact;
         }
+    }
+
+    /// The photons a debug run dumped (`Tuning::debug_photons`), in the order the GPU wrote them.
+    pub fn debug_photons(&self) -> Vec<DebugPhoton> {
+        let f = f32::from_bits;
+        self.debug_rows
+            .chunks_exact(3)
+            .map(|r| DebugPhoton {
+                x: r[0][0],
+                y: r[0][1],
+                level: r[0][2] & 0xFF,
+                status: (r[0][2] >> 8) & 0xFF,
+                radius: r[0][2] >> 16,
+                flux_r: f(r[0][3]),
+                uv: [f(r[1][0]), f(r[1][1])],
+                map_px: [f(r[1][2]), f(r[1][3])],
+                hit: [f(r[2][0]), f(r[2][1]), f(r[2][2])],
+            })
+            .collect()
     }
 
     /// Photons the frame emitted, summed over its lights (and color passes).

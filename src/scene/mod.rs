@@ -134,6 +134,22 @@ pub struct Camera {
     pub aspect: Option<f32>,
 }
 
+impl Camera {
+    /// The area one pixel covers (m²) in an image `width`×`height` through an orthographic camera (the window's
+    /// width follows the image's aspect): what turns an irradiance AOV's sum into flux. None for a perspective
+    /// camera.
+    pub fn pixel_area(&self, width: u32, height: u32) -> Option<f64> {
+        match self.projection {
+            Projection::Orthographic { half_height } => {
+                let hh = half_height as f64;
+                let hw = hh * width as f64 / height as f64;
+                Some((2.0 * hw / width as f64) * (2.0 * hh / height as f64))
+            }
+            Projection::Perspective { .. } => None,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 /// What an object is made of.
 pub enum Material {

@@ -192,17 +192,29 @@ pub fn top_aov(
     camera_aov(r, "top", (side, side), aov)
 }
 
-/// A float AOV (caustics, direct, linear beauty) of an in-process renderer from its scene's camera `camera` at
-/// `width`×`height`, with the frame's report.
-pub fn camera_aov(
+/// A frame of an in-process renderer from its scene's camera `camera` at `width`×`height`, reading back `aov`;
+/// validation stayed silent while it rendered.
+pub fn camera_frame(
     r: &mut caustics::Renderer,
     camera: &str,
     (width, height): (u32, u32),
     aov: caustics::Aov,
-) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
+) -> caustics::Frame {
     let cam = r.scene().camera(Some(camera)).unwrap_or_else(|e| panic!("{e}")).clone();
     let view = r.camera_view(&cam, width, height);
     let frame = r.render(&caustics::FrameDesc::new(&view, Some(aov))).expect("frame");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages: a frame through `{camera}`");
+    frame
+}
+
+/// A float AOV (caustics, direct, linear beauty) of [`camera_frame`], with the frame's report.
+pub fn camera_aov(
+    r: &mut caustics::Renderer,
+    camera: &str,
+    size: (u32, u32),
+    aov: caustics::Aov,
+) -> (caustics::image_io::RgbImage, caustics::FrameReport) {
+    let frame = camera_frame(r, camera, size, aov);
     match frame.image {
         Some(caustics::AovData::Float { width, height, rgba }) => {
             let data = rgba.iter().map(|p| [p[0], p[1], p[2]]).collect();
@@ -212,12 +224,9 @@ pub fn camera_aov(
     }
 }
 
-/// The tone-mapped 8-bit beauty of an in-process renderer through its scene's camera `camera` at
-/// `width`×`height`, as `render` writes it to a PNG: (width, height, RGBA8 bytes).
-pub fn camera_beauty(r: &mut caustics::Renderer, camera: &str, (width, height): (u32, u32)) -> (u32, u32, Vec<u8>) {
-    let cam = r.scene().camera(Some(camera)).unwrap_or_else(|e| panic!("{e}")).clone();
-    let view = r.camera_view(&cam, width, height);
-    match r.render(&caustics::FrameDesc::new(&view, Some(caustics::Aov::Beauty))).expect("frame").image {
+/// The tone-mapped 8-bit beauty of [`camera_frame`], as `render` writes it to a PNG: (width, height, RGBA8 bytes).
+pub fn camera_beauty(r: &mut caustics::Renderer, camera: &str, size: (u32, u32)) -> (u32, u32, Vec<u8>) {
+    match camera_frame(r, camera, size, caustics::Aov::Beauty).image {
         Some(caustics::AovData::Rgba8 { width, height, rgba }) => (width, height, rgba),
         _ => panic!("an 8-bit beauty"),
     }
@@ -257,6 +266,11 @@ impl Shot {
         self.transport().account()[k] * self.intensity
     }
 
+    /// The channel of each pass, as the stats name it (`gray`, `red`, `green`, `blue`, `rgb`, `spectral`).
+    pub fn passes(&self) -> Vec<&'static str> {
+        self.report.lights.iter().map(|l| l.channel_name()).collect()
+    }
+
     /// Every level's counts up to the frame's level.
     pub fn levels(&self) -> Vec<caustics::LevelCounters> {
         self.traversal().levels[..=self.config.level as usize].to_vec()
@@ -278,12 +292,8 @@ pub fn shot_at(
         r.set_time(time).expect("set_time");
     }
     let (img, report) = top_aov(&mut r, side, aov);
-    let half_height = match r.scene().camera(Some("top")).expect("a top camera").projection {
-        caustics::scene::Projection::Orthographic { half_height } => half_height as f64,
-        _ => panic!("the top camera is orthographic"),
-    };
-    let texel = 2.0 * half_height / side as f64;
-    let aov_flux = img.data.iter().map(|p| p[0] as f64).sum::<f64>() * texel * texel;
+    let area = r.scene().camera(Some("top")).expect("a top camera").pixel_area(side, side);
+    let aov_flux = img.data.iter().map(|p| p[0] as f64).sum::<f64>() * area.expect("an orthographic top camera");
     let intensity = r.scene().lights[0].intensity as f64;
     Shot { img, report, config: r.config().clone(), intensity, aov_flux }
 }

@@ -506,14 +506,7 @@ impl Session {
     }
 
     pub fn pixel_area(&self) -> Option<f64> {
-        match self.camera.projection {
-            Projection::Orthographic { half_height } => {
-                let hh = half_height as f64;
-                let hw = hh * self.width as f64 / self.height as f64;
-                Some((2.0 * hw / self.width as f64) * (2.0 * hh / self.height as f64))
-            }
-            Projection::Perspective { .. } => None,
-        }
+        self.camera.pixel_area(self.width, self.height)
     }
 }
 

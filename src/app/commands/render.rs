@@ -58,7 +58,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         write_aov(&session, args, aov, &image, &args.out, &mut extra)?;
     }
     if let Some(last) = reports.last().filter(|r| r.guard_intact.is_some()) {
-        extra.insert("debug_photons".into(), debug_photons_json(&last.debug_rows, last.debug_rows.len()));
+        extra.insert("debug_photons".into(), debug_photons_json(&last.debug_photons()));
         extra.insert("photon_guard_intact".into(), json!(last.guard_intact));
     }
     let stats = stats_json(&session, &reports, Value::Object(extra));

@@ -159,8 +159,7 @@ pub(super) fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
         .iter()
         .map(|rep| {
             let l = &r.scene().lights[rep.light];
-            // CHANNEL_RGB, CHANNEL_SPECTRAL: color or spectral photons, all three channels in one pass.
-            let channel = ["gray", "red", "green", "blue", "rgb", "spectral"][rep.channel.min(5) as usize];
+            let channel = rep.channel_name();
             let mut row = json!({
                 "light": rep.light,
                 "channel": channel,
@@ -181,17 +180,15 @@ pub(super) fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
     Value::Array(rows)
 }
 
-pub(super) fn debug_photons_json(rows: &[[u32; 4]], n: usize) -> Value {
-    let f = f32::from_bits;
-    let list: Vec<Value> = rows
-        .chunks_exact(3)
-        .take(n / 3)
-        .map(|r| {
+pub(super) fn debug_photons_json(photons: &[caustics::DebugPhoton]) -> Value {
+    let list: Vec<Value> = photons
+        .iter()
+        .map(|p| {
             json!({
-                "x": r[0][0], "y": r[0][1], "level": r[0][2] & 0xFF, "status": (r[0][2] >> 8) & 0xFF, "radius": r[0][2] >> 16,
-                "flux_r": f(r[0][3]), "uv": [f(r[1][0]), f(r[1][1])], "uv_bits": [r[1][0], r[1][1]],
-                "map_px": [f(r[1][2]), f(r[1][3])],
-                "hit": [f(r[2][0]), f(r[2][1]), f(r[2][2])],
+                "x": p.x, "y": p.y, "level": p.level, "status": p.status, "radius": p.radius,
+                "flux_r": p.flux_r, "uv": p.uv, "uv_bits": p.uv.map(f32::to_bits),
+                "map_px": p.map_px,
+                "hit": p.hit,
             })
         })
         .collect();
