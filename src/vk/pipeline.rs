@@ -486,7 +486,13 @@ impl Pipeline {
     /// the barriers they need, then bind the pipeline and push the descriptors the same uses name.
     pub fn bind_uses(&self, cmd: vk::CommandBuffer, sync: &mut super::Tracker, uses: &[Use]) -> VkResult<()> {
         debug_assert_eq!(self.bind_point, vk::PipelineBindPoint::COMPUTE, "declared uses are a compute pass's");
-        for u in uses {
+        assert_eq!(uses.len(), self.kinds.len(), "a use per binding");
+        for (u, kind) in uses.iter().zip(&self.kinds) {
+            // A buffer the layout reads as texels is declared as read as texels, and only such a buffer: the
+            // barrier follows the access the shader makes.
+            if let Use::Read(_) | Use::Write(_) | Use::Texels(_) = u {
+                assert_eq!(matches!(u, Use::Texels(_)), *kind == BindKind::Texels, "a texel buffer's use");
+            }
             u.declare(sync);
         }
         sync.flush(&self.device, cmd);
