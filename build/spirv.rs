@@ -1,7 +1,7 @@
 //! Just enough SPIR-V reading for the build's checks: names, struct member offsets, array strides, descriptor
-//! bindings and specialization-constant IDs.
+//! bindings (and which of them the shader may write) and specialization-constant IDs.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 
 /// What a descriptor binding is, as the shader declares it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,6 +27,9 @@ pub struct Module {
     pub bindings: BTreeMap<(u32, u32), (Descriptor, String)>,
     /// Specialization-constant IDs, with their names.
     pub spec_ids: BTreeMap<u32, String>,
+    /// The (set, binding) of every storage buffer, storage image or storage texel buffer the shader may write:
+    /// declared without `readonly` (a buffer block some member of which lacks NonWritable, an image without it).
+    pub writable: BTreeSet<(u32, u32)>,
 }
 
 const OP_NAME: u32 = 5;
@@ -42,6 +45,7 @@ const OP_MEMBER_DECORATE: u32 = 72;
 
 const DEC_SPEC_ID: u32 = 1;
 const DEC_ARRAY_STRIDE: u32 = 6;
+const DEC_NON_WRITABLE: u32 = 24;
 const DEC_BINDING: u32 = 33;
 const DEC_DESCRIPTOR_SET: u32 = 34;
 const DEC_OFFSET: u32 = 35;
@@ -69,6 +73,8 @@ impl Module {
         let mut arrays: HashMap<u32, u32> = HashMap::new(); // array type → element type
         let mut pointers: HashMap<u32, (u32, u32)> = HashMap::new(); // id → (storage class, pointee)
         let mut variables: Vec<(u32, u32, u32)> = Vec::new(); // (pointer type, id, storage class)
+        let mut non_writable: HashSet<u32> = HashSet::new(); // variables decorated NonWritable
+        let mut non_writable_members: HashMap<u32, HashSet<u32>> = HashMap::new(); // struct → such members
         let mut i = 5;
         while i < words.len() {
             let count = (words[i] >> 16) as usize;
@@ -108,10 +114,16 @@ impl Module {
                     DEC_DESCRIPTOR_SET => {
                         sets.insert(a[0], a[2]);
                     }
+                    DEC_NON_WRITABLE => {
+                        non_writable.insert(a[0]);
+                    }
                     _ => {}
                 },
                 OP_MEMBER_DECORATE if a[2] == DEC_OFFSET => {
                     m.member_offsets.entry(a[0]).or_default().insert(a[1], a[3]);
+                }
+                OP_MEMBER_DECORATE if a[2] == DEC_NON_WRITABLE => {
+                    non_writable_members.entry(a[0]).or_default().insert(a[1]);
                 }
                 _ => {}
             }
@@ -150,6 +162,17 @@ impl Module {
                 }
                 _ => continue,
             };
+            let writable = match kind {
+                Descriptor::Storage => {
+                    let members = m.struct_members.get(&ty).map_or(0, |v| v.len());
+                    non_writable_members.get(&ty).map_or(0, |n| n.len()) < members
+                }
+                Descriptor::StorageImage | Descriptor::StorageTexel => !non_writable.contains(&id),
+                _ => false,
+            };
+            if writable {
+                m.writable.insert((set, binding));
+            }
             // A block without an instance name (`buffer SplatBuf { ... };`) is named by its block.
             let name = m.names.get(&id).filter(|n| !n.is_empty()).or_else(|| m.names.get(&ty)).cloned();
             m.bindings.insert((set, binding), (kind, name.unwrap_or_default()));

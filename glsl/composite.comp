@@ -5,6 +5,7 @@
 // sRGB encoding) into the beauty image.
 // On glass, with EXACT_EYE (`--transport exact`): the glass pass's radiance (glsl/glass.comp). Without it: the
 // papers' deferred refraction through two surfaces (Wyman & Nichols sec. 3.1), in the eye g-buffers.
+#define GLASS_READ_ONLY
 #include "common/composite_bindings.glsl"
 #include "common/receiver.glsl"
 

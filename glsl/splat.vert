@@ -1,6 +1,7 @@
 #version 460
 // Splat (docs/design.md step 5), drawn with vkCmdDrawIndirect: one point per emitted photon, at its
 // landing texel of the light-space caustic map, sized by its footprint. The trace pass filled the splat records.
+#define SPLAT_RECORDS_READ_ONLY
 #include "common/photon_bindings.glsl"
 
 layout(location = 0) flat out float v_flux;

@@ -115,6 +115,23 @@ fn the_descriptors_a_shader_declares_are_read() {
 }
 
 #[test]
+fn the_bindings_a_shader_may_write_are_those_it_does_not_declare_readonly() {
+    use crate::shaders::consts::*;
+    let writable = |words: &[u32]| spirv::Module::parse(words).unwrap().writable;
+    // Buffers: a block without `readonly` (atomics on the traversal state), a `writeonly` one, a `readonly` one.
+    let wave = writable(crate::shaders::WAVE_COMP.words());
+    assert!(wave.contains(&(0, PB_STATE)) && wave.contains(&(0, PB_RAYS_OUT)), "{wave:?}");
+    assert!(!wave.contains(&(0, PB_RAYS_IN)) && !wave.contains(&(0, PB_BVH_PAIR)), "{wave:?}");
+    // Texel buffers and sampled images are read only; the wide wave reads its rays and photons as texels.
+    let wide = writable(crate::shaders::WAVE_COMP_WIDE.words());
+    assert!(!wide.contains(&(0, PB_RAYS_IN)) && !wide.contains(&(0, PB_PHOTONS)) && !wide.contains(&(0, PB_FRONT)));
+    // Storage images: the glass pass writes the glass image, the composite reads it (`readonly`).
+    assert!(writable(crate::shaders::GLASS_COMP.words()).contains(&(0, CB_GLASS)));
+    let composite = writable(crate::shaders::COMPOSITE_COMP.words());
+    assert!(!composite.contains(&(0, CB_GLASS)) && composite.contains(&(0, CB_BEAUTY)), "{composite:?}");
+}
+
+#[test]
 fn a_specialization_constant_takes_its_id_from_the_shared_constants() {
     let c = consts();
     let ok = "layout(constant_id = WAVE_PRIMARY_ID) const bool WAVE_PRIMARY = false;";

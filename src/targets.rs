@@ -122,14 +122,6 @@ pub struct Targets {
     pub aa: u32,
 }
 
-impl PhotonBuffers {
-    /// The splat records and their colors: whatever writes or reads one does the other (the colors only where the
-    /// photons carry them).
-    pub fn records(&self) -> [&Buffer; 2] {
-        [&self.splats, &self.splat_tints]
-    }
-}
-
 fn ext(w: u32, h: u32) -> vk::Extent2D {
     vk::Extent2D { width: w, height: h }
 }

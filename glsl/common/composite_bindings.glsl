@@ -22,8 +22,12 @@ layout(set = 0, binding = CB_ENV) uniform sampler2D t_env;                 // th
 layout(set = 0, binding = CB_ENV_IRRADIANCE) uniform sampler2D t_env_irr;  // its irradiance map
 layout(set = 0, binding = CB_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_textures;  // receivers' albedo textures
 // Exact transport: the glass's radiance per eye sample under every light, written by the glass pass; the
-// composite reads it.
+// composite reads it (and declares it so: the pass declares a read, src/passes/composite.rs).
+#ifdef GLASS_READ_ONLY
+layout(set = 0, binding = CB_GLASS, rgba32f) uniform readonly image2D o_glass;
+#else
 layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
+#endif
 
 layout(push_constant) uniform Push {
     uint pixels;  // glass.comp: 1 when an invocation traces a pixel's 2×2 samples of dispersive glass

@@ -43,7 +43,12 @@ layout(std430, set = 0, binding = PB_DEBUG) buffer DebugBuf { uvec4 debug_header
 // float (splat_pack): radii rx (bits 0-6) and ry (bits 7-13, 0 meaning ry = rx, so a plain radius r is the
 // isotropic tent of radius r), a shear s in [-1, 1] in 1/255 steps (bits 14-22, two's complement) and its axis
 // (bit 23).
+// The raster splat only reads them (SPLAT_RECORDS_READ_ONLY), as its pass declares (src/passes/photons.rs).
+#ifdef SPLAT_RECORDS_READ_ONLY
+layout(std430, set = 0, binding = PB_SPLATS) readonly buffer SplatBuf { GpuSplat splats[]; };
+#else
 layout(std430, set = 0, binding = PB_SPLATS) buffer SplatBuf { GpuSplat splats[]; };
+#endif
 // A record's tent: integer radii r (texels) and a shear. Row by row (columns by column when shear_y), the tent
 // across the rows is centred s texels further per texel of distance along them, so its weight at offset d from
 // the record's center is tent(d.x - s d.y, rx) tent(d.y, ry) (d.y - s d.x and d.x when shear_y).

@@ -90,11 +90,6 @@ impl SceneUpdate {
             && self.morph_triangles.is_empty()
             && self.refits.is_empty()
     }
-
-    /// Whether it deforms raster vertices (after placing the moved ones).
-    fn deforms_vertices(&self) -> bool {
-        !self.water_vertices.is_empty() || !self.morph_vertices.is_empty()
-    }
 }
 
 /// What a frame records: the decisions made before recording (by the renderer, from its inputs).
@@ -217,9 +212,10 @@ struct Ctx<'a> {
     eye_aovs: bool,
 }
 
-/// The scene update, before step 1: place the moved objects' vertices in world space (compute), and write the BVH's instance records
-/// (transfer). The rasterizer's vertex and index reads and the traversals' reads of the instances, later in this
-/// frame and the next, are declared here: nothing else in the frame writes them.
+/// The scene update, before step 1: place the moved objects' vertices in world space and deform the deforming ones
+/// (compute), write the BVH's instance records (transfer), and refit the deformed BVHs (compute). Each pass declares
+/// its uses as it binds them, and each transfer its accesses; the passes that read the results (the rasterizer's
+/// vertex and index reads, the traversals' reads of the BVH) declare theirs.
 fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResult<()> {
     if up.is_empty() {
         return Ok(());
@@ -230,7 +226,6 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
         rec.sync.buffer(&sb.morph_weights, &[Access::TransferDst]);
         rec.flush(d);
         update.write(rec.cmd, &sb.morph_weights, weights);
-        rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
     }
     if !up.water_rest.is_empty() || !up.water_steps.is_empty() {
         rec.ts.mark(rec.cmd, "scene_update.water_steps");
@@ -240,96 +235,36 @@ fn scene_update(res: &FrameResources, up: &SceneUpdate, rec: &mut Rec) -> VkResu
             update.water_rest(rec.cmd, sb, &up.water_rest);
         }
         for job in &up.water_steps {
-            rec.sync.buffer(&sb.heights, &[Access::ComputeWrite]);
-            rec.flush(d);
-            update.water_step(rec.cmd, sb, job)?;
+            update.water_step(rec.cmd, rec.sync, sb, job)?;
         }
     }
     rec.ts.mark(rec.cmd, "scene_update.vertices");
-    if !up.moves.is_empty() || up.deforms_vertices() {
-        rec.sync.buffer(&sb.object_vertices, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.object_indices, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.waves, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.heights, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.displaced, &[Access::ComputeWrite]);
-        rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
-        rec.sync.buffer(&sb.indices, &[Access::ComputeWrite]);
-        rec.flush(d);
-        if !up.moves.is_empty() {
-            update.place(rec.cmd, (&sb.object_vertices, &sb.object_indices), (&sb.vertices, &sb.indices), &up.moves)?;
-        }
-        if up.deforms_vertices() {
-            // A moved deforming object's vertices were just placed at rest: the deformation overwrites them.
-            rec.sync.buffer(&sb.vertices, &[Access::ComputeWrite]);
-            rec.flush(d);
-            update.water_vertices(rec.cmd, sb, &up.water_vertices)?;
-            update.morph_vertices(rec.cmd, sb, &up.morph_vertices)?;
-        }
-        rec.sync.buffer(&sb.vertices, &[Access::VertexInput]);
-        rec.sync.buffer(&sb.indices, &[Access::IndexInput]);
-    }
+    let world = (&sb.vertices, &sb.indices);
+    update.place(rec.cmd, rec.sync, (&sb.object_vertices, &sb.object_indices), world, &up.moves)?;
+    // A moved deforming object's vertices were just placed at rest: the deformation overwrites them.
+    update.water_vertices(rec.cmd, rec.sync, sb, &up.water_vertices)?;
+    update.morph_vertices(rec.cmd, rec.sync, sb, &up.morph_vertices)?;
     if let Some(records) = &up.instances {
         rec.ts.mark(rec.cmd, "scene_update.instances");
         rec.sync.buffer(&sb.bvh.instances, &[Access::TransferDst]);
         rec.flush(d);
         update.write(rec.cmd, &sb.bvh.instances, records);
-        rec.sync.buffer(&sb.bvh.instances, &[Access::ComputeRead, Access::ComputeTexels]);
     }
     if !up.water_triangles.is_empty() || !up.morph_triangles.is_empty() || !up.refits.is_empty() {
-        let b = &sb.bvh;
         // Marked before the barrier, not after it: lavapipe takes a timestamp's time at its next flush, so a mark
         // between a barrier and a dispatch would charge the dispatch to the stage before it.
         rec.ts.mark(rec.cmd, "scene_update.triangles");
-        rec.sync.buffer(&b.rest_tris, &[Access::ComputeRead]);
-        rec.sync.buffer(&b.rest_normals, &[Access::ComputeRead]);
-        rec.sync.buffer(&b.rest_corners, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.displaced, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.morphs, &[Access::ComputeRead]);
-        rec.sync.buffer(&sb.morph_weights, &[Access::ComputeRead]);
-        rec.sync.buffer(&b.triangles, &[Access::ComputeWrite]);
-        rec.sync.buffer(&b.normals, &[Access::ComputeWrite]);
-        rec.flush(d);
-        update.water_triangles(rec.cmd, sb, &up.water_triangles)?;
-        update.morph_triangles(rec.cmd, sb, &up.morph_triangles)?;
-        // The wide layout's variants read them as texels.
-        rec.sync.buffer(&b.triangles, &[Access::ComputeRead, Access::ComputeTexels]);
-        rec.sync.buffer(&b.normals, &[Access::ComputeRead, Access::ComputeTexels]);
+        update.water_triangles(rec.cmd, rec.sync, sb, &up.water_triangles)?;
+        update.morph_triangles(rec.cmd, rec.sync, sb, &up.morph_triangles)?;
         rec.ts.mark(rec.cmd, "scene_update.refit");
-        if !up.refits.is_empty() {
-            for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
-                rec.sync.buffer(buf, &[Access::ComputeWrite]);
-            }
-            rec.sync.buffer(&b.refit_nodes, &[Access::ComputeRead]);
-            rec.sync.buffer(&b.refit_order, &[Access::ComputeRead]);
-            // One height per dispatch, each after the one below (its boxes are read).
-            for job in &up.refits {
-                rec.sync.buffer(&b.refit_boxes, &[Access::ComputeWrite]);
-                rec.flush(d);
-                update.refit(rec.cmd, sb, job)?;
-            }
-            for buf in [&b.pair_nodes, &b.single_nodes, &b.threaded_nodes] {
-                rec.sync.buffer(buf, &[Access::ComputeRead]);
-            }
+        // One height per dispatch, each after the one below (its boxes are read).
+        for job in &up.refits {
+            update.refit(rec.cmd, rec.sync, sb, job)?;
         }
-        if !up.wide_refits.is_empty() {
-            rec.sync.buffer(&b.wide_refit_order, &[Access::ComputeRead]);
-            for buf in [&b.wide_nodes, &b.wide_prims] {
-                rec.sync.buffer(buf, &[Access::ComputeWrite]);
-            }
-            for job in &up.wide_refits {
-                rec.sync.buffer(&b.wide_refit_boxes, &[Access::ComputeWrite]);
-                rec.flush(d);
-                update.refit_wide(rec.cmd, sb, job)?;
-            }
-            // The wide layout's variants read them as texels.
-            for buf in [&b.wide_nodes, &b.wide_prims] {
-                rec.sync.buffer(buf, &[Access::ComputeRead, Access::ComputeTexels]);
-            }
+        for job in &up.wide_refits {
+            update.refit_wide(rec.cmd, rec.sync, sb, job)?;
         }
     }
-    rec.flush(d);
     Ok(())
 }
 
@@ -378,7 +313,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         let first_channel = c.channel == 0;
         if let Some(cont) = plan.continuation {
             if cont.passes[pass] {
-                c.light_gbuffers(rec, caustics, first_channel);
+                c.light_gbuffers(rec, caustics, first_channel)?;
                 c.coverage(rec)?;
                 c.photons(rec, plan.batch_slots, Some(cont.from_slot))?;
                 c.resolve(rec, true)?;
@@ -391,7 +326,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
                 c.reuse_caustics(rec);
             }
         } else {
-            c.light_gbuffers(rec, caustics, first_channel);
+            c.light_gbuffers(rec, caustics, first_channel)?;
             if caustics {
                 c.coverage(rec)?;
                 c.photons(rec, plan.batch_slots, None)?;
@@ -427,7 +362,7 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         // the glass nor the beauty: its refractor buffers, glass passes and composite are not recorded (their
         // timestamps mark empty stages), and the renderer lets no later frame reuse its eye view.
         if plan.beauty() {
-            c0.eye_refractors(rec);
+            c0.eye_refractors(rec)?;
             if c0.exact_eye() {
                 // One glass pass for up to GLASS_LIGHTS lights (a fourth adds a pass): the trace runs once per
                 // pass, each receiver it reaches shaded with the pass's lights.

@@ -69,12 +69,6 @@ const TRAVERSE_LABELS: [&str; MAX_LEVELS as usize] = [
     "traverse_L16",
 ];
 
-/// How the photon passes use the traversal's buffers: the state, the photon buffer and the indirect arguments are
-/// read and written by each compute pass, and the arguments drive the next dispatch or draw.
-const TRAVERSAL: [Access; 2] = [Access::ComputeWrite, Access::IndirectRead];
-/// A ray queue: a wave appends to one and reads the other, as texels in the wide layout's variant.
-const RAY_QUEUE: [Access; 2] = [Access::ComputeWrite, Access::ComputeTexels];
-
 impl Ctx<'_> {
     /// The splat's debug dump: off, or from which level.
     fn debug(&self) -> Option<u32> {
@@ -125,10 +119,9 @@ impl Ctx<'_> {
         for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect, &t.photon.debug, &t.photon.transport] {
             rec.sync.buffer(buf, &[Access::TransferDst]);
         }
+        // The compute splat's flux texels are cleared here (the raster splat's first batch clears its flux map).
         if self.compute_splat {
             rec.sync.buffer(&self.r.flux_texels, &[Access::TransferDst]);
-        } else {
-            rec.sync.discard(&self.r.flux, &[Access::ColorAttachment]);
         }
         let from = continue_from.map(|slot| &t.readbacks[slot]);
         if let Some(from) = from {
@@ -175,22 +168,7 @@ impl Ctx<'_> {
                 d.cmd_fill_buffer(cmd, t.photon.photons.raw, cap, 8 * PHOTON_GUARD as u64, CANARY);
             }
         }
-        for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect] {
-            rec.sync.buffer(buf, &TRAVERSAL);
-        }
-        rec.sync.buffer(&t.photon.debug, &[Access::ComputeWrite]);
-        rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
-        for buf in t.photon.records() {
-            rec.sync.buffer(buf, &[Access::ComputeWrite]);
-        }
-        rec.sync.buffer(&t.photon.coverage, &[Access::ComputeRead, Access::ComputeTexels]);
-        if self.compute_splat {
-            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
-        }
-        for q in &t.photon.queues {
-            rec.sync.buffer(q, &RAY_QUEUE);
-        }
-        rec.flush(d);
+        // Each photon pass declares its uses as it binds them (PhotonBindings::uses).
         match self.s.method {
             Method::Dense => self.dense(rec),
             Method::Adaptive => match self.s.driven {
@@ -218,10 +196,9 @@ impl Ctx<'_> {
         rec.ts.mark(rec.cmd, "splat");
         let b = self.bindings();
         let finest = if self.resolve_texels { 2 } else { 1 };
+        let planes = crate::targets::flux_planes(self.s) as u32;
         for level in (finest..=crate::targets::splat_levels(res)).rev() {
-            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeRead, Access::ComputeWrite]);
-            rec.flush(self.d);
-            self.p.photons.splat_collapse(rec.cmd, &b, level, res, crate::targets::flux_planes(self.s) as u32)?;
+            self.p.photons.splat_collapse(rec.cmd, rec.sync, &b, level, res, planes)?;
         }
         Ok(())
     }
@@ -251,66 +228,26 @@ impl Ctx<'_> {
         };
     }
 
-    /// Between one batch's splat and the next batch's compute passes: the next batch writes what this one's
-    /// trace and splat read.
-    fn after_splat(&self, rec: &mut Rec) {
-        let t = self.t;
-        if self.compute_splat {
-            rec.sync.buffer(&self.r.flux_texels, &[Access::ComputeWrite]);
-        } else {
-            rec.sync.image(&self.r.flux, &[Access::ColorAttachment]);
-        }
-        for buf in t.photon.records() {
-            rec.sync.buffer(buf, &[Access::ComputeWrite]);
-        }
-        for buf in [&t.photon.photons, &t.photon.state, &t.photon.indirect] {
-            rec.sync.buffer(buf, &TRAVERSAL);
-        }
-        rec.flush(self.d);
-    }
-
     /// Steps 4 and 5 for one batch: trace its emitted photons (compute, dispatched indirectly), then splat them.
     /// `commit`: adaptive traversal's last stats pass, which commits or splits the batch. Under two-interface
     /// transport it ran already; under exact transport it runs after the waves, which may abort the batch.
     fn trace_and_splat(&self, rec: &mut Rec, clear: bool, commit: bool) -> VkResult<()> {
-        let t = self.t;
         let (b, ph) = (self.bindings(), &self.p.photons);
         // Each mark goes before the barrier that opens its stage: lavapipe takes a timestamp's time at its next
         // flush, so a mark between a barrier and a dispatch would charge the dispatch to the stage before it.
         let exact = self.s.transport == Transport::Exact;
         rec.ts.mark(rec.cmd, if exact { "transport_primary" } else { "photon_trace" });
-        self.traversal_step(rec);
         if exact {
             self.exact_transport(rec, commit)?;
         } else {
-            ph.trace(rec.cmd, &b, self.debug())?;
+            ph.trace(rec.cmd, rec.sync, &b, self.debug())?;
         }
         rec.ts.mark(rec.cmd, "splat");
-        let reader = if self.compute_splat { Access::ComputeRead } else { Access::VertexRead };
-        for buf in t.photon.records() {
-            rec.sync.buffer(buf, &[reader]);
-        }
-        // The compute splat reads its record range from the draw command as well as dispatching from it.
-        rec.sync.buffer(&t.photon.indirect, &[Access::IndirectRead, Access::ComputeRead]);
-        rec.flush(self.d);
         if self.compute_splat {
-            ph.splat_compute(rec.cmd, &b, self.tiled_splat, self.s.carried_color)
+            ph.splat_compute(rec.cmd, rec.sync, &b, self.tiled_splat, self.s.carried_color)
         } else {
-            ph.splat(rec.cmd, &b, &self.r.flux, clear)
+            ph.splat(rec.cmd, rec.sync, &b, &self.r.flux, clear)
         }
-    }
-
-    /// Between two compute passes of the traversal: each reads and writes the traversal's buffers (and exact
-    /// transport's state), and the next dispatch may read the arguments the last one wrote.
-    fn traversal_step(&self, rec: &mut Rec) {
-        let t = self.t;
-        for buf in [&t.photon.state, &t.photon.photons, &t.photon.indirect] {
-            rec.sync.buffer(buf, &TRAVERSAL);
-        }
-        if self.s.transport == Transport::Exact {
-            rec.sync.buffer(&t.photon.transport, &[Access::ComputeWrite]);
-        }
-        rec.flush(self.d);
     }
 
     /// Exact transport of the batch's emitted photons, in waves (docs/design.md step 4): every wave is one
@@ -318,48 +255,29 @@ impl Ctx<'_> {
     /// records MAX_INTERACTIONS + 1 waves; those after the queue empties dispatch zero work groups.
     fn exact_transport(&self, rec: &mut Rec, commit: bool) -> VkResult<()> {
         use crate::passes::photons::transport_mode as tm;
-        let (t, b, ph) = (self.t, self.bindings(), &self.p.photons);
+        let (b, ph) = (self.bindings(), &self.p.photons);
         let adaptive = self.s.method == Method::Adaptive;
         let may_abort = adaptive && self.s.batching;
-        // Every transport and wave pass reads and writes the wave state, the traversal state, the queues and the
-        // splat records, and the next dispatch reads the arguments they wrote.
-        let step = |rec: &mut Rec| {
-            for buf in [&t.photon.transport, &t.photon.indirect, &t.photon.state] {
-                rec.sync.buffer(buf, &TRAVERSAL);
-            }
-            for buf in t.photon.records() {
-                rec.sync.buffer(buf, &[Access::ComputeWrite]);
-            }
-            for q in &t.photon.queues {
-                rec.sync.buffer(q, &RAY_QUEUE);
-            }
-            // The wide layout's waves read the photons traversal wrote as texels.
-            rec.sync.buffer(&t.photon.photons, &[Access::ComputeTexels]);
-            rec.flush(self.d);
-        };
-        ph.transport(rec.cmd, &b, if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE }, may_abort, 0)?;
+        let begin = if adaptive { tm::BEGIN_ADAPTIVE } else { tm::BEGIN_DENSE };
+        ph.transport(rec.cmd, rec.sync, &b, begin, may_abort, 0)?;
         for wave in 0..=MAX_INTERACTIONS {
             if wave >= 1 {
                 rec.ts.mark(rec.cmd, WAVE_LABELS[wave as usize - 1]);
             }
-            step(rec);
             let rays = WaveRays {
                 differential: self.s.footprint == Footprint::Differential,
                 media: self.s.media,
                 color: self.s.carried_color == CarriedColor::Tint,
                 spectral: self.s.carried_color == CarriedColor::Wavelength,
             };
-            ph.wave(rec.cmd, &b, wave, may_abort, self.s.bvh_layout, rays)?;
-            step(rec);
-            ph.transport(rec.cmd, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;
+            ph.wave(rec.cmd, rec.sync, &b, wave, may_abort, self.s.bvh_layout, rays)?;
+            ph.transport(rec.cmd, rec.sync, &b, tm::AFTER_WAVE, may_abort, wave + 1)?;
         }
         rec.ts.mark(rec.cmd, "stats");
-        step(rec);
         if commit {
-            ph.stats(rec.cmd, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg());
-            step(rec);
+            ph.stats(rec.cmd, rec.sync, &b, self.s.level, stats_mode::COMMIT, self.s.traverse_dispatch_wg())?;
         }
-        ph.transport(rec.cmd, &b, tm::COMMIT, may_abort, 0)
+        ph.transport(rec.cmd, rec.sync, &b, tm::COMMIT, may_abort, 0)
     }
 
     fn dense(&self, rec: &mut Rec) -> VkResult<()> {
@@ -375,17 +293,12 @@ impl Ctx<'_> {
         for band in 0..bands {
             let row0 = band * rows;
             rec.ts.mark(rec.cmd, "photon_init");
-            ph.init(rec.cmd, &b, init_mode::DENSE, self.s.traverse_wg);
-            self.traversal_step(rec);
+            ph.init(rec.cmd, rec.sync, &b, init_mode::DENSE, self.s.traverse_wg)?;
             rec.ts.mark(rec.cmd, "dense_emit");
-            ph.dense_emit(rec.cmd, &b, self.s.level, row0, rows.min(n - row0))?;
-            self.traversal_step(rec);
+            ph.dense_emit(rec.cmd, rec.sync, &b, self.s.level, row0, rows.min(n - row0))?;
             rec.ts.mark(rec.cmd, "stats");
-            ph.stats(rec.cmd, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg);
+            ph.stats(rec.cmd, rec.sync, &b, self.s.level, stats_mode::DENSE, self.s.traverse_wg)?;
             self.trace_and_splat(rec, band == 0, false)?;
-            if band + 1 < bands {
-                self.after_splat(rec);
-            }
         }
         Ok(())
     }
@@ -399,27 +312,20 @@ impl Ctx<'_> {
         let wg = shape.wg;
         let exact = self.s.transport == Transport::Exact;
         if fresh {
-            ph.init(rec.cmd, &b, init_mode::FRAME, wg);
-            self.traversal_step(rec);
+            ph.init(rec.cmd, rec.sync, &b, init_mode::FRAME, wg)?;
         }
         rec.report.batch_slots = slots;
         for slot in 0..slots {
             rec.ts.mark(rec.cmd, "photon_init");
-            ph.init(rec.cmd, &b, init_mode::BATCH, wg);
-            self.traversal_step(rec);
+            ph.init(rec.cmd, rec.sync, &b, init_mode::BATCH, wg)?;
             for level in 0..=self.s.level {
                 rec.ts.mark(rec.cmd, TRAVERSE_LABELS[level as usize]);
-                ph.traverse_indirect(rec.cmd, &b, level, shape)?;
-                self.traversal_step(rec);
+                ph.traverse_indirect(rec.cmd, rec.sync, &b, level, shape)?;
                 rec.ts.mark(rec.cmd, "stats");
                 let mode = if level == self.s.level && !exact { stats_mode::COMMIT } else { stats_mode::LEVEL };
-                ph.stats(rec.cmd, &b, level, mode, wg);
-                self.traversal_step(rec);
+                ph.stats(rec.cmd, rec.sync, &b, level, mode, wg)?;
             }
             self.trace_and_splat(rec, slot == 0, exact)?;
-            if slot + 1 < slots {
-                self.after_splat(rec);
-            }
         }
         Ok(())
     }
@@ -454,13 +360,12 @@ impl Ctx<'_> {
         let ph = &self.p.photons;
         let shape = self.traverse_shape();
         let wg = shape.wg;
-        ph.init(rec.cmd, &b, init_mode::FRAME, wg);
-        self.traversal_step(rec);
+        ph.init(rec.cmd, rec.sync, &b, init_mode::FRAME, wg)?;
         let mut first = true;
         let mut batches = 0;
         loop {
             rec.ts.mark(rec.cmd, "photon_init");
-            ph.init(rec.cmd, &b, init_mode::BATCH, wg);
+            ph.init(rec.cmd, rec.sync, &b, init_mode::BATCH, wg)?;
             self.copy_state(rec);
             rec.roundtrip()?;
             let mut st = self.read_state()?;
@@ -469,16 +374,21 @@ impl Ctx<'_> {
             }
             batches += 1;
             for level in st.start_level..=self.s.level {
-                self.traversal_step(rec);
                 rec.ts.mark(rec.cmd, TRAVERSE_LABELS[level as usize]);
                 if st.aborted == 0 {
-                    ph.traverse_direct(rec.cmd, &b, level, st.read_count, shape)?;
+                    ph.traverse_direct(rec.cmd, rec.sync, &b, level, st.read_count, shape)?;
                 }
-                self.traversal_step(rec);
                 rec.ts.mark(rec.cmd, "stats");
                 let last = level == self.s.level;
                 let commit = last && self.s.transport == Transport::TwoInterface;
-                ph.stats(rec.cmd, &b, level, if commit { stats_mode::COMMIT } else { stats_mode::LEVEL }, wg);
+                ph.stats(
+                    rec.cmd,
+                    rec.sync,
+                    &b,
+                    level,
+                    if commit { stats_mode::COMMIT } else { stats_mode::LEVEL },
+                    wg,
+                )?;
                 if !last {
                     self.copy_state(rec);
                     rec.roundtrip()?;
@@ -486,14 +396,12 @@ impl Ctx<'_> {
                 }
             }
             self.trace_and_splat(rec, first, self.s.transport == Transport::Exact)?;
-            self.after_splat(rec);
             first = false;
         }
         rec.report.batch_slots = batches;
         if first && !self.compute_splat {
             // No batch at all: the flux map still needs clearing (the compute splat's texels were cleared).
-            crate::passes::begin_rendering(self.d, rec.cmd, self.r.flux.extent, &[&self.r.flux], true, None);
-            unsafe { self.d.cmd_end_rendering(rec.cmd) };
+            ph.clear_flux(rec.cmd, rec.sync, &b, &self.r.flux)?;
         }
         Ok(())
     }

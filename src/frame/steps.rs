@@ -1,5 +1,6 @@
 //! The steps around the photons: the light-view g-buffers (1), coverage (2), the resolve (6), the eye view (7), the
-//! composite (8) and the readback. Each declares its accesses before it records; the tracker places the barriers.
+//! composite (8) and the readback. Each pass declares its uses as it binds them, and each transfer its accesses;
+//! the tracker places the barriers.
 
 use super::{Aov, Ctx, Rec};
 use crate::gpu_types::{TransportState, TraversalState};
@@ -13,74 +14,45 @@ use crate::targets::{Targets, DEBUG_ROWS, PHOTON_GUARD};
 use crate::vk::{Access, Image, VkResult};
 use ash::vk;
 
-/// Where a sampled g-buffer is read: the photon passes (compute), the raster splat (vertex) and the eye view.
-const SAMPLED: [Access; 3] = [Access::ComputeSampled, Access::VertexSampled, Access::FragmentSampled];
-/// Where the eye view reads a light's maps.
-const EYE_READ: [Access; 2] = [Access::FragmentSampled, Access::ComputeSampled];
-
 impl Ctx<'_> {
     /// Step 1: light-view g-buffers.
     /// `receivers`: also the receiver g-buffer and the shadow map (a light's first color pass draws them).
-    pub(super) fn light_gbuffers(&self, rec: &mut Rec, caustics: bool, receivers: bool) {
+    pub(super) fn light_gbuffers(&self, rec: &mut Rec, caustics: bool, receivers: bool) -> VkResult<()> {
         let (t, g) = (self.t, &self.p.geometry);
         rec.ts.mark(rec.cmd, "light_gbuffer.front");
-        for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
-            rec.sync.discard(img, &[Access::ColorAttachment]);
-        }
-        rec.sync.discard(&t.light.depth, &[Access::DepthAttachment]);
-        if receivers {
-            rec.sync.discard(&self.r.geo, &[Access::ColorAttachment]);
-            rec.sync.discard(&self.r.shadow, &[Access::DepthAttachment]);
-        }
-        rec.flush(self.d);
-        let cmd = rec.cmd;
         let photon_view = &self.data.light.photon_view;
         let receiver_view = &self.data.light.receiver_view;
         if caustics {
             // The IOR buffer is drawn only when the refractors' IORs differ (else the shaders read the uniform).
             let ior = self.sb.shared_ior.is_none().then_some(&t.light.front_aux);
-            g.record_front(cmd, self.sb, &t.light.front, ior, &t.light.depth, photon_view);
+            g.record_front(rec.cmd, rec.sync, self.sb, &t.light.front, ior, &t.light.depth, photon_view)?;
             // Exact transport reads only the front buffer (coverage); the back surface is the two-interface
             // trace's.
             if self.s.transport == Transport::TwoInterface {
-                rec.ts.mark(cmd, "light_gbuffer.back");
+                rec.ts.mark(rec.cmd, "light_gbuffer.back");
                 // The depth buffer is reused (cleared) by the back-face pass.
-                rec.sync.image(&t.light.depth, &[Access::DepthAttachment]);
-                rec.flush(self.d);
                 let back = GeometryTarget {
                     colors: &[&t.light.back],
                     depth: &t.light.depth,
                     view: photon_view,
                     ranges: &[self.sb.refractors],
                 };
-                g.record(cmd, &g.back, self.sb, &back);
+                g.record(rec.cmd, rec.sync, &g.back, self.sb, &back)?;
             }
         }
         if receivers {
             // The receivers' g-buffer and the shadow map, in one pass.
-            rec.ts.mark(cmd, "light_gbuffer.receivers");
-            g.record_receivers(cmd, self.sb, &self.r.geo, &self.r.shadow, receiver_view);
+            rec.ts.mark(rec.cmd, "light_gbuffer.receivers");
+            g.record_receivers(rec.cmd, rec.sync, self.sb, &self.r.geo, &self.r.shadow, receiver_view)?;
         }
-        if caustics {
-            for img in [&t.light.front, &t.light.front_aux, &t.light.back] {
-                rec.sync.image(img, &SAMPLED);
-            }
-        }
-        if receivers {
-            rec.sync.image(&self.r.geo, &SAMPLED);
-            rec.sync.image(&self.r.shadow, &EYE_READ);
-        }
-        rec.flush(self.d);
+        // Each pass that samples them declares it (and moves them out of the attachment layout).
+        Ok(())
     }
 
-    /// A frame that reuses the caustic map, the receiver g-buffer and the shadow map of the last one: the same
-    /// reads of the same images (the tracker orders them after the last frame's writes, which are visible to them).
+    /// A frame that reuses the caustic map, the receiver g-buffer and the shadow map of the last one (the passes
+    /// that read them declare their reads, which the tracker orders after the last frame's writes).
     pub(super) fn reuse_caustics(&self, rec: &mut Rec) {
         rec.ts.mark(rec.cmd, "reused");
-        rec.sync.image(&self.r.geo, &SAMPLED);
-        rec.sync.image(&self.r.shadow, &EYE_READ);
-        rec.sync.image(&self.r.irradiance, &EYE_READ);
-        rec.flush(self.d);
     }
 
     /// Step 2: the coverage pyramid.
@@ -129,8 +101,6 @@ impl Ctx<'_> {
                 &[img.range()],
             )
         };
-        rec.sync.image(img, &EYE_READ);
-        rec.flush(self.d);
     }
 
     /// Step 7a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
@@ -143,11 +113,7 @@ impl Ctx<'_> {
         let g = EyeGbuffer { geo: &e.recv, albedo: &e.albedo, depth: &e.depth };
         if first {
             // The g-buffer does not depend on the light: drawn once, before the first light's shading.
-            rec.sync.discard(&e.recv, &[Access::ColorAttachment]);
-            rec.sync.discard(&e.albedo, &[Access::ColorAttachment]);
-            rec.sync.discard(&e.depth, &[Access::DepthAttachment]);
-            rec.flush(self.d);
-            self.p.eye.record_gbuffer(rec.cmd, self.sb, &self.data.frame.camera, &g);
+            self.p.eye.record_gbuffer(rec.cmd, rec.sync, self.sb, &self.data.frame.camera, &g)?;
             rec.ts.mark(rec.cmd, "eye.shade");
         }
         let inputs = EyeInputs {
@@ -163,33 +129,21 @@ impl Ctx<'_> {
     }
 
     /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.
-    pub(super) fn eye_refractors(&self, rec: &mut Rec) {
+    pub(super) fn eye_refractors(&self, rec: &mut Rec) -> VkResult<()> {
         let e = &self.t.eye;
         let g = &self.p.geometry;
         let cam = &self.data.frame.camera;
         // The exact composite traces the glass through the BVH: it needs only where the front surface is.
         let exact = self.exact_eye();
-        rec.sync.discard(&e.front, &[Access::ColorAttachment]);
-        if !exact {
-            for img in [&e.front_aux, &e.back] {
-                rec.sync.discard(img, &[Access::ColorAttachment]);
-            }
-        }
-        rec.sync.discard(&e.refr_depth, &[Access::DepthAttachment]);
-        rec.flush(self.d);
         let ior = (!exact && self.sb.shared_ior.is_none()).then_some(&e.front_aux);
-        g.record_front(rec.cmd, self.sb, &e.front, ior, &e.refr_depth, cam);
+        g.record_front(rec.cmd, rec.sync, self.sb, &e.front, ior, &e.refr_depth, cam)?;
         if exact {
-            return;
+            return Ok(());
         }
-        rec.sync.image(&e.refr_depth, &[Access::DepthAttachment]);
-        rec.flush(self.d);
-        g.record(
-            rec.cmd,
-            &g.back,
-            self.sb,
-            &GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &[self.sb.refractors] },
-        );
+        // The depth buffer is reused (cleared) by the back-face pass.
+        let back =
+            GeometryTarget { colors: &[&e.back], depth: &e.refr_depth, view: cam, ranges: &[self.sb.refractors] };
+        g.record(rec.cmd, rec.sync, &g.back, self.sb, &back)
     }
 
     /// The composite traces eye rays through the BVH under exact transport, previews too (at their resolution and

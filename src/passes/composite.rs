@@ -210,7 +210,7 @@ impl CompositePass {
         let pipeline = self.glass[key.index()].get()?;
         // The layout holds the beauty images, which the glass pass does not write: declared as kept.
         let glass = if add { Use::ImageWrite(i.glass) } else { Use::ImageOverwrite(i.glass) };
-        pipeline.bind_uses(cmd, sync, &Self::uses(i, glass, Use::ImageWrite, key.wide))?;
+        pipeline.bind_uses(cmd, sync, &Self::uses(i, glass, Use::ImageWrite))?;
         // Dispersive glass at 2×2 samples a pixel: one invocation a pixel (its samples share their traces).
         let pixels = i.dispersive && i.glass.extent.width == 2 * i.beauty.extent.width;
         pipeline.push(cmd, &CompositePush { pixels: pixels as u32, add: add as u32 });
@@ -232,7 +232,7 @@ impl CompositePass {
             (false, false) => &self.pipeline,
         }
         .get()?;
-        pipeline.bind_uses(cmd, sync, &Self::uses(i, Use::ImageRead(i.glass), Use::ImageOverwrite, false))?;
+        pipeline.bind_uses(cmd, sync, &Self::uses(i, Use::ImageRead(i.glass), Use::ImageOverwrite))?;
         pipeline.push(cmd, &CompositePush { pixels: 0, add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
@@ -240,19 +240,18 @@ impl CompositePass {
     }
 
     /// The resources of both programs, which share one layout: `glass` as the glass image's use, `beauty` as the
-    /// beauty images'; `texels`: the BVH's triangles, instances and wide nodes read as texels (the wide layout's
-    /// glass pass). Every map is sampled, and the scene's textures are fixed.
+    /// beauty images'. Every map is sampled, the BVH read (the wide layout's glass pass reads its triangles,
+    /// instances and wide nodes through texel bindings), and the scene's textures are fixed.
     fn uses<'a>(
         i: &'a CompositeInputs,
         glass: Use<'a>,
         beauty: fn(&'a Image) -> Use<'a>,
-        texels: bool,
     ) -> [Use<'a>; CB_COUNT as usize] {
         // Lights the scene lacks bind the first light's maps (the shader reads only `lights` of them).
         let first = LightMaps { ubo: i.ubo, shadow: i.shadow, irradiance: i.irradiance, recv: i.recv };
         let l = |k: usize| i.more_lights.get(k).copied().unwrap_or(first);
         let (l1, l2) = (l(0), l(1));
-        let bvh = |b| if texels { Use::Texels(b) } else { Use::Read(b) };
+        let bvh = Use::Read;
         let (near, lin) = (i.nearest, i.linear);
         let fixed = |img, s| Use::Fixed(Bind::Sampled(img, s));
         ordered([

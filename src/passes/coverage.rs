@@ -3,7 +3,7 @@
 use super::groups_2d;
 use crate::gpu_types::CoveragePush;
 use crate::shaders::{self, consts::COVERAGE_MIP0_ID};
-use crate::vk::{Access, Barriers, BindKind, Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
+use crate::vk::{BindKind, Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -66,18 +66,9 @@ impl CoveragePass {
             Use::Sampled(i.recv, i.sampler),
         ];
         for m in 0..mips {
-            if m > 0 {
-                // Each mip reads the one before it: an ordering inside the pass, which the tracker does not see.
-                Barriers::new()
-                    .buffer(coverage, &[Access::ComputeWrite], &[Access::ComputeWrite])
-                    .flush(&self.device, cmd);
-            }
+            // Each mip reads the one before it: declared again, the write is ordered after the last.
             let pipeline = if m == 0 { &self.mip0 } else { &self.reduce };
-            if m == 0 {
-                pipeline.bind_uses(cmd, sync, &uses)?;
-            } else if m == 1 {
-                pipeline.bind(cmd, &uses.map(Use::bind));
-            }
+            pipeline.bind_uses(cmd, sync, &uses)?;
             let res = gbuffer_res >> m;
             let push = CoveragePush {
                 mip: m,

@@ -2,14 +2,15 @@
 //! albedo), then a compute pass shades each pixel under each light into the radiance and, when the frame reads
 //! one back, the caustics and direct AOVs.
 
-use super::{begin_rendering, groups_2d, DEPTH_FORMAT, GEO_FORMAT};
+use super::{groups_2d, DEPTH_FORMAT, GEO_FORMAT};
 use crate::gpu_types::{GeometryPush, GpuView, Vertex};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
 use crate::vk::pipeline::{kinds, LazyPipeline};
 use crate::vk::{
-    Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, Tracker, Use, VkResult,
+    Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Sampler, Target,
+    Tracker, Use, VkResult,
 };
 use ash::vk;
 use std::sync::Arc;
@@ -108,20 +109,30 @@ impl EyePass {
     }
 
     /// Rasterize the receivers seen from `camera` into the g-buffer (once per frame, whatever the lights).
-    pub fn record_gbuffer(&self, cmd: vk::CommandBuffer, scene: &SceneBuffers, camera: &GpuView, g: &EyeGbuffer) {
-        let d = &self.device;
-        begin_rendering(d, cmd, g.depth.extent, &[g.geo, g.albedo], true, Some(g.depth));
+    pub fn record_gbuffer(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        scene: &SceneBuffers,
+        camera: &GpuView,
+        g: &EyeGbuffer,
+    ) -> VkResult<()> {
         let images = &scene.images;
-        self.gbuffer.bind(cmd, &[Bind::Sampled(&images.albedo, &images.repeat)]);
+        let raster = Raster {
+            colors: &[Target::Clear(g.geo), Target::Clear(g.albedo)],
+            depth: Some(Target::Clear(g.depth)),
+            vertices: Some(&scene.vertices),
+            indices: Some(&scene.indices),
+            uses: &[Use::Fixed(Bind::Sampled(&images.albedo, &images.repeat))],
+        };
+        self.gbuffer.begin_raster(cmd, sync, &raster)?;
         self.gbuffer.push(cmd, &GeometryPush::from_view(camera));
-        unsafe {
-            d.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
-            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
-            if scene.receivers.index_count > 0 {
-                d.cmd_draw_indexed(cmd, scene.receivers.index_count, 1, scene.receivers.first_index, 0, 0);
-            }
-            d.cmd_end_rendering(cmd);
+        if scene.receivers.index_count > 0 {
+            let r = scene.receivers;
+            unsafe { self.device.cmd_draw_indexed(cmd, r.index_count, 1, r.first_index, 0, 0) };
         }
+        raster.end(&self.device, cmd);
+        Ok(())
     }
 
     /// Shade the g-buffer under one light into `out`: the radiance, or the radiance, caustics and direct. `add`:

@@ -1,11 +1,11 @@
 //! Rasterize triangles into view-space g-buffers: refractor front and back surfaces (from the light and from
 //! the eye), receivers from the light, and the shadow map.
 
-use super::{begin_rendering, AUX_FORMAT, DEPTH_FORMAT, GEO_FORMAT};
+use super::{AUX_FORMAT, DEPTH_FORMAT, GEO_FORMAT};
 use crate::gpu_types::{GeometryPush, GpuView, Vertex};
 use crate::scene_gpu::{DrawRange, SceneBuffers};
 use crate::shaders;
-use crate::vk::{Blend, ColorTarget, Device, GraphicsDesc, Image, Pipeline, VkResult};
+use crate::vk::{Blend, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Target, Tracker, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -104,39 +104,54 @@ impl GeometryPass {
         })
     }
 
-    pub fn record(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, scene: &SceneBuffers, t: &GeometryTarget) {
-        let d = &self.device;
-        begin_rendering(d, cmd, t.depth.extent, t.colors, true, Some(t.depth));
-        self.draw(cmd, pipeline, scene, t.view, t.ranges);
-        unsafe { d.cmd_end_rendering(cmd) };
+    /// Draw `t.ranges` with `pipeline` into `t`'s targets, cleared first.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        pipeline: &Pipeline,
+        scene: &SceneBuffers,
+        t: &GeometryTarget,
+    ) -> VkResult<()> {
+        let colors: Vec<Target> = t.colors.iter().map(|&img| Target::Clear(img)).collect();
+        let raster = Self::raster(scene, &colors, t.depth);
+        pipeline.begin_raster(cmd, sync, &raster)?;
+        self.draw(cmd, pipeline, t.view, t.ranges);
+        raster.end(&self.device, cmd);
+        Ok(())
+    }
+
+    /// A pass over the scene's vertices into `colors` and `depth` (cleared first); the geometry pipelines bind no
+    /// descriptors.
+    fn raster<'a>(scene: &'a SceneBuffers, colors: &'a [Target<'a>], depth: &'a Image) -> Raster<'a> {
+        Raster {
+            colors,
+            depth: Some(Target::Clear(depth)),
+            vertices: Some(&scene.vertices),
+            indices: Some(&scene.indices),
+            uses: &[],
+        }
     }
 
     /// The refractors' nearest front faces from `view` into `front` (normal and distance) and, when given, their
     /// index of refraction into `ior` (needed only where the refractors differ in it and a pass reads it).
+    #[allow(clippy::too_many_arguments)]
     pub fn record_front(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         scene: &SceneBuffers,
         front: &Image,
         ior: Option<&Image>,
         depth: &Image,
         view: &GpuView,
-    ) {
+    ) -> VkResult<()> {
         let ranges = [scene.refractors];
-        match ior {
-            Some(ior) => self.record(
-                cmd,
-                &self.front,
-                scene,
-                &GeometryTarget { colors: &[front, ior], depth, view, ranges: &ranges },
-            ),
-            None => self.record(
-                cmd,
-                &self.front_only,
-                scene,
-                &GeometryTarget { colors: &[front], depth, view, ranges: &ranges },
-            ),
-        }
+        let (pipeline, colors): (_, &[&Image]) = match ior {
+            Some(ior) => (&self.front, &[front, ior]),
+            None => (&self.front_only, &[front]),
+        };
+        self.record(cmd, sync, pipeline, scene, &GeometryTarget { colors, depth, view, ranges: &ranges })
     }
 
     /// The receiver pass: the receivers' g-buffer and, in the same depth target, the shadow map. The receivers are
@@ -145,36 +160,28 @@ impl GeometryPass {
     pub fn record_receivers(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         scene: &SceneBuffers,
         geo: &Image,
         shadow: &Image,
         view: &GpuView,
-    ) {
-        let d = &self.device;
-        begin_rendering(d, cmd, shadow.extent, &[geo], true, Some(shadow));
-        self.draw(cmd, &self.surfaces, scene, view, &[scene.receivers]);
-        self.draw(cmd, &self.occluders, scene, view, &[scene.refractors]);
-        unsafe { d.cmd_end_rendering(cmd) };
+    ) -> VkResult<()> {
+        let colors = [Target::Clear(geo)];
+        let raster = Self::raster(scene, &colors, shadow);
+        self.surfaces.begin_raster(cmd, sync, &raster)?;
+        self.draw(cmd, &self.surfaces, view, &[scene.receivers]);
+        self.occluders.bind_raster(cmd, &raster)?;
+        self.draw(cmd, &self.occluders, view, &[scene.refractors]);
+        raster.end(&self.device, cmd);
+        Ok(())
     }
 
-    fn draw(
-        &self,
-        cmd: vk::CommandBuffer,
-        pipeline: &Pipeline,
-        scene: &SceneBuffers,
-        view: &GpuView,
-        ranges: &[DrawRange],
-    ) {
-        let d = &self.device;
-        pipeline.bind(cmd, &[]);
+    /// Draw `ranges` of the bound index buffer with `pipeline` (bound) from `view`.
+    fn draw(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, view: &GpuView, ranges: &[DrawRange]) {
         pipeline.push(cmd, &GeometryPush::from_view(view));
-        unsafe {
-            d.cmd_bind_vertex_buffers(cmd, 0, &[scene.vertices.raw], &[0]);
-            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
-            for r in ranges {
-                if r.index_count > 0 {
-                    d.cmd_draw_indexed(cmd, r.index_count, 1, r.first_index, 0, 0);
-                }
+        for r in ranges {
+            if r.index_count > 0 {
+                unsafe { self.device.cmd_draw_indexed(cmd, r.index_count, 1, r.first_index, 0, 0) };
             }
         }
     }

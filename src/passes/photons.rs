@@ -2,7 +2,6 @@
 //! trace or the exact transport's waves, and the splat. They share one binding layout
 //! (glsl/common/photon_bindings.glsl).
 
-use super::begin_rendering;
 use crate::bvh::BvhLayout;
 use crate::gpu_types::{
     DenseEmitPush, InitPush, SplatCollapsePush, StatsPush, TracePush, TransportPush, TraversePush, WavePush,
@@ -11,7 +10,10 @@ use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
 use crate::vk::pipeline::LazyPipeline;
 use crate::vk::pipeline::{kinds, with_texels};
-use crate::vk::{Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Sampler, VkResult};
+use crate::vk::{
+    BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Sampler, Target, Tracker, Use,
+    VkResult,
+};
 use ash::vk;
 use std::sync::Arc;
 
@@ -170,33 +172,48 @@ pub struct PhotonBindings<'a> {
 }
 
 impl PhotonBindings<'_> {
-    fn binds(&self) -> [Bind<'_>; PB_COUNT as usize] {
+    /// The photon stage's one declaration: each binding of the shared layout, with the resource it binds and how
+    /// the stage's compute passes use it. Each pass declares the whole list as it binds it, so its dispatch is
+    /// ordered after the passes before it (each reads what the last one wrote: counts, queues, arguments); a
+    /// variant whose layout reads a buffer through texels declares that read.
+    fn uses(&self) -> [Use<'_>; PB_COUNT as usize] {
+        let bvh = self.bvh;
         crate::vk::pipeline::ordered([
-            (PB_FRAME, Bind::Uniform(self.ubo)),
-            (PB_STATE, Bind::Storage(self.state)),
-            (PB_PHOTONS, Bind::Storage(self.photons)),
-            (PB_INDIRECT, Bind::Storage(self.indirect)),
-            (PB_COVERAGE, Bind::Storage(self.coverage)),
-            (PB_FRONT, Bind::Sampled(self.front, self.sampler)),
-            (PB_FRONT_AUX, Bind::Sampled(self.front_aux, self.sampler)),
-            (PB_BACK, Bind::Sampled(self.back, self.sampler)),
-            (PB_RECEIVERS, Bind::Sampled(self.recv, self.sampler)),
-            (PB_DEBUG, Bind::Storage(self.debug)),
-            (PB_SPLATS, Bind::Storage(self.splats)),
-            (PB_TRANSPORT, Bind::Storage(self.transport)),
-            (PB_RAYS_IN, Bind::Storage(self.queues[0])),
-            (PB_RAYS_OUT, Bind::Storage(self.queues[1])),
-            (PB_BVH_PAIR, Bind::Storage(&self.bvh.pair_nodes)),
-            (PB_BVH_TRIS, Bind::Storage(&self.bvh.triangles)),
-            (PB_BVH_NORMALS, Bind::Storage(&self.bvh.normals)),
-            (PB_BVH_INSTANCES, Bind::Storage(&self.bvh.instances)),
-            (PB_BVH_SINGLE, Bind::Storage(&self.bvh.single_nodes)),
-            (PB_FLUX_TEXELS, Bind::Storage(self.flux_texels)),
-            (PB_BVH_THREADED, Bind::Storage(&self.bvh.threaded_nodes)),
-            (PB_BVH_WIDE, Bind::Storage(&self.bvh.wide_nodes)),
-            (PB_BVH_WIDE_PRIMS, Bind::Storage(&self.bvh.wide_prims)),
-            (PB_SPLAT_TINTS, Bind::Storage(self.splat_tints)),
+            (PB_FRAME, Use::Uniform(self.ubo)),
+            (PB_STATE, Use::Write(self.state)),
+            (PB_PHOTONS, Use::Write(self.photons)),
+            (PB_INDIRECT, Use::Indirect(self.indirect)),
+            (PB_COVERAGE, Use::Read(self.coverage)),
+            (PB_FRONT, Use::Sampled(self.front, self.sampler)),
+            (PB_FRONT_AUX, Use::Sampled(self.front_aux, self.sampler)),
+            (PB_BACK, Use::Sampled(self.back, self.sampler)),
+            (PB_RECEIVERS, Use::Sampled(self.recv, self.sampler)),
+            (PB_DEBUG, Use::Write(self.debug)),
+            (PB_SPLATS, Use::Write(self.splats)),
+            (PB_TRANSPORT, Use::Write(self.transport)),
+            (PB_RAYS_IN, Use::Write(self.queues[0])),
+            (PB_RAYS_OUT, Use::Write(self.queues[1])),
+            (PB_BVH_PAIR, Use::Read(&bvh.pair_nodes)),
+            (PB_BVH_TRIS, Use::Read(&bvh.triangles)),
+            (PB_BVH_NORMALS, Use::Read(&bvh.normals)),
+            (PB_BVH_INSTANCES, Use::Read(&bvh.instances)),
+            (PB_BVH_SINGLE, Use::Read(&bvh.single_nodes)),
+            (PB_FLUX_TEXELS, Use::Write(self.flux_texels)),
+            (PB_BVH_THREADED, Use::Read(&bvh.threaded_nodes)),
+            (PB_BVH_WIDE, Use::Read(&bvh.wide_nodes)),
+            (PB_BVH_WIDE_PRIMS, Use::Read(&bvh.wide_prims)),
+            (PB_SPLAT_TINTS, Use::Write(self.splat_tints)),
         ])
+    }
+
+    /// The raster splat's uses of the same layout: its vertex shader reads the records, its draw the arguments;
+    /// the rest it leaves alone.
+    fn raster_splat_uses(&self) -> [Use<'_>; PB_COUNT as usize] {
+        let mut uses = self.uses().map(Use::unused);
+        uses[PB_FRAME as usize] = Use::Uniform(self.ubo);
+        uses[PB_INDIRECT as usize] = Use::Indirect(self.indirect);
+        uses[PB_SPLATS as usize] = Use::Read(self.splats);
+        uses
     }
 }
 
@@ -416,22 +433,31 @@ impl PhotonPasses {
         list.iter().find(|(s, _)| *s == wg).map(|(_, p)| p).unwrap_or(&list[3].1).get()
     }
 
-    pub fn init(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, mode: u32, wg: u32) {
-        self.init.bind(cmd, &b.binds());
+    pub fn init(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        b: &PhotonBindings,
+        mode: u32,
+        wg: u32,
+    ) -> VkResult<()> {
+        self.init.bind_uses(cmd, sync, &b.uses())?;
         self.init.push(cmd, &InitPush { mode, wg_side: wg });
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
+        Ok(())
     }
 
     /// One traversal level, launched with vkCmdDispatchIndirect from the GPU-written arguments.
     pub fn traverse_indirect(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         level: u32,
         shape: TraverseShape,
     ) -> VkResult<()> {
         let p = self.traverse_pipeline(shape)?;
-        p.bind_checked(cmd, &b.binds())?;
+        p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &TraversePush { level, wg_side: shape.wg });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
         Ok(())
@@ -441,13 +467,14 @@ impl PhotonPasses {
     pub fn traverse_direct(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         level: u32,
         count: u32,
         shape: TraverseShape,
     ) -> VkResult<()> {
         let (wg, p) = (shape.wg, self.traverse_pipeline(shape)?);
-        p.bind_checked(cmd, &b.binds())?;
+        p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &TraversePush { level, wg_side: wg });
         let groups = count.div_ceil(wg * wg);
         if groups > 0 {
@@ -457,23 +484,33 @@ impl PhotonPasses {
         Ok(())
     }
 
-    pub fn stats(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, level: u32, mode: u32, wg: u32) {
-        self.stats.bind(cmd, &b.binds());
+    pub fn stats(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        b: &PhotonBindings,
+        level: u32,
+        mode: u32,
+        wg: u32,
+    ) -> VkResult<()> {
+        self.stats.bind_uses(cmd, sync, &b.uses())?;
         self.stats.push(cmd, &StatsPush { level, mode, wg_side: wg });
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
+        Ok(())
     }
 
     /// Emit every covered cell of rows [row0, row0 + rows) of the level's grid.
     pub fn dense_emit(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         level: u32,
         row0: u32,
         rows: u32,
     ) -> VkResult<()> {
         let p = self.dense_emit.get()?;
-        p.bind(cmd, &b.binds());
+        p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &DenseEmitPush { level, row0, rows });
         let n = LEVEL0_RES << level;
         unsafe { self.device.cmd_dispatch(cmd, n.div_ceil(TILE_WG), rows.div_ceil(TILE_WG), 1) };
@@ -482,9 +519,15 @@ impl PhotonPasses {
 
     /// Trace the emitted photons into splat records, dispatched indirectly. `debug`: dump the traced photons of
     /// level `debug` or deeper into the debug buffer.
-    pub fn trace(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, debug: Option<u32>) -> VkResult<()> {
+    pub fn trace(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        b: &PhotonBindings,
+        debug: Option<u32>,
+    ) -> VkResult<()> {
         let p = self.trace.get()?;
-        p.bind(cmd, &b.binds());
+        p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &TracePush { debug: debug.is_some() as u32, debug_min_level: debug.unwrap_or(0) });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, TRACE_OFFSET) };
         Ok(())
@@ -492,16 +535,18 @@ impl PhotonPasses {
 
     /// Exact transport's bookkeeping (`transport_mode`); `may_abort`: the batch is split on overflow; `next_wave`:
     /// after a wave, the index of the wave it prepares (0 otherwise).
+    #[allow(clippy::too_many_arguments)]
     pub fn transport(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         mode: u32,
         may_abort: bool,
         next_wave: u32,
     ) -> VkResult<()> {
         let p = self.transport.get()?;
-        p.bind(cmd, &b.binds());
+        p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &TransportPush { mode, may_abort: may_abort as u32, next_wave });
         unsafe { self.device.cmd_dispatch(cmd, 1, 1, 1) };
         Ok(())
@@ -509,9 +554,11 @@ impl PhotonPasses {
 
     /// One wave of exact transport, dispatched indirectly from the arguments the transport pass wrote.
     /// `rays`: what the rays carry besides themselves.
+    #[allow(clippy::too_many_arguments)]
     pub fn wave(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         wave: u32,
         may_abort: bool,
@@ -527,11 +574,11 @@ impl PhotonPasses {
         };
         let p = self.waves[l][wave_variant(wave == 0, rays)].get()?;
         // Wave k reads the queue wave k - 1 appended to and appends to the other.
-        let mut binds = b.binds();
+        let mut uses = b.uses();
         if wave % 2 == 1 {
-            binds.swap(PB_RAYS_IN as usize, PB_RAYS_OUT as usize);
+            uses.swap(PB_RAYS_IN as usize, PB_RAYS_OUT as usize);
         }
-        p.bind_checked(cmd, &binds)?;
+        p.bind_uses(cmd, sync, &uses)?;
         p.push(cmd, &WavePush { may_abort: may_abort as u32 });
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, WAVE_OFFSET) };
         Ok(())
@@ -543,6 +590,7 @@ impl PhotonPasses {
     pub fn splat_compute(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         tiled: bool,
         color: crate::settings::CarriedColor,
@@ -550,7 +598,7 @@ impl PhotonPasses {
         let p = if tiled { &self.splat_compute_tiled } else { &self.splat_compute };
         let Some(p) = p.as_ref() else { return Ok(()) };
         let p = p[color.splat_code() as usize].get()?;
-        p.bind(cmd, &b.binds());
+        p.bind_uses(cmd, sync, &b.uses())?;
         unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, SPLAT_OFFSET) };
         Ok(())
     }
@@ -560,28 +608,61 @@ impl PhotonPasses {
     pub fn splat_collapse(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         b: &PhotonBindings,
         level: u32,
         res: u32,
         planes: u32,
     ) -> VkResult<()> {
         let p = self.splat_collapse.get()?;
-        p.bind(cmd, &b.binds());
+        p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &SplatCollapsePush { level });
         let groups = (res >> (level - 1)).div_ceil(TILE_WG);
         unsafe { self.device.cmd_dispatch(cmd, groups, groups, planes) };
         Ok(())
     }
 
-    /// Splat the traced photons into the caustic flux map with vkCmdDrawIndirect.
-    pub fn splat(&self, cmd: vk::CommandBuffer, b: &PhotonBindings, flux: &Image, clear: bool) -> VkResult<()> {
+    /// Splat the traced photons into the caustic flux map with vkCmdDrawIndirect. `clear`: clear the map first
+    /// (the frame's first batch), else add to it.
+    pub fn splat(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        b: &PhotonBindings,
+        flux: &Image,
+        clear: bool,
+    ) -> VkResult<()> {
+        let target = if clear { Target::Clear(flux) } else { Target::Load(flux) };
+        self.raster_splat(cmd, sync, b, target, true)
+    }
+
+    /// Clear the caustic flux map (a frame whose traversal emitted no batch).
+    pub fn clear_flux(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        b: &PhotonBindings,
+        flux: &Image,
+    ) -> VkResult<()> {
+        self.raster_splat(cmd, sync, b, Target::Clear(flux), false)
+    }
+
+    fn raster_splat(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        b: &PhotonBindings,
+        flux: Target,
+        draw: bool,
+    ) -> VkResult<()> {
         let p = self.splat.get()?;
-        begin_rendering(&self.device, cmd, flux.extent, &[flux], clear, None);
-        p.bind(cmd, &b.binds());
-        unsafe {
-            self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16);
-            self.device.cmd_end_rendering(cmd);
+        let uses = b.raster_splat_uses();
+        let raster = Raster { colors: &[flux], depth: None, vertices: None, indices: None, uses: &uses };
+        p.begin_raster(cmd, sync, &raster)?;
+        if draw {
+            unsafe { self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16) };
         }
+        raster.end(&self.device, cmd);
         Ok(())
     }
 }

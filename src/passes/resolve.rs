@@ -67,7 +67,7 @@ impl ResolvePass {
         let (pipeline, flux_use) = match flux {
             FluxSource::Image(img) => (&self.pipeline, Use::Sampled(img, s)),
             FluxSource::Texels(buf) | FluxSource::ColorTexels(buf) => {
-                (self.texels[matches!(flux, FluxSource::ColorTexels(_)) as usize].get()?, Use::Texels(buf))
+                (self.texels[matches!(flux, FluxSource::ColorTexels(_)) as usize].get()?, Use::Read(buf))
             }
         };
         pipeline.bind_uses(cmd, sync, &[Use::Uniform(ubo), flux_use, Use::Sampled(recv, s), out_use])?;

@@ -13,7 +13,7 @@ use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::LINEAR_WG;
 use crate::vk::pipeline::LazyPipeline;
-use crate::vk::{Bind, BindKind, Buffer, Device, VkResult};
+use crate::vk::{BindKind, Buffer, Device, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -114,13 +114,16 @@ impl SceneUpdatePass {
         unsafe { self.device.cmd_dispatch(cmd, x, groups.div_ceil(x), 1) };
     }
 
-    /// Bind `pipeline` to `binds` and dispatch one job each: its push constants, over `items(job)` invocations.
-    /// Without jobs nothing is recorded (and a pipeline never needed is never created).
+    /// Bind `pipeline` to `uses` (declared to `sync`, which orders the pipeline's dispatches after the writes and
+    /// reads before them) and dispatch one job each: its push constants, over `items(job)` invocations. The jobs
+    /// of one call write disjoint ranges, so nothing orders them among themselves. Without jobs nothing is
+    /// recorded (and a pipeline never needed is never created).
     fn run<P: bytemuck::Pod>(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         pipeline: &LazyPipeline,
-        binds: &[Bind],
+        uses: &[Use],
         jobs: &[P],
         items: impl Fn(&P) -> u32,
     ) -> VkResult<()> {
@@ -128,7 +131,7 @@ impl SceneUpdatePass {
             return Ok(());
         }
         let pipeline = pipeline.get()?;
-        pipeline.bind(cmd, binds);
+        pipeline.bind_uses(cmd, sync, uses)?;
         for j in jobs {
             pipeline.push(cmd, j);
             self.dispatch(cmd, items(j));
@@ -141,42 +144,57 @@ impl SceneUpdatePass {
     pub fn place(
         &self,
         cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
         object: (&Buffer, &Buffer),
         world: (&Buffer, &Buffer),
         moves: &[SceneUpdatePush],
     ) -> VkResult<()> {
-        let binds = [Bind::Storage(object.0), Bind::Storage(world.0), Bind::Storage(object.1), Bind::Storage(world.1)];
-        self.run(cmd, &self.place, &binds, moves, |m| m.vertex_count.max(m.index_count / 3))
+        let uses = [Use::Read(object.0), Use::Write(world.0), Use::Read(object.1), Use::Write(world.1)];
+        self.run(cmd, sync, &self.place, &uses, moves, |m| m.vertex_count.max(m.index_count / 3))
     }
 
     /// Displace water's raster vertices (each job one object, to world space).
-    pub fn water_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
-        let binds = [
-            Bind::Storage(&sb.waves),
-            Bind::Storage(&sb.object_vertices),
-            Bind::Storage(&sb.vertices),
-            Bind::Storage(&sb.heights),
-            Bind::Storage(&sb.displaced),
+    pub fn water_vertices(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        jobs: &[WaterPush],
+    ) -> VkResult<()> {
+        let uses = [
+            Use::Read(&sb.waves),
+            Use::Read(&sb.object_vertices),
+            Use::Write(&sb.vertices),
+            Use::Read(&sb.heights),
+            Use::Write(&sb.displaced),
         ];
-        self.run(cmd, &self.water, &binds, jobs, |j| j.count)
+        self.run(cmd, sync, &self.water, &uses, jobs, |j| j.count)
     }
 
     /// Gather water's BVH triangles from its displaced vertices (each job one water mesh, in object space).
-    pub fn water_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[WaterPush]) -> VkResult<()> {
+    pub fn water_triangles(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        jobs: &[WaterPush],
+    ) -> VkResult<()> {
         let b = &sb.bvh;
-        let binds = [
-            Bind::Storage(&sb.displaced),
-            Bind::Storage(&b.rest_corners),
-            Bind::Storage(&b.triangles),
-            Bind::Storage(&b.normals),
-        ];
-        self.run(cmd, &self.water_bvh, &binds, jobs, |j| j.count)
+        let uses =
+            [Use::Read(&sb.displaced), Use::Read(&b.rest_corners), Use::Write(&b.triangles), Use::Write(&b.normals)];
+        self.run(cmd, sync, &self.water_bvh, &uses, jobs, |j| j.count)
     }
 
-    /// One job of a simulated water surface (a drop, or a step) over its nodes. The caller orders each job after
-    /// the one before.
-    pub fn water_step(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, job: &WaterStepPush) -> VkResult<()> {
-        self.run(cmd, &self.water_step, &[Bind::Storage(&sb.heights)], std::slice::from_ref(job), |j| j.nodes * j.nodes)
+    /// One job of a simulated water surface (a drop, or a step) over its nodes, ordered after the one before.
+    pub fn water_step(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        job: &WaterStepPush,
+    ) -> VkResult<()> {
+        let uses = [Use::Write(&sb.heights)];
+        self.run(cmd, sync, &self.water_step, &uses, std::slice::from_ref(job), |j| j.nodes * j.nodes)
     }
 
     /// Put simulated surfaces back at rest: each range of `sb.heights` (first float, count) zeroed.
@@ -188,58 +206,82 @@ impl SceneUpdatePass {
 
     /// Morph the raster vertices of morphing objects (each job one object, to world space), with the weights in
     /// `sb.morph_weights`.
-    pub fn morph_vertices(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[MorphPush]) -> VkResult<()> {
-        let binds = [
-            Bind::Storage(&sb.morphs),
-            Bind::Storage(&sb.morph_weights),
-            Bind::Storage(&sb.object_vertices),
-            Bind::Storage(&sb.vertices),
+    pub fn morph_vertices(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        jobs: &[MorphPush],
+    ) -> VkResult<()> {
+        let uses = [
+            Use::Read(&sb.morphs),
+            Use::Read(&sb.morph_weights),
+            Use::Read(&sb.object_vertices),
+            Use::Write(&sb.vertices),
         ];
-        self.run(cmd, &self.morph, &binds, jobs, |j| j.count)
+        self.run(cmd, sync, &self.morph, &uses, jobs, |j| j.count)
     }
 
     /// Morph the BVH triangles of morphing meshes (each job one mesh, in object space).
-    pub fn morph_triangles(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, jobs: &[MorphPush]) -> VkResult<()> {
+    pub fn morph_triangles(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        jobs: &[MorphPush],
+    ) -> VkResult<()> {
         let b = &sb.bvh;
-        let binds = [
-            Bind::Storage(&sb.morphs),
-            Bind::Storage(&sb.morph_weights),
-            Bind::Storage(&b.rest_tris),
-            Bind::Storage(&b.rest_normals),
-            Bind::Storage(&b.rest_corners),
-            Bind::Storage(&b.triangles),
-            Bind::Storage(&b.normals),
+        let uses = [
+            Use::Read(&sb.morphs),
+            Use::Read(&sb.morph_weights),
+            Use::Read(&b.rest_tris),
+            Use::Read(&b.rest_normals),
+            Use::Read(&b.rest_corners),
+            Use::Write(&b.triangles),
+            Use::Write(&b.normals),
         ];
-        self.run(cmd, &self.morph_bvh, &binds, jobs, |j| j.count)
+        self.run(cmd, sync, &self.morph_bvh, &uses, jobs, |j| j.count)
     }
 
-    /// Bound one height of a deforming mesh's bottom-level BVH (the heights below it bounded before).
-    pub fn refit(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, job: &RefitPush) -> VkResult<()> {
+    /// Bound one height of a deforming mesh's bottom-level BVH, after the heights below it (whose boxes it reads).
+    pub fn refit(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        job: &RefitPush,
+    ) -> VkResult<()> {
         let b = &sb.bvh;
-        let binds = [
-            Bind::Storage(&b.refit_nodes),
-            Bind::Storage(&b.refit_order),
-            Bind::Storage(&b.refit_boxes),
-            Bind::Storage(&b.triangles),
-            Bind::Storage(&b.pair_nodes),
-            Bind::Storage(&b.single_nodes),
-            Bind::Storage(&b.threaded_nodes),
+        let uses = [
+            Use::Read(&b.refit_nodes),
+            Use::Read(&b.refit_order),
+            Use::Write(&b.refit_boxes),
+            Use::Read(&b.triangles),
+            Use::Write(&b.pair_nodes),
+            Use::Write(&b.single_nodes),
+            Use::Write(&b.threaded_nodes),
         ];
-        self.run(cmd, &self.refit, &binds, std::slice::from_ref(job), |j| j.count)
+        self.run(cmd, sync, &self.refit, &uses, std::slice::from_ref(job), |j| j.count)
     }
 
-    /// Requantize one height of a deforming mesh's wide nodes over its refit triangles (the heights below it
-    /// done before), rewriting its wide triangle list.
-    pub fn refit_wide(&self, cmd: vk::CommandBuffer, sb: &SceneBuffers, job: &RefitPush) -> VkResult<()> {
+    /// Requantize one height of a deforming mesh's wide nodes over its refit triangles, after the heights below it,
+    /// rewriting its wide triangle list.
+    pub fn refit_wide(
+        &self,
+        cmd: vk::CommandBuffer,
+        sync: &mut Tracker,
+        sb: &SceneBuffers,
+        job: &RefitPush,
+    ) -> VkResult<()> {
         let b = &sb.bvh;
-        let binds = [
-            Bind::Storage(&b.wide_refit_order),
-            Bind::Storage(&b.wide_refit_boxes),
-            Bind::Storage(&b.triangles),
-            Bind::Storage(&b.wide_nodes),
-            Bind::Storage(&b.wide_prims),
+        let uses = [
+            Use::Read(&b.wide_refit_order),
+            Use::Write(&b.wide_refit_boxes),
+            Use::Read(&b.triangles),
+            Use::Write(&b.wide_nodes),
+            Use::Write(&b.wide_prims),
         ];
-        self.run(cmd, &self.refit_wide, &binds, std::slice::from_ref(job), |j| j.count)
+        self.run(cmd, sync, &self.refit_wide, &uses, std::slice::from_ref(job), |j| j.count)
     }
 
     /// Write `data` at the start of `buffer` from the command buffer (in chunks vkCmdUpdateBuffer takes).

@@ -14,6 +14,7 @@ pub mod query;
 pub(crate) mod spirv;
 pub mod sync;
 pub mod tracker;
+pub mod uses;
 
 pub use buffer::Buffer;
 pub use cmd::{Recorder, SubmitSync};
@@ -21,10 +22,11 @@ pub use context::{Context, ContextDesc, Device, DeviceInfo, Instance};
 pub use debug::validation_message_count;
 pub use error::{Check, VkError, VkResult};
 pub use image::{Image, Sampler};
-pub use pipeline::{Bind, BindKind, Blend, ColorTarget, GraphicsDesc, Pipeline, Use};
+pub use pipeline::{Bind, BindKind, Blend, ColorTarget, GraphicsDesc, Pipeline};
 pub use query::Timestamps;
 pub use sync::{Access, Barriers};
 pub use tracker::Tracker;
+pub use uses::{Raster, Target, Use};
 
 /// A fresh id for a buffer or an image.
 fn next_resource_id() -> u64 {

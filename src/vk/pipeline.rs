@@ -76,73 +76,6 @@ pub enum Bind<'a> {
     StorageImage(&'a Image),
 }
 
-/// A resource a compute pass binds, with how the pass uses it: the one declaration from which both the pass's
-/// descriptor and the barriers before it come ([`Pipeline::bind_uses`]).
-#[derive(Clone, Copy)]
-pub enum Use<'a> {
-    /// A uniform buffer, written by the host before the submission (ordered by it: no barrier).
-    Uniform(&'a Buffer),
-    /// A storage buffer the pass reads.
-    Read(&'a Buffer),
-    /// A storage buffer the pass writes, or reads and writes (atomics included).
-    Write(&'a Buffer),
-    /// A buffer the pass reads through its texel view.
-    Texels(&'a Buffer),
-    /// An image the pass samples.
-    Sampled(&'a Image, &'a Sampler),
-    /// A storage image the pass reads.
-    ImageRead(&'a Image),
-    /// A storage image the pass writes, or reads and writes, keeping what it held.
-    ImageWrite(&'a Image),
-    /// A storage image the pass writes whole: what it held before does not matter (no layout to keep).
-    ImageOverwrite(&'a Image),
-    /// A resource no frame writes (a scene texture, uploaded once; its upload's barrier made it readable): bound
-    /// with no barrier.
-    Fixed(Bind<'a>),
-}
-
-impl<'a> Use<'a> {
-    /// The descriptor.
-    pub fn bind(self) -> Bind<'a> {
-        match self {
-            Use::Uniform(b) => Bind::Uniform(b),
-            Use::Read(b) | Use::Write(b) | Use::Texels(b) => Bind::Storage(b),
-            Use::Sampled(i, s) => Bind::Sampled(i, s),
-            Use::ImageRead(i) | Use::ImageWrite(i) | Use::ImageOverwrite(i) => Bind::StorageImage(i),
-            Use::Fixed(b) => b,
-        }
-    }
-
-    /// Declare the use to `sync`, which then places the barriers it needs after the resource's earlier uses.
-    pub fn declare(self, sync: &mut super::Tracker) {
-        use super::Access::*;
-        match self {
-            Use::Uniform(_) | Use::Fixed(_) => {}
-            Use::Read(b) => {
-                sync.buffer(b, &[ComputeRead]);
-            }
-            Use::Write(b) => {
-                sync.buffer(b, &[ComputeWrite]);
-            }
-            Use::Texels(b) => {
-                sync.buffer(b, &[ComputeTexels]);
-            }
-            Use::Sampled(i, _) => {
-                sync.image(i, &[ComputeSampled]);
-            }
-            Use::ImageRead(i) => {
-                sync.image(i, &[ComputeRead]);
-            }
-            Use::ImageWrite(i) => {
-                sync.image(i, &[ComputeWrite]);
-            }
-            Use::ImageOverwrite(i) => {
-                sync.discard(i, &[ComputeWrite]);
-            }
-        }
-    }
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Blend {
     None,
@@ -173,12 +106,16 @@ pub struct GraphicsDesc<'a> {
 }
 
 pub struct Pipeline {
-    device: Arc<Device>,
+    pub(super) device: Arc<Device>,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pub bind_point: vk::PipelineBindPoint,
-    kinds: Vec<BindKind>,
+    pub(super) kinds: Vec<BindKind>,
+    /// Per binding, whether one of the pipeline's shaders may write it (declares it without `readonly`).
+    pub(super) writable: Vec<bool>,
+    /// Its name in messages.
+    pub(super) name: String,
     push_stages: vk::ShaderStageFlags,
 }
 
@@ -211,14 +148,14 @@ struct Layouts<'a> {
 /// Checks a pipeline's layout against the device's limits and against what its shaders declare: every
 /// descriptor a shader reads is in the layout (set 0), of the kind the layout gives it. A mismatch is this crate's
 /// defect, and the error names the pipeline, the binding and both kinds; the device's limit is named by its
-/// Vulkan name.
+/// Vulkan name. Returns, per binding, whether a shader may write it.
 fn check_interface(
     device: &Device,
     name: &str,
     shaders: &[&[u32]],
     kinds: &[BindKind],
     push_size: u32,
-) -> VkResult<()> {
+) -> VkResult<Vec<bool>> {
     use super::spirv::{Descriptor, Module};
     let limits = &device.info.limits;
     if kinds.len() as u32 > device.info.max_push_descriptors {
@@ -235,8 +172,14 @@ fn check_interface(
             device.info.name, limits.max_push_constants_size
         )));
     }
+    let mut writable = vec![false; kinds.len()];
     for words in shaders {
         let module = Module::parse(words).map_err(|e| VkError::Interface(format!("pipeline {name}: {e}")))?;
+        for &(_, binding) in module.writable.iter().filter(|(set, _)| *set == 0) {
+            if let Some(w) = writable.get_mut(binding as usize) {
+                *w = true;
+            }
+        }
         for (&(set, binding), (declared, var)) in &module.bindings {
             let expected = match declared {
                 Descriptor::Uniform => Some(BindKind::Uniform),
@@ -256,7 +199,7 @@ fn check_interface(
             }
         }
     }
-    Ok(())
+    Ok(writable)
 }
 
 impl<'a> Layouts<'a> {
@@ -331,7 +274,7 @@ impl Pipeline {
         spec: &[(u32, u32)],
     ) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::COMPUTE;
-        check_interface(device, name, &[spv], kinds, push_size)?;
+        let writable = check_interface(device, name, &[spv], kinds, push_size)?;
         let layouts = Layouts::new(device, kinds, stages, push_size)?;
         let module = Module::new(device, spv)?;
         let entries: Vec<vk::SpecializationMapEntry> = (0..spec.len() as u32)
@@ -356,13 +299,15 @@ impl Pipeline {
             set_layout,
             bind_point: vk::PipelineBindPoint::COMPUTE,
             kinds: kinds.to_vec(),
+            writable,
+            name: name.to_string(),
             push_stages: stages,
         })
     }
 
     pub fn graphics(device: &Arc<Device>, name: &str, desc: &GraphicsDesc) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
-        check_interface(device, name, &[desc.vertex, desc.fragment], desc.binds, desc.push_size)?;
+        let writable = check_interface(device, name, &[desc.vertex, desc.fragment], desc.binds, desc.push_size)?;
         let layouts = Layouts::new(device, desc.binds, stages, desc.push_size)?;
         let vs = Module::new(device, desc.vertex)?;
         let fs = Module::new(device, desc.fragment)?;
@@ -466,6 +411,8 @@ impl Pipeline {
             set_layout,
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             kinds: desc.binds.to_vec(),
+            writable,
+            name: name.to_string(),
             push_stages: stages,
         })
     }
@@ -480,24 +427,6 @@ impl Pipeline {
         }
         self.bind(cmd, binds);
         Ok(())
-    }
-
-    /// A compute pass's one declaration of its resources: declare each use to `sync` (binding i = uses[i]), record
-    /// the barriers they need, then bind the pipeline and push the descriptors the same uses name.
-    pub fn bind_uses(&self, cmd: vk::CommandBuffer, sync: &mut super::Tracker, uses: &[Use]) -> VkResult<()> {
-        debug_assert_eq!(self.bind_point, vk::PipelineBindPoint::COMPUTE, "declared uses are a compute pass's");
-        assert_eq!(uses.len(), self.kinds.len(), "a use per binding");
-        for (u, kind) in uses.iter().zip(&self.kinds) {
-            // A buffer the layout reads as texels is declared as read as texels, and only such a buffer: the
-            // barrier follows the access the shader makes.
-            if let Use::Read(_) | Use::Write(_) | Use::Texels(_) = u {
-                assert_eq!(matches!(u, Use::Texels(_)), *kind == BindKind::Texels, "a texel buffer's use");
-            }
-            u.declare(sync);
-        }
-        sync.flush(&self.device, cmd);
-        let binds: Vec<Bind> = uses.iter().map(|u| u.bind()).collect();
-        self.bind_checked(cmd, &binds)
     }
 
     /// Bind the pipeline and push its descriptors (binding i = binds[i]). A buffer bound where the pipeline's layout

@@ -34,6 +34,8 @@ pub enum Access {
     VertexRead,
     /// Storage buffer written (atomics) in a vertex shader.
     VertexWrite,
+    /// Storage buffer read in a fragment shader.
+    FragmentRead,
     /// Sampled image read in a vertex shader.
     VertexSampled,
     /// Sampled image read in a fragment shader.
@@ -71,6 +73,7 @@ impl Access {
             VertexWrite => {
                 (Stage::VERTEX_SHADER, Acc::SHADER_STORAGE_WRITE | Acc::SHADER_STORAGE_READ, Layout::GENERAL)
             }
+            FragmentRead => (Stage::FRAGMENT_SHADER, Acc::SHADER_STORAGE_READ, Layout::GENERAL),
             VertexSampled => (Stage::VERTEX_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
             FragmentSampled => (Stage::FRAGMENT_SHADER, Acc::SHADER_SAMPLED_READ, Layout::SHADER_READ_ONLY_OPTIMAL),
             ColorAttachment => (
