@@ -44,9 +44,10 @@ layout(constant_id = WAVE_SPECTRAL_ID) const bool WAVE_SPECTRAL = false;
 layout(constant_id = WAVE_SUBGROUPS_ID) const uint WAVE_SUBGROUPS = LINEAR_WG;
 
 // Each subgroup's sums of the account's terms, then of the flux whose term depends on the reservation verdict:
-// children to append, records, and the records' one-interaction part (rows ACC_TERMS + PEND_*).
-const uint PEND_CHILD = 0u, PEND_REC = 1u, PEND_ONE = 2u;
-shared float s_acc[ACC_TERMS + 3u][LINEAR_WG];
+// children to append, records, the records' one-interaction part and their eye deposit's part (rows
+// ACC_TERMS + PEND_*).
+const uint PEND_CHILD = 0u, PEND_REC = 1u, PEND_ONE = 2u, PEND_EYE = 3u;
+shared float s_acc[ACC_TERMS + 4u][LINEAR_WG];
 // The work group's children that travel inside glass, those outside it, and its records, counted in three 10-bit
 // fields of one word (each at most 2 LINEAR_WG; src/passes/photons.rs asserts it), so that an invocation takes all
 // its slots with one shared atomic: a CPU driver runs each atomic as a loop over the SIMD group's lanes.
@@ -83,6 +84,7 @@ struct Outcome {
     uint rec_tint;     // its color, packed (WAVE_COLOR)
     float rec_flux;    // its flux, relative to the light's intensity (the account's unit)
     bool one_event;    // its path met exactly one interaction
+    bool eye;          // the record is the eye deposit's (in eye samples, its shape negated)
 };
 
 // The ray an invocation traces, and its photon.
@@ -200,12 +202,12 @@ bool rare_term(uint k) { return k == ACC_CAP || k == ACC_LOST; }
 // the records' rows (wave 0's rays reach a receiver only directly, a bounce wave's only after an interaction). The
 // other rows are neither summed nor read: on a CPU driver each sum is a loop over the lanes.
 bool wave_row(uint k) {
-    if (k == ACC_CAUSTIC || k == ACC_OVERFLOW || k == ACC_ONE_EVENT) return false;  // the pending rows hold them
+    if (k == ACC_CAUSTIC || k == ACC_OVERFLOW || k == ACC_ONE_EVENT || k == ACC_EYE) return false;  // the pending rows hold them
     if (rare_term(k)) return false;
     if (k == ACC_ABSORBED) return WAVE_MEDIA;
     if (k == ACC_EMITTED || k == ACC_DIRECT) return WAVE_PRIMARY;
     if (k == ACC_UNSEEN) return !WAVE_PRIMARY;
-    if (k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE) return !WAVE_PRIMARY;
+    if (k == ACC_TERMS + PEND_REC || k == ACC_TERMS + PEND_ONE || k == ACC_TERMS + PEND_EYE) return !WAVE_PRIMARY;
     return true;
 }
 
@@ -275,13 +277,42 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     return t;
 }
 
-// A ray of a bounce wave reaches a diffuse receiver at p: its splat record, where the light's view sees p (else the
-// caustic map cannot hold it: ACC_UNSEEN). (Wave 0's rays have met nothing yet.)
-void record_at(Traced t, RayDiff rdf, vec3 p, float flux, inout Outcome o) {
+// The eye deposit (docs/design.md "The eye deposit"): a landing at p, arriving along rd, that the light's caustic
+// map cannot hold becomes a record in the eye's samples where the camera sees p on the side the light arrives on:
+// its center in samples, its tent from the ray differentials projected into the eye's image, its shape negated.
+// Returns false where the camera does not see it (the light is then unseen).
+bool eye_record(Traced t, RayDiff rdf, vec3 p, vec3 rd, float flux, inout Outcome o) {
+    if (u_frame.frame.eye_deposit == 0u) return false;
+    GpuView cam = u_frame.frame.camera;
+    vec2 uv;
+    if (!receiver_seen(cam, t_eye, p, uv)) return false;
+    ivec2 size = textureSize(t_eye, 0);
+    ivec2 q = clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1);
+    vec3 n = geo_fetch(t_eye, q).xyz;
+    if (dot(rd, n) * dot(view_dir_to(cam, p), n) <= 0.0) return false;  // it lands on the side the eye does not see
+    float shape = 1.0;
+    if (WAVE_DIFFERENTIAL) {
+        vec2 mx = view_px_diff(cam, p, rdf.dpx), my = view_px_diff(cam, p, rdf.dpy);
+        uint r = uint(clamp(round(sqrt(abs(mx.x * my.y - mx.y * my.x))), 1.0, float(EYE_SPLAT_RADIUS)));
+        shape = footprint_radii(mx, my, r);
+    }
+    o.record = GpuSplat(uv * vec2(size), flux * u_frame.light.light_intensity, -shape);
+    o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : WAVE_SPECTRAL ? floatBitsToUint(ray_nm) : 0u;
+    o.rec = true;
+    o.rec_flux = flux;
+    o.one_event = t.depth == 1u;
+    o.eye = true;
+    return true;
+}
+
+// A ray of a bounce wave reaches a diffuse receiver at p along rd: its splat record, where the light's view sees p,
+// else the eye deposit's where the camera sees it (else no map of the frame can hold it: ACC_UNSEEN). (Wave 0's
+// rays have met nothing yet.)
+void record_at(Traced t, RayDiff rdf, vec3 p, vec3 rd, float flux, inout Outcome o) {
     GpuView rv = u_frame.light.receiver_view;
     vec2 uv;
     if (!receiver_seen(rv, t_recv, p, uv)) {
-        acc[ACC_UNSEEN] += flux;
+        if (!eye_record(t, rdf, p, rd, flux, o)) acc[ACC_UNSEEN] += flux;
         return;
     }
     uint r = t.lod ? side_splat_radius(weak_widen(t.cell) * cell_side(cell_level(t.cell))) : cell_splat_radius(t.cell);
@@ -441,7 +472,7 @@ void interact(Traced t, uint capacity, inout Outcome o) {
         if (WAVE_PRIMARY) {
             acc[ACC_DIRECT] += t.phi * w;
         } else {
-            record_at(t, rdf, p, t.phi * w, o);
+            record_at(t, rdf, p, rd, t.phi * w, o);
         }
     } else if (t.depth >= MAX_INTERACTIONS) {
         acc[ACC_CAP] += t.phi * w;
@@ -499,6 +530,7 @@ void sum_shares(Outcome o, float phi) {
     if (wave_row(ACC_TERMS + PEND_REC)) {
         subgroup_sum(ACC_TERMS + PEND_REC, o.rec ? o.rec_flux : 0.0);
         subgroup_sum(ACC_TERMS + PEND_ONE, o.rec && o.one_event ? o.rec_flux : 0.0);
+        subgroup_sum(ACC_TERMS + PEND_EYE, o.rec && o.eye ? o.rec_flux : 0.0);
     }
 }
 
@@ -506,10 +538,11 @@ void sum_shares(Outcome o, float phi) {
 // (a CPU driver then loads each once for its SIMD group, where a branch or an address per invocation makes it load
 // lane by lane), and invocation `lid` adds term lid in fixed point. What was not appended is overflow.
 void add_shares(uint lid, bool rays_ok, bool recs_ok) {
-    float child = wave_sum(ACC_TERMS + PEND_CHILD), recs = 0.0, one = 0.0;
+    float child = wave_sum(ACC_TERMS + PEND_CHILD), recs = 0.0, one = 0.0, eye = 0.0;
     if (wave_row(ACC_TERMS + PEND_REC)) {
         recs = wave_sum(ACC_TERMS + PEND_REC);
         one = wave_sum(ACC_TERMS + PEND_ONE);
+        eye = wave_sum(ACC_TERMS + PEND_EYE);
     }
     float mine = 0.0;
     for (uint k = 0u; k < ACC_TERMS; k++) {
@@ -517,6 +550,7 @@ void add_shares(uint lid, bool rays_ok, bool recs_ok) {
         if (k == ACC_OVERFLOW) sum += (rays_ok ? 0.0 : child) + (recs_ok ? 0.0 : recs);
         if (k == ACC_CAUSTIC) sum += recs_ok ? recs : 0.0;
         if (k == ACC_ONE_EVENT) sum += recs_ok ? one : 0.0;
+        if (k == ACC_EYE) sum += recs_ok ? eye : 0.0;
         mine = lid == k ? sum : mine;
     }
     if (lid < ACC_TERMS) account_add(lid, mine);
@@ -539,7 +573,7 @@ void main() {
     RayDiff none;
     none.dpx = none.dpy = none.ddx = none.ddy = vec3(0.0);
     Child no_child = Child(GpuRay(vec3(0.0), 0.0, vec3(0.0), 0u), none, false, AIR, uvec2(0u), vec3(1.0));
-    Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0u, 0.0, false);
+    Outcome o = Outcome(0u, no_child, no_child, false, GpuSplat(vec2(0.0), 0.0, 0.0), 0u, 0.0, false, false);
     float phi = 0.0, side = 1.0;
     uint depth = 0u;
     if (i < in_count && !(can_abort && aborted)) {

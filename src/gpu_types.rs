@@ -80,8 +80,9 @@ pub struct FrameUniforms {
     /// Exact transport's weak-branch fraction (0: off), and the weak-branch block's side in cells.
     pub weak_fraction: f32,
     pub weak_block: f32,
-    /// To a multiple of 16 bytes, as std140 places the struct.
-    pub pad: u32,
+    /// 1: the eye deposit is on: a landing the light's caustic map cannot hold is deposited in the eye's image
+    /// where the camera sees it (docs/design.md "The eye deposit").
+    pub eye_deposit: u32,
 }
 
 /// A light's part of the uniforms: its views, its power, and its color as a spectrum.
@@ -221,6 +222,7 @@ pub const ACCOUNT_TERMS: [&str; ACC_TERMS as usize] = [
     "weak_left",
     "weak_carried",
     "unseen",
+    "caustics_eye",
 ];
 
 /// Exact transport (docs/design.md step 4, `--transport exact`): the state of the waves of one batch and the

@@ -86,6 +86,17 @@ pub enum CoopChecks {
     Off,
 }
 
+/// A switch on the command line (`on` or `off`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum OnOff {
+    /// On.
+    On,
+    /// Off.
+    Off,
+}
+
 impl CoopChecks {
     /// `auto` follows the measured rule: on a GPU a level's checks are few and long, and four lanes finish them
     /// about four times sooner; a CPU device runs the same work either way and loses the early returns.
@@ -241,6 +252,9 @@ pub struct Tuning {
     pub traverse_wg: u32,
     /// Four lanes per candidate for the metrics' checks.
     pub coop_checks: CoopChecks,
+    /// Exact transport with a compute splat: deposit the landings that the light's caustic map cannot hold in the
+    /// eye's image where the camera sees them (docs/design.md "The eye deposit"); off: count them as `unseen`.
+    pub eye_deposit: bool,
     /// Split batches on overflow (off only for tests: overflowing work is then dropped and counted).
     pub batching: bool,
     /// Batch slots recorded per frame for GPU-driven batching (0: automatic).
@@ -269,6 +283,7 @@ impl Default for Tuning {
             check_level: None,
             traverse_wg: TRAVERSE_WG,
             coop_checks: CoopChecks::Auto,
+            eye_deposit: true,
             batching: true,
             batch_slots: 0,
             shadow_bias: 1.5,
@@ -341,6 +356,8 @@ pub struct ResolvedSettings {
     pub traverse_wg: u32,
     /// On or off (never `auto`).
     pub coop_checks: CoopChecks,
+    /// The eye deposit runs: [`Tuning::eye_deposit`], under exact transport with a compute splat.
+    pub eye_deposit: bool,
     /// See [`Tuning::batching`].
     pub batching: bool,
     /// See [`Tuning::batch_slots`].
@@ -608,6 +625,7 @@ impl Settings {
             check_level: t.check_level.unwrap_or_else(|| default_check_level(q.metric, level)),
             traverse_wg: t.traverse_wg,
             coop_checks: t.coop_checks.resolve(class),
+            eye_deposit: t.eye_deposit && q.transport == Transport::Exact && splat.is_compute(),
             batching: t.batching,
             batch_slots: t.batch_slots,
             shadow_bias: t.shadow_bias,

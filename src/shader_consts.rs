@@ -13,6 +13,9 @@ pub const LINEAR_WG: u32 = 64;
 pub const TILE_WG: u32 = 8;
 /// Largest splat radius in caustic-map texels (point size 2r must stay within lavapipe's 255).
 pub const MAX_SPLAT_RADIUS: u32 = 64;
+/// The eye deposit's widest tent radius, in eye samples: its records are few (the landings the light's caustic map
+/// cannot hold), and their tents at most (2 EYE_SPLAT_RADIUS + 1)² taps.
+pub const EYE_SPLAT_RADIUS: u32 = 8;
 /// Side of the shared-memory window in which the tiled compute splat gathers a work group's taps.
 pub const SPLAT_TILE: u32 = 32;
 /// Differential footprints, compute splats: a tent wider than this many texels (either radius) is splatted at the
@@ -66,8 +69,11 @@ pub const ACC_WEAK_CARRIED: u32 = 11;
 /// cannot hold this light (the floor of a deep pool beside its wall, lit by refraction where the wall shades it
 /// along the light's straight rays).
 pub const ACC_UNSEEN: u32 = 12;
+/// The part of ACC_CAUSTIC that the light's caustic map could not hold and the eye deposit took: landings on the
+/// receivers the camera sees (docs/design.md "The eye deposit"; not a term of the partition).
+pub const ACC_EYE: u32 = 13;
 /// Terms of the account.
-pub const ACC_TERMS: u32 = 13;
+pub const ACC_TERMS: u32 = 14;
 
 // The indirect-command buffer, in 16-byte commands: one dispatch per traversal level (0..MAX_LEVELS), then these.
 /// The two-interface trace's dispatch.
@@ -151,8 +157,12 @@ pub const PB_BVH_WIDE: u32 = 21;
 pub const PB_BVH_WIDE_PRIMS: u32 = 22;
 /// Binding: each splat record's color (color photons, `GpuRayMedium::tint`'s encoding).
 pub const PB_SPLAT_TINTS: u32 = 23;
+/// Binding: the receivers seen from the eye (the eye deposit's visibility).
+pub const PB_EYE_GEO: u32 = 24;
+/// Binding: the eye deposit's flux, W per eye sample, three planes (red, green, blue).
+pub const PB_EYE_FLUX: u32 = 25;
 /// Bindings of the layout.
-pub const PB_COUNT: u32 = 24;
+pub const PB_COUNT: u32 = 26;
 
 // Binding indices of the composite and the glass pass (glsl/common/composite_bindings.glsl, src/passes/composite.rs).
 /// Binding: the frame uniforms.
@@ -238,14 +248,16 @@ pub const EB_ALBEDO: u32 = 5;
 pub const EB_ENV: u32 = 6;
 /// Binding: the environment's irradiance map.
 pub const EB_ENV_IRRADIANCE: u32 = 7;
+/// Binding: the eye deposit's flux (the photon passes' `PB_EYE_FLUX`).
+pub const EB_EYE_FLUX: u32 = 8;
 /// Binding: the radiance (written).
-pub const EB_RADIANCE: u32 = 8;
+pub const EB_RADIANCE: u32 = 9;
 /// Binding: the caustics AOV (written).
-pub const EB_CAUSTICS: u32 = 9;
+pub const EB_CAUSTICS: u32 = 10;
 /// Binding: the direct AOV (written).
-pub const EB_DIRECT: u32 = 10;
+pub const EB_DIRECT: u32 = 11;
 /// Bindings of the layout.
-pub const EB_COUNT: u32 = 11;
+pub const EB_COUNT: u32 = 12;
 
 // Pass modes: what a pass's `mode` push constant selects (the passes push these; the shaders compare with them).
 /// glsl/init.comp: frame start (clear the counters, push the root tile).

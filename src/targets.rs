@@ -58,13 +58,27 @@ pub struct EyeTargets {
     /// Exact transport: the glass's radiance per eye sample, each light's added in turn (a: 1 where glass is in
     /// front).
     pub glass: Image,
+    /// The eye deposit (docs/design.md "The eye deposit"): caustic flux per eye sample, W, in three planes (red,
+    /// green, blue), the photon passes' atomic target; 4 bytes where it does not fit one binding.
+    pub flux: Buffer,
+    /// Whether `flux` holds the eye's samples (12 bytes each within the device's binding limit).
+    pub deposit_fits: bool,
 }
 
 impl EyeTargets {
     /// The beauty images at `width`×`height`; the eye buffers they are composited from `aa` times larger per side
     /// (the supersamples).
-    pub fn new(device: &Arc<Device>, width: u32, height: u32, aa: u32) -> VkResult<Self> {
+    pub fn new(device: &Arc<Device>, width: u32, height: u32, aa: u32, binding_limit: u64) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
+        let flux_bytes = Self::deposit_bytes(width, height, aa);
+        let deposit_fits = flux_bytes <= binding_limit;
+        let flux = Buffer::new(
+            device,
+            "eye deposit",
+            if deposit_fits { flux_bytes } else { 4 },
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
         let img = |name: &str, format, usage| Image::new(device, name, format, ext(aa * width, aa * height), usage);
         let out = |name: &str, format, usage| Image::new(device, name, format, ext(width, height), usage);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
@@ -83,7 +97,14 @@ impl EyeTargets {
             beauty: out("beauty", BEAUTY_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
             hdr: out("beauty linear", HDR_FORMAT, U::STORAGE | U::TRANSFER_SRC)?,
             glass: img("eye glass radiance", HDR_FORMAT, U::STORAGE)?,
+            flux,
+            deposit_fits,
         })
+    }
+
+    /// The eye deposit's bytes: three floats per eye sample.
+    pub fn deposit_bytes(width: u32, height: u32, aa: u32) -> u64 {
+        12 * (aa * width) as u64 * (aa * height) as u64
     }
 }
 
@@ -127,6 +148,14 @@ fn ext(w: u32, h: u32) -> vk::Extent2D {
 }
 
 impl Targets {
+    /// Whether a frame under `s` runs the eye deposit: asked for (exact transport, a compute splat), a flux map
+    /// the compute splat adds into, and an eye deposit within one binding.
+    pub fn eye_deposit(&self, s: &Settings) -> bool {
+        s.eye_deposit
+            && self.eye.deposit_fits
+            && self.receivers.first().is_some_and(|r| r.flux.format == vk::Format::R32_SFLOAT)
+    }
+
     /// `aa`: eye-view supersampling per side; `lights`: how many lights get their own receiver maps
     /// (1..=MAX_LIGHTS); `passes`: uniforms, one per light and color channel; `slots`: frames in flight.
     #[allow(clippy::too_many_arguments)]
@@ -166,7 +195,7 @@ impl Targets {
             })
         };
         let receivers = (0..lights.max(1)).map(|_| receiver()).collect::<VkResult<Vec<_>>>()?;
-        let eye = EyeTargets::new(device, width, height, aa)?;
+        let eye = EyeTargets::new(device, width, height, aa, s.binding_limit)?;
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
@@ -285,7 +314,7 @@ impl Targets {
 
     /// A new output size: only the eye-sized targets and the readback buffer change.
     pub fn resize(&mut self, device: &Arc<Device>, s: &Settings, width: u32, height: u32, aa: u32) -> VkResult<()> {
-        self.eye = EyeTargets::new(device, width, height, aa)?;
+        self.eye = EyeTargets::new(device, width, height, aa, s.binding_limit)?;
         self.aa = aa;
         self.readbacks = Self::readback_buffers(device, s, width, height, self.readbacks.len())?;
         self.width = width;

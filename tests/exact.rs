@@ -75,18 +75,20 @@ struct Case {
 fn exact_matches_all_paths_reference() {
     let cases = [
         Case { scene: "sphere.toml", rel_l1: 0.0075, ratio: 1.0001 },
-        Case { scene: "bunny.toml", rel_l1: 0.0415, ratio: 1.0023 },
+        Case { scene: "bunny.toml", rel_l1: 0.0360, ratio: 1.0023 },
         Case { scene: "tilted_cube.toml", rel_l1: 0.0100, ratio: 1.0000 },
         Case { scene: "ior24.toml", rel_l1: 0.0163, ratio: 0.9990 },
         // A convex mirror spreads the reflected light thinly: level 3's photons land far apart. Their differential
         // footprints follow that spread (under `--footprint cell` the tents follow the cell size instead, and the
         // ring caustic is sampled coarsely: 9.3% at 64², 86% at 256²). The flux ratio is 0.3% below 1 (0.9988
         // under `cell`): the wide tents move a little light to where the image does not count it.
-        Case { scene: "mirror_sphere.toml", rel_l1: 0.0243, ratio: 0.9969 },
+        Case { scene: "mirror_sphere.toml", rel_l1: 0.0271, ratio: 0.9970 },
         // A curved receiver: the ball's caustic in a diffuse bowl (a lathe), whose sides tilt by up to 50°.
         Case { scene: "bowl.toml", rel_l1: 0.0066, ratio: 0.9991 },
-        // Media: water in a glass, three kinds of interface (glass | air, water | glass, water | air).
-        Case { scene: "glass_of_water.toml", rel_l1: 0.0328, ratio: 0.9971 },
+        // Media: water in a glass, three kinds of interface (glass | air, water | glass, water | air). The light the
+        // glass scatters beyond the lamp's receiver view (0.28 mW in the image, at the image's edges) is the eye
+        // deposit's; without it rel-L1 is 3.28% and the flux ratio 0.9971.
+        Case { scene: "glass_of_water.toml", rel_l1: 0.0285, ratio: 1.0023 },
     ];
     let (_gpu, device) = gpu();
     for c in &cases {

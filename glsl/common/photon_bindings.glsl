@@ -161,6 +161,11 @@ layout(std430, set = 0, binding = PB_FLUX_TEXELS) buffer FluxBuf { float flux_te
 // Photons that carry their color: each splat record's color (tint_pack, glsl/common/types.glsl) or wavelength (its
 // float bits), at its record's index.
 layout(std430, set = 0, binding = PB_SPLAT_TINTS) buffer SplatTintBuf { uint splat_tints[]; };
+// The eye deposit (docs/design.md "The eye deposit"): the receivers seen from the eye (normal, distance; 0: none;
+// common/gbuffer.glsl), which the waves test a landing against, and the caustic flux per eye sample, W, in three
+// planes (red, green, blue), which the compute splats add a negated-shape record's taps into.
+layout(set = 0, binding = PB_EYE_GEO) uniform usampler2D t_eye;
+layout(std430, set = 0, binding = PB_EYE_FLUX) buffer EyeFluxBuf { float eye_flux[]; };
 // The threaded layout (src/bvh/): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
 layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { SingleNode bvh_nodes_threaded[]; };
 // The wide layout (src/bvh/): compressed 8-wide nodes, and its triangle list (each entry its triangle's three

@@ -111,6 +111,11 @@ pub(crate) struct FramePlan<'a> {
     pub reused: bool,
     /// The eye view of the last frame serves this one too: steps 7 and 8 are not recorded.
     pub eye_reused: bool,
+    /// The frame's photons deposit what the lights' maps cannot hold in the eye's samples (docs/design.md "The eye
+    /// deposit"): the receivers' eye g-buffer is drawn before the lights' passes.
+    pub eye_deposit: bool,
+    /// Clear the eye deposit's flux before the lights' passes (else they add to it, or it is kept).
+    pub clear_eye_flux: bool,
     /// A preview: one eye sample per pixel (glass traced as in a still, at the preview's resolution).
     pub preview: bool,
     /// The AOV to copy to the readback buffer.
@@ -131,6 +136,18 @@ pub struct Continuation<'a> {
     pub passes: &'a [bool],
     /// The frame-in-flight slot whose readback buffer holds the earlier frame's states.
     pub from_slot: usize,
+}
+
+impl FrameReport {
+    /// What the frame's report knows before it is recorded: its plan.
+    fn start(&mut self, plan: &FramePlan, compute_splat: bool) {
+        self.caustics = plan.caustics.first().copied().unwrap_or(false);
+        self.compute_splat = compute_splat;
+        self.photon_view = plan.photon_view;
+        self.reused = plan.reused;
+        self.level = plan.settings.level;
+        self.preview = plan.preview;
+    }
 }
 
 impl FramePlan<'_> {
@@ -296,16 +313,12 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         resolve_texels: compute_splat && t.receivers[p / nc].flux_texels.texels != vk::BufferView::null(),
         eye_aovs: matches!(plan.aov, Some(Aov::Caustics) | Some(Aov::Direct)),
     };
-    rec.report.caustics = plan.caustics.first().copied().unwrap_or(false);
-    rec.report.compute_splat = compute_splat;
-    rec.report.photon_view = plan.photon_view;
-    rec.report.reused = plan.reused;
-    rec.report.level = s.level;
-    rec.report.preview = plan.preview;
+    rec.report.start(plan, compute_splat);
     rec.ts.reset(rec.cmd);
     scene_update(res, plan.scene_update, rec)?;
     // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
     rec.sync.buffer(readback, &[Access::TransferDst]);
+    let eye_gbuffer_drawn = ctx(0).eye_deposit_first(rec, plan.clear_eye_flux, plan.eye_deposit && !plan.eye_reused)?;
     for pass in 0..plan.lights() * nc {
         let c = ctx(pass);
         let first_segment = rec.ts.len();
@@ -353,9 +366,11 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
         // The beauty and HDR images are the last frame's, left as transfer sources by its composite.
         rec.ts.mark(rec.cmd, "eye_reused");
     } else {
-        rec.ts.mark(rec.cmd, "eye.receivers");
+        if !eye_gbuffer_drawn {
+            rec.ts.mark(rec.cmd, "eye.receivers");
+        }
         for light in 0..plan.lights() {
-            ctx(light * nc).eye_receivers(rec)?;
+            ctx(light * nc).eye_receivers(rec, !eye_gbuffer_drawn)?;
         }
         rec.ts.mark(rec.cmd, "eye.refractors");
         // A frame that reads back the caustics or direct AOV (the receivers' shading writes them) needs neither

@@ -106,6 +106,8 @@ impl Ctx<'_> {
             bvh: &self.sb.bvh,
             flux_texels: &self.r.flux_texels,
             splat_tints: &t.photon.splat_tints,
+            eye_geo: &t.eye.recv,
+            eye_flux: &t.eye.flux,
         }
     }
 

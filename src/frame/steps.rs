@@ -106,14 +106,18 @@ impl Ctx<'_> {
     /// Step 7a: the eye view of the receivers under this light: the first light draws their eye g-buffer, then
     /// each light's shading writes (the first) or adds to (the others) the radiance, and the caustics and direct
     /// AOVs when the frame reads one back, so the AOVs are the sums over lights.
-    pub(super) fn eye_receivers(&self, rec: &mut Rec) -> VkResult<()> {
+    /// `gbuffer`: the first light draws the receivers' eye g-buffer (else the eye deposit drew it before the
+    /// photons).
+    pub(super) fn eye_receivers(&self, rec: &mut Rec, gbuffer: bool) -> VkResult<()> {
         let e = &self.t.eye;
         let first = self.light == 0;
         let out: &[&Image] = if self.eye_aovs { &[&e.radiance, &e.caustics, &e.direct] } else { &[&e.radiance] };
         let g = EyeGbuffer { geo: &e.recv, albedo: &e.albedo, depth: &e.depth };
         if first {
             // The g-buffer does not depend on the light: drawn once, before the first light's shading.
-            self.p.eye.record_gbuffer(rec.cmd, rec.sync, self.sb, &self.data.frame.camera, &g)?;
+            if gbuffer {
+                self.eye_gbuffer(rec)?;
+            }
             rec.ts.mark(rec.cmd, "eye.shade");
         }
         let inputs = EyeInputs {
@@ -124,8 +128,33 @@ impl Ctx<'_> {
             nearest: self.nearest,
             linear: self.linear,
             images: &self.sb.images,
+            eye_flux: &e.flux,
         };
         self.p.eye.record_shade(rec.cmd, rec.sync, &inputs, &g, out, !first)
+    }
+
+    /// The receivers' eye g-buffer (normal and distance, albedo, depth), once a frame whatever the lights.
+    pub(super) fn eye_gbuffer(&self, rec: &mut Rec) -> VkResult<()> {
+        let e = &self.t.eye;
+        let g = EyeGbuffer { geo: &e.recv, albedo: &e.albedo, depth: &e.depth };
+        self.p.eye.record_gbuffer(rec.cmd, rec.sync, self.sb, &self.data.frame.camera, &g)
+    }
+
+    /// Before the lights' passes, for the eye deposit (docs/design.md "The eye deposit"): zero its flux (`clear`),
+    /// and draw the receivers' eye g-buffer that the photons test their landings against (`gbuffer`). Returns
+    /// whether it drew the g-buffer (then the eye view does not).
+    pub(super) fn eye_deposit_first(&self, rec: &mut Rec, clear: bool, gbuffer: bool) -> VkResult<bool> {
+        if clear {
+            let flux = &self.t.eye.flux;
+            rec.sync.buffer(flux, &[Access::TransferDst]);
+            rec.flush(self.d);
+            unsafe { self.d.cmd_fill_buffer(rec.cmd, flux.raw, 0, vk::WHOLE_SIZE, 0) };
+        }
+        if gbuffer {
+            rec.ts.mark(rec.cmd, "eye.receivers");
+            self.eye_gbuffer(rec)?;
+        }
+        Ok(gbuffer)
     }
 
     /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.

@@ -35,6 +35,8 @@ pub struct EyeInputs<'a> {
     pub nearest: &'a Sampler,
     pub linear: &'a Sampler,
     pub images: &'a crate::scene_gpu::SceneImages,
+    /// The eye deposit's flux (docs/design.md "The eye deposit").
+    pub eye_flux: &'a Buffer,
 }
 
 /// The eye g-buffer of the receivers.
@@ -62,6 +64,7 @@ const SHADE_LAYOUT: [(u32, BindKind); EB_COUNT as usize] = [
     (EB_ALBEDO, BindKind::Sampled),
     (EB_ENV, BindKind::Sampled),
     (EB_ENV_IRRADIANCE, BindKind::Sampled),
+    (EB_EYE_FLUX, BindKind::Storage),
     (EB_RADIANCE, BindKind::StorageImage),
     (EB_CAUSTICS, BindKind::StorageImage),
     (EB_DIRECT, BindKind::StorageImage),
@@ -156,6 +159,7 @@ impl EyePass {
             (EB_ALBEDO, Use::Sampled(g.albedo, i.nearest)),
             (EB_ENV, Use::Fixed(Bind::Sampled(&i.images.environment, &i.images.equirect))),
             (EB_ENV_IRRADIANCE, Use::Fixed(Bind::Sampled(&i.images.environment_irradiance, &i.images.equirect))),
+            (EB_EYE_FLUX, Use::Read(i.eye_flux)),
         ];
         // A further light adds to what the last one wrote, pixel by pixel.
         let write = |img| if add { Use::ImageWrite(img) } else { Use::ImageOverwrite(img) };

@@ -43,6 +43,8 @@ const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
     (PB_BVH_WIDE, BindKind::Storage),
     (PB_BVH_WIDE_PRIMS, BindKind::Storage),
     (PB_SPLAT_TINTS, BindKind::Storage),
+    (PB_EYE_GEO, BindKind::Sampled),
+    (PB_EYE_FLUX, BindKind::Storage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
@@ -169,6 +171,9 @@ pub struct PhotonBindings<'a> {
     pub bvh: &'a crate::scene_gpu::BvhBuffers,
     pub flux_texels: &'a Buffer,
     pub splat_tints: &'a Buffer,
+    /// The eye deposit: the receivers seen from the eye, and the flux per eye sample.
+    pub eye_geo: &'a Image,
+    pub eye_flux: &'a Buffer,
 }
 
 impl PhotonBindings<'_> {
@@ -203,6 +208,8 @@ impl PhotonBindings<'_> {
             (PB_BVH_WIDE, Use::Read(&bvh.wide_nodes)),
             (PB_BVH_WIDE_PRIMS, Use::Read(&bvh.wide_prims)),
             (PB_SPLAT_TINTS, Use::Write(self.splat_tints)),
+            (PB_EYE_GEO, Use::Sampled(self.eye_geo, self.sampler)),
+            (PB_EYE_FLUX, Use::Write(self.eye_flux)),
         ])
     }
 

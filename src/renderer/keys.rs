@@ -80,12 +80,54 @@ pub(crate) struct EyeKey {
 pub(crate) struct Caches {
     pub caustic: Option<(CausticKey, Vec<LightReport>)>,
     pub eye: Option<EyeKey>,
+    /// The eye view (the camera's uniform bytes and the eye targets' generation) that the eye deposit's flux was
+    /// deposited or cleared for.
+    pub eye_deposit: Option<(Vec<u8>, u64)>,
+}
+
+/// Whether the last caustic frame's light all landed in the lights' own maps (every pass's account, once its frame
+/// completed, has no eye deposit and nothing unseen): its maps then serve any eye view.
+pub(crate) fn light_maps_hold_all(reports: &[LightReport]) -> bool {
+    use crate::shaders::consts::{ACC_EYE, ACC_UNSEEN};
+    reports.iter().all(|l| {
+        !l.caustics
+            || l.transport.is_some_and(|t| {
+                let a = t.account();
+                a[ACC_EYE as usize] == 0.0 && a[ACC_UNSEEN as usize] == 0.0
+            })
+    })
 }
 
 impl Caches {
+    /// Whether a frame with the caustic inputs `key` reuses the last frame's maps (`reuse`: reuse is on), and whether
+    /// it clears the eye deposit first. `eye_view`: the eye view the eye deposit is for, when it runs. The deposit
+    /// depends on the eye too: maps that held every landing serve any eye view (the frame then clears the deposit
+    /// for a new one), else only the eye view they were deposited for. A frame that traces clears the deposit; a
+    /// continuation (`continuation`) adds to it and reuses nothing.
+    pub fn plan(
+        &mut self,
+        key: &CausticKey,
+        eye_view: Option<(Vec<u8>, u64)>,
+        reuse: bool,
+        continuation: bool,
+    ) -> (bool, bool) {
+        let same_eye = self.eye_deposit == eye_view;
+        let reused = !continuation
+            && reuse
+            && self.caustic.as_ref().is_some_and(|(k, reports)| {
+                k == key && (eye_view.is_none() || same_eye || light_maps_hold_all(reports))
+            });
+        let clear = eye_view.is_some() && !continuation && (!reused || !same_eye);
+        if eye_view.is_some() && (!reused || clear) {
+            self.eye_deposit = eye_view;
+        }
+        (reused, clear)
+    }
+
     /// Forget both: the next frame recomputes everything.
     pub fn clear(&mut self) {
         self.caustic = None;
         self.eye = None;
+        self.eye_deposit = None;
     }
 }

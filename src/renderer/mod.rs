@@ -803,10 +803,12 @@ impl Renderer {
             &s,
             self.targets_key,
         );
-        let reused =
-            continuation.is_none() && self.reuse && self.caches.caustic.as_ref().is_some_and(|(k, _)| *k == key);
         let targets = self.targets.as_mut().expect("targets");
         let data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &views, targets, nc);
+        let eye_deposit = targets.eye_deposit(&s);
+        let eye_view =
+            eye_deposit.then(|| (bytemuck::bytes_of(&data[0].frame.camera).to_vec(), self.targets_generation));
+        let (reused, clear_eye_flux) = self.caches.plan(&key, eye_view, self.reuse, continuation.is_some());
         // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
         // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
         let eye_key = EyeKey {
@@ -833,6 +835,8 @@ impl Renderer {
             photon_view: views[0].photon,
             reused,
             eye_reused,
+            eye_deposit: eye_deposit && !reused,
+            clear_eye_flux,
             preview: desc.preview,
             aov: desc.aov,
             batch_slots: self.queue.batch_slots(&s, targets.photon.capacity),

@@ -116,7 +116,7 @@ pub(crate) fn frame_data(
         shared_ior: scene_buffers.shared_ior.unwrap_or(0.0),
         weak_fraction: s.weak_branches,
         weak_block: s.weak_block as f32,
-        pad: 0,
+        eye_deposit: targets.eye_deposit(s) as u32,
     };
     let light = LightUniforms {
         photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),

@@ -9,8 +9,8 @@ use caustics::image_io::{self, RgbImage};
 use caustics::scene::{Camera, Projection, Scene};
 use caustics::settings::BvhLayout;
 use caustics::settings::{
-    parse_size, CoopChecks, Driven, Footprint, Method, Metric, Quality, ResolvedSettings, Settings, Splat, Transport,
-    Tuning, DEFAULT_TARGET_ERROR,
+    parse_size, CoopChecks, Driven, Footprint, Method, Metric, OnOff, Quality, ResolvedSettings, Settings, Splat,
+    Transport, Tuning, DEFAULT_TARGET_ERROR,
 };
 use caustics::{Aov, AovData, Frame, FrameDesc, FrameReport, Renderer};
 use serde_json::{json, Value};
@@ -180,6 +180,11 @@ pub struct TuningArgs {
     /// invocations at once (on) or in one, one after another (off); auto: on for GPUs, off for CPU devices.
     #[arg(long, value_enum, default_value_t = CoopChecks::Auto, help_heading = "Tuning")]
     pub coop_checks: CoopChecks,
+    /// Exact transport with a compute splat: deposit the light that lands where the light's caustic map cannot
+    /// hold it (a ceiling, a wall behind the light, a floor under an overhang) in the eye's image, where the
+    /// camera sees it (on), or count it as unseen (off).
+    #[arg(long, value_enum, default_value_t = OnOff::On, help_heading = "Tuning")]
+    pub eye_deposit: OnOff,
     /// Batch slots recorded per frame for GPU-driven batching (0: automatic, adapted between frames).
     #[arg(long, default_value_t = 0, help_heading = "Tuning")]
     pub batch_slots: u32,
@@ -234,6 +239,7 @@ impl TuningArgs {
             check_level: self.check_level,
             traverse_wg,
             coop_checks: self.coop_checks,
+            eye_deposit: self.eye_deposit == OnOff::On,
             batching: !self.no_batching,
             batch_slots: self.batch_slots,
             debug_photons: self.debug_photons,
