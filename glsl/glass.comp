@@ -73,6 +73,26 @@ vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
     return e;
 }
 
+// The eye deposit's irradiance at receiver point p (shading normal ns) that an eye ray reached through glass: where
+// the eye sample that p projects to sees p itself (the receivers' radiance holds that sample's eye distance in
+// .a, 0 where it sees none; within four samples' footprint, as receiver_seen tests), its flux over the receiver
+// area the sample covers at p, as the eye shading reads it for the samples that see p directly.
+vec3 eye_deposit_at(vec3 p, vec3 ns) {
+    GpuView cam = u_frame.frame.camera;
+    vec2 uv = view_uv(cam, p);
+    if (!uv_inside_strict(uv)) return vec3(0.0);
+    ivec2 size = textureSize(t_radiance, 0);
+    ivec2 q = clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1);
+    float seen = texelFetch(t_radiance, q, 0).a, d = view_dist(cam, p);
+    float side = cam.window.z * cam.extent.z;
+    if (!(seen > 0.0 && abs(seen - d) < 4.0 * side * (view_is_ortho(cam) ? 1.0 : d) + 1e-3 * d)) return vec3(0.0);
+    uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
+    vec3 flux = vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
+    float cos_t = max(abs(dot(ns, view_dir_to(cam, p))), 0.02);
+    float area = view_cell_measure(cam, view_xy_of_uv(cam, (vec2(q) + 0.5) * cam.extent.zw), side) / cos_t;
+    return flux / (view_is_ortho(cam) ? area : area * d * d);
+}
+
 // A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance
 // in its direction instead (so that nothing turns black where the tree is cut).
 const float EYE_THRESHOLD = 0.05;
@@ -147,6 +167,8 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
             vec3 t2 = cross(ns, t1);
             vec3 e = lights_irradiance(p, ns, t1, t2, width) + environment_irradiance(n_eye);
+            // The eye deposit holds every light's: the first glass pass adds it.
+            if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e += eye_deposit_at(p, ns);
             L += w * albedo / RECV_PI * e;
             continue;
         }

@@ -226,8 +226,11 @@ pub const CB_RECEIVERS2: u32 = 26;
 pub const CB_BVH_WIDE: u32 = 27;
 /// Binding: the wide layout's triangle list.
 pub const CB_BVH_WIDE_PRIMS: u32 = 28;
+/// Binding: the eye deposit's flux (the photon passes' `PB_EYE_FLUX`), which the glass pass reads where an eye ray
+/// reaches a receiver that the eye's samples see.
+pub const CB_EYE_FLUX: u32 = 29;
 /// Bindings of the layout.
-pub const CB_COUNT: u32 = 29;
+pub const CB_COUNT: u32 = 30;
 /// Lights one glass pass shades with.
 pub const GLASS_LIGHTS: u32 = 3;
 

@@ -201,6 +201,7 @@ impl Ctx<'_> {
             nearest: self.nearest,
             linear: self.linear,
             glass: &e.glass,
+            eye_flux: &e.flux,
             more_lights,
             exact: self.exact_eye(),
             wide: self.s.bvh_layout == crate::bvh::BvhLayout::Wide,

@@ -114,6 +114,8 @@ pub struct CompositeInputs<'a> {
     pub linear: &'a Sampler,
     /// The glass's radiance per eye sample (exact transport: the glass pass writes it, the composite reads it).
     pub glass: &'a Image,
+    /// The eye deposit's flux (docs/design.md "The eye deposit").
+    pub eye_flux: &'a Buffer,
     /// The glass pass's second and third lights' maps (its first is `ubo`, `shadow`, `irradiance`, `recv`).
     pub more_lights: &'a [LightMaps<'a>],
     /// Trace the glass through the BVH.
@@ -160,6 +162,7 @@ const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
     (CB_RECEIVERS2, BindKind::Sampled),
     (CB_BVH_WIDE, BindKind::Storage),
     (CB_BVH_WIDE_PRIMS, BindKind::Storage),
+    (CB_EYE_FLUX, BindKind::Storage),
 ];
 const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
 
@@ -284,6 +287,7 @@ impl CompositePass {
             (CB_RECEIVERS2, Use::Sampled(l2.recv, near)),
             (CB_BVH_WIDE, bvh(&i.bvh.wide_nodes)),
             (CB_BVH_WIDE_PRIMS, bvh(&i.bvh.wide_prims)),
+            (CB_EYE_FLUX, Use::Read(i.eye_flux)),
         ])
     }
 }
