@@ -62,16 +62,12 @@ vec3 on_plane(GpuView cam, ivec2 q, vec3 p, vec3 n) {
     return abs(c) > 1e-6 ? ro + rd * (dot(p - ro, n) / c) : p;
 }
 
-// The eye deposit's irradiance at sample q (W/m^2): its flux over the receiver area the sample covers, A = Omega d^2
-// / |cos| (perspective) or side^2 / |cos| (orthographic), so that sum E A keeps the deposited flux.
-vec3 eye_deposit_irradiance(GpuView cam, ivec2 q, ivec2 size, vec3 rd, vec3 n, float dist) {
+// The eye deposit's irradiance at sample q (W/m^2): its flux over the receiver area the sample covers, so that
+// sum E A keeps the deposited flux.
+vec3 eye_deposit_irradiance(GpuView cam, ivec2 q, ivec2 size, vec3 n, float dist) {
     uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
     vec3 flux = vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
-    float cos_t = max(abs(dot(n, rd)), 0.02);
-    vec2 xy = view_xy_of_uv(cam, (vec2(q) + 0.5) * cam.extent.zw);
-    float area = view_cell_measure(cam, xy, cam.window.z * cam.extent.z) / cos_t;
-    if (!view_is_ortho(cam)) area *= dist * dist;
-    return flux / area;
+    return flux / view_texel_area(cam, q, n, dist);
 }
 
 void main() {
@@ -100,7 +96,7 @@ void main() {
     vec2 dy = view_uv(lv, on_plane(cam, q + ivec2(0, 1), p, n)) - uv;
     vec3 e_caustic = caustic_irradiance(p, dx, dy);
     // The eye deposit holds every light's: the first light's shading adds it.
-    if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e_caustic += eye_deposit_irradiance(cam, q, size, rd, n, g.w);
+    if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e_caustic += eye_deposit_irradiance(cam, q, size, n, g.w);
     // The environment lights the side the eye sees (its radiance is 0 in further lights' uniforms).
     vec3 n_eye = dot(n, view_dir_to(cam, p)) > 0.0 ? -n : n;
     vec3 e_env = environment_irradiance(n_eye);

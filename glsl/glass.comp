@@ -88,9 +88,7 @@ vec3 eye_deposit_at(vec3 p, vec3 ns) {
     if (!(seen > 0.0 && abs(seen - d) < 4.0 * side * (view_is_ortho(cam) ? 1.0 : d) + 1e-3 * d)) return vec3(0.0);
     uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
     vec3 flux = vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
-    float cos_t = max(abs(dot(ns, view_dir_to(cam, p))), 0.02);
-    float area = view_cell_measure(cam, view_xy_of_uv(cam, (vec2(q) + 0.5) * cam.extent.zw), side) / cos_t;
-    return flux / (view_is_ortho(cam) ? area : area * d * d);
+    return flux / view_texel_area(cam, q, ns, d);
 }
 
 // A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance

@@ -57,14 +57,7 @@ void main() {
     vec4 r = geo_fetch(t_recv, p);
     vec3 e = vec3(0.0);
     if (r.w > 0.0) {
-        vec2 uv = (vec2(p) + 0.5) * v.extent.zw;
-        vec2 xy = view_xy_of_uv(v, uv);
-        vec3 ro, rd;
-        view_ray_xy(v, xy, ro, rd);
-        float cos_t = max(abs(dot(normalize(r.xyz), rd)), 0.02);
-        float side = v.window.z * v.extent.z;
-        float area = view_cell_measure(v, xy, side) / cos_t;
-        if (!view_is_ortho(v)) area *= r.w * r.w;
+        float area = view_texel_area(v, p, r.xyz, r.w);
         // The map holds flux for a white light; the light's color (per unit intensity) tints it here. Spectral
         // photons carried it (glsl/splat.comp, spectral_tint).
         vec3 tint = u_frame.light.light_intensity > 0.0 ? u_frame.light.light_power / u_frame.light.light_intensity : vec3(0.0);

@@ -51,6 +51,19 @@ float view_cell_measure(GpuView v, vec2 xy, float d) {
     return d * d / (q * sqrt(q));
 }
 
+// The receiver area (m^2) that texel q of view v covers on a surface of normal n at distance `dist` along the
+// texel's ray: Omega d^2 / |cos| (perspective) or side^2 / |cos| (orthographic), |cos| at least 0.02. Flux in
+// the texel over it is irradiance (the resolve's caustic map, the eye deposit's samples).
+float view_texel_area(GpuView v, ivec2 q, vec3 n, float dist) {
+    vec2 xy = view_xy_of_uv(v, (vec2(q) + 0.5) * v.extent.zw);
+    vec3 ro, rd;
+    view_ray_xy(v, xy, ro, rd);
+    float cos_t = max(abs(dot(normalize(n), rd)), 0.02);
+    float area = view_cell_measure(v, xy, v.window.z * v.extent.z) / cos_t;
+    if (!view_is_ortho(v)) area *= dist * dist;
+    return area;
+}
+
 // Inside the spot cone (hard edge); always true without a cone.
 bool view_in_cone(GpuView v, vec2 xy) {
     if (view_is_ortho(v) || v.right.w <= -1.0) return true;
