@@ -75,17 +75,15 @@ vec3 lights_irradiance(vec3 p, vec3 ns, vec3 t1, vec3 t2, float width) {
 
 // The eye deposit's irradiance at receiver point p (shading normal ns) that an eye ray reached through glass: where
 // the eye sample that p projects to sees p itself (the receivers' radiance holds that sample's eye distance in
-// .a, 0 where it sees none; within four samples' footprint, as receiver_seen tests), its flux over the receiver
-// area the sample covers at p, as the eye shading reads it for the samples that see p directly.
+// .a, 0 where it sees none: receiver_seen), its flux over the receiver area the sample covers at p, as the eye
+// shading reads it for the samples that see p directly.
 vec3 eye_deposit_at(vec3 p, vec3 ns) {
     GpuView cam = u_frame.frame.camera;
-    vec2 uv = view_uv(cam, p);
-    if (!uv_inside_strict(uv)) return vec3(0.0);
+    vec2 uv;
+    if (!receiver_seen(cam, t_radiance, p, uv)) return vec3(0.0);
     ivec2 size = textureSize(t_radiance, 0);
     ivec2 q = clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1);
-    float seen = texelFetch(t_radiance, q, 0).a, d = view_dist(cam, p);
-    float side = cam.window.z * cam.extent.z;
-    if (!(seen > 0.0 && abs(seen - d) < 4.0 * side * (view_is_ortho(cam) ? 1.0 : d) + 1e-3 * d)) return vec3(0.0);
+    float d = view_dist(cam, p);
     uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
     vec3 flux = vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
     return flux / view_texel_area(cam, q, ns, d);

@@ -73,8 +73,8 @@ pub use error::{Error, Result};
 pub use frame::{Aov, AovData, DebugPhoton, FrameReport, LightReport, SceneUpdateReport, SlotVerdict, HOST_ROUNDTRIP};
 pub use gpu_types::{LevelCounters, TransportState, TraversalState, ACCOUNT_TERMS};
 pub use renderer::{
-    BvhStats, Finish, Frame, FrameDesc, FrameEstimate, FrameOutput, InstanceId, MeshId, Pipelines, RecordTarget,
-    RecordedFrame, Renderer, Views, MAX_FRAMES_IN_FLIGHT,
+    emitters, lights_without_receivers, BvhStats, Emitter, Finish, Frame, FrameDesc, FrameEstimate, FrameOutput,
+    InstanceId, MeshId, Pipelines, RecordTarget, RecordedFrame, Renderer, Views, MAX_FRAMES_IN_FLIGHT,
 };
 
 /// Constants the renderer and its shaders share (src/shader_consts.rs): grid sizes, limits and the layouts of the

@@ -233,6 +233,9 @@ pub const CB_EYE_FLUX: u32 = 29;
 pub const CB_COUNT: u32 = 30;
 /// Lights one glass pass shades with.
 pub const GLASS_LIGHTS: u32 = 3;
+/// A light view's `right.w` (GpuView) at or above this: the view is a face of a point light's cube, whose domain
+/// is the square |x|, |y| <= 1 of its image plane (else `right.w` is the spot cone's cosine, or -1 for none).
+pub const VIEW_SQUARE_DOMAIN: u32 = 2;
 
 // Binding indices of the eye view's shading (glsl/eye_shade.comp, src/passes/eye.rs).
 /// Binding: the frame uniforms.

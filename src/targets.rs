@@ -4,10 +4,12 @@ use crate::gpu_types::{FrameData, TransportState, TraversalState};
 use crate::passes::{
     coverage::pyramid_layout, photons::INDIRECT_BYTES, AUX_FORMAT, BEAUTY_FORMAT, DEPTH_FORMAT, GEO_FORMAT, HDR_FORMAT,
 };
+use crate::scene::view::CUBE_FACES;
 use crate::scene::MAX_LIGHTS;
 
-/// Passes of a frame at most: a light's three color passes, for every light.
-pub const MAX_PASSES: usize = 3 * MAX_LIGHTS;
+/// Passes of a frame at most: a light view's three color passes, for every view of every light (a point light
+/// with objects on every side has a view per cube face).
+pub const MAX_PASSES: usize = 3 * MAX_LIGHTS * CUBE_FACES;
 use crate::settings::ResolvedSettings as Settings;
 use crate::vk::{Buffer, Device, Image, VkResult};
 use ash::vk;
@@ -156,8 +158,9 @@ impl Targets {
             && self.receivers.first().is_some_and(|r| r.flux.format == vk::Format::R32_SFLOAT)
     }
 
-    /// `aa`: eye-view supersampling per side; `lights`: how many lights get their own receiver maps
-    /// (1..=MAX_LIGHTS); `passes`: uniforms, one per light and color channel; `slots`: frames in flight.
+    /// `aa`: eye-view supersampling per side; `lights`: how many light views get their own receiver maps
+    /// (1..=MAX_LIGHTS·CUBE_FACES); `passes`: uniforms, one per light view and color channel; `slots`: frames in
+    /// flight.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &Arc<Device>,

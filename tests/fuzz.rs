@@ -88,8 +88,8 @@ fn check_scene(scene: &Scene) {
     let settings = ResolvedSettings { gbuffer_res: 64, caustic_res: 64, ..ResolvedSettings::default() };
     for c in &scene.cameras {
         let view = CameraView::new(c, 64, 48, scene.bounds());
-        for i in 0..scene.lights.len() {
-            let _ = Views::new(scene, &settings, &view, i);
+        for e in caustics::emitters(scene).into_iter().flatten() {
+            let _ = Views::new(scene, &settings, &view, e);
         }
     }
 }

@@ -37,14 +37,32 @@ float geo_dist(sampler2D t, ivec2 p) { return texelFetch(t, p, 0).w; }
 // the light that reaches p: the photons deposit only there (glsl/wave.comp, ACC_UNSEEN), and the receivers' shading
 // reads only there (common/receiver.glsl). Returns p's uv in the view. Defined where common/view.glsl came first.
 #ifdef VIEW_GLSL
-bool receiver_seen(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
-    uv = view_uv(lv, p);
-    if (!uv_inside_strict(uv)) return false;
-    ivec2 size = textureSize(recv, 0);
-    float r_dist = geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1));
+// p's uv in view lv, and whether it lies in the window in front of the view (a point behind a perspective view
+// projects through its origin into the window).
+bool view_holds(GpuView lv, vec3 p, out vec2 uv) {
+    vec3 img = view_image(lv, p);
+    uv = (img.xy - lv.window.xy) / lv.window.zw;
+    return uv_inside_strict(uv) && (view_is_ortho(lv) || img.z > 0.0);
+}
+
+// Whether the distance r_dist that lv's texel at p stores is p's own (within four texels' footprint).
+bool stored_distance_is(GpuView lv, vec3 p, float r_dist) {
     float d = view_dist(lv, p);
     float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
     return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
+}
+
+bool receiver_seen(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
+    if (!view_holds(lv, p, uv)) return false;
+    ivec2 size = textureSize(recv, 0);
+    return stored_distance_is(lv, p, geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1)));
+}
+
+// The same, where the distance is the .w of a float image (the eye's receiver radiance).
+bool receiver_seen(GpuView lv, sampler2D recv, vec3 p, out vec2 uv) {
+    if (!view_holds(lv, p, uv)) return false;
+    ivec2 size = textureSize(recv, 0);
+    return stored_distance_is(lv, p, geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1)));
 }
 #endif
 

@@ -101,8 +101,10 @@ pub(crate) struct FramePlan<'a> {
     /// The uniforms of each pass (light-major: one per light and color channel), already written to the slot's
     /// uniform buffers.
     pub data: &'a [FrameData],
-    /// Per light: whether a refractor lies in its light (its caustic stages run).
+    /// Per light view: whether a refractor lies in its light (its caustic stages run).
     pub caustics: &'a [bool],
+    /// Per light view: its light and cube face.
+    pub emitters: &'a [crate::renderer::Emitter],
     /// Color passes per light: 1, or 3 when some glass needs color and the photons cannot carry it.
     pub channels: usize,
     /// The first light's photon view (for the report).
@@ -350,7 +352,8 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
             }
         }
         rec.report.lights.push(LightReport {
-            light: c.light,
+            light: plan.emitters[c.light].light,
+            face: plan.emitters[c.light].face,
             // The pass's channel code, as its uniforms give it to the shaders.
             channel: c.data.pass.channel,
             caustics,

@@ -38,6 +38,8 @@ impl std::str::FromStr for Aov {
 pub struct LightReport {
     /// The light's index in the scene.
     pub light: usize,
+    /// Its cube face, for a point light with a view per face (docs/design.md "Lights that shine every way").
+    pub face: Option<u8>,
     /// 0: the gray pass; 1, 2, 3: red, green, blue; `CHANNEL_RGB`, `CHANNEL_SPECTRAL`: photons that carry their
     /// color or a wavelength ([`LightReport::channel_name`]).
     pub channel: u32,

@@ -19,7 +19,7 @@ pub use crate::frame::{Aov, AovData, FrameReport, SlotVerdict};
 pub use estimate::FrameEstimate;
 pub use queue::MAX_FRAMES_IN_FLIGHT;
 pub use scene_api::{InstanceId, MeshId};
-pub use views::Views;
+pub use views::{emitters, lights_without_receivers, Emitter, Views};
 
 use crate::error::{Error, Result};
 use crate::frame::{FramePlan, FrameResources, Rec, SceneUpdate};
@@ -259,6 +259,12 @@ impl Renderer {
         check_transport(&scene, &config)?;
         check_lights(&scene)?;
         check_media(&scene)?;
+        for i in views::lights_without_receivers(&scene) {
+            log::warn!(
+                "{}: light {i} reaches no receiver: it lights only the glass (is it aimed where you meant?)",
+                scene.path.display()
+            );
+        }
         let mut recorder = Recorder::new(&device)?;
         let t0 = Instant::now();
         let instances = scene_api::Instances::of(&scene);
@@ -338,8 +344,9 @@ impl Renderer {
         Ok(())
     }
 
-    /// Replace light `index` (its position, target, power...). Checked as a whole scene would be: a light
-    /// that would see an object behind it is refused, and the scene keeps the light it had.
+    /// Replace light `index` (its position, target, power...). Checked as a whole scene would be: a spot light
+    /// that would see glass behind it, or a point light inside glass, is refused, and the scene keeps the light it
+    /// had.
     pub fn set_light(&mut self, index: usize, light: crate::scene::Light) -> Result<()> {
         if index >= self.scene.lights.len() {
             return Err(Error::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
@@ -351,7 +358,13 @@ impl Renderer {
             16,
             self.scene.bounds(),
         );
-        if let Err(e) = Views::new(&self.scene, &self.config, &view, index) {
+        let checked = views::emitters(&self.scene).and_then(|es| {
+            es.into_iter().filter(|e| e.light == index).try_for_each(|e| {
+                Views::new(&self.scene, &self.config, &view, e)?;
+                Ok(())
+            })
+        });
+        if let Err(e) = checked {
             self.scene.lights[index] = old;
             return Err(e);
         }
@@ -547,7 +560,7 @@ impl Renderer {
     /// frame).
     fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> Result<()> {
         self.tracker.prune();
-        let lights = self.scene.lights.len();
+        let lights = views::emitters(&self.scene)?.len();
         let passes = lights * self.color_passes(s);
         let key = TargetsKey::new(s, passes, self.queue.frames_in_flight());
         let same_key = self.targets_key == Some(key);
@@ -785,11 +798,11 @@ impl Renderer {
             blocking_submits: self.recorder.blocking_submits - submits,
             wait_idles: self.device.wait_idle_count() - idles,
         };
-        let nl = self.scene.lights.len();
-        // Color: 3 passes per light (red, green, blue) when some glass disperses, or absorbs unequally and the
-        // photons cannot carry their color, else 1.
+        // Color: 3 passes per light view (red, green, blue) when some glass disperses, or absorbs unequally and
+        // the photons cannot carry their color, else 1.
         let nc = self.color_passes(&s);
-        let views = (0..nl).map(|i| Views::new(&self.scene, &s, camera, i)).collect::<Result<Vec<_>>>()?;
+        let emitters = views::emitters(&self.scene)?;
+        let views = emitters.iter().map(|&e| Views::new(&self.scene, &s, camera, e)).collect::<Result<Vec<_>>>()?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
@@ -804,7 +817,7 @@ impl Renderer {
             self.targets_key,
         );
         let targets = self.targets.as_mut().expect("targets");
-        let data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &views, targets, nc);
+        let data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &emitters, &views, targets, nc);
         let eye_deposit = targets.eye_deposit(&s);
         let eye_view =
             eye_deposit.then(|| (bytemuck::bytes_of(&data[0].frame.camera).to_vec(), self.targets_generation));
@@ -831,6 +844,7 @@ impl Renderer {
             settings: &s,
             data: &data,
             caustics: &caustics,
+            emitters: &emitters,
             channels: nc,
             photon_view: views[0].photon,
             reused,

@@ -1,7 +1,7 @@
 //! The uniforms of one pass (`FrameData`, src/gpu_types.rs): its light's views and power, the camera, the settings the
 //! shaders read, and the exposure.
 
-use super::Views;
+use super::{Emitter, Views};
 use crate::gpu_types::{FrameData, FrameUniforms, GpuView, LightUniforms, PassUniforms};
 use crate::scene::view::{CameraView, LightView};
 use crate::scene::Projection;
@@ -12,11 +12,12 @@ use crate::shaders::consts::*;
 use crate::targets::Targets;
 use glam::Vec3;
 
-/// The uniforms of every pass, light-major: `nc` color passes per light (`views` per light).
+/// The uniforms of every pass, light-view-major: `nc` color passes per light view (`views` per emitter).
 pub(crate) fn pass_data(
     scene: &Scene,
     scene_buffers: &SceneBuffers,
     s: &ResolvedSettings,
+    emitters: &[Emitter],
     views: &[Views],
     targets: &Targets,
     nc: usize,
@@ -29,12 +30,20 @@ pub(crate) fn pass_data(
         _ => c as u32 + 1,
     };
     (0..views.len() * nc)
-        .map(|p| frame_data(scene, scene_buffers, s, &views[p / nc], targets, p / nc, channel(p % nc)))
+        .map(|p| {
+            let v = p / nc;
+            let mut d = frame_data(scene, scene_buffers, s, &views[v], targets, emitters[v].light, channel(p % nc));
+            // The environment's light is added once, by the frame's first light view.
+            if v > 0 {
+                d.pass.sky = 0.0;
+            }
+            d
+        })
         .collect()
 }
 
-/// The uniforms of one pass: light `index` (its views and power; the exposure follows the first light) and
-/// color `channel` (0: one gray pass; 1, 2, 3: red, green, blue; CHANNEL_RGB: color photons; CHANNEL_SPECTRAL:
+/// The uniforms of one pass: a view of light `index` (its views and power; the exposure follows the first light)
+/// and color `channel` (0: one gray pass; 1, 2, 3: red, green, blue; CHANNEL_RGB: color photons; CHANNEL_SPECTRAL:
 /// spectral photons).
 pub(crate) fn frame_data(
     scene: &Scene,
@@ -149,7 +158,7 @@ impl GpuView {
         GpuView {
             view_proj: v.view_proj().to_cols_array(),
             origin: v4(v.origin, if v.kind == LightKind::Directional { 1.0 } else { 0.0 }),
-            right: v4(v.right, v.cos_cone),
+            right: v4(v.right, if v.face { VIEW_SQUARE_DOMAIN as f32 } else { v.cos_cone }),
             down: v4(v.down, v.near),
             forward: v4(v.forward, v.far),
             window: [v.window.x0, v.window.y0, v.window.w, v.window.w],

@@ -43,7 +43,15 @@ pub struct LightView {
     pub far: f32,
     /// Cosine of the cone half-angle (spot); -1 for directional lights.
     pub cos_cone: f32,
+    /// A face of a point light's cube ([`LightView::cube_face`]): the view's domain is the square |x|, |y| ≤ 1 of
+    /// its image plane, and it lights, emits and deposits only there.
+    pub face: bool,
 }
+
+/// The six faces of a point light's cube, in the light's frame (right, down, forward), each as the frame of a
+/// 90° view (right', down', forward') with right' × down' = forward': +forward, −forward, +right, −right, +down,
+/// −down.
+pub const CUBE_FACES: usize = 6;
 
 fn rows_to_mat(rows: [[f32; 4]; 4]) -> Mat4 {
     Mat4::from_cols_array_2d(&rows).transpose()
@@ -71,7 +79,115 @@ impl LightView {
             near: 0.01,
             far: 100.0,
             cos_cone: if light.kind == LightKind::Spot { light.cone.cos() } else { -1.0 },
+            face: false,
         }
+    }
+
+    /// Face `k` (0..[`CUBE_FACES`]) of point light `light`'s cube: a 90° view whose window is its whole square
+    /// (near and far planes still to fit: [`LightView::fit_face`]).
+    pub fn cube_face(light: &Light, k: usize) -> LightView {
+        let (r, d, f) = Self::basis(light);
+        let (right, down, forward) = [(r, d, f), (-r, d, -f), (d, f, r), (-d, f, -r), (f, r, d), (-f, r, -d)][k];
+        LightView { right, down, forward, face: true, ..Self::frame(light) }
+    }
+
+    /// The parts of a mesh (`positions`, three `indices` per triangle) inside this face's frustum (|x|, |y| ≤ 1 on
+    /// its image plane, in front of the light): the image-plane points and depths of the corners of the
+    /// triangles clipped to it, appended to `out`. A mesh wholly inside adds its vertices; wholly outside one
+    /// plane, nothing.
+    pub fn face_points(&self, positions: &[Vec3], indices: &[u32], out: &mut Vec<(Vec2, f32)>) {
+        self.pyramid_points(1.0, positions, indices, out)
+    }
+
+    /// Whether some triangle of a mesh reaches into spot light `light`'s cone (conservatively: the square pyramid
+    /// around it).
+    pub fn spot_reaches(light: &Light, positions: &[Vec3], indices: &[u32]) -> bool {
+        let mut out = Vec::new();
+        Self::frame(light).pyramid_points(light.cone.tan(), positions, indices, &mut out);
+        !out.is_empty()
+    }
+
+    /// [`LightView::face_points`] for the pyramid |x|, |y| ≤ `half` of the image plane.
+    fn pyramid_points(&self, half: f32, positions: &[Vec3], indices: &[u32], out: &mut Vec<(Vec2, f32)>) {
+        let local = |p: Vec3| {
+            let d = p - self.origin;
+            Vec3::new(d.dot(self.right), d.dot(self.down), d.dot(self.forward))
+        };
+        // Inside where every one of these is >= 0 (the last keeps the depth positive).
+        let planes = |v: Vec3| {
+            let h = v.z * half;
+            [h - v.x, h + v.x, h - v.y, h + v.y, v.z - 1e-6]
+        };
+        let project = |v: Vec3| (Vec2::new(v.x / v.z, v.y / v.z).clamp(Vec2::splat(-half), Vec2::splat(half)), v.z);
+        let pts: Vec<Vec3> = positions.iter().map(|&p| local(p)).collect();
+        let mut all_in = true;
+        let mut out_of = [true; 5];
+        for v in &pts {
+            let g = planes(*v);
+            all_in &= g.iter().all(|&x| x >= 0.0);
+            for (o, x) in out_of.iter_mut().zip(g) {
+                *o &= x < 0.0;
+            }
+        }
+        if out_of.iter().any(|&o| o) {
+            return;
+        }
+        if all_in {
+            out.extend(pts.iter().map(|&v| project(v)));
+            return;
+        }
+        let mut poly = Vec::with_capacity(9);
+        let mut next = Vec::with_capacity(9);
+        for t in indices.chunks_exact(3) {
+            poly.clear();
+            poly.extend(t.iter().map(|&i| pts[i as usize]));
+            for k in 0..5 {
+                next.clear();
+                for (j, &a) in poly.iter().enumerate() {
+                    let b = poly[(j + 1) % poly.len()];
+                    let (ga, gb) = (planes(a)[k], planes(b)[k]);
+                    if ga >= 0.0 {
+                        next.push(a);
+                    }
+                    if (ga >= 0.0) != (gb >= 0.0) {
+                        next.push(a + (b - a) * (ga / (ga - gb)));
+                    }
+                }
+                std::mem::swap(&mut poly, &mut next);
+                if poly.is_empty() {
+                    break;
+                }
+            }
+            out.extend(poly.iter().map(|&v| project(v)));
+        }
+    }
+
+    /// This face with its window fitted around `points` (image-plane points and depths from
+    /// [`LightView::face_points`]), padded by `pad_texels` texels of a `resolution`² map and kept inside the
+    /// face's square, and near and far planes around `depths`. `points` empty: the whole square. None when
+    /// `depths` is empty.
+    pub fn fit_face(
+        mut self,
+        points: &[(Vec2, f32)],
+        depths: &[(Vec2, f32)],
+        resolution: u32,
+        pad_texels: f32,
+    ) -> Option<LightView> {
+        let (dmin, dmax) = depths.iter().fold((f32::INFINITY, 0.0f32), |(a, b), &(_, c)| (a.min(c), b.max(c)));
+        if depths.is_empty() || dmax <= 0.0 {
+            return None;
+        }
+        if !points.is_empty() {
+            let lo = points.iter().fold(Vec2::ONE, |a, &(p, _)| a.min(p));
+            let hi = points.iter().fold(Vec2::NEG_ONE, |a, &(p, _)| a.max(p));
+            let half = ((hi - lo) * 0.5).max_element().max(1e-6);
+            let half = (half * (1.0 + 2.0 * pad_texels / resolution as f32) + 1e-7).min(1.0);
+            let center = ((lo + hi) * 0.5).clamp(Vec2::splat(half - 1.0), Vec2::splat(1.0 - half));
+            self.window = Window { x0: center.x - half, y0: center.y - half, w: 2.0 * half };
+        }
+        self.far = dmax * 1.05 + 1e-3;
+        self.near = (dmin * 0.5).max(self.far * 1e-4);
+        Some(self)
     }
 
     /// (x, y) on the image plane and the depth along `forward`.
@@ -391,5 +507,67 @@ mod tests {
         let clip = v.view_proj() * Vec3::new(0.5, 0.0, -0.5).extend(1.0);
         let want = v.project(Vec3::new(0.5, 0.0, -0.5)).unwrap() / 128.0 - Vec2::ONE;
         assert!((clip.truncate().truncate() / clip.w - want).length() < 1e-5);
+    }
+
+    fn point() -> Light {
+        Light {
+            kind: LightKind::Point,
+            position: Vec3::new(0.1, 1.0, 0.2),
+            target: Vec3::new(0.3, 0.0, -0.1),
+            ..spot()
+        }
+    }
+
+    /// Each face is a right-handed orthonormal frame, and the six squares hold every direction exactly once (away
+    /// from the seams).
+    #[test]
+    fn cube_faces_partition_the_sphere() {
+        let faces: Vec<LightView> = (0..CUBE_FACES).map(|k| LightView::cube_face(&point(), k)).collect();
+        for f in &faces {
+            assert!((f.right.cross(f.down) - f.forward).length() < 1e-6 && f.face);
+        }
+        let mut seed = 12345u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        for _ in 0..2000 {
+            let d = Vec3::new(rnd(), rnd(), rnd());
+            if d.length() < 0.1 {
+                continue;
+            }
+            let inside = faces
+                .iter()
+                .filter(|f| {
+                    let (xy, c) = f.image_coords(f.origin + d);
+                    c > 0.0 && xy.abs().max_element() < 1.0
+                })
+                .count();
+            assert_eq!(inside, 1, "{d}");
+        }
+    }
+
+    /// A triangle through a face's frustum is clipped to it; one behind the light, or beside the frustum, adds
+    /// nothing; one inside adds its corners.
+    #[test]
+    fn face_points_clip_to_the_frustum() {
+        let f = LightView::cube_face(&point(), 0);
+        let at = |x: f32, y: f32, c: f32| f.origin + f.right * x + f.down * y + f.forward * c;
+        let mut out = Vec::new();
+        f.face_points(&[at(-5.0, 0.0, 1.0), at(5.0, -0.5, 1.0), at(0.0, 5.0, 1.0)], &[0, 1, 2], &mut out);
+        assert!(out.len() >= 3 && out.iter().all(|(xy, c)| xy.abs().max_element() <= 1.0 && *c > 0.0), "{out:?}");
+        assert!(
+            out.iter().any(|(xy, _)| (xy.x - 1.0).abs() < 1e-5) && out.iter().any(|(xy, _)| (xy.y - 1.0).abs() < 1e-5)
+        );
+        let mut none = Vec::new();
+        f.face_points(&[at(0.0, 0.0, -1.0), at(1.0, 0.0, -1.0), at(0.0, 1.0, -2.0)], &[0, 1, 2], &mut none);
+        f.face_points(&[at(3.0, 0.0, 1.0), at(4.0, 0.0, 1.0), at(3.5, 0.5, 2.0)], &[0, 1, 2], &mut none);
+        assert!(none.is_empty(), "{none:?}");
+        let mut inside = Vec::new();
+        f.face_points(&[at(0.1, 0.1, 1.0), at(0.2, 0.1, 1.0), at(0.1, 0.3, 2.0)], &[0, 1, 2], &mut inside);
+        assert_eq!(inside.len(), 3);
+        let fitted = f.fit_face(&inside, &inside, 64, 1.0).unwrap();
+        let w = fitted.window;
+        assert!(w.x0 >= -1.0 && w.y0 >= -1.0 && w.x0 + w.w <= 1.0 && w.y0 + w.w <= 1.0, "{w:?}");
     }
 }

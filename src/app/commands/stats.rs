@@ -162,6 +162,7 @@ pub(super) fn light_rows(r: &Renderer, last: &FrameReport) -> Value {
             let channel = rep.channel_name();
             let mut row = json!({
                 "light": rep.light,
+                "face": rep.face,
                 "channel": channel,
                 "kind": format!("{:?}", l.kind).to_lowercase(),
                 "intensity": l.intensity,
