@@ -163,8 +163,21 @@ pub fn top_reference_at(
     side: u32,
     time: f32,
 ) -> caustics::image_io::RgbImage {
+    camera_reference(scene, "top", aov, paths, photons, side, time)
+}
+
+/// [`top_reference_at`] through the scene's orthographic camera `camera`.
+pub fn camera_reference(
+    scene: &str,
+    camera: &str,
+    aov: caustics::reference::Aov,
+    paths: caustics::reference::Paths,
+    photons: u64,
+    side: u32,
+    time: f32,
+) -> caustics::image_io::RgbImage {
     let p = caustics::reference::RefParams {
-        camera: Some("top".into()),
+        camera: Some(camera.into()),
         aov,
         paths,
         photons,
