@@ -43,16 +43,14 @@ pub struct FrameUniforms {
     pub exposure: f32,
     /// Start of each coverage mip in the coverage buffer.
     pub pyramid: [[u32; 4]; (MAX_PYRAMID_MIPS / 4) as usize],
-    /// The refractor g-buffers' side R, log2(R/64), the caustic map's side M, and the coverage pyramid's mips.
+    /// The refractor g-buffers' side R, log2(R/64), and the caustic map's side M.
     pub gbuffer_res: u32,
     pub gbuffer_level: u32,
     pub caustic_res: u32,
-    pub pyramid_mips: u32,
-    /// The traversal: its deepest level, its metric (`Metric::code`), whether an overflowing batch splits
-    /// (1) or drops its work (0), the first level checked for convergence, and the photons one batch may emit
-    /// (`Settings::batch_photons`).
+    /// The traversal: its deepest level (its metric is compiled into its pipeline, `Metric::code`), whether an
+    /// overflowing batch splits (1) or drops its work (0), the first level checked for convergence, and the
+    /// photons one batch may emit (`Settings::batch_photons`).
     pub max_level: u32,
-    pub metric: u32,
     pub batching: u32,
     pub check_level: u32,
     pub batch_photons: u32,
@@ -83,6 +81,8 @@ pub struct FrameUniforms {
     /// 1: the eye deposit is on: a landing the light's caustic map cannot hold is deposited in the eye's image
     /// where the camera sees it (docs/design.md "The eye deposit").
     pub eye_deposit: u32,
+    /// To a multiple of 16 bytes, as std140 places the struct.
+    pub pad: [u32; 2],
 }
 
 /// A light's part of the uniforms: its views, its power, and its color as a spectrum.
@@ -487,9 +487,9 @@ pub struct SceneUpdatePush {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct WaterPush {
-    /// Rows of world_from_object's 3x4 affine part (mode 0).
+    /// Rows of world_from_object's 3x4 affine part (the plain build).
     pub rows: [[f32; 4]; 3],
-    /// Rows of the inverse transpose of its 3x3 part (mode 0).
+    /// Rows of the inverse transpose of its 3x3 part (the plain build).
     pub nrows: [[f32; 4]; 3],
     /// The scene's time, s.
     pub time: f32,
@@ -533,14 +533,15 @@ pub struct WaterStepPush {
     pub bodies: [[f32; 4]; 4],
 }
 
-/// Push constants of morph.comp: one morphing object's vertices weighted by its morph targets (mode 0: its raster
-/// vertices, to world space; mode 1: its BVH triangles, in object space, read through their rest corners).
+/// Push constants of morph.comp: one morphing object's vertices weighted by its morph targets (the plain build: its
+/// raster vertices, to world space; the MORPH_BVH build: its BVH triangles, in object space, read through their
+/// rest corners).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct MorphPush {
-    /// Rows of world_from_object's 3x4 affine part (mode 0).
+    /// Rows of world_from_object's 3x4 affine part (the plain build).
     pub rows: [[f32; 4]; 3],
-    /// Rows of the inverse transpose of its 3x3 part (mode 0).
+    /// Rows of the inverse transpose of its 3x3 part (the plain build).
     pub nrows: [[f32; 4]; 3],
     /// Its base vertices in the morph data (targets follow, `vertices` apart), its vertex and target counts, and
     /// its first weight.
@@ -548,7 +549,8 @@ pub struct MorphPush {
     pub vertices: u32,
     pub targets: u32,
     pub first_weight: u32,
-    /// First vertex (mode 0) or rest triangle (mode 1) read, first vertex or BVH triangle written, and how many.
+    /// First vertex (the plain build) or rest triangle (MORPH_BVH) read, first vertex or BVH triangle written, and
+    /// how many.
     pub src: u32,
     pub dst: u32,
     pub count: u32,

@@ -38,7 +38,8 @@ impl Metric {
         }
     }
 
-    /// The code the traverse shader reads (`FrameUniforms.metric`).
+    /// Its index among the traversal's pipelines (build.rs compiles traverse.comp per metric, TRAVERSE_METRIC
+    /// 1 for max-error and 2 for flux-error; max-level's traversal is TRAVERSE_MAX_LEVEL's).
     pub fn code(self) -> u32 {
         match self {
             Metric::MaxLevel => 0,

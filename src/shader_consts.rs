@@ -96,10 +96,10 @@ pub const RAY_VEC4S_DIFFERENTIAL: u32 = 3;
 /// vec4s a ray's medium adds, last in its entry, when the scene has absorbing or overlapping media: a
 /// `GpuRayMedium`.
 pub const RAY_VEC4S_MEDIUM: u32 = 1;
-/// `FrameData::channel` of a pass whose photons carry their color (red, green and blue at once; glsl/wave.comp
+/// `PassUniforms::channel` of a pass whose photons carry their color (red, green and blue at once; glsl/wave.comp
 /// `WAVE_COLOR`): 0 is one gray pass, 1-3 one channel each.
 pub const CHANNEL_RGB: u32 = 4;
-/// `FrameData::channel` of a pass of spectral photons (each a wavelength, its RGB deposited; glsl/wave.comp
+/// `PassUniforms::channel` of a pass of spectral photons (each a wavelength, its RGB deposited; glsl/wave.comp
 /// `WAVE_SPECTRAL`).
 pub const CHANNEL_SPECTRAL: u32 = 5;
 /// The most volumes with a priority a ray can be inside at once (`GpuRayMedium::inside`): one more is not entered.

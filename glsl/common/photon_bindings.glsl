@@ -1,4 +1,5 @@
-// The binding layout shared by every photon pass (init, plan, traverse, stats, dense emit, splat).
+// The binding layout shared by every photon pass (init, traverse, stats, dense emit, trace, transport, wave, the
+// splats and their collapse).
 // Each binding's index is a constant of src/shader_consts.rs (PB_*), which src/passes/photons.rs binds by too.
 #ifndef PHOTON_BINDINGS_GLSL
 #define PHOTON_BINDINGS_GLSL

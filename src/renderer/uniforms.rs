@@ -105,9 +105,7 @@ pub(crate) fn frame_data(
         gbuffer_res: s.gbuffer_side(),
         gbuffer_level: s.gbuffer_level(),
         caustic_res: s.caustic_res,
-        pyramid_mips: s.gbuffer_level() + 1,
         max_level: s.level,
-        metric: s.metric.code(),
         batching: s.batching as u32,
         check_level: s.check_level,
         batch_photons: s.batch_photons(targets.photon.capacity),
@@ -126,6 +124,7 @@ pub(crate) fn frame_data(
         weak_fraction: s.weak_branches,
         weak_block: s.weak_block as f32,
         eye_deposit: targets.eye_deposit(s) as u32,
+        pad: [0; 2],
     };
     let light = LightUniforms {
         photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
