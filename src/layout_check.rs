@@ -94,7 +94,8 @@ fn a_shader_that_reads_a_struct_with_another_layout_fails_the_check() {
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
     assert!(e.contains("FrameUniforms.pyramid has an array stride of 16 bytes in SPIR-V, 8 in Rust"), "{e}");
     // A member the shader does not have.
-    let last = "    pub sky: f32,\n    /// To a multiple of 16 bytes, as std140 places the struct.\n    pub pad: [u32; 2],\n}";
+    let last =
+        "    pub sky: f32,\n    /// To a multiple of 16 bytes, as std140 places the struct.\n    pub pad: [u32; 2],\n}";
     let more = "    pub sky: f32,\n    pub pad: u32,\n    pub more: u32,\n}";
     let wrong = real_structs(Some((last, more)));
     let e = structs::check_spirv(name, words, &wrong).unwrap_err();
