@@ -558,9 +558,9 @@ impl Renderer {
     /// only touches the eye-sized targets, not the light maps or the photon buffer.
     /// Also drops the tracker's histories of the buffers and images destroyed since the last frame (it runs once per
     /// frame).
-    fn ensure_targets(&mut self, s: &ResolvedSettings, width: u32, height: u32, aa: u32) -> Result<()> {
+    /// `lights`: the frame's light views ([`views::emitters`]), each with its own receiver maps.
+    fn ensure_targets(&mut self, s: &ResolvedSettings, lights: usize, width: u32, height: u32, aa: u32) -> Result<()> {
         self.tracker.prune();
-        let lights = views::emitters(&self.scene)?.len();
         let passes = lights * self.color_passes(s);
         let key = TargetsKey::new(s, passes, self.queue.frames_in_flight());
         let same_key = self.targets_key == Some(key);
@@ -767,7 +767,8 @@ impl Renderer {
             _ if desc.preview => 1,
             _ => s.aa,
         };
-        self.ensure_targets(&s, camera.width, camera.height, aa)?;
+        let emitters = views::emitters(&self.scene)?;
+        self.ensure_targets(&s, emitters.len(), camera.width, camera.height, aa)?;
         if s.transport == Transport::Exact && !self.scene_buffers.bvh.has(s.bvh_layout) {
             // The waves and the eye view's glass trace the BVH: built, and this layout uploaded, once needed. The
             // buffers it replaces are bound by the frames in flight.
@@ -801,7 +802,6 @@ impl Renderer {
         // Color: 3 passes per light view (red, green, blue) when some glass disperses, or absorbs unequally and
         // the photons cannot carry their color, else 1.
         let nc = self.color_passes(&s);
-        let emitters = views::emitters(&self.scene)?;
         let views = emitters.iter().map(|&e| Views::new(&self.scene, &s, camera, e)).collect::<Result<Vec<_>>>()?;
         // Reuse by dependency: the light-view stages, the photons and the caustic map depend on the lights, the
         // geometry and materials, and the settings, not on the camera or the output size. When none of those
