@@ -124,8 +124,10 @@ impl Views {
         let (index, light) = (e.light, &scene.lights[e.light]);
         if let Some(k) = e.face {
             let face = LightView::cube_face(light, k as usize);
-            let all = face_points(scene, &face, scene.objects.iter());
+            // The refractors and the receivers partition the objects: each is clipped once.
             let refr = face_points(scene, &face, scene.refractors());
+            let mut all = face_points(scene, &face, scene.receivers());
+            all.extend_from_slice(&refr);
             let photon =
                 (!refr.is_empty()).then(|| face.fit_face(&refr, &refr, settings.gbuffer_side(), 1.0)).flatten();
             let receiver = face.fit_face(&[], &all, settings.caustic_res, 1.0).unwrap_or(face);
