@@ -1,62 +1,14 @@
-//! The binding check: each compiled shader's descriptors, reflected from its SPIR-V, against the Rust declaration
-//! of the layout it binds by. A shared layout is a table `const NAME: [(u32, BindKind); N] = [(XB_NAME,
-//! BindKind::Kind), ...]` in a pass's source, and a shader binds by it when it (or a file it includes) names its
-//! constants (`binding = XB_...`). A shader that declares a binding the table lacks, or with another kind, fails the
-//! build. Pipelines with a layout of their own (a few bindings, written at the pipeline) are checked when they are
-//! created (src/vk/pipeline.rs), as every pipeline is against the device's limits.
+//! The build's binding checks. A pipeline's descriptor layout is reflected from its SPIR-V when it is created
+//! (src/vk/pipeline.rs), so the shaders are the layout's only source; what the build checks is how they name it:
+//! - every `binding =` in glsl/ names a constant of src/shader_consts.rs, never a number, so that the Rust pass
+//!   binds each resource by the same name (`ordered([(XB_NAME, use), ...])`);
+//! - a shader names the constants of one family (one prefix, `XB_`), the family of the passes that share them;
+//! - every shader of a family declares a binding with one kind: a variant that reads it through a texel view
+//!   where the others load a storage buffer or sample an image is the one allowed difference.
 
 use super::spirv::{Descriptor, Module};
 use std::collections::HashMap;
 use std::path::Path;
-
-/// (binding-constant prefix, the Rust file, its table).
-pub const LAYOUTS: &[(&str, &str, &str)] = &[
-    ("PB_", "src/passes/photons.rs", "LAYOUT"),
-    ("CB_", "src/passes/composite.rs", "LAYOUT"),
-    ("EB_", "src/passes/eye.rs", "SHADE_LAYOUT"),
-];
-
-/// A declared layout: binding → kind (`Uniform`, `Storage`, `Sampled`, `StorageImage`, `Texels`).
-pub struct Layout {
-    pub prefix: &'static str,
-    pub origin: String,
-    pub kinds: HashMap<u32, String>,
-}
-
-/// Reads table `name` of `text` (the file `file`).
-pub fn parse(
-    file: &str,
-    text: &str,
-    name: &str,
-    consts: &HashMap<String, u32>,
-) -> Result<HashMap<u32, String>, String> {
-    let head = format!("const {name}: [(u32, BindKind);");
-    let (start, _) = text
-        .lines()
-        .enumerate()
-        .find(|(_, l)| l.trim_start().starts_with(&head))
-        .ok_or_else(|| format!("{file}: no `{head}` table"))?;
-    let mut kinds = HashMap::new();
-    for (n, line) in text.lines().enumerate().skip(start + 1) {
-        let line = line.trim();
-        if line == "];" {
-            return Ok(kinds);
-        }
-        let at = |m: String| format!("{file}:{}: {m}", n + 1);
-        let entry = line
-            .strip_prefix('(')
-            .and_then(|l| l.strip_suffix("),"))
-            .ok_or_else(|| at(format!("a layout entry reads `(XB_NAME, BindKind::Kind),`: `{line}`")))?;
-        let (constant, kind) = entry.split_once(',').ok_or_else(|| at(format!("no kind in `{line}`")))?;
-        let binding =
-            *consts.get(constant.trim()).ok_or_else(|| at(format!("`{constant}` is not a shader constant")))?;
-        let kind = kind.trim().strip_prefix("BindKind::").ok_or_else(|| at(format!("`{kind}`: not a BindKind")))?;
-        if kinds.insert(binding, kind.to_string()).is_some() {
-            return Err(at(format!("binding {binding} is declared twice")));
-        }
-    }
-    Err(format!("{file}: table {name} has no end"))
-}
 
 /// The text of a GLSL file and of every file it includes (resolved against glsl/), once each.
 pub fn with_includes(glsl: &Path, file: &Path, seen: &mut Vec<std::path::PathBuf>) -> String {
@@ -74,41 +26,83 @@ pub fn with_includes(glsl: &Path, file: &Path, seen: &mut Vec<std::path::PathBuf
     all
 }
 
-/// The layout a shader's source binds by, if it names one's constants (and only one's).
-pub fn layout_of<'a>(shader: &str, text: &str, layouts: &'a [Layout]) -> Result<Option<&'a Layout>, String> {
-    let named: Vec<&Layout> = layouts.iter().filter(|l| text.contains(&format!("binding = {}", l.prefix))).collect();
-    match named.as_slice() {
-        [] => Ok(None),
-        [one] => Ok(Some(one)),
-        _ => Err(format!("{shader}: binds by several layouts' constants")),
-    }
-}
-
-/// Whether a descriptor the shader declares fits the layout's kind. A storage buffer may be read through its texel
-/// view: the pass then binds it as `Texels` for that build (src/vk/pipeline.rs, `with_texels`).
-fn fits(declared: Descriptor, kind: &str) -> bool {
-    matches!(
-        (declared, kind),
-        (Descriptor::Uniform, "Uniform")
-            | (Descriptor::Storage, "Storage")
-            | (Descriptor::Sampled, "Sampled")
-            | (Descriptor::StorageImage, "StorageImage")
-            | (Descriptor::UniformTexel, "Texels" | "Storage")
-    )
-}
-
-/// Checks every descriptor a compiled shader declares against its layout.
-pub fn check(shader: &str, words: &[u32], layout: &Layout) -> Result<(), String> {
-    let module = Module::parse(words).map_err(|e| format!("{shader}: {e}"))?;
-    for (&(set, binding), (declared, var)) in &module.bindings {
-        let kind = layout.kinds.get(&binding).filter(|_| set == 0);
-        if !kind.is_some_and(|k| fits(*declared, k)) {
+/// The names `binding = NAME` gives in `text` (the file `file`), each with its line; a number, or a name that is no
+/// shader constant, is refused with its line.
+pub fn binding_names(file: &str, text: &str, consts: &HashMap<String, u32>) -> Result<Vec<(usize, String)>, String> {
+    let mut names = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let code = line.split("//").next().unwrap_or_default();
+        let Some(at) = code.find("binding") else { continue };
+        let Some(rest) = code[at + "binding".len()..].trim_start().strip_prefix('=') else { continue };
+        let name: String = rest.trim_start().chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+        if name.is_empty() || name.starts_with(|c: char| c.is_ascii_digit()) {
             return Err(format!(
-                "{shader}: `{var}` is set {set}, binding {binding}, a {declared:?} descriptor; {} has {}",
-                layout.origin,
-                kind.map_or("nothing there".to_string(), |k| format!("BindKind::{k}"))
+                "{file}:{}: `binding = {name}`: a binding is named by a constant of src/shader_consts.rs, which the \
+                 pass binds by too",
+                n + 1
             ));
         }
+        if !consts.contains_key(&name) {
+            return Err(format!("{file}:{}: `{name}` is not a constant of src/shader_consts.rs", n + 1));
+        }
+        names.push((n + 1, name));
     }
-    Ok(())
+    Ok(names)
+}
+
+/// The constant family (`XB_`) a shader's source and its includes bind by, if it declares descriptors.
+pub fn family_of(shader: &str, text: &str, consts: &HashMap<String, u32>) -> Result<Option<String>, String> {
+    let mut family: Option<String> = None;
+    for (_, name) in binding_names(shader, text, consts)? {
+        let prefix = name.split_once('_').map_or(name.as_str(), |(p, _)| p).to_string() + "_";
+        match &family {
+            Some(f) if *f != prefix => {
+                return Err(format!("{shader}: binds by the constants of two families, {f} and {prefix}"));
+            }
+            _ => family = Some(prefix),
+        }
+    }
+    Ok(family)
+}
+
+/// Whether two shaders' declarations of one binding agree: the same kind, or a texel buffer where the other reads
+/// a storage buffer or samples an image (a variant that gathers through texels what the others load or sample:
+/// the wide BVH layout's, the resolve of the compute splat's flux texels).
+fn agree(a: Descriptor, b: Descriptor) -> bool {
+    use Descriptor::*;
+    a == b || matches!((a, b), (Storage | Sampled, UniformTexel) | (UniformTexel, Storage | Sampled))
+}
+
+/// What the shaders of each family declare at each binding, as the build meets them.
+#[derive(Default)]
+pub struct Families {
+    /// (family, binding) → the kind, and the shader and variable that declared it first.
+    seen: HashMap<(String, u32), (Descriptor, String, String)>,
+}
+
+impl Families {
+    /// Adds a compiled shader of `family`; refuses a binding it declares with another kind than an earlier shader
+    /// of the family, or outside set 0.
+    pub fn check(&mut self, shader: &str, family: &str, words: &[u32]) -> Result<(), String> {
+        let module = Module::parse(words).map_err(|e| format!("{shader}: {e}"))?;
+        for (&(set, binding), (declared, var)) in &module.bindings {
+            if set != 0 {
+                return Err(format!("{shader}: `{var}` is in set {set}: every binding is in set 0"));
+            }
+            let key = (family.to_string(), binding);
+            match self.seen.get(&key) {
+                Some((kind, first, first_var)) if !agree(*kind, *declared) => {
+                    return Err(format!(
+                        "{shader}: `{var}` is binding {binding} of {family} as a {declared:?} descriptor; {first} \
+                         declares it (`{first_var}`) as {kind:?}"
+                    ));
+                }
+                Some(_) => {}
+                None => {
+                    self.seen.insert(key, (*declared, shader.to_string(), var.clone()));
+                }
+            }
+        }
+        Ok(())
+    }
 }

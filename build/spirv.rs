@@ -30,9 +30,25 @@ pub struct Module {
     /// The (set, binding) of every storage buffer, storage image or storage texel buffer the shader may write:
     /// declared without `readonly` (a buffer block some member of which lacks NonWritable, an image without it).
     pub writable: BTreeSet<(u32, u32)>,
+    /// The push-constant block, if the shader declares one.
+    pub push: Option<PushBlock>,
+}
+
+/// A shader's push-constant block: its size in bytes, and the name of the struct it holds (a block of one struct
+/// member, `layout(push_constant) uniform XBlock { XPush pc; };`) or else the block's own name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PushBlock {
+    pub name: String,
+    pub size: u32,
 }
 
 const OP_NAME: u32 = 5;
+const OP_TYPE_BOOL: u32 = 20;
+const OP_TYPE_INT: u32 = 21;
+const OP_TYPE_FLOAT: u32 = 22;
+const OP_TYPE_VECTOR: u32 = 23;
+const OP_TYPE_MATRIX: u32 = 24;
+const OP_CONSTANT: u32 = 43;
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
 const OP_TYPE_ARRAY: u32 = 28;
@@ -49,10 +65,25 @@ const DEC_NON_WRITABLE: u32 = 24;
 const DEC_BINDING: u32 = 33;
 const DEC_DESCRIPTOR_SET: u32 = 34;
 const DEC_OFFSET: u32 = 35;
+const DEC_MATRIX_STRIDE: u32 = 7;
 
 const SC_UNIFORM_CONSTANT: u32 = 0;
 const SC_UNIFORM: u32 = 2;
+const SC_PUSH_CONSTANT: u32 = 9;
 const SC_STORAGE_BUFFER: u32 = 12;
+
+/// The sizes the build's checks need: of scalars, vectors, matrices, arrays of a constant length and structs.
+#[derive(Default)]
+struct Types {
+    /// Scalar or vector type → bytes.
+    plain: HashMap<u32, u32>,
+    /// Matrix type → (column type, columns).
+    matrices: HashMap<u32, (u32, u32)>,
+    /// Array type of a constant length → the constant's id.
+    lengths: HashMap<u32, u32>,
+    /// Integer constants → value.
+    constants: HashMap<u32, u32>,
+}
 
 fn string(words: &[u32]) -> String {
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).take_while(|&b| b != 0).collect();
@@ -75,6 +106,8 @@ impl Module {
         let mut variables: Vec<(u32, u32, u32)> = Vec::new(); // (pointer type, id, storage class)
         let mut non_writable: HashSet<u32> = HashSet::new(); // variables decorated NonWritable
         let mut non_writable_members: HashMap<u32, HashSet<u32>> = HashMap::new(); // struct → such members
+        let mut types = Types::default();
+        let mut matrix_strides: HashMap<(u32, u32), u32> = HashMap::new(); // (struct, member) → stride
         let mut i = 5;
         while i < words.len() {
             let count = (words[i] >> 16) as usize;
@@ -87,6 +120,22 @@ impl Module {
                 OP_NAME => {
                     m.names.insert(a[0], string(&a[1..]));
                 }
+                OP_TYPE_BOOL => {
+                    types.plain.insert(a[0], 4);
+                }
+                OP_TYPE_INT | OP_TYPE_FLOAT => {
+                    types.plain.insert(a[0], a[1] / 8);
+                }
+                OP_TYPE_VECTOR => {
+                    let bytes = types.plain.get(&a[1]).copied().unwrap_or(0) * a[2];
+                    types.plain.insert(a[0], bytes);
+                }
+                OP_TYPE_MATRIX => {
+                    types.matrices.insert(a[0], (a[1], a[2]));
+                }
+                OP_CONSTANT if a.len() == 3 => {
+                    types.constants.insert(a[1], a[2]);
+                }
                 OP_TYPE_IMAGE => {
                     images.insert(a[0], (a[2], a[6]));
                 }
@@ -95,6 +144,9 @@ impl Module {
                 }
                 OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY => {
                     arrays.insert(a[0], a[1]);
+                    if op == OP_TYPE_ARRAY {
+                        types.lengths.insert(a[0], a[2]);
+                    }
                 }
                 OP_TYPE_STRUCT => {
                     m.struct_members.insert(a[0], a[1..].to_vec());
@@ -122,6 +174,9 @@ impl Module {
                 OP_MEMBER_DECORATE if a[2] == DEC_OFFSET => {
                     m.member_offsets.entry(a[0]).or_default().insert(a[1], a[3]);
                 }
+                OP_MEMBER_DECORATE if a[2] == DEC_MATRIX_STRIDE => {
+                    matrix_strides.insert((a[0], a[1]), a[3]);
+                }
                 OP_MEMBER_DECORATE if a[2] == DEC_NON_WRITABLE => {
                     non_writable_members.entry(a[0]).or_default().insert(a[1]);
                 }
@@ -131,6 +186,19 @@ impl Module {
         }
         for (id, spec_id) in spec {
             m.spec_ids.insert(spec_id, m.names.get(&id).cloned().unwrap_or_default());
+        }
+        for &(ptr, _, class) in &variables {
+            if class != SC_PUSH_CONSTANT {
+                continue;
+            }
+            let block = pointers.get(&ptr).map(|p| p.1).ok_or("a variable without a pointer type")?;
+            let members = m.struct_members.get(&block).cloned().unwrap_or_default();
+            let inner = match members[..] {
+                [only] if m.struct_members.contains_key(&only) => only,
+                _ => block,
+            };
+            let size = m.size_of(block, &types, &matrix_strides)?;
+            m.push = Some(PushBlock { name: m.names.get(&inner).cloned().unwrap_or_default(), size });
         }
         for (ptr, id, class) in variables {
             let Some(&binding) = bindings.get(&id) else { continue };
@@ -178,5 +246,32 @@ impl Module {
             m.bindings.insert((set, binding), (kind, name.unwrap_or_default()));
         }
         Ok(m)
+    }
+
+    /// The bytes a value of type `ty` takes in an explicitly laid out block (a struct: its last member's offset
+    /// plus that member's size).
+    fn size_of(&self, ty: u32, types: &Types, strides: &HashMap<(u32, u32), u32>) -> Result<u32, String> {
+        if let Some(&bytes) = types.plain.get(&ty) {
+            return Ok(bytes);
+        }
+        if let Some(&len) = types.lengths.get(&ty) {
+            let stride = *self.array_strides.get(&ty).ok_or("an array without a stride")?;
+            return Ok(stride * types.constants.get(&len).copied().ok_or("an array of a length not constant")?);
+        }
+        if let Some(members) = self.struct_members.get(&ty) {
+            let mut end = 0;
+            for (k, &member) in members.iter().enumerate() {
+                let offset = self.member_offsets.get(&ty).and_then(|o| o.get(&(k as u32))).copied().unwrap_or(0);
+                let bytes = match types.matrices.get(&member) {
+                    Some(&(_, columns)) => {
+                        strides.get(&(ty, k as u32)).copied().ok_or("a matrix without a stride")? * columns
+                    }
+                    None => self.size_of(member, types, strides)?,
+                };
+                end = end.max(offset + bytes);
+            }
+            return Ok(end);
+        }
+        Err(format!("type {ty}: a size not read"))
     }
 }

@@ -7,10 +7,10 @@
 #include "common/types.glsl"
 #include "common/march.glsl"
 
-layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
-layout(std430, set = 0, binding = 1) buffer CoverageBuf { uint coverage[]; };
-layout(set = 0, binding = 2) uniform usampler2D t_front;
-layout(set = 0, binding = 3) uniform usampler2D t_recv;  // receivers from the light
+layout(std140, set = 0, binding = CV_FRAME) uniform FrameUbo { FrameData u_frame; };
+layout(std430, set = 0, binding = CV_COVERAGE) buffer CoverageBuf { uint coverage[]; };
+layout(set = 0, binding = CV_FRONT) uniform usampler2D t_front;
+layout(set = 0, binding = CV_RECEIVERS) uniform usampler2D t_recv;  // receivers from the light
 
 // Is the refractor surface at this texel in the light, or does a receiver stand between them?
 bool lit(ivec2 p, vec4 front) {

@@ -30,9 +30,7 @@ layout(set = 0, binding = EB_CAUSTICS, rgba32f) uniform image2D o_caustics;  // 
 layout(set = 0, binding = EB_DIRECT, rgba32f) uniform image2D o_direct;    // rgb: direct irradiance (W/m^2)
 #endif
 
-layout(push_constant) uniform Push {
-    uint add;  // 0: the first light (write), 1: a further light (add)
-} pc;
+layout(push_constant) uniform ShadePushBlock { ShadePush pc; };
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 

@@ -10,17 +10,17 @@ layout(local_size_x = LINEAR_WG) in;
 
 // Per morphing object: its base vertices, then each target's displacements, `vertices` apart; two vec4 per
 // vertex: (position, 0), (normal, 0).
-layout(std430, set = 0, binding = 0) readonly buffer Morphs { vec4 morph[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Weights { float weights[]; };
+layout(std430, set = 0, binding = MO_MORPHS) readonly buffer Morphs { vec4 morph[]; };
+layout(std430, set = 0, binding = MO_WEIGHTS) readonly buffer Weights { float weights[]; };
 #ifdef MORPH_BVH
-layout(std430, set = 0, binding = 2) readonly buffer RestTris { vec4 rest_tris[]; };
-layout(std430, set = 0, binding = 3) readonly buffer RestNormals { vec4 rest_normals[]; };
-layout(std430, set = 0, binding = 4) readonly buffer RestCorners { uint rest_corners[]; };
-layout(std430, set = 0, binding = 5) writeonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
+layout(std430, set = 0, binding = MO_REST_TRIS) readonly buffer RestTris { vec4 rest_tris[]; };
+layout(std430, set = 0, binding = MO_REST_NORMALS) readonly buffer RestNormals { vec4 rest_normals[]; };
+layout(std430, set = 0, binding = MO_REST_CORNERS) readonly buffer RestCorners { uint rest_corners[]; };
+layout(std430, set = 0, binding = MO_BVH_TRIS) writeonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = MO_BVH_NORMALS) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
 #else
-layout(std430, set = 0, binding = 2) readonly buffer ObjectVertices { Vertex object_vertices[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer WorldVertices { Vertex world_vertices[]; };
+layout(std430, set = 0, binding = MO_OBJECT_VERTICES) readonly buffer ObjectVertices { Vertex object_vertices[]; };
+layout(std430, set = 0, binding = MO_WORLD_VERTICES) writeonly buffer WorldVertices { Vertex world_vertices[]; };
 #endif
 
 layout(push_constant) uniform MorphPushBlock { MorphPush pc; };

@@ -8,13 +8,13 @@
 layout(local_size_x = LINEAR_WG) in;
 
 const uint NONE = 0xffffffffu;
-layout(std430, set = 0, binding = 0) readonly buffer Nodes { RefitNode nodes[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 2) buffer Boxes { vec4 boxes[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Tris { vec4 tris[]; };
-layout(std430, set = 0, binding = 4) buffer Pair { PairNode pair_nodes[]; };
-layout(std430, set = 0, binding = 5) buffer Single { SingleNode single_nodes[]; };
-layout(std430, set = 0, binding = 6) buffer Threaded { SingleNode threaded_nodes[]; };
+layout(std430, set = 0, binding = RF_NODES) readonly buffer Nodes { RefitNode nodes[]; };
+layout(std430, set = 0, binding = RF_ORDER) readonly buffer Order { uint order[]; };
+layout(std430, set = 0, binding = RF_BOXES) buffer Boxes { vec4 boxes[]; };
+layout(std430, set = 0, binding = RF_TRIS) readonly buffer Tris { vec4 tris[]; };
+layout(std430, set = 0, binding = RF_PAIR) buffer Pair { PairNode pair_nodes[]; };
+layout(std430, set = 0, binding = RF_SINGLE) buffer Single { SingleNode single_nodes[]; };
+layout(std430, set = 0, binding = RF_THREADED) buffer Threaded { SingleNode threaded_nodes[]; };
 
 layout(push_constant) uniform RefitPushBlock { RefitPush pc; };
 

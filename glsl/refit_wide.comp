@@ -9,13 +9,13 @@
 // up. Its meta bytes, inner-child mask and child and triangle bases are kept: the tree's shape does not change.
 layout(local_size_x = LINEAR_WG) in;
 
-layout(std430, set = 0, binding = 0) readonly buffer Order { uint order[]; };
-layout(std430, set = 0, binding = 1) buffer Boxes { vec4 boxes[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Tris { vec4 tris[]; };
+layout(std430, set = 0, binding = RW_ORDER) readonly buffer Order { uint order[]; };
+layout(std430, set = 0, binding = RW_BOXES) buffer Boxes { vec4 boxes[]; };
+layout(std430, set = 0, binding = RW_TRIS) readonly buffer Tris { vec4 tris[]; };
 // A wide node is five uvec4 (src/bvh/records.rs, WideNode); a wide triangle-list entry three (its vertices' bits,
 // the first's w the triangle's index in `tris`).
-layout(std430, set = 0, binding = 3) buffer Nodes { uvec4 nodes[]; };
-layout(std430, set = 0, binding = 4) buffer Prims { uvec4 prims[]; };
+layout(std430, set = 0, binding = RW_NODES) buffer Nodes { uvec4 nodes[]; };
+layout(std430, set = 0, binding = RW_PRIMS) buffer Prims { uvec4 prims[]; };
 
 layout(push_constant) uniform RefitPushBlock { RefitPush pc; };
 

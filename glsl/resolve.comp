@@ -6,13 +6,13 @@
 #include "common/gbuffer.glsl"
 #include "common/splat_levels.glsl"
 
-layout(std140, set = 0, binding = 0) uniform FrameUbo { FrameData u_frame; };
+layout(std140, set = 0, binding = RS_FRAME) uniform FrameUbo { FrameData u_frame; };
 #ifdef RESOLVE_TEXELS
 // The compute splat's flux texels (a texel view of the buffer: level 0, then the coarse levels). The levels from 2
 // up have been added into level 1 (glsl/splat_collapse.comp); level 1's share is added here, as splat_collapse.comp
 // would add it into level 0 (splat_parents and splat_share, glsl/common/splat_levels.glsl), which saves that pass
 // over the whole map and the copy into the flux image.
-layout(set = 0, binding = 1) uniform samplerBuffer t_flux;
+layout(set = 0, binding = RS_FLUX) uniform samplerBuffer t_flux;
 // Color photons: the texels hold a plane per channel (red, green, blue; glsl/splat.comp).
 layout(constant_id = RESOLVE_COLOR_ID) const bool RESOLVE_COLOR = false;
 
@@ -37,15 +37,15 @@ vec3 flux_rgb(ivec2 q, ivec2 size) {
 }
 #else
 // The flux image (the raster splat's target, or the compute splat's level 0 copied into it).
-layout(set = 0, binding = 1) uniform sampler2D t_flux;
+layout(set = 0, binding = RS_FLUX) uniform sampler2D t_flux;
 
 vec3 flux_rgb(ivec2 q, ivec2 size) { return vec3(texelFetch(t_flux, q, 0).r); }
 #endif
-layout(set = 0, binding = 2) uniform usampler2D t_recv;
-layout(set = 0, binding = 3, rgba32f) uniform image2D o_irradiance;
+layout(set = 0, binding = RS_RECEIVERS) uniform usampler2D t_recv;
+layout(set = 0, binding = RS_IRRADIANCE, rgba32f) uniform image2D o_irradiance;
 
 // add: add to the irradiance already there (a frame's remaining batches) instead of writing it.
-layout(push_constant) uniform ResolvePush { uint add; } pc;
+layout(push_constant) uniform ResolvePushBlock { ResolvePush pc; };
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 

@@ -6,10 +6,10 @@
 // mirroring transform swaps two indices of each triangle so that the winding stays counter-clockwise outside.
 layout(local_size_x = LINEAR_WG) in;
 
-layout(std430, set = 0, binding = 0) readonly buffer ObjectVertices { Vertex object_vertices[]; };
-layout(std430, set = 0, binding = 1) writeonly buffer WorldVertices { Vertex world_vertices[]; };
-layout(std430, set = 0, binding = 2) readonly buffer ObjectIndices { uint object_indices[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer WorldIndices { uint world_indices[]; };
+layout(std430, set = 0, binding = SU_OBJECT_VERTICES) readonly buffer ObjectVertices { Vertex object_vertices[]; };
+layout(std430, set = 0, binding = SU_WORLD_VERTICES) writeonly buffer WorldVertices { Vertex world_vertices[]; };
+layout(std430, set = 0, binding = SU_OBJECT_INDICES) readonly buffer ObjectIndices { uint object_indices[]; };
+layout(std430, set = 0, binding = SU_WORLD_INDICES) writeonly buffer WorldIndices { uint world_indices[]; };
 
 layout(push_constant) uniform SceneUpdatePushBlock { SceneUpdatePush pc; };
 

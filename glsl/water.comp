@@ -12,17 +12,17 @@
 layout(local_size_x = LINEAR_WG) in;
 
 #ifdef WATER_BVH
-layout(std430, set = 0, binding = 0) readonly buffer Displaced { vec4 displaced[]; };
-layout(std430, set = 0, binding = 1) readonly buffer RestCorners { uint rest_corners[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer BvhTris { vec4 bvh_tris[]; };
-layout(std430, set = 0, binding = 3) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
+layout(std430, set = 0, binding = WA_BVH_DISPLACED) readonly buffer Displaced { vec4 displaced[]; };
+layout(std430, set = 0, binding = WA_REST_CORNERS) readonly buffer RestCorners { uint rest_corners[]; };
+layout(std430, set = 0, binding = WA_BVH_TRIS) writeonly buffer BvhTris { vec4 bvh_tris[]; };
+layout(std430, set = 0, binding = WA_BVH_NORMALS) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
 #else
 // Two per wave: (direction x, direction z, k, omega), (amplitude, 0, 0, 0).
-layout(std430, set = 0, binding = 0) readonly buffer Waves { vec4 waves[]; };
-layout(std430, set = 0, binding = 1) readonly buffer ObjectVertices { Vertex object_vertices[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer WorldVertices { Vertex world_vertices[]; };
-layout(std430, set = 0, binding = 3) readonly buffer Heights { float heights[]; };
-layout(std430, set = 0, binding = 4) writeonly buffer Displaced { vec4 displaced[]; };
+layout(std430, set = 0, binding = WA_WAVES) readonly buffer Waves { vec4 waves[]; };
+layout(std430, set = 0, binding = WA_OBJECT_VERTICES) readonly buffer ObjectVertices { Vertex object_vertices[]; };
+layout(std430, set = 0, binding = WA_WORLD_VERTICES) writeonly buffer WorldVertices { Vertex world_vertices[]; };
+layout(std430, set = 0, binding = WA_HEIGHTS) readonly buffer Heights { float heights[]; };
+layout(std430, set = 0, binding = WA_DISPLACED) writeonly buffer Displaced { vec4 displaced[]; };
 #endif
 
 layout(push_constant) uniform WaterPushBlock { WaterPush pc; };

@@ -8,7 +8,7 @@
 // drops and bodies (cos, sqrt) do not enter.
 layout(local_size_x = LINEAR_WG) in;
 
-layout(std430, set = 0, binding = 0) buffer Heights { float heights[]; };
+layout(std430, set = 0, binding = WS_HEIGHTS) buffer Heights { float heights[]; };
 
 layout(push_constant) uniform WaterStepPushBlock { WaterStepPush pc; };
 

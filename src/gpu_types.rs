@@ -443,6 +443,35 @@ pub struct WavePush {
     pub may_abort: u32,
 }
 
+/// Push constants of glsl/resolve.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ResolvePush {
+    /// 1: add to what the caustic map holds (the rest of a frame's batches, traced after the first submission ran
+    /// out of batch slots); 0: write it.
+    pub add: u32,
+}
+
+/// Push constants of glsl/eye_shade.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ShadePush {
+    /// 0: the first light (write), 1: a further light (add).
+    pub add: u32,
+}
+
+/// Push constants of the composite and the glass pass (glsl/common/composite_bindings.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CompositePush {
+    /// The glass pass: 1 when each invocation traces a pixel's 2×2 samples of dispersive glass (glsl/glass.comp,
+    /// `glass_pixel`), dispatched over the pixels; 0: one sample an invocation.
+    pub pixels: u32,
+    /// The glass pass: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights; its
+    /// number of lights is a specialization constant, `GlassKey::lights`).
+    pub add: u32,
+}
+
 /// Push constants of glsl/splat_collapse.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -145,20 +145,9 @@ fn a_specialization_constant_takes_its_id_from_the_shared_constants() {
     assert!(e.contains("src/shader_consts.rs"), "{e}");
 }
 
-/// The photon passes' layout as build.rs reads it, with `edit` applied to src/passes/photons.rs first.
-fn photon_layout(edit: Option<(&str, &str)>) -> Result<layouts::Layout, String> {
-    let mut text = std::fs::read_to_string(format!("{ROOT}/src/passes/photons.rs")).unwrap();
-    if let Some((a, b)) = edit {
-        assert!(text.contains(a), "{a}");
-        text = text.replace(a, b);
-    }
-    let kinds = layouts::parse("src/passes/photons.rs", &text, "LAYOUT", &consts())?;
-    Ok(layouts::Layout { prefix: "PB_", origin: "photons.rs LAYOUT".into(), kinds })
-}
-
 #[test]
-fn every_shader_of_a_shared_layout_declares_what_the_rust_table_does() {
-    let layout = photon_layout(None).unwrap();
+fn the_shaders_of_a_binding_family_declare_each_binding_with_one_kind() {
+    let mut families = layouts::Families::default();
     for (name, words) in [
         ("wave", crate::shaders::WAVE_COMP.words()),
         ("wave wide (texels)", crate::shaders::WAVE_COMP_WIDE.words()),
@@ -166,27 +155,46 @@ fn every_shader_of_a_shared_layout_declares_what_the_rust_table_does() {
         ("splat.vert", crate::shaders::SPLAT_VERT.words()),
         ("trace", crate::shaders::TRACE_COMP.words()),
     ] {
-        layouts::check(name, words, &layout).unwrap();
+        families.check(name, "PB_", words).unwrap();
     }
-    // Which layout a source binds by follows from the constants it (or an include) names.
+    // The resolve's binding 1 is a sampled image; the photon passes' is a storage buffer (the traversal state).
+    let e = families.check("resolve", "PB_", crate::shaders::RESOLVE_COMP.words()).unwrap_err();
+    assert!(e.contains("`t_flux` is binding 1 of PB_ as a Sampled descriptor") && e.contains("as Storage"), "{e}");
+    // Its texel variant reads that binding through a texel view: the one difference a family allows.
+    let mut resolve = layouts::Families::default();
+    resolve.check("resolve", "RS_", crate::shaders::RESOLVE_COMP.words()).unwrap();
+    resolve.check("resolve texels", "RS_", crate::shaders::RESOLVE_COMP_TEXELS.words()).unwrap();
+    // The family a source binds by follows from the constants it (or an include) names.
     let glsl = std::path::Path::new(ROOT).join("glsl");
     let text = layouts::with_includes(&glsl, &glsl.join("wave.comp"), &mut Vec::new());
-    let all = [layout, photon_layout(None).map(|l| layouts::Layout { prefix: "CB_", ..l }).unwrap()];
-    assert_eq!(layouts::layout_of("wave.comp", &text, &all).unwrap().map(|l| l.prefix), Some("PB_"));
+    assert_eq!(layouts::family_of("wave.comp", &text, &consts()).unwrap().as_deref(), Some("PB_"));
+    let mixed = "layout(binding = PB_FRAME) uniform A { uint a; };\nlayout(binding = CB_HDR) uniform B { uint b; };";
+    let e = layouts::family_of("x.comp", mixed, &consts()).unwrap_err();
+    assert!(e.contains("two families, PB_ and CB_"), "{e}");
 }
 
 #[test]
-fn a_shader_that_declares_another_kind_or_an_undeclared_binding_fails_the_check() {
-    let words = crate::shaders::WAVE_COMP.words();
-    let wrong = photon_layout(Some(("(PB_SPLATS, BindKind::Storage)", "(PB_SPLATS, BindKind::Sampled)"))).unwrap();
-    let e = layouts::check("wave.comp", words, &wrong).unwrap_err();
-    assert!(e.contains("binding 10, a Storage descriptor; photons.rs LAYOUT has BindKind::Sampled"), "{e}");
-    let wrong = photon_layout(Some(("    (PB_SPLATS, BindKind::Storage),\n", ""))).unwrap();
-    let e = layouts::check("wave.comp", words, &wrong).unwrap_err();
-    assert!(e.contains("has nothing there"), "{e}");
-    // A table entry build.rs cannot read is refused with its line.
-    let e = photon_layout(Some(("(PB_SPLATS, BindKind::Storage),", "(PB_SPLATS BindKind::Storage),"))).err().unwrap();
-    assert!(e.starts_with("src/passes/photons.rs:") && e.contains("no kind"), "{e}");
+fn a_binding_is_named_by_a_shader_constant_never_a_number() {
+    let c = consts();
+    let ok = "layout(std430, set = 0, binding = WA_HEIGHTS) readonly buffer Heights { float heights[]; };";
+    assert_eq!(layouts::binding_names("x.comp", ok, &c).unwrap(), [(1, "WA_HEIGHTS".to_string())]);
+    let e = layouts::binding_names("x.comp", "\nlayout(set = 0, binding = 3) buffer B { uint b[]; };", &c).unwrap_err();
+    assert!(e.starts_with("x.comp:2:") && e.contains("`binding = 3`"), "{e}");
+    let e = layouts::binding_names("x.comp", "layout(binding = WA_NO_SUCH) buffer B { uint b[]; };", &c).unwrap_err();
+    assert!(e.contains("`WA_NO_SUCH` is not a constant"), "{e}");
+    // Comments are not declarations.
+    assert!(layouts::binding_names("x.comp", "// binding = 3 is the old one", &c).unwrap().is_empty());
+    // Every shader of the repository names its bindings.
+    let glsl = std::path::Path::new(ROOT).join("glsl");
+    let mut named = 0;
+    for dir in [glsl.clone(), glsl.join("common")] {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let text = std::fs::read_to_string(&path).unwrap_or_default();
+            named += layouts::binding_names(&path.display().to_string(), &text, &c).unwrap().len();
+        }
+    }
+    assert!(named > 100, "{named} named bindings");
 }
 
 #[test]
@@ -209,20 +217,4 @@ fn a_word_struct_packs_each_field_into_its_bytes_and_refuses_what_does_not_fill_
     let short = parse("#[repr(C)]\npub struct S {\n    pub a: [f32; 3],\n}\n").unwrap();
     let e = structs::word_functions(&short[0]).unwrap_err();
     assert!(e.contains("12 bytes are not whole 16-byte words"), "{e}");
-}
-
-#[test]
-fn every_shared_layout_table_parses_with_one_entry_per_binding() {
-    use crate::shaders::consts::{CB_COUNT, EB_COUNT, PB_COUNT};
-    for &(prefix, file, name) in layouts::LAYOUTS {
-        let text = std::fs::read_to_string(format!("{ROOT}/{file}")).unwrap();
-        let kinds = layouts::parse(file, &text, name, &consts()).unwrap();
-        let count = match prefix {
-            "PB_" => PB_COUNT,
-            "CB_" => CB_COUNT,
-            _ => EB_COUNT,
-        };
-        assert_eq!(kinds.len() as u32, count, "{file} {name}");
-        assert!((0..count).all(|b| kinds.contains_key(&b)), "{file} {name}");
-    }
 }

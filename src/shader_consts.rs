@@ -320,3 +320,94 @@ pub const SPLAT_COLOR_ID: u32 = 0;
 pub const RESOLVE_COLOR_ID: u32 = 0;
 /// glsl/coverage.comp: the pass builds mip 0 from the g-buffers.
 pub const COVERAGE_MIP0_ID: u32 = 0;
+
+// Binding indices of the pipelines with a layout of their own. Each shader names its bindings by these constants and
+// each pass binds by them (`ordered`, src/vk/pipeline.rs); the layout itself is reflected from the SPIR-V.
+/// glsl/resolve.comp: the frame uniforms.
+pub const RS_FRAME: u32 = 0;
+/// glsl/resolve.comp: the flux (an image, or the compute splat's texels).
+pub const RS_FLUX: u32 = 1;
+/// glsl/resolve.comp: the light's receiver g-buffer.
+pub const RS_RECEIVERS: u32 = 2;
+/// glsl/resolve.comp: the caustic irradiance it writes.
+pub const RS_IRRADIANCE: u32 = 3;
+/// glsl/coverage.comp: the frame uniforms.
+pub const CV_FRAME: u32 = 0;
+/// glsl/coverage.comp: the coverage pyramid it writes.
+pub const CV_COVERAGE: u32 = 1;
+/// glsl/coverage.comp: the refractors' front g-buffer.
+pub const CV_FRONT: u32 = 2;
+/// glsl/coverage.comp: the light's receiver g-buffer.
+pub const CV_RECEIVERS: u32 = 3;
+/// glsl/morph.comp: the morph targets' records.
+pub const MO_MORPHS: u32 = 0;
+/// glsl/morph.comp: the targets' weights.
+pub const MO_WEIGHTS: u32 = 1;
+/// glsl/morph.comp (vertices): the object-space vertices.
+pub const MO_OBJECT_VERTICES: u32 = 2;
+/// glsl/morph.comp (vertices): the world-space vertices it writes.
+pub const MO_WORLD_VERTICES: u32 = 3;
+/// glsl/morph.comp (MORPH_BVH): the rest triangles.
+pub const MO_REST_TRIS: u32 = 2;
+/// glsl/morph.comp (MORPH_BVH): the rest vertex normals.
+pub const MO_REST_NORMALS: u32 = 3;
+/// glsl/morph.comp (MORPH_BVH): each BVH triangle corner's vertex.
+pub const MO_REST_CORNERS: u32 = 4;
+/// glsl/morph.comp (MORPH_BVH): the BVH triangles it writes.
+pub const MO_BVH_TRIS: u32 = 5;
+/// glsl/morph.comp (MORPH_BVH): the BVH normals it writes.
+pub const MO_BVH_NORMALS: u32 = 6;
+/// glsl/water.comp: the wave records.
+pub const WA_WAVES: u32 = 0;
+/// glsl/water.comp: the object-space vertices.
+pub const WA_OBJECT_VERTICES: u32 = 1;
+/// glsl/water.comp: the world-space vertices it writes.
+pub const WA_WORLD_VERTICES: u32 = 2;
+/// glsl/water.comp: the simulated heights.
+pub const WA_HEIGHTS: u32 = 3;
+/// glsl/water.comp: the displaced positions it writes, for its BVH mode.
+pub const WA_DISPLACED: u32 = 4;
+/// glsl/water.comp (WATER_BVH): the displaced positions.
+pub const WA_BVH_DISPLACED: u32 = 0;
+/// glsl/water.comp (WATER_BVH): each BVH triangle corner's vertex.
+pub const WA_REST_CORNERS: u32 = 1;
+/// glsl/water.comp (WATER_BVH): the BVH triangles it writes.
+pub const WA_BVH_TRIS: u32 = 2;
+/// glsl/water.comp (WATER_BVH): the BVH normals it writes.
+pub const WA_BVH_NORMALS: u32 = 3;
+/// glsl/water_step.comp: the simulated heights (two steps' fields).
+pub const WS_HEIGHTS: u32 = 0;
+/// glsl/refit.comp: the refit nodes.
+pub const RF_NODES: u32 = 0;
+/// glsl/refit.comp: the order in which the nodes are refitted.
+pub const RF_ORDER: u32 = 1;
+/// glsl/refit.comp: the refitted boxes.
+pub const RF_BOXES: u32 = 2;
+/// glsl/refit.comp: the BVH triangles.
+pub const RF_TRIS: u32 = 3;
+/// glsl/refit.comp: the pair layout's nodes.
+pub const RF_PAIR: u32 = 4;
+/// glsl/refit.comp: the single layout's nodes.
+pub const RF_SINGLE: u32 = 5;
+/// glsl/refit.comp: the threaded layout's nodes.
+pub const RF_THREADED: u32 = 6;
+/// glsl/refit_wide.comp: the order in which the wide nodes are refitted.
+pub const RW_ORDER: u32 = 0;
+/// glsl/refit_wide.comp: the refitted boxes.
+pub const RW_BOXES: u32 = 1;
+/// glsl/refit_wide.comp: the BVH triangles.
+pub const RW_TRIS: u32 = 2;
+/// glsl/refit_wide.comp: the wide nodes.
+pub const RW_NODES: u32 = 3;
+/// glsl/refit_wide.comp: the wide layout's triangle list.
+pub const RW_PRIMS: u32 = 4;
+/// glsl/scene_update.comp: the object-space vertices.
+pub const SU_OBJECT_VERTICES: u32 = 0;
+/// glsl/scene_update.comp: the world-space vertices it writes.
+pub const SU_WORLD_VERTICES: u32 = 1;
+/// glsl/scene_update.comp: the object-space indices.
+pub const SU_OBJECT_INDICES: u32 = 2;
+/// glsl/scene_update.comp: the world-space indices it writes.
+pub const SU_WORLD_INDICES: u32 = 3;
+/// glsl/geometry.frag (the eye's receivers): the albedo textures.
+pub const GE_ALBEDO: u32 = 0;

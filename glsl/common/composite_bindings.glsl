@@ -33,8 +33,5 @@ layout(set = 0, binding = CB_GLASS, rgba32f) uniform image2D o_glass;
 // blue), every light's; the glass pass adds its irradiance at the receivers it reaches that the eye's samples see.
 layout(std430, set = 0, binding = CB_EYE_FLUX) readonly buffer EyeFluxBuf { float eye_flux[]; };
 
-layout(push_constant) uniform Push {
-    uint pixels;  // glass.comp: 1 when an invocation traces a pixel's 2×2 samples of dispersive glass
-    uint add;  // glass.comp: 1 to add to what an earlier pass wrote (a scene with more than GLASS_LIGHTS lights)
-} pc;
+layout(push_constant) uniform CompositePushBlock { CompositePush pc; };
 #endif

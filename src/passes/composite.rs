@@ -3,11 +3,12 @@
 //! beauty image.
 
 use super::groups_2d;
+use crate::gpu_types::CompositePush;
 use crate::scene_gpu::BvhBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
-use crate::vk::pipeline::{kinds, ordered, with_texels, LazyPipeline};
-use crate::vk::{Bind, BindKind, Buffer, Device, Image, Sampler, Tracker, Use, VkResult};
+use crate::vk::pipeline::{ordered, LazyPipeline};
+use crate::vk::{Bind, Buffer, Device, Image, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -76,18 +77,6 @@ impl GlassKey {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CompositePush {
-    /// The glass pass: 1 when each invocation traces a pixel's 2×2 samples of dispersive glass (glsl/glass.comp,
-    /// `glass_pixel`), dispatched over the pixels; 0: one sample an invocation.
-    pixels: u32,
-    /// The glass pass: add to what an earlier pass wrote. (Its number of lights is a specialization constant,
-    /// [`GlassKey::lights`].)
-    add: u32,
-}
-const _: () = assert!(std::mem::size_of::<CompositePush>() == 8);
-
 /// One light's uniforms and maps, as the glass pass reads them.
 #[derive(Clone, Copy)]
 pub struct LightMaps<'a> {
@@ -130,63 +119,19 @@ pub struct CompositeInputs<'a> {
     pub media: bool,
 }
 
-/// The composite's and the glass pass's bindings (glsl/common/composite_bindings.glsl declares each with the same
-/// constant).
-const LAYOUT: [(u32, BindKind); CB_COUNT as usize] = [
-    (CB_FRAME, BindKind::Uniform),
-    (CB_RADIANCE, BindKind::Sampled),
-    (CB_FRONT, BindKind::Sampled),
-    (CB_FRONT_AUX, BindKind::Sampled),
-    (CB_BACK, BindKind::Sampled),
-    (CB_RADIANCE_LINEAR, BindKind::Sampled),
-    (CB_BEAUTY, BindKind::StorageImage),
-    (CB_HDR, BindKind::StorageImage),
-    (CB_SHADOW, BindKind::Sampled),
-    (CB_IRRADIANCE, BindKind::Sampled),
-    (CB_RECEIVERS, BindKind::Sampled),
-    (CB_BVH_PAIR, BindKind::Storage),
-    (CB_BVH_TRIS, BindKind::Storage),
-    (CB_BVH_NORMALS, BindKind::Storage),
-    (CB_BVH_INSTANCES, BindKind::Storage),
-    (CB_ALBEDO_TEXTURES, BindKind::Sampled),
-    (CB_ENV, BindKind::Sampled),
-    (CB_ENV_IRRADIANCE, BindKind::Sampled),
-    (CB_GLASS, BindKind::StorageImage),
-    (CB_LIGHT1, BindKind::Uniform),
-    (CB_SHADOW1, BindKind::Sampled),
-    (CB_IRRADIANCE1, BindKind::Sampled),
-    (CB_RECEIVERS1, BindKind::Sampled),
-    (CB_LIGHT2, BindKind::Uniform),
-    (CB_SHADOW2, BindKind::Sampled),
-    (CB_IRRADIANCE2, BindKind::Sampled),
-    (CB_RECEIVERS2, BindKind::Sampled),
-    (CB_BVH_WIDE, BindKind::Storage),
-    (CB_BVH_WIDE_PRIMS, BindKind::Storage),
-    (CB_EYE_FLUX, BindKind::Storage),
-];
-const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
-
 impl CompositePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        let binds = kinds(&LAYOUT);
-        let push = std::mem::size_of::<CompositePush>() as u32;
-        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
+        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv);
         let pipeline = lazy("composite", shaders::COMPOSITE_COMP.words());
         let exact = lazy("composite exact", shaders::COMPOSITE_COMP_EXACT.words());
         let single = lazy("composite, one sample", shaders::COMPOSITE_COMP_SINGLE.words());
         let exact_single = lazy("composite exact, one sample", shaders::COMPOSITE_COMP_EXACT_SINGLE.words());
         // The wide layout's glass pass reads the BVH as texels (glsl/common/bvh.glsl, `BVH_TEXELS`).
-        let texel_binds =
-            with_texels(binds, &[CB_BVH_TRIS, CB_BVH_NORMALS, CB_BVH_INSTANCES, CB_BVH_WIDE, CB_BVH_WIDE_PRIMS]);
         let glass = (0..GlassKey::COUNT)
             .map(|k| {
                 let key = GlassKey::of_index(k);
-                let (spv, binds) = if key.wide {
-                    (shaders::GLASS_COMP_WIDE.words(), &texel_binds)
-                } else {
-                    (shaders::GLASS_COMP.words(), &binds)
-                };
-                LazyPipeline::compute_specialized(device, &format!("eye glass {key:?}"), spv, binds, push, &key.spec())
+                let spv = if key.wide { shaders::GLASS_COMP_WIDE.words() } else { shaders::GLASS_COMP.words() };
+                LazyPipeline::compute_specialized(device, &format!("eye glass {key:?}"), spv, &key.spec())
             })
             .collect();
         Ok(CompositePass { device: device.clone(), pipeline, exact, single, exact_single, glass })
@@ -235,8 +180,8 @@ impl CompositePass {
             (false, false) => &self.pipeline,
         }
         .get()?;
+        // The composite reads no push constants (its shader declares none; only the glass pass reads them).
         pipeline.bind_uses(cmd, sync, &Self::uses(i, Use::ImageRead(i.glass), Use::ImageOverwrite))?;
-        pipeline.push(cmd, &CompositePush { pixels: 0, add: 0 });
         let (gx, gy) = groups_2d(i.beauty.extent.width, i.beauty.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())

@@ -2,8 +2,9 @@
 
 use super::groups_2d;
 use crate::gpu_types::CoveragePush;
-use crate::shaders::{self, consts::COVERAGE_MIP0_ID};
-use crate::vk::{BindKind, Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
+use crate::shaders::{self, consts::*};
+use crate::vk::pipeline::ordered;
+use crate::vk::{Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -43,8 +44,6 @@ impl CoveragePass {
                 device,
                 name,
                 shaders::COVERAGE_COMP.words(),
-                &[BindKind::Uniform, BindKind::Storage, BindKind::Sampled, BindKind::Sampled],
-                std::mem::size_of::<CoveragePush>() as u32,
                 &[(COVERAGE_MIP0_ID, mip0 as u32)],
             )
         };
@@ -59,12 +58,12 @@ impl CoveragePass {
     pub fn record(&self, cmd: vk::CommandBuffer, sync: &mut Tracker, i: &CoverageInputs) -> VkResult<()> {
         let (gbuffer_res, mips, coverage) = (i.front.extent.width, i.mips, i.coverage);
         let (offsets, _) = pyramid_layout(gbuffer_res, mips);
-        let uses = [
-            Use::Uniform(i.ubo),
-            Use::Write(coverage),
-            Use::Sampled(i.front, i.sampler),
-            Use::Sampled(i.recv, i.sampler),
-        ];
+        let uses = ordered([
+            (CV_FRAME, Use::Uniform(i.ubo)),
+            (CV_COVERAGE, Use::Write(coverage)),
+            (CV_FRONT, Use::Sampled(i.front, i.sampler)),
+            (CV_RECEIVERS, Use::Sampled(i.recv, i.sampler)),
+        ]);
         for m in 0..mips {
             // Each mip reads the one before it: declared again, the write is ordered after the last.
             let pipeline = if m == 0 { &self.mip0 } else { &self.reduce };

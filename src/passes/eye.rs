@@ -3,14 +3,14 @@
 //! one back, the caustics and direct AOVs.
 
 use super::{groups_2d, DEPTH_FORMAT, GEO_FORMAT};
-use crate::gpu_types::{GeometryPush, GpuView, Vertex};
+use crate::gpu_types::{GeometryPush, GpuView, ShadePush, Vertex};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
 use crate::shaders::consts::*;
-use crate::vk::pipeline::{kinds, LazyPipeline};
+use crate::vk::pipeline::{ordered, LazyPipeline};
 use crate::vk::{
-    Bind, BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Sampler, Target,
-    Tracker, Use, VkResult,
+    Bind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Sampler, Target, Tracker, Use,
+    VkResult,
 };
 use ash::vk;
 use std::sync::Arc;
@@ -46,31 +46,6 @@ pub struct EyeGbuffer<'a> {
     pub depth: &'a Image,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadePush {
-    add: u32,
-}
-const _: () = assert!(std::mem::size_of::<ShadePush>() == 4);
-
-/// The eye shading's bindings (glsl/eye_shade.comp declares each with the same constant); without the AOVs, all
-/// but the last two.
-const SHADE_LAYOUT: [(u32, BindKind); EB_COUNT as usize] = [
-    (EB_FRAME, BindKind::Uniform),
-    (EB_SHADOW, BindKind::Sampled),
-    (EB_IRRADIANCE, BindKind::Sampled),
-    (EB_RECEIVERS, BindKind::Sampled),
-    (EB_EYE, BindKind::Sampled),
-    (EB_ALBEDO, BindKind::Sampled),
-    (EB_ENV, BindKind::Sampled),
-    (EB_ENV_IRRADIANCE, BindKind::Sampled),
-    (EB_EYE_FLUX, BindKind::Storage),
-    (EB_RADIANCE, BindKind::StorageImage),
-    (EB_CAUSTICS, BindKind::StorageImage),
-    (EB_DIRECT, BindKind::StorageImage),
-];
-const _: () = assert!(crate::vk::pipeline::bindings_in_order(&SHADE_LAYOUT));
-
 impl EyePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
         let gbuffer = Pipeline::graphics(
@@ -79,8 +54,6 @@ impl EyePass {
             &GraphicsDesc {
                 vertex: shaders::GEOMETRY_VERT_ALBEDO.words(),
                 fragment: shaders::GEOMETRY_FRAG_ALBEDO.words(),
-                binds: &[BindKind::Sampled],
-                push_size: std::mem::size_of::<GeometryPush>() as u32,
                 vertex_attributes: &[
                     (vk::Format::R32G32B32A32_SFLOAT, 0),
                     (vk::Format::R32G32B32A32_SFLOAT, 16),
@@ -96,17 +69,9 @@ impl EyePass {
                 ],
             },
         )?;
-        let binds = kinds(&SHADE_LAYOUT);
-        let push = std::mem::size_of::<ShadePush>() as u32;
         let shade = [
-            LazyPipeline::compute(
-                device,
-                "eye shade",
-                shaders::EYE_SHADE_COMP.words(),
-                &binds[..EB_CAUSTICS as usize],
-                push,
-            ),
-            LazyPipeline::compute(device, "eye shade (AOVs)", shaders::EYE_SHADE_COMP_AOVS.words(), &binds, push),
+            LazyPipeline::compute(device, "eye shade", shaders::EYE_SHADE_COMP.words()),
+            LazyPipeline::compute(device, "eye shade (AOVs)", shaders::EYE_SHADE_COMP_AOVS.words()),
         ];
         Ok(EyePass { device: device.clone(), gbuffer, shade })
     }
@@ -126,7 +91,7 @@ impl EyePass {
             depth: Some(Target::Clear(g.depth)),
             vertices: Some(&scene.vertices),
             indices: Some(&scene.indices),
-            uses: &[Use::Fixed(Bind::Sampled(&images.albedo, &images.repeat))],
+            uses: &ordered([(GE_ALBEDO, Use::Fixed(Bind::Sampled(&images.albedo, &images.repeat)))]),
         };
         self.gbuffer.begin_raster(cmd, sync, &raster)?;
         self.gbuffer.push(cmd, &GeometryPush::from_view(camera));

@@ -53,8 +53,6 @@ impl GeometryPass {
                 &GraphicsDesc {
                     vertex: vert,
                     fragment: frag,
-                    binds: &[],
-                    push_size: std::mem::size_of::<GeometryPush>() as u32,
                     vertex_attributes: attrs,
                     vertex_stride: std::mem::size_of::<Vertex>() as u32,
                     topology: vk::PrimitiveTopology::TRIANGLE_LIST,

@@ -9,52 +9,11 @@ use crate::gpu_types::{
 use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
 use crate::vk::pipeline::LazyPipeline;
-use crate::vk::pipeline::{kinds, with_texels};
 use crate::vk::{
-    BindKind, Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Sampler, Target, Tracker, Use,
-    VkResult,
+    Blend, Buffer, ColorTarget, Device, GraphicsDesc, Image, Pipeline, Raster, Sampler, Target, Tracker, Use, VkResult,
 };
 use ash::vk;
 use std::sync::Arc;
-
-/// The photon passes' shared layout (glsl/common/photon_bindings.glsl declares each with the same constant).
-const LAYOUT: [(u32, BindKind); PB_COUNT as usize] = [
-    (PB_FRAME, BindKind::Uniform),
-    (PB_STATE, BindKind::Storage),
-    (PB_PHOTONS, BindKind::Storage),
-    (PB_INDIRECT, BindKind::Storage),
-    (PB_COVERAGE, BindKind::Storage),
-    (PB_FRONT, BindKind::Sampled),
-    (PB_FRONT_AUX, BindKind::Sampled),
-    (PB_BACK, BindKind::Sampled),
-    (PB_RECEIVERS, BindKind::Sampled),
-    (PB_DEBUG, BindKind::Storage),
-    (PB_SPLATS, BindKind::Storage),
-    (PB_TRANSPORT, BindKind::Storage),
-    (PB_RAYS_IN, BindKind::Storage),
-    (PB_RAYS_OUT, BindKind::Storage),
-    (PB_BVH_PAIR, BindKind::Storage),
-    (PB_BVH_TRIS, BindKind::Storage),
-    (PB_BVH_NORMALS, BindKind::Storage),
-    (PB_BVH_INSTANCES, BindKind::Storage),
-    (PB_BVH_SINGLE, BindKind::Storage),
-    (PB_FLUX_TEXELS, BindKind::Storage),
-    (PB_BVH_THREADED, BindKind::Storage),
-    (PB_BVH_WIDE, BindKind::Storage),
-    (PB_BVH_WIDE_PRIMS, BindKind::Storage),
-    (PB_SPLAT_TINTS, BindKind::Storage),
-    (PB_EYE_GEO, BindKind::Sampled),
-    (PB_EYE_FLUX, BindKind::Storage),
-];
-const _: () = assert!(crate::vk::pipeline::bindings_in_order(&LAYOUT));
-
-/// The BVH bindings the wide layout's variants read as texel buffers (glsl/common/bvh.glsl, `BVH_TEXELS`): on a
-/// CPU driver a texel fetch gathers all lanes at once, where a storage-buffer load walks the lanes one by one.
-const BVH_TEXEL_BINDINGS: [u32; 5] = [PB_BVH_TRIS, PB_BVH_NORMALS, PB_BVH_INSTANCES, PB_BVH_WIDE, PB_BVH_WIDE_PRIMS];
-
-/// The wide layout's waves read the photons, the coverage pyramid and their rays as texels too (glsl/wave.comp,
-/// `WAVE_TEXELS`).
-const WAVE_TEXEL_BINDINGS: [u32; 3] = [PB_PHOTONS, PB_COVERAGE, PB_RAYS_IN];
 
 /// glsl/wave.comp's specialization constants (src/shader_consts.rs): `WAVE_PRIMARY`, `WAVE_DIFFERENTIAL`,
 /// `WAVE_MEDIA`, `WAVE_COLOR`, `WAVE_SPECTRAL` and `WAVE_SUBGROUPS` (`subgroups`).
@@ -107,31 +66,19 @@ fn wave_subgroups(min_subgroup_size: u32) -> u32 {
 const _: () = assert!(2 * LINEAR_WG < 1 << 10);
 
 /// One BVH layout's wave pipelines, every specialization ([`wave_spec`]).
-fn wave_variants(
-    device: &Arc<Device>,
-    layout: &str,
-    spv: &'static shaders::Spv,
-    binds: &[BindKind],
-    push: u32,
-) -> [LazyPipeline; 32] {
+fn wave_variants(device: &Arc<Device>, layout: &str, spv: &'static shaders::Spv) -> [LazyPipeline; 32] {
     std::array::from_fn(|k| {
         let spec = wave_spec(k, wave_subgroups(device.info.min_subgroup_size));
-        LazyPipeline::compute_specialized(device, &wave_name(layout, &spec), spv.words(), binds, push, &spec)
+        LazyPipeline::compute_specialized(device, &wave_name(layout, &spec), spv.words(), &spec)
     })
 }
 
 /// A compute splat's pipelines, per `SPLAT_COLOR`: gray records, records with an RGB tint, records with a
 /// wavelength.
-fn splat_variants(
-    device: &Arc<Device>,
-    name: &str,
-    spv: &'static [u32],
-    binds: &[BindKind],
-    push: u32,
-) -> [LazyPipeline; 3] {
+fn splat_variants(device: &Arc<Device>, name: &str, spv: &'static [u32]) -> [LazyPipeline; 3] {
     [0u32, 1, 2].map(|color| {
         let name = format!("{name}{}", ["", ", color", ", spectral"][color as usize]);
-        LazyPipeline::compute_specialized(device, &name, spv, binds, push, &[(SPLAT_COLOR_ID, color)])
+        LazyPipeline::compute_specialized(device, &name, spv, &[(SPLAT_COLOR_ID, color)])
     })
 }
 
@@ -242,29 +189,6 @@ pub mod transport_mode {
     };
 }
 
-/// The push range of the photon passes' shared layout: the largest of their push structs.
-const PHOTON_PUSH_BYTES: usize = {
-    let sizes = [
-        std::mem::size_of::<InitPush>(),
-        std::mem::size_of::<TraversePush>(),
-        std::mem::size_of::<StatsPush>(),
-        std::mem::size_of::<DenseEmitPush>(),
-        std::mem::size_of::<TracePush>(),
-        std::mem::size_of::<TransportPush>(),
-        std::mem::size_of::<WavePush>(),
-        std::mem::size_of::<SplatCollapsePush>(),
-    ];
-    let mut max = 0;
-    let mut i = 0;
-    while i < sizes.len() {
-        if sizes[i] > max {
-            max = sizes[i];
-        }
-        i += 1;
-    }
-    max
-};
-
 pub struct PhotonPasses {
     device: Arc<Device>,
     init: Pipeline,
@@ -306,25 +230,20 @@ pub struct TraverseShape {
 impl PhotonPasses {
     /// `flux_format`: the caustic flux map's format (R32F where it can be blended).
     pub fn new(device: &Arc<Device>, flux_format: vk::Format) -> VkResult<Self> {
-        let push = PHOTON_PUSH_BYTES as u32;
-        let binds = kinds(&LAYOUT);
-        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv, &binds, push);
-        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv, &binds, push);
-        let texel_binds = with_texels(binds, &BVH_TEXEL_BINDINGS);
-        let wave_texel_binds = with_texels(texel_binds, &WAVE_TEXEL_BINDINGS);
+        let compute = |name: &str, spv: &[u32]| Pipeline::compute(device, name, spv);
+        let lazy = |name: &str, spv: &'static [u32]| LazyPipeline::compute(device, name, spv);
         // One traversal pipeline per BVH layout the checks walk (pair; wide: texel reads), metric (llvmpipe pays
         // for code a metric never takes) and work-group side.
         let sides = [1u32, 2, 4, 8, 16];
         // Each layout index: 0 pair, 1 wide.
         let layout_name = |l: usize| ["", ", wide BVH"][l];
         let variant = |metric: Metric, l: usize, spv: [&'static Spv; 5]| -> Vec<(u32, LazyPipeline)> {
-            let binds = if l > 0 { &texel_binds } else { &binds };
             sides
                 .iter()
                 .zip(spv)
                 .map(|(&s, spv)| {
                     let name = format!("traverse {metric:?} {s}x{s}{}", layout_name(l));
-                    (s, LazyPipeline::compute(device, &name, spv.words(), binds, push))
+                    (s, LazyPipeline::compute(device, &name, spv.words()))
                 })
                 .collect()
         };
@@ -369,7 +288,7 @@ impl PhotonPasses {
         };
         let traverse = [traverse_layout(0), traverse_layout(1)];
         let splat = {
-            let (device, binds) = (device.clone(), binds.to_vec());
+            let device = device.clone();
             LazyPipeline::new(move || {
                 Pipeline::graphics(
                     &device,
@@ -377,8 +296,6 @@ impl PhotonPasses {
                     &GraphicsDesc {
                         vertex: shaders::SPLAT_VERT.words(),
                         fragment: shaders::SPLAT_FRAG.words(),
-                        binds: &binds,
-                        push_size: push,
                         vertex_attributes: &[],
                         vertex_stride: 0,
                         topology: vk::PrimitiveTopology::POINT_LIST,
@@ -390,9 +307,9 @@ impl PhotonPasses {
             })
         };
         let coop = |metric: &str, pair: &'static Spv, wide: &'static Spv, l: usize| {
-            let (binds, spv) = if l > 0 { (&texel_binds, wide) } else { (&binds, pair) };
+            let spv = if l > 0 { wide } else { pair };
             let name = format!("traverse {metric} 8x8, four lanes a candidate{}", layout_name(l));
-            LazyPipeline::compute(device, &name, spv.words(), binds, push)
+            LazyPipeline::compute(device, &name, spv.words())
         };
         let traverse_coop = [0, 1].map(|l| {
             [
@@ -401,7 +318,7 @@ impl PhotonPasses {
             ]
         });
         let atomics = device.info.float_atomic_add;
-        let splat_color = |name: &str, spv: &'static [u32]| splat_variants(device, name, spv, &binds, push);
+        let splat_color = |name: &str, spv: &'static [u32]| splat_variants(device, name, spv);
         Ok(PhotonPasses {
             device: device.clone(),
             init: compute("init", shaders::INIT_COMP.words())?,
@@ -411,12 +328,12 @@ impl PhotonPasses {
             dense_emit: lazy("dense emit", shaders::DENSE_EMIT_COMP.words()),
             trace: lazy("photon trace", shaders::TRACE_COMP.words()),
             waves: [
-                ("pair", WAVE_COMP, &binds),
-                ("single-box", WAVE_COMP_SINGLE, &binds),
-                ("threaded", WAVE_COMP_THREADED, &binds),
-                ("wide", WAVE_COMP_WIDE, &wave_texel_binds),
+                ("pair", WAVE_COMP),
+                ("single-box", WAVE_COMP_SINGLE),
+                ("threaded", WAVE_COMP_THREADED),
+                ("wide", WAVE_COMP_WIDE),
             ]
-            .map(|(layout, spv, binds)| wave_variants(device, layout, spv, binds, push)),
+            .map(|(layout, spv)| wave_variants(device, layout, spv)),
             transport: lazy("transport state", shaders::TRANSPORT_COMP.words()),
             splat_compute: atomics.then(|| splat_color("compute splat", shaders::SPLAT_COMP.words())),
             splat_compute_tiled: atomics

@@ -1,9 +1,10 @@
 //! Caustic flux (W per texel) to caustic irradiance (W/m²).
 
 use super::groups_2d;
-use crate::shaders;
-use crate::vk::pipeline::LazyPipeline;
-use crate::vk::{BindKind, Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
+use crate::gpu_types::ResolvePush;
+use crate::shaders::{self, consts::*};
+use crate::vk::pipeline::{ordered, LazyPipeline};
+use crate::vk::{Buffer, Device, Image, Pipeline, Sampler, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -27,21 +28,13 @@ pub struct ResolvePass {
 
 impl ResolvePass {
     pub fn new(device: &Arc<Device>) -> VkResult<Self> {
-        let pipeline = Pipeline::compute(
-            device,
-            "resolve",
-            shaders::RESOLVE_COMP.words(),
-            &[BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::StorageImage],
-            4,
-        )?;
+        let pipeline = Pipeline::compute(device, "resolve", shaders::RESOLVE_COMP.words())?;
         let texels = [false, true].map(|color| {
             LazyPipeline::compute_specialized(
                 device,
                 if color { "resolve (flux texels, color)" } else { "resolve (flux texels)" },
                 shaders::RESOLVE_COMP_TEXELS.words(),
-                &[BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage],
-                4,
-                &[(shaders::consts::RESOLVE_COLOR_ID, color as u32)],
+                &[(RESOLVE_COLOR_ID, color as u32)],
             )
         });
         Ok(ResolvePass { device: device.clone(), pipeline, texels })
@@ -70,8 +63,14 @@ impl ResolvePass {
                 (self.texels[matches!(flux, FluxSource::ColorTexels(_)) as usize].get()?, Use::Read(buf))
             }
         };
-        pipeline.bind_uses(cmd, sync, &[Use::Uniform(ubo), flux_use, Use::Sampled(recv, s), out_use])?;
-        pipeline.push(cmd, &(add as u32));
+        let uses = ordered([
+            (RS_FRAME, Use::Uniform(ubo)),
+            (RS_FLUX, flux_use),
+            (RS_RECEIVERS, Use::Sampled(recv, s)),
+            (RS_IRRADIANCE, out_use),
+        ]);
+        pipeline.bind_uses(cmd, sync, &uses)?;
+        pipeline.push(cmd, &ResolvePush { add: add as u32 });
         let (gx, gy) = groups_2d(out.extent.width, out.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())

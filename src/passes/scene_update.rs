@@ -11,9 +11,9 @@
 use crate::gpu_types::{MorphPush, RefitPush, SceneUpdatePush, WaterPush, WaterStepPush};
 use crate::scene_gpu::SceneBuffers;
 use crate::shaders;
-use crate::shaders::consts::LINEAR_WG;
-use crate::vk::pipeline::LazyPipeline;
-use crate::vk::{BindKind, Buffer, Device, Tracker, Use, VkResult};
+use crate::shaders::consts::*;
+use crate::vk::pipeline::{ordered, LazyPipeline};
+use crate::vk::{Buffer, Device, Tracker, Use, VkResult};
 use ash::vk;
 use std::sync::Arc;
 
@@ -34,63 +34,14 @@ const UPDATE_CHUNK: usize = 65536;
 
 impl SceneUpdatePass {
     pub fn new(device: &Arc<Device>) -> Self {
-        let size = |n: usize| n as u32;
-        let place = LazyPipeline::compute(
-            device,
-            "scene update",
-            shaders::SCENE_UPDATE_COMP.words(),
-            &[BindKind::Storage; 4],
-            size(std::mem::size_of::<SceneUpdatePush>()),
-        );
-        let water = LazyPipeline::compute(
-            device,
-            "water",
-            shaders::WATER_COMP.words(),
-            &[BindKind::Storage; 5],
-            size(std::mem::size_of::<WaterPush>()),
-        );
-        let water_bvh = LazyPipeline::compute(
-            device,
-            "water (BVH triangles)",
-            shaders::WATER_COMP_BVH.words(),
-            &[BindKind::Storage; 4],
-            size(std::mem::size_of::<WaterPush>()),
-        );
-        let water_step = LazyPipeline::compute(
-            device,
-            "water step",
-            shaders::WATER_STEP_COMP.words(),
-            &[BindKind::Storage; 1],
-            size(std::mem::size_of::<WaterStepPush>()),
-        );
-        let morph = LazyPipeline::compute(
-            device,
-            "morph",
-            shaders::MORPH_COMP.words(),
-            &[BindKind::Storage; 4],
-            size(std::mem::size_of::<MorphPush>()),
-        );
-        let morph_bvh = LazyPipeline::compute(
-            device,
-            "morph (BVH triangles)",
-            shaders::MORPH_COMP_BVH.words(),
-            &[BindKind::Storage; 7],
-            size(std::mem::size_of::<MorphPush>()),
-        );
-        let refit = LazyPipeline::compute(
-            device,
-            "refit",
-            shaders::REFIT_COMP.words(),
-            &[BindKind::Storage; 7],
-            size(std::mem::size_of::<RefitPush>()),
-        );
-        let refit_wide = LazyPipeline::compute(
-            device,
-            "refit (wide nodes)",
-            shaders::REFIT_WIDE_COMP.words(),
-            &[BindKind::Storage; 5],
-            size(std::mem::size_of::<RefitPush>()),
-        );
+        let place = LazyPipeline::compute(device, "scene update", shaders::SCENE_UPDATE_COMP.words());
+        let water = LazyPipeline::compute(device, "water", shaders::WATER_COMP.words());
+        let water_bvh = LazyPipeline::compute(device, "water (BVH triangles)", shaders::WATER_COMP_BVH.words());
+        let water_step = LazyPipeline::compute(device, "water step", shaders::WATER_STEP_COMP.words());
+        let morph = LazyPipeline::compute(device, "morph", shaders::MORPH_COMP.words());
+        let morph_bvh = LazyPipeline::compute(device, "morph (BVH triangles)", shaders::MORPH_COMP_BVH.words());
+        let refit = LazyPipeline::compute(device, "refit", shaders::REFIT_COMP.words());
+        let refit_wide = LazyPipeline::compute(device, "refit (wide nodes)", shaders::REFIT_WIDE_COMP.words());
         SceneUpdatePass {
             device: device.clone(),
             place,
@@ -149,7 +100,12 @@ impl SceneUpdatePass {
         world: (&Buffer, &Buffer),
         moves: &[SceneUpdatePush],
     ) -> VkResult<()> {
-        let uses = [Use::Read(object.0), Use::Write(world.0), Use::Read(object.1), Use::Write(world.1)];
+        let uses = ordered([
+            (SU_OBJECT_VERTICES, Use::Read(object.0)),
+            (SU_WORLD_VERTICES, Use::Write(world.0)),
+            (SU_OBJECT_INDICES, Use::Read(object.1)),
+            (SU_WORLD_INDICES, Use::Write(world.1)),
+        ]);
         self.run(cmd, sync, &self.place, &uses, moves, |m| m.vertex_count.max(m.index_count / 3))
     }
 
@@ -161,13 +117,13 @@ impl SceneUpdatePass {
         sb: &SceneBuffers,
         jobs: &[WaterPush],
     ) -> VkResult<()> {
-        let uses = [
-            Use::Read(&sb.waves),
-            Use::Read(&sb.object_vertices),
-            Use::Write(&sb.vertices),
-            Use::Read(&sb.heights),
-            Use::Write(&sb.displaced),
-        ];
+        let uses = ordered([
+            (WA_WAVES, Use::Read(&sb.waves)),
+            (WA_OBJECT_VERTICES, Use::Read(&sb.object_vertices)),
+            (WA_WORLD_VERTICES, Use::Write(&sb.vertices)),
+            (WA_HEIGHTS, Use::Read(&sb.heights)),
+            (WA_DISPLACED, Use::Write(&sb.displaced)),
+        ]);
         self.run(cmd, sync, &self.water, &uses, jobs, |j| j.count)
     }
 
@@ -180,8 +136,12 @@ impl SceneUpdatePass {
         jobs: &[WaterPush],
     ) -> VkResult<()> {
         let b = &sb.bvh;
-        let uses =
-            [Use::Read(&sb.displaced), Use::Read(&b.rest_corners), Use::Write(&b.triangles), Use::Write(&b.normals)];
+        let uses = ordered([
+            (WA_BVH_DISPLACED, Use::Read(&sb.displaced)),
+            (WA_REST_CORNERS, Use::Read(&b.rest_corners)),
+            (WA_BVH_TRIS, Use::Write(&b.triangles)),
+            (WA_BVH_NORMALS, Use::Write(&b.normals)),
+        ]);
         self.run(cmd, sync, &self.water_bvh, &uses, jobs, |j| j.count)
     }
 
@@ -193,7 +153,7 @@ impl SceneUpdatePass {
         sb: &SceneBuffers,
         job: &WaterStepPush,
     ) -> VkResult<()> {
-        let uses = [Use::Write(&sb.heights)];
+        let uses = ordered([(WS_HEIGHTS, Use::Write(&sb.heights))]);
         self.run(cmd, sync, &self.water_step, &uses, std::slice::from_ref(job), |j| j.nodes * j.nodes)
     }
 
@@ -213,12 +173,12 @@ impl SceneUpdatePass {
         sb: &SceneBuffers,
         jobs: &[MorphPush],
     ) -> VkResult<()> {
-        let uses = [
-            Use::Read(&sb.morphs),
-            Use::Read(&sb.morph_weights),
-            Use::Read(&sb.object_vertices),
-            Use::Write(&sb.vertices),
-        ];
+        let uses = ordered([
+            (MO_MORPHS, Use::Read(&sb.morphs)),
+            (MO_WEIGHTS, Use::Read(&sb.morph_weights)),
+            (MO_OBJECT_VERTICES, Use::Read(&sb.object_vertices)),
+            (MO_WORLD_VERTICES, Use::Write(&sb.vertices)),
+        ]);
         self.run(cmd, sync, &self.morph, &uses, jobs, |j| j.count)
     }
 
@@ -231,15 +191,15 @@ impl SceneUpdatePass {
         jobs: &[MorphPush],
     ) -> VkResult<()> {
         let b = &sb.bvh;
-        let uses = [
-            Use::Read(&sb.morphs),
-            Use::Read(&sb.morph_weights),
-            Use::Read(&b.rest_tris),
-            Use::Read(&b.rest_normals),
-            Use::Read(&b.rest_corners),
-            Use::Write(&b.triangles),
-            Use::Write(&b.normals),
-        ];
+        let uses = ordered([
+            (MO_MORPHS, Use::Read(&sb.morphs)),
+            (MO_WEIGHTS, Use::Read(&sb.morph_weights)),
+            (MO_REST_TRIS, Use::Read(&b.rest_tris)),
+            (MO_REST_NORMALS, Use::Read(&b.rest_normals)),
+            (MO_REST_CORNERS, Use::Read(&b.rest_corners)),
+            (MO_BVH_TRIS, Use::Write(&b.triangles)),
+            (MO_BVH_NORMALS, Use::Write(&b.normals)),
+        ]);
         self.run(cmd, sync, &self.morph_bvh, &uses, jobs, |j| j.count)
     }
 
@@ -252,15 +212,15 @@ impl SceneUpdatePass {
         job: &RefitPush,
     ) -> VkResult<()> {
         let b = &sb.bvh;
-        let uses = [
-            Use::Read(&b.refit_nodes),
-            Use::Read(&b.refit_order),
-            Use::Write(&b.refit_boxes),
-            Use::Read(&b.triangles),
-            Use::Write(&b.pair_nodes),
-            Use::Write(&b.single_nodes),
-            Use::Write(&b.threaded_nodes),
-        ];
+        let uses = ordered([
+            (RF_NODES, Use::Read(&b.refit_nodes)),
+            (RF_ORDER, Use::Read(&b.refit_order)),
+            (RF_BOXES, Use::Write(&b.refit_boxes)),
+            (RF_TRIS, Use::Read(&b.triangles)),
+            (RF_PAIR, Use::Write(&b.pair_nodes)),
+            (RF_SINGLE, Use::Write(&b.single_nodes)),
+            (RF_THREADED, Use::Write(&b.threaded_nodes)),
+        ]);
         self.run(cmd, sync, &self.refit, &uses, std::slice::from_ref(job), |j| j.count)
     }
 
@@ -274,13 +234,13 @@ impl SceneUpdatePass {
         job: &RefitPush,
     ) -> VkResult<()> {
         let b = &sb.bvh;
-        let uses = [
-            Use::Read(&b.wide_refit_order),
-            Use::Write(&b.wide_refit_boxes),
-            Use::Read(&b.triangles),
-            Use::Write(&b.wide_nodes),
-            Use::Write(&b.wide_prims),
-        ];
+        let uses = ordered([
+            (RW_ORDER, Use::Read(&b.wide_refit_order)),
+            (RW_BOXES, Use::Write(&b.wide_refit_boxes)),
+            (RW_TRIS, Use::Read(&b.triangles)),
+            (RW_NODES, Use::Write(&b.wide_nodes)),
+            (RW_PRIMS, Use::Write(&b.wide_prims)),
+        ]);
         self.run(cmd, sync, &self.refit_wide, &uses, std::slice::from_ref(job), |j| j.count)
     }
 

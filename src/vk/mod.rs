@@ -22,7 +22,7 @@ pub use context::{Context, ContextDesc, Device, DeviceInfo, Instance};
 pub use debug::validation_message_count;
 pub use error::{Check, VkError, VkResult};
 pub use image::{Image, Sampler};
-pub use pipeline::{Bind, BindKind, Blend, ColorTarget, GraphicsDesc, Pipeline};
+pub use pipeline::{Bind, Blend, ColorTarget, GraphicsDesc, Pipeline};
 pub use query::Timestamps;
 pub use sync::{Access, Barriers};
 pub use tracker::Tracker;

@@ -1,5 +1,7 @@
-//! Pipelines with one push-descriptor set (VK_KHR_push_descriptor) and a push-constant block.
-//! Binding `i` of a pipeline is the `i`-th entry of its [`BindKind`] list, so passes bind by position.
+//! Pipelines with one push-descriptor set (VK_KHR_push_descriptor) and a push-constant block, both reflected from
+//! the pipeline's SPIR-V: the shaders are the layout's only source. A pass binds a [`Use`](super::Use) per binding,
+//! in the order of the binding constants both sides name (src/shader_consts.rs; [`ordered`]), and each use is
+//! checked against what the shaders declare there.
 
 use super::buffer::Buffer;
 use super::context::Device;
@@ -31,7 +33,6 @@ impl BindKind {
     }
 }
 
-/// A resource bound at record time.
 /// Whether a binding list names its bindings 0, 1, 2, ... in order: the lists in src/passes/ pair each entry with its
 /// index constant (src/shader_consts.rs, the same macro the GLSL declares it with), and a const assertion holds
 /// the order, so that Rust and GLSL cannot drift.
@@ -46,26 +47,13 @@ pub const fn bindings_in_order<T>(entries: &[(u32, T)]) -> bool {
     true
 }
 
-/// The kinds of a binding list (see [`bindings_in_order`]).
-pub fn kinds<const N: usize>(entries: &[(u32, BindKind); N]) -> [BindKind; N] {
-    entries.map(|(_, k)| k)
-}
-
-/// `kinds` with the bindings `texels` names read as texel buffers (a variant that reads through texel views what
-/// the others read as storage buffers; [`Pipeline::bind`]).
-pub fn with_texels<const N: usize>(mut kinds: [BindKind; N], texels: &[u32]) -> [BindKind; N] {
-    for &b in texels {
-        kinds[b as usize] = BindKind::Texels;
-    }
-    kinds
-}
-
 /// The binds of a list in binding order, checked against its index constants.
 pub fn ordered<T, const N: usize>(entries: [(u32, T); N]) -> [T; N] {
     assert!(bindings_in_order(&entries), "a binding list out of its index order");
     entries.map(|(_, b)| b)
 }
 
+/// A resource bound at record time.
 #[derive(Clone, Copy)]
 pub enum Bind<'a> {
     Uniform(&'a Buffer),
@@ -94,8 +82,6 @@ pub struct ColorTarget {
 pub struct GraphicsDesc<'a> {
     pub vertex: &'a [u32],
     pub fragment: &'a [u32],
-    pub binds: &'a [BindKind],
-    pub push_size: u32,
     /// Interleaved vertex attributes, as (format, offset); stride in `vertex_stride`. Empty: no vertex buffer.
     pub vertex_attributes: &'a [(vk::Format, u32)],
     pub vertex_stride: u32,
@@ -111,9 +97,8 @@ pub struct Pipeline {
     pub layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pub bind_point: vk::PipelineBindPoint,
-    pub(super) kinds: Vec<BindKind>,
-    /// Per binding, whether one of the pipeline's shaders may write it (declares it without `readonly`).
-    pub(super) writable: Vec<bool>,
+    /// What its shaders declare: each binding's kind, writability and name, and the push block.
+    pub(super) iface: Interface,
     /// Its name in messages.
     pub(super) name: String,
     push_stages: vk::ShaderStageFlags,
@@ -145,68 +130,95 @@ struct Layouts<'a> {
     pipeline: vk::PipelineLayout,
 }
 
-/// Checks a pipeline's layout against the device's limits and against what its shaders declare: every
-/// descriptor a shader reads is in the layout (set 0), of the kind the layout gives it. A mismatch is this crate's
-/// defect, and the error names the pipeline, the binding and both kinds; the device's limit is named by its
-/// Vulkan name. Returns, per binding, whether a shader may write it.
-fn check_interface(
-    device: &Device,
-    name: &str,
-    shaders: &[&[u32]],
-    kinds: &[BindKind],
-    push_size: u32,
-) -> VkResult<Vec<bool>> {
+/// What a pipeline's shaders declare, reflected from their SPIR-V: the layout's only source.
+pub(super) struct Interface {
+    /// Per binding of set 0, its kind, or `None` where no shader declares it.
+    pub(super) kinds: Vec<Option<BindKind>>,
+    /// Per binding, whether one of the shaders may write it (declares it without `readonly`).
+    pub(super) writable: Vec<bool>,
+    /// Per binding, the name the shaders give it (the variable, or a block without an instance name).
+    pub(super) names: Vec<String>,
+    /// The push-constant block the shaders share, if any.
+    pub(super) push: Option<super::spirv::PushBlock>,
+}
+
+/// Reflects a pipeline's layout from its shaders and checks it against the device's limits. Every descriptor is in
+/// set 0 and is of a kind this crate binds; shaders of one pipeline that declare a binding or the push block
+/// differently are refused. A mismatch is this crate's defect, and the error names the pipeline and the binding;
+/// the device's limit is named by its Vulkan name.
+fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interface> {
     use super::spirv::{Descriptor, Module};
+    let fail = |m: String| VkError::Interface(format!("pipeline {name}: {m}"));
+    let mut me = Interface { kinds: Vec::new(), writable: Vec::new(), names: Vec::new(), push: None };
+    for words in shaders {
+        let module = Module::parse(words).map_err(fail)?;
+        for (&(set, binding), (declared, var)) in &module.bindings {
+            let kind = match declared {
+                Descriptor::Uniform => BindKind::Uniform,
+                Descriptor::Storage => BindKind::Storage,
+                Descriptor::Sampled => BindKind::Sampled,
+                Descriptor::StorageImage => BindKind::StorageImage,
+                Descriptor::UniformTexel => BindKind::Texels,
+                Descriptor::StorageTexel => {
+                    return Err(fail(format!("`{var}` (binding {binding}) is a storage texel buffer: not bound here")))
+                }
+            };
+            if set != 0 {
+                return Err(fail(format!("`{var}` is in set {set}: every binding is in set 0")));
+            }
+            let b = binding as usize;
+            if me.kinds.len() <= b {
+                me.kinds.resize(b + 1, None);
+                me.writable.resize(b + 1, false);
+                me.names.resize(b + 1, String::new());
+            }
+            if me.kinds[b].is_some_and(|k| k != kind) {
+                return Err(fail(format!(
+                    "its shaders declare binding {binding} as {:?} (`{}`) and as {kind:?} (`{var}`)",
+                    me.kinds[b].unwrap_or(kind),
+                    me.names[b]
+                )));
+            }
+            me.kinds[b] = Some(kind);
+            me.writable[b] |= module.writable.contains(&(set, binding));
+            me.names[b] = var.clone();
+        }
+        if let Some(push) = module.push {
+            if me.push.as_ref().is_some_and(|p| *p != push) {
+                return Err(fail(format!("its shaders declare push blocks {:?} and {push:?}", me.push)));
+            }
+            me.push = Some(push);
+        }
+    }
     let limits = &device.info.limits;
-    if kinds.len() as u32 > device.info.max_push_descriptors {
+    let count = me.kinds.iter().flatten().count();
+    if count as u32 > device.info.max_push_descriptors {
         return Err(VkError::Unsupported(format!(
-            "pipeline {name}: its layout binds {} push descriptors; {} allows {} (maxPushDescriptors)",
-            kinds.len(),
-            device.info.name,
-            device.info.max_push_descriptors
+            "pipeline {name}: its layout binds {count} push descriptors; {} allows {} (maxPushDescriptors)",
+            device.info.name, device.info.max_push_descriptors
         )));
     }
+    let push_size = me.push.as_ref().map_or(0, |p| p.size);
     if push_size > limits.max_push_constants_size {
         return Err(VkError::Unsupported(format!(
             "pipeline {name}: {push_size} bytes of push constants; {} allows {} (maxPushConstantsSize)",
             device.info.name, limits.max_push_constants_size
         )));
     }
-    let mut writable = vec![false; kinds.len()];
-    for words in shaders {
-        let module = Module::parse(words).map_err(|e| VkError::Interface(format!("pipeline {name}: {e}")))?;
-        for &(_, binding) in module.writable.iter().filter(|(set, _)| *set == 0) {
-            if let Some(w) = writable.get_mut(binding as usize) {
-                *w = true;
-            }
-        }
-        for (&(set, binding), (declared, var)) in &module.bindings {
-            let expected = match declared {
-                Descriptor::Uniform => Some(BindKind::Uniform),
-                Descriptor::Storage => Some(BindKind::Storage),
-                Descriptor::Sampled => Some(BindKind::Sampled),
-                Descriptor::StorageImage => Some(BindKind::StorageImage),
-                Descriptor::UniformTexel => Some(BindKind::Texels),
-                Descriptor::StorageTexel => None,
-            };
-            let layout = kinds.get(binding as usize).filter(|_| set == 0);
-            if layout.is_none() || layout != expected.as_ref() {
-                return Err(VkError::Interface(format!(
-                    "pipeline {name}: its shader declares `{var}` at set {set}, binding {binding} as {declared:?}; \
-                     the layout has {}",
-                    layout.map_or("nothing there".to_string(), |k| format!("{k:?}"))
-                )));
-            }
-        }
-    }
-    Ok(writable)
+    Ok(me)
 }
 
 impl<'a> Layouts<'a> {
-    fn new(device: &'a Device, kinds: &[BindKind], stages: vk::ShaderStageFlags, push_size: u32) -> VkResult<Self> {
+    fn new(
+        device: &'a Device,
+        kinds: &[Option<BindKind>],
+        stages: vk::ShaderStageFlags,
+        push_size: u32,
+    ) -> VkResult<Self> {
         let bindings: Vec<_> = kinds
             .iter()
             .enumerate()
+            .filter_map(|(i, k)| k.map(|k| (i, k)))
             .map(|(i, k)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
@@ -252,30 +264,17 @@ impl Drop for Layouts<'_> {
 }
 
 impl Pipeline {
-    pub fn compute(
-        device: &Arc<Device>,
-        name: &str,
-        spv: &[u32],
-        kinds: &[BindKind],
-        push_size: u32,
-    ) -> VkResult<Self> {
-        Self::compute_specialized(device, name, spv, kinds, push_size, &[])
+    pub fn compute(device: &Arc<Device>, name: &str, spv: &[u32]) -> VkResult<Self> {
+        Self::compute_specialized(device, name, spv, &[])
     }
 
     /// A compute pipeline whose specialization constants take the values `spec` gives, as (constant_id, value)
     /// pairs (32-bit each: a `bool` constant takes 0 or 1). The driver folds them before it compiles, so a branch
     /// on one costs nothing, not even on a CPU driver that runs both sides of every branch under a mask.
-    pub fn compute_specialized(
-        device: &Arc<Device>,
-        name: &str,
-        spv: &[u32],
-        kinds: &[BindKind],
-        push_size: u32,
-        spec: &[(u32, u32)],
-    ) -> VkResult<Self> {
+    pub fn compute_specialized(device: &Arc<Device>, name: &str, spv: &[u32], spec: &[(u32, u32)]) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::COMPUTE;
-        let writable = check_interface(device, name, &[spv], kinds, push_size)?;
-        let layouts = Layouts::new(device, kinds, stages, push_size)?;
+        let iface = reflect(device, name, &[spv])?;
+        let layouts = Layouts::new(device, &iface.kinds, stages, iface.push_size())?;
         let module = Module::new(device, spv)?;
         let entries: Vec<vk::SpecializationMapEntry> = (0..spec.len() as u32)
             .map(|i| vk::SpecializationMapEntry { constant_id: spec[i as usize].0, offset: 4 * i, size: 4 })
@@ -298,8 +297,7 @@ impl Pipeline {
             layout,
             set_layout,
             bind_point: vk::PipelineBindPoint::COMPUTE,
-            kinds: kinds.to_vec(),
-            writable,
+            iface,
             name: name.to_string(),
             push_stages: stages,
         })
@@ -307,8 +305,8 @@ impl Pipeline {
 
     pub fn graphics(device: &Arc<Device>, name: &str, desc: &GraphicsDesc) -> VkResult<Self> {
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
-        let writable = check_interface(device, name, &[desc.vertex, desc.fragment], desc.binds, desc.push_size)?;
-        let layouts = Layouts::new(device, desc.binds, stages, desc.push_size)?;
+        let iface = reflect(device, name, &[desc.vertex, desc.fragment])?;
+        let layouts = Layouts::new(device, &iface.kinds, stages, iface.push_size())?;
         let vs = Module::new(device, desc.vertex)?;
         let fs = Module::new(device, desc.fragment)?;
         let shader_stages = [
@@ -410,8 +408,7 @@ impl Pipeline {
             layout,
             set_layout,
             bind_point: vk::PipelineBindPoint::GRAPHICS,
-            kinds: desc.binds.to_vec(),
-            writable,
+            iface,
             name: name.to_string(),
             push_stages: stages,
         })
@@ -420,8 +417,8 @@ impl Pipeline {
     /// [`Pipeline::bind`], after checking that every buffer bound to a texel-buffer binding has its texel view (an
     /// error names the one that has none).
     pub fn bind_checked(&self, cmd: vk::CommandBuffer, binds: &[Bind]) -> VkResult<()> {
-        for (b, kind) in binds.iter().zip(&self.kinds) {
-            if let (Bind::Uniform(buf) | Bind::Storage(buf), BindKind::Texels) = (b, kind) {
+        for (b, kind) in binds.iter().zip(&self.iface.kinds) {
+            if let (Bind::Uniform(buf) | Bind::Storage(buf), Some(BindKind::Texels)) = (b, kind) {
                 buf.texel_view()?;
             }
         }
@@ -429,17 +426,20 @@ impl Pipeline {
         Ok(())
     }
 
-    /// Bind the pipeline and push its descriptors (binding i = binds[i]). A buffer bound where the pipeline's layout
-    /// has a texel-buffer binding (a variant that reads it as texels, where the others read it as storage) is bound
-    /// through its texel view.
+    /// Bind the pipeline and push its descriptors (binding i = binds[i]; a binding no shader of the pipeline
+    /// declares is left out). A buffer bound where the shaders declare a texel buffer (a variant that reads it as
+    /// texels, where the others read it as storage) is bound through its texel view.
     pub fn bind(&self, cmd: vk::CommandBuffer, binds: &[Bind]) {
-        debug_assert_eq!(binds.len(), self.kinds.len(), "binding count mismatch");
+        let kinds = &self.iface.kinds;
+        assert!(binds.len() >= kinds.len(), "pipeline {}: binding {} has nothing bound", self.name, binds.len());
         let mut buffer_infos = Vec::with_capacity(binds.len());
         let mut image_infos = Vec::with_capacity(binds.len());
         let mut texel_views = Vec::with_capacity(binds.len());
-        for (b, kind) in binds.iter().zip(&self.kinds) {
+        let present: Vec<(usize, &Bind, BindKind)> =
+            binds.iter().zip(kinds).enumerate().filter_map(|(i, (b, k))| k.map(|k| (i, b, k))).collect();
+        for &(_, b, kind) in &present {
             match b {
-                Bind::Uniform(buf) | Bind::Storage(buf) if *kind == BindKind::Texels => {
+                Bind::Uniform(buf) | Bind::Storage(buf) if kind == BindKind::Texels => {
                     debug_assert!(buf.texels != vk::BufferView::null(), "buffer `{}` has no texel view", buf.name);
                     texel_views.push(buf.texels)
                 }
@@ -459,15 +459,12 @@ impl Pipeline {
             }
         }
         let (mut bi, mut ii, mut ti) = (0, 0, 0);
-        let writes: Vec<_> = binds
+        let writes: Vec<_> = present
             .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let w = vk::WriteDescriptorSet::default()
-                    .dst_binding(i as u32)
-                    .descriptor_type(self.kinds[i].descriptor_type());
+            .map(|&(i, b, kind)| {
+                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(kind.descriptor_type());
                 match b {
-                    Bind::Uniform(_) | Bind::Storage(_) if self.kinds[i] == BindKind::Texels => {
+                    Bind::Uniform(_) | Bind::Storage(_) if kind == BindKind::Texels => {
                         ti += 1;
                         w.texel_buffer_view(std::slice::from_ref(&texel_views[ti - 1]))
                     }
@@ -490,8 +487,24 @@ impl Pipeline {
         }
     }
 
+    /// Push `data` as the pipeline's push constants: a value of the Rust struct the shaders' push block holds
+    /// (src/gpu_types.rs, from which the build generates the GLSL struct), checked by its name and size.
     pub fn push<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, data: &T) {
+        let ty = std::any::type_name::<T>().rsplit("::").next().unwrap_or_default();
+        let push = self.iface.push.as_ref();
+        assert!(
+            push.is_some_and(|p| p.name == ty && p.size as usize == std::mem::size_of::<T>()),
+            "pipeline {}: pushes a {ty} of {} bytes; its shaders' push block is {push:?}",
+            self.name,
+            std::mem::size_of::<T>()
+        );
         unsafe { self.device.cmd_push_constants(cmd, self.layout, self.push_stages, 0, bytemuck::bytes_of(data)) };
+    }
+}
+
+impl Interface {
+    fn push_size(&self) -> u32 {
+        self.push.as_ref().map_or(0, |p| p.size)
     }
 }
 
@@ -517,22 +530,15 @@ impl LazyPipeline {
         LazyPipeline { cell: std::sync::OnceLock::new(), make: Box::new(make) }
     }
 
-    /// A compute pipeline of `spv`, with the binding kinds and push-constant size given.
-    pub fn compute(device: &Arc<Device>, name: &str, spv: &'static [u32], binds: &[BindKind], push: u32) -> Self {
-        Self::compute_specialized(device, name, spv, binds, push, &[])
+    /// A compute pipeline of `spv` (its layout reflected from it).
+    pub fn compute(device: &Arc<Device>, name: &str, spv: &'static [u32]) -> Self {
+        Self::compute_specialized(device, name, spv, &[])
     }
 
     /// The same with specialization constants ([`Pipeline::compute_specialized`]).
-    pub fn compute_specialized(
-        device: &Arc<Device>,
-        name: &str,
-        spv: &'static [u32],
-        binds: &[BindKind],
-        push: u32,
-        spec: &[(u32, u32)],
-    ) -> Self {
-        let (device, name, binds, spec) = (device.clone(), name.to_string(), binds.to_vec(), spec.to_vec());
-        Self::new(move || Pipeline::compute_specialized(&device, &name, spv, &binds, push, &spec))
+    pub fn compute_specialized(device: &Arc<Device>, name: &str, spv: &'static [u32], spec: &[(u32, u32)]) -> Self {
+        let (device, name, spec) = (device.clone(), name.to_string(), spec.to_vec());
+        Self::new(move || Pipeline::compute_specialized(&device, &name, spv, &spec))
     }
 
     /// The pipeline, built now if no frame has needed it yet.
@@ -558,27 +564,43 @@ mod tests {
     use crate::shaders;
 
     #[test]
-    fn a_layout_that_differs_from_its_shader_is_refused_with_the_binding_named() {
+    fn a_pipeline_takes_its_layout_and_push_block_from_its_shaders() {
         let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
         let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
-        let spv = shaders::RESOLVE_COMP.words();
-        let push = 4;
-        let right = [BindKind::Uniform, BindKind::Sampled, BindKind::Sampled, BindKind::StorageImage];
-        Pipeline::compute(&device, "resolve", spv, &right, push).expect("the pass's own layout");
-        // The texel variant's layout under the plain shader.
-        let texels = [BindKind::Uniform, BindKind::Texels, BindKind::Sampled, BindKind::StorageImage];
-        let e = Pipeline::compute(&device, "resolve", spv, &texels, push).err().expect("refused").to_string();
-        assert!(e.contains("binding 1 as Sampled; the layout has Texels"), "{e}");
-        let e = Pipeline::compute(&device, "resolve", spv, &right[..3], push).err().expect("refused").to_string();
-        assert!(e.contains("binding 3 as StorageImage; the layout has nothing there"), "{e}");
-        // The texel variant reads binding 1 as a texel buffer (a `usamplerBuffer`).
-        let spv = shaders::RESOLVE_COMP_TEXELS.words();
-        Pipeline::compute(&device, "resolve, texels", spv, &texels, push).expect("the texel variant's layout");
-        let e = Pipeline::compute(&device, "resolve, texels", spv, &right, push).err().expect("refused").to_string();
-        assert!(e.contains("binding 1 as UniformTexel; the layout has Sampled"), "{e}");
-        let many = [BindKind::Storage; 64];
-        let e = Pipeline::compute(&device, "wide", spv, &many, push).err().expect("refused").to_string();
-        assert!(e.contains("maxPushDescriptors"), "{e}");
+        let p = Pipeline::compute(&device, "resolve", shaders::RESOLVE_COMP.words()).expect("pipeline");
+        let sampled = Some(BindKind::Sampled);
+        assert_eq!(p.iface.kinds, [Some(BindKind::Uniform), sampled, sampled, Some(BindKind::StorageImage)]);
+        assert_eq!(p.iface.names[1], "t_flux");
+        assert_eq!(p.iface.writable, [false, false, false, true]);
+        let push = p.iface.push.as_ref().expect("a push block");
+        assert_eq!((push.name.as_str(), push.size), ("ResolvePush", 4));
+        // The texel variant reads binding 1 as a texel buffer (a `samplerBuffer`).
+        let texels = Pipeline::compute(&device, "resolve, texels", shaders::RESOLVE_COMP_TEXELS.words()).unwrap();
+        assert_eq!(texels.iface.kinds[1], Some(BindKind::Texels));
+        let step = Pipeline::compute(&device, "water step", shaders::WATER_STEP_COMP.words()).unwrap();
+        let size = std::mem::size_of::<crate::gpu_types::WaterStepPush>() as u32;
+        assert_eq!((step.iface.kinds.len(), step.iface.push.as_ref().map(|p| p.size)), (1, Some(size)));
+        // Push constants of another type, or of another size, are refused with the block named.
+        let cmd = vk::CommandBuffer::null();
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| p.push(cmd, &1u32))).expect_err("refused");
+        let message = e.downcast_ref::<String>().expect("a message");
+        assert!(message.contains("pushes a u32 of 4 bytes") && message.contains("ResolvePush"), "{message}");
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            p.push(cmd, &crate::gpu_types::ShadePush { add: 1 })
+        }))
+        .expect_err("refused");
+        let message = e.downcast_ref::<String>().expect("a message");
+        assert!(message.contains("pushes a ShadePush"), "{message}");
+        // A shader's push block's size is read from the SPIR-V's offsets and types.
+        let wave = Pipeline::compute(&device, "wave", shaders::WAVE_COMP.words()).unwrap();
+        let size = std::mem::size_of::<crate::gpu_types::WavePush>() as u32;
+        assert_eq!(wave.iface.push, Some(crate::vk::spirv::PushBlock { name: "WavePush".into(), size }));
+        let g = crate::gpu_types::GeometryPush::default();
+        let size = std::mem::size_of_val(&g) as u32;
+        let words = [shaders::GEOMETRY_VERT_ALBEDO.words(), shaders::GEOMETRY_FRAG_ALBEDO.words()];
+        let eye = reflect(&device, "eye g-buffer", &words).unwrap();
+        assert_eq!(eye.push, Some(crate::vk::spirv::PushBlock { name: "GeometryPush".into(), size }));
+        assert_eq!(eye.kinds, [sampled]);
         assert_eq!(crate::vk::validation_message_count(), 0);
     }
 }

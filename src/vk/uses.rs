@@ -144,13 +144,28 @@ impl Pipeline {
     /// fit its binding, or a read of a binding the pipeline's shaders may write (declared without `readonly`, as
     /// the SPIR-V says), is this crate's defect: the barriers would not cover what the shaders do.
     fn declare_uses(&self, sync: &mut Tracker, uses: &[Use]) {
-        assert_eq!(uses.len(), self.kinds.len(), "pipeline {}: a use per binding", self.name);
+        let iface = &self.iface;
+        assert!(uses.len() >= iface.kinds.len(), "pipeline {}: binding {} has no use", self.name, uses.len());
         let stages = if self.bind_point == vk::PipelineBindPoint::COMPUTE { Stages::Compute } else { Stages::Graphics };
-        for (i, (u, &kind)) in uses.iter().zip(&self.kinds).enumerate() {
-            assert!(u.fits(kind), "pipeline {}: binding {i}, a use that does not fit its {kind:?} binding", self.name);
+        for (i, u) in uses.iter().enumerate() {
+            let kind = iface.kinds.get(i).copied().flatten();
+            // A binding no shader of this pipeline declares is neither bound nor accessed by a shader; the
+            // arguments of the pass's indirect command are still read.
+            let Some(kind) = kind else {
+                if let Use::Indirect(b) = u {
+                    sync.buffer(b, &[Access::IndirectRead]);
+                }
+                continue;
+            };
+            let var = &iface.names[i];
             assert!(
-                !(self.writable[i] && u.reads_only()),
-                "pipeline {}: binding {i} is declared read, but a shader may write it (it lacks `readonly`)",
+                u.fits(kind),
+                "pipeline {}: binding {i} (`{var}`), a use that does not fit its {kind:?} binding",
+                self.name
+            );
+            assert!(
+                !(iface.writable[i] && u.reads_only()),
+                "pipeline {}: binding {i} (`{var}`) is declared read, but a shader may write it (it lacks `readonly`)",
                 self.name
             );
             u.declare(sync, kind, stages);
@@ -194,7 +209,6 @@ impl Pipeline {
     /// Bind this pipeline to the raster pass `raster` already begun (another pipeline of the same pass, which reads
     /// what the declaration names): its descriptors, vertex and index buffers.
     pub fn bind_raster(&self, cmd: vk::CommandBuffer, raster: &Raster) -> VkResult<()> {
-        assert_eq!(raster.uses.len(), self.kinds.len(), "a use per binding");
         let binds: Vec<Bind> = raster.uses.iter().map(|u| u.bind()).collect();
         self.bind_checked(cmd, &binds)?;
         let d = &self.device;
@@ -303,7 +317,7 @@ impl Raster<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vk::{BindKind, Pipeline};
+    use crate::vk::Pipeline;
 
     /// The scene update's placement reads object-space buffers (`readonly`) and writes world-space ones
     /// (`writeonly`): a pass that declared a world-space buffer as read would get no barrier before the next
@@ -312,10 +326,9 @@ mod tests {
     fn a_read_of_a_binding_the_shader_writes_is_refused() {
         let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
         let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
-        let push = std::mem::size_of::<crate::gpu_types::SceneUpdatePush>() as u32;
         let words = crate::shaders::SCENE_UPDATE_COMP.words();
-        let p = Pipeline::compute(&device, "scene update", words, &[BindKind::Storage; 4], push).expect("pipeline");
-        assert_eq!(p.writable, [false, true, false, true]);
+        let p = Pipeline::compute(&device, "scene update", words).expect("pipeline");
+        assert_eq!(p.iface.writable, [false, true, false, true]);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let b: Vec<Buffer> = (0..4)
             .map(|i| {
@@ -329,12 +342,21 @@ mod tests {
         let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| p.declare_uses(&mut sync, &wrong)))
             .expect_err("a read of a written binding");
         let message = e.downcast_ref::<String>().expect("a message");
-        assert!(message.contains("pipeline scene update: binding 1 is declared read"), "{message}");
+        assert!(message.contains("pipeline scene update: binding 1 (`WorldVertices`) is declared read"), "{message}");
         // A use of another kind than its binding is refused the same way.
         let img = [Use::Read(&b[0]), Use::Uniform(&b[1]), Use::Read(&b[2]), Use::Write(&b[3])];
         let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| p.declare_uses(&mut sync, &img)))
             .expect_err("a uniform where the layout binds storage");
         let message = e.downcast_ref::<String>().expect("a message");
-        assert!(message.contains("binding 1, a use that does not fit its Storage binding"), "{message}");
+        assert!(
+            message.contains("binding 1 (`WorldVertices`), a use that does not fit its Storage binding"),
+            "{message}"
+        );
+        // A list that leaves a binding out is refused.
+        let short = [Use::Read(&b[0]), Use::Write(&b[1])];
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| p.declare_uses(&mut sync, &short)))
+            .expect_err("a binding without a use");
+        let message = e.downcast_ref::<String>().expect("a message");
+        assert!(message.contains("binding 2 has no use"), "{message}");
     }
 }
