@@ -10,7 +10,7 @@ layout(local_size_x = LINEAR_WG) in;
 
 // Per morphing object: its base vertices, then each target's displacements, `vertices` apart; two vec4 per
 // vertex: (position, 0), (normal, 0).
-layout(std430, set = 0, binding = MO_MORPHS) readonly buffer Morphs { vec4 morph[]; };
+layout(std430, set = 0, binding = MO_MORPHS) readonly buffer Morphs { GpuPointNormal morph[]; };
 layout(std430, set = 0, binding = MO_WEIGHTS) readonly buffer Weights { float weights[]; };
 #ifdef MORPH_BVH
 layout(std430, set = 0, binding = MO_REST_TRIS) readonly buffer RestTris { vec4 rest_tris[]; };
@@ -28,15 +28,15 @@ layout(push_constant) uniform MorphPushBlock { MorphPush pc; };
 // Vertex v of the object, weighted.
 void morphed(uint v, out vec3 p, out vec3 n) {
     uint b = pc.first + v;
-    p = morph[2u * b].xyz;
-    n = morph[2u * b + 1u].xyz;
+    p = morph[b].position.xyz;
+    n = morph[b].normal.xyz;
     vec3 n0 = n;
     for (uint k = 0u; k < pc.targets; k++) {
         float w = weights[pc.first_weight + k];
         if (w == 0.0) continue;
         uint j = b + (k + 1u) * pc.vertices;
-        p += w * morph[2u * j].xyz;
-        n += w * morph[2u * j + 1u].xyz;
+        p += w * morph[j].position.xyz;
+        n += w * morph[j].normal.xyz;
     }
     float len = length(n);
     n = len > 0.0 && !isinf(len) ? n / len : n0;

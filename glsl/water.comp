@@ -12,17 +12,17 @@
 layout(local_size_x = LINEAR_WG) in;
 
 #ifdef WATER_BVH
-layout(std430, set = 0, binding = WA_BVH_DISPLACED) readonly buffer Displaced { vec4 displaced[]; };
+layout(std430, set = 0, binding = WA_BVH_DISPLACED) readonly buffer Displaced { GpuPointNormal displaced[]; };
 layout(std430, set = 0, binding = WA_REST_CORNERS) readonly buffer RestCorners { uint rest_corners[]; };
 layout(std430, set = 0, binding = WA_BVH_TRIS) writeonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = WA_BVH_NORMALS) writeonly buffer BvhNormals { vec4 bvh_normals[]; };
 #else
 // Two per wave: (direction x, direction z, k, omega), (amplitude, 0, 0, 0).
-layout(std430, set = 0, binding = WA_WAVES) readonly buffer Waves { vec4 waves[]; };
+layout(std430, set = 0, binding = WA_WAVES) readonly buffer Waves { GpuWaveRecord waves[]; };
 layout(std430, set = 0, binding = WA_OBJECT_VERTICES) readonly buffer ObjectVertices { Vertex object_vertices[]; };
 layout(std430, set = 0, binding = WA_WORLD_VERTICES) writeonly buffer WorldVertices { Vertex world_vertices[]; };
 layout(std430, set = 0, binding = WA_HEIGHTS) readonly buffer Heights { float heights[]; };
-layout(std430, set = 0, binding = WA_DISPLACED) writeonly buffer Displaced { vec4 displaced[]; };
+layout(std430, set = 0, binding = WA_DISPLACED) writeonly buffer Displaced { GpuPointNormal displaced[]; };
 #endif
 
 layout(push_constant) uniform WaterPushBlock { WaterPush pc; };
@@ -33,8 +33,8 @@ void displace(inout vec3 p, inout vec3 n) {
     float h = 0.0;
     vec2 g = vec2(0.0);
     for (uint w = 0u; w < pc.wave_count; w++) {
-        vec4 a = waves[2u * (pc.first_wave + w)];
-        float amp = waves[2u * (pc.first_wave + w) + 1u].x;
+        vec4 a = waves[pc.first_wave + w].a;
+        float amp = waves[pc.first_wave + w].b.x;
         float phase = a.z * (a.x * p.x + a.y * p.z) - a.w * pc.time;
         h += amp * sin(phase);
         g += a.xy * (amp * a.z * cos(phase));
@@ -42,7 +42,7 @@ void displace(inout vec3 p, inout vec3 n) {
     if (pc.heights != 0u) {
         // The simulated surface at the nearest node (src/scene/water.rs Water::node), its gradient by central
         // differences, zero across a wall (HeightField::at).
-        vec4 r = waves[2u * (pc.first_wave + pc.wave_count)];
+        vec4 r = waves[pc.first_wave + pc.wave_count].a;
         uint nodes = floatBitsToUint(r.x);
         float cells = float(nodes - 1u);
         uint i = uint(clamp(round(p.x * 2.0 * r.y + 0.5 * cells), 0.0, cells));
@@ -66,8 +66,7 @@ void main() {
         Vertex v = object_vertices[pc.src + i];
         vec3 p = v.position.xyz, n = v.normal.xyz;
         displace(p, n);
-        displaced[2u * (pc.displaced + i)] = vec4(p, 0.0);
-        displaced[2u * (pc.displaced + i) + 1u] = vec4(n, 0.0);
+        displaced[pc.displaced + i] = GpuPointNormal(vec4(p, 0.0), vec4(n, 0.0));
         vec4 q = vec4(p, 1.0);
         v.position.xyz = vec3(dot(pc.rows[0], q), dot(pc.rows[1], q), dot(pc.rows[2], q));
         vec3 m = vec3(dot(pc.nrows[0].xyz, n), dot(pc.nrows[1].xyz, n), dot(pc.nrows[2].xyz, n));
@@ -81,8 +80,8 @@ void main() {
             uint t = 3u * (pc.src + i) + c;
             uint k = pc.displaced + rest_corners[t];
             // The w lanes hold texture coordinates, which water's meshes have none of (src/scene/water.rs).
-            bvh_tris[3u * (pc.dst + i) + c] = vec4(displaced[2u * k].xyz, 0.0);
-            bvh_normals[3u * (pc.dst + i) + c] = vec4(displaced[2u * k + 1u].xyz, 0.0);
+            bvh_tris[3u * (pc.dst + i) + c] = vec4(displaced[k].position.xyz, 0.0);
+            bvh_normals[3u * (pc.dst + i) + c] = vec4(displaced[k].normal.xyz, 0.0);
         }
     }
 #endif

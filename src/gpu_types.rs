@@ -443,6 +443,26 @@ pub struct WavePush {
     pub may_abort: u32,
 }
 
+/// A vertex's position and normal, w unused: a morphing mesh's base vertices and its targets' displacements
+/// (`SceneBuffers::morphs`, glsl/morph.comp), and water's vertices displaced to the frame's time
+/// (`SceneBuffers::displaced`, glsl/water.comp), in object space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuPointNormal {
+    pub position: [f32; 4],
+    pub normal: [f32; 4],
+}
+
+/// A record of `SceneBuffers::waves` (glsl/water.comp). A wave: `a` = (direction x, direction z, k, ω), `b` =
+/// (amplitude, 0, 0, 0). After a simulated surface's waves, the surface's record: `a` = (its nodes a side as the
+/// float's bits, 1 / 2Δx, 1 / 2Δz, 0), `b` zero.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuWaveRecord {
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+}
+
 /// Push constants of glsl/resolve.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

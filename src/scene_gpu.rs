@@ -4,7 +4,7 @@
 //! exact transport, built when a frame first needs it.
 
 use crate::bvh::{BvhLayout, BvhObject, GpuInstance, SceneBvh};
-use crate::gpu_types::Vertex;
+use crate::gpu_types::{GpuPointNormal, GpuWaveRecord, Vertex};
 use crate::gpu_types::{MorphPush, SceneUpdatePush, WaterPush};
 use crate::scene::{Material, Mesh, Scene};
 use crate::vk::{cmd::upload_buffer, cmd::upload_image, Buffer, Device, Image, Recorder, Sampler, VkResult};
@@ -45,7 +45,7 @@ pub enum Deformer {
 /// A water object's part of `SceneBuffers::waves` and `heights`.
 #[derive(Clone, Copy, Debug)]
 pub struct WaterRange {
-    /// Its first wave (two vec4 each) and how many.
+    /// Its first wave record ([`GpuWaveRecord`]) and how many waves.
     pub first_wave: u32,
     pub wave_count: u32,
     /// Its first vertex in `SceneBuffers::displaced`.
@@ -67,10 +67,10 @@ pub struct SimulationState {
 /// the count of their weights.
 #[derive(Default)]
 struct DeformData {
-    waves: Vec<[f32; 4]>,
+    waves: Vec<GpuWaveRecord>,
     heights: u32,
     displaced: u32,
-    morphs: Vec<[f32; 4]>,
+    morphs: Vec<GpuPointNormal>,
     weights: u32,
 }
 
@@ -80,15 +80,16 @@ impl DeformData {
     fn water(&mut self, w: &crate::scene::water::Water, vertices: u32) -> WaterRange {
         let first_displaced = self.displaced;
         self.displaced += vertices;
-        let first_wave = self.waves.len() as u32 / 2;
+        let first_wave = self.waves.len() as u32;
         for wave in &w.waves {
             let k = std::f32::consts::TAU / wave.wavelength;
-            self.waves.push([wave.direction.x, wave.direction.y, k, k * wave.speed]);
-            self.waves.push([wave.amplitude, 0.0, 0.0, 0.0]);
+            self.waves.push(GpuWaveRecord {
+                a: [wave.direction.x, wave.direction.y, k, k * wave.speed],
+                b: [wave.amplitude, 0.0, 0.0, 0.0],
+            });
         }
         let simulation = w.step_coefficients().map(|k| {
-            self.waves.push([f32::from_bits(k.nodes), 0.5 / k.dx, 0.5 / k.dz, 0.0]);
-            self.waves.push([0.0; 4]);
+            self.waves.push(GpuWaveRecord { a: [f32::from_bits(k.nodes), 0.5 / k.dx, 0.5 / k.dz, 0.0], b: [0.0; 4] });
             let base = self.heights;
             self.heights += 2 * k.nodes * k.nodes;
             (base, k)
@@ -99,18 +100,18 @@ impl DeformData {
     /// A morphing mesh's base (`base`, object space) and targets.
     fn morph(&mut self, base: &crate::scene::Mesh, m: &crate::scene::morph::Morph) -> MorphRange {
         let range = MorphRange {
-            first: self.morphs.len() as u32 / 2,
+            first: self.morphs.len() as u32,
             vertices: base.positions.len() as u32,
             targets: m.targets.len() as u32,
             first_weight: self.weights,
         };
         let v4 = |v: &glam::Vec3| [v.x, v.y, v.z, 0.0];
         for (p, n) in base.positions.iter().zip(&base.normals) {
-            self.morphs.extend([v4(p), v4(n)]);
+            self.morphs.push(GpuPointNormal { position: v4(p), normal: v4(n) });
         }
         for t in &m.targets {
             for (k, p) in t.positions.iter().enumerate() {
-                self.morphs.extend([v4(p), t.normals.get(k).map_or([0.0; 4], v4)]);
+                self.morphs.push(GpuPointNormal { position: v4(p), normal: t.normals.get(k).map_or([0.0; 4], v4) });
             }
         }
         self.weights += range.targets;
@@ -121,7 +122,7 @@ impl DeformData {
 /// A morphing object's part of `SceneBuffers::morphs` and `morph_weights`.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct MorphRange {
-    /// Its base vertices (two vec4 each), each target's displacements `vertices` further on.
+    /// Its base vertices ([`GpuPointNormal`]), each target's displacements `vertices` further on.
     pub first: u32,
     pub vertices: u32,
     pub targets: u32,
@@ -149,13 +150,12 @@ pub struct SceneBuffers {
     /// The IOR every refractor's vertices carry, when they all carry the same ([`shared_ior`]).
     pub shared_ior: Option<f32>,
     pub bvh: BvhBuffers,
-    /// Every water object's waves, two vec4 each: (direction x, direction z, k, ω) and (amplitude, 0, 0, 0);
-    /// after a simulated one's, a record (nodes as bits, 1 / 2Δx, 1 / 2Δz, 0) and a pad.
+    /// Every water object's waves, and after a simulated one's, its surface's record ([`GpuWaveRecord`]).
     pub waves: Buffer,
     /// Every simulated water surface's heights (m), two slots each ([`WaterRange::simulation`]).
     pub heights: Buffer,
-    /// Every water object's vertices displaced to the frame's time, in object space (position, normal: two vec4
-    /// each), written with its raster vertices and read by its BVH triangles (each vertex displaced once).
+    /// Every water object's vertices displaced to the frame's time, in object space ([`GpuPointNormal`]), written
+    /// with its raster vertices and read by its BVH triangles (each vertex displaced once).
     pub displaced: Buffer,
     /// Per scene object: where its simulated surface stands on the GPU (what the recorded frames stepped it to).
     pub simulations: Vec<Option<SimulationState>>,
@@ -695,7 +695,7 @@ impl SceneBuffers {
             })
             .collect();
         let DeformData { waves, heights, displaced, morphs, weights } = data;
-        let displaced = vec![[0f32; 4]; 2 * displaced.max(1) as usize];
+        let displaced = vec![GpuPointNormal::default(); displaced.max(1) as usize];
         let displaced = upload_buffer(device, recorder, "water vertices (displaced)", &displaced, storage)?;
         let waves = upload_buffer(device, recorder, "water waves", &nonempty(&waves), storage)?;
         let simulations = deformers
