@@ -2,6 +2,9 @@
 //! (src/vk/pipeline.rs), so the shaders are the layout's only source; what the build checks is how they name it:
 //! - every `binding =` in glsl/ names a constant of src/shader_consts.rs, never a number, so that the Rust pass
 //!   binds each resource by the same name (`ordered([(XB_NAME, use), ...])`);
+//! - the constant names what the declaration does: `binding = WA_HEIGHTS` declares `Heights` (a block's name, or a
+//!   variable's without its `t_`, `o_` or `u_`), so that two bindings swapped on one side fail the build
+//!   ([`names_agree`]);
 //! - a shader names the constants of one family (one prefix, `XB_`), the family of the passes that share them;
 //! - every shader of a family declares a binding with one kind: a variant that reads it through a texel view
 //!   where the others load a storage buffer or sample an image is the one allowed difference.
@@ -26,8 +29,64 @@ pub fn with_includes(glsl: &Path, file: &Path, seen: &mut Vec<std::path::PathBuf
     all
 }
 
+/// Abbreviations a declaration may use for a word of its constant.
+const ABBREVIATIONS: &[(&str, &str)] = &[("recv", "receivers"), ("irr", "irradiance"), ("lin", "linear")];
+
+/// The words of a name (`snake_case`, `CamelCase` or `UPPER_CASE`; digits are words of their own), lowercase,
+/// abbreviations spelled out, each without a plural `s`, and without the container words a declaration adds
+/// (`Buf`, `Ubo`, `texels`) at its end.
+fn words(name: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    let mut word = String::new();
+    let mut prev: Option<char> = None;
+    for c in name.chars() {
+        let split = c == '_'
+            || prev.is_some_and(|p| {
+                (p.is_ascii_lowercase() && c.is_ascii_uppercase()) || (p.is_ascii_digit() != c.is_ascii_digit())
+            });
+        if split && !word.is_empty() {
+            out.push(std::mem::take(&mut word));
+        }
+        if c != '_' {
+            word.push(c.to_ascii_lowercase());
+        }
+        prev = Some(c);
+    }
+    if !word.is_empty() {
+        out.push(word);
+    }
+    while out.last().is_some_and(|w| ["buf", "ubo", "texels"].contains(&w.as_str())) {
+        out.pop();
+    }
+    out.iter()
+        .map(|w| {
+            let w = ABBREVIATIONS.iter().find(|(a, _)| a == w).map_or(w.as_str(), |(_, full)| full);
+            w.strip_suffix('s').filter(|s| !s.is_empty()).unwrap_or(w).to_string()
+        })
+        .collect()
+}
+
+/// Whether the constant `constant` (its family prefix included) names the declaration `declared`: the same words
+/// ([`words`]) once the family and the declaration's `t_`, `o_` or `u_` are left off.
+pub fn names_agree(constant: &str, declared: &str) -> bool {
+    let suffix = constant.split_once('_').map_or(constant, |(_, s)| s);
+    let declared = ["t_", "o_", "u_"].iter().find_map(|p| declared.strip_prefix(p)).unwrap_or(declared);
+    words(suffix) == words(declared)
+}
+
+/// The name a declaration's line gives (after its `layout(...)`): a block's name (`buffer Heights { ... };`), or
+/// else the variable's (`uniform usampler2D t_recv;`).
+fn declared_name(line: &str) -> Option<String> {
+    let ident = |t: &str| t.chars().rev().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect::<String>();
+    let rest = &line[line.find("layout(")?..];
+    let rest = &rest[rest.find(')')? + 1..];
+    let end = rest.find('{').or_else(|| rest.find(';'))?;
+    let name: String = ident(rest[..end].trim_end()).chars().rev().collect();
+    (!name.is_empty()).then_some(name)
+}
+
 /// The names `binding = NAME` gives in `text` (the file `file`), each with its line; a number, or a name that is no
-/// shader constant, is refused with its line.
+/// shader constant, or one that does not name what its line declares, is refused with its line.
 pub fn binding_names(file: &str, text: &str, consts: &HashMap<String, u32>) -> Result<Vec<(usize, String)>, String> {
     let mut names = Vec::new();
     for (n, line) in text.lines().enumerate() {
@@ -44,6 +103,15 @@ pub fn binding_names(file: &str, text: &str, consts: &HashMap<String, u32>) -> R
         }
         if !consts.contains_key(&name) {
             return Err(format!("{file}:{}: `{name}` is not a constant of src/shader_consts.rs", n + 1));
+        }
+        if let Some(declared) = declared_name(code) {
+            if !names_agree(&name, &declared) {
+                return Err(format!(
+                    "{file}:{}: binding `{name}` (src/shader_consts.rs) declares `{declared}` here: the constant and \
+                     the declaration name one resource, so that the pass binds by it what the shader reads",
+                    n + 1
+                ));
+            }
         }
         names.push((n + 1, name));
     }

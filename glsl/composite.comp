@@ -17,7 +17,7 @@ vec3 behind(GpuView cam, vec3 o, vec3 dir) {
     vec3 pad = 1e-2 * max(hi - lo, vec3(1.0));
     vec3 hit;
     if (find_surface(cam, t_radiance, o, dir, ray_box_exit(o, dir, lo - pad, hi + pad), hit)) {
-        return textureLod(t_radiance_lin, view_uv(cam, hit), 0.0).rgb;
+        return textureLod(t_radiance_linear, view_uv(cam, hit), 0.0).rgb;
     }
     return environment(dir);
 }

@@ -15,7 +15,7 @@ layout(set = 0, binding = EB_SHADOW) uniform sampler2D t_shadow;      // depth o
 layout(set = 0, binding = EB_IRRADIANCE) uniform sampler2D t_irradiance;  // caustic irradiance, W/m^2 (linear filtering)
 layout(set = 0, binding = EB_RECEIVERS) uniform usampler2D t_recv;       // receivers from the light: normal, distance
 layout(set = 0, binding = EB_ENV) uniform sampler2D t_env;                 // the environment map
-layout(set = 0, binding = EB_ENV_IRRADIANCE) uniform sampler2D t_env_irr;  // its irradiance map
+layout(set = 0, binding = EB_ENV_IRRADIANCE) uniform sampler2D t_env_irradiance;  // its irradiance map
 
 #include "common/receiver.glsl"
 

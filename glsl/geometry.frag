@@ -13,7 +13,7 @@ layout(location = 2) flat in vec4 v_albedo;
 layout(location = 3) in vec2 v_uv;
 // The receivers' albedo textures, one per layer (linear reflectance, decoded from sRGB on the host), trilinear
 // and repeating: albedo(uv) = factor x texture(uv), the texture's mip chosen by the uv's screen-space derivatives.
-layout(set = 0, binding = GE_ALBEDO) uniform sampler2DArray t_albedo_textures;
+layout(set = 0, binding = GE_ALBEDO_TEXTURES) uniform sampler2DArray t_albedo_textures;
 #endif
 
 layout(location = 0) out uvec2 o_geo;  // normal (interpolated, as the reference sees it), distance: common/gbuffer.glsl

@@ -31,7 +31,7 @@ layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
 #include "common/receiver.glsl"
 
 #include "common/bvh_types.glsl"
-layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhNodes { PairNode bvh_nodes[]; };
+layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhPair { PairNode bvh_nodes[]; };
 #ifdef BVH_TEXELS
 layout(set = 0, binding = CB_BVH_INSTANCES) uniform samplerBuffer bvh_instance_texels;
 layout(set = 0, binding = CB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;

@@ -12,7 +12,7 @@
 layout(local_size_x = LINEAR_WG) in;
 
 #ifdef WATER_BVH
-layout(std430, set = 0, binding = WA_BVH_DISPLACED) readonly buffer Displaced { GpuPointNormal displaced[]; };
+layout(std430, set = 0, binding = WA_BVH_DISPLACED) readonly buffer BvhDisplaced { GpuPointNormal displaced[]; };
 layout(std430, set = 0, binding = WA_REST_CORNERS) readonly buffer RestCorners { uint rest_corners[]; };
 layout(std430, set = 0, binding = WA_BVH_TRIS) writeonly buffer BvhTris { vec4 bvh_tris[]; };
 layout(std430, set = 0, binding = WA_BVH_NORMALS) writeonly buffer BvhNormals { vec4 bvh_normals[]; };

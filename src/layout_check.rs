@@ -168,7 +168,7 @@ fn the_shaders_of_a_binding_family_declare_each_binding_with_one_kind() {
     let glsl = std::path::Path::new(ROOT).join("glsl");
     let text = layouts::with_includes(&glsl, &glsl.join("wave.comp"), &mut Vec::new());
     assert_eq!(layouts::family_of("wave.comp", &text, &consts()).unwrap().as_deref(), Some("PB_"));
-    let mixed = "layout(binding = PB_FRAME) uniform A { uint a; };\nlayout(binding = CB_HDR) uniform B { uint b; };";
+    let mixed = "layout(binding = PB_FRAME) uniform Frame { uint a; };\nlayout(binding = CB_HDR) uniform Hdr { uint b; };";
     let e = layouts::family_of("x.comp", mixed, &consts()).unwrap_err();
     assert!(e.contains("two families, PB_ and CB_"), "{e}");
 }
@@ -182,6 +182,22 @@ fn a_binding_is_named_by_a_shader_constant_never_a_number() {
     assert!(e.starts_with("x.comp:2:") && e.contains("`binding = 3`"), "{e}");
     let e = layouts::binding_names("x.comp", "layout(binding = WA_NO_SUCH) buffer B { uint b[]; };", &c).unwrap_err();
     assert!(e.contains("`WA_NO_SUCH` is not a constant"), "{e}");
+    // Two bindings swapped on the shader's side: each constant declares the other's resource.
+    let water = std::fs::read_to_string(format!("{ROOT}/glsl/water.comp")).unwrap();
+    let swapped = water
+        .replace("binding = WA_HEIGHTS)", "binding = WA_SWAP)")
+        .replace("binding = WA_OBJECT_VERTICES)", "binding = WA_HEIGHTS)")
+        .replace("binding = WA_SWAP)", "binding = WA_OBJECT_VERTICES)");
+    let e = layouts::binding_names("glsl/water.comp", &swapped, &c).unwrap_err();
+    assert!(e.contains("binding `WA_HEIGHTS` (src/shader_consts.rs) declares `ObjectVertices`"), "{e}");
+    // A declaration may abbreviate and pluralize as the shaders do; a different word is refused.
+    assert!(layouts::names_agree("PB_RECEIVERS", "t_recv"));
+    assert!(layouts::names_agree("CB_RECEIVERS1", "t_recv1"));
+    assert!(layouts::names_agree("PB_BVH_INSTANCES", "bvh_instance_texels"));
+    assert!(layouts::names_agree("PB_FLUX_TEXELS", "FluxBuf"));
+    assert!(layouts::names_agree("CB_FRAME", "FrameUbo"));
+    assert!(!layouts::names_agree("CB_FRONT", "t_front_aux"));
+    assert!(!layouts::names_agree("CB_IRRADIANCE1", "t_irradiance2"));
     // Comments are not declarations.
     assert!(layouts::binding_names("x.comp", "// binding = 3 is the old one", &c).unwrap().is_empty());
     // Every shader of the repository names its bindings.

@@ -158,7 +158,7 @@ pub const PB_BVH_WIDE_PRIMS: u32 = 22;
 /// Binding: each splat record's color (color photons, `GpuRayMedium::tint`'s encoding).
 pub const PB_SPLAT_TINTS: u32 = 23;
 /// Binding: the receivers seen from the eye (the eye deposit's visibility).
-pub const PB_EYE_GEO: u32 = 24;
+pub const PB_EYE: u32 = 24;
 /// Binding: the eye deposit's flux, W per eye sample, three planes (red, green, blue).
 pub const PB_EYE_FLUX: u32 = 25;
 /// Bindings of the layout.
@@ -410,4 +410,4 @@ pub const SU_OBJECT_INDICES: u32 = 2;
 /// glsl/scene_update.comp: the world-space indices it writes.
 pub const SU_WORLD_INDICES: u32 = 3;
 /// glsl/geometry.frag (the eye's receivers): the albedo textures.
-pub const GE_ALBEDO: u32 = 0;
+pub const GE_ALBEDO_TEXTURES: u32 = 0;

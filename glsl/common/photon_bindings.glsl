@@ -144,8 +144,8 @@ uvec4 ray_word_in(uint k) { return rays_in[k]; }
 #endif
 layout(std430, set = 0, binding = PB_RAYS_OUT) writeonly buffer RaysOut { uvec4 rays_out[]; };
 #include "common/bvh_types.glsl"
-layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhNodes { PairNode bvh_nodes[]; };
-layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhNodesSingle { SingleNode bvh_nodes_single[]; };
+layout(std430, set = 0, binding = PB_BVH_PAIR) readonly buffer BvhPair { PairNode bvh_nodes[]; };
+layout(std430, set = 0, binding = PB_BVH_SINGLE) readonly buffer BvhSingle { SingleNode bvh_nodes_single[]; };
 #ifdef BVH_TEXELS
 layout(set = 0, binding = PB_BVH_TRIS) uniform samplerBuffer bvh_tri_texels;       // 3 per triangle
 layout(set = 0, binding = PB_BVH_NORMALS) uniform samplerBuffer bvh_normal_texels; // 3 per triangle
@@ -165,17 +165,17 @@ layout(std430, set = 0, binding = PB_SPLAT_TINTS) buffer SplatTintBuf { uint spl
 // The eye deposit (docs/design.md "The eye deposit"): the receivers seen from the eye (normal, distance; 0: none;
 // common/gbuffer.glsl), which the waves test a landing against, and the caustic flux per eye sample, W, in three
 // planes (red, green, blue), which the compute splats add a negated-shape record's taps into.
-layout(set = 0, binding = PB_EYE_GEO) uniform usampler2D t_eye;
+layout(set = 0, binding = PB_EYE) uniform usampler2D t_eye;
 layout(std430, set = 0, binding = PB_EYE_FLUX) buffer EyeFluxBuf { float eye_flux[]; };
 // The threaded layout (src/bvh/): depth-first nodes with escape links; lo.w: escape, hi.w: count << 29 | first.
-layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhNodesThreaded { SingleNode bvh_nodes_threaded[]; };
+layout(std430, set = 0, binding = PB_BVH_THREADED) readonly buffer BvhThreaded { SingleNode bvh_nodes_threaded[]; };
 // The wide layout (src/bvh/): compressed 8-wide nodes, and its triangle list (each entry its triangle's three
 // vertices, the first's w the triangle's index in bvh_tris' triangles).
 #ifdef BVH_TEXELS
 layout(set = 0, binding = PB_BVH_WIDE) uniform usamplerBuffer bvh_wide_texels;  // 5 per node
 layout(set = 0, binding = PB_BVH_WIDE_PRIMS) uniform usamplerBuffer bvh_wide_prim_texels;  // 3 per entry
 #else
-layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhNodesWide { WideNode bvh_nodes_wide[]; };
+layout(std430, set = 0, binding = PB_BVH_WIDE) readonly buffer BvhWide { WideNode bvh_nodes_wide[]; };
 layout(std430, set = 0, binding = PB_BVH_WIDE_PRIMS) readonly buffer BvhWidePrims { uvec4 bvh_wide_prims[]; };
 #endif
 

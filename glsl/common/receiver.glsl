@@ -2,7 +2,7 @@
 // tracer (glsl/glass.comp): direct irradiance from the light through a filtered shadow map, caustic
 // irradiance from the light-space caustic map, and the environment (docs/design.md "Eye view").
 // Needs u_frame and the samplers t_shadow (light depth of all objects), t_irradiance (caustic irradiance, linear
-// filtering), t_recv (receivers from the light: normal, distance), t_env (the environment map) and t_env_irr (its
+// filtering), t_recv (receivers from the light: normal, distance), t_env (the environment map) and t_env_irradiance (its
 // irradiance map).
 #ifndef RECEIVER_GLSL
 #define RECEIVER_GLSL
@@ -117,9 +117,9 @@ vec3 environment_irradiance(vec3 n) {
     if (ENVIRONMENT_MAP && u_frame.frame.environment > 0.5) {
         // The irradiance map's rows run from pole to pole (src/scene/environment.rs): row j at v = j / (h - 1).
         vec2 uv = equirect_uv(n);
-        float h = float(textureSize(t_env_irr, 0).y);
+        float h = float(textureSize(t_env_irradiance, 0).y);
         uv.y = (uv.y * (h - 1.0) + 0.5) / h;
-        return u_frame.pass.sky * textureLod(t_env_irr, uv, 0.0).rgb;
+        return u_frame.pass.sky * textureLod(t_env_irradiance, uv, 0.0).rgb;
     }
     float c = clamp(n.y, -1.0, 1.0);
     return RECV_PI * u_frame.pass.sky * (SKY_TINT * (1.0 + c) + GROUND_TINT * (1.0 - c)) * 0.5;

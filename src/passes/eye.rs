@@ -91,7 +91,7 @@ impl EyePass {
             depth: Some(Target::Clear(g.depth)),
             vertices: Some(&scene.vertices),
             indices: Some(&scene.indices),
-            uses: &ordered([(GE_ALBEDO, Use::Fixed(Bind::Sampled(&images.albedo, &images.repeat)))]),
+            uses: &ordered([(GE_ALBEDO_TEXTURES, Use::Fixed(Bind::Sampled(&images.albedo, &images.repeat)))]),
         };
         self.gbuffer.begin_raster(cmd, sync, &raster)?;
         self.gbuffer.push(cmd, &GeometryPush::from_view(camera));

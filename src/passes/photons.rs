@@ -155,7 +155,7 @@ impl PhotonBindings<'_> {
             (PB_BVH_WIDE, Use::Read(&bvh.wide_nodes)),
             (PB_BVH_WIDE_PRIMS, Use::Read(&bvh.wide_prims)),
             (PB_SPLAT_TINTS, Use::Write(self.splat_tints)),
-            (PB_EYE_GEO, Use::Sampled(self.eye_geo, self.sampler)),
+            (PB_EYE, Use::Sampled(self.eye_geo, self.sampler)),
             (PB_EYE_FLUX, Use::Write(self.eye_flux)),
         ])
     }
