@@ -30,6 +30,11 @@ pub struct Module {
     /// The (set, binding) of every storage buffer, storage image or storage texel buffer the shader may write:
     /// declared without `readonly` (a buffer block some member of which lacks NonWritable, an image without it).
     pub writable: BTreeSet<(u32, u32)>,
+    /// The (set, binding) of every descriptor the shader's code writes: a store, an atomic or an image write
+    /// through the variable or a pointer into it (a subset of `writable`; what the validation layers'
+    /// synchronization validation takes as the dispatch's write, where every other access of a descriptor the
+    /// shader uses is a read).
+    pub written: BTreeSet<(u32, u32)>,
     /// The push-constant block, if the shader declares one.
     pub push: Option<PushBlock>,
 }
@@ -49,6 +54,27 @@ const OP_TYPE_FLOAT: u32 = 22;
 const OP_TYPE_VECTOR: u32 = 23;
 const OP_TYPE_MATRIX: u32 = 24;
 const OP_CONSTANT: u32 = 43;
+const OP_IMAGE_TEXEL_POINTER: u32 = 60;
+const OP_LOAD: u32 = 61;
+const OP_STORE: u32 = 62;
+const OP_COPY_MEMORY: u32 = 63;
+const OP_ACCESS_CHAIN: u32 = 65;
+const OP_IN_BOUNDS_ACCESS_CHAIN: u32 = 66;
+const OP_PTR_ACCESS_CHAIN: u32 = 67;
+const OP_COPY_OBJECT: u32 = 83;
+const OP_IMAGE_WRITE: u32 = 99;
+const OP_ATOMIC_STORE: u32 = 228;
+const OP_ATOMIC_FLAG_CLEAR: u32 = 319;
+
+/// Whether an instruction writes through the pointer in its operand `at`: a store, a copy into it, an atomic other
+/// than a load (the integer ones, the flag ones, and the float add, min and max), or an image write.
+fn write_target(op: u32) -> Option<usize> {
+    match op {
+        OP_STORE | OP_COPY_MEMORY | OP_ATOMIC_STORE | OP_ATOMIC_FLAG_CLEAR | OP_IMAGE_WRITE => Some(0),
+        229..=242 | 318 | 5614 | 5615 | 6035 => Some(2),
+        _ => None,
+    }
+}
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
 const OP_TYPE_ARRAY: u32 = 28;
@@ -108,6 +134,10 @@ impl Module {
         let mut non_writable_members: HashMap<u32, HashSet<u32>> = HashMap::new(); // struct → such members
         let mut types = Types::default();
         let mut matrix_strides: HashMap<(u32, u32), u32> = HashMap::new(); // (struct, member) → stride
+                                                                           // Every pointer (or loaded image) derived from a global variable, with the variable it reaches, and the
+                                                                           // variables the code writes through one.
+        let mut roots: HashMap<u32, u32> = HashMap::new();
+        let mut written_vars: HashSet<u32> = HashSet::new();
         let mut i = 5;
         while i < words.len() {
             let count = (words[i] >> 16) as usize;
@@ -154,7 +184,20 @@ impl Module {
                 OP_TYPE_POINTER => {
                     pointers.insert(a[0], (a[1], a[2]));
                 }
-                OP_VARIABLE => variables.push((a[0], a[1], a[2])),
+                OP_VARIABLE => {
+                    variables.push((a[0], a[1], a[2]));
+                    roots.insert(a[1], a[1]);
+                }
+                OP_ACCESS_CHAIN
+                | OP_IN_BOUNDS_ACCESS_CHAIN
+                | OP_PTR_ACCESS_CHAIN
+                | OP_COPY_OBJECT
+                | OP_LOAD
+                | OP_IMAGE_TEXEL_POINTER => {
+                    if let Some(&root) = roots.get(&a[2]) {
+                        roots.insert(a[1], root);
+                    }
+                }
                 OP_DECORATE => match a[1] {
                     DEC_SPEC_ID => spec.push((a[0], a[2])),
                     DEC_ARRAY_STRIDE => {
@@ -181,6 +224,11 @@ impl Module {
                     non_writable_members.entry(a[0]).or_default().insert(a[1]);
                 }
                 _ => {}
+            }
+            if let Some(at) = write_target(op) {
+                if let Some(root) = a.get(at).and_then(|p| roots.get(p)) {
+                    written_vars.insert(*root);
+                }
             }
             i += count;
         }
@@ -240,6 +288,9 @@ impl Module {
             };
             if writable {
                 m.writable.insert((set, binding));
+                if written_vars.contains(&id) {
+                    m.written.insert((set, binding));
+                }
             }
             // A block without an instance name (`buffer SplatBuf { ... };`) is named by its block.
             let name = m.names.get(&id).filter(|n| !n.is_empty()).or_else(|| m.names.get(&ty)).cloned();

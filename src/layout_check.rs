@@ -168,7 +168,8 @@ fn the_shaders_of_a_binding_family_declare_each_binding_with_one_kind() {
     let glsl = std::path::Path::new(ROOT).join("glsl");
     let text = layouts::with_includes(&glsl, &glsl.join("wave.comp"), &mut Vec::new());
     assert_eq!(layouts::family_of("wave.comp", &text, &consts()).unwrap().as_deref(), Some("PB_"));
-    let mixed = "layout(binding = PB_FRAME) uniform Frame { uint a; };\nlayout(binding = CB_HDR) uniform Hdr { uint b; };";
+    let mixed =
+        "layout(binding = PB_FRAME) uniform Frame { uint a; };\nlayout(binding = CB_HDR) uniform Hdr { uint b; };";
     let e = layouts::family_of("x.comp", mixed, &consts()).unwrap_err();
     assert!(e.contains("two families, PB_ and CB_"), "{e}");
 }

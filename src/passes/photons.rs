@@ -43,7 +43,7 @@ fn wave_name(layout: &str, spec: &[(u32, u32); 6]) -> String {
 }
 
 /// What a queue entry of exact transport holds besides its ray ([`crate::settings::ResolvedSettings::ray_vec4s`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WaveRays {
     /// Ray differentials (`--footprint differential`).
     pub differential: bool,
@@ -124,10 +124,12 @@ pub struct PhotonBindings<'a> {
 }
 
 impl PhotonBindings<'_> {
-    /// The photon stage's one declaration: each binding of the shared layout, with the resource it binds and how
-    /// the stage's compute passes use it. Each pass declares the whole list as it binds it, so its dispatch is
-    /// ordered after the passes before it (each reads what the last one wrote: counts, queues, arguments); a
-    /// variant whose layout reads a buffer through texels declares that read.
+    /// The photon stage's one declaration: each binding of the shared layout, with the resource it binds and its
+    /// strongest use by any of the stage's compute passes. Each pass binds the whole list; its pipeline declares
+    /// of it what its SPIR-V accesses, a binding its shaders only read as a read, one they do not declare not at
+    /// all (src/vk/uses.rs), so each dispatch is ordered after the passes whose writes it reads (counts, queues,
+    /// arguments) and no more. Which pass writes what: the test `the_photon_passes_write_what_their_table_says`.
+    /// A variant whose layout reads a buffer through texels declares that read.
     fn uses(&self) -> [Use<'_>; PB_COUNT as usize] {
         let bvh = self.bvh;
         crate::vk::pipeline::ordered([
@@ -594,6 +596,68 @@ impl PhotonPasses {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The photon stage's passes share one list of uses (`PhotonBindings::uses`), each declaring what its SPIR-V
+    /// writes as a write and the rest as reads (src/vk/uses.rs). This table is what each writes, so that a reader
+    /// sees it, and a shader that starts writing something else changes it.
+    #[test]
+    fn the_photon_passes_write_what_their_table_says() {
+        let desc = crate::vk::ContextDesc { validation: true, ..crate::vk::ContextDesc::from_env() };
+        let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
+        let p = PhotonPasses::new(&device, vk::Format::R32_SFLOAT).expect("the photon passes");
+        let names: std::collections::HashMap<u32, &str> = [
+            (PB_STATE, "state"),
+            (PB_PHOTONS, "photons"),
+            (PB_INDIRECT, "indirect"),
+            (PB_DEBUG, "debug"),
+            (PB_SPLATS, "splats"),
+            (PB_TRANSPORT, "transport"),
+            (PB_RAYS_IN, "rays_in"),
+            (PB_RAYS_OUT, "rays_out"),
+            (PB_FLUX_TEXELS, "flux_texels"),
+            (PB_SPLAT_TINTS, "splat_tints"),
+            (PB_EYE_FLUX, "eye_flux"),
+        ]
+        .into_iter()
+        .collect();
+        let writes = |pipeline: &Pipeline| -> Vec<&str> {
+            pipeline.writes().iter().map(|b| names.get(b).copied().unwrap_or("?")).collect()
+        };
+        let wave = |k: usize| p.waves[3][k].get().expect("wave");
+        let splat = |s: &Option<[LazyPipeline; 3]>| s.as_ref().map(|s| writes(s[1].get().expect("splat")));
+        let got = [
+            ("init", writes(&p.init)),
+            ("traverse", writes(p.traverse[1][2][3].1.get().expect("traverse"))),
+            ("stats", writes(&p.stats)),
+            ("dense emit", writes(p.dense_emit.get().expect("dense emit"))),
+            ("trace", writes(p.trace.get().expect("trace"))),
+            ("transport", writes(p.transport.get().expect("transport"))),
+            ("wave 0", writes(wave(wave_variant(true, WaveRays::default())))),
+            ("bounce wave", writes(wave(wave_variant(false, WaveRays::default())))),
+            ("splat", splat(&p.splat_compute).unwrap_or_default()),
+            ("splat tiled", splat(&p.splat_compute_tiled).unwrap_or_default()),
+            ("collapse", writes(p.splat_collapse.get().expect("collapse"))),
+        ];
+        let table: [(&str, &[&str]); 11] = [
+            ("init", &["state", "photons", "indirect"]),
+            ("traverse", &["state", "photons"]),
+            ("stats", &["state", "indirect"]),
+            ("dense emit", &["state", "photons"]),
+            ("trace", &["debug", "splats"]),
+            ("transport", &["indirect", "transport"]),
+            ("wave 0", &["state", "splats", "transport", "rays_out", "splat_tints"]),
+            ("bounce wave", &["state", "splats", "transport", "rays_out", "splat_tints"]),
+            ("splat", &["flux_texels", "eye_flux"]),
+            ("splat tiled", &["flux_texels", "eye_flux"]),
+            ("collapse", &["flux_texels"]),
+        ];
+        let atomics = device.info.float_atomic_add;
+        for ((name, w), (expected_name, expected)) in got.iter().zip(table) {
+            let expected: &[&str] = if name.starts_with("splat") && !atomics { &[] } else { expected };
+            assert_eq!((*name, w.as_slice()), (expected_name, expected));
+        }
+        assert_eq!(crate::vk::validation_message_count(), 0);
+    }
 
     #[test]
     fn wave_subgroups_cover_every_subgroup_size() {

@@ -136,6 +136,9 @@ pub(super) struct Interface {
     pub(super) kinds: Vec<Option<BindKind>>,
     /// Per binding, whether one of the shaders may write it (declares it without `readonly`).
     pub(super) writable: Vec<bool>,
+    /// Per binding, whether one of the shaders' code writes it (stores, atomics, image writes: a subset of
+    /// `writable`, read from the SPIR-V as the validation layers read it).
+    pub(super) written: Vec<bool>,
     /// Per binding, the name the shaders give it (the variable, or a block without an instance name).
     pub(super) names: Vec<String>,
     /// The push-constant block the shaders share, if any.
@@ -149,7 +152,8 @@ pub(super) struct Interface {
 fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interface> {
     use super::spirv::{Descriptor, Module};
     let fail = |m: String| VkError::Interface(format!("pipeline {name}: {m}"));
-    let mut me = Interface { kinds: Vec::new(), writable: Vec::new(), names: Vec::new(), push: None };
+    let mut me =
+        Interface { kinds: Vec::new(), writable: Vec::new(), written: Vec::new(), names: Vec::new(), push: None };
     for words in shaders {
         let module = Module::parse(words).map_err(fail)?;
         for (&(set, binding), (declared, var)) in &module.bindings {
@@ -170,6 +174,7 @@ fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interfac
             if me.kinds.len() <= b {
                 me.kinds.resize(b + 1, None);
                 me.writable.resize(b + 1, false);
+                me.written.resize(b + 1, false);
                 me.names.resize(b + 1, String::new());
             }
             if me.kinds[b].is_some_and(|k| k != kind) {
@@ -181,6 +186,7 @@ fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interfac
             }
             me.kinds[b] = Some(kind);
             me.writable[b] |= module.writable.contains(&(set, binding));
+            me.written[b] |= module.written.contains(&(set, binding));
             me.names[b] = var.clone();
         }
         if let Some(push) = module.push {
@@ -499,6 +505,15 @@ impl Pipeline {
             std::mem::size_of::<T>()
         );
         unsafe { self.device.cmd_push_constants(cmd, self.layout, self.push_stages, 0, bytemuck::bytes_of(data)) };
+    }
+}
+
+impl Pipeline {
+    /// The bindings its shaders' code writes (stores, atomics, image writes), as the SPIR-V says: every other
+    /// binding it declares, it only reads.
+    #[cfg(test)]
+    pub fn writes(&self) -> Vec<u32> {
+        (0..self.iface.written.len() as u32).filter(|&b| self.iface.written[b as usize]).collect()
     }
 }
 

@@ -164,11 +164,21 @@ impl Pipeline {
                 self.name
             );
             assert!(
-                !(iface.writable[i] && u.reads_only()),
-                "pipeline {}: binding {i} (`{var}`) is declared read, but a shader may write it (it lacks `readonly`)",
+                !(iface.written[i] && u.reads_only()),
+                "pipeline {}: binding {i} (`{var}`) is declared read, but a shader writes it",
                 self.name
             );
-            u.declare(sync, kind, stages);
+            // What the shaders only read is declared as read, whatever the list says: passes that share one list
+            // (the photon stage) each declare the accesses their SPIR-V makes, as synchronization validation
+            // reads them.
+            match *u {
+                Use::Write(b) if !iface.written[i] => Use::Read(b).declare(sync, kind, stages),
+                Use::ImageWrite(img) if !iface.written[i] => Use::ImageRead(img).declare(sync, kind, stages),
+                Use::Indirect(b) if !iface.written[i] && stages == Stages::Compute && kind == BindKind::Storage => {
+                    sync.buffer(b, &[Access::ComputeRead, Access::IndirectRead]);
+                }
+                u => u.declare(sync, kind, stages),
+            }
         }
     }
 
