@@ -176,32 +176,7 @@ fn main() {
         jobs.extend(variants.into_iter().map(|(name, extra)| (src, name, extra)));
     }
 
-    // Compiled on every core (glslang's optimizer is most of a build's shader time), results kept in job order.
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(jobs.len().max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut results: Vec<Option<Result<Vec<u8>, String>>> = (0..jobs.len()).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(|| {
-                    let compiler = shaderc::Compiler::new().expect("shaderc compiler");
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        let Some((src, _, extra)) = jobs.get(i) else { break };
-                        let result = compile(&compiler, &glsl, &generated_glsl, &macros, src, extra);
-                        done.push((i, result));
-                    }
-                    done
-                })
-            })
-            .collect();
-        for w in workers {
-            for (i, r) in w.join().expect("shader compile thread") {
-                results[i] = Some(r);
-            }
-        }
-    });
+    let results = compile_all(&jobs, &glsl, &generated_glsl, &macros);
 
     // The binding family each source names, read once for all its variants.
     let family_of: HashMap<&PathBuf, Result<Option<String>, String>> = sources
@@ -250,6 +225,42 @@ fn main() {
         panic!("GLSL compilation or its checks failed:\n{}", errors.join("\n"));
     }
     std::fs::write(out_dir.join("shaders.rs"), generated).expect("write shaders.rs");
+}
+
+/// Compiles every job on every core (glslang's optimizer is most of a build's shader time), the results in job
+/// order.
+fn compile_all(
+    jobs: &[(&PathBuf, String, Vec<Define>)],
+    glsl: &Path,
+    generated_glsl: &str,
+    macros: &[(String, String)],
+) -> Vec<Option<Result<Vec<u8>, String>>> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(jobs.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut results: Vec<Option<Result<Vec<u8>, String>>> = (0..jobs.len()).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let compiler = shaderc::Compiler::new().expect("shaderc compiler");
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some((src, _, extra)) = jobs.get(i) else { break };
+                        let result = compile(&compiler, glsl, generated_glsl, macros, src, extra);
+                        done.push((i, result));
+                    }
+                    done
+                })
+            })
+            .collect();
+        for w in workers {
+            for (i, r) in w.join().expect("shader compile thread") {
+                results[i] = Some(r);
+            }
+        }
+    });
+    results
 }
 
 /// One shader build: SPIR-V bytes, or glslang's message.

@@ -111,6 +111,34 @@ struct Types {
     constants: HashMap<u32, u32>,
 }
 
+/// What a module's instructions declare, gathered in one pass ([`Module::scan`]).
+#[derive(Default)]
+struct Scan {
+    bindings: HashMap<u32, u32>,
+    sets: HashMap<u32, u32>,
+    spec: Vec<(u32, u32)>,
+    /// Image type → (dim, sampled).
+    images: HashMap<u32, (u32, u32)>,
+    sampled_images: HashMap<u32, u32>,
+    /// Array type → element type.
+    arrays: HashMap<u32, u32>,
+    /// Pointer type → (storage class, pointee).
+    pointers: HashMap<u32, (u32, u32)>,
+    /// (pointer type, id, storage class).
+    variables: Vec<(u32, u32, u32)>,
+    /// Variables decorated NonWritable.
+    non_writable: HashSet<u32>,
+    /// Struct → its members decorated NonWritable.
+    non_writable_members: HashMap<u32, HashSet<u32>>,
+    types: Types,
+    /// (struct, member) → matrix stride.
+    matrix_strides: HashMap<(u32, u32), u32>,
+    /// Every pointer (or loaded image) derived from a global variable → the variable.
+    roots: HashMap<u32, u32>,
+    /// The variables the code writes through such a pointer.
+    written_vars: HashSet<u32>,
+}
+
 fn string(words: &[u32]) -> String {
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).take_while(|&b| b != 0).collect();
     String::from_utf8_lossy(&bytes).into_owned()
@@ -122,22 +150,19 @@ impl Module {
             return Err("not SPIR-V".into());
         }
         let mut m = Module::default();
-        let mut bindings: HashMap<u32, u32> = HashMap::new();
-        let mut sets: HashMap<u32, u32> = HashMap::new();
-        let mut spec: Vec<(u32, u32)> = Vec::new();
-        let mut images: HashMap<u32, (u32, u32)> = HashMap::new(); // id → (dim, sampled)
-        let mut sampled_images: HashMap<u32, u32> = HashMap::new();
-        let mut arrays: HashMap<u32, u32> = HashMap::new(); // array type → element type
-        let mut pointers: HashMap<u32, (u32, u32)> = HashMap::new(); // id → (storage class, pointee)
-        let mut variables: Vec<(u32, u32, u32)> = Vec::new(); // (pointer type, id, storage class)
-        let mut non_writable: HashSet<u32> = HashSet::new(); // variables decorated NonWritable
-        let mut non_writable_members: HashMap<u32, HashSet<u32>> = HashMap::new(); // struct → such members
-        let mut types = Types::default();
-        let mut matrix_strides: HashMap<(u32, u32), u32> = HashMap::new(); // (struct, member) → stride
-                                                                           // Every pointer (or loaded image) derived from a global variable, with the variable it reaches, and the
-                                                                           // variables the code writes through one.
-        let mut roots: HashMap<u32, u32> = HashMap::new();
-        let mut written_vars: HashSet<u32> = HashSet::new();
+        let s = m.scan(words)?;
+        for &(id, spec_id) in &s.spec {
+            m.spec_ids.insert(spec_id, m.names.get(&id).cloned().unwrap_or_default());
+        }
+        m.push_block(&s)?;
+        m.descriptors(&s)?;
+        Ok(m)
+    }
+
+    /// One pass over the instructions: the names, types, decorations and variables, and the writes through
+    /// pointers derived from each variable.
+    fn scan(&mut self, words: &[u32]) -> Result<Scan, String> {
+        let mut s = Scan::default();
         let mut i = 5;
         while i < words.len() {
             let count = (words[i] >> 16) as usize;
@@ -148,45 +173,45 @@ impl Module {
             let a = &words[i + 1..i + count];
             match op {
                 OP_NAME => {
-                    m.names.insert(a[0], string(&a[1..]));
+                    self.names.insert(a[0], string(&a[1..]));
                 }
                 OP_TYPE_BOOL => {
-                    types.plain.insert(a[0], 4);
+                    s.types.plain.insert(a[0], 4);
                 }
                 OP_TYPE_INT | OP_TYPE_FLOAT => {
-                    types.plain.insert(a[0], a[1] / 8);
+                    s.types.plain.insert(a[0], a[1] / 8);
                 }
                 OP_TYPE_VECTOR => {
-                    let bytes = types.plain.get(&a[1]).copied().unwrap_or(0) * a[2];
-                    types.plain.insert(a[0], bytes);
+                    let bytes = s.types.plain.get(&a[1]).copied().unwrap_or(0) * a[2];
+                    s.types.plain.insert(a[0], bytes);
                 }
                 OP_TYPE_MATRIX => {
-                    types.matrices.insert(a[0], (a[1], a[2]));
+                    s.types.matrices.insert(a[0], (a[1], a[2]));
                 }
                 OP_CONSTANT if a.len() == 3 => {
-                    types.constants.insert(a[1], a[2]);
+                    s.types.constants.insert(a[1], a[2]);
                 }
                 OP_TYPE_IMAGE => {
-                    images.insert(a[0], (a[2], a[6]));
+                    s.images.insert(a[0], (a[2], a[6]));
                 }
                 OP_TYPE_SAMPLED_IMAGE => {
-                    sampled_images.insert(a[0], a[1]);
+                    s.sampled_images.insert(a[0], a[1]);
                 }
                 OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY => {
-                    arrays.insert(a[0], a[1]);
+                    s.arrays.insert(a[0], a[1]);
                     if op == OP_TYPE_ARRAY {
-                        types.lengths.insert(a[0], a[2]);
+                        s.types.lengths.insert(a[0], a[2]);
                     }
                 }
                 OP_TYPE_STRUCT => {
-                    m.struct_members.insert(a[0], a[1..].to_vec());
+                    self.struct_members.insert(a[0], a[1..].to_vec());
                 }
                 OP_TYPE_POINTER => {
-                    pointers.insert(a[0], (a[1], a[2]));
+                    s.pointers.insert(a[0], (a[1], a[2]));
                 }
                 OP_VARIABLE => {
-                    variables.push((a[0], a[1], a[2]));
-                    roots.insert(a[1], a[1]);
+                    s.variables.push((a[0], a[1], a[2]));
+                    s.roots.insert(a[1], a[1]);
                 }
                 OP_ACCESS_CHAIN
                 | OP_IN_BOUNDS_ACCESS_CHAIN
@@ -194,65 +219,72 @@ impl Module {
                 | OP_COPY_OBJECT
                 | OP_LOAD
                 | OP_IMAGE_TEXEL_POINTER => {
-                    if let Some(&root) = roots.get(&a[2]) {
-                        roots.insert(a[1], root);
+                    if let Some(&root) = s.roots.get(&a[2]) {
+                        s.roots.insert(a[1], root);
                     }
                 }
                 OP_DECORATE => match a[1] {
-                    DEC_SPEC_ID => spec.push((a[0], a[2])),
+                    DEC_SPEC_ID => s.spec.push((a[0], a[2])),
                     DEC_ARRAY_STRIDE => {
-                        m.array_strides.insert(a[0], a[2]);
+                        self.array_strides.insert(a[0], a[2]);
                     }
                     DEC_BINDING => {
-                        bindings.insert(a[0], a[2]);
+                        s.bindings.insert(a[0], a[2]);
                     }
                     DEC_DESCRIPTOR_SET => {
-                        sets.insert(a[0], a[2]);
+                        s.sets.insert(a[0], a[2]);
                     }
                     DEC_NON_WRITABLE => {
-                        non_writable.insert(a[0]);
+                        s.non_writable.insert(a[0]);
                     }
                     _ => {}
                 },
                 OP_MEMBER_DECORATE if a[2] == DEC_OFFSET => {
-                    m.member_offsets.entry(a[0]).or_default().insert(a[1], a[3]);
+                    self.member_offsets.entry(a[0]).or_default().insert(a[1], a[3]);
                 }
                 OP_MEMBER_DECORATE if a[2] == DEC_MATRIX_STRIDE => {
-                    matrix_strides.insert((a[0], a[1]), a[3]);
+                    s.matrix_strides.insert((a[0], a[1]), a[3]);
                 }
                 OP_MEMBER_DECORATE if a[2] == DEC_NON_WRITABLE => {
-                    non_writable_members.entry(a[0]).or_default().insert(a[1]);
+                    s.non_writable_members.entry(a[0]).or_default().insert(a[1]);
                 }
                 _ => {}
             }
             if let Some(at) = write_target(op) {
-                if let Some(root) = a.get(at).and_then(|p| roots.get(p)) {
-                    written_vars.insert(*root);
+                if let Some(root) = a.get(at).and_then(|p| s.roots.get(p)) {
+                    s.written_vars.insert(*root);
                 }
             }
             i += count;
         }
-        for (id, spec_id) in spec {
-            m.spec_ids.insert(spec_id, m.names.get(&id).cloned().unwrap_or_default());
-        }
-        for &(ptr, _, class) in &variables {
+        Ok(s)
+    }
+
+    /// The push-constant block, if a variable holds one.
+    fn push_block(&mut self, s: &Scan) -> Result<(), String> {
+        for &(ptr, _, class) in &s.variables {
             if class != SC_PUSH_CONSTANT {
                 continue;
             }
-            let block = pointers.get(&ptr).map(|p| p.1).ok_or("a variable without a pointer type")?;
-            let members = m.struct_members.get(&block).cloned().unwrap_or_default();
+            let block = s.pointers.get(&ptr).map(|p| p.1).ok_or("a variable without a pointer type")?;
+            let members = self.struct_members.get(&block).cloned().unwrap_or_default();
             let inner = match members[..] {
-                [only] if m.struct_members.contains_key(&only) => only,
+                [only] if self.struct_members.contains_key(&only) => only,
                 _ => block,
             };
-            let size = m.size_of(block, &types, &matrix_strides)?;
-            m.push = Some(PushBlock { name: m.names.get(&inner).cloned().unwrap_or_default(), size });
+            let size = self.size_of(block, &s.types, &s.matrix_strides)?;
+            self.push = Some(PushBlock { name: self.names.get(&inner).cloned().unwrap_or_default(), size });
         }
-        for (ptr, id, class) in variables {
-            let Some(&binding) = bindings.get(&id) else { continue };
-            let set = sets.get(&id).copied().unwrap_or(0);
-            let mut ty = pointers.get(&ptr).map(|p| p.1).ok_or("a variable without a pointer type")?;
-            while let Some(&e) = arrays.get(&ty) {
+        Ok(())
+    }
+
+    /// Every descriptor: its kind, name, and whether the shader may write it and does.
+    fn descriptors(&mut self, s: &Scan) -> Result<(), String> {
+        for &(ptr, id, class) in &s.variables {
+            let Some(&binding) = s.bindings.get(&id) else { continue };
+            let set = s.sets.get(&id).copied().unwrap_or(0);
+            let mut ty = s.pointers.get(&ptr).map(|p| p.1).ok_or("a variable without a pointer type")?;
+            while let Some(&e) = s.arrays.get(&ty) {
                 ty = e;
             }
             let kind = match class {
@@ -260,14 +292,14 @@ impl Module {
                 SC_STORAGE_BUFFER => Descriptor::Storage,
                 SC_UNIFORM_CONSTANT => {
                     // A sampler of a buffer image (`samplerBuffer`) is a uniform texel buffer.
-                    if let Some(image) = sampled_images.get(&ty) {
-                        if images.get(image).is_some_and(|i| i.0 == 5) {
+                    if let Some(image) = s.sampled_images.get(&ty) {
+                        if s.images.get(image).is_some_and(|i| i.0 == 5) {
                             Descriptor::UniformTexel
                         } else {
                             Descriptor::Sampled
                         }
                     } else {
-                        match images.get(&ty) {
+                        match s.images.get(&ty) {
                             // Dim Buffer: a texel buffer; sampled 1: read through a sampler, 2: a storage image.
                             Some(&(5, 1)) => Descriptor::UniformTexel,
                             Some(&(5, _)) => Descriptor::StorageTexel,
@@ -280,23 +312,23 @@ impl Module {
             };
             let writable = match kind {
                 Descriptor::Storage => {
-                    let members = m.struct_members.get(&ty).map_or(0, |v| v.len());
-                    non_writable_members.get(&ty).map_or(0, |n| n.len()) < members
+                    let members = self.struct_members.get(&ty).map_or(0, |v| v.len());
+                    s.non_writable_members.get(&ty).map_or(0, |n| n.len()) < members
                 }
-                Descriptor::StorageImage | Descriptor::StorageTexel => !non_writable.contains(&id),
+                Descriptor::StorageImage | Descriptor::StorageTexel => !s.non_writable.contains(&id),
                 _ => false,
             };
             if writable {
-                m.writable.insert((set, binding));
-                if written_vars.contains(&id) {
-                    m.written.insert((set, binding));
+                self.writable.insert((set, binding));
+                if s.written_vars.contains(&id) {
+                    self.written.insert((set, binding));
                 }
             }
             // A block without an instance name (`buffer SplatBuf { ... };`) is named by its block.
-            let name = m.names.get(&id).filter(|n| !n.is_empty()).or_else(|| m.names.get(&ty)).cloned();
-            m.bindings.insert((set, binding), (kind, name.unwrap_or_default()));
+            let name = self.names.get(&id).filter(|n| !n.is_empty()).or_else(|| self.names.get(&ty)).cloned();
+            self.bindings.insert((set, binding), (kind, name.unwrap_or_default()));
         }
-        Ok(m)
+        Ok(())
     }
 
     /// The bytes a value of type `ty` takes in an explicitly laid out block (a struct: its last member's offset

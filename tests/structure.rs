@@ -1,5 +1,5 @@
-//! The code stays in pieces a reader can hold: no function in src/ longer than 120 lines, and no GLSL function
-//! longer than 150. The functions that were longer when the limits were set are listed below with their lengths
+//! The code stays in pieces a reader can hold: no Rust function longer than 120 lines (src/, build.rs, build/,
+//! tests/, examples/), and no GLSL function longer than 150. The functions that were longer when the limits were set are listed below with their lengths
 //! then: each may only shrink, and leaves the list once it fits (the test says so), so the list only gets shorter.
 
 use std::path::{Path, PathBuf};
@@ -134,6 +134,10 @@ fn functions_stay_within_their_limits() {
     let mut all = Vec::new();
     files(&root.join("src"), &mut all);
     files(&root.join("glsl"), &mut all);
+    for dir in ["build", "tests", "examples"] {
+        files(&root.join(dir), &mut all);
+    }
+    all.push(root.join("build.rs"));
     let mut found = Vec::new();
     let mut problems = Vec::new();
     for path in all {
