@@ -28,7 +28,7 @@ void main() {
                 state.stack[0] = ivec4(-6, 0, 0, 0);  // 2^6 = 64: the whole level-0 grid
                 state.stack_size = 1u;
             }
-            for (uint l = 0u; l < MAX_LEVELS; l++) dispatch_cmd[l] = uvec4(0u, 0u, 1u, 0u);
+            for (uint l = 0u; l < MAX_LEVELS; l++) dispatch_cmd(l) = uvec4(0u, 0u, 1u, 0u);
             set_emitted(0u, state.capacity);
         }
         return;
@@ -40,7 +40,7 @@ void main() {
         state.aborted = 0u;
         for (uint l = 0u; l < MAX_LEVELS; l++) {
             state.batch_levels[l] = LevelCounters(0u, 0u, 0u, 0u, 0u, 0u);
-            dispatch_cmd[l] = uvec4(0u, 0u, 1u, 0u);
+            dispatch_cmd(l) = uvec4(0u, 0u, 1u, 0u);
         }
         set_emitted(0u, state.capacity);
         if (state.stack_size == 0u) {
@@ -64,7 +64,7 @@ void main() {
                 state.aborted = 1u;
                 count = 0u;
             } else {
-                dispatch_cmd[start] = dispatch_groups(count, pc.wg_side * pc.wg_side);
+                dispatch_cmd(start) = dispatch_groups(count, pc.wg_side * pc.wg_side);
             }
             s_tile = t;
             s_count = count;

@@ -12,9 +12,9 @@ layout(local_size_x = LINEAR_WG) in;
 layout(std430, set = 0, binding = RW_ORDER) readonly buffer Order { uint order[]; };
 layout(std430, set = 0, binding = RW_BOXES) buffer Boxes { vec4 boxes[]; };
 layout(std430, set = 0, binding = RW_TRIS) readonly buffer Tris { vec4 tris[]; };
-// A wide node is five uvec4 (src/bvh/records.rs, WideNode); a wide triangle-list entry three (its vertices' bits,
-// the first's w the triangle's index in `tris`).
-layout(std430, set = 0, binding = RW_NODES) buffer Nodes { uvec4 nodes[]; };
+// A wide node's five words (src/bvh/records.rs, WideNode); a wide triangle-list entry is three uvec4 (its vertices'
+// bits, the first's w the triangle's index in `tris`).
+layout(std430, set = 0, binding = RW_NODES) buffer Nodes { WideNode nodes[]; };
 layout(std430, set = 0, binding = RW_PRIMS) buffer Prims { uvec4 prims[]; };
 
 layout(push_constant) uniform RefitPushBlock { RefitPush pc; };
@@ -43,7 +43,7 @@ void main() {
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * LINEAR_WG;
     if (i >= pc.count) return;
     uint k = order[pc.first + i];
-    uvec4 w0 = nodes[5u * k], w1 = nodes[5u * k + 1u];
+    uvec4 w0 = nodes[k].w0, w1 = nodes[k].w1;
     uint imask = w0.w >> 24;
     vec3 clo[8], chi[8];
     vec3 lo = vec3(1e30), hi = vec3(-1e30);
@@ -79,7 +79,7 @@ void main() {
     vec3 s = uintBitsToFloat(eb << 23);
     // Planes: x in the third uvec4, y in the fourth, z in the fifth; each low bytes (.xy) then high bytes (.zw),
     // slots 0-3 in the first word of a pair and 4-7 in the second. Empty slots keep theirs.
-    uvec4 planes[3] = uvec4[3](nodes[5u * k + 2u], nodes[5u * k + 3u], nodes[5u * k + 4u]);
+    uvec4 planes[3] = uvec4[3](nodes[k].w2, nodes[k].w3, nodes[k].w4);
     for (uint c = 0u; c < 8u; c++) {
         if (clo[c].x > chi[c].x) continue;
         uint word = c >> 2, shift = 8u * (c & 3u), keep = ~(0xFFu << shift);
@@ -89,10 +89,10 @@ void main() {
             planes[axis][2u + word] = (planes[axis][2u + word] & keep) | (q.y << shift);
         }
     }
-    nodes[5u * k] = uvec4(floatBitsToUint(lo), eb.x | (eb.y << 8) | (eb.z << 16) | (imask << 24));
-    nodes[5u * k + 2u] = planes[0];
-    nodes[5u * k + 3u] = planes[1];
-    nodes[5u * k + 4u] = planes[2];
+    nodes[k].w0 = uvec4(floatBitsToUint(lo), eb.x | (eb.y << 8) | (eb.z << 16) | (imask << 24));
+    nodes[k].w2 = planes[0];
+    nodes[k].w3 = planes[1];
+    nodes[k].w4 = planes[2];
     boxes[2u * k] = vec4(lo, 0.0);
     boxes[2u * k + 1u] = vec4(hi, 0.0);
 }

@@ -69,7 +69,7 @@ void main() {
         state.write_count = 0u;
         if (l + 1u < MAX_LEVELS) {
             bool stop = state.aborted != 0u && state.batching != 0u;
-            dispatch_cmd[l + 1u] = stop ? uvec4(0u, 0u, 1u, 0u) : dispatch_groups(state.read_count, pc.wg_side * pc.wg_side);
+            dispatch_cmd(l + 1u) = stop ? uvec4(0u, 0u, 1u, 0u) : dispatch_groups(state.read_count, pc.wg_side * pc.wg_side);
         }
     }
     if (pc.mode == STATS_COMMIT) commit();

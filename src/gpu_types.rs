@@ -463,6 +463,15 @@ pub struct GpuWaveRecord {
     pub b: [f32; 4],
 }
 
+/// One command of the indirect-command buffer (`PhotonBindings::indirect`, glsl/common/photon_bindings.glsl): a
+/// dispatch's group counts (x, y, z, unused) or a draw's (vertexCount, instanceCount, firstVertex, firstInstance).
+/// Its slots are the INDIRECT_* constants of src/shader_consts.rs.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct IndirectCommand {
+    pub args: [u32; 4],
+}
+
 /// Push constants of glsl/resolve.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -75,7 +75,8 @@ pub const ACC_EYE: u32 = 13;
 /// Terms of the account.
 pub const ACC_TERMS: u32 = 14;
 
-// The indirect-command buffer, in 16-byte commands: one dispatch per traversal level (0..MAX_LEVELS), then these.
+// The indirect-command buffer's slots (`IndirectCommand`, src/gpu_types.rs): one dispatch per traversal level
+// (0..MAX_LEVELS), then these.
 /// The two-interface trace's dispatch.
 pub const INDIRECT_TRACE: u32 = MAX_LEVELS;
 /// The raster splat's draw (vertexCount, instanceCount, firstVertex, firstInstance).

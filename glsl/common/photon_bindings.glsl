@@ -19,12 +19,12 @@ uvec2 photon_at(uint i) { return photons[i]; }
 // Indirect commands: dispatch[level] (x, y, z, pad) for each traversal level, the photon trace's dispatch, then
 // the splat's draw command (vertexCount, instanceCount, firstVertex, firstInstance).
 // Exact transport adds the current wave's dispatch.
-layout(std430, set = 0, binding = PB_INDIRECT) buffer IndirectBuf { uvec4 indirect_cmd[INDIRECT_COMMANDS]; };
-#define dispatch_cmd indirect_cmd
-#define trace_cmd indirect_cmd[INDIRECT_TRACE]
-#define draw_cmd indirect_cmd[INDIRECT_DRAW]
-#define wave_cmd indirect_cmd[INDIRECT_WAVE]
-#define splat_cmd indirect_cmd[INDIRECT_SPLAT]
+layout(std430, set = 0, binding = PB_INDIRECT) buffer IndirectBuf { IndirectCommand indirect_cmd[INDIRECT_COMMANDS]; };
+#define dispatch_cmd(level) indirect_cmd[level].args
+#define trace_cmd indirect_cmd[INDIRECT_TRACE].args
+#define draw_cmd indirect_cmd[INDIRECT_DRAW].args
+#define wave_cmd indirect_cmd[INDIRECT_WAVE].args
+#define splat_cmd indirect_cmd[INDIRECT_SPLAT].args
 #ifdef WAVE_TEXELS
 layout(set = 0, binding = PB_COVERAGE) uniform usamplerBuffer coverage_texels;
 uint coverage_at(uint i) { return texelFetch(coverage_texels, int(i)).x; }

@@ -4,7 +4,8 @@
 
 use crate::bvh::BvhLayout;
 use crate::gpu_types::{
-    DenseEmitPush, InitPush, SplatCollapsePush, StatsPush, TracePush, TransportPush, TraversePush, WavePush,
+    DenseEmitPush, IndirectCommand, InitPush, SplatCollapsePush, StatsPush, TracePush, TransportPush, TraversePush,
+    WavePush,
 };
 use crate::settings::Metric;
 use crate::shaders::{self, consts::*};
@@ -91,14 +92,16 @@ fn wave_variant(primary: bool, rays: WaveRays) -> usize {
         | (rays.spectral as usize) << 4
 }
 
+/// The bytes of one indirect command ([`IndirectCommand`]).
+pub const COMMAND_BYTES: u64 = std::mem::size_of::<IndirectCommand>() as u64;
 /// Byte offsets of the indirect commands (`IndirectBuf` in photon_bindings.glsl, by the same constants).
-pub const TRACE_OFFSET: u64 = 16 * INDIRECT_TRACE as u64;
-pub const DRAW_OFFSET: u64 = 16 * INDIRECT_DRAW as u64;
+pub const TRACE_OFFSET: u64 = COMMAND_BYTES * INDIRECT_TRACE as u64;
+pub const DRAW_OFFSET: u64 = COMMAND_BYTES * INDIRECT_DRAW as u64;
 /// Exact transport: the current wave's dispatch.
-pub const WAVE_OFFSET: u64 = 16 * INDIRECT_WAVE as u64;
+pub const WAVE_OFFSET: u64 = COMMAND_BYTES * INDIRECT_WAVE as u64;
 /// The compute splat's dispatch over the draw's records.
-pub const SPLAT_OFFSET: u64 = 16 * INDIRECT_SPLAT as u64;
-pub const INDIRECT_BYTES: u64 = 16 * INDIRECT_COMMANDS as u64;
+pub const SPLAT_OFFSET: u64 = COMMAND_BYTES * INDIRECT_SPLAT as u64;
+pub const INDIRECT_BYTES: u64 = COMMAND_BYTES * INDIRECT_COMMANDS as u64;
 
 pub struct PhotonBindings<'a> {
     pub ubo: &'a Buffer,
@@ -385,7 +388,7 @@ impl PhotonPasses {
         let p = self.traverse_pipeline(shape)?;
         p.bind_uses(cmd, sync, &b.uses())?;
         p.push(cmd, &TraversePush { level, wg_side: shape.wg });
-        unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, 16 * level as u64) };
+        unsafe { self.device.cmd_dispatch_indirect(cmd, b.indirect.raw, COMMAND_BYTES * level as u64) };
         Ok(())
     }
 
@@ -586,7 +589,7 @@ impl PhotonPasses {
         let raster = Raster { colors: &[flux], depth: None, vertices: None, indices: None, uses: &uses };
         p.begin_raster(cmd, sync, &raster)?;
         if draw {
-            unsafe { self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, 16) };
+            unsafe { self.device.cmd_draw_indirect(cmd, b.indirect.raw, DRAW_OFFSET, 1, COMMAND_BYTES as u32) };
         }
         raster.end(&self.device, cmd);
         Ok(())
