@@ -12,7 +12,8 @@
 // its four children that dense emission would emit, instead of appending them as candidates of level L.
 // TRAVERSE_MAX_LEVEL compiles the max-level variant: no metric code at all (llvmpipe runs both sides of a divergent
 // branch under a mask, so code that max-level never takes still costs its full price there; docs/experiments.md).
-// Likewise TRAVERSE_METRIC (1: max-error, 2: flux-error) compiles one metric's code only.
+// Likewise TRAVERSE_METRIC (METRIC_MAX_ERROR or METRIC_FLUX_ERROR, src/shader_consts.rs) compiles one metric's code
+// only.
 // TRAVERSE_COOP (exact transport, max-error and flux-error; `--coop-checks`): four invocations share each
 // candidate, so a work group of side^2 invocations takes side^2 / 4 candidates. Each lane first traces one child's
 // dominant path into shared memory, then lane 0 decides with the four results. A check then waits for the
@@ -120,10 +121,10 @@ bool look_ahead_level(uint level) {
 }
 
 #if !defined(TRAVERSE_MAX_LEVEL) && !defined(TRAVERSE_METRIC)
-#define TRAVERSE_METRIC 1
+#define TRAVERSE_METRIC METRIC_MAX_ERROR
 #endif
 
-#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 1
+#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == METRIC_MAX_ERROR
 
 const uint CHILDREN_REFINE = 0xFFFFFFFFu;
 const uint CHILDREN_DROP = 0xFFFFFFFEu;
@@ -188,9 +189,9 @@ uint children_verdict(uint level, uvec2 xy) {
     return uint(clamp(ceil(spread), 1.0, float(MAX_SPLAT_RADIUS)));
 }
 
-#endif  // TRAVERSE_METRIC == 1
+#endif  // TRAVERSE_METRIC == METRIC_MAX_ERROR
 
-#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 2
+#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == METRIC_FLUX_ERROR
 
 // Flux-error metric (docs/design.md, "The flux-error metric"). Each child k lands at p_k (caustic-map texels)
 // carrying the caustic flux phi_k (W: its dominant path's under exact transport, the two-interface trace's
@@ -362,7 +363,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     return FE_REFINE;
 }
 
-#endif  // TRAVERSE_METRIC == 2
+#endif  // TRAVERSE_METRIC == METRIC_FLUX_ERROR
 
 #ifdef TRAVERSE_COOP
 // Whether decide() checks `cell` with its four children's dominant paths, by decide's own tests. A cell this missed
@@ -371,7 +372,7 @@ bool needs_checks(uint level, uvec2 cell) {
     uvec2 xy = cell_xy(cell);
     if (!transport_exact() || !cell_in_play(level, xy) || level >= u_frame.frame.max_level) return false;
     bool checkable = level >= u_frame.frame.check_level && cell_inside(level, xy);
-#if TRAVERSE_METRIC == 2
+#if TRAVERSE_METRIC == METRIC_FLUX_ERROR
     if (checkable) return cell_radius(cell) == 0u;  // else predicted to refine: no check
     return look_ahead_level(level) && cell_inside(level, xy);
 #else
@@ -402,7 +403,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
         if (!checkable) no_check = 2u;
     }
 #endif
-#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 2
+#if defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == METRIC_FLUX_ERROR
     // The look-ahead starts one level above the check level: a cell there never becomes a photon itself, but when
     // it could merge (e <= its budget; each child is then predicted at an eighth of it, against a quarter) its
     // children are emitted now, without their own checks; otherwise they refine, and skip the checks that its e
@@ -441,7 +442,7 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
         // Children that will be checked (not the last level's) skip their check when it is predicted to refine.
         out_cell = pack_cell(level, xy.x, xy.y, skip);
     }
-#elif defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == 1
+#elif defined(TRAVERSE_METRIC) && TRAVERSE_METRIC == METRIC_MAX_ERROR
     if (checkable) {
         uint r = children_verdict(level, xy);
         if (r == CHILDREN_DROP) return ACT_DROP;

@@ -39,12 +39,13 @@ impl Metric {
     }
 
     /// Its index among the traversal's pipelines (build.rs compiles traverse.comp per metric, TRAVERSE_METRIC
-    /// 1 for max-error and 2 for flux-error; max-level's traversal is TRAVERSE_MAX_LEVEL's).
+    /// METRIC_MAX_ERROR or METRIC_FLUX_ERROR; max-level's traversal is TRAVERSE_MAX_LEVEL's).
     pub fn code(self) -> u32 {
+        use crate::shaders::consts::{METRIC_FLUX_ERROR, METRIC_MAX_ERROR, METRIC_MAX_LEVEL};
         match self {
-            Metric::MaxLevel => 0,
-            Metric::MaxError => 1,
-            Metric::FluxError => 2,
+            Metric::MaxLevel => METRIC_MAX_LEVEL,
+            Metric::MaxError => METRIC_MAX_ERROR,
+            Metric::FluxError => METRIC_FLUX_ERROR,
         }
     }
 }

@@ -75,6 +75,15 @@ pub const ACC_EYE: u32 = 13;
 /// Terms of the account.
 pub const ACC_TERMS: u32 = 14;
 
+// The adaptive traversal's metrics (`Metric::code`; traverse.comp's TRAVERSE_METRIC takes one of the last two, and
+// max-level's variant is TRAVERSE_MAX_LEVEL's).
+/// `--metric max-level`.
+pub const METRIC_MAX_LEVEL: u32 = 0;
+/// `--metric max-error`.
+pub const METRIC_MAX_ERROR: u32 = 1;
+/// `--metric flux-error`.
+pub const METRIC_FLUX_ERROR: u32 = 2;
+
 // The indirect-command buffer's slots (`IndirectCommand`, src/gpu_types.rs): one dispatch per traversal level
 // (0..MAX_LEVELS), then these.
 /// The two-interface trace's dispatch.
