@@ -17,8 +17,8 @@
 // sum to 1; splat_collapse.comp adds the levels back into the map. So a record costs at most about (2
 // SPLAT_FINE_RADIUS + 1)² taps, where a 64-texel tent took 129².
 //
-// SPLAT_COLOR (docs/design.md "Color"): 1, color photons: a record's flux is its channels' mean and its tint their
-// ratios to it (splat_tints); 2, spectral photons: a record's word is its wavelength, whose RGB (spectrum_rgb)
+// SPLAT_COLOR (docs/design.md "Color"): SPLAT_TINT, color photons: a record's flux is its channels' mean and its
+// tint their ratios to it (splat_tints); SPLAT_WAVELENGTH, spectral photons: a record's word is its wavelength, whose RGB (spectrum_rgb)
 // times the light's color at it (spectral_tint) the flux is spread over. Either way each tap adds its share of each channel to that channel's plane of the texels.
 //
 // A record whose shape is negated is the eye deposit's (docs/design.md "The eye deposit"; glsl/wave.comp
@@ -32,8 +32,8 @@
 
 layout(local_size_x = LINEAR_WG) in;
 
-layout(constant_id = SPLAT_COLOR_ID) const uint SPLAT_COLOR = 0u;
-const bool SPLAT_RGB = SPLAT_COLOR != 0u;
+layout(constant_id = SPLAT_COLOR_ID) const uint SPLAT_COLOR = SPLAT_GRAY;
+const bool SPLAT_RGB = SPLAT_COLOR != SPLAT_GRAY;
 const uint SPLAT_PLANES = SPLAT_RGB ? 3u : 1u;
 
 // Add v (W) to flux texel k, tinted: each channel's share to its plane (`plane` texels apart).
@@ -58,7 +58,7 @@ void flux_add(uint k, float v, vec3 tint, uint plane) {
 // The RGB an eye-deposit record's watt adds: its tint (a spectral record's already holds its light's color) times
 // its light's color, which the resolve applies to the map's records; a one-channel pass adds its channel alone.
 vec3 eye_tint(vec3 tint) {
-    if (SPLAT_COLOR == 2u) return tint;
+    if (SPLAT_COLOR == SPLAT_WAVELENGTH) return tint;
     vec3 color = u_frame.light.light_intensity > 0.0 ? u_frame.light.light_power / u_frame.light.light_intensity : vec3(0.0);
     uint c = u_frame.pass.channel;
     if (c >= 1u && c <= 3u) color *= vec3(equal(uvec3(1u, 2u, 3u), uvec3(c)));
@@ -179,7 +179,7 @@ void main() {
         s = splats[draw_cmd.z + i];
         if (SPLAT_RGB) {
             uint w = splat_tints[draw_cmd.z + i];
-            tint = SPLAT_COLOR == 2u ? spectral_tint(uintBitsToFloat(w)) : tint_unpack(w);
+            tint = SPLAT_COLOR == SPLAT_WAVELENGTH ? spectral_tint(uintBitsToFloat(w)) : tint_unpack(w);
         }
         valid = s.shape > 0.0 && all(greaterThanEqual(s.texel, vec2(0.0))) && all(lessThanEqual(s.texel, vec2(size)));
         if (s.shape < 0.0) eye_splat(s, tint);

@@ -26,9 +26,8 @@ void main() {
         uint k = atomicAdd(debug_header.x, 1u);
         if (k < debug_header.y) {
             vec2 uv = cell_center_uv(level, xy);
-            debug_rows[3u * k] = uvec4(xy, level | (h.status << 8) | (r << 16), floatBitsToUint(h.flux));
-            debug_rows[3u * k + 1u] = floatBitsToUint(vec4(uv, h.map_px));
-            debug_rows[3u * k + 2u] = uvec4(floatBitsToUint(h.pos), 0u);
+            debug_photons[k] =
+                GpuDebugPhoton(xy.x, xy.y, level | (h.status << 8) | (r << 16), h.flux, uv, h.map_px, vec4(h.pos, 0.0));
         }
     }
 }

@@ -472,6 +472,26 @@ pub struct IndirectCommand {
     pub args: [u32; 4],
 }
 
+/// One photon of the two-interface trace's debug dump (`Tuning::debug_photons`, glsl/trace.comp), after the dump's
+/// 16-byte header (count, capacity).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuDebugPhoton {
+    /// Its cell's column and row at its level.
+    pub x: u32,
+    pub y: u32,
+    /// Its level (bits 0-7), status (8-15) and splat radius (16-31).
+    pub level_status_radius: u32,
+    /// Its flux's first channel.
+    pub flux: f32,
+    /// The cell center's light-view texture coordinates.
+    pub uv: [f32; 2],
+    /// Where it lands in the caustic map (texels).
+    pub map_px: [f32; 2],
+    /// Where it hit a receiver (xyz; w unused).
+    pub hit: [f32; 4],
+}
+
 /// Push constants of glsl/resolve.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -403,9 +403,14 @@ impl CarriedColor {
         self != CarriedColor::None
     }
 
-    /// glsl/splat.comp's `SPLAT_COLOR`: 0 gray records, 1 records with an RGB tint, 2 with a wavelength.
+    /// glsl/splat.comp's `SPLAT_COLOR`: gray records, records with an RGB tint, or with a wavelength.
     pub fn splat_code(self) -> u32 {
-        self as u32
+        use crate::shaders::consts::{SPLAT_GRAY, SPLAT_TINT, SPLAT_WAVELENGTH};
+        match self {
+            CarriedColor::None => SPLAT_GRAY,
+            CarriedColor::Tint => SPLAT_TINT,
+            CarriedColor::Wavelength => SPLAT_WAVELENGTH,
+        }
     }
 }
 

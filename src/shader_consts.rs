@@ -75,6 +75,14 @@ pub const ACC_EYE: u32 = 13;
 /// Terms of the account.
 pub const ACC_TERMS: u32 = 14;
 
+// glsl/splat.comp's SPLAT_COLOR (`CarriedColor::splat_code`): what a record carries of its color.
+/// Gray records.
+pub const SPLAT_GRAY: u32 = 0;
+/// Records with an RGB tint (color photons, `splat_tints`).
+pub const SPLAT_TINT: u32 = 1;
+/// Records with a wavelength (spectral photons).
+pub const SPLAT_WAVELENGTH: u32 = 2;
+
 // The adaptive traversal's metrics (`Metric::code`; traverse.comp's TRAVERSE_METRIC takes one of the last two, and
 // max-level's variant is TRAVERSE_MAX_LEVEL's).
 /// `--metric max-level`.

@@ -20,8 +20,8 @@ use std::sync::Arc;
 /// writes past the capacity it was given.
 pub const PHOTON_GUARD: u32 = 1024;
 pub const CANARY: u32 = 0xDEAD_BEEF;
-/// Rows of the debug photon dump per photon (see photon_bindings.glsl).
-pub const DEBUG_ROWS: u64 = 3;
+/// Bytes of the debug photon dump per photon ([`crate::gpu_types::GpuDebugPhoton`]).
+pub const DEBUG_PHOTON_BYTES: u64 = std::mem::size_of::<crate::gpu_types::GpuDebugPhoton>() as u64;
 
 pub struct LightTargets {
     pub front: Image,
@@ -205,7 +205,7 @@ impl Targets {
         let tints = if s.carried_color.carried() { capacity } else { 4 };
         let mips = s.gbuffer_level() + 1;
         let (pyramid_offsets, pyramid_len) = pyramid_layout(s.gbuffer_side(), mips);
-        let debug_bytes = 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
+        let debug_bytes = 16 + DEBUG_PHOTON_BYTES * s.debug_photons.max(1) as u64;
         // Exact transport's two ray queues; the wide layout's waves read their rays as texels too.
         let ray_queue = |name: &str| {
             let bytes = s.ray_bytes() as u64 * s.ray_queue_capacity().max(1) as u64;
@@ -330,7 +330,7 @@ impl Targets {
         let state = 0u64;
         let transport = MAX_PASSES as u64 * std::mem::size_of::<TraversalState>() as u64;
         let debug = transport + MAX_PASSES as u64 * std::mem::size_of::<TransportState>() as u64;
-        let guard = debug + 16 + 16 * DEBUG_ROWS * s.debug_photons.max(1) as u64;
+        let guard = debug + 16 + DEBUG_PHOTON_BYTES * s.debug_photons.max(1) as u64;
         let aov = guard + 8 * PHOTON_GUARD as u64;
         ReadbackLayout { state, transport, debug, guard, aov, total: aov + aov_bytes }
     }

@@ -36,10 +36,8 @@ layout(set = 0, binding = PB_FRONT) uniform usampler2D t_front;     // refractor
 layout(set = 0, binding = PB_FRONT_AUX) uniform sampler2D t_front_aux;  // refractor front: index of refraction
 layout(set = 0, binding = PB_BACK) uniform usampler2D t_back;      // refractor back: normal, distance
 layout(set = 0, binding = PB_RECEIVERS) uniform usampler2D t_recv;      // receivers from the light: normal, distance
-// Debug photon dump (tests), three rows per splatted photon:
-//   (cell x, cell y, level | status << 8 | radius << 16, bits(flux.r)), bits(uv.x, uv.y, map_px.x, map_px.y),
-//   bits(hit.x, hit.y, hit.z), 0.
-layout(std430, set = 0, binding = PB_DEBUG) buffer DebugBuf { uvec4 debug_header; uvec4 debug_rows[]; };
+// Debug photon dump (tests): a header (count, capacity) and a GpuDebugPhoton per splatted photon.
+layout(std430, set = 0, binding = PB_DEBUG) buffer DebugBuf { uvec4 debug_header; GpuDebugPhoton debug_photons[]; };
 // Splat records (GpuSplat). A record's shape (0: the photon did not land) is an exact integer below 2^24 in a
 // float (splat_pack): radii rx (bits 0-6) and ry (bits 7-13, 0 meaning ry = rx, so a plain radius r is the
 // isotropic tent of radius r), a shear s in [-1, 1] in 1/255 steps (bits 14-22, two's complement) and its axis

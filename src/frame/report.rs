@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::gpu_types::{TransportState, TraversalState};
 use crate::scene::view::LightView;
 use crate::settings::{Method, ResolvedSettings, Transport};
-use crate::targets::{Targets, CANARY, DEBUG_ROWS, PHOTON_GUARD};
+use crate::targets::{Targets, CANARY, PHOTON_GUARD};
 use crate::vk::Buffer;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,7 +64,7 @@ impl LightReport {
     }
 }
 
-/// One photon of a debug run's dump (`Tuning::debug_photons`): its three rows (glsl/common/photon_bindings.glsl).
+/// One photon of a debug run's dump (`Tuning::debug_photons`), decoded from its `GpuDebugPhoton`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DebugPhoton {
     /// Its cell's column at its level.
@@ -173,8 +173,8 @@ pub struct FrameReport {
     pub batch_slots: u32,
     /// Tiles still pending when the frame ended (GPU-driven batching ran out of slots).
     pub unfinished_tiles: u32,
-    /// Debug photon dump: 3 rows per photon (see photon_bindings.glsl).
-    pub debug_rows: Vec<[u32; 4]>,
+    /// The debug photon dump, as the GPU wrote it.
+    pub debug_rows: Vec<crate::gpu_types::GpuDebugPhoton>,
     /// Debug runs: whether the photon buffer's guard region kept its canary.
     pub guard_intact: Option<bool>,
 }
@@ -223,19 +223,18 @@ impl FrameReport {
 
     /// The photons a debug run dumped (`Tuning::debug_photons`), in the order the GPU wrote them.
     pub fn debug_photons(&self) -> Vec<DebugPhoton> {
-        let f = f32::from_bits;
         self.debug_rows
-            .chunks_exact(3)
+            .iter()
             .map(|r| DebugPhoton {
-                x: r[0][0],
-                y: r[0][1],
-                level: r[0][2] & 0xFF,
-                status: (r[0][2] >> 8) & 0xFF,
-                radius: r[0][2] >> 16,
-                flux_r: f(r[0][3]),
-                uv: [f(r[1][0]), f(r[1][1])],
-                map_px: [f(r[1][2]), f(r[1][3])],
-                hit: [f(r[2][0]), f(r[2][1]), f(r[2][2])],
+                x: r.x,
+                y: r.y,
+                level: r.level_status_radius & 0xFF,
+                status: (r.level_status_radius >> 8) & 0xFF,
+                radius: r.level_status_radius >> 16,
+                flux_r: r.flux,
+                uv: r.uv,
+                map_px: r.map_px,
+                hit: [r.hit[0], r.hit[1], r.hit[2]],
             })
             .collect()
     }
@@ -310,7 +309,7 @@ pub(crate) fn read_results(
     if report.lights[0].caustics && s.debug_photons > 0 {
         let header = readback.read::<[u32; 4]>(layout.debug, 1)?[0];
         let n = header[0].min(s.debug_photons) as usize;
-        report.debug_rows = readback.read::<[u32; 4]>(layout.debug + 16, n * DEBUG_ROWS as usize)?;
+        report.debug_rows = readback.read::<crate::gpu_types::GpuDebugPhoton>(layout.debug + 16, n)?;
         let guard = readback.read::<u32>(layout.guard, 2 * PHOTON_GUARD as usize)?;
         report.guard_intact = Some(guard.iter().all(|&w| w == CANARY));
     }

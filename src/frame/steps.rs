@@ -10,7 +10,7 @@ use crate::passes::eye::{EyeGbuffer, EyeInputs};
 use crate::passes::geometry::GeometryTarget;
 use crate::passes::resolve::FluxSource;
 use crate::settings::Transport;
-use crate::targets::{Targets, DEBUG_ROWS, PHOTON_GUARD};
+use crate::targets::{Targets, DEBUG_PHOTON_BYTES, PHOTON_GUARD};
 use crate::vk::{Access, Image, VkResult};
 use ash::vk;
 
@@ -300,7 +300,7 @@ impl Ctx<'_> {
                 [vk::BufferCopy { src_offset: 0, dst_offset: layout.transport + i * transport, size: transport }];
             d.cmd_copy_buffer(cmd, t.photon.transport.raw, self.readback.raw, &copies);
             if debug {
-                let bytes = 16 + 16 * DEBUG_ROWS * self.s.debug_photons as u64;
+                let bytes = 16 + DEBUG_PHOTON_BYTES * self.s.debug_photons as u64;
                 d.cmd_copy_buffer(
                     cmd,
                     t.photon.debug.raw,

@@ -77,7 +77,7 @@ fn wave_variants(device: &Arc<Device>, layout: &str, spv: &'static shaders::Spv)
 /// A compute splat's pipelines, per `SPLAT_COLOR`: gray records, records with an RGB tint, records with a
 /// wavelength.
 fn splat_variants(device: &Arc<Device>, name: &str, spv: &'static [u32]) -> [LazyPipeline; 3] {
-    [0u32, 1, 2].map(|color| {
+    [SPLAT_GRAY, SPLAT_TINT, SPLAT_WAVELENGTH].map(|color| {
         let name = format!("{name}{}", ["", ", color", ", spectral"][color as usize]);
         LazyPipeline::compute_specialized(device, &name, spv, &[(SPLAT_COLOR_ID, color)])
     })
