@@ -21,15 +21,15 @@ layout(push_constant) uniform RefitPushBlock { RefitPush pc; };
 void store(uint k, RefitNode n, vec3 lo, vec3 hi) {
     boxes[2u * k] = vec4(lo, 0.0);
     boxes[2u * k + 1u] = vec4(hi, 0.0);
-    if ((pc.layouts & 2u) != 0u) {
+    if ((pc.layouts & REFIT_SINGLE) != 0u) {
         single_nodes[n.single].lo.xyz = lo;
         single_nodes[n.single].hi.xyz = hi;
     }
-    if ((pc.layouts & 4u) != 0u) {
+    if ((pc.layouts & REFIT_THREADED) != 0u) {
         threaded_nodes[n.threaded].lo.xyz = lo;
         threaded_nodes[n.threaded].hi.xyz = hi;
     }
-    if ((pc.layouts & 1u) != 0u && n.pair != NONE) {
+    if ((pc.layouts & REFIT_PAIR) != 0u && n.pair != NONE) {
         uint p = n.pair >> 1u;
         if ((n.pair & 1u) == 0u) {
             pair_nodes[p].lo0.xyz = lo;

@@ -635,7 +635,7 @@ pub struct MorphPush {
 }
 
 /// Push constants of refit.comp: one height of a deforming mesh's nodes (`count` of them from `first` in the refit
-/// order), and the layouts on the GPU (1 pair, 2 single, 4 threaded).
+/// order), and the binary layouts on the GPU it writes (REFIT_PAIR, REFIT_SINGLE, REFIT_THREADED bits).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RefitPush {

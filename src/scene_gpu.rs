@@ -369,6 +369,7 @@ impl BvhBuffers {
         self.host.is_some() && self.uploaded[0] && self.uploaded[Self::slot(layout)]
     }
 
+    /// The layout's slot in `uploaded`.
     fn slot(layout: BvhLayout) -> usize {
         match layout {
             BvhLayout::Pair | BvhLayout::Auto => 0,
@@ -573,7 +574,7 @@ impl BvhBuffers {
         levels_of(levels, r.wide_first_level, r.wide_levels)
     }
 
-    /// The binary layouts the refit writes, as its mask: 1 pair, 2 single, 4 threaded; those on the GPU that
+    /// The binary layouts the refit writes, as its mask (REFIT_PAIR, REFIT_SINGLE, REFIT_THREADED): those on the GPU that
     /// frames read (none when they trace the wide layout, which has a pass of its own). 0: no binary refit.
     pub(crate) fn layout_mask(&self) -> u32 {
         let read = |k: usize| match self.traced {
@@ -581,7 +582,14 @@ impl BvhBuffers {
             Some(BvhLayout::Wide) => false,
             Some(t) => k == 0 || k == Self::slot(t),
         };
-        (0..3).filter(|&k| self.uploaded[k] && read(k)).map(|k| 1u32 << k).sum()
+        use crate::shaders::consts::{REFIT_PAIR, REFIT_SINGLE, REFIT_THREADED};
+        let bits =
+            [(BvhLayout::Pair, REFIT_PAIR), (BvhLayout::Single, REFIT_SINGLE), (BvhLayout::Threaded, REFIT_THREADED)];
+        bits.iter()
+            .map(|&(l, bit)| (Self::slot(l), bit))
+            .filter(|&(k, _)| self.uploaded[k] && read(k))
+            .map(|(_, bit)| bit)
+            .sum()
     }
 
     /// The instance records as the GPU buffer holds them (None before the BVH is built).

@@ -75,6 +75,15 @@ pub const ACC_EYE: u32 = 13;
 /// Terms of the account.
 pub const ACC_TERMS: u32 = 14;
 
+// The binary BVH layouts a refit writes (`RefitPush::layouts`, glsl/refit.comp): a bit per layout, bit k the layout
+// in slot k of `BvhBuffers` (pair 0, single 1, threaded 2; the wide layout, slot 3, has refit_wide.comp).
+/// The pair layout's nodes.
+pub const REFIT_PAIR: u32 = 1;
+/// The single-box layout's nodes.
+pub const REFIT_SINGLE: u32 = 2;
+/// The threaded layout's nodes.
+pub const REFIT_THREADED: u32 = 4;
+
 // glsl/splat.comp's SPLAT_COLOR (`CarriedColor::splat_code`): what a record carries of its color.
 /// Gray records.
 pub const SPLAT_GRAY: u32 = 0;
