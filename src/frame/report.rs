@@ -173,8 +173,8 @@ pub struct FrameReport {
     pub batch_slots: u32,
     /// Tiles still pending when the frame ended (GPU-driven batching ran out of slots).
     pub unfinished_tiles: u32,
-    /// The debug photon dump, as the GPU wrote it.
-    pub debug_rows: Vec<crate::gpu_types::GpuDebugPhoton>,
+    /// The debug photon dump, as the GPU wrote it ([`FrameReport::debug_photons`] decodes it).
+    pub(crate) debug_rows: Vec<crate::gpu_types::GpuDebugPhoton>,
     /// Debug runs: whether the photon buffer's guard region kept its canary.
     pub guard_intact: Option<bool>,
 }
