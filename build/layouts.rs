@@ -66,10 +66,16 @@ fn words(name: &str) -> Vec<String> {
         .collect()
 }
 
+/// A binding constant's family (`WA_`) and the rest of its name (`HEIGHTS`).
+fn family_split(constant: &str) -> (String, &str) {
+    let (family, rest) = constant.split_once('_').unwrap_or((constant, ""));
+    (format!("{family}_"), rest)
+}
+
 /// Whether the constant `constant` (its family prefix included) names the declaration `declared`: the same words
 /// ([`words`]) once the family and the declaration's `t_`, `o_` or `u_` are left off.
 pub fn names_agree(constant: &str, declared: &str) -> bool {
-    let suffix = constant.split_once('_').map_or(constant, |(_, s)| s);
+    let (_, suffix) = family_split(constant);
     let declared = ["t_", "o_", "u_"].iter().find_map(|p| declared.strip_prefix(p)).unwrap_or(declared);
     words(suffix) == words(declared)
 }
@@ -122,7 +128,7 @@ pub fn binding_names(file: &str, text: &str, consts: &HashMap<String, u32>) -> R
 pub fn family_of(shader: &str, text: &str, consts: &HashMap<String, u32>) -> Result<Option<String>, String> {
     let mut family: Option<String> = None;
     for (_, name) in binding_names(shader, text, consts)? {
-        let prefix = name.split_once('_').map_or(name.as_str(), |(p, _)| p).to_string() + "_";
+        let (prefix, _) = family_split(&name);
         match &family {
             Some(f) if *f != prefix => {
                 return Err(format!("{shader}: binds by the constants of two families, {f} and {prefix}"));

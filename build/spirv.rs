@@ -65,16 +65,6 @@ const OP_COPY_OBJECT: u32 = 83;
 const OP_IMAGE_WRITE: u32 = 99;
 const OP_ATOMIC_STORE: u32 = 228;
 const OP_ATOMIC_FLAG_CLEAR: u32 = 319;
-
-/// Whether an instruction writes through the pointer in its operand `at`: a store, a copy into it, an atomic other
-/// than a load (the integer ones, the flag ones, and the float add, min and max), or an image write.
-fn write_target(op: u32) -> Option<usize> {
-    match op {
-        OP_STORE | OP_COPY_MEMORY | OP_ATOMIC_STORE | OP_ATOMIC_FLAG_CLEAR | OP_IMAGE_WRITE => Some(0),
-        229..=242 | 318 | 5614 | 5615 | 6035 => Some(2),
-        _ => None,
-    }
-}
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
 const OP_TYPE_ARRAY: u32 = 28;
@@ -97,6 +87,16 @@ const SC_UNIFORM_CONSTANT: u32 = 0;
 const SC_UNIFORM: u32 = 2;
 const SC_PUSH_CONSTANT: u32 = 9;
 const SC_STORAGE_BUFFER: u32 = 12;
+
+/// Whether an instruction writes through the pointer in its operand `at`: a store, a copy into it, an atomic other
+/// than a load (the integer ones, the flag ones, and the float add, min and max), or an image write.
+fn write_target(op: u32) -> Option<usize> {
+    match op {
+        OP_STORE | OP_COPY_MEMORY | OP_ATOMIC_STORE | OP_ATOMIC_FLAG_CLEAR | OP_IMAGE_WRITE => Some(0),
+        229..=242 | 318 | 5614 | 5615 | 6035 => Some(2),
+        _ => None,
+    }
+}
 
 /// The sizes the build's checks need: of scalars, vectors, matrices, arrays of a constant length and structs.
 #[derive(Default)]

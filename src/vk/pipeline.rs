@@ -97,7 +97,7 @@ pub struct Pipeline {
     pub layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pub bind_point: vk::PipelineBindPoint,
-    /// What its shaders declare: each binding's kind, writability and name, and the push block.
+    /// What its shaders declare: each binding's kind, whether they write it and its name, and the push block.
     pub(super) iface: Interface,
     /// Its name in messages.
     pub(super) name: String,
@@ -134,10 +134,8 @@ struct Layouts<'a> {
 pub(super) struct Interface {
     /// Per binding of set 0, its kind, or `None` where no shader declares it.
     pub(super) kinds: Vec<Option<BindKind>>,
-    /// Per binding, whether one of the shaders may write it (declares it without `readonly`).
-    pub(super) writable: Vec<bool>,
-    /// Per binding, whether one of the shaders' code writes it (stores, atomics, image writes: a subset of
-    /// `writable`, read from the SPIR-V as the validation layers read it).
+    /// Per binding, whether one of the shaders' code writes it (stores, atomics, image writes through it, read from
+    /// the SPIR-V as the validation layers read it; a binding declared `readonly` never is).
     pub(super) written: Vec<bool>,
     /// Per binding, the name the shaders give it (the variable, or a block without an instance name).
     pub(super) names: Vec<String>,
@@ -152,8 +150,7 @@ pub(super) struct Interface {
 fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interface> {
     use super::spirv::{Descriptor, Module};
     let fail = |m: String| VkError::Interface(format!("pipeline {name}: {m}"));
-    let mut me =
-        Interface { kinds: Vec::new(), writable: Vec::new(), written: Vec::new(), names: Vec::new(), push: None };
+    let mut me = Interface { kinds: Vec::new(), written: Vec::new(), names: Vec::new(), push: None };
     for words in shaders {
         let module = Module::parse(words).map_err(fail)?;
         for (&(set, binding), (declared, var)) in &module.bindings {
@@ -173,7 +170,6 @@ fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interfac
             let b = binding as usize;
             if me.kinds.len() <= b {
                 me.kinds.resize(b + 1, None);
-                me.writable.resize(b + 1, false);
                 me.written.resize(b + 1, false);
                 me.names.resize(b + 1, String::new());
             }
@@ -185,7 +181,6 @@ fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interfac
                 )));
             }
             me.kinds[b] = Some(kind);
-            me.writable[b] |= module.writable.contains(&(set, binding));
             me.written[b] |= module.written.contains(&(set, binding));
             me.names[b] = var.clone();
         }
@@ -204,7 +199,7 @@ fn reflect(device: &Device, name: &str, shaders: &[&[u32]]) -> VkResult<Interfac
             device.info.name, device.info.max_push_descriptors
         )));
     }
-    let push_size = me.push.as_ref().map_or(0, |p| p.size);
+    let push_size = me.push_size();
     if push_size > limits.max_push_constants_size {
         return Err(VkError::Unsupported(format!(
             "pipeline {name}: {push_size} bytes of push constants; {} allows {} (maxPushConstantsSize)",
@@ -586,7 +581,7 @@ mod tests {
         let sampled = Some(BindKind::Sampled);
         assert_eq!(p.iface.kinds, [Some(BindKind::Uniform), sampled, sampled, Some(BindKind::StorageImage)]);
         assert_eq!(p.iface.names[1], "t_flux");
-        assert_eq!(p.iface.writable, [false, false, false, true]);
+        assert_eq!(p.iface.written, [false, false, false, true]);
         let push = p.iface.push.as_ref().expect("a push block");
         assert_eq!((push.name.as_str(), push.size), ("ResolvePush", 4));
         // The texel variant reads binding 1 as a texel buffer (a `samplerBuffer`).

@@ -141,8 +141,10 @@ impl<'a> Use<'a> {
 
 impl Pipeline {
     /// Declare `uses` (binding i = uses[i]) to `sync` as this pipeline's shaders make them. A use that does not
-    /// fit its binding, or a read of a binding the pipeline's shaders may write (declared without `readonly`, as
-    /// the SPIR-V says), is this crate's defect: the barriers would not cover what the shaders do.
+    /// fit its binding, a read of a binding the pipeline's shaders write (a store, an atomic or an image write in
+    /// the SPIR-V), or a binding without a use, is this crate's defect: the barriers would not cover what the
+    /// shaders do. A write of a binding the shaders only read is declared as a read, and a binding they do not
+    /// declare is not declared (the read of an indirect command's arguments excepted).
     fn declare_uses(&self, sync: &mut Tracker, uses: &[Use]) {
         let iface = &self.iface;
         assert!(uses.len() >= iface.kinds.len(), "pipeline {}: binding {} has no use", self.name, uses.len());
@@ -338,7 +340,7 @@ mod tests {
         let device = crate::vk::Context::headless(&desc).expect("a Vulkan device").device;
         let words = crate::shaders::SCENE_UPDATE_COMP.words();
         let p = Pipeline::compute(&device, "scene update", words).expect("pipeline");
-        assert_eq!(p.iface.writable, [false, true, false, true]);
+        assert_eq!(p.iface.written, [false, true, false, true]);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let b: Vec<Buffer> = (0..4)
             .map(|i| {
