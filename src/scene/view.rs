@@ -367,9 +367,11 @@ impl CameraView {
         }
         let span = (dmax - dmin).max(1e-3);
         match self.projection {
+            // The eye sees what lies in front of it: an orthographic camera inside a room looks at the wall ahead,
+            // not at the back of the one behind it (the reference's visibility rays end at the eye too).
             Projection::Orthographic { .. } => {
-                self.near = dmin - 0.05 * span;
-                self.far = dmax + 0.05 * span;
+                self.near = (dmin - 0.05 * span).max(0.0);
+                self.far = (dmax + 0.05 * span).max(self.near + 1e-3);
             }
             Projection::Perspective { .. } => {
                 self.far = dmax.max(1e-2) * 1.05;
