@@ -92,7 +92,7 @@ void main() {
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, on_plane(cam, q + ivec2(1, 0), p, n)) - uv;
     vec2 dy = view_uv(lv, on_plane(cam, q + ivec2(0, 1), p, n)) - uv;
-    vec3 e_caustic = caustic_irradiance(p, dx, dy);
+    vec3 e_caustic = caustic_irradiance(p, n, rd, dx, dy);
     // The eye deposit holds every light's: the first light's shading adds it.
     if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e_caustic += eye_deposit_irradiance(cam, q, size, n, g.w);
     // The environment lights the side the eye sees (its radiance is 0 in further lights' uniforms).

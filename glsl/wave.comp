@@ -307,11 +307,11 @@ bool eye_record(Traced t, RayDiff rdf, vec3 p, vec3 rd, float flux, inout Outcom
 
 // A ray of a bounce wave reaches a diffuse receiver at p along rd: its splat record, where the light's view sees p,
 // else the eye deposit's where the camera sees it (else no map of the frame can hold it: ACC_UNSEEN). (Wave 0's
-// rays have met nothing yet.)
-void record_at(Traced t, RayDiff rdf, vec3 p, vec3 rd, float flux, inout Outcome o) {
+// rays have met nothing yet.) ng: the receiver's geometric normal at p, for the side rd arrives on.
+void record_at(Traced t, RayDiff rdf, vec3 p, vec3 ng, vec3 rd, float flux, inout Outcome o) {
     GpuView rv = u_frame.light.receiver_view;
     vec2 uv;
-    if (!receiver_seen(rv, t_recv, p, uv)) {
+    if (!receiver_seen(rv, t_recv, p, uv) || !same_side_as_view(rv, p, ng, rd)) {
         if (!eye_record(t, rdf, p, rd, flux, o)) acc[ACC_UNSEEN] += flux;
         return;
     }
@@ -443,9 +443,9 @@ void interact(Traced t, uint capacity, inout Outcome o) {
     }
     vec3 p = bvh_hit_point(hit);
     bool specular = inst_is_dielectric(hit.inst);
-    // The normals, once: the absorption test and the interface both need them.
+    // The normals, once: the interface, the differentials and a landing's side need them.
     vec3 ng = vec3(0.0), ns = vec3(0.0);
-    if (specular || (diff && t.depth > 0u)) bvh_normals(hit, ng, ns);
+    if (specular || !WAVE_PRIMARY) bvh_normals(hit, ng, ns);
     // The differentials move to the hit, in the plane of its triangle.
     if (diff) diff_transfer(rdf, rd, dot(p - ro, rd), ng);
     if (WAVE_COLOR) {
@@ -472,7 +472,7 @@ void interact(Traced t, uint capacity, inout Outcome o) {
         if (WAVE_PRIMARY) {
             acc[ACC_DIRECT] += t.phi * w;
         } else {
-            record_at(t, rdf, p, rd, t.phi * w, o);
+            record_at(t, rdf, p, ng, rd, t.phi * w, o);
         }
     } else if (t.depth >= MAX_INTERACTIONS) {
         acc[ACC_CAP] += t.phi * w;

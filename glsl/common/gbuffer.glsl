@@ -58,6 +58,15 @@ bool receiver_seen(GpuView lv, usampler2D recv, vec3 p, out vec2 uv) {
     return stored_distance_is(lv, p, geo_dist(recv, clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1)));
 }
 
+// Whether a ray arriving at p along `arrival` (a photon's, or the eye's) meets the side of the surface there (normal
+// n, either way round) that view lv's rays meet: a light's caustic map holds only the side its straight rays reach.
+// Where two surfaces meet at an edge the distance test passes for both within four texels: a ledge's underside,
+// beside its front, is as far from the light as the front is, but faces away from it, and must neither take the
+// front's light nor give its own to it.
+bool same_side_as_view(GpuView lv, vec3 p, vec3 n, vec3 arrival) {
+    return dot(arrival, n) * dot(view_dir_to(lv, p), n) > 0.0;
+}
+
 // The same, where the distance is the .w of a float image (the eye's receiver radiance).
 bool receiver_seen(GpuView lv, sampler2D recv, vec3 p, out vec2 uv) {
     if (!view_holds(lv, p, uv)) return false;

@@ -58,12 +58,13 @@ vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, sampler2D s
     return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, p, n);
 }
 
-// Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) averaged over a footprint in
-// its caustic map spanned by the uv offsets dx, dy (up to 8x8 bilinear taps), so that a caustic sharper than the
-// footprint keeps its flux.
-vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, vec2 dx, vec2 dy) {
+// Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) at p (normal n), on the side that
+// the eye's ray (direction `eye`) meets, averaged over a footprint in its caustic map spanned by the uv offsets dx,
+// dy (up to 8x8 bilinear taps), so that a caustic sharper than the footprint keeps its flux.
+vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, vec3 n, vec3 eye, vec2 dx, vec2 dy) {
     vec2 uv;
-    if (!receiver_seen(lv, recv, p, uv)) return vec3(0.0);  // the map holds another receiver's light there
+    // The map holds another receiver's light there, or the light's on the other side.
+    if (!receiver_seen(lv, recv, p, uv) || !same_side_as_view(lv, p, n, eye)) return vec3(0.0);
     vec2 size = vec2(textureSize(irr, 0));
     int nx = int(clamp(ceil(length(dx * size)), 1.0, 8.0));
     int ny = int(clamp(ceil(length(dy * size)), 1.0, 8.0));
@@ -81,8 +82,8 @@ vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, v
 vec3 direct_irradiance(vec3 p, vec3 n) {
     return direct_irradiance_in(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, t_shadow, p, n);
 }
-vec3 caustic_irradiance(vec3 p, vec2 dx, vec2 dy) {
-    return caustic_irradiance_in(u_frame.light.receiver_view, t_irradiance, t_recv, p, dx, dy);
+vec3 caustic_irradiance(vec3 p, vec3 n, vec3 eye, vec2 dx, vec2 dy) {
+    return caustic_irradiance_in(u_frame.light.receiver_view, t_irradiance, t_recv, p, n, eye, dx, dy);
 }
 
 // The environment (docs/design.md "Environment"), seen directly, in reflections and through glass. With a map
