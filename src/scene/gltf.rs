@@ -25,6 +25,7 @@ const SUPPORTED: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_volume",
     "KHR_materials_dispersion",
+    "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
 
@@ -1105,8 +1106,8 @@ fn morph_targets(
         let t_at = format!("{at}.targets[{k}]");
         let read = |a: Option<gltf::Accessor>, what: &str| -> Result<Vec<Vec3>, SceneError> {
             let Some(a) = a else { return Ok(Vec::new()) };
-            let v = read_floats(cx, &a, &format!("{t_at}.{what}"), buffers, 3)?;
-            let v: Vec<Vec3> = v.chunks_exact(3).map(Vec3::from_slice).collect();
+            let ints = if what == "POSITION" { quantized::DELTA } else { quantized::NORMAL };
+            let v = read_vec3(cx, &a, &format!("{t_at}.{what}"), buffers, ints)?;
             if v.len() != vertices || v.iter().any(|x| !x.is_finite()) {
                 return Err(
                     cx.err(format!("{t_at}.{what}"), format!("needs one finite displacement per vertex ({vertices})"))
@@ -1126,7 +1127,7 @@ fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Res
     let pos = p
         .get(&gltf::Semantic::Positions)
         .ok_or_else(|| cx.err(format!("{at}.attributes"), "a primitive needs a POSITION attribute"))?;
-    let positions = read_vec3(cx, &pos, &format!("{at}.attributes.POSITION"), buffers)?;
+    let positions = read_vec3(cx, &pos, &format!("{at}.attributes.POSITION"), buffers, quantized::POSITION)?;
     if positions.iter().any(|v| !v.is_finite()) {
         return Err(cx.err(format!("{at}.attributes.POSITION"), "positions must be finite"));
     }
@@ -1147,7 +1148,7 @@ fn primitive(cx: &Cx, p: &gltf::Primitive, at: &str, buffers: &[Vec<u8>]) -> Res
     let mut mesh = Mesh { positions, normals: Vec::new(), indices, uvs: Vec::new() };
     match p.get(&gltf::Semantic::Normals) {
         Some(n) => {
-            let normals = read_vec3(cx, &n, &format!("{at}.attributes.NORMAL"), buffers)?;
+            let normals = read_vec3(cx, &n, &format!("{at}.attributes.NORMAL"), buffers, quantized::NORMAL)?;
             if normals.len() != mesh.positions.len() || normals.iter().any(|v| !v.is_finite()) {
                 return Err(cx.err(format!("{at}.attributes.NORMAL"), "needs one finite normal per position"));
             }
@@ -1238,6 +1239,19 @@ fn read_floats(
     buffers: &[Vec<u8>],
     width: usize,
 ) -> Result<Vec<f32>, SceneError> {
+    decode_floats(cx, a, at, buffers, width, false)
+}
+
+/// [`read_floats`], where `plain_ints` also takes integers that are not normalized as their values (the vertex
+/// attributes of KHR_mesh_quantization: a position of shorts is scaled by its node's transform).
+fn decode_floats(
+    cx: &Cx,
+    a: &gltf::Accessor,
+    at: &str,
+    buffers: &[Vec<u8>],
+    width: usize,
+    plain_ints: bool,
+) -> Result<Vec<f32>, SceneError> {
     use gltf::accessor::DataType;
     let comps = a.dimensions().multiplicity();
     if comps != width {
@@ -1253,11 +1267,16 @@ fn read_floats(
         (DataType::U8, true) => |b| b[0] as f32 / 255.0,
         (DataType::I16, true) => |b| (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0),
         (DataType::U16, true) => |b| u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
-        (t, _) => {
+        (DataType::I8, false) if plain_ints => |b| b[0] as i8 as f32,
+        (DataType::U8, false) if plain_ints => |b| b[0] as f32,
+        (DataType::I16, false) if plain_ints => |b| i16::from_le_bytes([b[0], b[1]]) as f32,
+        (DataType::U16, false) if plain_ints => |b| u16::from_le_bytes([b[0], b[1]]) as f32,
+        (t, n) => {
+            let n = if n { "normalized " } else { "" };
             return Err(cx.err(
                 format!("{at} (accessors[{}])", a.index()),
-                format!("must be FLOAT or normalized integers (got {t:?}; quantized data is not supported)"),
-            ))
+                format!("must be FLOAT or normalized integers (got {n}{t:?})"),
+            ));
         }
     };
     let size = a.data_type().size();
@@ -1266,40 +1285,77 @@ fn read_floats(
     Ok(bytes.chunks_exact(size).map(read).collect())
 }
 
-fn read_vec3(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<Vec3>, SceneError> {
-    use gltf::accessor::{DataType, Dimensions};
-    if a.dimensions() != Dimensions::Vec3 || a.data_type() != DataType::F32 || a.normalized() {
-        return Err(cx.err(
-            format!("{at} (accessors[{}])", a.index()),
-            format!(
-                "must be VEC3 of FLOAT (got {:?} of {:?}; quantized meshes are not supported)",
-                a.dimensions(),
-                a.data_type()
-            ),
-        ));
-    }
-    Ok(read_floats(cx, a, at, buffers, 3)?.chunks_exact(3).map(Vec3::from_slice).collect())
+/// The component types a vertex attribute may have (glTF 2.0 §3.7.2.1 with KHR_mesh_quantization), each as
+/// (type, normalized); FLOAT is always allowed.
+mod quantized {
+    use gltf::accessor::DataType::{self, I16, I8, U16, U8};
+    pub const POSITION: &[(DataType, bool)] =
+        &[(I8, false), (I8, true), (U8, false), (U8, true), (I16, false), (I16, true), (U16, false), (U16, true)];
+    pub const NORMAL: &[(DataType, bool)] = &[(I8, true), (I16, true)];
+    pub const TEXCOORD: &[(DataType, bool)] = POSITION;
+    /// A morph target's POSITION displacements.
+    pub const DELTA: &[(DataType, bool)] = &[(I8, false), (I8, true), (I16, false), (I16, true)];
 }
 
-/// TEXCOORD data: VEC2 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT; finite.
-fn read_uvs(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<glam::Vec2>, SceneError> {
-    use gltf::accessor::{DataType, Dimensions};
-    let ok = matches!(
-        (a.data_type(), a.normalized()),
-        (DataType::F32, false) | (DataType::U8, true) | (DataType::U16, true)
-    );
-    if a.dimensions() != Dimensions::Vec2 || !ok {
+/// A vertex attribute of `dims`, as floats: FLOAT, or one of the integer types in `ints` ([`quantized`]).
+fn read_attribute(
+    cx: &Cx,
+    a: &gltf::Accessor,
+    at: &str,
+    buffers: &[Vec<u8>],
+    dims: gltf::accessor::Dimensions,
+    ints: &[(gltf::accessor::DataType, bool)],
+) -> Result<Vec<f32>, SceneError> {
+    use gltf::accessor::DataType;
+    let (t, n) = (a.data_type(), a.normalized());
+    if a.dimensions() != dims || !(t == DataType::F32 && !n || ints.contains(&(t, n))) {
+        // glTF's own names: "normalized UNSIGNED_SHORT", "VEC3".
+        let name = |t: DataType, n: bool| {
+            let t = match t {
+                DataType::I8 => "BYTE",
+                DataType::U8 => "UNSIGNED_BYTE",
+                DataType::I16 => "SHORT",
+                DataType::U16 => "UNSIGNED_SHORT",
+                DataType::U32 => "UNSIGNED_INT",
+                DataType::F32 => "FLOAT",
+            };
+            format!("{}{t}", if n { "normalized " } else { "" })
+        };
+        let allowed: Vec<String> = ints.iter().map(|&(t, n)| name(t, n)).collect();
+        let dims_name = |d: gltf::accessor::Dimensions| format!("{d:?}").to_uppercase();
         return Err(cx.err(
             format!("{at} (accessors[{}])", a.index()),
             format!(
-                "must be VEC2 of FLOAT, or of normalized unsigned bytes or shorts (got {:?} of {:?})",
-                a.dimensions(),
-                a.data_type()
+                "must be {} of FLOAT, or (KHR_mesh_quantization) of {} (got {} of {})",
+                dims_name(dims),
+                allowed.join(", "),
+                dims_name(a.dimensions()),
+                name(t, n)
             ),
         ));
     }
+    decode_floats(cx, a, at, buffers, dims.multiplicity(), true)
+}
+
+fn read_vec3(
+    cx: &Cx,
+    a: &gltf::Accessor,
+    at: &str,
+    buffers: &[Vec<u8>],
+    ints: &[(gltf::accessor::DataType, bool)],
+) -> Result<Vec<Vec3>, SceneError> {
+    let v = read_attribute(cx, a, at, buffers, gltf::accessor::Dimensions::Vec3, ints)?;
+    Ok(v.chunks_exact(3).map(Vec3::from_slice).collect())
+}
+
+/// TEXCOORD data: VEC2 of FLOAT, or of normalized unsigned bytes or shorts, or (KHR_mesh_quantization) of any
+/// byte or short, which the texture's KHR_texture_transform scales; finite.
+fn read_uvs(cx: &Cx, a: &gltf::Accessor, at: &str, buffers: &[Vec<u8>]) -> Result<Vec<glam::Vec2>, SceneError> {
     let uvs: Vec<glam::Vec2> =
-        read_floats(cx, a, at, buffers, 2)?.chunks_exact(2).map(glam::Vec2::from_slice).collect();
+        read_attribute(cx, a, at, buffers, gltf::accessor::Dimensions::Vec2, quantized::TEXCOORD)?
+            .chunks_exact(2)
+            .map(glam::Vec2::from_slice)
+            .collect();
     if uvs.iter().any(|uv| !uv.is_finite()) {
         return Err(cx.err(at.to_string(), "texture coordinates must be finite"));
     }
