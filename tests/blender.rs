@@ -351,16 +351,22 @@ fn a_glass_of_water_from_blender_resolves_its_overlap_by_priority() {
 
 /// gltfpack 1.3 (npm) writes KHR_mesh_quantization by default (tests/data/gltfpack, written from the fixtures above
 /// by tools/gltfpack_scenes): positions as 14-bit integers that the node's transform scales back, normals as 8-bit
-/// normalized bytes, a morph target's displacements as shorts. Each renders as its Blender source does (caustics
-/// from `Top` at 256x144, exact transport at level 3; rel-L1 at 256), measured on lavapipe:
-/// - unquantized (`-noq`, gltfpack's other rewrites alone): the same frame and the same photon count;
+/// normalized bytes, a morph target's displacements as shorts; `-c` adds EXT_meshopt_compression, and `-cc` its
+/// filters. Each renders as its Blender source does (caustics from `Top` at 256x144, exact transport at level 3;
+/// rel-L1 at 256), measured on lavapipe:
+/// - unquantized (`-noq`, gltfpack's other rewrites alone): the same photon count, and the frame within float noise;
 /// - 16-bit positions and normals: 0.28%, flux ratio 0.99991;
 /// - the default: 6.0%, flux 0.9975. That is the 8-bit normals' bound (each normal within 0.5° of its source,
 ///   and a glass's caustic moves with its normals); 12-bit normals with the default positions give 0.75%
 ///   (`render --level 4`);
-/// - the shape keys by default, at t = 0.5 s (their morph on the GPU): 0.39%, flux 1.0003.
+/// - compressed (`-c`): the same positions and normals as the default's uncompressed file, and the same triangles,
+///   each starting at another corner where the index codec rotated it: the same photons, 6.3e-5 apart;
+/// - compressed with filters, float positions through the exponential filter and 16-bit octahedral normals
+///   (`-cc -vn 16 -vpf`): 0.23%, flux 0.99987;
+/// - the shape keys by default, at t = 0.5 s (their morph on the GPU): 0.39%, flux 1.0003; with `-cc` (8-bit
+///   octahedral normals): 0.76%, flux 1.0002.
 #[test]
-fn gltfpack_quantized_files_render_as_their_sources() {
+fn gltfpack_files_render_as_their_sources() {
     let (_lock, device) = gpu();
     let packed =
         |name: &str| Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltfpack").join(format!("{name}.glb"));
@@ -371,17 +377,27 @@ fn gltfpack_quantized_files_render_as_their_sources() {
         frame(&mut r, "Top", Aov::Caustics)
     };
     let (water, photons) = shot(&fixture("glass_of_water"), 0.0);
-    let (noq, noq_photons) = shot(&packed("glass_of_water_noq"), 0.0);
-    assert_eq!(noq_photons, photons, "photons of the unquantized file");
-    assert!(rel_l1(&noq, &water) < 1e-5, "unquantized: rel-L1 {}", rel_l1(&noq, &water));
     let (keys, _) = shot(&fixture("shape_keys"), 0.5);
+    let (quantized, quantized_photons) = shot(&packed("glass_of_water"), 0.0);
+    for (name, want, want_photons) in
+        [("glass_of_water_noq", &water, photons), ("glass_of_water_meshopt", &quantized, quantized_photons)]
+    {
+        let (img, n) = shot(&packed(name), 0.0);
+        assert_eq!(n, want_photons, "{name}: photons");
+        assert!(rel_l1(&img, want) < 2e-4, "{name}: rel-L1 {}", rel_l1(&img, want));
+    }
     let cases = [
-        ("glass_of_water_16bit", 0.0, &water, 0.005),
-        ("glass_of_water", 0.0, &water, 0.07),
-        ("shape_keys", 0.5, &keys, 0.007),
+        ("glass_of_water_16bit", 0.0, &water, None, 0.005),
+        ("glass_of_water", 0.0, &water, Some(&quantized), 0.07),
+        ("glass_of_water_meshopt_filters", 0.0, &water, None, 0.005),
+        ("shape_keys", 0.5, &keys, None, 0.007),
+        ("shape_keys_meshopt", 0.5, &keys, None, 0.01),
     ];
-    for (name, time, want, max_rel) in cases {
-        let (img, _) = shot(&packed(name), time);
+    for (name, time, want, rendered, max_rel) in cases {
+        let img = match rendered {
+            Some(img) => img.clone(),
+            None => shot(&packed(name), time).0,
+        };
         let m = caustics::metrics::compare(&img, want, 256, 4.0);
         eprintln!("gltfpack {name}: rel-L1 {:.5}, flux ratio {:.5}", m.rel_l1, m.flux_ratio);
         assert!(m.rel_l1 < max_rel && (m.flux_ratio - 1.0).abs() < 0.005, "{name}: {m:?}");

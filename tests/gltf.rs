@@ -816,60 +816,76 @@ fn what_exporters_write_loads_as_the_spec_says() {
     }
 }
 
-/// A quantized file from gltfpack (tests/data/gltfpack/glass_of_water.glb: KHR_mesh_quantization's integer
-/// positions and normalized-byte normals), its accessors' encodings and layouts mutated, and bytes of its buffer
-/// overwritten: every load is a scene or an error that names the file and the accessor's place, never a panic.
+/// Files from gltfpack (tests/data/gltfpack): the quantized glass of water (KHR_mesh_quantization's integer
+/// positions and normalized-byte normals) and its compressed copy with filters (EXT_meshopt_compression), their
+/// accessors' encodings and layouts mutated, the compressed views' fields too, and bytes of their buffers
+/// overwritten: every load is a scene or an error that names the file, never a panic.
 #[test]
-fn mutated_quantized_gltf_never_panics() {
-    let dir = out_dir("gltf_quantized_mutated");
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltfpack/glass_of_water.glb");
-    let bytes = std::fs::read(&src).unwrap();
-    // The GLB's two chunks: JSON, then BIN.
-    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
-    let json_len = u32_at(12);
-    let doc: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
-    let bin_at = 20 + json_len;
-    let bin = bytes[bin_at + 8..bin_at + 8 + u32_at(bin_at)].to_vec();
-    assert!(Scene::load(&src).is_ok(), "the fixture loads");
-    let wild = [json!(5120), json!(5121), json!(5122), json!(5123), json!(5125), json!(5126), json!(true), json!(-1)];
+fn mutated_gltfpack_files_never_panic() {
+    let dir = out_dir("gltf_gltfpack_mutated");
     let mut loads = 0;
     let mut errors = 0;
-    let mut check = |d: Value, bin: &[u8], what: &str| {
-        let p = write(&dir, "q.glb", glb(&d, bin));
-        let r = std::panic::catch_unwind(|| Scene::load(&p).map(|s| s.triangle_count()));
-        match r {
-            Err(_) => panic!("{what}: panicked"),
-            Ok(Err(e)) => {
-                let m = e.to_string();
-                assert!(m.contains("q.glb"), "{what}: the message names no file: {m}");
-                errors += 1;
+    for name in ["glass_of_water", "glass_of_water_meshopt_filters"] {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/gltfpack/{name}.glb"));
+        let bytes = std::fs::read(&src).unwrap();
+        // The GLB's two chunks: JSON, then BIN.
+        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
+        let json_len = u32_at(12);
+        let doc: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+        let bin_at = 20 + json_len;
+        let bin = bytes[bin_at + 8..bin_at + 8 + u32_at(bin_at)].to_vec();
+        assert!(Scene::load(&src).is_ok(), "{name} loads");
+        let mut check = |d: Value, bin: &[u8], what: &str| {
+            let p = write(&dir, "q.glb", glb(&d, bin));
+            match std::panic::catch_unwind(|| Scene::load(&p).map(|s| s.triangle_count())) {
+                Err(_) => panic!("{name}: {what}: panicked"),
+                Ok(Err(e)) => {
+                    let m = e.to_string();
+                    assert!(m.contains("q.glb"), "{name}: {what}: the message names no file: {m}");
+                    errors += 1;
+                }
+                Ok(Ok(_)) => {}
             }
-            Ok(Ok(_)) => {}
+            loads += 1;
+        };
+        let wild =
+            [json!(5120), json!(5121), json!(5122), json!(5123), json!(5125), json!(5126), json!(true), json!(-1)];
+        for i in 0..doc["accessors"].as_array().unwrap().len() {
+            for key in ["componentType", "normalized", "type", "byteOffset", "count"] {
+                for w in &wild {
+                    let mut d = doc.clone();
+                    d["accessors"][i][key] = w.clone();
+                    check(d, &bin, &format!("accessors[{i}].{key} = {w}"));
+                }
+            }
         }
-        loads += 1;
-    };
-    for i in 0..doc["accessors"].as_array().unwrap().len() {
-        for key in ["componentType", "normalized", "type", "byteOffset", "count"] {
-            for w in &wild {
+        let ext_wild =
+            [json!(0), json!(1), json!(3), json!(12), json!(100000), json!("TRIANGLES"), json!("X"), json!(-1)];
+        for i in 0..doc["bufferViews"].as_array().unwrap().len() {
+            for w in [json!(1), json!(2), json!(6), json!(255)] {
                 let mut d = doc.clone();
-                d["accessors"][i][key] = w.clone();
-                check(d, &bin, &format!("accessors[{i}].{key} = {w}"));
+                d["bufferViews"][i]["byteStride"] = w.clone();
+                check(d, &bin, &format!("bufferViews[{i}].byteStride = {w}"));
+            }
+            if doc["bufferViews"][i]["extensions"]["EXT_meshopt_compression"].is_null() {
+                continue;
+            }
+            for key in ["buffer", "byteOffset", "byteLength", "byteStride", "count", "mode", "filter"] {
+                for w in &ext_wild {
+                    let mut d = doc.clone();
+                    d["bufferViews"][i]["extensions"]["EXT_meshopt_compression"][key] = w.clone();
+                    check(d, &bin, &format!("bufferViews[{i}] EXT_meshopt_compression.{key} = {w}"));
+                }
             }
         }
-    }
-    for i in 0..doc["bufferViews"].as_array().unwrap().len() {
-        for w in [json!(1), json!(2), json!(6), json!(255)] {
-            let mut d = doc.clone();
-            d["bufferViews"][i]["byteStride"] = w.clone();
-            check(d, &bin, &format!("bufferViews[{i}].byteStride = {w}"));
+        // The buffer's bytes overwritten, a stretch at a time: compressed streams, positions, normals and indices
+        // out of their ranges.
+        for at in (0..bin.len()).step_by(bin.len() / 64 + 1) {
+            let mut b = bin.clone();
+            b[at..(at + 64).min(bin.len())].iter_mut().for_each(|x| *x = 0xFF);
+            check(doc.clone(), &b, &format!("bytes {at}.. overwritten"));
         }
-    }
-    // The buffer's bytes overwritten, a stretch at a time: positions, normals and indices out of their ranges.
-    for at in (0..bin.len()).step_by(bin.len() / 64 + 1) {
-        let mut b = bin.clone();
-        b[at..(at + 64).min(bin.len())].iter_mut().for_each(|x| *x = 0xFF);
-        check(doc.clone(), &b, &format!("bytes {at}.. overwritten"));
     }
     eprintln!("{loads} loads, {errors} errors");
-    assert!(loads > 200 && errors > 50, "{loads} loads, {errors} errors");
+    assert!(loads > 600 && errors > 200, "{loads} loads, {errors} errors");
 }

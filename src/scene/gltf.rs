@@ -27,17 +27,18 @@ const SUPPORTED: &[&str] = &[
     "KHR_materials_dispersion",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
+    super::meshopt::EXTENSION,
 ];
 
 /// The deepest node hierarchy accepted (the traversal is recursive).
 const MAX_DEPTH: usize = 256;
 
-struct Cx {
+pub(super) struct Cx {
     file: String,
 }
 
 impl Cx {
-    fn err(&self, path: impl Into<String>, message: impl Into<String>) -> SceneError {
+    pub(super) fn err(&self, path: impl Into<String>, message: impl Into<String>) -> SceneError {
         SceneError::Gltf { file: self.file.clone(), path: path.into(), message: message.into() }
     }
     fn warn(&self, path: &str, message: &str) {
@@ -123,7 +124,8 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
         }
     }
 
-    let buffers = load_buffers(&cx, &document, blob, path)?;
+    let mut buffers = load_buffers(&cx, &document, blob, path)?;
+    super::meshopt::decode_views(&cx, &document, &mut buffers)?;
 
     // Materials, converted once (and warned about once), with the textures their base colors name; per material,
     // the TEXCOORD set its texture reads.
@@ -219,6 +221,13 @@ fn load_buffers(
     for b in document.buffers() {
         let at = format!("buffers[{}]", b.index());
         let data = match b.source() {
+            // EXT_meshopt_compression's fallback without data: its views are decoded into it.
+            gltf::buffer::Source::Bin if super::meshopt::is_fallback(&b) => {
+                if b.length() > 1 << 31 {
+                    return Err(cx.err(format!("{at}.byteLength"), "is too large"));
+                }
+                vec![0; b.length()]
+            }
             gltf::buffer::Source::Bin => {
                 blob.take().ok_or_else(|| cx.err(&at, "has no `uri` and the file has no GLB binary chunk"))?
             }

@@ -7,6 +7,7 @@ pub mod animation;
 pub mod environment;
 mod gltf;
 pub mod mesh;
+mod meshopt;
 pub mod morph;
 mod schema;
 pub mod texture;
