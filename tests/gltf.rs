@@ -816,17 +816,20 @@ fn what_exporters_write_loads_as_the_spec_says() {
     }
 }
 
-/// Files from gltfpack (tests/data/gltfpack): the quantized glass of water (KHR_mesh_quantization's integer
-/// positions and normalized-byte normals) and its compressed copy with filters (EXT_meshopt_compression), their
-/// accessors' encodings and layouts mutated, the compressed views' fields too, and bytes of their buffers
-/// overwritten: every load is a scene or an error that names the file, never a panic.
+/// Files from gltfpack and glTF-Transform (tests/data): the quantized glass of water (KHR_mesh_quantization's
+/// integer positions and normalized-byte normals), its compressed copy with filters (EXT_meshopt_compression) and
+/// its Draco copy (KHR_draco_mesh_compression), their accessors' encodings and layouts mutated, the compressed
+/// views' fields too, and bytes of their buffers overwritten: every load is a scene or an error that names the
+/// file, never a panic.
 #[test]
-fn mutated_gltfpack_files_never_panic() {
-    let dir = out_dir("gltf_gltfpack_mutated");
+fn mutated_pipeline_files_never_panic() {
+    let dir = out_dir("gltf_pipeline_mutated");
     let mut loads = 0;
     let mut errors = 0;
-    for name in ["glass_of_water", "glass_of_water_meshopt_filters"] {
-        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/gltfpack/{name}.glb"));
+    for name in
+        ["gltfpack/glass_of_water", "gltfpack/glass_of_water_meshopt_filters", "gltf-transform/glass_of_water_draco"]
+    {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/{name}.glb"));
         let bytes = std::fs::read(&src).unwrap();
         // The GLB's two chunks: JSON, then BIN.
         let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
@@ -879,13 +882,18 @@ fn mutated_gltfpack_files_never_panic() {
             }
         }
         // The buffer's bytes overwritten, a stretch at a time: compressed streams, positions, normals and indices
-        // out of their ranges.
+        // out of their ranges; and single bytes flipped all along it.
         for at in (0..bin.len()).step_by(bin.len() / 64 + 1) {
             let mut b = bin.clone();
             b[at..(at + 64).min(bin.len())].iter_mut().for_each(|x| *x = 0xFF);
             check(doc.clone(), &b, &format!("bytes {at}.. overwritten"));
         }
+        for at in (0..bin.len()).step_by(bin.len() / 256 + 1) {
+            let mut b = bin.clone();
+            b[at] ^= 0x5A;
+            check(doc.clone(), &b, &format!("byte {at} flipped"));
+        }
     }
     eprintln!("{loads} loads, {errors} errors");
-    assert!(loads > 600 && errors > 200, "{loads} loads, {errors} errors");
+    assert!(loads > 1500 && errors > 300, "{loads} loads, {errors} errors");
 }

@@ -4,6 +4,7 @@
 //! reported by the CLI with exit code 2.
 
 pub mod animation;
+mod draco;
 pub mod environment;
 mod gltf;
 pub mod mesh;
