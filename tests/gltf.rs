@@ -81,7 +81,8 @@ fn gltf_scene() -> (Value, Vec<u8>) {
     let doc = json!({
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
-                           "KHR_materials_volume", "KHR_materials_dispersion", "EXT_made_up"],
+                           "KHR_materials_volume", "KHR_materials_dispersion", "EXT_made_up",
+                           "KHR_materials_clearcoat"],
         "scene": 0,
         "scenes": [{"nodes": [0, 1, 2, 3]}],
         "nodes": [
@@ -248,6 +249,7 @@ fn gltf_renders_the_same_flux_as_toml() {
     let stderr = ok(&a);
     assert!(!stderr.contains("KHR_materials_dispersion"), "dispersion is supported now: {stderr}");
     assert!(stderr.contains("EXT_made_up"), "{stderr}");
+    assert!(stderr.contains("`KHR_materials_clearcoat`: no clear coat is rendered"), "{stderr}");
     let gs = read_json(&stats);
     assert_validation_clean(&gs);
     let fg = gs["aov_flux_w"].as_f64().unwrap();
@@ -448,6 +450,10 @@ fn bad_gltf_exits_2() {
     let mut d = doc.clone();
     d["extensionsRequired"] = json!(["KHR_lights_punctual", "EXT_teleport"]);
     expect_bad(&dir, "required.gltf", embedded(d, &bin), &["extensionsRequired[1]", "EXT_teleport"]);
+    // KTX2 textures with no fallback: what to do instead.
+    let mut d = doc.clone();
+    d["extensionsRequired"] = json!(["KHR_texture_basisu"]);
+    expect_bad(&dir, "basisu.gltf", embedded(d, &bin), &["extensionsRequired[0]", "KTX2", "PNG, JPEG or WebP"]);
 
     // A point light at the center of the glass it would aim its maps at.
     let mut d = doc.clone();
@@ -604,21 +610,23 @@ fn bad_gltf_animations_exit_2() {
 }
 
 /// The Khronos glTF validator (tools/setup installs it) finds no error in any glTF file the project writes or
-/// keeps: the gallery (tools/gltf_scenes), the Blender fixtures (tools/blender_scenes), and the files these tests
+/// keeps: the gallery (tools/gltf_scenes), the Blender fixtures (tools/blender_scenes) and their gltfpack and glTF-Transform copies
+/// (tools/gltfpack_scenes, tools/gltf_transform_scenes), and the files these tests
 /// and the animation tests write.
 #[test]
 fn the_khronos_validator_finds_no_error() {
     let dir = out_dir("gltf_validator");
     let mut files = vec![std::path::PathBuf::from(scene("gallery.gltf"))];
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender");
-    let mut glbs: Vec<_> = std::fs::read_dir(&fixtures)
-        .unwrap()
+    // Blender's fixtures, and gltfpack's and glTF-Transform's files made from them.
+    let mut glbs: Vec<_> = ["blender", "gltfpack", "gltf-transform"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(d)).unwrap())
         .flatten()
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|e| e == "glb"))
         .collect();
     glbs.sort();
-    assert!(glbs.len() >= 6, "the Blender fixtures: {glbs:?}");
+    assert!(glbs.len() >= 30, "the fixtures: {glbs:?}");
     files.extend(glbs);
     let (doc, bin) = gltf_scene();
     files.push(write(&dir, "twin.gltf", embedded(doc.clone(), &bin)));
@@ -817,18 +825,23 @@ fn what_exporters_write_loads_as_the_spec_says() {
 }
 
 /// Files from gltfpack and glTF-Transform (tests/data): the quantized glass of water (KHR_mesh_quantization's
-/// integer positions and normalized-byte normals), its compressed copy with filters (EXT_meshopt_compression) and
-/// its Draco copy (KHR_draco_mesh_compression), their accessors' encodings and layouts mutated, the compressed
-/// views' fields too, and bytes of their buffers overwritten: every load is a scene or an error that names the
-/// file, never a panic.
+/// integer positions and normalized-byte normals), its compressed copy with filters (EXT_meshopt_compression), its
+/// Draco copy (KHR_draco_mesh_compression), the textured floor as WebP (EXT_texture_webp) and the quantized
+/// instanced balls (EXT_mesh_gpu_instancing), their accessors' encodings and layouts mutated, the compressed views',
+/// WebP textures' and instanced nodes' fields too, and bytes of their buffers
+/// overwritten: every load is a scene or an error that names the file, never a panic.
 #[test]
 fn mutated_pipeline_files_never_panic() {
     let dir = out_dir("gltf_pipeline_mutated");
     let mut loads = 0;
     let mut errors = 0;
-    for name in
-        ["gltfpack/glass_of_water", "gltfpack/glass_of_water_meshopt_filters", "gltf-transform/glass_of_water_draco"]
-    {
+    for name in [
+        "gltfpack/glass_of_water",
+        "gltfpack/glass_of_water_meshopt_filters",
+        "gltf-transform/glass_of_water_draco",
+        "gltf-transform/textured_webp",
+        "gltfpack/instances",
+    ] {
         let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/{name}.glb"));
         let bytes = std::fs::read(&src).unwrap();
         // The GLB's two chunks: JSON, then BIN.
@@ -880,6 +893,31 @@ fn mutated_pipeline_files_never_panic() {
                     check(d, &bin, &format!("bufferViews[{i}] EXT_meshopt_compression.{key} = {w}"));
                 }
             }
+        }
+        for i in 0..doc["textures"].as_array().map_or(0, |t| t.len()) {
+            for w in &ext_wild {
+                let mut d = doc.clone();
+                d["textures"][i]["extensions"]["EXT_texture_webp"]["source"] = w.clone();
+                check(d, &bin, &format!("textures[{i}] EXT_texture_webp.source = {w}"));
+            }
+            let mut d = doc.clone();
+            d["textures"][i]["extensions"] = json!({});
+            check(d, &bin, &format!("textures[{i}] without EXT_texture_webp"));
+        }
+        for i in 0..doc["nodes"].as_array().unwrap().len() {
+            if doc["nodes"][i]["extensions"]["EXT_mesh_gpu_instancing"].is_null() {
+                continue;
+            }
+            for key in ["TRANSLATION", "ROTATION", "SCALE", "_ID"] {
+                for w in &ext_wild {
+                    let mut d = doc.clone();
+                    d["nodes"][i]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"][key] = w.clone();
+                    check(d, &bin, &format!("nodes[{i}] EXT_mesh_gpu_instancing {key} = {w}"));
+                }
+            }
+            let mut d = doc.clone();
+            d["nodes"][i]["extensions"]["EXT_mesh_gpu_instancing"] = json!({"attributes": 3});
+            check(d, &bin, &format!("nodes[{i}] EXT_mesh_gpu_instancing without attributes"));
         }
         // The buffer's bytes overwritten, a stretch at a time: compressed streams, positions, normals and indices
         // out of their ranges; and single bytes flipped all along it.

@@ -181,7 +181,7 @@ fn bad_textures_and_maps_exit_2() {
         (
             "not_image",
             base.replace(floor, r#"material = { kind = "diffuse", albedo_texture = "not_an_image.png" }"#),
-            &["not_an_image.png", "not a PNG or JPEG"],
+            &["not_an_image.png", "not a PNG, JPEG or WebP"],
         ),
         ("nan", format!("{base}\n[environment]\npath = \"nan.exr\"\n"), &["nan.exr", "texel (5, 0)", "finite"]),
         ("square", format!("{base}\n[environment]\npath = \"square.exr\"\n"), &["square.exr", "twice as wide"]),

@@ -437,6 +437,59 @@ def scene_glass_of_water():
     export("glass_of_water", apply_modifiers=True, extras=True)
 
 
+def scene_textured():
+    """A floor textured by an image (8x8 blocks of distinct colors, 64 px a side, saved as PNG, UV-mapped by the
+    plane's own coordinates and repeated twice along u) under a glass ball lit by a spot: the file the texture
+    compressors (glTF-Transform's `webp`) start from."""
+    reset()
+    fl = floor()
+    img = bpy.data.images.new("Blocks", 64, 64)
+    px = []
+    for y in range(64):
+        for x in range(64):
+            bx, by = x // 8, y // 8
+            px += [0.15 + 0.1 * bx, 0.85 - 0.1 * by, 0.2 + 0.6 * ((bx + by) % 2), 1.0]
+    img.pixels = px
+    img.filepath_raw = os.path.join(bpy.app.tempdir, "blocks.png")
+    img.file_format = "PNG"
+    img.save()
+    m = fl.data.materials[0]
+    nodes, links = m.node_tree.nodes, m.node_tree.links
+    tex = nodes.new("ShaderNodeTexImage")
+    tex.image = img
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.inputs["Scale"].default_value = (2.0, 1.0, 1.0)
+    coords = nodes.new("ShaderNodeTexCoord")
+    links.new(coords.outputs["UV"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+    links.new(tex.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
+    give(ball("Ball", 0.4, location=(0, 0, 0.6)), glass("Ball", 1.5))
+    spot()
+    cameras()
+    facts("textured", [1])
+    export("textured")
+
+
+def scene_instances():
+    """Four glass balls sharing one mesh (linked duplicates, as Alt+D makes them: one mesh datablock, four objects)
+    and a fifth scaled and turned, over a floor, lit by a spot: the file gltfpack's `-mi` (EXT_mesh_gpu_instancing)
+    starts from."""
+    reset()
+    floor()
+    first = give(ball("Ball", 0.22, location=(-0.5, -0.5, 0.35)), glass("Ball", 1.5))
+    spots = [(0.5, -0.5, 0.35), (-0.5, 0.5, 0.35), (0.5, 0.5, 0.5)]
+    for k, location in enumerate(spots):
+        ob = link(bpy.data.objects.new(f"Ball.{k + 1:03}", first.data))
+        ob.location = location
+    last = bpy.data.objects["Ball.003"]
+    last.scale = (1.0, 1.4, 0.8)
+    last.rotation_euler = (0.3, 0.0, 0.7)
+    spot(size_deg=90.0)
+    cameras()
+    facts("instances", [1])
+    export("instances")
+
+
 os.makedirs(OUT, exist_ok=True)
 scene_glass_modifiers()
 scene_two_objects()
@@ -447,6 +500,8 @@ scene_mirror(True)
 scene_colored_glass()
 scene_skinned()
 scene_glass_of_water()
+scene_textured()
+scene_instances()
 with open(os.path.join(OUT, "blender.json"), "w") as f:
     json.dump(FACTS, f, indent=1, sort_keys=True)
     f.write("\n")

@@ -27,9 +27,31 @@ const SUPPORTED: &[&str] = &[
     "KHR_materials_dispersion",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
+    WEBP,
+    INSTANCING,
     super::meshopt::EXTENSION,
     super::draco::EXTENSION,
 ];
+
+/// Extensions a file may use that the renderer reads nothing from, with what that means for the picture (each is
+/// warned of once, in these words).
+const IGNORED: &[(&str, &str)] = &[
+    ("KHR_materials_emissive_strength", "surfaces do not emit light here: emission and its strength are not rendered"),
+    (
+        "KHR_materials_specular",
+        "diffuse surfaces have no specular lobe here and glass reflects by Fresnel at its IOR: the specular factor \
+         and color are ignored",
+    ),
+    ("KHR_materials_clearcoat", "no clear coat is rendered: the material beneath it is"),
+    ("KHR_materials_variants", "each primitive's default material is rendered (the variants' mappings are ignored)"),
+    ("KHR_texture_basisu", "KTX2 images are not decoded: each texture's PNG, JPEG or WebP fallback is used"),
+];
+
+/// A node's mesh drawn at many placements, each given by the node's per-instance TRS attributes.
+const INSTANCING: &str = "EXT_mesh_gpu_instancing";
+
+/// A texture's WebP image (its `source` then a PNG or JPEG fallback, or absent).
+const WEBP: &str = "EXT_texture_webp";
 
 /// The deepest node hierarchy accepted (the traversal is recursive).
 const MAX_DEPTH: usize = 256;
@@ -65,6 +87,14 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
 fn check_extensions(cx: &Cx, root: &gltf::json::Root) -> Result<(), SceneError> {
     let known = |e: &str| SUPPORTED.contains(&e);
     for (i, e) in root.extensions_required.iter().enumerate() {
+        if e == "KHR_texture_basisu" {
+            return Err(cx.err(
+                format!("extensionsRequired[{i}]"),
+                "the file's textures are KTX2 (Basis Universal) images without a fallback, which this renderer does \
+                 not decode: write them as PNG, JPEG or WebP (gltfpack without -tc; glTF-Transform's `webp` rather \
+                 than `etc1s` or `uastc`)",
+            ));
+        }
         if !known(e) {
             return Err(cx.err(
                 format!("extensionsRequired[{i}]"),
@@ -76,7 +106,9 @@ fn check_extensions(cx: &Cx, root: &gltf::json::Root) -> Result<(), SceneError> 
         }
     }
     for (i, e) in root.extensions_used.iter().enumerate() {
-        if !known(e) {
+        if let Some((_, what)) = IGNORED.iter().find(|(name, _)| name == e) {
+            cx.warn(&format!("extensionsUsed[{i}]"), &format!("`{e}`: {what}"));
+        } else if !known(e) {
             cx.warn(&format!("extensionsUsed[{i}]"), &format!("extension `{e}` is not supported and is ignored"));
         }
     }
@@ -111,7 +143,13 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
         let unsupported = p.starts_with("extensionsRequired") && matches!(e, VError::Unsupported);
         let draco_view =
             matches!(e, VError::Missing) && draco.iter().any(|a| p == format!("accessors[{a}].bufferView"));
-        if !(unsupported || draco_view) {
+        // A texture with a WebP image needs no other (texture_image checks that it has one).
+        let webp_only = matches!(e, VError::Missing)
+            && root.textures.iter().enumerate().any(|(t, tex)| {
+                p == format!("textures[{t}].source")
+                    && tex.extensions.as_ref().is_some_and(|x| x.others.contains_key(WEBP))
+            });
+        if !(unsupported || draco_view || webp_only) {
             problems.push((p, e));
         }
     });
@@ -136,7 +174,7 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
 
     // Materials, converted once (and warned about once), with the textures their base colors name; per material,
     // the TEXCOORD set its texture reads.
-    let mut textures = Textures::default();
+    let mut textures = Textures::new(&document);
     let (materials, tex_coords): (Vec<Material>, Vec<Option<u32>>) = document
         .materials()
         .map(|m| material(&cx, &m, &buffers, path, &mut textures))
@@ -180,6 +218,7 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     // Only skins stand where their joints are at rest.
     let rest_world = if document.skins().len() > 0 { rest_worlds(&document) } else { Vec::new() };
     let g = Globals {
+        document: &document,
         buffers: &buffers,
         materials: &materials,
         tex_coords: &tex_coords,
@@ -311,10 +350,41 @@ fn base64_decode(s: &str) -> Option<Vec<u8>> {
 }
 
 /// The images the materials' base colors have named, each decoded once: (image index → scene texture).
-#[derive(Default)]
-struct Textures {
+struct Textures<'a> {
+    document: &'a gltf::Document,
     list: Vec<std::sync::Arc<Texture>>,
     by_image: std::collections::HashMap<usize, usize>,
+}
+
+impl<'a> Textures<'a> {
+    fn new(document: &'a gltf::Document) -> Self {
+        Textures { document, list: Vec::new(), by_image: Default::default() }
+    }
+}
+
+/// The image a texture shows: EXT_texture_webp's `source` where the texture has that extension (the WebP image,
+/// preferred to the fallback), else its own `source`.
+fn texture_image<'a>(
+    cx: &Cx,
+    document: &'a gltf::Document,
+    texture: &gltf::Texture,
+) -> Result<gltf::image::Image<'a>, SceneError> {
+    let at = format!("textures[{}]", texture.index());
+    let images = document.images().len();
+    let (index, field) = match texture.extension_value(WEBP) {
+        Some(v) => {
+            let field = format!("{at}.extensions.{WEBP}.source");
+            let i = v.get("source").and_then(|s| s.as_u64()).ok_or_else(|| {
+                cx.err(field.clone(), "must be an image's index (the texture's WebP image)".to_string())
+            })?;
+            (usize::try_from(i).unwrap_or(usize::MAX), field)
+        }
+        None => (document.as_json().textures[texture.index()].source.value(), format!("{at}.source")),
+    };
+    document
+        .images()
+        .nth(index)
+        .ok_or_else(|| cx.err(field, format!("index out of bounds: the file has {images} images")))
 }
 
 /// Decode glTF image `img` (a data URI, a file beside the glTF, or a bufferView) as an albedo texture.
@@ -359,7 +429,7 @@ fn base_color_map(
     path: &Path,
     textures: &mut Textures,
 ) -> Result<(AlbedoMap, u32), SceneError> {
-    let img = info.texture().source();
+    let img = texture_image(cx, textures.document, &info.texture())?;
     let k = match textures.by_image.get(&img.index()) {
         Some(&k) => k,
         None => {
@@ -501,6 +571,7 @@ fn material(
 
 /// What every node's visit reads: the buffers, the materials, the animation tracks and the nodes' rest placement.
 struct Globals<'a> {
+    document: &'a gltf::Document,
     buffers: &'a [Vec<u8>],
     materials: &'a [Material],
     /// Per material: the TEXCOORD set its base color texture reads (None: untextured).
@@ -546,6 +617,19 @@ struct Placement {
 impl Placement {
     fn root() -> Placement {
         Placement { world: Mat4::IDENTITY, chain: Vec::new(), chain_parent: Mat4::IDENTITY }
+    }
+
+    /// An instance placed by `local` (translation, rotation, scale) in this placement's space.
+    fn instanced(&self, local: Trs) -> Placement {
+        let mut p = self.clone();
+        let m = Mat4::from_scale_rotation_translation(local.2, local.1, local.0);
+        if p.chain.is_empty() {
+            p.world *= m;
+        } else {
+            p.chain.push(Motion::rest(local));
+            p.world *= m;
+        }
+        p
     }
 
     /// Its transform over time (None: it stands still).
@@ -848,7 +932,13 @@ fn visit(
     }
 
     if let Some(mesh) = node.mesh() {
-        mesh_objects(cx, node, &mesh, &place, g, out)?;
+        let places = match instances(cx, node, g)? {
+            Some(locals) => locals.into_iter().map(|local| place.instanced(local)).collect(),
+            None => vec![place.clone()],
+        };
+        mesh_objects(cx, node, &mesh, &places, g, out)?;
+    } else if node.extension_value(INSTANCING).is_some() {
+        cx.warn(&format!("{at}.extensions.{INSTANCING}"), "the node has no mesh to instance: ignored");
     }
 
     let origin = world.transform_point3(Vec3::ZERO);
@@ -968,13 +1058,80 @@ fn visit(
     Ok(())
 }
 
-/// The objects of `node`'s mesh, one per primitive: placed by the node (animated or not), a skinned mesh at its
-/// bind pose, with its morph targets weighted (static weights baked in; animated ones kept for the GPU).
+/// The most instances one node may draw (EXT_mesh_gpu_instancing): each is an object of the scene, holding its
+/// triangles in world space on the host (the GPU's BVH holds the mesh once).
+pub const MAX_INSTANCES: usize = 1 << 14;
+
+/// The most triangles one node's instances may hold together.
+pub const MAX_INSTANCED_TRIANGLES: usize = 1 << 24;
+
+/// A placement as translation, rotation and scale.
+type Trs = (Vec3, Quat, Vec3);
+
+/// A node's EXT_mesh_gpu_instancing placements in its own space (translation, rotation, scale), each attribute's
+/// absent components the identity's; None without the extension. TRANSLATION and SCALE are VEC3 of FLOAT (or, as
+/// KHR_mesh_quantization allows, of bytes or shorts), ROTATION a unit VEC4 of FLOAT or normalized bytes or shorts;
+/// all of one count.
+fn instances(cx: &Cx, node: &gltf::Node, g: &Globals) -> Result<Option<Vec<Trs>>, SceneError> {
+    use gltf::accessor::Dimensions;
+    let Some(ext) = node.extension_value(INSTANCING) else { return Ok(None) };
+    let at = format!("nodes[{}].extensions.{INSTANCING}", node.index());
+    let attributes = ext
+        .get("attributes")
+        .and_then(|a| a.as_object())
+        .ok_or_else(|| cx.err(format!("{at}.attributes"), "must be an object of accessor indices"))?;
+    let mut count = None;
+    let mut read = |name: &str, dims: Dimensions, ints: &[(gltf::accessor::DataType, bool)]| {
+        let Some(v) = attributes.get(name) else { return Ok(None) };
+        let a_at = format!("{at}.attributes.{name}");
+        let a = v
+            .as_u64()
+            .and_then(|i| g.document.accessors().nth(usize::try_from(i).ok()?))
+            .ok_or_else(|| cx.err(a_at.clone(), format!("must be an accessor's index (got {v})")))?;
+        if *count.get_or_insert(a.count()) != a.count() {
+            return Err(cx.err(a_at, format!("holds {} instances where another attribute holds {count:?}", a.count())));
+        }
+        let values = read_attribute(cx, &a, &a_at, g.buffers, dims, ints)?;
+        if values.iter().any(|x| !x.is_finite()) {
+            return Err(cx.err(a_at, "must be finite"));
+        }
+        Ok(Some(values))
+    };
+    let translation = read("TRANSLATION", Dimensions::Vec3, quantized::DELTA)?;
+    let rotation = read("ROTATION", Dimensions::Vec4, quantized::NORMAL)?;
+    let scale = read("SCALE", Dimensions::Vec3, quantized::DELTA)?;
+    let n = count.unwrap_or(0);
+    if n == 0 {
+        return Err(cx.err(format!("{at}.attributes"), "needs TRANSLATION, ROTATION or SCALE with instances"));
+    }
+    if n > MAX_INSTANCES {
+        return Err(cx.err(format!("{at}.attributes"), format!("{n} instances: at most {MAX_INSTANCES} are supported")));
+    }
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        let t = translation.as_ref().map_or(Vec3::ZERO, |v| Vec3::from_slice(&v[3 * k..]));
+        let s = scale.as_ref().map_or(Vec3::ONE, |v| Vec3::from_slice(&v[3 * k..]));
+        let q = rotation.as_ref().map_or(Quat::IDENTITY, |v| Quat::from_slice(&v[4 * k..]));
+        let q = unit(q);
+        if !q.is_finite() || s.cmpeq(Vec3::ZERO).any() {
+            return Err(cx.err(
+                format!("{at}.attributes"),
+                format!("instance {k}: its rotation must be a non-zero quaternion and its scale non-zero"),
+            ));
+        }
+        out.push((t, q, s));
+    }
+    Ok(Some(out))
+}
+
+/// The objects of `node`'s mesh, one per primitive and placement: placed by the node (animated or not; one
+/// placement, or one per EXT_mesh_gpu_instancing instance), a skinned mesh at its bind pose, with its morph
+/// targets weighted (static weights baked in; animated ones kept for the GPU).
 fn mesh_objects(
     cx: &Cx,
     node: &gltf::Node,
     mesh: &gltf::Mesh,
-    place: &Placement,
+    places: &[Placement],
     g: &Globals,
     out: &mut Scene,
 ) -> Result<(), SceneError> {
@@ -985,7 +1142,7 @@ fn mesh_objects(
     let base_name = node.name().or(mesh.name()).map(str::to_string).unwrap_or_else(|| format!("mesh{}", mesh.index()));
     // A skinned mesh: its vertices are placed by its joints, not by its node (glTF 2.0 §3.7.3.3). At rest a
     // skin's joint transforms times their inverse bind matrices are the mesh's bind placement; it stays there.
-    let mut place = place.clone();
+    let mut places = places.to_vec();
     if let Some(skin) = node.skin() {
         let joint = skin.joints().next();
         let ibm = match (skin.inverse_bind_matrices(), &joint) {
@@ -1004,10 +1161,9 @@ fn mesh_objects(
             ),
         );
         if bind.is_finite() && glam::Mat3::from_mat4(bind).determinant().abs() > 1e-12 {
-            place = Placement { world: bind, chain: Vec::new(), chain_parent: Mat4::IDENTITY };
+            places = vec![Placement { world: bind, chain: Vec::new(), chain_parent: Mat4::IDENTITY }];
         }
     }
-    let animation = place.animation(g.period);
     let count = mesh.primitives().len();
     let targets_of = |p: &gltf::Primitive| p.morph_targets().len();
     let n_targets = mesh.primitives().next().map_or(0, |p| targets_of(&p));
@@ -1091,19 +1247,34 @@ fn mesh_objects(
         }
         // The mesh stays in its node's space, placed by the node's world transform (an instance of it: the
         // renderer's BVH holds it in that space), animated or not, so that a still pose and an animation reaching
-        // it render alike; and it is deformed at the scene's time when its morph weights animate.
-        let anim = std::sync::Arc::new(super::ObjectAnimation {
-            mesh: m,
-            animation: animation.clone(),
-            placement: place.world,
-            water: None,
-            morph,
-        });
-        let placed = anim.mesh_at(0.0);
-        if placed.positions.iter().any(|v| !v.is_finite()) {
-            return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
+        // it render alike; and it is deformed at the scene's time when its morph weights animate. An instanced
+        // node's mesh is one object per instance (`name[k]`), all of them sharing one BVH.
+        if places.len() > 1 && places.len() * m.triangle_count() > MAX_INSTANCED_TRIANGLES {
+            return Err(cx.err(
+                format!("{at}.extensions.{INSTANCING}"),
+                format!(
+                    "{} instances of mesh \"{base_name}\" ({} triangles) make more than {MAX_INSTANCED_TRIANGLES} \
+                     triangles",
+                    places.len(),
+                    m.triangle_count()
+                ),
+            ));
         }
-        out.objects.push(Object { animation: Some(anim), priority, ..Object::new(name, material, placed) });
+        for (k, place) in places.iter().enumerate() {
+            let anim = std::sync::Arc::new(super::ObjectAnimation {
+                mesh: m.clone(),
+                animation: place.animation(g.period),
+                placement: place.world,
+                water: None,
+                morph: morph.clone(),
+            });
+            let placed = anim.mesh_at(0.0);
+            if placed.positions.iter().any(|v| !v.is_finite()) {
+                return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
+            }
+            let name = if places.len() > 1 { format!("{name}[{k}]") } else { name.clone() };
+            out.objects.push(Object { animation: Some(anim), priority, ..Object::new(name, material, placed) });
+        }
     }
     Ok(())
 }

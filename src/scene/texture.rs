@@ -72,9 +72,10 @@ pub fn linear_to_srgb(y: f32) -> u8 {
 pub const MAX_TEXTURE_SIZE: u32 = 2048;
 
 impl Texture {
-    /// Decode an image file's bytes (PNG or JPEG; 8- or 16-bit, gray or color, with or without alpha).
+    /// Decode an image file's bytes (PNG, JPEG or WebP; 8- or 16-bit, gray or color, with or without alpha;
+    /// WebP lossy or lossless).
     pub fn decode(name: &str, bytes: &[u8]) -> Result<Texture, String> {
-        let img = image::load_from_memory(bytes).map_err(|e| format!("not a PNG or JPEG image ({e})"))?;
+        let img = image::load_from_memory(bytes).map_err(|e| format!("not a PNG, JPEG or WebP image ({e})"))?;
         let rgba = img.to_rgba8();
         let (width, height) = rgba.dimensions();
         if width == 0 || height == 0 {
@@ -242,6 +243,6 @@ mod tests {
     #[test]
     fn a_non_image_is_refused() {
         let e = Texture::decode("x", b"not an image").unwrap_err();
-        assert!(e.contains("not a PNG or JPEG"), "{e}");
+        assert!(e.contains("not a PNG, JPEG or WebP"), "{e}");
     }
 }
