@@ -610,9 +610,9 @@ fn bad_gltf_animations_exit_2() {
 }
 
 /// The Khronos glTF validator (tools/setup installs it) finds no error in any glTF file the project writes or
-/// keeps: the gallery (tools/gltf_scenes), the Blender fixtures (tools/blender_scenes) and their gltfpack and glTF-Transform copies
-/// (tools/gltfpack_scenes, tools/gltf_transform_scenes), and the files these tests
-/// and the animation tests write.
+/// keeps: the gallery (tools/gltf_scenes), the Blender fixtures (tools/blender_scenes) and their gltfpack and
+/// glTF-Transform copies (tools/gltfpack_scenes, tools/gltf_transform_scenes), and the files these tests and the
+/// animation tests write.
 #[test]
 fn the_khronos_validator_finds_no_error() {
     let dir = out_dir("gltf_validator");
