@@ -1,7 +1,8 @@
 //! glTF files written by Blender's own exporter (tests/data/blender, written by tools/blender_scenes with Blender
 //! 3.4 from scenes built there): glass with a modifier, a parented animated rig, two animated objects, a shape-key
 //! animation, a mirror beside a negatively scaled node, colored glass, a glass of water whose materials carry
-//! their media's priorities, and a skinned cylinder (skins are not
+//! their media's priorities, a textured floor, balls sharing one mesh (and the files gltfpack, glTF-Transform and
+//! Blender's OBJ exporter make of them), and a skinned cylinder (skins are not
 //! supported: it stands at its bind pose, which Blender's numbers give with the armature at rest). Each loads where Blender put everything
 //! (tests/data/blender/blender.json: Blender's own evaluation of each object's bounds), each animation renders at
 //! its frames as Blender's still export of that pose renders, and each renders what it must against the CPU
@@ -515,6 +516,70 @@ fn instanced_files_render_as_their_sources() {
         );
         let dp = (photons as f64 / want_photons as f64 - 1.0).abs();
         assert!(dp <= max_photons, "{name}: {photons} photons, the source {want_photons}");
+        assert!(m.rel_l1 <= max_rel && (m.flux_ratio - 1.0).abs() < 0.005, "{name}: {m:?}");
+    }
+}
+
+/// A scene of one OBJ whose materials come from its MTL (`kind = "mtl"`), the OBJ at `obj` (absolute), with a
+/// placeholder light and camera (the tests give it the glTF export's).
+fn obj_scene(dir: &Path, obj: &Path) -> Scene {
+    let text = format!(
+        "[[light]]\nkind = \"spot\"\nposition = [0.0, 2.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\ncone_deg = 40.0\n\
+         intensity = 1.0\n\n[[camera]]\nname = \"c\"\nkind = \"perspective\"\nposition = [0.0, 1.0, 2.0]\n\
+         target = [0.0, 0.0, 0.0]\nfov_deg = 40.0\n\n[[object]]\nname = \"obj\"\nshape = \"mesh\"\npath = {:?}\n\
+         material = {{ kind = \"mtl\" }}\n",
+        obj.display().to_string()
+    );
+    let path = dir.join("obj.toml");
+    std::fs::write(&path, text).unwrap();
+    Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Blender's OBJ exports (its exporter's defaults, with the MTL and the texture copied beside them) render as its
+/// glTF exports of the same scenes: the textured floor (`map_Kd -s 2 1 1 blocks.png`: the texture where the glTF's
+/// KHR_texture_transform puts it, OBJ's upward v flipped) and the mirror (`illum 3`) beside the prism. Blender's
+/// OBJ exporter writes glass as an opaque surface (`illum 2`, `d 1`), so the test gives the glass parts the glTF's
+/// glass. Each material is one object, `obj/NAME`. Measured (rel-L1 at 256²): the textured floor's beauty
+/// 3.8e-5 from the perspective camera, the mirror scene's caustics 1.1e-3 from above (the two exporters number the
+/// prism's vertices differently).
+#[test]
+fn blenders_obj_exports_render_as_its_gltf_exports() {
+    let (_lock, device) = gpu();
+    let dir = out_dir("blender_obj");
+    for (name, camera, aov, max_rel) in
+        [("textured", "Camera", Aov::BeautyHdr, 5e-4), ("mirror_applied", "Top", Aov::Caustics, 5e-3)]
+    {
+        let gltf = Scene::load(&fixture(name)).unwrap();
+        let mut obj = obj_scene(&dir, &fixture(name).with_extension("obj"));
+        obj.lights = gltf.lights.clone();
+        obj.cameras = gltf.cameras.clone();
+        let mut names: Vec<&str> = obj.objects.iter().map(|o| o.name.as_str()).collect();
+        names.sort();
+        let want: &[&str] = match name {
+            "textured" => &["obj/Ball", "obj/Floor"],
+            _ => &["obj/Floor", "obj/Glass", "obj/Mirror", "obj/Wall"],
+        };
+        assert_eq!(names, want, "{name}: one object per material");
+        let glass = gltf.objects.iter().find(|o| matches!(o.material, Material::Dielectric { .. })).unwrap().material;
+        for o in &mut obj.objects {
+            match o.name.as_str() {
+                "obj/Ball" | "obj/Glass" => {
+                    assert!(matches!(o.material, Material::Diffuse { .. }), "Blender's OBJ glass is opaque");
+                    o.material = glass;
+                }
+                "obj/Mirror" => assert_eq!(o.material, Material::Mirror, "{name}: illum 3"),
+                "obj/Floor" if name == "textured" => {
+                    assert!(matches!(o.material, Material::Diffuse { map: Some(_), .. }), "map_Kd");
+                }
+                _ => assert!(matches!(o.material, Material::Diffuse { map: None, .. }), "{}", o.name),
+            }
+        }
+        let shot = |scene: Scene| {
+            let mut r = Renderer::new(device.clone(), scene, settings(Transport::Exact)).unwrap();
+            frame(&mut r, camera, aov).0
+        };
+        let m = caustics::metrics::compare(&shot(obj), &shot(gltf), 256, 4.0);
+        eprintln!("{name}: OBJ against glTF: rel-L1 {:.2e}, flux ratio {:.5}", m.rel_l1, m.flux_ratio);
         assert!(m.rel_l1 <= max_rel && (m.flux_ratio - 1.0).abs() < 0.005, "{name}: {m:?}");
     }
 }

@@ -199,6 +199,15 @@ def export(name, apply_modifiers=False, animations=True, extras=False):
     print("wrote", path, os.path.getsize(path), "bytes")
 
 
+def export_obj(name):
+    """The scene's meshes as Wavefront OBJ with its MTL materials and their textures copied beside it (the
+    exporter's defaults: glTF's axes, -Z forward and Y up). Blender writes a glass material as an opaque one
+    (`illum 2`, `d 1`): its OBJ export carries no transmission."""
+    path = os.path.join(OUT, name + ".obj")
+    bpy.ops.wm.obj_export(filepath=path, export_materials=True, path_mode="COPY")
+    print("wrote", path, os.path.getsize(path), "bytes")
+
+
 def export_poses(name, frames, apply_modifiers=False):
     """The animated scene, and Blender's still pose at each of `frames` (NAME@FRAME.glb)."""
     facts(name, frames)
@@ -355,6 +364,8 @@ def scene_mirror(applied):
     name = "mirror_applied" if applied else "mirror"
     facts(name, [1])
     export(name)
+    if applied:
+        export_obj(name)
 
 
 def scene_colored_glass():
@@ -468,6 +479,7 @@ def scene_textured():
     cameras()
     facts("textured", [1])
     export("textured")
+    export_obj("textured")
 
 
 def scene_instances():

@@ -262,15 +262,23 @@ pub fn load_obj_report(path: &std::path::Path) -> Result<(Mesh, MeshReport), Str
 
 /// Parse OBJ bytes (see [`load_obj_report`]; errors without the path, and no line check).
 fn load_obj_bytes(bytes: &[u8]) -> Result<(Mesh, MeshReport), String> {
-    let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
     // Materials are not used: every `mtllib` resolves to nothing, so no other file is ever opened.
     let (models, _) =
-        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &OBJ_OPTIONS, |_| Err(tobj::LoadError::OpenFileFailed))
             .map_err(|e| e.to_string())?;
+    merge_models(&models.iter().collect::<Vec<_>>())
+}
+
+const OBJ_OPTIONS: tobj::LoadOptions =
+    tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+
+/// One mesh of OBJ models (repaired by [`sanitize`]), with their normals when every vertex has one and their
+/// texture coordinates when every vertex has one.
+fn merge_models(models: &[&tobj::Model]) -> Result<(Mesh, MeshReport), String> {
     let mut mesh = Mesh::default();
     let mut all_normals = true;
     let all_uvs = models.iter().all(|m| m.mesh.texcoords.len() * 3 == m.mesh.positions.len() * 2);
-    for m in &models {
+    for m in models {
         if all_uvs {
             // OBJ's v runs up the image; ours runs down.
             mesh.uvs.extend(m.mesh.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])));
@@ -313,6 +321,78 @@ fn load_obj_bytes(bytes: &[u8]) -> Result<(Mesh, MeshReport), String> {
         return Err(format!("no triangles with a non-zero area ({} degenerate)", report.degenerate_removed));
     }
     Ok((mesh, report))
+}
+
+/// An OBJ's triangles split by the MTL material their faces use.
+#[derive(Debug)]
+pub struct ObjParts {
+    /// Every material of its `mtllib` files, in the order they were defined.
+    pub materials: Vec<super::mtl::MtlMaterial>,
+    /// Per material used (in the order of first use): its index in `materials` (None: faces before any
+    /// `usemtl`, or after one naming no material of the files), its mesh and what was repaired in it.
+    pub parts: Vec<(Option<usize>, Mesh, MeshReport)>,
+}
+
+/// Load an OBJ with its `mtllib` materials (relative to the OBJ), one mesh per material used. Errors start with
+/// the file's path and line (`PATH:LINE: message`), an MTL file's too.
+pub fn load_obj_parts(path: &std::path::Path) -> Result<ObjParts, String> {
+    let file = path.display();
+    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let text = String::from_utf8_lossy(&bytes);
+    check_obj_vertices(&text).map_err(|e| format!("{file}:{e}"))?;
+    let dir = path.parent().unwrap_or(std::path::Path::new(""));
+    // Each `mtllib` file, parsed here (tobj is given only the names, to resolve `usemtl`).
+    let mut materials = Vec::new();
+    let mut by_file: std::collections::HashMap<String, Vec<String>> = Default::default();
+    for (i, line) in text.lines().enumerate() {
+        let Some(name) = line.trim_start().strip_prefix("mtllib").filter(|r| r.starts_with(char::is_whitespace)) else {
+            continue;
+        };
+        let name = name.trim().to_string();
+        let full = dir.join(&name);
+        let mtl = std::fs::read(&full)
+            .map_err(|e| format!("{file}:{}: mtllib `{name}`: cannot read {}: {e}", i + 1, full.display()))?;
+        let parsed = super::mtl::parse(&String::from_utf8_lossy(&mtl), &full.display().to_string())?;
+        by_file.insert(name, parsed.iter().map(|m| m.name.clone()).collect());
+        materials.extend(parsed);
+    }
+    if materials.is_empty() {
+        return Err(format!("{file}: the OBJ names no MTL materials (`mtllib`), or its files define none"));
+    }
+    let (models, names) = tobj::load_obj_buf(&mut std::io::Cursor::new(&bytes[..]), &OBJ_OPTIONS, |p| {
+        let names = by_file.get(&p.display().to_string()).cloned().unwrap_or_default();
+        let map = names.iter().enumerate().map(|(k, n)| (n.clone(), k)).collect();
+        Ok((names.into_iter().map(|name| tobj::Material { name, ..Default::default() }).collect(), map))
+    })
+    .map_err(|e| format!("{file}: {e}"))?;
+    let names = names.map_err(|e| format!("{file}: {e}"))?;
+    // Each model's material, by name (the last definition of a name wins, as tobj's map has it).
+    let of = |m: &tobj::Model| {
+        let name = &names.get(m.mesh.material_id?)?.name;
+        materials.iter().rposition(|x: &super::mtl::MtlMaterial| &x.name == name)
+    };
+    let mut used: Vec<Option<usize>> = Vec::new();
+    for m in &models {
+        if !used.contains(&of(m)) {
+            used.push(of(m));
+        }
+    }
+    let mut parts = Vec::new();
+    for u in used {
+        let group: Vec<&tobj::Model> = models.iter().filter(|m| of(m) == u).collect();
+        if group.iter().all(|m| m.mesh.indices.is_empty()) {
+            continue;
+        }
+        let (mesh, report) = merge_models(&group).map_err(|e| match u {
+            Some(k) => format!("{file}: the faces of material `{}`: {e}", materials[k].name),
+            None => format!("{file}: the faces without a material: {e}"),
+        })?;
+        parts.push((u, mesh, report));
+    }
+    if parts.is_empty() {
+        return Err(format!("{file}: no triangles"));
+    }
+    Ok(ObjParts { materials, parts })
 }
 
 /// What [`sanitize`] found in a mesh and did about it.

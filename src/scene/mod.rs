@@ -10,6 +10,7 @@ mod gltf;
 pub mod mesh;
 mod meshopt;
 pub mod morph;
+pub mod mtl;
 mod schema;
 pub mod texture;
 mod toml;

@@ -64,21 +64,30 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
     }
     let mut objects = Vec::new();
     let mut textures = Textures::default();
+    // An object whose OBJ's materials split it (`kind = "mtl"`) is its first part here, the others after every
+    // object, so that `objects[i]` is `file.object[i]` for `media`.
+    let mut parts: Vec<Object> = Vec::new();
     for (i, o) in file.object.iter().enumerate() {
-        let obj = object(&cx, i, o, &mut textures)?;
-        if objects.iter().any(|x: &Object| x.name == obj.name) {
-            return Err(cx.err(
-                o.get_ref().name.span(),
-                format!("object[{i}].name"),
-                format!("duplicate object name `{}`", obj.name),
-            ));
+        for (k, obj) in object(&cx, i, o, &mut textures)?.into_iter().enumerate() {
+            if objects.iter().chain(&parts).any(|x: &Object| x.name == obj.name) {
+                return Err(cx.err(
+                    o.get_ref().name.span(),
+                    format!("object[{i}].name"),
+                    format!("duplicate object name `{}`", obj.name),
+                ));
+            }
+            if k == 0 {
+                objects.push(obj);
+            } else {
+                parts.push(obj);
+            }
         }
-        objects.push(obj);
     }
     if objects.is_empty() {
         return Err(cx.err(0..0, "object", "the scene needs at least one [[object]]"));
     }
     media(&cx, &file.object, &mut objects)?;
+    objects.extend(parts);
     let environment = match &file.environment {
         Some(e) => Some(environment_def(&cx, e)?),
         None => None,
@@ -612,23 +621,181 @@ fn albedo_map(
     Ok(Some((map.0.scaled(scale), map.1)))
 }
 
-fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>, textures: &mut Textures) -> Result<Object, SceneError> {
+/// The object (or, for a mesh with `kind = "mtl"`, one per material its faces use).
+fn object(cx: &Ctx, i: usize, o: &S<ObjectDef>, textures: &mut Textures) -> Result<Vec<Object>, SceneError> {
     let d = o.get_ref();
     let name = d.name.get_ref().clone();
     let f = |field: &str| format!("object[{i}] \"{name}\".{field}");
     if name.is_empty() {
         return Err(cx.err(d.name.span(), format!("object[{i}].name"), "must not be empty"));
     }
+    if d.material.get_ref().kind.get_ref() == "mtl" {
+        return mtl_objects(cx, o, &f, textures);
+    }
     let (mesh, water) = shape(cx, o, &f)?;
     let (mesh, animation) = placement(cx, o, &f, mesh, water)?;
     let material = material(cx, o, &f, textures, &mesh)?;
-    Ok(Object { name, material, mesh, animation, outside: None, priority: 0 })
+    Ok(vec![Object { name, material, mesh, animation, outside: None, priority: 0 }])
+}
+
+/// A `mesh` whose material is `{ kind = "mtl" }`: one object per MTL material its faces use (named
+/// `NAME/MATERIAL` when there are several), each placed as the object says (docs/scenes.md, "OBJ materials").
+fn mtl_objects(
+    cx: &Ctx,
+    o: &S<ObjectDef>,
+    f: &dyn Fn(&str) -> String,
+    textures: &mut Textures,
+) -> Result<Vec<Object>, SceneError> {
+    let d = o.get_ref();
+    let m = d.material.get_ref();
+    let mf = |field: &str| f(&format!("material.{field}"));
+    let others = [
+        ("albedo", m.albedo.as_ref().map(|x| x.span())),
+        ("ior", m.ior.as_ref().map(|x| x.span())),
+        ("absorption", m.absorption.as_ref().map(|x| x.span())),
+        ("abbe", m.abbe.as_ref().map(|x| x.span())),
+        ("outside", m.outside.as_ref().map(|x| x.span())),
+        ("inside", m.inside.as_ref().map(|x| x.span())),
+        ("priority", m.priority.as_ref().map(|x| x.span())),
+        ("albedo_texture", m.albedo_texture.as_ref().map(|x| x.span())),
+        ("checker", m.checker.as_ref().map(|x| x.span())),
+        ("uv_scale", m.uv_scale.as_ref().map(|x| x.span())),
+    ];
+    if let Some((field, Some(span))) = others.into_iter().find(|(_, s)| s.is_some()) {
+        return Err(cx.err(
+            span,
+            mf(field),
+            format!("`{field}` does not apply to `kind = \"mtl\"`: the MTL file gives it"),
+        ));
+    }
+    if d.shape.get_ref() != "mesh" {
+        return Err(cx.err(
+            m.kind.span(),
+            mf("kind"),
+            "`mtl` reads the materials of an OBJ file: only shape \"mesh\" has one",
+        ));
+    }
+    shape_fields(cx, o, f)?;
+    let p = d.path.as_ref().ok_or_else(|| cx.err(o.span(), f("path"), "a mesh needs `path`"))?;
+    let full = cx.dir.join(p.get_ref());
+    if !full.is_file() {
+        return Err(cx.err(p.span(), f("path"), format!("mesh file not found: {}", full.display())));
+    }
+    let obj = mesh::load_obj_parts(&full).map_err(|e| cx.err(p.span(), f("path"), e))?;
+    let several = obj.parts.len() > 1;
+    let mut out = Vec::new();
+    for (k, part, report) in obj.parts {
+        let mtl = k.map(|k| &obj.materials[k]);
+        let label = mtl.map_or("(none)", |m| m.name.as_str());
+        let name = if several { format!("{}/{label}", d.name.get_ref()) } else { d.name.get_ref().clone() };
+        let (mesh, animation) = placement(cx, o, f, part, None)?;
+        let material = mtl_material(mtl, textures, &mesh)
+            .map_err(|e| cx.err(p.span(), f("path"), format!("{}: {e}", full.display())))?;
+        let glass = matches!(material, Material::Dielectric { .. });
+        for finding in report.findings() {
+            let topology = finding.starts_with("open") || finding.starts_with("non-");
+            if glass || !topology {
+                log::warn!(
+                    "{}",
+                    cx.err(p.span(), f("path"), format!("{}: material `{label}`: {finding}", full.display()))
+                );
+            }
+        }
+        out.push(Object { name, material, mesh, animation, outside: None, priority: 0 });
+    }
+    Ok(out)
+}
+
+/// An MTL material as the renderer's (docs/scenes.md, "OBJ materials"); `mesh` is its part, in world space (its
+/// uvs for a texture, its box for `Tf`). None: faces without a material, diffuse gray. Errors and warnings start
+/// with the material's `FILE:LINE`.
+fn mtl_material(mtl: Option<&mtl::MtlMaterial>, textures: &mut Textures, mesh: &Mesh) -> Result<Material, String> {
+    let Some(m) = mtl else {
+        log::warn!(
+            "faces without an MTL material (no `usemtl`, or one naming no material of the files) are diffuse gray"
+        );
+        return Ok(Material::diffuse(Vec3::splat(0.8)));
+    };
+    let at = format!("{} `{}`", m.at, m.name);
+    if let Some(ke) = m.ke.filter(|k| k.max_element() > 0.0) {
+        log::warn!("{at}: `Ke {} {} {}` is not rendered: surfaces do not emit light here", ke.x, ke.y, ke.z);
+    }
+    if let Some(d) = m.dissolve.filter(|&d| d < 1.0 && m.kind() != mtl::Kind::Glass) {
+        log::warn!(
+            "{at}: `d {d}` with `illum {}` is drawn opaque: the renderer has no partly dissolved surfaces (`illum` 4, 6, \
+             7 or 9 makes glass)",
+            m.illum.unwrap_or(2)
+        );
+    }
+    match m.kind() {
+        mtl::Kind::Glass => {
+            let ior = m.ni.unwrap_or(1.5);
+            // Tf: what a ray keeps crossing the part's thinnest extent (the format gives no distance).
+            let mut absorption = Vec3::ZERO;
+            if let Some(tf) = m.tf.filter(|t| t.min_element() < 1.0) {
+                let (lo, hi) = mesh.bounds();
+                let thin = (hi - lo).min_element();
+                if thin > 0.0 {
+                    absorption = -tf.max(Vec3::splat(1e-6)).map(f32::ln) / thin;
+                }
+            }
+            Ok(Material::Dielectric { ior, absorption, abbe: 0.0 })
+        }
+        mtl::Kind::Mirror => Ok(Material::Mirror),
+        mtl::Kind::Diffuse => {
+            let Some((file, scale, offset)) = &m.map_kd else {
+                return Ok(Material::diffuse(m.kd.unwrap_or(Vec3::splat(0.8))));
+            };
+            if mesh.uvs.len() != mesh.positions.len() {
+                return Err(format!(
+                    "{at}: `map_Kd {file}`: the mesh has no texture coordinates (`vt` on every vertex)"
+                ));
+            }
+            let full = Path::new(&m.file).parent().unwrap_or(Path::new("")).join(file);
+            let i = textures
+                .get_or(format!("file:{}", full.display()), || {
+                    if !full.is_file() {
+                        return Err(format!("texture file not found: {}", full.display()));
+                    }
+                    Texture::load(&full)
+                })
+                .map_err(|e| format!("{at}: `map_Kd`: {e}"))?;
+            // -s and -o act on OBJ's uv (v up); the mesh's v runs down: v' = s·v + (1 − s − o) in its terms.
+            let mut map = AlbedoMap::new(i);
+            map.uv_transform = [[scale.x, 0.0, offset.x], [0.0, scale.y, 1.0 - scale.y - offset.y]];
+            Ok(Material::Diffuse { albedo: m.kd.unwrap_or(Vec3::ONE), map: Some(map) })
+        }
+    }
 }
 
 /// The object's mesh in its own space, as its shape and the shape's fields say (and its water, for a water
 /// surface). A field that does not apply to the shape is refused, so that a typo'd scene never silently ignores a
 /// value.
 fn shape(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<(Mesh, Option<water::Water>), SceneError> {
+    let d = o.get_ref();
+    let shape = shape_fields(cx, o, f)?;
+    let water = if shape == "water" { Some(water_def(cx, o, f)?) } else { None };
+    let mesh = match shape {
+        "water" => water.as_ref().expect("water").rest_mesh(),
+        "plane" => {
+            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a plane needs `size = [x, z]`"))?;
+            let v = positive_size(cx, f("size"), s, 2)?;
+            mesh::plane(v.x, v.z)
+        }
+        "cube" => {
+            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a cube needs `size`"))?;
+            mesh::cube(positive_size(cx, f("size"), s, 3)?)
+        }
+        "room" => room_mesh(cx, o, f)?,
+        "lathe" => lathe_mesh(cx, o, f)?,
+        "sphere" => sphere_mesh(cx, o, f)?,
+        _ => obj_mesh(cx, o, f)?,
+    };
+    Ok((mesh, water))
+}
+
+/// The object's shape, once each field it has applies to it.
+fn shape_fields<'a>(cx: &Ctx, o: &'a S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<&'a str, SceneError> {
     let d = o.get_ref();
     let shape = d.shape.get_ref().as_str();
     let allowed: &[&str] = match shape {
@@ -668,24 +835,7 @@ fn shape(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<(Mesh
             }
         }
     }
-    let water = if shape == "water" { Some(water_def(cx, o, f)?) } else { None };
-    let mesh = match shape {
-        "water" => water.as_ref().expect("water").rest_mesh(),
-        "plane" => {
-            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a plane needs `size = [x, z]`"))?;
-            let v = positive_size(cx, f("size"), s, 2)?;
-            mesh::plane(v.x, v.z)
-        }
-        "cube" => {
-            let s = d.size.as_ref().ok_or_else(|| cx.err(o.span(), f("size"), "a cube needs `size`"))?;
-            mesh::cube(positive_size(cx, f("size"), s, 3)?)
-        }
-        "room" => room_mesh(cx, o, f)?,
-        "lathe" => lathe_mesh(cx, o, f)?,
-        "sphere" => sphere_mesh(cx, o, f)?,
-        _ => obj_mesh(cx, o, f)?,
-    };
-    Ok((mesh, water))
+    Ok(shape)
 }
 
 fn room_mesh(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<Mesh, SceneError> {
@@ -934,7 +1084,9 @@ fn material(
         other => Err(cx.err(
             m.kind.span(),
             mf("kind"),
-            format!("unknown material `{other}` (expected \"diffuse\", \"dielectric\" or \"mirror\")"),
+            format!(
+                "unknown material `{other}` (expected \"diffuse\", \"dielectric\", \"mirror\", or \"mtl\" on a mesh)"
+            ),
         )),
     }
 }
