@@ -1,6 +1,10 @@
 """Write the glTF fixtures of tests/data/blender/ with Blender's own glTF exporter (run by tools/blender_scenes).
 
-    blender -b --factory-startup --python tools/blender_scenes.py -- OUT_DIR
+    blender -b --factory-startup --python tools/blender_scenes.py -- OUT_DIR      (Blender 3.4, Debian 12's)
+    target/bpy/bin/python tools/blender_scenes.py -- OUT_DIR                       (the current Blender's `bpy`)
+
+One script serves both: where the Principled BSDF's inputs, the exporter's helpers, auto smooth and the actions'
+F-curves moved between them, it asks which Blender runs it.
 
 Each scene is built here in Blender (Z up, meters, 24 fps), as a user would build it in the UI, and exported with the
 exporter's defaults except where a comment says why. A scene that animates is also exported still at a few frames
@@ -12,11 +16,17 @@ import math
 import os
 import sys
 
+import bpy  # first: as a Python module (the current Blender's `bpy`), it brings bmesh and mathutils
 import bmesh
-import bpy
 from mathutils import Vector
 
-from io_scene_gltf2.blender.com.gltf2_blender_material_helpers import create_settings_group
+# Blender 4.2 and later: the exporter's helpers were renamed, the Principled BSDF's inputs too.
+NEW = bpy.app.version >= (4, 0, 0)
+if NEW:
+    from io_scene_gltf2.blender.com.material_helpers import create_settings_group
+else:
+    from io_scene_gltf2.blender.com.gltf2_blender_material_helpers import create_settings_group
+TRANSMISSION = "Transmission Weight" if NEW else "Transmission"
 
 OUT = sys.argv[sys.argv.index("--") + 1]
 FPS = 24
@@ -57,7 +67,7 @@ def glass(name, ior=1.45):
     b.inputs["Metallic"].default_value = 0.0
     b.inputs["Roughness"].default_value = 0.0
     b.inputs["IOR"].default_value = ior
-    b.inputs["Transmission"].default_value = 1.0
+    b.inputs[TRANSMISSION].default_value = 1.0
     return m
 
 
@@ -140,6 +150,29 @@ def cameras(main_location=(2.6, -2.6, 2.0), target=(0, 0, 0.4)):
     return ob, t
 
 
+def fcurves(anim_data):
+    """An animation's F-curves: the action's own before Blender 4.4, its slot's channel bag since (layered actions;
+    Blender 5 has no `Action.fcurves`)."""
+    action = anim_data.action
+    if hasattr(action, "fcurves"):
+        return action.fcurves
+    from bpy_extras import anim_utils
+
+    bag = anim_utils.action_get_channelbag_for_slot(action, anim_data.action_slot)
+    return bag.fcurves if bag else []
+
+
+def auto_smooth(ob):
+    """Sharp edges over 30° (Blender's auto smooth; a modifier since 4.1, after the others as auto smooth was)."""
+    if hasattr(ob.data, "use_auto_smooth"):
+        ob.data.use_auto_smooth = True
+        return
+    bpy.ops.object.select_all(action="DESELECT")
+    ob.select_set(True)
+    bpy.context.view_layer.objects.active = ob
+    bpy.ops.object.shade_auto_smooth(angle=math.radians(30))
+
+
 def key(ob, path, frames_values, index=-1):
     """Keyframes of `ob.path` at (frame, value), linear between them."""
     for frame, value in frames_values:
@@ -147,7 +180,7 @@ def key(ob, path, frames_values, index=-1):
         ob.keyframe_insert(path, frame=frame, index=index)
     data = ob.animation_data if hasattr(ob, "animation_data") else None
     if data and data.action:
-        for fc in data.action.fcurves:
+        for fc in fcurves(data):
             for kp in fc.keyframe_points:
                 kp.interpolation = "LINEAR"
 
@@ -320,7 +353,7 @@ def scene_shape_keys():
     for frame, value in [(1, 0.0), (48, 1.0)]:
         bulge.value = value
         bulge.keyframe_insert("value", frame=frame)
-    for fc in slab.data.shape_keys.animation_data.action.fcurves:
+    for fc in fcurves(slab.data.shape_keys.animation_data):
         for kp in fc.keyframe_points:
             kp.interpolation = "LINEAR"
     spot(location=(0, 0, 2.0), size_deg=60)
@@ -398,7 +431,7 @@ def scene_skinned():
     bone = arm.pose.bones[0]
     bone.rotation_mode = "XYZ"
     key(bone, "rotation_euler", [(1, (0, 0, 0)), (48, (math.radians(40), 0, 0))])
-    for fc in arm.animation_data.action.fcurves:
+    for fc in fcurves(arm.animation_data):
         for kp in fc.keyframe_points:
             kp.interpolation = "LINEAR"
     spot()
@@ -431,14 +464,14 @@ def scene_glass_of_water():
     glass_material = glass("Glass", 1.5)
     glass_material["priority"] = 2
     smooth(give(g, glass_material))
-    g.data.use_auto_smooth = True
+    auto_smooth(g)
     bpy.ops.mesh.primitive_cylinder_add(vertices=96, radius=0.37, depth=0.67, location=(0, 0, 0.366))
     w = active()
     w.name = "Water"
     water_material = glass("Water", 1.33)
     water_material["priority"] = 1
     smooth(give(w, water_material))
-    w.data.use_auto_smooth = True
+    auto_smooth(w)
     # A wide cone: the caustic map holds what the light sees, and the caustic reaches far behind the glass.
     s = spot(location=(-1.6, 0.3, 1.6), power=120.0, size_deg=100.0)
     direction = Vector((0, 0, 0.35)) - s.location
