@@ -655,3 +655,66 @@ fn the_current_blenders_exports_render_as_blender_34s() {
     }
     eprintln!("worst: {:.2e} ({})", worst.0, worst.1);
 }
+
+/// `--frame N` is Blender's frame N: N / `--frame-rate` seconds (24 by default, Blender's), the frame `render
+/// --time` renders there, in `render` and `reference` alike; with `--time`, or a rate that is not positive, it
+/// exits 2.
+#[test]
+fn frame_n_is_blenders_frame_n() {
+    let dir = out_dir("blender_frame");
+    let file = fixture("two_objects");
+    let render = |extra: &[&str], name: &str| {
+        let (out, stats) = (dir.join(format!("{name}.exr")), dir.join(format!("{name}.json")));
+        let mut args = vec!["render", "--scene", file.to_str().unwrap(), "--camera", "Top", "--aov", "caustics"];
+        args.extend_from_slice(&["--level", "1", "--size", "32x18", "--out", out.to_str().unwrap()]);
+        args.extend_from_slice(&["--stats", stats.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        let o = caustics(&args);
+        (o, out, stats)
+    };
+    let pixels = |path: &Path| caustics::image_io::read_exr(path).unwrap();
+    let mut images = Vec::new();
+    for (extra, name) in [
+        (&["--time", "0.75"][..], "time"),
+        (&["--frame", "18"], "frame"),
+        (&["--frame", "36", "--frame-rate", "48"], "rate"),
+        (&["--time", "0.5"], "other"),
+    ] {
+        let (o, out, _) = render(extra, name);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        images.push(pixels(&out));
+    }
+    // The same frame up to the splat's float sums, which the GPU adds in any order.
+    let apart = |k: usize| caustics::metrics::compare(&images[k], &images[0], 32, 4.0).rel_l1;
+    assert!(apart(1) < 1e-5, "frame 18 at 24 fps is 0.75 s: {}", apart(1));
+    assert!(apart(2) < 1e-5, "frame 36 at 48 fps is 0.75 s: {}", apart(2));
+    assert!(apart(3) > 0.05, "the glass moves between 0.5 s and 0.75 s: {}", apart(3));
+    for (extra, needle) in [
+        (&["--frame", "18", "--time", "0.5"][..], "--time"),
+        (&["--frame", "18", "--frame-rate", "0"][..], "--frame-rate 0"),
+    ] {
+        let (o, _, _) = render(extra, "bad");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(needle), "{extra:?}: {err}");
+    }
+    let out = dir.join("reference.exr");
+    let o = caustics(&[
+        "reference",
+        "--scene",
+        file.to_str().unwrap(),
+        "--camera",
+        "Top",
+        "--aov",
+        "caustics",
+        "--photons",
+        "20000",
+        "--size",
+        "32x18",
+        "--frame",
+        "18",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -357,6 +357,8 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
             camera: Some(args.camera.clone()),
             size: Some(args.size.clone()),
             time: 0.0,
+            frame: None,
+            frame_rate: 24.0,
             animation: None,
             environment: None,
         };

@@ -48,6 +48,12 @@ pub struct ReferenceArgs {
     /// places them).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// The time as the authoring tool's frame N: N / --frame-rate seconds (as `render --frame`) [not with --time].
+    #[arg(long, conflicts_with = "time", allow_negative_numbers = true)]
+    pub frame: Option<f32>,
+    /// The frame rate --frame counts in, frames per second (glTF does not record it).
+    #[arg(long, default_value_t = 24.0)]
+    pub frame_rate: f32,
     /// Also report the radii holding 50% and 90% of the AOV's flux around this point, "x,y,z".
     #[arg(long)]
     pub radial_center: Option<String>,
@@ -89,7 +95,7 @@ impl ReferenceArgs {
             threads: self.threads,
             progress: Some(progress_bar()),
             radial_center: self.radial_center.as_deref().map(|s| parse_vec3(s, "--radial-center")).transpose()?,
-            time: self.time,
+            time: super::commands::seconds(self.time, self.frame, self.frame_rate)?,
         })
     }
 }
@@ -111,7 +117,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     let scene_path = args.scene.clone().unwrap_or_else(super::commands::default_scene);
     let mut scene = Scene::load_with(&scene_path, &super::commands::load_options(args.animation.as_deref()))?;
     // The camera as it stands at --time, for the default size (the tracer places the scene there itself).
-    scene.set_time(args.time);
+    scene.set_time(params.time);
     if let Ok(c) = scene.camera(args.camera.as_deref()) {
         (params.width, params.height) = caustics::settings::output_size(args.size.as_deref(), "--size", c)?;
     }
@@ -128,7 +134,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     meta.insert("photons".into(), args.photons.to_string());
     meta.insert("seed".into(), args.seed.to_string());
     meta.insert("level".into(), "none".into());
-    meta.insert("time".into(), args.time.to_string());
+    meta.insert("time".into(), params.time.to_string());
     image_io::write_exr_meta(&args.out, &out.image, &meta)?;
     if let Some(s) = &args.stats {
         let json = serde_json::to_string_pretty(&out.stats).map_err(|e| Error::Failed(e.to_string()))?;

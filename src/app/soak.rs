@@ -316,6 +316,8 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         camera: Some(args.camera.clone()),
         size: Some("64x64".into()),
         time: 0.0,
+        frame: None,
+        frame_rate: 24.0,
         animation: None,
         environment: None,
     };

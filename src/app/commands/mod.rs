@@ -60,6 +60,13 @@ pub struct SceneArgs {
     /// Scene time in seconds: animated objects, cameras and lights stand where their keyframes place them then.
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// The time as the authoring tool's frame N: N / --frame-rate seconds (Blender writes its frame N there; glTF
+    /// holds seconds, not frames) [not with --time].
+    #[arg(long, conflicts_with = "time", allow_negative_numbers = true)]
+    pub frame: Option<f32>,
+    /// The frame rate --frame counts in, frames per second (glTF does not record it).
+    #[arg(long, default_value_t = 24.0)]
+    pub frame_rate: f32,
     /// glTF: the animation that plays, by name or index [default: all of them, together].
     #[arg(long)]
     pub animation: Option<String>,
@@ -67,6 +74,31 @@ pub struct SceneArgs {
     /// and refracts, and light on the receivers (its texel values in W/(m²·sr), scaled by --sky).
     #[arg(long)]
     pub environment: Option<PathBuf>,
+}
+
+impl SceneArgs {
+    /// The scene time in seconds: `--time`, or `--frame` at `--frame-rate`.
+    pub fn seconds(&self) -> Result<f32> {
+        seconds(self.time, self.frame, self.frame_rate)
+    }
+}
+
+/// `--time T`, or `--frame N` at `--frame-rate F` (N / F seconds), checked.
+pub fn seconds(time: f32, frame: Option<f32>, frame_rate: f32) -> Result<f32> {
+    if !(frame_rate.is_finite() && frame_rate > 0.0) {
+        return Err(Error::BadInput(format!(
+            "--frame-rate {frame_rate}: must be a positive number of frames per second"
+        )));
+    }
+    let t = match frame {
+        Some(n) if !n.is_finite() => return Err(Error::BadInput(format!("--frame {n}: must be finite"))),
+        Some(n) => n / frame_rate,
+        None => time,
+    };
+    if !t.is_finite() {
+        return Err(Error::BadInput(format!("--time {t}: must be finite")));
+    }
+    Ok(t)
 }
 
 /// How `--animation` asks a scene to load: all of a glTF file's animations by default.
@@ -396,10 +428,7 @@ impl Session {
         let path = args.scene.clone().unwrap_or_else(default);
         let mut scene = Scene::load_with(&path, &load_options(args.animation.as_deref()))?;
         apply_environment(&mut scene, args.environment.as_deref())?;
-        if !args.time.is_finite() {
-            return Err(Error::BadInput(format!("--time {}: must be finite", args.time)));
-        }
-        scene.set_time(args.time);
+        scene.set_time(args.seconds()?);
         let camera = scene.camera(args.camera.as_deref()).map_err(|e| camera_error(args.camera.as_deref(), e))?.clone();
         let (width, height) = caustics::settings::output_size(args.size.as_deref(), "--size", &camera)?;
         let desc = ContextDesc::from_env();

@@ -24,7 +24,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     if let Some(n) = args.sequence {
         let bar = sequence_bar(n);
         for k in 0..n {
-            let t = args.scene.time + k as f32 / args.fps;
+            let t = args.scene.seconds()? + k as f32 / args.fps;
             session.renderer.set_time(t)?;
             // An animated camera moves with its node.
             if let Ok(c) = session.renderer.scene().camera(Some(&session.camera.name)) {
@@ -37,7 +37,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
             bar.inc(1);
         }
         bar.finish_and_clear();
-        extra.insert("sequence".into(), json!({"frames": n, "fps": args.fps, "start_s": args.scene.time}));
+        extra.insert("sequence".into(), json!({"frames": n, "fps": args.fps, "start_s": args.scene.seconds()?}));
     } else {
         let mut image = None;
         for i in 0..args.frames {

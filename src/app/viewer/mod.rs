@@ -81,6 +81,12 @@ pub struct ViewArgs {
     /// Scene time in seconds to start at (as `render --time`).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// The time to start at as the authoring tool's frame N: N / --frame-rate seconds (as `render --frame`).
+    #[arg(long, conflicts_with = "time", allow_negative_numbers = true)]
+    pub frame: Option<f32>,
+    /// The frame rate --frame counts in, frames per second (glTF does not record it).
+    #[arg(long, default_value_t = 24.0)]
+    pub frame_rate: f32,
     /// glTF: the animation that plays, by name or index [default: all of them, together]; N switches.
     #[arg(long)]
     pub animation: Option<String>,
@@ -189,13 +195,11 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let scene_path = args.scene.clone().unwrap_or_else(first_picture_scene);
     let mut scene = Scene::load_with(&scene_path, &load_options(args.animation.as_deref()))?;
     crate::app::commands::apply_environment(&mut scene, args.environment.as_deref())?;
-    if !args.time.is_finite() {
-        return Err(Error::BadInput(format!("--time {}: must be finite", args.time)));
-    }
+    let time = crate::app::commands::seconds(args.time, args.frame, args.frame_rate)?;
     if let Some(dt) = args.frame_dt.filter(|dt| !(dt.is_finite() && *dt >= 0.0)) {
         return Err(Error::BadInput(format!("--frame-dt {dt}: must be finite and >= 0")));
     }
-    scene.set_time(args.time);
+    scene.set_time(time);
     let camera = pick_camera(&scene, args.camera.as_deref())?;
     let event_loop = EventLoop::new().map_err(|e| {
         Error::Failed(format!(
