@@ -935,3 +935,100 @@ fn mutated_pipeline_files_never_panic() {
     eprintln!("{loads} loads, {errors} errors");
     assert!(loads > 1500 && errors > 300, "{loads} loads, {errors} errors");
 }
+
+/// The twin with KHR_animation_pointer channels (no `node`): the spot's intensity from 683 to 2049 cd and its
+/// color from white to red, its cone from 40° to 20° (as the spec writes the pointer, and as Blender 5.2 does,
+/// `spot.outerConeAngle`), the orthographic camera's ymag from 1 to 2, a node's translation by pointer, and a
+/// material's IOR, which is warned of.
+fn pointer_gltf() -> (Value, Vec<u8>) {
+    let (mut doc, mut bin) = gltf_scene();
+    let times = add_accessor(&mut doc, &mut bin, &[0.0, 1.0], "SCALAR");
+    let intensity = add_accessor(&mut doc, &mut bin, &[683.0, 2049.0], "SCALAR");
+    let color = add_accessor(&mut doc, &mut bin, &[1.0, 1.0, 1.0, 1.0, 0.0, 0.0], "VEC3");
+    let cone = add_accessor(&mut doc, &mut bin, &[40f32.to_radians(), 20f32.to_radians()], "SCALAR");
+    let ymag = add_accessor(&mut doc, &mut bin, &[1.0, 2.0], "SCALAR");
+    let moves = add_accessor(&mut doc, &mut bin, &[0.0, 0.5, 0.0, 0.3, 0.5, 0.0], "VEC3");
+    let ior = add_accessor(&mut doc, &mut bin, &[1.5, 1.3], "SCALAR");
+    let pointer = |s: usize, p: &str| json!({"sampler": s, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": p}}}});
+    doc["extensionsUsed"].as_array_mut().unwrap().push(json!("KHR_animation_pointer"));
+    doc["animations"] = json!([{
+        "channels": [
+            pointer(0, "/extensions/KHR_lights_punctual/lights/0/intensity"),
+            pointer(1, "/extensions/KHR_lights_punctual/lights/0/color"),
+            pointer(2, "/extensions/KHR_lights_punctual/lights/0/spot/outerConeAngle"),
+            pointer(3, "/cameras/0/orthographic/ymag"),
+            pointer(4, "/nodes/1/translation"),
+            pointer(5, "/materials/1/extensions/KHR_materials_ior/ior"),
+        ],
+        "samplers": [
+            {"input": times, "output": intensity}, {"input": times, "output": color},
+            {"input": times, "output": cone}, {"input": times, "output": ymag},
+            {"input": times, "output": moves}, {"input": times, "output": ior}
+        ]
+    }]);
+    (doc, bin)
+}
+
+/// KHR_animation_pointer sets the light's intensity, color and cone and the camera's size over time, as the
+/// renderer and the reference read them (Scene::set_time), and a node's translation by pointer moves it; a
+/// material's animated IOR is warned of; a pointer past the file's lights exits 2 naming the channel.
+#[test]
+fn animation_pointers_set_light_and_camera_properties() {
+    let (_gpu, device) = gpu();
+    let dir = out_dir("gltf_pointer");
+    let (doc, bin) = pointer_gltf();
+    let path = write(&dir, "pointer.gltf", embedded(doc.clone(), &bin));
+    let scene = Scene::load(&path).unwrap();
+    assert!(scene.is_animated() && scene.duration() == 1.0);
+    let half = scene.at_time(0.5);
+    let l = &half.lights[0];
+    assert!((l.intensity - 2.0).abs() < 1e-5, "1366 cd at 0.5 s: {}", l.intensity);
+    assert!((l.color - Vec3::new(1.0, 0.5, 0.5)).abs().max_element() < 1e-6, "{}", l.color);
+    assert!((l.cone - 30f32.to_radians()).abs() < 1e-6, "{}", l.cone.to_degrees());
+    assert!(
+        matches!(half.cameras[0].projection, Projection::Orthographic { half_height } if (half_height - 1.5).abs() < 1e-6)
+    );
+    let glass = |s: &Scene| s.objects.iter().find(|o| o.name == "glass").unwrap().mesh.bounds();
+    let (lo, hi) = glass(&half);
+    assert!(close((lo + hi) * 0.5, Vec3::new(0.15, 0.5, 0.0)), "{lo} {hi}");
+    // Rendered at 1 s: the red spot lights nothing in green, and its caustic has three times the red flux of the
+    // same file whose intensity does not animate (its pointer aimed at the light's `range`, which is ignored).
+    let settings = adaptive(2, Metric::FluxError);
+    let shot = |p: &Path| shot_at(&device, p.to_str().unwrap(), settings.clone(), 1.0, caustics::Aov::Caustics, 64);
+    let mut d = doc.clone();
+    d["animations"][0]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
+        json!("/extensions/KHR_lights_punctual/lights/0/range");
+    let (end, still) = (shot(&path), shot(&write(&dir, "still.gltf", embedded(d, &bin))));
+    assert!(end.img.data.iter().all(|p| p[1] == 0.0), "a red light puts no green anywhere");
+    let ratio = end.aov_flux / still.aov_flux;
+    assert!(
+        still.aov_flux > 1e-3 && (ratio - 3.0).abs() < 1e-3,
+        "{} W, not animated {} W",
+        end.aov_flux,
+        still.aov_flux
+    );
+    // Through the CLI: the IOR's animation is warned of, once.
+    let o = caustics(&[
+        "render",
+        "--scene",
+        path.to_str().unwrap(),
+        "--level",
+        "1",
+        "--size",
+        "32x32",
+        "--out",
+        dir.join("p.png").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("material animation is not rendered").count(), 1, "{err}");
+    let mut d = doc.clone();
+    d["animations"][0]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
+        json!("/extensions/KHR_lights_punctual/lights/3/intensity");
+    expect_bad(&dir, "far.gltf", embedded(d, &bin), &["animations[0].channels[0]", "the file has 1 lights"]);
+    let mut d = doc;
+    d["animations"][0]["channels"][2]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
+        json!("/extensions/KHR_lights_punctual/lights/0/spot.outerConeAngle");
+    let s = Scene::load(&write(&dir, "blender_cone.gltf", embedded(d, &bin))).unwrap();
+    assert!((s.at_time(1.0).lights[0].cone - 20f32.to_radians()).abs() < 1e-6, "Blender's spot.outerConeAngle");
+}

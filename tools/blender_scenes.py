@@ -206,16 +206,21 @@ def facts(name, frames):
             objects[ob.name] = {"min": lo, "max": hi, "triangles": len(me.loop_triangles)}
             ev.to_mesh_clear()
         out["frames"][str(f)] = objects
+    # The lights' power at the first frame (where an animated one starts).
+    sc.frame_set(1)
     for ob in sc.objects:
         if ob.type == "LIGHT":
             out["lights"][ob.name] = {"type": ob.data.type, "watts": ob.data.energy}
-    sc.frame_set(1)
     FACTS[name] = out
 
 
-def export(name, apply_modifiers=False, animations=True, extras=False):
+def export(name, apply_modifiers=False, animations=True, extras=False, pointers=False):
     path = os.path.join(OUT, name + ".glb")
+    # Lights', cameras' and materials' animation as KHR_animation_pointer (Blender 4.2 and later), which the
+    # exporter writes in its "Scene" animation mode only.
+    more = {"export_pointer_animation": True, "export_animation_mode": "SCENE"} if pointers and animations else {}
     bpy.ops.export_scene.gltf(
+        **more,
         # Custom properties as extras (the media's priorities), where a scene has them.
         export_extras=extras,
         filepath=path,
@@ -241,10 +246,10 @@ def export_obj(name):
     print("wrote", path, os.path.getsize(path), "bytes")
 
 
-def export_poses(name, frames, apply_modifiers=False):
+def export_poses(name, frames, apply_modifiers=False, pointers=False):
     """The animated scene, and Blender's still pose at each of `frames` (NAME@FRAME.glb)."""
     facts(name, frames)
-    export(name, apply_modifiers)
+    export(name, apply_modifiers, pointers=pointers)
     for f in frames:
         bpy.context.scene.frame_set(f)
         export(f"{name}@{f}", apply_modifiers, animations=False)
@@ -535,6 +540,29 @@ def scene_instances():
     export("instances")
 
 
+def scene_light_and_lens():
+    """A spot whose power, color and cone change over the animation, and a camera that zooms (its focal length
+    from 30 to 60 mm), over a glass ball: what KHR_animation_pointer carries (the current Blender only; 3.4's
+    exporter has no pointers)."""
+    reset()
+    floor()
+    give(ball("Ball", 0.4, location=(0, 0, 0.6)), glass("Ball", 1.5))
+    light = spot(size_deg=40.0).data
+    for frame, watts, color, size in [(1, 20.0, (1.0, 1.0, 1.0), 40.0), (48, 80.0, (1.0, 0.5, 0.2), 70.0)]:
+        light.energy, light.color, light.spot_size = watts, color, math.radians(size)
+        for path in ["energy", "color", "spot_size"]:
+            light.keyframe_insert(path, frame=frame)
+    cam, _ = cameras()
+    for frame, lens in [(1, 30.0), (48, 60.0)]:
+        cam.data.lens = lens
+        cam.data.keyframe_insert("lens", frame=frame)
+    for data in [light, cam.data]:
+        for fc in fcurves(data.animation_data):
+            for kp in fc.keyframe_points:
+                kp.interpolation = "LINEAR"
+    export_poses("light_and_lens", [1, 20, 48], pointers=True)
+
+
 os.makedirs(OUT, exist_ok=True)
 scene_glass_modifiers()
 scene_two_objects()
@@ -547,6 +575,8 @@ scene_skinned()
 scene_glass_of_water()
 scene_textured()
 scene_instances()
+if NEW:
+    scene_light_and_lens()
 with open(os.path.join(OUT, "blender.json"), "w") as f:
     json.dump(FACTS, f, indent=1, sort_keys=True)
     f.write("\n")

@@ -31,7 +31,11 @@ const SUPPORTED: &[&str] = &[
     INSTANCING,
     super::meshopt::EXTENSION,
     super::draco::EXTENSION,
+    POINTER,
 ];
+
+/// Animation channels that target a property by its JSON pointer.
+const POINTER: &str = "KHR_animation_pointer";
 
 /// Extensions a file may use that the renderer reads nothing from, with what that means for the picture (each is
 /// warned of once, in these words).
@@ -83,6 +87,295 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     parse(&bytes, path, options)
 }
 
+/// A KHR_animation_pointer channel, which the gltf crate cannot hold (it has no `node`): taken out of the JSON
+/// before the crate reads it. A pointer to a node's translation, rotation, scale or weights stays in as the
+/// ordinary channel it means.
+struct PointerChannel {
+    animation: usize,
+    /// Its index in the file's `channels`.
+    channel: usize,
+    sampler: usize,
+    pointer: String,
+}
+
+/// The file's document and its animation-pointer channels (see [`PointerChannel`]).
+fn read_document(cx: &Cx, bytes: &[u8]) -> Result<(gltf::Gltf, Vec<PointerChannel>), SceneError> {
+    let syntax = |j: serde_json::Error| SceneError::Syntax {
+        file: cx.file.clone(),
+        line: j.line(),
+        column: j.column(),
+        message: format!("not valid glTF JSON: {j}"),
+    };
+    let glb_error = |b| cx.err("(GLB container)", format!("not a valid GLB file: {b}"));
+    if !bytes.windows(POINTER.len()).any(|w| w == POINTER.as_bytes()) {
+        let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
+            gltf::Error::Deserialize(j) => syntax(j),
+            gltf::Error::Binary(b) => glb_error(b),
+            other => cx.err("(file)", format!("not a valid glTF file: {other}")),
+        })?;
+        return Ok((gltf, Vec::new()));
+    }
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| match e {
+            gltf::Error::Binary(b) => glb_error(b),
+            other => cx.err("(GLB container)", format!("not a valid GLB file: {other}")),
+        })?;
+        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let mut value: serde_json::Value = serde_json::from_slice(&json).map_err(syntax)?;
+    let mut pointers = Vec::new();
+    if let Some(animations) = value.get_mut("animations").and_then(|a| a.as_array_mut()) {
+        for (a, anim) in animations.iter_mut().enumerate() {
+            let samplers = anim.get("samplers").and_then(|s| s.as_array()).map_or(0, |s| s.len());
+            let Some(channels) = anim.get_mut("channels").and_then(|c| c.as_array_mut()) else { continue };
+            let mut kept = Vec::new();
+            for (c, mut ch) in std::mem::take(channels).into_iter().enumerate() {
+                let target = &ch["target"];
+                if target.get("path").and_then(|p| p.as_str()) != Some("pointer") {
+                    kept.push(ch);
+                    continue;
+                }
+                let at = format!("animations[{a}].channels[{c}]");
+                let pointer = target["extensions"][POINTER]["pointer"].as_str().ok_or_else(|| {
+                    cx.err(format!("{at}.target"), format!("a `pointer` channel needs extensions.{POINTER}.pointer"))
+                })?;
+                let sampler =
+                    ch["sampler"].as_u64().map(|s| s as usize).filter(|&s| s < samplers).ok_or_else(|| {
+                        cx.err(format!("{at}.sampler"), format!("must be one of the animation's {samplers} samplers"))
+                    })?;
+                // A node's own properties are ordinary channels.
+                let parts: Vec<&str> = pointer.trim_start_matches('/').split('/').collect();
+                if let ["nodes", n, path @ ("translation" | "rotation" | "scale" | "weights")] = parts[..] {
+                    if let Ok(n) = n.parse::<u64>() {
+                        ch["target"] = serde_json::json!({"node": n, "path": path});
+                        kept.push(ch);
+                        continue;
+                    }
+                }
+                pointers.push(PointerChannel { animation: a, channel: c, sampler, pointer: pointer.to_string() });
+            }
+            *channels = kept;
+        }
+    }
+    let root: gltf::json::Root =
+        serde_json::from_value(value).map_err(|e| cx.err("(file)", format!("not valid glTF JSON: {e}")))?;
+    Ok((gltf::Gltf { document: gltf::Document::from_json_without_validation(root), blob }, pointers))
+}
+
+/// Per scene light and camera, the glTF light and camera it was made from (animation pointers name those).
+#[derive(Default)]
+struct Sources {
+    lights: Vec<usize>,
+    cameras: Vec<usize>,
+}
+
+/// The light and camera properties the playing animations' pointers set (docs/scenes.md, "glTF scenes"): a light's
+/// `intensity` (candela or lux → W/sr or W/m²), `color` and spot `outerConeAngle` (Blender 5.2 writes
+/// `spot.outerConeAngle`), a camera's `yfov` or `ymag`. Pointers to anything else are warned of and ignored.
+fn pointer_tracks(
+    cx: &Cx,
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    pointers: &[PointerChannel],
+    sources: &Sources,
+    chosen: Option<usize>,
+) -> Result<Vec<super::PropertyTrack>, SceneError> {
+    use super::PropertyTrack as P;
+    let lights = document.lights().map_or(0, |l| l.len());
+    let cameras = document.cameras().len();
+    let mut out = Vec::new();
+    let mut owner: std::collections::HashMap<&str, usize> = Default::default();
+    for p in pointers.iter().filter(|p| chosen.is_none_or(|c| c == p.animation)) {
+        let at = format!("animations[{}].channels[{}]", p.animation, p.channel);
+        let warn = |what: &str| cx.warn(&at, &format!("`{}`: {what}", p.pointer));
+        let index = |s: &str, n: usize, what: &str| {
+            s.parse::<usize>().ok().filter(|&i| i < n).ok_or_else(|| {
+                cx.err(
+                    format!("{at}.target.extensions.{POINTER}.pointer"),
+                    format!("`{}`: the file has {n} {what}", p.pointer),
+                )
+            })
+        };
+        #[derive(Clone, Copy)]
+        enum T {
+            Intensity(usize),
+            Color(usize),
+            Cone(usize),
+            Fov(usize),
+            HalfHeight(usize),
+        }
+        let parts: Vec<&str> = p.pointer.trim_start_matches('/').split('/').collect();
+        let target = match parts[..] {
+            ["extensions", "KHR_lights_punctual", "lights", i, ref rest @ ..] => {
+                let i = index(i, lights, "lights")?;
+                match rest {
+                    ["intensity"] => T::Intensity(i),
+                    ["color"] => T::Color(i),
+                    ["spot", "outerConeAngle"] | ["spot.outerConeAngle"] => T::Cone(i),
+                    ["spot", "innerConeAngle"] | ["spot.innerConeAngle"] => {
+                        warn("the spot's edge is drawn hard at its outer angle: its inner angle is not animated");
+                        continue;
+                    }
+                    _ => {
+                        warn("not a light property the renderer has: ignored");
+                        continue;
+                    }
+                }
+            }
+            ["cameras", i, "perspective", "yfov"] => T::Fov(index(i, cameras, "cameras")?),
+            ["cameras", i, "orthographic", "ymag"] => T::HalfHeight(index(i, cameras, "cameras")?),
+            ["materials", ..] => {
+                warn("material animation is not rendered: the material keeps the file's value");
+                continue;
+            }
+            _ => {
+                warn("not a property the renderer animates: ignored");
+                continue;
+            }
+        };
+        if let Some(&first) = owner.get(p.pointer.as_str()) {
+            warn(&format!("animations[{first}] animates it too and plays it"));
+            continue;
+        }
+        owner.insert(&p.pointer, p.animation);
+        let Some(sampler) = document.animations().nth(p.animation).and_then(|a| a.samplers().nth(p.sampler)) else {
+            continue;
+        };
+        let s_at = format!("animations[{}].samplers[{}]", p.animation, p.sampler);
+        let width = if matches!(target, T::Color(_)) { 3 } else { 1 };
+        let k = keyframes(cx, &sampler, &s_at, buffers, width, width, "the property")?;
+        let scalar = |f: &dyn Fn(f32) -> f32, ok: &dyn Fn(f32) -> bool, rule: &str| {
+            if let Some(v) = k.values.iter().find(|v| !ok(**v)) {
+                return Err(cx.err(format!("{s_at}.output"), format!("`{}`: {v} {rule}", p.pointer)));
+            }
+            let (values, tangents) = split(k.values.iter().map(|v| f(*v)).collect(), k.per_key);
+            Ok(Track { times: k.times.clone(), values, tangents, interpolation: k.interpolation })
+        };
+        let quarter = std::f32::consts::FRAC_PI_2;
+        let (of_light, of_camera) = (&sources.lights, &sources.cameras);
+        // The scene lights (cameras) made from glTF light (camera) `i`: one per node that holds it.
+        let each = |of: &[usize], i: usize| -> Vec<usize> {
+            of.iter().enumerate().filter(|(_, &g)| g == i).map(|(k, _)| k).collect()
+        };
+        match target {
+            T::Intensity(i) => {
+                // Blender's exporter (5.2) writes a spot's or point's animated intensity 4π times its still one (it
+                // leaves out the watts' spread over the sphere): where the file is Blender's and a keyframe is 4π
+                // times the light's own intensity, the track is read as Blender means it.
+                let light = document.lights().and_then(|mut l| l.nth(i));
+                let still = light.as_ref().map_or(0.0, |l| l.intensity());
+                let spread = std::f32::consts::PI * 4.0;
+                let blender = document.as_json().asset.generator.as_deref().is_some_and(|g| g.contains("Blender"));
+                let point = light.is_some_and(|l| !matches!(l.kind(), gltf::khr_lights_punctual::Kind::Directional));
+                let too_bright = still > 0.0
+                    && k.values.iter().step_by(k.per_key).any(|v| ((v / still) / spread - 1.0).abs() < 1e-4);
+                let divide = if blender && point && too_bright {
+                    warn(&format!(
+                        "read as {spread:.4} times less: Blender's exporter writes an animated spot or point light's \
+                         intensity without dividing its watts by 4π (its still intensity {still} cd is a keyframe's \
+                         / 4π)"
+                    ));
+                    spread * LUMENS_PER_WATT
+                } else {
+                    LUMENS_PER_WATT
+                };
+                let track = scalar(&|v| v / divide, &|v| v >= 0.0, "must be >= 0")?;
+                out.extend(each(of_light, i).into_iter().map(|k| P::LightIntensity(k, track.clone())));
+            }
+            T::Cone(i) => {
+                let track = scalar(&|v| v, &|v| v > 0.0 && v < quarter, "must lie in (0, π/2)")?;
+                out.extend(each(of_light, i).into_iter().map(|k| P::LightCone(k, track.clone())));
+            }
+            T::Fov(i) => {
+                let track = scalar(&|v| v, &|v| v > 0.0 && v < std::f32::consts::PI, "must lie in (0, π)")?;
+                out.extend(each(of_camera, i).into_iter().map(|k| P::CameraFov(k, track.clone())));
+            }
+            T::HalfHeight(i) => {
+                let track = scalar(&|v| v, &|v| v > 0.0, "must be > 0")?;
+                out.extend(each(of_camera, i).into_iter().map(|k| P::CameraHalfHeight(k, track.clone())));
+            }
+            T::Color(i) => {
+                if k.values.iter().any(|v| *v < 0.0) && k.per_key == 1 {
+                    return Err(cx.err(format!("{s_at}.output"), format!("`{}`: components must be >= 0", p.pointer)));
+                }
+                let v: Vec<Vec3> = k.values.chunks_exact(3).map(Vec3::from_slice).collect();
+                let (values, tangents) = split(v, k.per_key);
+                let track = Track { times: k.times.clone(), values, tangents, interpolation: k.interpolation };
+                out.extend(each(of_light, i).into_iter().map(|k| P::LightColor(k, track.clone())));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A sampler's keyframes: its times, its interpolation, its values (`comps` floats an element, `width` a keyframe
+/// value, three keyframe values a keyframe for cubic splines: in tangent, value, out tangent), and how many
+/// keyframe values a keyframe holds.
+struct Keyframes {
+    times: Vec<f32>,
+    interpolation: Interpolation,
+    values: Vec<f32>,
+    per_key: usize,
+}
+
+/// Read and check a sampler's keyframes ([`Keyframes`]): times finite and increasing, at least one; values finite,
+/// as many as the keyframes need. `what` names the property in messages.
+fn keyframes(
+    cx: &Cx,
+    sampler: &gltf::animation::Sampler,
+    s_at: &str,
+    buffers: &[Vec<u8>],
+    comps: usize,
+    width: usize,
+    what: &str,
+) -> Result<Keyframes, SceneError> {
+    use gltf::animation::Interpolation as GI;
+    let times = read_floats(cx, &sampler.input(), &format!("{s_at}.input"), buffers, 1)?;
+    if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
+        return Err(cx.err(format!("{s_at}.input"), "keyframe times must be finite, and there must be one"));
+    }
+    if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(cx.err(
+            format!("{s_at}.input"),
+            format!("keyframe times must increase: {} s follows {} s", times[k + 1], times[k]),
+        ));
+    }
+    let interpolation = match sampler.interpolation() {
+        GI::Linear => Interpolation::Linear,
+        GI::Step => Interpolation::Step,
+        GI::CubicSpline => Interpolation::Cubic,
+    };
+    let per_key = if interpolation == Interpolation::Cubic { 3 } else { 1 };
+    let values = read_floats(cx, &sampler.output(), &format!("{s_at}.output"), buffers, comps)?;
+    // The accessor's elements, and how many each keyframe needs.
+    let (elements, per_keyframe) = (values.len() / comps, per_key * width / comps);
+    if elements != times.len() * per_keyframe {
+        return Err(cx.err(
+            format!("{s_at}.output"),
+            format!(
+                "{elements} values for {} keyframes (a {interpolation:?} sampler of {what} needs {per_keyframe} each)",
+                times.len()
+            ),
+        ));
+    }
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(cx.err(format!("{s_at}.output"), "values must be finite"));
+    }
+    Ok(Keyframes { times, interpolation, values, per_key })
+}
+
+/// (in tangent, value, out tangent) per keyframe for cubic splines (`per_key` 3); the values alone otherwise.
+fn split<T: Copy>(v: Vec<T>, per_key: usize) -> (Vec<T>, Vec<(T, T)>) {
+    if per_key == 1 {
+        return (v, Vec::new());
+    }
+    let values = v.chunks_exact(3).map(|c| c[1]).collect();
+    let tangents = v.chunks_exact(3).map(|c| (c[0], c[2])).collect();
+    (values, tangents)
+}
+
 /// Refuse a required extension this renderer does not support; warn of a used one it ignores.
 fn check_extensions(cx: &Cx, root: &gltf::json::Root) -> Result<(), SceneError> {
     let known = |e: &str| SUPPORTED.contains(&e);
@@ -118,16 +411,7 @@ fn check_extensions(cx: &Cx, root: &gltf::json::Root) -> Result<(), SceneError> 
 /// Parse glTF JSON or GLB bytes; `path` locates the file for messages and external buffers.
 pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, SceneError> {
     let cx = Cx { file: path.display().to_string() };
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
-        gltf::Error::Deserialize(j) => SceneError::Syntax {
-            file: cx.file.clone(),
-            line: j.line(),
-            column: j.column(),
-            message: format!("not valid glTF JSON: {j}"),
-        },
-        gltf::Error::Binary(b) => cx.err("(GLB container)", format!("not a valid GLB file: {b}")),
-        other => cx.err("(file)", format!("not a valid glTF file: {other}")),
-    })?;
+    let (gltf::Gltf { document, blob }, pointers) = read_document(&cx, bytes)?;
     let root = document.as_json();
 
     // Extensions first: a required extension we cannot honor makes everything else meaningless.
@@ -219,6 +503,7 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     let rest_world = if document.skins().len() > 0 { rest_worlds(&document) } else { Vec::new() };
     let g = Globals {
         document: &document,
+        sources: Default::default(),
         buffers: &buffers,
         materials: &materials,
         tex_coords: &tex_coords,
@@ -231,6 +516,8 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     for n in roots {
         visit(&cx, &n, &Placement::root(), &g, &mut visiting, &mut out)?;
     }
+    out.properties = pointer_tracks(&cx, &document, &buffers, &pointers, &g.sources.borrow(), chosen)?;
+    out.place_properties();
     if out.lights.is_empty() {
         return Err(cx.err(
             "extensions.KHR_lights_punctual",
@@ -572,6 +859,8 @@ fn material(
 /// What every node's visit reads: the buffers, the materials, the animation tracks and the nodes' rest placement.
 struct Globals<'a> {
     document: &'a gltf::Document,
+    /// The glTF light and camera each scene light and camera comes from, as the nodes are visited.
+    sources: std::cell::RefCell<Sources>,
     buffers: &'a [Vec<u8>],
     materials: &'a [Material],
     /// Per material: the TEXCOORD set its base color texture reads (None: untextured).
@@ -701,24 +990,7 @@ fn animations(
             let s_at = format!("animations[{}].samplers[{}]", anim.index(), ch.sampler().index());
             let node = ch.target().node();
             let n = node.index();
-            let times = read_floats(cx, &ch.sampler().input(), &format!("{s_at}.input"), buffers, 1)?;
-            if times.is_empty() || times.iter().any(|t| !t.is_finite()) {
-                return Err(cx.err(format!("{s_at}.input"), "keyframe times must be finite, and there must be one"));
-            }
-            if let Some(k) = times.windows(2).position(|w| w[1] <= w[0]) {
-                return Err(cx.err(
-                    format!("{s_at}.input"),
-                    format!("keyframe times must increase: {} s follows {} s", times[k + 1], times[k]),
-                ));
-            }
-            use gltf::animation::Interpolation as GI;
             use gltf::animation::Property;
-            let interpolation = match ch.sampler().interpolation() {
-                GI::Linear => Interpolation::Linear,
-                GI::Step => Interpolation::Step,
-                GI::CubicSpline => Interpolation::Cubic,
-            };
-            let per_key = if interpolation == Interpolation::Cubic { 3 } else { 1 };
             let property = ch.target().property();
             let (key, width) = match property {
                 Property::Translation => ("translation", 3),
@@ -754,31 +1026,9 @@ fn animations(
             owner.insert((n, key), anim.index());
             // Weights are SCALAR, one per target per keyframe; the TRS properties one VEC3 or VEC4 per keyframe.
             let comps = if key == "weights" { 1 } else { width };
-            let values = read_floats(cx, &ch.sampler().output(), &format!("{s_at}.output"), buffers, comps)?;
-            // The accessor's elements, and how many each keyframe needs.
-            let (elements, per_keyframe) = (values.len() / comps, per_key * width / comps);
-            if elements != times.len() * per_keyframe {
-                return Err(cx.err(
-                    format!("{s_at}.output"),
-                    format!(
-                        "{elements} values for {} keyframes (a {interpolation:?} sampler of {key} needs {per_keyframe} each)",
-                        times.len()
-                    ),
-                ));
-            }
-            if values.iter().any(|v| !v.is_finite()) {
-                return Err(cx.err(format!("{s_at}.output"), "values must be finite"));
-            }
+            let Keyframes { times, interpolation, values, per_key } =
+                keyframes(cx, &ch.sampler(), &s_at, buffers, comps, width, key)?;
             period = period.max(*times.last().unwrap_or(&0.0));
-            // (in tangent, value, out tangent) per keyframe for cubic splines; the values alone otherwise.
-            fn split<T: Copy>(v: Vec<T>, per_key: usize) -> (Vec<T>, Vec<(T, T)>) {
-                if per_key == 1 {
-                    return (v, Vec::new());
-                }
-                let values = v.chunks_exact(3).map(|c| c[1]).collect();
-                let tangents = v.chunks_exact(3).map(|c| (c[0], c[2])).collect();
-                (values, tangents)
-            }
             let t = &mut tracks[n];
             match property {
                 Property::Translation | Property::Scale => {
@@ -989,6 +1239,7 @@ fn visit(
         if let Some(a) = &animation {
             out.movers.push(Mover { what: Moved::Camera(out.cameras.len()), animation: a.clone() });
         }
+        g.sources.borrow_mut().cameras.push(cam.index());
         out.cameras.push(Camera {
             name,
             projection,
@@ -1048,6 +1299,7 @@ fn visit(
         if let Some(a) = &animation {
             out.movers.push(Mover { what: Moved::Light(out.lights.len()), animation: a.clone() });
         }
+        g.sources.borrow_mut().lights.push(light.index());
         out.lights.push(Light { kind, position: origin, target, cone, intensity, color });
     }
 

@@ -351,6 +351,36 @@ pub struct Scene {
     pub animations: Vec<String>,
     /// The animation that plays (None: all of them, together).
     pub playing: Option<usize>,
+    /// The light and camera properties that animations set (glTF's KHR_animation_pointer), set at `time`.
+    pub properties: Vec<PropertyTrack>,
+}
+
+/// A light's or camera's property over time (glTF's KHR_animation_pointer), in the renderer's units.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PropertyTrack {
+    /// `lights[i].intensity`: W/sr (spot, point) or W/m² (directional).
+    LightIntensity(usize, animation::Track<f32>),
+    /// `lights[i].color`.
+    LightColor(usize, animation::Track<Vec3>),
+    /// `lights[i].cone`: a spot's half-angle, radians.
+    LightCone(usize, animation::Track<f32>),
+    /// `cameras[i]`'s vertical field of view (perspective), radians.
+    CameraFov(usize, animation::Track<f32>),
+    /// `cameras[i]`'s half height (orthographic), meters.
+    CameraHalfHeight(usize, animation::Track<f32>),
+}
+
+impl PropertyTrack {
+    /// Its last keyframe's time (s).
+    pub fn end(&self) -> f32 {
+        match self {
+            PropertyTrack::LightColor(_, t) => t.end(),
+            PropertyTrack::LightIntensity(_, t)
+            | PropertyTrack::LightCone(_, t)
+            | PropertyTrack::CameraFov(_, t)
+            | PropertyTrack::CameraHalfHeight(_, t) => t.end(),
+        }
+    }
 }
 
 /// What a [`Mover`] moves.
@@ -422,18 +452,22 @@ impl Scene {
             movers: Vec::new(),
             animations: Vec::new(),
             playing: None,
+            properties: Vec::new(),
         }
     }
 
     /// Whether any object animates.
     pub fn is_animated(&self) -> bool {
-        self.objects.iter().any(|o| o.animation.as_ref().is_some_and(|a| a.changes())) || !self.movers.is_empty()
+        self.objects.iter().any(|o| o.animation.as_ref().is_some_and(|a| a.changes()))
+            || !self.movers.is_empty()
+            || !self.properties.is_empty()
     }
 
     /// The longest animation's duration (s; 0 for a still scene).
     pub fn duration(&self) -> f32 {
         let objects = self.objects.iter().filter_map(|o| o.animation.as_ref()).map(|a| a.duration());
-        objects.chain(self.movers.iter().map(|m| m.animation.duration())).fold(0.0, f32::max)
+        let properties = self.properties.iter().map(PropertyTrack::end);
+        objects.chain(self.movers.iter().map(|m| m.animation.duration())).chain(properties).fold(0.0, f32::max)
     }
 
     /// Place every animated object, camera and light where it stands at time `t` (s), a simulated water surface
@@ -502,6 +536,32 @@ impl Scene {
         }
         if self.movers.iter().any(|m| matches!(m.what, Moved::Light(_))) {
             self.place_directional_lights();
+        }
+        self.place_properties();
+    }
+
+    /// The light and camera properties that animations set ([`PropertyTrack`]), at the scene's time, held in their
+    /// ranges where a spline overshoots.
+    pub fn place_properties(&mut self) {
+        let t = self.time;
+        for p in &self.properties {
+            match p {
+                PropertyTrack::LightIntensity(i, k) => self.lights[*i].intensity = k.at(t).max(0.0),
+                PropertyTrack::LightColor(i, k) => self.lights[*i].color = k.at(t).max(Vec3::ZERO),
+                PropertyTrack::LightCone(i, k) => {
+                    self.lights[*i].cone = k.at(t).clamp(1e-4, std::f32::consts::FRAC_PI_2 - 1e-4)
+                }
+                PropertyTrack::CameraFov(i, k) => {
+                    if let Projection::Perspective { fov } = &mut self.cameras[*i].projection {
+                        *fov = k.at(t).clamp(1e-4, std::f32::consts::PI - 1e-3);
+                    }
+                }
+                PropertyTrack::CameraHalfHeight(i, k) => {
+                    if let Projection::Orthographic { half_height } = &mut self.cameras[*i].projection {
+                        *half_height = k.at(t).max(1e-6);
+                    }
+                }
+            }
         }
     }
 

@@ -103,6 +103,7 @@ pub(super) fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
         movers: Vec::new(),
         animations: Vec::new(),
         playing: None,
+        properties: Vec::new(),
     };
     scene.aim_point_lights();
     for (i, l) in scene.lights.iter().enumerate() {
