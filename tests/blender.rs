@@ -552,15 +552,29 @@ fn instanced_files_render_as_their_sources() {
 /// A scene of one OBJ whose materials come from its MTL (`kind = "mtl"`), the OBJ at `obj` (absolute), with a
 /// placeholder light and camera (the tests give it the glTF export's).
 fn obj_scene(dir: &Path, obj: &Path) -> Scene {
-    let text = format!(
-        "[[light]]\nkind = \"spot\"\nposition = [0.0, 2.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\ncone_deg = 40.0\n\
-         intensity = 1.0\n\n[[camera]]\nname = \"c\"\nkind = \"perspective\"\nposition = [0.0, 1.0, 2.0]\n\
-         target = [0.0, 0.0, 0.0]\nfov_deg = 40.0\n\n[[object]]\nname = \"obj\"\nshape = \"mesh\"\npath = {:?}\n\
-         material = {{ kind = \"mtl\" }}\n",
-        obj.display().to_string()
-    );
+    let text = r#"
+[[light]]
+kind = "spot"
+position = [0.0, 2.0, 0.0]
+target = [0.0, 0.0, 0.0]
+cone_deg = 40.0
+intensity = 1.0
+
+[[camera]]
+name = "c"
+kind = "perspective"
+position = [0.0, 1.0, 2.0]
+target = [0.0, 0.0, 0.0]
+fov_deg = 40.0
+
+[[object]]
+name = "obj"
+shape = "mesh"
+path = "OBJ"
+material = { kind = "mtl" }
+"#;
     let path = dir.join("obj.toml");
-    std::fs::write(&path, text).unwrap();
+    std::fs::write(&path, text.replace("OBJ", &obj.display().to_string())).unwrap();
     Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 

@@ -18,7 +18,6 @@ const OVER: &[(&str, &str, usize)] = &[
     ("src/scene/gltf.rs", "animations", 163),
     ("src/app/temporal.rs", "run_temporal", 159),
     ("src/app/viewer/mod.rs", "redraw", 151),
-    ("src/scene/mesh.rs", "sanitize", 140),
     ("src/targets.rs", "new", 139),
     ("src/scene/gltf.rs", "mesh_objects", 139),
     ("src/scene/gltf.rs", "parse", 139),

@@ -356,11 +356,7 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
             scene: Some(scene_path.clone()),
             camera: Some(args.camera.clone()),
             size: Some(args.size.clone()),
-            time: 0.0,
-            frame: None,
-            frame_rate: 24.0,
-            animation: None,
-            environment: None,
+            ..SceneArgs::default()
         };
         let base = Settings {
             quality: Quality {

@@ -315,11 +315,7 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         scene: args.scene.clone(),
         camera: Some(args.camera.clone()),
         size: Some("64x64".into()),
-        time: 0.0,
-        frame: None,
-        frame_rate: 24.0,
-        animation: None,
-        environment: None,
+        ..SceneArgs::default()
     };
     let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
     if session.pixel_area().is_none() {

@@ -147,11 +147,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         scene: args.scene.clone(),
         camera: Some(args.camera.clone()),
         size: Some(args.size.clone()),
-        time: 0.0,
-        frame: None,
-        frame_rate: 24.0,
-        animation: None,
-        environment: None,
+        ..SceneArgs::default()
     };
     let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
     let half_height = match session.camera.projection {

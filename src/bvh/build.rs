@@ -232,10 +232,18 @@ fn depth_first(nodes: &[obvhs::bvh2::node::Bvh2Node]) -> (Vec<usize>, Vec<u32>, 
     (order, pos, size)
 }
 
-/// A mesh's tree over its valid triangles. obvhs' medium build (PLOC) with reinsertion over every node, before and
-/// after the collapse to leaves: a tree 1–16% cheaper by the surface-area heuristic (the bunny 6.5%), whose frames
-/// trace 5–16% faster on lavapipe (docs/experiments.md, "BVH build quality"), for a build 4–7× longer (the bunny's
-/// 3,674 triangles: 6 ms instead of 1.3 ms).
+/// Triangles whose nodes all get reinserted; a bigger mesh reinserts this many of its nodes' worth (at least
+/// [`MIN_REINSERTION`] of them), so that its build stays a second or so.
+pub const REINSERTED_TRIANGLES: usize = 100_000;
+
+/// The smallest share of a big mesh's nodes reinserted (obvhs' own medium build's).
+pub const MIN_REINSERTION: f32 = 0.05;
+
+/// A mesh's tree over its valid triangles. obvhs' medium build (PLOC, in parallel) with reinsertion over every node,
+/// before and after the collapse to leaves: a tree 1–16% cheaper by the surface-area heuristic (the bunny 6.5%),
+/// whose frames trace 5–16% faster on lavapipe (docs/experiments.md, "BVH build quality"), for a build 4–7× longer
+/// (the bunny's 3,674 triangles: 6 ms instead of 1.3 ms). Over [`REINSERTED_TRIANGLES`] the share reinserted falls
+/// with the size: a million-triangle sphere builds in 1.1 s instead of 3.2 s, its frames 1–6% slower.
 pub(super) fn build_tree(tris: &[[Vec4; 3]]) -> Bvh2 {
     let boxes: Vec<Triangle> = tris
         .iter()
@@ -247,7 +255,7 @@ pub(super) fn build_tree(tris: &[[Vec4; 3]]) -> Bvh2 {
         .collect();
     let params = BvhBuildParams {
         max_prims_per_leaf: MAX_LEAF_TRIS,
-        reinsertion_batch_ratio: 1.0,
+        reinsertion_batch_ratio: (REINSERTED_TRIANGLES as f32 / tris.len().max(1) as f32).clamp(MIN_REINSERTION, 1.0),
         post_collapse_reinsertion_batch_ratio_multiplier: 1.0,
         ..BvhBuildParams::medium_build()
     };

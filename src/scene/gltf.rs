@@ -183,58 +183,13 @@ fn pointer_tracks(
     chosen: Option<usize>,
 ) -> Result<Vec<super::PropertyTrack>, SceneError> {
     use super::PropertyTrack as P;
-    let lights = document.lights().map_or(0, |l| l.len());
-    let cameras = document.cameras().len();
+    use Pointee as T;
     let mut out = Vec::new();
     let mut owner: std::collections::HashMap<&str, usize> = Default::default();
     for p in pointers.iter().filter(|p| chosen.is_none_or(|c| c == p.animation)) {
         let at = format!("animations[{}].channels[{}]", p.animation, p.channel);
         let warn = |what: &str| cx.warn(&at, &format!("`{}`: {what}", p.pointer));
-        let index = |s: &str, n: usize, what: &str| {
-            s.parse::<usize>().ok().filter(|&i| i < n).ok_or_else(|| {
-                cx.err(
-                    format!("{at}.target.extensions.{POINTER}.pointer"),
-                    format!("`{}`: the file has {n} {what}", p.pointer),
-                )
-            })
-        };
-        #[derive(Clone, Copy)]
-        enum T {
-            Intensity(usize),
-            Color(usize),
-            Cone(usize),
-            Fov(usize),
-            HalfHeight(usize),
-        }
-        let parts: Vec<&str> = p.pointer.trim_start_matches('/').split('/').collect();
-        let target = match parts[..] {
-            ["extensions", "KHR_lights_punctual", "lights", i, ref rest @ ..] => {
-                let i = index(i, lights, "lights")?;
-                match rest {
-                    ["intensity"] => T::Intensity(i),
-                    ["color"] => T::Color(i),
-                    ["spot", "outerConeAngle"] | ["spot.outerConeAngle"] => T::Cone(i),
-                    ["spot", "innerConeAngle"] | ["spot.innerConeAngle"] => {
-                        warn("the spot's edge is drawn hard at its outer angle: its inner angle is not animated");
-                        continue;
-                    }
-                    _ => {
-                        warn("not a light property the renderer has: ignored");
-                        continue;
-                    }
-                }
-            }
-            ["cameras", i, "perspective", "yfov"] => T::Fov(index(i, cameras, "cameras")?),
-            ["cameras", i, "orthographic", "ymag"] => T::HalfHeight(index(i, cameras, "cameras")?),
-            ["materials", ..] => {
-                warn("material animation is not rendered: the material keeps the file's value");
-                continue;
-            }
-            _ => {
-                warn("not a property the renderer animates: ignored");
-                continue;
-            }
-        };
+        let Some(target) = pointer_target(cx, document, p)? else { continue };
         if let Some(&first) = owner.get(p.pointer.as_str()) {
             warn(&format!("animations[{first}] animates it too and plays it"));
             continue;
@@ -308,6 +263,54 @@ fn pointer_tracks(
         }
     }
     Ok(out)
+}
+
+/// What a pointer channel sets: a light's intensity, color or cone, or a camera's yfov or ymag (by the file's light
+/// and camera indices). None (with a warning): what the renderer does not animate.
+#[derive(Clone, Copy)]
+enum Pointee {
+    Intensity(usize),
+    Color(usize),
+    Cone(usize),
+    Fov(usize),
+    HalfHeight(usize),
+}
+
+fn pointer_target(cx: &Cx, document: &gltf::Document, p: &PointerChannel) -> Result<Option<Pointee>, SceneError> {
+    use Pointee as T;
+    let at = format!("animations[{}].channels[{}]", p.animation, p.channel);
+    let warn = |what: &str| {
+        cx.warn(&at, &format!("`{}`: {what}", p.pointer));
+        Ok(None)
+    };
+    let (lights, cameras) = (document.lights().map_or(0, |l| l.len()), document.cameras().len());
+    let index = |s: &str, n: usize, what: &str| {
+        s.parse::<usize>().ok().filter(|&i| i < n).ok_or_else(|| {
+            cx.err(
+                format!("{at}.target.extensions.{POINTER}.pointer"),
+                format!("`{}`: the file has {n} {what}", p.pointer),
+            )
+        })
+    };
+    let parts: Vec<&str> = p.pointer.trim_start_matches('/').split('/').collect();
+    Ok(Some(match parts[..] {
+        ["extensions", "KHR_lights_punctual", "lights", i, ref rest @ ..] => {
+            let i = index(i, lights, "lights")?;
+            match rest {
+                ["intensity"] => T::Intensity(i),
+                ["color"] => T::Color(i),
+                ["spot", "outerConeAngle"] | ["spot.outerConeAngle"] => T::Cone(i),
+                ["spot", "innerConeAngle"] | ["spot.innerConeAngle"] => {
+                    return warn("the spot's edge is drawn hard at its outer angle: its inner angle is not animated")
+                }
+                _ => return warn("not a light property the renderer has: ignored"),
+            }
+        }
+        ["cameras", i, "perspective", "yfov"] => T::Fov(index(i, cameras, "cameras")?),
+        ["cameras", i, "orthographic", "ymag"] => T::HalfHeight(index(i, cameras, "cameras")?),
+        ["materials", ..] => return warn("material animation is not rendered: the material keeps the file's value"),
+        _ => return warn("not a property the renderer animates: ignored"),
+    }))
 }
 
 /// A sampler's keyframes: its times, its interpolation, its values (`comps` floats an element, `width` a keyframe
@@ -1181,15 +1184,7 @@ fn visit(
         return Err(cx.err(at, "the node's transform is not finite"));
     }
 
-    if let Some(mesh) = node.mesh() {
-        let places = match instances(cx, node, g)? {
-            Some(locals) => locals.into_iter().map(|local| place.instanced(local)).collect(),
-            None => vec![place.clone()],
-        };
-        mesh_objects(cx, node, &mesh, &places, g, out)?;
-    } else if node.extension_value(INSTANCING).is_some() {
-        cx.warn(&format!("{at}.extensions.{INSTANCING}"), "the node has no mesh to instance: ignored");
-    }
+    node_mesh(cx, node, &place, g, out)?;
 
     let origin = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
@@ -1310,6 +1305,21 @@ fn visit(
     Ok(())
 }
 
+/// The objects of the node's mesh, placed by the node, or once per instance (EXT_mesh_gpu_instancing).
+fn node_mesh(cx: &Cx, node: &gltf::Node, place: &Placement, g: &Globals, out: &mut Scene) -> Result<(), SceneError> {
+    if let Some(mesh) = node.mesh() {
+        let places = match instances(cx, node, g)? {
+            Some(locals) => locals.into_iter().map(|local| place.instanced(local)).collect(),
+            None => vec![place.clone()],
+        };
+        mesh_objects(cx, node, &mesh, &places, g, out)?;
+    } else if node.extension_value(INSTANCING).is_some() {
+        let at = format!("nodes[{}].extensions.{INSTANCING}", node.index());
+        cx.warn(&at, "the node has no mesh to instance: ignored");
+    }
+    Ok(())
+}
+
 /// The most instances one node may draw (EXT_mesh_gpu_instancing): each is an object of the scene, holding its
 /// triangles in world space on the host (the GPU's BVH holds the mesh once).
 pub const MAX_INSTANCES: usize = 1 << 14;
@@ -1376,6 +1386,31 @@ fn instances(cx: &Cx, node: &gltf::Node, g: &Globals) -> Result<Option<Vec<Trs>>
     Ok(Some(out))
 }
 
+/// A skinned mesh's placement: its vertices are placed by its joints, not by its node (glTF 2.0 §3.7.3.3). At rest
+/// a skin's joint transforms times their inverse bind matrices are the mesh's bind placement; it stays there (with
+/// a warning). None: the node has no skin (or its bind placement is degenerate).
+fn skin_placement(cx: &Cx, node: &gltf::Node, g: &Globals, base_name: &str) -> Result<Option<Placement>, SceneError> {
+    let Some(skin) = node.skin() else { return Ok(None) };
+    let joint = skin.joints().next();
+    let ibm = match (skin.inverse_bind_matrices(), &joint) {
+        (Some(a), Some(_)) => {
+            let m = read_floats(cx, &a, &format!("skins[{}].inverseBindMatrices", skin.index()), g.buffers, 16)?;
+            m.get(..16).map_or(Mat4::IDENTITY, Mat4::from_cols_slice)
+        }
+        _ => Mat4::IDENTITY,
+    };
+    let bind = joint.map_or(Mat4::IDENTITY, |j| g.rest_world[j.index()]) * ibm;
+    cx.warn(
+        &node_label(node),
+        &format!(
+            "skins are not supported: mesh \"{base_name}\" stands at its bind pose (skins[{}] and its joints' animation are ignored)",
+            skin.index()
+        ),
+    );
+    let ok = bind.is_finite() && glam::Mat3::from_mat4(bind).determinant().abs() > 1e-12;
+    Ok(ok.then(|| Placement { world: bind, chain: Vec::new(), chain_parent: Mat4::IDENTITY }))
+}
+
 /// The objects of `node`'s mesh, one per primitive and placement: placed by the node (animated or not; one
 /// placement, or one per EXT_mesh_gpu_instancing instance), a skinned mesh at its bind pose, with its morph
 /// targets weighted (static weights baked in; animated ones kept for the GPU).
@@ -1392,30 +1427,10 @@ fn mesh_objects(
     let at = format!("nodes[{}]", node.index());
     let mesh_at = format!("meshes[{}]", mesh.index());
     let base_name = node.name().or(mesh.name()).map(str::to_string).unwrap_or_else(|| format!("mesh{}", mesh.index()));
-    // A skinned mesh: its vertices are placed by its joints, not by its node (glTF 2.0 §3.7.3.3). At rest a
-    // skin's joint transforms times their inverse bind matrices are the mesh's bind placement; it stays there.
-    let mut places = places.to_vec();
-    if let Some(skin) = node.skin() {
-        let joint = skin.joints().next();
-        let ibm = match (skin.inverse_bind_matrices(), &joint) {
-            (Some(a), Some(_)) => {
-                let m = read_floats(cx, &a, &format!("skins[{}].inverseBindMatrices", skin.index()), buffers, 16)?;
-                m.get(..16).map_or(Mat4::IDENTITY, Mat4::from_cols_slice)
-            }
-            _ => Mat4::IDENTITY,
-        };
-        let bind = joint.map_or(Mat4::IDENTITY, |j| g.rest_world[j.index()]) * ibm;
-        cx.warn(
-            &node_label(node),
-            &format!(
-                "skins are not supported: mesh \"{base_name}\" stands at its bind pose (skins[{}] and its joints' animation are ignored)",
-                skin.index()
-            ),
-        );
-        if bind.is_finite() && glam::Mat3::from_mat4(bind).determinant().abs() > 1e-12 {
-            places = vec![Placement { world: bind, chain: Vec::new(), chain_parent: Mat4::IDENTITY }];
-        }
-    }
+    let places = match skin_placement(cx, node, g, &base_name)? {
+        Some(bind) => vec![bind],
+        None => places.to_vec(),
+    };
     let count = mesh.primitives().len();
     let targets_of = |p: &gltf::Primitive| p.morph_targets().len();
     let n_targets = mesh.primitives().next().map_or(0, |p| targets_of(&p));

@@ -76,6 +76,22 @@ pub struct SceneArgs {
     pub environment: Option<PathBuf>,
 }
 
+impl Default for SceneArgs {
+    /// The default scene (each command's own), its first camera and size, at time 0.
+    fn default() -> Self {
+        SceneArgs {
+            scene: None,
+            camera: None,
+            size: None,
+            time: 0.0,
+            frame: None,
+            frame_rate: 24.0,
+            animation: None,
+            environment: None,
+        }
+    }
+}
+
 impl SceneArgs {
     /// The scene time in seconds: `--time`, or `--frame` at `--frame-rate`.
     pub fn seconds(&self) -> Result<f32> {
@@ -409,6 +425,9 @@ pub struct Session {
     pub validation: bool,
     /// When set (see [`Session::plan`]), [`Session::frame`] prints the elapsed time every few seconds against it.
     pub slow_frame_s: Option<f64>,
+    /// The load phase, ms: reading the scene (its meshes parsed and repaired), and the renderer's start (device,
+    /// scene buffers, pipelines). The first frame that needs the BVH builds it (`BvhStats::build_ms`).
+    pub load_ms: [f64; 2],
 }
 
 /// Frames estimated to take longer than this (seconds) get a warning and a progress line.
@@ -426,7 +445,14 @@ impl Session {
             parse_size(s, "--size")?;
         }
         let path = args.scene.clone().unwrap_or_else(default);
-        let mut scene = Scene::load_with(&path, &load_options(args.animation.as_deref()))?;
+        let start = std::time::Instant::now();
+        // A spinner on a terminal while a big scene loads.
+        let spinner = indicatif::ProgressBar::new_spinner().with_message(format!("loading {}", path.display()));
+        spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+        let scene = Scene::load_with(&path, &load_options(args.animation.as_deref()));
+        spinner.finish_and_clear();
+        let mut scene = scene?;
+        let scene_ms = start.elapsed().as_secs_f64() * 1e3;
         apply_environment(&mut scene, args.environment.as_deref())?;
         scene.set_time(args.seconds()?);
         let camera = scene.camera(args.camera.as_deref()).map_err(|e| camera_error(args.camera.as_deref(), e))?.clone();
@@ -434,6 +460,7 @@ impl Session {
         let desc = ContextDesc::from_env();
         let ctx = Context::headless(&desc)?;
         let renderer = Renderer::new(ctx.device, scene, settings)?;
+        let renderer_ms = start.elapsed().as_secs_f64() * 1e3 - scene_ms;
         Ok(Session {
             scene_path: path,
             camera,
@@ -442,6 +469,7 @@ impl Session {
             renderer,
             validation: desc.validation,
             slow_frame_s: None,
+            load_ms: [scene_ms, renderer_ms],
         })
     }
 

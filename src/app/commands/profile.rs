@@ -59,6 +59,17 @@ pub fn run_profile(args: &ProfileArgs) -> Result<()> {
             last.host_readbacks
         );
         let photons = last.state.map(|x| x.photons_total as u64);
+        let bvh = &session.renderer.bvh_stats();
+        println!(
+            "load: scene {:.0} ms, renderer {:.0} ms{}",
+            session.load_ms[0],
+            session.load_ms[1],
+            if bvh.built {
+                format!(", BVH {:.0} ms ({} triangles, in the first frame)", bvh.build_ms, bvh.triangles)
+            } else {
+                String::new()
+            }
+        );
         print!("{}", profiler::table(&summaries, reports.len(), photons));
         let subs = profiler::substage_summaries(&reports);
         let (waves, parts): (Vec<_>, Vec<_>) = subs.iter().partition(|(l, _)| l.starts_with("transport_bounces.wave_"));
