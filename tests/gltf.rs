@@ -938,8 +938,8 @@ fn mutated_pipeline_files_never_panic() {
 
 /// The twin with KHR_animation_pointer channels (no `node`): the spot's intensity from 683 to 2049 cd and its
 /// color from white to red, its cone from 40° to 20° (as the spec writes the pointer, and as Blender 5.2 does,
-/// `spot.outerConeAngle`), the orthographic camera's ymag from 1 to 2, a node's translation by pointer, and a
-/// material's IOR, which is warned of.
+/// `spot.outerConeAngle`), the orthographic camera's ymag from 1 to 2, a node's translation by pointer, the glass's
+/// IOR from 1.5 to 1.3, and its attenuation distance, which is warned of.
 fn pointer_gltf() -> (Value, Vec<u8>) {
     let (mut doc, mut bin) = gltf_scene();
     let times = add_accessor(&mut doc, &mut bin, &[0.0, 1.0], "SCALAR");
@@ -959,6 +959,7 @@ fn pointer_gltf() -> (Value, Vec<u8>) {
             pointer(3, "/cameras/0/orthographic/ymag"),
             pointer(4, "/nodes/1/translation"),
             pointer(5, "/materials/1/extensions/KHR_materials_ior/ior"),
+            pointer(5, "/materials/1/extensions/KHR_materials_volume/attenuationDistance"),
         ],
         "samplers": [
             {"input": times, "output": intensity}, {"input": times, "output": color},
@@ -969,9 +970,9 @@ fn pointer_gltf() -> (Value, Vec<u8>) {
     (doc, bin)
 }
 
-/// KHR_animation_pointer sets the light's intensity, color and cone and the camera's size over time, as the
-/// renderer and the reference read them (Scene::set_time), and a node's translation by pointer moves it; a
-/// material's animated IOR is warned of; a pointer past the file's lights exits 2 naming the channel.
+/// KHR_animation_pointer sets the light's intensity, color and cone, the camera's size and the glass's IOR over
+/// time, as the renderer and the reference read them (Scene::set_time), and a node's translation by pointer moves
+/// it; an animated attenuation is warned of; a pointer past the file's lights exits 2 naming the channel.
 #[test]
 fn animation_pointers_set_light_and_camera_properties() {
     let (_gpu, device) = gpu();
@@ -989,6 +990,8 @@ fn animation_pointers_set_light_and_camera_properties() {
         matches!(half.cameras[0].projection, Projection::Orthographic { half_height } if (half_height - 1.5).abs() < 1e-6)
     );
     let glass = |s: &Scene| s.objects.iter().find(|o| o.name == "glass").unwrap().mesh.bounds();
+    let ior = half.objects.iter().find(|o| o.name == "glass").unwrap().material;
+    assert!(matches!(ior, Material::Dielectric { ior, .. } if (ior - 1.4).abs() < 1e-6), "{ior:?}");
     let (lo, hi) = glass(&half);
     assert!(close((lo + hi) * 0.5, Vec3::new(0.15, 0.5, 0.0)), "{lo} {hi}");
     // Rendered at 1 s: the red spot lights nothing in green, and its caustic has three times the red flux of the
@@ -1021,7 +1024,7 @@ fn animation_pointers_set_light_and_camera_properties() {
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert_eq!(err.matches("material animation is not rendered").count(), 1, "{err}");
+    assert_eq!(err.matches("not a material property the renderer animates").count(), 1, "{err}");
     let mut d = doc.clone();
     d["animations"][0]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"] =
         json!("/extensions/KHR_lights_punctual/lights/3/intensity");

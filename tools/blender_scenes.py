@@ -542,11 +542,17 @@ def scene_instances():
 
 def scene_light_and_lens():
     """A spot whose power, color and cone change over the animation, and a camera that zooms (its focal length
-    from 30 to 60 mm), over a glass ball: what KHR_animation_pointer carries (the current Blender only; 3.4's
+    from 30 to 60 mm), over a glass ball whose IOR falls: what KHR_animation_pointer carries (the current Blender only; 3.4's
     exporter has no pointers)."""
     reset()
     floor()
-    give(ball("Ball", 0.4, location=(0, 0, 0.6)), glass("Ball", 1.5))
+    ball_glass = glass("Ball", 1.5)
+    give(ball("Ball", 0.4, location=(0, 0, 0.6)), ball_glass)
+    # The glass's IOR too, from 1.5 to 1.33.
+    ior = ball_glass.node_tree.nodes["Principled BSDF"].inputs["IOR"]
+    for frame, value in [(1, 1.5), (48, 1.33)]:
+        ior.default_value = value
+        ior.keyframe_insert("default_value", frame=frame)
     light = spot(size_deg=40.0).data
     for frame, watts, color, size in [(1, 20.0, (1.0, 1.0, 1.0), 40.0), (48, 80.0, (1.0, 0.5, 0.2), 70.0)]:
         light.energy, light.color, light.spot_size = watts, color, math.radians(size)
@@ -556,7 +562,7 @@ def scene_light_and_lens():
     for frame, lens in [(1, 30.0), (48, 60.0)]:
         cam.data.lens = lens
         cam.data.keyframe_insert("lens", frame=frame)
-    for data in [light, cam.data]:
+    for data in [light, cam.data, ball_glass.node_tree]:
         for fc in fcurves(data.animation_data):
             for kp in fc.keyframe_points:
                 kp.interpolation = "LINEAR"

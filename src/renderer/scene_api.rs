@@ -304,7 +304,12 @@ impl Renderer {
                     .map_err(|e| Error::BadInput(format!("object `{}` at {t} s: {e}", self.scene.objects[i].name)))?;
             }
         }
+        // Animated materials (a glass's IOR) change the scene's materials: its buffers and BVH are rebuilt.
+        let before: Vec<Material> = self.scene.objects.iter().map(|o| o.material).collect();
         self.scene.place_movers();
+        if self.scene.objects.iter().zip(&before).any(|(o, m)| o.material != *m) {
+            self.geometry_dirty = true;
+        }
         Ok(())
     }
 

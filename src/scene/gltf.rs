@@ -169,6 +169,8 @@ fn read_document(cx: &Cx, bytes: &[u8]) -> Result<(gltf::Gltf, Vec<PointerChanne
 struct Sources {
     lights: Vec<usize>,
     cameras: Vec<usize>,
+    /// Per scene object, its glTF material.
+    materials: Vec<Option<usize>>,
 }
 
 /// The light and camera properties the playing animations' pointers set (docs/scenes.md, "glTF scenes"): a light's
@@ -180,6 +182,7 @@ fn pointer_tracks(
     buffers: &[Vec<u8>],
     pointers: &[PointerChannel],
     sources: &Sources,
+    objects: &[Material],
     chosen: Option<usize>,
 ) -> Result<Vec<super::PropertyTrack>, SceneError> {
     use super::PropertyTrack as P;
@@ -251,6 +254,12 @@ fn pointer_tracks(
                 let track = scalar(&|v| v, &|v| v > 0.0, "must be > 0")?;
                 out.extend(each(of_camera, i).into_iter().map(|k| P::CameraHalfHeight(k, track.clone())));
             }
+            T::Ior(i) => {
+                let track = scalar(&|v| v, &|v| v > 0.0, "must be > 0")?;
+                let of: Vec<usize> = sources.materials.iter().map(|m| m.unwrap_or(usize::MAX)).collect();
+                let glass = each(&of, i).into_iter().filter(|&k| matches!(objects[k], Material::Dielectric { .. }));
+                out.extend(glass.map(|k| P::ObjectIor(k, track.clone())));
+            }
             T::Color(i) => {
                 if k.values.iter().any(|v| *v < 0.0) && k.per_key == 1 {
                     return Err(cx.err(format!("{s_at}.output"), format!("`{}`: components must be >= 0", p.pointer)));
@@ -274,6 +283,7 @@ enum Pointee {
     Cone(usize),
     Fov(usize),
     HalfHeight(usize),
+    Ior(usize),
 }
 
 fn pointer_target(cx: &Cx, document: &gltf::Document, p: &PointerChannel) -> Result<Option<Pointee>, SceneError> {
@@ -308,7 +318,12 @@ fn pointer_target(cx: &Cx, document: &gltf::Document, p: &PointerChannel) -> Res
         }
         ["cameras", i, "perspective", "yfov"] => T::Fov(index(i, cameras, "cameras")?),
         ["cameras", i, "orthographic", "ymag"] => T::HalfHeight(index(i, cameras, "cameras")?),
-        ["materials", ..] => return warn("material animation is not rendered: the material keeps the file's value"),
+        ["materials", i, "extensions", "KHR_materials_ior", "ior"] => {
+            T::Ior(index(i, document.materials().len(), "materials")?)
+        }
+        ["materials", ..] => {
+            return warn("not a material property the renderer animates (only a glass's IOR): ignored")
+        }
         _ => return warn("not a property the renderer animates: ignored"),
     }))
 }
@@ -519,7 +534,9 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     for n in roots {
         visit(&cx, &n, &Placement::root(), &g, &mut visiting, &mut out)?;
     }
-    out.properties = pointer_tracks(&cx, &document, &buffers, &pointers, &g.sources.borrow(), chosen)?;
+    let object_materials: Vec<Material> = out.objects.iter().map(|o| o.material).collect();
+    out.properties =
+        pointer_tracks(&cx, &document, &buffers, &pointers, &g.sources.borrow(), &object_materials, chosen)?;
     out.place_properties();
     if out.lights.is_empty() {
         return Err(cx.err(
@@ -1540,6 +1557,7 @@ fn mesh_objects(
                 return Err(cx.err(at.clone(), format!("mesh \"{base_name}\": world-space positions overflow")));
             }
             let name = if places.len() > 1 { format!("{name}[{k}]") } else { name.clone() };
+            g.sources.borrow_mut().materials.push(p.material().index());
             out.objects.push(Object { animation: Some(anim), priority, ..Object::new(name, material, placed) });
         }
     }

@@ -368,6 +368,8 @@ pub enum PropertyTrack {
     CameraFov(usize, animation::Track<f32>),
     /// `cameras[i]`'s half height (orthographic), meters.
     CameraHalfHeight(usize, animation::Track<f32>),
+    /// `objects[i]`'s IOR (a dielectric).
+    ObjectIor(usize, animation::Track<f32>),
 }
 
 impl PropertyTrack {
@@ -378,7 +380,8 @@ impl PropertyTrack {
             PropertyTrack::LightIntensity(_, t)
             | PropertyTrack::LightCone(_, t)
             | PropertyTrack::CameraFov(_, t)
-            | PropertyTrack::CameraHalfHeight(_, t) => t.end(),
+            | PropertyTrack::CameraHalfHeight(_, t)
+            | PropertyTrack::ObjectIor(_, t) => t.end(),
         }
     }
 }
@@ -559,6 +562,11 @@ impl Scene {
                 PropertyTrack::CameraHalfHeight(i, k) => {
                     if let Projection::Orthographic { half_height } = &mut self.cameras[*i].projection {
                         *half_height = k.at(t).max(1e-6);
+                    }
+                }
+                PropertyTrack::ObjectIor(i, k) => {
+                    if let Material::Dielectric { ior, .. } = &mut self.objects[*i].material {
+                        *ior = k.at(t).max(1e-3);
                     }
                 }
             }
