@@ -305,9 +305,11 @@ impl Renderer {
             }
         }
         // Animated materials (a glass's IOR) change the scene's materials: its buffers and BVH are rebuilt.
-        let before: Vec<Material> = self.scene.objects.iter().map(|o| o.material).collect();
+        let animates = |p: &crate::scene::PropertyTrack| matches!(p, crate::scene::PropertyTrack::ObjectIor(..));
+        let before: Option<Vec<Material>> =
+            self.scene.properties.iter().any(animates).then(|| self.scene.objects.iter().map(|o| o.material).collect());
         self.scene.place_movers();
-        if self.scene.objects.iter().zip(&before).any(|(o, m)| o.material != *m) {
+        if before.is_some_and(|b| self.scene.objects.iter().zip(&b).any(|(o, m)| o.material != *m)) {
             self.geometry_dirty = true;
         }
         Ok(())

@@ -931,13 +931,11 @@ impl Placement {
     /// An instance placed by `local` (translation, rotation, scale) in this placement's space.
     fn instanced(&self, local: Trs) -> Placement {
         let mut p = self.clone();
-        let m = Mat4::from_scale_rotation_translation(local.2, local.1, local.0);
-        if p.chain.is_empty() {
-            p.world *= m;
-        } else {
+        // An animated placement composes the instance after its chain; a still one only multiplies.
+        if !p.chain.is_empty() {
             p.chain.push(Motion::rest(local));
-            p.world *= m;
         }
+        p.world *= Mat4::from_scale_rotation_translation(local.2, local.1, local.0);
         p
     }
 

@@ -255,9 +255,7 @@ pub fn load_obj(path: &std::path::Path) -> Result<Mesh, String> {
 pub fn load_obj_report(path: &std::path::Path) -> Result<(Mesh, MeshReport), String> {
     let file = path.display();
     let start = std::time::Instant::now();
-    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
-    let text = String::from_utf8_lossy(&bytes);
-    check_obj_vertices(&text).map_err(|e| format!("{file}:{e}"))?;
+    let bytes = read_obj(path)?;
     let out = load_obj_bytes(&bytes).map_err(|e| format!("{file}: {e}"))?;
     log::info!(
         "{file}: {} triangles, read and repaired in {:.0} ms",
@@ -265,6 +263,14 @@ pub fn load_obj_report(path: &std::path::Path) -> Result<(Mesh, MeshReport), Str
         start.elapsed().as_secs_f64() * 1e3
     );
     Ok(out)
+}
+
+/// An OBJ file's bytes, once its `v` lines are checked ([`check_obj_vertices`]); errors start with its path.
+fn read_obj(path: &std::path::Path) -> Result<Vec<u8>, String> {
+    let file = path.display();
+    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    check_obj_vertices(&String::from_utf8_lossy(&bytes)).map_err(|e| format!("{file}:{e}"))?;
+    Ok(bytes)
 }
 
 /// Parse OBJ bytes (see [`load_obj_report`]; errors without the path, and no line check).
@@ -344,9 +350,8 @@ pub struct ObjParts {
 /// the file's path and line (`PATH:LINE: message`), an MTL file's too.
 pub fn load_obj_parts(path: &std::path::Path) -> Result<ObjParts, String> {
     let file = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let bytes = read_obj(path)?;
     let text = String::from_utf8_lossy(&bytes);
-    check_obj_vertices(&text).map_err(|e| format!("{file}:{e}"))?;
     let dir = path.parent().unwrap_or(std::path::Path::new(""));
     // Each `mtllib` file, parsed here (tobj is given only the names, to resolve `usemtl`).
     let mut materials = Vec::new();

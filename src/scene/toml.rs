@@ -551,6 +551,16 @@ impl Textures {
         self.by_key.insert(key, self.list.len() - 1);
         Ok(self.list.len() - 1)
     }
+
+    /// The image file at `full` (a scene's `albedo_texture`, an MTL's `map_Kd`), decoded once.
+    fn file(&mut self, full: &Path) -> Result<usize, String> {
+        self.get_or(format!("file:{}", full.display()), || {
+            if !full.is_file() {
+                return Err(format!("texture file not found: {}", full.display()));
+            }
+            Texture::load(full)
+        })
+    }
 }
 
 /// A diffuse material's albedo map from `albedo_texture` or `checker`, and `uv_scale` (None: neither given), and
@@ -574,16 +584,7 @@ fn albedo_map(
             return Err(cx.err(c.span(), mf("checker"), "give `albedo_texture` or `checker`, not both"));
         }
         (Some(p), None) => {
-            let full = cx.dir.join(p.get_ref());
-            let key = format!("file:{}", full.display());
-            let i = textures
-                .get_or(key, || {
-                    if !full.is_file() {
-                        return Err(format!("texture file not found: {}", full.display()));
-                    }
-                    Texture::load(&full)
-                })
-                .map_err(|e| cx.err(p.span(), mf("albedo_texture"), e))?;
+            let i = textures.file(&cx.dir.join(p.get_ref())).map_err(|e| cx.err(p.span(), mf("albedo_texture"), e))?;
             (AlbedoMap::new(i), albedo.unwrap_or(Vec3::ONE))
         }
         (None, Some(c)) => {
@@ -677,12 +678,8 @@ fn mtl_objects(
         ));
     }
     shape_fields(cx, o, f)?;
-    let p = d.path.as_ref().ok_or_else(|| cx.err(o.span(), f("path"), "a mesh needs `path`"))?;
-    let full = cx.dir.join(p.get_ref());
-    if !full.is_file() {
-        return Err(cx.err(p.span(), f("path"), format!("mesh file not found: {}", full.display())));
-    }
-    let obj = mesh::load_obj_parts(&full).map_err(|e| cx.err(p.span(), f("path"), e))?;
+    let (full, span) = obj_path(cx, o, f)?;
+    let obj = mesh::load_obj_parts(&full).map_err(|e| cx.err(span.clone(), f("path"), e))?;
     let several = obj.parts.len() > 1;
     let mut out = Vec::new();
     for (k, part, report) in obj.parts {
@@ -691,17 +688,9 @@ fn mtl_objects(
         let name = if several { format!("{}/{label}", d.name.get_ref()) } else { d.name.get_ref().clone() };
         let (mesh, animation) = placement(cx, o, f, part, None)?;
         let material = mtl_material(mtl, textures, &mesh)
-            .map_err(|e| cx.err(p.span(), f("path"), format!("{}: {e}", full.display())))?;
+            .map_err(|e| cx.err(span.clone(), f("path"), format!("{}: {e}", full.display())))?;
         let glass = matches!(material, Material::Dielectric { .. });
-        for finding in report.findings() {
-            let topology = finding.starts_with("open") || finding.starts_with("non-");
-            if glass || !topology {
-                log::warn!(
-                    "{}",
-                    cx.err(p.span(), f("path"), format!("{}: material `{label}`: {finding}", full.display()))
-                );
-            }
-        }
+        warn_findings(cx, &span, f, &format!("{}: material `{label}`", full.display()), &report, glass);
         out.push(Object { name, material, mesh, animation, outside: None, priority: 0 });
     }
     Ok(out)
@@ -753,14 +742,7 @@ fn mtl_material(mtl: Option<&mtl::MtlMaterial>, textures: &mut Textures, mesh: &
                 ));
             }
             let full = Path::new(&m.file).parent().unwrap_or(Path::new("")).join(file);
-            let i = textures
-                .get_or(format!("file:{}", full.display()), || {
-                    if !full.is_file() {
-                        return Err(format!("texture file not found: {}", full.display()));
-                    }
-                    Texture::load(&full)
-                })
-                .map_err(|e| format!("{at}: `map_Kd`: {e}"))?;
+            let i = textures.file(&full).map_err(|e| format!("{at}: `map_Kd`: {e}"))?;
             // -s and -o act on OBJ's uv (v up); the mesh's v runs down: v' = s·v + (1 − s − o) in its terms.
             let mut map = AlbedoMap::new(i);
             map.uv_transform = [[scale.x, 0.0, offset.x], [0.0, scale.y, 1.0 - scale.y - offset.y]];
@@ -932,22 +914,44 @@ fn sphere_mesh(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result
 
 /// A `mesh` shape: its OBJ file, with a warning for each defect that matters for its material.
 fn obj_mesh(cx: &Ctx, o: &S<ObjectDef>, f: &dyn Fn(&str) -> String) -> Result<Mesh, SceneError> {
-    let d = o.get_ref();
-    let p = d.path.as_ref().ok_or_else(|| cx.err(o.span(), f("path"), "a mesh needs `path`"))?;
+    let (full, span) = obj_path(cx, o, f)?;
+    let (mesh, report) = mesh::load_obj_report(&full).map_err(|e| cx.err(span.clone(), f("path"), e))?;
+    let dielectric = o.get_ref().material.get_ref().kind.get_ref() == "dielectric";
+    warn_findings(cx, &span, f, &full.display().to_string(), &report, dielectric);
+    Ok(mesh)
+}
+
+/// A `mesh` object's OBJ file (its `path`, relative to the scene file), which must exist, and the span of `path`.
+fn obj_path(
+    cx: &Ctx,
+    o: &S<ObjectDef>,
+    f: &dyn Fn(&str) -> String,
+) -> Result<(PathBuf, std::ops::Range<usize>), SceneError> {
+    let p = o.get_ref().path.as_ref().ok_or_else(|| cx.err(o.span(), f("path"), "a mesh needs `path`"))?;
     let full = cx.dir.join(p.get_ref());
     if !full.is_file() {
         return Err(cx.err(p.span(), f("path"), format!("mesh file not found: {}", full.display())));
     }
-    let (mesh, report) = mesh::load_obj_report(&full).map_err(|e| cx.err(p.span(), f("path"), e))?;
-    let dielectric = d.material.get_ref().kind.get_ref() == "dielectric";
+    Ok((full, p.span()))
+}
+
+/// Warn of each defect [`mesh::sanitize`] found in an OBJ mesh that matters for its material (`what` names the
+/// file, or the file and material), at the object's `path`: an open or non-manifold receiver is an ordinary
+/// surface; only glass needs a closed volume.
+fn warn_findings(
+    cx: &Ctx,
+    span: &std::ops::Range<usize>,
+    f: &dyn Fn(&str) -> String,
+    what: &str,
+    report: &mesh::MeshReport,
+    glass: bool,
+) {
     for finding in report.findings() {
-        // An open or non-manifold receiver is an ordinary surface; only glass needs a closed volume.
         let topology = finding.starts_with("open") || finding.starts_with("non-");
-        if dielectric || !topology {
-            log::warn!("{}", cx.err(p.span(), f("path"), format!("{}: {finding}", full.display())));
+        if glass || !topology {
+            log::warn!("{}", cx.err(span.clone(), f("path"), format!("{what}: {finding}")));
         }
     }
-    Ok(mesh)
 }
 
 /// Places the object's mesh: its `translate`, `rotate_deg` and `scale`, and its keyframes (with its water, its
