@@ -24,6 +24,7 @@ layout(set = 0, binding = EB_ALBEDO) uniform sampler2D t_albedo;   // their albe
 // The eye deposit (docs/design.md "The eye deposit"): caustic flux per eye sample, W, three planes (red, green,
 // blue), of the landings the lights' caustic maps could not hold, every light's.
 layout(std430, set = 0, binding = EB_EYE_FLUX) readonly buffer EyeFluxBuf { float eye_flux[]; };
+#include "common/deposit_eye.glsl"
 layout(set = 0, binding = EB_RADIANCE, rgba32f) uniform image2D o_radiance;  // rgb: radiance (W/m^2/sr); a: eye distance
 #ifdef WITH_AOVS
 layout(set = 0, binding = EB_CAUSTICS, rgba32f) uniform image2D o_caustics;  // rgb: caustic irradiance (W/m^2)
@@ -58,14 +59,6 @@ vec3 on_plane(GpuView cam, ivec2 q, vec3 p, vec3 n) {
     pixel_ray(cam, q, ro, rd);
     float c = dot(rd, n);
     return abs(c) > 1e-6 ? ro + rd * (dot(p - ro, n) / c) : p;
-}
-
-// The eye deposit's irradiance at sample q (W/m^2): its flux over the receiver area the sample covers, so that
-// sum E A keeps the deposited flux.
-vec3 eye_deposit_irradiance(GpuView cam, ivec2 q, ivec2 size, vec3 n, float dist) {
-    uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
-    vec3 flux = vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
-    return flux / view_texel_area(cam, q, n, dist);
 }
 
 void main() {

@@ -29,6 +29,7 @@ layout(set = 0, binding = CB_IRRADIANCE2) uniform sampler2D t_irradiance2;
 layout(set = 0, binding = CB_RECEIVERS2) uniform usampler2D t_recv2;
 
 #include "common/receiver.glsl"
+#include "common/deposit_eye.glsl"
 
 #include "common/bvh_types.glsl"
 layout(std430, set = 0, binding = CB_BVH_PAIR) readonly buffer BvhPair { PairNode bvh_nodes[]; };
@@ -56,7 +57,7 @@ vec3 light_irradiance(GpuView lv, vec3 power, float bias, sampler2D shadow, samp
                       vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
-    return direct_irradiance_in(lv, power, bias, shadow, p, ns) + caustic_irradiance_in(lv, irr, recv, p, ns, d, dx, dy);
+    return direct_irradiance_in(lv, power, bias, shadow, p, ns) + light_map_irradiance(lv, irr, recv, p, ns, d, dx, dy);
 }
 
 // The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
@@ -84,10 +85,7 @@ vec3 eye_deposit_at(vec3 p, vec3 ns) {
     if (!receiver_seen(cam, t_radiance, p, uv)) return vec3(0.0);
     ivec2 size = textureSize(t_radiance, 0);
     ivec2 q = clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1);
-    float d = view_dist(cam, p);
-    uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
-    vec3 flux = vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
-    return flux / view_texel_area(cam, q, ns, d);
+    return eye_deposit_irradiance(cam, q, size, ns, view_dist(cam, p));
 }
 
 // A branch below this fraction of the eye ray's throughput is not traced: it takes the environment's radiance

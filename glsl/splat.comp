@@ -21,14 +21,17 @@
 // tint their ratios to it (splat_tints); SPLAT_WAVELENGTH, spectral photons: a record's word is its wavelength, whose RGB (spectrum_rgb)
 // times the light's color at it (spectral_tint) the flux is spread over. Either way each tap adds its share of each channel to that channel's plane of the texels.
 //
-// A record whose shape is negated is the eye deposit's (docs/design.md "The eye deposit"; glsl/wave.comp
-// eye_record): its center is in eye samples, and it is added into the eye's flux (eye_splat), not the map.
+// A record whose shape is negated is the eye deposit's (docs/design.md "The eye deposit"; common/deposit.glsl):
+// its center is in eye samples, and it is added into the eye's flux (common/deposit_eye.glsl eye_splat), not the
+// map.
 #extension GL_EXT_shader_atomic_float : require
 #include "common/photon_bindings.glsl"
 #include "common/splat_levels.glsl"
 #include "common/spectrum.glsl"
 #include "common/view.glsl"
 #include "common/gbuffer.glsl"
+#define DEPOSIT_SPLAT
+#include "common/deposit_eye.glsl"
 
 layout(local_size_x = LINEAR_WG) in;
 
@@ -63,55 +66,6 @@ vec3 eye_tint(vec3 tint) {
     uint c = u_frame.pass.channel;
     if (c >= 1u && c <= 3u) color *= vec3(equal(uvec3(1u, 2u, 3u), uvec3(c)));
     return tint * color;
-}
-
-// Where eye sample q's ray meets the receiver it sees (`dist`: its g-buffer distance along the ray).
-vec3 eye_point(GpuView cam, ivec2 q, float dist) {
-    vec3 ro, rd;
-    view_ray(cam, (vec2(q) + 0.5) * cam.extent.zw, ro, rd);
-    return ro + rd * dist;
-}
-
-// The eye deposit's record s: its tent (radii at most EYE_SPLAT_RADIUS) over the eye samples that see the surface
-// its center sees (on that surface's tangent plane within the tent's reach, facing the same way), its weights
-// normalized over them, so that it deposits all its flux on the receiver it landed on and none across an edge.
-void eye_splat(GpuSplat s, vec3 tint) {
-    GpuView cam = u_frame.frame.camera;
-    ivec2 size = textureSize(t_eye, 0);
-    ivec2 c = clamp(ivec2(floor(s.texel)), ivec2(0), size - 1);
-    vec4 g0 = geo_fetch(t_eye, c);
-    if (!(g0.w > 0.0)) return;  // the wave saw a receiver there
-    vec3 p0 = eye_point(cam, c, g0.w);
-    SplatShape k = splat_shape(-s.shape);
-    k.r = min(k.r, vec2(float(EYE_SPLAT_RADIUS)));
-    vec2 e = splat_extent(k);
-    ivec2 lo = max(ivec2(ceil(s.texel - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(s.texel + e - 0.5)), size - 1);
-    float sample_side = cam.window.z * cam.extent.z * (view_is_ortho(cam) ? 1.0 : g0.w);
-    float reach = (max(k.r.x, k.r.y) + 1.0) * sample_side;
-    float sum = 0.0;
-    for (int pass = 0; pass < 2; pass++) {
-        float f = pass == 0 ? 0.0 : s.flux / sum;
-        vec3 rgb = f * eye_tint(tint);
-        for (int y = lo.y; y <= hi.y; y++) {
-            for (int x = lo.x; x <= hi.x; x++) {
-                ivec2 q = ivec2(x, y);
-                float w = splat_weight(q, s.texel, k);
-                if (w == 0.0) continue;
-                vec4 g = geo_fetch(t_eye, q);
-                if (!(g.w > 0.0) || dot(g.xyz, g0.xyz) < 0.9) continue;
-                if (abs(dot(eye_point(cam, q, g.w) - p0, g0.xyz)) > reach) continue;
-                if (pass == 0) {
-                    sum += w;
-                } else {
-                    uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
-                    atomicAdd(eye_flux[i], w * rgb.r);
-                    atomicAdd(eye_flux[i + plane], w * rgb.g);
-                    atomicAdd(eye_flux[i + 2u * plane], w * rgb.b);
-                }
-            }
-        }
-        if (!(sum > 0.0)) return;
-    }
 }
 
 #ifdef SPLAT_TILED
@@ -182,7 +136,7 @@ void main() {
             tint = SPLAT_COLOR == SPLAT_WAVELENGTH ? spectral_tint(uintBitsToFloat(w)) : tint_unpack(w);
         }
         valid = s.shape > 0.0 && all(greaterThanEqual(s.texel, vec2(0.0))) && all(lessThanEqual(s.texel, vec2(size)));
-        if (s.shape < 0.0) eye_splat(s, tint);
+        if (s.shape < 0.0) eye_splat(s, eye_tint(tint));
     }
     SplatShape k = splat_shape(s.shape);
     vec2 e = splat_extent(k);

@@ -104,7 +104,7 @@ void cell_rect(uint level, uvec2 xy, out vec2 lo, out vec2 hi) {
 bool cell_in_play(uint level, uvec2 xy) {
     vec2 lo, hi;
     cell_rect(level, xy, lo, hi);
-    return cell_any_covered(level, xy) && view_rect_touches_cone(u_frame.light.photon_view, lo, hi);
+    return cell_any_covered(level, xy) && emitter_touches(u_frame.light.photon_view, lo, hi);
 }
 
 // Whether the cell lies wholly on the refractors and inside the cone: the metrics check only such cells, because
@@ -112,7 +112,7 @@ bool cell_in_play(uint level, uvec2 xy) {
 bool cell_inside(uint level, uvec2 xy) {
     vec2 lo, hi;
     cell_rect(level, xy, lo, hi);
-    return cell_all_covered(level, xy) && view_rect_inside_cone(u_frame.light.photon_view, lo, hi);
+    return cell_all_covered(level, xy) && emitter_contains(u_frame.light.photon_view, lo, hi);
 }
 
 // Flux-error's look-ahead level: one above the check level, when that is above the maximal level's.

@@ -19,6 +19,7 @@ layout(push_constant) uniform WavePushBlock { WavePush pc; };
 #include "common/coverage.glsl"
 #include "common/photon.glsl"
 #include "common/transport.glsl"
+#include "common/deposit.glsl"
 
 layout(local_size_x = LINEAR_WG) in;
 
@@ -277,55 +278,24 @@ Traced traced_ray(uint i, uint stride, uint in_count, uint capacity) {
     return t;
 }
 
-// The eye deposit (docs/design.md "The eye deposit"): a landing at p, arriving along rd, that the light's caustic
-// map cannot hold becomes a record in the eye's samples where the camera sees p on the side the light arrives on:
-// its center in samples, its tent from the ray differentials projected into the eye's image, its shape negated.
-// Returns false where the camera does not see it (the light is then unseen).
-bool eye_record(Traced t, RayDiff rdf, vec3 p, vec3 rd, float flux, inout Outcome o) {
-    if (u_frame.frame.eye_deposit == 0u) return false;
-    GpuView cam = u_frame.frame.camera;
-    vec2 uv;
-    if (!receiver_seen(cam, t_eye, p, uv)) return false;
-    ivec2 size = textureSize(t_eye, 0);
-    ivec2 q = clamp(ivec2(uv * vec2(size)), ivec2(0), size - 1);
-    vec3 n = geo_fetch(t_eye, q).xyz;
-    if (dot(rd, n) * dot(view_dir_to(cam, p), n) <= 0.0) return false;  // it lands on the side the eye does not see
-    float shape = 1.0;
-    if (WAVE_DIFFERENTIAL) {
-        vec2 mx = view_px_diff(cam, p, rdf.dpx), my = view_px_diff(cam, p, rdf.dpy);
-        uint r = uint(clamp(round(sqrt(abs(mx.x * my.y - mx.y * my.x))), 1.0, float(EYE_SPLAT_RADIUS)));
-        shape = footprint_radii(mx, my, r);
-    }
-    o.record = GpuSplat(uv * vec2(size), flux * u_frame.light.light_intensity, -shape);
-    o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : WAVE_SPECTRAL ? floatBitsToUint(ray_nm) : 0u;
-    o.rec = true;
-    o.rec_flux = flux;
-    o.one_event = t.depth == 1u;
-    o.eye = true;
-    return true;
-}
-
-// A ray of a bounce wave reaches a diffuse receiver at p along rd: its splat record, where the light's view sees p,
-// else the eye deposit's where the camera sees it (else no map of the frame can hold it: ACC_UNSEEN). (Wave 0's
-// rays have met nothing yet.) ng: the receiver's geometric normal at p, for the side rd arrives on.
+// A ray of a bounce wave reaches a diffuse receiver at p along rd: its splat record in the first deposit that holds
+// it (common/deposit.glsl: the light's map where its view sees p, else the eye's samples where the camera sees it),
+// else no deposit of the frame can hold it (ACC_UNSEEN). (Wave 0's rays have met nothing yet.) ng: the receiver's
+// geometric normal at p, for the side rd arrives on.
 void record_at(Traced t, RayDiff rdf, vec3 p, vec3 ng, vec3 rd, float flux, inout Outcome o) {
-    GpuView rv = u_frame.light.receiver_view;
-    vec2 uv;
-    if (!receiver_seen(rv, t_recv, p, uv) || !same_side_as_view(rv, p, ng, rd)) {
-        if (!eye_record(t, rdf, p, rd, flux, o)) acc[ACC_UNSEEN] += flux;
-        return;
-    }
-    uint r = t.lod ? side_splat_radius(weak_widen(t.cell) * cell_side(cell_level(t.cell))) : cell_splat_radius(t.cell);
     // A cluster (max-error, flux-error) takes its own cell's footprint too, clamped around the radius traversal
     // gave it (its children's spread): the parallelogram the whole cell covers where it lands, which a round splat
     // of the spread fits only where that is round.
-    float shape = WAVE_DIFFERENTIAL ? footprint_radii(view_px_diff(rv, p, rdf.dpx), view_px_diff(rv, p, rdf.dpy), r)
-                                    : float(r);
-    o.record = GpuSplat(uv * rv.extent.xy, flux * u_frame.light.light_intensity, shape);
+    uint r = t.lod ? side_splat_radius(weak_widen(t.cell) * cell_side(cell_level(t.cell))) : cell_splat_radius(t.cell);
+    if (!deposit_landing(p, ng, rd, rdf, r, WAVE_DIFFERENTIAL, flux * u_frame.light.light_intensity, o.record)) {
+        acc[ACC_UNSEEN] += flux;
+        return;
+    }
     o.rec_tint = WAVE_COLOR ? tint_pack(t.tint) : WAVE_SPECTRAL ? floatBitsToUint(ray_nm) : 0u;
     o.rec = true;
     o.rec_flux = flux;
     o.one_event = t.depth == 1u;
+    if (o.record.shape < 0.0) o.eye = true;
 }
 
 // Whether a Fresnel branch of weight wb is traced: cut below the flux threshold, left to its block's carrier when

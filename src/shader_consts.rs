@@ -263,6 +263,15 @@ pub const GLASS_LIGHTS: u32 = 3;
 /// A light view's `right.w` (GpuView) at or above this: the view is a face of a point light's cube, whose domain
 /// is the square |x|, |y| <= 1 of its image plane (else `right.w` is the spot cone's cosine, or -1 for none).
 pub const VIEW_SQUARE_DOMAIN: u32 = 2;
+/// The emitter kinds (glsl/common/emitter.glsl, src/scene/view.rs `EmitterKind`): a directional light's parallel
+/// beam,
+pub const EMITTER_BEAM: u32 = 0;
+/// a point light's rays over its whole window,
+pub const EMITTER_OPEN: u32 = 1;
+/// a spot light's cone,
+pub const EMITTER_CONE: u32 = 2;
+/// a face of a point light's cube.
+pub const EMITTER_SQUARE: u32 = 3;
 
 // Binding indices of the eye view's shading (glsl/eye_shade.comp, src/passes/eye.rs).
 /// Binding: the frame uniforms.

@@ -3,7 +3,7 @@
 // finer levels share the base texel that contains them.
 #ifndef COVERAGE_GLSL
 #define COVERAGE_GLSL
-#include "common/view.glsl"
+#include "common/emitter.glsl"
 
 uint pyramid_offset(uint m) { return u_frame.frame.pyramid[m >> 2][m & 3u]; }
 
@@ -42,7 +42,7 @@ bool leaf_emitted(uint level, uvec2 xy) {
     GpuView v = u_frame.light.photon_view;
     float side = v.window.z / float(LEVEL0_RES << level);
     vec2 center = v.window.xy + (vec2(xy) + 0.5) * side;
-    return leaf_covered(level, xy) && view_in_cone(v, center);
+    return leaf_covered(level, xy) && emitter_holds(v, center);
 }
 
 #endif

@@ -5,7 +5,7 @@
 // by traversal (the max-error metric traces a cell's four children). Needs photon_bindings and coverage.
 #ifndef PHOTON_GLSL
 #define PHOTON_GLSL
-#include "common/view.glsl"
+#include "common/emitter.glsl"
 #include "common/optics.glsl"
 #include "common/march.glsl"
 
@@ -32,11 +32,11 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     GpuView v = u_frame.light.photon_view;
     GpuView rv = u_frame.light.receiver_view;
     vec2 xy = view_xy_of_uv(v, uv);
-    if (!view_in_cone(v, xy)) { h.status = HIT_OUTSIDE_CONE; return h; }
+    if (!emitter_holds(v, xy)) { h.status = HIT_OUTSIDE_CONE; return h; }
     vec4 front;
     if (!covered || !geo_sample(t_front, uv, front)) { h.status = HIT_MISS; return h; }
     vec3 ro, rd;
-    view_ray_xy(v, xy, ro, rd);
+    emitter_ray(v, xy, ro, rd);
     vec3 p1 = ro + rd * front.w;
     // (A receiver between the light and the refractor shadows it: coverage.comp leaves such texels uncovered.)
     ivec2 aux_size = textureSize(t_front_aux, 0);
@@ -60,7 +60,7 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     }
     h.pos = p3;
     h.map_px = view_uv(rv, p3) * rv.extent.xy;
-    h.flux = u_frame.light.light_intensity * view_cell_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
+    h.flux = u_frame.light.light_intensity * emitter_measure(v, xy, side) * (1.0 - F1) * (1.0 - F2);
     return h;
 }
 
@@ -92,7 +92,7 @@ bool weak_by_siblings(uint level) { return level + weak_block_shift() <= u_frame
 // A photon's flux in units of the light's intensity (sr, or m^2 for a directional light): Omega of its cell.
 float cell_measure(uint level, uvec2 xy) {
     GpuView v = u_frame.light.photon_view;
-    return view_cell_measure(v, view_xy_of_uv(v, cell_center_uv(level, xy)), cell_side(level));
+    return emitter_measure(v, view_xy_of_uv(v, cell_center_uv(level, xy)), cell_side(level));
 }
 
 Hit trace_cell(uint level, uvec2 xy) {

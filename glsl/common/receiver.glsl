@@ -1,14 +1,15 @@
 // Shading of a diffuse receiver point, shared by the deferred eye shading (glsl/eye_shade.comp) and the eye-view ray
 // tracer (glsl/glass.comp): direct irradiance from the light through a filtered shadow map, caustic
-// irradiance from the light-space caustic map, and the environment (docs/design.md "Eye view").
+// irradiance from the light-space caustic map (common/deposit_light_map.glsl), and the environment (docs/design.md "Eye view").
 // Needs u_frame and the samplers t_shadow (light depth of all objects), t_irradiance (caustic irradiance, linear
 // filtering), t_recv (receivers from the light: normal, distance), t_env (the environment map) and t_env_irradiance (its
 // irradiance map).
 #ifndef RECEIVER_GLSL
 #define RECEIVER_GLSL
 #include "common/types.glsl"
-#include "common/view.glsl"
+#include "common/emitter.glsl"
 #include "common/gbuffer.glsl"
+#include "common/deposit_light_map.glsl"
 
 const float RECV_PI = 3.14159265358979;
 
@@ -53,29 +54,9 @@ vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, sampler2D s
     vec3 img = view_image(lv, p);
     vec3 l = -view_dir_to(lv, p);
     float cos_s = dot(n, l);
-    if (!(cos_s > 0.0 && view_in_cone(lv, img.xy) && img.z > 0.0)) return vec3(0.0);
+    if (!(cos_s > 0.0 && emitter_holds(lv, img.xy) && img.z > 0.0)) return vec3(0.0);
     float d2 = view_is_ortho(lv) ? 1.0 : dot(p - lv.origin.xyz, p - lv.origin.xyz);
     return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, p, n);
-}
-
-// Caustic irradiance (W/m^2) of a light (view lv, caustic map irr, receivers recv) at p (normal n), on the side that
-// the eye's ray (direction `eye`) meets, averaged over a footprint in its caustic map spanned by the uv offsets dx,
-// dy (up to 8x8 bilinear taps), so that a caustic sharper than the footprint keeps its flux.
-vec3 caustic_irradiance_in(GpuView lv, sampler2D irr, usampler2D recv, vec3 p, vec3 n, vec3 eye, vec2 dx, vec2 dy) {
-    vec2 uv;
-    // The map holds another receiver's light there, or the light's on the other side.
-    if (!receiver_seen(lv, recv, p, uv) || !same_side_as_view(lv, p, n, eye)) return vec3(0.0);
-    vec2 size = vec2(textureSize(irr, 0));
-    int nx = int(clamp(ceil(length(dx * size)), 1.0, 8.0));
-    int ny = int(clamp(ceil(length(dy * size)), 1.0, 8.0));
-    vec3 e = vec3(0.0);
-    for (int j = 0; j < ny; j++) {
-        for (int i = 0; i < nx; i++) {
-            vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
-            e += textureLod(irr, uv + o.x * dx + o.y * dy, 0.0).rgb;
-        }
-    }
-    return e / float(nx * ny);
 }
 
 // The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
@@ -83,7 +64,7 @@ vec3 direct_irradiance(vec3 p, vec3 n) {
     return direct_irradiance_in(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, t_shadow, p, n);
 }
 vec3 caustic_irradiance(vec3 p, vec3 n, vec3 eye, vec2 dx, vec2 dy) {
-    return caustic_irradiance_in(u_frame.light.receiver_view, t_irradiance, t_recv, p, n, eye, dx, dy);
+    return light_map_irradiance(u_frame.light.receiver_view, t_irradiance, t_recv, p, n, eye, dx, dy);
 }
 
 // The environment (docs/design.md "Environment"), seen directly, in reflections and through glass. With a map

@@ -6,45 +6,20 @@
 #define TRANSPORT_GLSL
 #include "common/bvh.glsl"
 #include "common/interface.glsl"
+#include "common/emitter.glsl"
 
 
-// The photon ray of a cell: from the light through the cell's center.
+// The photon ray of a cell: the emitter's ray through the cell's center (common/emitter.glsl).
 void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {
     GpuView v = u_frame.light.photon_view;
-    view_ray_xy(v, view_xy_of_uv(v, cell_center_uv(level, xy)), ro, rd);
+    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), ro, rd);
 }
 
-// Ray differentials (Igehy, "Tracing Ray Differentials", SIGGRAPH 1999): how a photon ray's origin and unit
-// direction change across one cell width of its emitting cell, along the light view's two cell axes x and y
-// (`--footprint differential`). At the receiver, dP/dx and dP/dy are the sides of the parallelogram the cell
-// covers there, which sizes the splat.
-struct RayDiff {
-    vec3 dpx, dpy;  // dP/dx, dP/dy (m per cell)
-    vec3 ddx, ddy;  // dD/dx, dD/dy (per cell)
-};
-
-// A cell's ray and its differentials. Perspective (spot light): P is the light's position, so dP = 0, and
-// D = d/|d| with d = x right + y down + forward, so dD = (dd - D (D.dd)) / |d| with dd = one cell side along
-// right (or down). Orthographic (directional): dP = one cell side along right (or down), dD = 0.
+// A cell's ray and its differentials across one cell side (emitter_ray_diff).
 RayDiff cell_ray_diff(uint level, uvec2 xy, vec3 rd) {
     GpuView v = u_frame.light.photon_view;
     vec2 side = v.window.zw / float(LEVEL0_RES << level);
-    vec3 ex = side.x * v.right.xyz, ey = side.y * v.down.xyz;
-    RayDiff r;
-    if (view_is_ortho(v)) {
-        r.dpx = ex;
-        r.dpy = ey;
-        r.ddx = vec3(0.0);
-        r.ddy = vec3(0.0);
-    } else {
-        vec2 pxy = view_xy_of_uv(v, cell_center_uv(level, xy));
-        float len = length(pxy.x * v.right.xyz + pxy.y * v.down.xyz + v.forward.xyz);
-        r.dpx = vec3(0.0);
-        r.dpy = vec3(0.0);
-        r.ddx = (ex - rd * dot(rd, ex)) / len;
-        r.ddy = (ey - rd * dot(rd, ey)) / len;
-    }
-    return r;
+    return emitter_ray_diff(v, view_xy_of_uv(v, cell_center_uv(level, xy)), side, rd);
 }
 
 // A ray's differentials in a queue: four half-float pairs. Only the parts across the ray's unit direction D are

@@ -64,34 +64,6 @@ float view_texel_area(GpuView v, ivec2 q, vec3 n, float dist) {
     return area;
 }
 
-// A light view's domain: a spot's cone (right.w its cosine), a cube face's square |x|, |y| <= 1 (right.w >=
-// VIEW_SQUARE_DOMAIN), or the whole image plane (right.w = -1, and orthographic views).
-bool view_square_domain(GpuView v) { return v.right.w >= float(VIEW_SQUARE_DOMAIN); }
-
-// Inside the view's domain (hard edge).
-bool view_in_cone(GpuView v, vec2 xy) {
-    if (view_is_ortho(v) || v.right.w <= -1.0) return true;
-    if (view_square_domain(v)) return max(abs(xy.x), abs(xy.y)) <= 1.0;
-    return inversesqrt(1.0 + dot(xy, xy)) >= v.right.w;
-}
-
-// Does the image-plane rectangle [lo, hi] intersect the domain? (conservative cell test)
-bool view_rect_touches_cone(GpuView v, vec2 lo, vec2 hi) {
-    if (view_is_ortho(v) || v.right.w <= -1.0) return true;
-    if (view_square_domain(v)) return all(lessThanEqual(lo, vec2(1.0))) && all(greaterThanEqual(hi, vec2(-1.0)));
-    float c = v.right.w;
-    float t2 = (1.0 - c * c) / (c * c);  // tan^2 of the half-angle
-    vec2 q = clamp(vec2(0.0), lo, hi);
-    return dot(q, q) <= t2;
-}
-
-// Is the rectangle entirely inside the domain (all four corners)?
-bool view_rect_inside_cone(GpuView v, vec2 lo, vec2 hi) {
-    if (view_is_ortho(v) || v.right.w <= -1.0) return true;
-    vec2 far_corner = max(abs(lo), abs(hi));
-    return view_in_cone(v, far_corner);
-}
-
 bool uv_inside_strict(vec2 uv) { return all(greaterThan(uv, vec2(0.0))) && all(lessThan(uv, vec2(1.0))); }
 
 #endif

@@ -20,6 +20,7 @@
 //! traversal records every level with vkCmdDispatchIndirect from arguments that the stats shader wrote; the
 //! CPU-driven baseline submits after each level, reads the count back, and records the next dispatch directly.
 
+pub(crate) mod deposit;
 mod photons;
 pub mod report;
 mod steps;
@@ -33,6 +34,7 @@ use crate::settings::{ResolvedSettings, Splat};
 use crate::targets::{ReceiverTargets, Targets};
 use crate::vk::{Access, Buffer, Device, Recorder, Sampler, Timestamps, Tracker, VkResult};
 use ash::vk;
+use deposit::Step;
 pub use report::{Aov, AovData, DebugPhoton, FrameReport, LightReport, SceneUpdateReport, SlotVerdict};
 use std::time::Instant;
 
@@ -113,11 +115,11 @@ pub(crate) struct FramePlan<'a> {
     pub reused: bool,
     /// The eye view of the last frame serves this one too: steps 7 and 8 are not recorded.
     pub eye_reused: bool,
-    /// The frame's photons deposit what the lights' maps cannot hold in the eye's samples (docs/design.md "The eye
-    /// deposit"): the receivers' eye g-buffer is drawn before the lights' passes.
-    pub eye_deposit: bool,
-    /// Clear the eye deposit's flux before the lights' passes (else they add to it, or it is kept).
-    pub clear_eye_flux: bool,
+    /// The deposits the frame's landings go to, in the order they try them (a subset of
+    /// [`deposit::DEPOSITS`]): the light maps, and the eye deposit where it runs (docs/design.md "The eye deposit").
+    pub deposits: &'a [deposit::Deposit],
+    /// Clear the frame-scoped deposits' stores before the lights' passes (else they add to them, or they are kept).
+    pub clear_deposits: bool,
     /// A preview: one eye sample per pixel (glass traced as in a still, at the preview's resolution).
     pub preview: bool,
     /// The AOV to copy to the readback buffer.
@@ -320,7 +322,37 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
     scene_update(res, plan.scene_update, rec)?;
     // The lights' state copies and the AOV readback write disjoint ranges of the readback buffer.
     rec.sync.buffer(readback, &[Access::TransferDst]);
-    let eye_gbuffer_drawn = ctx(0).eye_deposit_first(rec, plan.clear_eye_flux, plan.eye_deposit && !plan.eye_reused)?;
+    let mut lights_end = None;
+    for step in deposit::order(plan.deposits, plan.clear_deposits, !plan.reused, !plan.eye_reused) {
+        match step {
+            Step::Clear(d) => ctx(0).clear_deposit(rec, d),
+            Step::EyeGbuffer => {
+                rec.ts.mark(rec.cmd, "eye.receivers");
+                ctx(0).eye_gbuffer(rec)?;
+            }
+            Step::LightViews => light_views(plan, &ctx, rec)?,
+            Step::EyeView { gbuffer } => {
+                // The lights' own stages end where the eye view starts.
+                lights_end = Some(rec.ts.len());
+                eye_view(plan, &ctx, rec, gbuffer)?;
+            }
+        }
+    }
+    rec.report.eye_reused = plan.eye_reused;
+    let lights_end = lights_end.unwrap_or_else(|| rec.ts.len());
+    let c0 = ctx(0);
+    if plan.eye_reused {
+        // The beauty and HDR images are the last frame's, left as transfer sources by its composite.
+        rec.ts.mark(rec.cmd, "eye_reused");
+    }
+    rec.ts.mark(rec.cmd, "readback");
+    let aov = c0.readback(rec, plan.aov);
+    Ok((lights_end, aov))
+}
+
+/// Steps 1 to 6 for every light view and color channel (or their reuse, or a continuation's remaining batches).
+fn light_views<'a>(plan: &FramePlan, ctx: &impl Fn(usize) -> Ctx<'a>, rec: &mut Rec) -> VkResult<()> {
+    let nc = plan.channels;
     for pass in 0..plan.lights() * nc {
         let c = ctx(pass);
         let first_segment = rec.ts.len();
@@ -361,47 +393,44 @@ pub(crate) fn record_frame(res: &FrameResources, plan: &FramePlan, rec: &mut Rec
             ..Default::default()
         });
     }
+    Ok(())
+}
+
+/// Step 7 and 8: the eye view (drawing the receivers' eye g-buffer when `gbuffer`: no deposit drew it before the
+/// photons), the glass and the composite.
+fn eye_view<'a>(plan: &FramePlan, ctx: &impl Fn(usize) -> Ctx<'a>, rec: &mut Rec, gbuffer: bool) -> VkResult<()> {
+    let nc = plan.channels;
     let c0 = ctx(0);
-    rec.report.eye_reused = plan.eye_reused;
-    // The lights' own stages end where the eye view starts.
-    let lights_end = rec.ts.len();
-    if plan.eye_reused {
-        // The beauty and HDR images are the last frame's, left as transfer sources by its composite.
-        rec.ts.mark(rec.cmd, "eye_reused");
-    } else {
-        if !eye_gbuffer_drawn {
-            rec.ts.mark(rec.cmd, "eye.receivers");
-        }
-        for light in 0..plan.lights() {
-            ctx(light * nc).eye_receivers(rec, !eye_gbuffer_drawn)?;
-        }
-        rec.ts.mark(rec.cmd, "eye.refractors");
-        // A frame that reads back the caustics or direct AOV (the receivers' shading writes them) needs neither
-        // the glass nor the beauty: its refractor buffers, glass passes and composite are not recorded (their
-        // timestamps mark empty stages), and the renderer lets no later frame reuse its eye view.
-        if plan.beauty() {
-            c0.eye_refractors(rec)?;
-            if c0.exact_eye() {
-                // One glass pass for up to GLASS_LIGHTS lights (a fourth adds a pass): the trace runs once per
-                // pass, each receiver it reaches shaded with the pass's lights.
-                let lights: Vec<usize> = (0..plan.lights()).collect();
-                for (k, group) in lights.chunks(crate::shaders::consts::GLASS_LIGHTS as usize).enumerate() {
-                    let more: Vec<LightMaps> = group[1..]
-                        .iter()
-                        .map(|&l| {
-                            let c = ctx(l * nc);
-                            LightMaps { ubo: c.ubo, shadow: &c.r.shadow, irradiance: &c.r.irradiance, recv: &c.r.geo }
-                        })
-                        .collect();
-                    ctx(group[0] * nc).eye_glass(rec, &more, k > 0)?;
-                }
-            }
-            c0.composite(rec)?;
-        } else {
-            rec.ts.mark(rec.cmd, "composite");
-        }
+    if gbuffer {
+        rec.ts.mark(rec.cmd, "eye.receivers");
     }
-    rec.ts.mark(rec.cmd, "readback");
-    let aov = c0.readback(rec, plan.aov);
-    Ok((lights_end, aov))
+    for light in 0..plan.lights() {
+        ctx(light * nc).eye_receivers(rec, gbuffer)?;
+    }
+    rec.ts.mark(rec.cmd, "eye.refractors");
+    // A frame that reads back the caustics or direct AOV (the receivers' shading writes them) needs neither
+    // the glass nor the beauty: its refractor buffers, glass passes and composite are not recorded (their
+    // timestamps mark empty stages), and the renderer lets no later frame reuse its eye view.
+    if plan.beauty() {
+        c0.eye_refractors(rec)?;
+        if c0.exact_eye() {
+            // One glass pass for up to GLASS_LIGHTS lights (a fourth adds a pass): the trace runs once per
+            // pass, each receiver it reaches shaded with the pass's lights.
+            let lights: Vec<usize> = (0..plan.lights()).collect();
+            for (k, group) in lights.chunks(crate::shaders::consts::GLASS_LIGHTS as usize).enumerate() {
+                let more: Vec<LightMaps> = group[1..]
+                    .iter()
+                    .map(|&l| {
+                        let c = ctx(l * nc);
+                        LightMaps { ubo: c.ubo, shadow: &c.r.shadow, irradiance: &c.r.irradiance, recv: &c.r.geo }
+                    })
+                    .collect();
+                ctx(group[0] * nc).eye_glass(rec, &more, k > 0)?;
+            }
+        }
+        c0.composite(rec)?;
+    } else {
+        rec.ts.mark(rec.cmd, "composite");
+    }
+    Ok(())
 }

@@ -2,6 +2,7 @@
 //! composite (8) and the readback. Each pass declares its uses as it binds them, and each transfer its accesses;
 //! the tracker places the barriers.
 
+use super::deposit::Deposit;
 use super::{Aov, Ctx, Rec};
 use crate::gpu_types::{TransportState, TraversalState};
 use crate::passes::composite::{CompositeInputs, LightMaps};
@@ -140,21 +141,16 @@ impl Ctx<'_> {
         self.p.eye.record_gbuffer(rec.cmd, rec.sync, self.sb, &self.data.frame.camera, &g)
     }
 
-    /// Before the lights' passes, for the eye deposit (docs/design.md "The eye deposit"): zero its flux (`clear`),
-    /// and draw the receivers' eye g-buffer that the photons test their landings against (`gbuffer`). Returns
-    /// whether it drew the g-buffer (then the eye view does not).
-    pub(super) fn eye_deposit_first(&self, rec: &mut Rec, clear: bool, gbuffer: bool) -> VkResult<bool> {
-        if clear {
-            let flux = &self.t.eye.flux;
-            rec.sync.buffer(flux, &[Access::TransferDst]);
-            rec.flush(self.d);
-            unsafe { self.d.cmd_fill_buffer(rec.cmd, flux.raw, 0, vk::WHOLE_SIZE, 0) };
-        }
-        if gbuffer {
-            rec.ts.mark(rec.cmd, "eye.receivers");
-            self.eye_gbuffer(rec)?;
-        }
-        Ok(gbuffer)
+    /// Before the lights' passes: zero a frame-scoped deposit's store (the eye deposit's flux, docs/design.md "The
+    /// eye deposit"). A light map's store is its view's own, which its photons' first batch clears.
+    pub(super) fn clear_deposit(&self, rec: &mut Rec, deposit: Deposit) {
+        let store = match deposit {
+            Deposit::Eye => &self.t.eye.flux,
+            Deposit::LightMap => return,
+        };
+        rec.sync.buffer(store, &[Access::TransferDst]);
+        rec.flush(self.d);
+        unsafe { self.d.cmd_fill_buffer(rec.cmd, store.raw, 0, vk::WHOLE_SIZE, 0) };
     }
 
     /// Step 7b: the eye view of the refractors: front and back g-buffers for the composite.

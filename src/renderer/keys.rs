@@ -88,12 +88,14 @@ pub(crate) struct Caches {
 /// Whether the last caustic frame's light all landed in the lights' own maps (every pass's account, once its frame
 /// completed, has no eye deposit and nothing unseen): its maps then serve any eye view.
 pub(crate) fn light_maps_hold_all(reports: &[LightReport]) -> bool {
-    use crate::shaders::consts::{ACC_EYE, ACC_UNSEEN};
+    use crate::frame::deposit::DEPOSITS;
+    use crate::shaders::consts::ACC_UNSEEN;
+    let camera_terms = || DEPOSITS.iter().map(|d| d.declares()).filter(|d| d.follows_camera).map(|d| d.account);
     reports.iter().all(|l| {
         !l.caustics
             || l.transport.is_some_and(|t| {
                 let a = t.account();
-                a[ACC_EYE as usize] == 0.0 && a[ACC_UNSEEN as usize] == 0.0
+                camera_terms().all(|term| a[term as usize] == 0.0) && a[ACC_UNSEEN as usize] == 0.0
             })
     })
 }

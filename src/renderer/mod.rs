@@ -22,6 +22,7 @@ pub use scene_api::{InstanceId, MeshId};
 pub use views::{emitters, lights_without_receivers, Emitter, Views};
 
 use crate::error::{Error, Result};
+use crate::frame::deposit::{Deposit, DEPOSITS};
 use crate::frame::{FramePlan, FrameResources, Rec, SceneUpdate};
 use crate::passes::Passes;
 use crate::scene::view::CameraView;
@@ -818,10 +819,14 @@ impl Renderer {
         );
         let targets = self.targets.as_mut().expect("targets");
         let data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &emitters, &views, targets, nc);
+        // The deposits that run: the light maps, and the eye deposit where the targets hold it.
         let eye_deposit = targets.eye_deposit(&s);
-        let eye_view =
-            eye_deposit.then(|| (bytemuck::bytes_of(&data[0].frame.camera).to_vec(), self.targets_generation));
-        let (reused, clear_eye_flux) = self.caches.plan(&key, eye_view, self.reuse, continuation.is_some());
+        let deposits: Vec<Deposit> = DEPOSITS.into_iter().filter(|&d| d != Deposit::Eye || eye_deposit).collect();
+        let eye_view = deposits
+            .iter()
+            .any(|d| d.declares().follows_camera)
+            .then(|| (bytemuck::bytes_of(&data[0].frame.camera).to_vec(), self.targets_generation));
+        let (reused, clear_deposits) = self.caches.plan(&key, eye_view, self.reuse, continuation.is_some());
         // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
         // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
         let eye_key = EyeKey {
@@ -849,8 +854,8 @@ impl Renderer {
             photon_view: views[0].photon,
             reused,
             eye_reused,
-            eye_deposit: eye_deposit && !reused,
-            clear_eye_flux,
+            deposits: &deposits,
+            clear_deposits,
             preview: desc.preview,
             aov: desc.aov,
             batch_slots: self.queue.batch_slots(&s, targets.photon.capacity),

@@ -154,10 +154,11 @@ fn extent(w: u32, h: u32) -> [f32; 4] {
 
 impl GpuView {
     pub fn from_light(v: &LightView, resolution: u32) -> Self {
+        let (ortho, domain) = v.emitter_kind().lanes(v.cos_cone);
         GpuView {
             view_proj: v.view_proj().to_cols_array(),
-            origin: v4(v.origin, if v.kind == LightKind::Directional { 1.0 } else { 0.0 }),
-            right: v4(v.right, if v.face { VIEW_SQUARE_DOMAIN as f32 } else { v.cos_cone }),
+            origin: v4(v.origin, ortho),
+            right: v4(v.right, domain),
             down: v4(v.down, v.near),
             forward: v4(v.forward, v.far),
             window: [v.window.x0, v.window.y0, v.window.w, v.window.w],

@@ -48,6 +48,33 @@ pub struct LightView {
     pub face: bool,
 }
 
+/// What kind of emitter a light view is (glsl/common/emitter.glsl, docs/design.md "Emitters and deposits"): what
+/// its photons' refinement domain, cell measure and rays are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmitterKind {
+    /// A directional light: parallel rays over the window, a cell's measure its area across the beam (m²).
+    Beam,
+    /// A point light whose objects all lie in front of it: rays from its position over the whole window.
+    Open,
+    /// A spot light: rays from its position within its cone.
+    Cone,
+    /// A face of a point light's cube: rays from its position through the square |x|, |y| ≤ 1 of the image plane.
+    Square,
+}
+
+impl EmitterKind {
+    /// The GPU view's lanes that say the kind, as glsl/common/emitter.glsl's `emitter_kind` reads them:
+    /// `origin.w` (1: orthographic) and `right.w` (the cone's cosine; -1: no cone; `VIEW_SQUARE_DOMAIN`: a face).
+    pub fn lanes(self, cos_cone: f32) -> (f32, f32) {
+        match self {
+            EmitterKind::Beam => (1.0, -1.0),
+            EmitterKind::Open => (0.0, -1.0),
+            EmitterKind::Cone => (0.0, cos_cone),
+            EmitterKind::Square => (0.0, crate::shaders::consts::VIEW_SQUARE_DOMAIN as f32),
+        }
+    }
+}
+
 /// The six faces of a point light's cube, in the light's frame (right, down, forward), each as the frame of a
 /// 90° view (right', down', forward') with right' × down' = forward': +forward, −forward, +right, −right, +down,
 /// −down.
@@ -58,6 +85,16 @@ fn rows_to_mat(rows: [[f32; 4]; 4]) -> Mat4 {
 }
 
 impl LightView {
+    /// The emitter this view is.
+    pub fn emitter_kind(&self) -> EmitterKind {
+        match self.kind {
+            LightKind::Directional => EmitterKind::Beam,
+            _ if self.face => EmitterKind::Square,
+            LightKind::Spot => EmitterKind::Cone,
+            LightKind::Point => EmitterKind::Open,
+        }
+    }
+
     /// The light's orthonormal frame (right, down, forward), right-handed: right × down = forward.
     pub fn basis(light: &Light) -> (Vec3, Vec3, Vec3) {
         let f = (light.target - light.position).normalize();

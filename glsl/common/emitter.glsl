@@ -1,0 +1,95 @@
+// The emitter interface (docs/design.md "Emitters and deposits"). A light view emits its photons from the cells of a
+// quadtree over its refinement domain: a window of its image plane, LEVEL0_RES << L cells a side at level L. An
+// emitter kind answers three questions, and the photon passes ask nothing else of a light:
+// - its domain: whether an image-plane point emits (emitter_holds), and whether a cell's rectangle touches the
+//   domain or lies wholly inside it (emitter_touches, emitter_contains: the traversal's conservative tests);
+// - a cell's measure: the solid angle (sr) or the area across the beam (m^2) it emits into, so that a photon's
+//   flux is the light's intensity times it (emitter_measure);
+// - its sample: the ray through an image-plane point, and how it changes across a cell (emitter_ray,
+//   emitter_ray_diff).
+// The kinds (emitter_kind; src/scene/view.rs EmitterKind writes the view's lanes that say which):
+// - EMITTER_BEAM: a directional light, parallel rays over the window (an orthographic view);
+// - EMITTER_OPEN: a point light whose objects all lie in front of it, rays from a point over the whole window;
+// - EMITTER_CONE: a spot light, rays from a point within a cone (right.w its cosine);
+// - EMITTER_SQUARE: a face of a point light's cube, rays from a point through the square |x|, |y| <= 1 of its
+//   image plane (right.w = VIEW_SQUARE_DOMAIN), so that the faces partition the sphere of directions.
+// A light's direct light and shadows hold the same domain (common/receiver.glsl).
+#ifndef EMITTER_GLSL
+#define EMITTER_GLSL
+#include "common/view.glsl"
+
+uint emitter_kind(GpuView v) {
+    if (view_is_ortho(v)) return EMITTER_BEAM;
+    if (v.right.w <= -1.0) return EMITTER_OPEN;
+    if (v.right.w >= float(VIEW_SQUARE_DOMAIN)) return EMITTER_SQUARE;
+    return EMITTER_CONE;
+}
+
+// The domain: whether image-plane point xy emits (hard edge).
+bool emitter_holds(GpuView v, vec2 xy) {
+    switch (emitter_kind(v)) {
+    case EMITTER_SQUARE: return max(abs(xy.x), abs(xy.y)) <= 1.0;
+    case EMITTER_CONE: return inversesqrt(1.0 + dot(xy, xy)) >= v.right.w;
+    default: return true;
+    }
+}
+
+// Whether the image-plane rectangle [lo, hi] intersects the domain (conservative).
+bool emitter_touches(GpuView v, vec2 lo, vec2 hi) {
+    switch (emitter_kind(v)) {
+    case EMITTER_SQUARE: return all(lessThanEqual(lo, vec2(1.0))) && all(greaterThanEqual(hi, vec2(-1.0)));
+    case EMITTER_CONE: {
+        float c = v.right.w;
+        float t2 = (1.0 - c * c) / (c * c);  // tan^2 of the half-angle
+        vec2 q = clamp(vec2(0.0), lo, hi);
+        return dot(q, q) <= t2;
+    }
+    default: return true;
+    }
+}
+
+// Whether the rectangle lies wholly inside the domain (its farthest corner does: both domains are symmetric and
+// convex).
+bool emitter_contains(GpuView v, vec2 lo, vec2 hi) {
+    uint k = emitter_kind(v);
+    if (k == EMITTER_BEAM || k == EMITTER_OPEN) return true;
+    return emitter_holds(v, max(abs(lo), abs(hi)));
+}
+
+// The solid angle (sr), or the area across a beam (m^2), of a square image-plane cell of side d centered at xy.
+float emitter_measure(GpuView v, vec2 xy, float d) { return view_cell_measure(v, xy, d); }
+
+// The ray through image-plane point xy.
+void emitter_ray(GpuView v, vec2 xy, out vec3 ro, out vec3 rd) { view_ray_xy(v, xy, ro, rd); }
+
+// Ray differentials (Igehy, "Tracing Ray Differentials", SIGGRAPH 1999): how a photon ray's origin and unit
+// direction change across one cell width of its emitting cell, along the light view's two cell axes x and y
+// (`--footprint differential`). At the receiver, dP/dx and dP/dy are the sides of the parallelogram the cell
+// covers there, which sizes the splat.
+struct RayDiff {
+    vec3 dpx, dpy;  // dP/dx, dP/dy (m per cell)
+    vec3 ddx, ddy;  // dD/dx, dD/dy (per cell)
+};
+
+// The differentials of the ray rd through xy across a cell of sides `side`. From a point (every kind but a beam):
+// P is the light's position, so dP = 0, and D = d/|d| with d = x right + y down + forward, so dD = (dd - D (D.dd))
+// / |d| with dd = one cell side along right (or down). A beam: dP = one cell side along right (or down), dD = 0.
+RayDiff emitter_ray_diff(GpuView v, vec2 xy, vec2 side, vec3 rd) {
+    vec3 ex = side.x * v.right.xyz, ey = side.y * v.down.xyz;
+    RayDiff r;
+    if (emitter_kind(v) == EMITTER_BEAM) {
+        r.dpx = ex;
+        r.dpy = ey;
+        r.ddx = vec3(0.0);
+        r.ddy = vec3(0.0);
+    } else {
+        float len = length(xy.x * v.right.xyz + xy.y * v.down.xyz + v.forward.xyz);
+        r.dpx = vec3(0.0);
+        r.dpy = vec3(0.0);
+        r.ddx = (ex - rd * dot(rd, ex)) / len;
+        r.ddy = (ey - rd * dot(rd, ey)) / len;
+    }
+    return r;
+}
+
+#endif
