@@ -53,23 +53,23 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 // Direct and caustic irradiance at receiver point p (shading normal ns), which the eye's ray reaches along d, from
 // one light, its caustics averaged over the pixel's footprint: the square of side `width` on the tangent plane
 // (axes t1, t2), in its caustic map.
-vec3 light_irradiance(GpuView lv, vec3 power, float bias, sampler2D shadow, sampler2D irr, usampler2D recv, vec3 p,
-                      vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
+vec3 light_irradiance(GpuView lv, vec3 power, float bias, float spread, sampler2D shadow, sampler2D irr, usampler2D recv,
+                      vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
-    return direct_irradiance_in(lv, power, bias, shadow, p, ns) + light_map_irradiance(lv, irr, recv, p, ns, d, dx, dy);
+    return direct_irradiance_in(lv, power, bias, spread, shadow, p, ns) + light_map_irradiance(lv, irr, recv, p, ns, d, dx, dy);
 }
 
 // The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
 vec3 lights_irradiance(vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
-    vec3 e = light_irradiance(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, t_shadow,
+    vec3 e = light_irradiance(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, u_frame.light.beam_spread, t_shadow,
                               t_irradiance, t_recv, p, ns, d, t1, t2, width);
     if (GLASS_LIGHT_COUNT > 1u) {
-        e += light_irradiance(u_light1.light.receiver_view, u_light1.light.light_power, u_light1.frame.shadow_bias, t_shadow1,
+        e += light_irradiance(u_light1.light.receiver_view, u_light1.light.light_power, u_light1.frame.shadow_bias, u_light1.light.beam_spread, t_shadow1,
                               t_irradiance1, t_recv1, p, ns, d, t1, t2, width);
     }
     if (GLASS_LIGHT_COUNT > 2u) {
-        e += light_irradiance(u_light2.light.receiver_view, u_light2.light.light_power, u_light2.frame.shadow_bias, t_shadow2,
+        e += light_irradiance(u_light2.light.receiver_view, u_light2.light.light_power, u_light2.frame.shadow_bias, u_light2.light.beam_spread, t_shadow2,
                               t_irradiance2, t_recv2, p, ns, d, t1, t2, width);
     }
     return e;

@@ -5,10 +5,13 @@
 //   domain or lies wholly inside it (emitter_touches, emitter_contains: the traversal's conservative tests);
 // - a cell's measure: the solid angle (sr) or the area across the beam (m^2) it emits into, so that a photon's
 //   flux is the light's intensity times it (emitter_measure);
-// - its sample: the ray through an image-plane point, and how it changes across a cell (emitter_ray,
-//   emitter_ray_diff).
+// - its sample: the ray of an image-plane point and a point u of the unit square (each cell's own, from
+//   emitter_cell_sample), and how it changes across a cell (emitter_ray, emitter_ray_diff).
 // The kinds (emitter_kind; src/scene/view.rs EmitterKind writes the view's lanes that say which):
-// - EMITTER_BEAM: a directional light, parallel rays over the window (an orthographic view);
+// - EMITTER_BEAM: a directional light, rays over the window (an orthographic view): parallel, or a sun's, whose
+//   radiance is uniform over a disk of directions (LightUniforms.beam_spread, the tangent of its angular radius):
+//   each cell's ray takes the direction u maps to on that disk, through the cell at the glass's depth
+//   (beam_pivot), so that a tilted ray still meets the glass where its cell's coverage says;
 // - EMITTER_OPEN: a point light whose objects all lie in front of it, rays from a point over the whole window;
 // - EMITTER_CONE: a spot light, rays from a point within a cone (right.w its cosine);
 // - EMITTER_SQUARE: a face of a point light's cube, rays from a point through the square |x|, |y| <= 1 of its
@@ -59,8 +62,52 @@ bool emitter_contains(GpuView v, vec2 lo, vec2 hi) {
 // The solid angle (sr), or the area across a beam (m^2), of a square image-plane cell of side d centered at xy.
 float emitter_measure(GpuView v, vec2 xy, float d) { return view_cell_measure(v, xy, d); }
 
-// The ray through image-plane point xy.
-void emitter_ray(GpuView v, vec2 xy, out vec3 ro, out vec3 rd) { view_ray_xy(v, xy, ro, rd); }
+// A point of the unit square for cell (level, xy), so that any few neighbouring cells spread evenly over it: the 2D
+// R2 sequence (Roberts 2018, in 32-bit fixed point) at the cell's Morton index, shifted by a hash of the level.
+uint emitter_hash(uint x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    return x ^ (x >> 16);
+}
+uint emitter_spread_bits(uint v) {
+    v &= 0xFFFFu;
+    v = (v | (v << 8)) & 0x00FF00FFu;
+    v = (v | (v << 4)) & 0x0F0F0F0Fu;
+    v = (v | (v << 2)) & 0x33333333u;
+    return (v | (v << 1)) & 0x55555555u;
+}
+vec2 emitter_cell_sample(uint level, uvec2 xy) {
+    uint n = emitter_spread_bits(xy.x) | (emitter_spread_bits(xy.y) << 1);
+    uint h = emitter_hash(level + 0x9e3779b9u);
+    uvec2 q = uvec2(n * 0xC13FA9A9u + h, n * 0x91E10DA5u + emitter_hash(h));
+    return vec2(q >> 8u) * (1.0 / 16777216.0);
+}
+
+// Shirley and Chiu's concentric map of the unit square onto the unit disk (area-preserving).
+vec2 emitter_disk(vec2 u) {
+    vec2 o = 2.0 * u - 1.0;
+    if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
+    const float QUARTER_PI = 0.78539816339;
+    bool wide = abs(o.x) > abs(o.y);
+    float r = wide ? o.x : o.y;
+    float theta = wide ? QUARTER_PI * (o.y / o.x) : 2.0 * QUARTER_PI - QUARTER_PI * (o.x / o.y);
+    return r * vec2(cos(theta), sin(theta));
+}
+
+// The ray of image-plane point xy and sample u. A sun's (a beam with beam_spread > 0): its direction u's point of
+// the disk of directions, through xy's point at depth beam_pivot, from the view's plane. Needs u_frame.
+void emitter_ray(GpuView v, vec2 xy, vec2 u, out vec3 ro, out vec3 rd) {
+    view_ray_xy(v, xy, ro, rd);
+    float spread = u_frame.light.beam_spread;
+    if (emitter_kind(v) == EMITTER_BEAM && spread > 0.0) {
+        vec2 d = spread * emitter_disk(u);
+        rd = normalize(v.forward.xyz + d.x * v.right.xyz + d.y * v.down.xyz);
+        float pivot = u_frame.light.beam_pivot;
+        ro += v.forward.xyz * pivot - rd * (pivot / dot(rd, v.forward.xyz));
+    }
+}
 
 // Ray differentials (Igehy, "Tracing Ray Differentials", SIGGRAPH 1999): how a photon ray's origin and unit
 // direction change across one cell width of its emitting cell, along the light view's two cell axes x and y

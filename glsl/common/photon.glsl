@@ -36,7 +36,8 @@ Hit trace_photon(vec2 uv, float side, bool covered) {
     vec4 front;
     if (!covered || !geo_sample(t_front, uv, front)) { h.status = HIT_MISS; return h; }
     vec3 ro, rd;
-    emitter_ray(v, xy, ro, rd);
+    // (The two-interface trace reads the front surface where the straight ray meets it: a sun's rays are parallel.)
+    view_ray_xy(v, xy, ro, rd);
     vec3 p1 = ro + rd * front.w;
     // (A receiver between the light and the refractor shadows it: coverage.comp leaves such texels uncovered.)
     ivec2 aux_size = textureSize(t_front_aux, 0);

@@ -22,13 +22,67 @@ float linear_depth(GpuView v, float z) {
 // Percentage-closer filtering: a 4x4 grid of shadow-map texels with bilinear weights over a 3x3-texel tent (the
 // 2x2 bilinear PCF, box-filtered over 3x3 positions a texel apart), so that a shadow edge is a smooth ramp about
 // three texels wide instead of a staircase of texels.
-float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, vec3 p, vec3 n) {
+// A sun (`spread`: the tangent of its angular radius, over an orthographic shadow map): the fraction of its disk of
+// directions that reaches p. A direction tilted by t (on the tangent plane) meets a blocker at depth z_b where the
+// straight ray through p + (z - z_b) t does, so the lit fraction is the shadow test averaged over the disk of
+// radius (z - z_b) spread around p (Fernando's percentage-closer soft shadows): a blocker search over the widest
+// such disk (4x4 tests) gives the blockers' mean depth, then 8x8 tests spread uniformly over that disk, the pattern
+// turned by an angle hashed from p's texel (noise, which the eye's samples average, in place of 64 bands). Where the
+// search finds no blocker, p sees the whole sun; a penumbra under 1.5 texels takes the 3x3 tent.
+float sun_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float texel, float slope, float bias_texels,
+                       float spread, out bool hard) {
+    hard = false;
+    ivec2 size = textureSize(shadow, 0);
+    float near = v.down.w;
+    float search = clamp((img.z - near) * spread / texel, 1.0, float(max(size.x, size.y)));
+    float blockers = 0.0, depth = 0.0;
+    for (int j = 0; j < 4; j++) {
+        for (int i = 0; i < 4; i++) {
+            vec2 o = (vec2(i, j) + 0.5) / 2.0 - 1.0;
+            ivec2 q = clamp(ivec2(floor(st + 0.5 + o * search)), ivec2(0), size - 1);
+            float z = linear_depth(v, texelFetch(shadow, q, 0).x);
+            float bias = bias_texels * texel * (1.0 + length(o) * search * slope);
+            if (z < img.z - bias) {
+                blockers += 1.0;
+                depth += z;
+            }
+        }
+    }
+    if (blockers == 0.0) return 1.0;
+    float w = (img.z - depth / blockers) * spread / texel;
+    if (w < 1.5) {
+        hard = true;
+        return 1.0;
+    }
+    ivec2 t = ivec2(floor(st));
+    float turn = float(emitter_hash(uint(t.x) * 73856093u ^ uint(t.y) * 19349663u) >> 8) * (6.28318531 / 16777216.0);
+    mat2 rot = mat2(cos(turn), sin(turn), -sin(turn), cos(turn));
+    float lit = 0.0;
+    for (int j = 0; j < 8; j++) {
+        for (int i = 0; i < 8; i++) {
+            vec2 o = w * (rot * emitter_disk((vec2(i, j) + 0.5) / 8.0));
+            ivec2 q = clamp(ivec2(floor(st + 0.5 + o)), ivec2(0), size - 1);
+            float bias = bias_texels * texel * (1.0 + length(o) * slope);
+            lit += img.z - bias <= linear_depth(v, texelFetch(shadow, q, 0).x) ? 1.0 : 0.0;
+        }
+    }
+    return lit / 64.0;
+}
+
+float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, float spread, vec3 p, vec3 n) {
     vec3 img = view_image(v, p);
     vec2 uv = (img.xy - v.window.xy) / v.window.zw;
     if (!uv_inside_strict(uv)) return 1.0;
     float texel = v.window.z * v.extent.z * (view_is_ortho(v) ? 1.0 : img.z);
     vec3 l = -view_dir_to(v, p);
     float cos_t = clamp(abs(dot(n, l)), 0.05, 1.0);
+    if (spread > 0.0 && view_is_ortho(v)) {
+        bool hard;
+        float slope = sqrt(1.0 - cos_t * cos_t) / cos_t;
+        vec2 st0 = uv * vec2(textureSize(shadow, 0)) - 0.5;
+        float lit = sun_lit_fraction(v, shadow, img, st0, texel, slope, bias_texels, spread, hard);
+        if (!hard) return lit;
+    }
     // The tent reaches 2 texels out: the bias grows with it along the slope.
     float bias = bias_texels * texel * (1.0 + 2.0 * sqrt(1.0 - cos_t * cos_t) / cos_t);
     ivec2 size = textureSize(shadow, 0);
@@ -49,19 +103,20 @@ float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, vec3 p, ve
 }
 
 // Direct irradiance (W/m^2) at p with normal n from a light with view lv and power (W/sr, or W/m^2 across a
-// directional beam), shadowed by its shadow map.
-vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, sampler2D shadow, vec3 p, vec3 n) {
+// directional beam), shadowed by its shadow map (softened by a sun's `spread`).
+vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, float spread, sampler2D shadow, vec3 p, vec3 n) {
     vec3 img = view_image(lv, p);
     vec3 l = -view_dir_to(lv, p);
     float cos_s = dot(n, l);
     if (!(cos_s > 0.0 && emitter_holds(lv, img.xy) && img.z > 0.0)) return vec3(0.0);
     float d2 = view_is_ortho(lv) ? 1.0 : dot(p - lv.origin.xyz, p - lv.origin.xyz);
-    return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, p, n);
+    return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, spread, p, n);
 }
 
 // The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
 vec3 direct_irradiance(vec3 p, vec3 n) {
-    return direct_irradiance_in(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, t_shadow, p, n);
+    return direct_irradiance_in(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias,
+                                u_frame.light.beam_spread, t_shadow, p, n);
 }
 vec3 caustic_irradiance(vec3 p, vec3 n, vec3 eye, vec2 dx, vec2 dy) {
     return light_map_irradiance(u_frame.light.receiver_view, t_irradiance, t_recv, p, n, eye, dx, dy);

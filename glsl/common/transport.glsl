@@ -9,10 +9,11 @@
 #include "common/emitter.glsl"
 
 
-// The photon ray of a cell: the emitter's ray through the cell's center (common/emitter.glsl).
+// The photon ray of a cell: the emitter's ray through the cell's center, with the cell's own sample
+// (common/emitter.glsl).
 void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {
     GpuView v = u_frame.light.photon_view;
-    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), ro, rd);
+    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), emitter_cell_sample(level, xy), ro, rd);
 }
 
 // A cell's ray and its differentials across one cell side (emitter_ray_diff).
@@ -171,7 +172,10 @@ const uint DOM_LONG = 4u;     // still in the glass after CHECK_INTERACTIONS: wh
 // throughput (the product of the branch fractions it kept: the share of the cell's flux that follows it).
 uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out float throughput) {
     vec3 ro, rd;
-    cell_ray(level, xy, ro, rd);
+    // The straight ray: a sun's cells refine where its center's caustic needs them (their sampled directions are
+    // the waves').
+    GpuView v = u_frame.light.photon_view;
+    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), vec2(0.5), ro, rd);
     map_px = vec2(-1e9);
     events = 0u;
     throughput = 1.0;

@@ -446,10 +446,16 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
                     let (y0, y1) =
                         (proj(down).fold(f64::INFINITY, f64::min), proj(down).fold(f64::NEG_INFINITY, f64::max));
                     let depth0 = all_pts.iter().map(|&q| (q - pos).dot(fwd)).fold(f64::INFINITY, f64::min);
+                    // A sun's tilted rays reach what they light from as far to the side as its depth times the
+                    // tangent of its angular radius.
+                    let radius = light.angular_radius as f64;
+                    let depth1 = pts.iter().map(|&q| (q - pos).dot(fwd)).fold(f64::NEG_INFINITY, f64::max);
+                    let m = (depth1 - depth0 + 1e-3).max(0.0) * radius.tan();
+                    let (x0, x1, y0, y1) = (x0 - m, x1 + m, y0 - m, y1 + m);
                     let pad = 1e-6 * (1.0 + (x1 - x0).max(y1 - y0));
                     let (x0, x1, y0, y1) = (x0 - pad, x1 + pad, y0 - pad, y1 + pad);
                     let corner = pos + right * x0 + down * y0 + fwd * (depth0 - 1e-3 - pad);
-                    let e = Emission::Beam { corner, eu: right * (x1 - x0), ev: down * (y1 - y0), dir: fwd };
+                    let e = Emission::Beam { corner, eu: right * (x1 - x0), ev: down * (y1 - y0), dir: fwd, radius };
                     (e, if caustics_only { "beam over refractors" } else { "beam over scene" }, None)
                 }
             };

@@ -94,6 +94,10 @@ pub enum Emission {
         eu: DVec3,
         ev: DVec3,
         dir: DVec3,
+        /// A sun's angular radius, radians (0: parallel rays): its directions are uniform in solid angle within
+        /// this cone around `dir` (the cos θ that weighs each across the rectangle, within 1 − cos of 1, is left
+        /// out: 4e-5 for 1°).
+        radius: f64,
     },
 }
 
@@ -106,9 +110,14 @@ impl Emission {
         }
     }
 
+    /// A sun: its directions take a point of their own.
+    pub fn has_size(&self) -> bool {
+        matches!(*self, Emission::Beam { radius, .. } if radius > 0.0)
+    }
+
     /// The ray for a point (a, b) ∈ [0, 1)² of the stratified domain, uniform in solid angle (cone) or in area
-    /// (beam); `None` when the direction falls outside the spot cone.
-    pub fn ray(&self, a: f64, b: f64) -> Option<(DVec3, DVec3)> {
+    /// (beam), and (c, d) ∈ [0, 1)² for a sun's direction; `None` when the direction falls outside the spot cone.
+    pub fn ray(&self, a: f64, b: f64, c: f64, d: f64) -> Option<(DVec3, DVec3)> {
         match *self {
             Emission::Cone { origin, u, v, axis, cos_half, spot_axis, cos_spot } => {
                 // (cos θ, φ) parametrization: cos θ uniform in [cos_half, 1] is uniform in solid angle.
@@ -118,7 +127,18 @@ impl Emission {
                 let d = (u * (sin_t * phi.cos()) + v * (sin_t * phi.sin()) + axis * cos_t).normalize();
                 (d.dot(spot_axis) >= cos_spot).then_some((origin, d))
             }
-            Emission::Beam { corner, eu, ev, dir } => Some((corner + eu * b + ev * a, dir)),
+            Emission::Beam { corner, eu, ev, dir, radius } => {
+                let dir = if radius > 0.0 {
+                    let cos_t = 1.0 - c * (1.0 - radius.cos());
+                    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+                    let phi = 2.0 * std::f64::consts::PI * d;
+                    let (u, v) = (eu.normalize(), ev.normalize());
+                    (u * (sin_t * phi.cos()) + v * (sin_t * phi.sin()) + dir * cos_t).normalize()
+                } else {
+                    dir
+                };
+                Some((corner + eu * b + ev * a, dir))
+            }
         }
     }
 }
@@ -171,7 +191,7 @@ mod tests {
         let s = Strata::new(1000);
         for i in 0..1000 {
             let (a, b) = s.point(i, 0.5, 0.5);
-            let (_, d) = e.ray(a, b).unwrap();
+            let (_, d) = e.ray(a, b, 0.0, 0.0).unwrap();
             assert!(d.dot(axis) >= cos_half - 1e-12);
         }
     }

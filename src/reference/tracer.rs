@@ -401,7 +401,9 @@ impl Tracer<'_> {
         let mut rng = Rng::new(self.seed, li as u64, i);
         let (a, b) = light.strata.point(i, rng.next_f64(), rng.next_f64());
         let t = &mut out.tally;
-        let Some((mut o, mut d)) = emission.ray(a, b) else {
+        // A sun's direction takes two numbers more (other lights' photons draw the same numbers as before).
+        let (c, e) = if emission.has_size() { (rng.next_f64(), rng.next_f64()) } else { (0.0, 0.0) };
+        let Some((mut o, mut d)) = emission.ray(a, b, c, e) else {
             t.photons_outside_cone += 1;
             return;
         };

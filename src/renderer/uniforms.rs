@@ -134,7 +134,11 @@ pub(crate) fn frame_data(
         light_spectrum_c0: light_spectrum[0],
         light_spectrum_c1: light_spectrum[1],
         light_spectrum_c2: light_spectrum[2],
-        pad: 0,
+        beam_spread: if light.kind == LightKind::Directional { light.angular_radius.tan() } else { 0.0 },
+        beam_pivot: (0.5 * (rlo + rhi) - photon_view.origin).dot(photon_view.forward).max(0.0),
+        pad0: 0,
+        pad1: 0,
+        pad2: 0,
     };
     // The environment's light is added once: by the first light's eye shading (and the composite, which reads the
     // first pass's uniforms).

@@ -102,6 +102,9 @@ pub struct Light {
     pub intensity: f32,
     /// RGB color multiplying its power per channel.
     pub color: Vec3,
+    /// A directional light's angular radius, radians: its radiance is uniform over a disk of directions this wide
+    /// around its axis (a sun; 0: parallel rays). `intensity` stays the irradiance across the beam.
+    pub angular_radius: f32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -899,6 +902,26 @@ material = { kind = "dielectric", ior = 1.5 }
     fn cone_out_of_range() {
         let e = parse(&BASE.replace("cone_deg = 40.0", "cone_deg = 90.0")).unwrap_err().to_string();
         assert!(e.contains("test.toml:6: light[0].cone_deg"), "{e}");
+    }
+
+    /// A sun is a directional light 0.53° across unless it says otherwise; a spot has no angular size, and a sun's
+    /// stays within [0, 20]°.
+    #[test]
+    fn a_sun_has_its_size() {
+        let sun = BASE.replace("kind = \"spot\"", "kind = \"sun\"").replace("cone_deg = 40.0\n", "");
+        let light = &parse(&sun).unwrap().lights[0];
+        assert_eq!(light.kind, LightKind::Directional);
+        assert!((light.angular_radius - 0.265f32.to_radians()).abs() < 1e-9);
+        let wide = sun.replace("intensity = 1.0", "intensity = 1.0\nangular_diameter_deg = 2.0");
+        assert!((parse(&wide).unwrap().lights[0].angular_radius - 1f32.to_radians()).abs() < 1e-9);
+        let e = parse(&wide.replace("2.0", "25.0")).unwrap_err().to_string();
+        assert!(e.contains("test.toml:7: light[0].angular_diameter_deg") && e.contains("[0, 20]"), "{e}");
+        let spot = BASE.replace("intensity = 1.0", "intensity = 1.0\nangular_diameter_deg = 0.5");
+        let e = parse(&spot).unwrap_err().to_string();
+        assert!(
+            e.contains("light[0].angular_diameter_deg") && e.contains("a spot light has no angular diameter"),
+            "{e}"
+        );
     }
 
     #[test]

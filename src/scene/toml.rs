@@ -123,16 +123,17 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
     let f = |name: &str| format!("light[{i}].{name}");
     let kind = match d.kind.get_ref().as_str() {
         "spot" => LightKind::Spot,
-        "directional" => LightKind::Directional,
+        "directional" | "sun" => LightKind::Directional,
         "point" => LightKind::Point,
         other => {
             return Err(cx.err(
                 d.kind.span(),
                 f("kind"),
-                format!("unknown light kind `{other}` (expected \"spot\", \"directional\" or \"point\")"),
+                format!("unknown light kind `{other}` (expected \"spot\", \"directional\", \"sun\" or \"point\")"),
             ))
         }
     };
+    let angular_radius = angular_radius(cx, i, d)?;
     let required = |v: Option<S<[f32; 3]>>, name: &str| {
         v.ok_or_else(|| cx.err(l.span(), f(name), format!("a light needs `{name}` (missing field `{name}`)")))
     };
@@ -195,7 +196,34 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
         }
         None => Vec3::ONE,
     };
-    Ok(Light { kind, position: position.into(), target: target.into(), cone, intensity, color })
+    Ok(Light { kind, position: position.into(), target: target.into(), cone, intensity, color, angular_radius })
+}
+
+/// The Sun's mean angular diameter seen from the Earth, degrees: a `sun`'s by default.
+pub const SUN_DIAMETER_DEG: f32 = 0.53;
+
+/// A directional light's angular radius (radians) from `angular_diameter_deg`: a `sun`'s 0.53° by default, a
+/// `directional` light's 0 (parallel rays); no other kind has one.
+fn angular_radius(cx: &Ctx, i: usize, d: &LightDef) -> Result<f32, SceneError> {
+    let name = format!("light[{i}].angular_diameter_deg");
+    let kind = d.kind.get_ref().as_str();
+    let deg = match (&d.angular_diameter_deg, kind) {
+        (None, "sun") => SUN_DIAMETER_DEG,
+        (None, _) => 0.0,
+        (Some(a), "sun" | "directional") => *a.get_ref(),
+        (Some(a), _) => {
+            return Err(cx.err(
+                a.span(),
+                name,
+                format!("a {kind} light has no angular diameter (a sun or a directional light has)"),
+            ))
+        }
+    };
+    if !(0.0..=20.0).contains(&deg) {
+        let span = d.angular_diameter_deg.as_ref().map_or(d.kind.span(), |a| a.span());
+        return Err(cx.err(span, name, format!("must lie in [0, 20] degrees (got {deg})")));
+    }
+    Ok(0.5 * deg.to_radians())
 }
 
 fn camera(cx: &Ctx, i: usize, c: &S<CameraDef>) -> Result<Camera, SceneError> {

@@ -503,6 +503,7 @@ mod tests {
             cone: 40f32.to_radians(),
             intensity: 1.0,
             color: Vec3::ONE,
+            angular_radius: 0.0,
         }
     }
 
