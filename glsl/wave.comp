@@ -287,7 +287,10 @@ void record_at(Traced t, RayDiff rdf, vec3 p, vec3 ng, vec3 rd, float flux, inou
     // gave it (its children's spread): the parallelogram the whole cell covers where it lands, which a round splat
     // of the spread fits only where that is round.
     uint r = t.lod ? side_splat_radius(weak_widen(t.cell) * cell_side(cell_level(t.cell))) : cell_splat_radius(t.cell);
-    if (!deposit_landing(p, ng, rd, rdf, r, WAVE_DIFFERENTIAL, flux * u_frame.light.light_intensity, o.record)) {
+    // A sun's photon takes one direction of its disk (common/emitter.glsl): where it lands scatters by the disk's
+    // image over the ray's last segment.
+    float jitter = u_frame.light.beam_spread * distance(p, t.ray.origin);
+    if (!deposit_landing(p, ng, rd, rdf, r, WAVE_DIFFERENTIAL, jitter, flux * u_frame.light.light_intensity, o.record)) {
         acc[ACC_UNSEEN] += flux;
         return;
     }

@@ -14,18 +14,18 @@
 #include "common/deposit_eye.glsl"
 
 // A landing at p (geometric normal ng) arriving along rd, of flux `flux` (W), whose photon's cell has the splat
-// radius r_cell (caustic-map texels) and the ray differentials rdf (`differential`): its record in the first
-// deposit that holds it. Returns false where none does.
-bool deposit_landing(vec3 p, vec3 ng, vec3 rd, RayDiff rdf, uint r_cell, bool differential, float flux,
+// radius r_cell (caustic-map texels) and the ray differentials rdf (`differential`), and a sun's jitter (m,
+// light_map_footprint): its record in the first deposit that holds it. Returns false where none does.
+bool deposit_landing(vec3 p, vec3 ng, vec3 rd, RayDiff rdf, uint r_cell, bool differential, float jitter, float flux,
                      out GpuSplat record) {
     GpuView rv = u_frame.light.receiver_view;
     vec2 uv;
     if (light_map_project(rv, t_recv, p, ng, rd, uv)) {
-        record = GpuSplat(uv * rv.extent.xy, flux, light_map_footprint(rv, p, rdf, r_cell, differential));
+        record = GpuSplat(uv * rv.extent.xy, flux, light_map_footprint(rv, p, rdf, r_cell, differential, jitter));
         return true;
     }
     if (u_frame.frame.eye_deposit != 0u && eye_project(p, rd, uv)) {
-        record = GpuSplat(uv * vec2(textureSize(t_eye, 0)), flux, -eye_footprint(p, rdf, differential));
+        record = GpuSplat(uv * vec2(textureSize(t_eye, 0)), flux, -eye_footprint(p, rdf, differential, jitter));
         return true;
     }
     return false;

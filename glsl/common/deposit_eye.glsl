@@ -39,11 +39,18 @@ bool eye_project(vec3 p, vec3 rd, out vec2 uv) {
 
 #ifdef TRANSPORT_GLSL
 // A record's shape in eye samples: the ray differentials projected into the eye's image (`differential`), its
-// radius at most EYE_SPLAT_RADIUS, else one sample.
-float eye_footprint(vec3 p, RayDiff rdf, bool differential) {
+// radius at most EYE_SPLAT_RADIUS, else one sample. A sun's `jitter` (m) widens it as the light map's footprint
+// (common/deposit_light_map.glsl).
+float eye_footprint(vec3 p, RayDiff rdf, bool differential, float jitter) {
     if (!differential) return 1.0;
     GpuView cam = u_frame.frame.camera;
     vec2 mx = view_px_diff(cam, p, rdf.dpx), my = view_px_diff(cam, p, rdf.dpy);
+    if (jitter > 0.0) {
+        float sample_side = cam.window.z * cam.extent.z * (view_is_ortho(cam) ? 1.0 : view_dist(cam, p));
+        float f = clamp(jitter / sample_side / max(sqrt(abs(mx.x * my.y - mx.y * my.x)), 1.0), 1.0, 3.0);
+        mx *= f;
+        my *= f;
+    }
     uint r = uint(clamp(round(sqrt(abs(mx.x * my.y - mx.y * my.x))), 1.0, float(EYE_SPLAT_RADIUS)));
     return footprint_radii(mx, my, r);
 }
