@@ -62,14 +62,14 @@ vec3 light_irradiance(GpuView lv, vec3 power, float bias, float spread, sampler2
 
 // The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
 vec3 lights_irradiance(vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
-    vec3 e = light_irradiance(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, u_frame.light.beam_spread, t_shadow,
+    vec3 e = light_irradiance(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, shadow_size(u_frame.light), t_shadow,
                               t_irradiance, t_recv, p, ns, d, t1, t2, width);
     if (GLASS_LIGHT_COUNT > 1u) {
-        e += light_irradiance(u_light1.light.receiver_view, u_light1.light.light_power, u_light1.frame.shadow_bias, u_light1.light.beam_spread, t_shadow1,
+        e += light_irradiance(u_light1.light.receiver_view, u_light1.light.light_power, u_light1.frame.shadow_bias, shadow_size(u_light1.light), t_shadow1,
                               t_irradiance1, t_recv1, p, ns, d, t1, t2, width);
     }
     if (GLASS_LIGHT_COUNT > 2u) {
-        e += light_irradiance(u_light2.light.receiver_view, u_light2.light.light_power, u_light2.frame.shadow_bias, u_light2.light.beam_spread, t_shadow2,
+        e += light_irradiance(u_light2.light.receiver_view, u_light2.light.light_power, u_light2.frame.shadow_bias, shadow_size(u_light2.light), t_shadow2,
                               t_irradiance2, t_recv2, p, ns, d, t1, t2, width);
     }
     return e;

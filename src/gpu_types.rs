@@ -102,12 +102,14 @@ pub struct LightUniforms {
     pub light_spectrum_c0: f32,
     pub light_spectrum_c1: f32,
     pub light_spectrum_c2: f32,
-    /// A sun's spread (glsl/common/emitter.glsl): the tangent of its angular radius (0: parallel rays), and the depth
-    /// along its axis, from its view's origin, where each cell's tilted rays cross the cell (the glass's middle).
+    /// A light with size (glsl/common/emitter.glsl): the tangent of the angular radius it shows the glass (a sun's
+    /// own; a sphere light's radius over its distance; 0: a point or parallel rays), and the distance from its
+    /// view's origin, along its rays, at which each cell's rays cross the cell (the glass's middle).
     pub beam_spread: f32,
     pub beam_pivot: f32,
+    /// A sphere light's radius, m (0: a point).
+    pub light_radius: f32,
     /// To a multiple of 16 bytes, as std140 places the struct (scalars: std140 aligns an array to 16 bytes).
-    pub pad0: u32,
     pub pad1: u32,
     pub pad2: u32,
 }

@@ -16,6 +16,11 @@
 // - EMITTER_CONE: a spot light, rays from a point within a cone (right.w its cosine);
 // - EMITTER_SQUARE: a face of a point light's cube, rays from a point through the square |x|, |y| <= 1 of its
 //   image plane (right.w = VIEW_SQUARE_DOMAIN), so that the faces partition the sphere of directions.
+// A light with size samples it with the cell's point u: a sun (a beam whose radiance is uniform over a disk of
+// directions) tilts the cell's ray by u's point of that disk; a sphere light (a point or spot light with
+// LightUniforms.light_radius) starts it at u's point of the sphere's disk across the cell's direction, aimed at
+// where the straight ray is at the glass's depth. Either way the ray still meets the glass where its cell's
+// coverage says, and the light's intensity through the cell is unchanged.
 // A light's direct light and shadows hold the same domain (common/receiver.glsl).
 #ifndef EMITTER_GLSL
 #define EMITTER_GLSL
@@ -97,15 +102,26 @@ vec2 emitter_disk(vec2 u) {
 }
 
 // The ray of image-plane point xy and sample u. A sun's (a beam with beam_spread > 0): its direction u's point of
-// the disk of directions, through xy's point at depth beam_pivot, from the view's plane. Needs u_frame.
+// the disk of directions, through xy's point at depth beam_pivot, from the view's plane. A sphere light's
+// (light_radius > 0): from u's point of the sphere's disk across the straight ray, through the straight ray's point
+// at distance beam_pivot. Needs u_frame.
 void emitter_ray(GpuView v, vec2 xy, vec2 u, out vec3 ro, out vec3 rd) {
     view_ray_xy(v, xy, ro, rd);
-    float spread = u_frame.light.beam_spread;
-    if (emitter_kind(v) == EMITTER_BEAM && spread > 0.0) {
-        vec2 d = spread * emitter_disk(u);
-        rd = normalize(v.forward.xyz + d.x * v.right.xyz + d.y * v.down.xyz);
-        float pivot = u_frame.light.beam_pivot;
-        ro += v.forward.xyz * pivot - rd * (pivot / dot(rd, v.forward.xyz));
+    float spread = u_frame.light.beam_spread, radius = u_frame.light.light_radius;
+    float pivot = u_frame.light.beam_pivot;
+    if (emitter_kind(v) == EMITTER_BEAM) {
+        if (spread > 0.0) {
+            vec2 d = spread * emitter_disk(u);
+            rd = normalize(v.forward.xyz + d.x * v.right.xyz + d.y * v.down.xyz);
+            ro += v.forward.xyz * pivot - rd * (pivot / dot(rd, v.forward.xyz));
+        }
+    } else if (radius > 0.0) {
+        vec3 b1 = normalize(cross(rd, abs(rd.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+        vec3 b2 = cross(rd, b1);
+        vec2 d = radius * emitter_disk(u);
+        vec3 aim = ro + rd * pivot;
+        ro += d.x * b1 + d.y * b2;
+        rd = normalize(aim - ro);
     }
 }
 

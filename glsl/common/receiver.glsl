@@ -22,19 +22,22 @@ float linear_depth(GpuView v, float z) {
 // Percentage-closer filtering: a 4x4 grid of shadow-map texels with bilinear weights over a 3x3-texel tent (the
 // 2x2 bilinear PCF, box-filtered over 3x3 positions a texel apart), so that a shadow edge is a smooth ramp about
 // three texels wide instead of a staircase of texels.
-// A sun (`spread`: the tangent of its angular radius, over an orthographic shadow map): the fraction of its disk of
-// directions that reaches p. A direction tilted by t (on the tangent plane) meets a blocker at depth z_b where the
-// straight ray through p + (z - z_b) t does, so the lit fraction is the shadow test averaged over the disk of
-// radius (z - z_b) spread around p (Fernando's percentage-closer soft shadows): a blocker search over the widest
+// A light with size (`size`: a sun's tangent of its angular radius, over an orthographic shadow map; a sphere
+// light's radius, m, over a perspective one): the fraction of it that reaches p. A sun's direction tilted by t (on
+// the tangent plane) meets a blocker at depth z_b where the straight ray through p + (z - z_b) t does, so the lit
+// fraction is the shadow test averaged over the disk of radius (z - z_b) size around p; a sphere's, of radius
+// size (z - z_b) / z_b (Fernando's percentage-closer soft shadows): a blocker search over the widest
 // such disk (4x4 tests) gives the blockers' mean depth, then 8x8 tests spread uniformly over that disk, the pattern
 // turned by an angle hashed from p's texel (noise, which the eye's samples average, in place of 64 bands). Where the
 // search finds no blocker, p sees the whole sun; a penumbra under 1.5 texels takes the 3x3 tent.
-float sun_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float texel, float slope, float bias_texels,
-                       float spread, out bool hard) {
+float soft_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float texel, float slope, float bias_texels,
+                        float light_size, out bool hard) {
     hard = false;
     ivec2 size = textureSize(shadow, 0);
+    bool ortho = view_is_ortho(v);
     float near = v.down.w;
-    float search = clamp((img.z - near) * spread / texel, 1.0, float(max(size.x, size.y)));
+    float widest = ortho ? (img.z - near) * light_size : light_size * (img.z - near) / max(near, 1e-3);
+    float search = clamp(widest / texel, 1.0, ortho ? float(max(size.x, size.y)) : 128.0);
     float blockers = 0.0, depth = 0.0;
     for (int j = 0; j < 4; j++) {
         for (int i = 0; i < 4; i++) {
@@ -49,7 +52,8 @@ float sun_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float tex
         }
     }
     if (blockers == 0.0) return 1.0;
-    float w = (img.z - depth / blockers) * spread / texel;
+    float zb = depth / blockers;
+    float w = (img.z - zb) * (ortho ? light_size : light_size / max(zb, 1e-3)) / texel;
     if (w < 1.5) {
         hard = true;
         return 1.0;
@@ -69,18 +73,18 @@ float sun_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float tex
     return lit / 64.0;
 }
 
-float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, float spread, vec3 p, vec3 n) {
+float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, float light_size, vec3 p, vec3 n) {
     vec3 img = view_image(v, p);
     vec2 uv = (img.xy - v.window.xy) / v.window.zw;
     if (!uv_inside_strict(uv)) return 1.0;
     float texel = v.window.z * v.extent.z * (view_is_ortho(v) ? 1.0 : img.z);
     vec3 l = -view_dir_to(v, p);
     float cos_t = clamp(abs(dot(n, l)), 0.05, 1.0);
-    if (spread > 0.0 && view_is_ortho(v)) {
+    if (light_size > 0.0) {
         bool hard;
         float slope = sqrt(1.0 - cos_t * cos_t) / cos_t;
         vec2 st0 = uv * vec2(textureSize(shadow, 0)) - 0.5;
-        float lit = sun_lit_fraction(v, shadow, img, st0, texel, slope, bias_texels, spread, hard);
+        float lit = soft_lit_fraction(v, shadow, img, st0, texel, slope, bias_texels, light_size, hard);
         if (!hard) return lit;
     }
     // The tent reaches 2 texels out: the bias grows with it along the slope.
@@ -103,20 +107,23 @@ float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, float spre
 }
 
 // Direct irradiance (W/m^2) at p with normal n from a light with view lv and power (W/sr, or W/m^2 across a
-// directional beam), shadowed by its shadow map (softened by a sun's `spread`).
-vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, float spread, sampler2D shadow, vec3 p, vec3 n) {
+// directional beam), shadowed by its shadow map (softened by its size: shadow_size).
+vec3 direct_irradiance_in(GpuView lv, vec3 power, float bias_texels, float light_size, sampler2D shadow, vec3 p, vec3 n) {
     vec3 img = view_image(lv, p);
     vec3 l = -view_dir_to(lv, p);
     float cos_s = dot(n, l);
     if (!(cos_s > 0.0 && emitter_holds(lv, img.xy) && img.z > 0.0)) return vec3(0.0);
     float d2 = view_is_ortho(lv) ? 1.0 : dot(p - lv.origin.xyz, p - lv.origin.xyz);
-    return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, spread, p, n);
+    return power * cos_s / d2 * lit_fraction_in(lv, shadow, bias_texels, light_size, p, n);
 }
+
+// A light's size for its soft shadows: a sun's tangent of its angular radius, a sphere light's radius (m).
+float shadow_size(LightUniforms l) { return view_is_ortho(l.receiver_view) ? l.beam_spread : l.light_radius; }
 
 // The frame's light (u_frame, t_shadow, t_irradiance, t_recv): what the eye shading and the composite use.
 vec3 direct_irradiance(vec3 p, vec3 n) {
     return direct_irradiance_in(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias,
-                                u_frame.light.beam_spread, t_shadow, p, n);
+                                shadow_size(u_frame.light), t_shadow, p, n);
 }
 vec3 caustic_irradiance(vec3 p, vec3 n, vec3 eye, vec2 dx, vec2 dy) {
     return light_map_irradiance(u_frame.light.receiver_view, t_irradiance, t_recv, p, n, eye, dx, dy);

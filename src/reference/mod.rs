@@ -423,7 +423,15 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
                     }
                     // A point light is a spot light whose cone is the whole sphere.
                     let cos_spot = if light.kind == LightKind::Point { -1.0 } else { (light.cone as f64).cos() };
-                    let sub = if caustics_only { bounding_cone(pos, &refractor_pts) } else { None };
+                    // A sphere light's rays start up to its radius to the side: the sub-cone widens by the angle
+                    // the sphere shows the nearest glass.
+                    let radius = light.radius as f64;
+                    let widen = |(axis, cos_half): (DVec3, f64)| {
+                        let near = refractor_pts.iter().map(|&q| (q - pos).length()).fold(f64::INFINITY, f64::min);
+                        let grow = if radius > 0.0 { (radius / near.max(radius)).asin() } else { 0.0 };
+                        (axis, (cos_half.clamp(-1.0, 1.0).acos() + grow).min(std::f64::consts::PI).cos())
+                    };
+                    let sub = if caustics_only { bounding_cone(pos, &refractor_pts).map(widen) } else { None };
                     let (axis, u, v, cos_half, sampling) = match sub {
                         Some((axis, cos_half)) if cos_half > cos_spot => {
                             let (u, v) = frame(axis);
@@ -432,7 +440,7 @@ fn light_setups(scene: &Scene, p: &RefParams) -> Vec<(LightSetup, LightInfo)> {
                         _ if light.kind == LightKind::Point => (fwd, right, down, cos_spot, "sphere"),
                         _ => (fwd, right, down, cos_spot, "spot cone"),
                     };
-                    let e = Emission::Cone { origin: pos, u, v, axis, cos_half, spot_axis: fwd, cos_spot };
+                    let e = Emission::Cone { origin: pos, u, v, axis, cos_half, spot_axis: fwd, cos_spot, radius };
                     (e, sampling, Some(cos_half.acos().to_degrees()))
                 }
                 LightKind::Directional => {

@@ -86,6 +86,9 @@ pub enum Emission {
         /// The light's own cone: directions outside it carry nothing.
         spot_axis: DVec3,
         cos_spot: f64,
+        /// A sphere light's radius (0: a point): each ray starts at a point of the sphere's disk across its
+        /// direction, uniform in area (the rays of one direction leaving a sphere of uniform radiance).
+        radius: f64,
     },
     Beam {
         /// The beam rectangle's corner, on a plane in front of all geometry.
@@ -112,26 +115,34 @@ impl Emission {
 
     /// A sun: its directions take a point of their own.
     pub fn has_size(&self) -> bool {
-        matches!(*self, Emission::Beam { radius, .. } if radius > 0.0)
+        match *self {
+            Emission::Beam { radius, .. } | Emission::Cone { radius, .. } => radius > 0.0,
+        }
     }
 
     /// The ray for a point (a, b) ∈ [0, 1)² of the stratified domain, uniform in solid angle (cone) or in area
     /// (beam), and (c, d) ∈ [0, 1)² for a sun's direction; `None` when the direction falls outside the spot cone.
-    pub fn ray(&self, a: f64, b: f64, c: f64, d: f64) -> Option<(DVec3, DVec3)> {
+    pub fn ray(&self, a: f64, b: f64, c: f64, d_: f64) -> Option<(DVec3, DVec3)> {
         match *self {
-            Emission::Cone { origin, u, v, axis, cos_half, spot_axis, cos_spot } => {
+            Emission::Cone { origin, u, v, axis, cos_half, spot_axis, cos_spot, radius } => {
                 // (cos θ, φ) parametrization: cos θ uniform in [cos_half, 1] is uniform in solid angle.
                 let cos_t = 1.0 - a * (1.0 - cos_half);
                 let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
                 let phi = 2.0 * std::f64::consts::PI * b;
                 let d = (u * (sin_t * phi.cos()) + v * (sin_t * phi.sin()) + axis * cos_t).normalize();
-                (d.dot(spot_axis) >= cos_spot).then_some((origin, d))
+                let mut o = origin;
+                if radius > 0.0 {
+                    let (e1, e2) = frame(d);
+                    let (r, t) = (radius * c.sqrt(), 2.0 * std::f64::consts::PI * d_);
+                    o += e1 * (r * t.cos()) + e2 * (r * t.sin());
+                }
+                (d.dot(spot_axis) >= cos_spot).then_some((o, d))
             }
             Emission::Beam { corner, eu, ev, dir, radius } => {
                 let dir = if radius > 0.0 {
                     let cos_t = 1.0 - c * (1.0 - radius.cos());
                     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-                    let phi = 2.0 * std::f64::consts::PI * d;
+                    let phi = 2.0 * std::f64::consts::PI * d_;
                     let (u, v) = (eu.normalize(), ev.normalize());
                     (u * (sin_t * phi.cos()) + v * (sin_t * phi.sin()) + dir * cos_t).normalize()
                 } else {
@@ -187,6 +198,7 @@ mod tests {
             cos_half,
             spot_axis: DVec3::NEG_Y,
             cos_spot: 40f64.to_radians().cos(),
+            radius: 0.0,
         };
         let s = Strata::new(1000);
         for i in 0..1000 {

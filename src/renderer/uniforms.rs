@@ -126,6 +126,14 @@ pub(crate) fn frame_data(
         eye_deposit: targets.eye_deposit(s) as u32,
         pad: [0; 2],
     };
+    // Where a light with size aims each cell's rays: through the cell at the glass's middle, along the axis (a
+    // beam) or from the light (a sphere).
+    let to_glass = 0.5 * (rlo + rhi) - photon_view.origin;
+    let pivot = match light.kind {
+        LightKind::Directional => to_glass.dot(photon_view.forward),
+        _ => to_glass.length(),
+    };
+    let pivot = if pivot.is_finite() { pivot.max(0.0) } else { 0.0 };
     let light = LightUniforms {
         photon_view: GpuView::from_light(&photon_view, s.gbuffer_side()),
         receiver_view: GpuView::from_light(&views.receiver, s.caustic_res),
@@ -134,9 +142,12 @@ pub(crate) fn frame_data(
         light_spectrum_c0: light_spectrum[0],
         light_spectrum_c1: light_spectrum[1],
         light_spectrum_c2: light_spectrum[2],
-        beam_spread: if light.kind == LightKind::Directional { light.angular_radius.tan() } else { 0.0 },
-        beam_pivot: (0.5 * (rlo + rhi) - photon_view.origin).dot(photon_view.forward).max(0.0),
-        pad0: 0,
+        beam_spread: match light.kind {
+            LightKind::Directional => light.angular_radius.tan(),
+            _ => light.radius / pivot.max(light.radius).max(1e-6),
+        },
+        beam_pivot: pivot,
+        light_radius: if light.kind == LightKind::Directional { 0.0 } else { light.radius },
         pad1: 0,
         pad2: 0,
     };

@@ -76,6 +76,17 @@ fn inside(o: &crate::scene::Object, p: Vec3) -> bool {
 pub fn emitters(scene: &Scene) -> Result<Vec<Emitter>> {
     let mut out = Vec::new();
     for (index, light) in scene.lights.iter().enumerate() {
+        let r2 = light.radius * light.radius;
+        let reached =
+            |o: &&crate::scene::Object| o.mesh.positions.iter().any(|p| p.distance_squared(light.position) < r2);
+        if let Some(o) = scene.objects.iter().find(reached) {
+            return Err(Error::BadInput(format!(
+                "{}: light {index}'s sphere (radius {} m) reaches into `{}`; a light with size must stand clear of every object",
+                scene.path.display(),
+                light.radius,
+                o.name
+            )));
+        }
         if light.kind != LightKind::Point || !scene.objects.iter().any(|o| behind(light, o)) {
             out.push(Emitter { light: index, face: None });
             continue;
@@ -215,6 +226,16 @@ material = { kind = "dielectric", ior = 1.5 }
         let up = up.replace("translate = [0.0, 0.5, 0.0]", "translate = [0.0, 1.0, 0.0]");
         let scene = Scene::parse(&up, Path::new("up.toml")).unwrap();
         assert_eq!(lights_without_receivers(&scene), [0]);
+    }
+
+    /// A light's sphere that reaches into an object is refused, naming both.
+    #[test]
+    fn a_bulb_stands_clear_of_the_objects() {
+        let clear = SCENE.replace("intensity = 1.0", "intensity = 1.0\nradius = 0.5");
+        assert!(emitters(&Scene::parse(&clear, Path::new("clear.toml")).unwrap()).is_ok());
+        let big = SCENE.replace("intensity = 1.0", "intensity = 1.0\nradius = 1.0");
+        let e = emitters(&Scene::parse(&big, Path::new("big.toml")).unwrap()).unwrap_err().to_string();
+        assert!(e.contains("light 0's sphere (radius 1 m) reaches into `glass`"), "{e}");
     }
 
     /// A point light with the floor behind it gets the faces that hold something; one inside the glass is refused.

@@ -105,6 +105,9 @@ pub struct Light {
     /// A directional light's angular radius, radians: its radiance is uniform over a disk of directions this wide
     /// around its axis (a sun; 0: parallel rays). `intensity` stays the irradiance across the beam.
     pub angular_radius: f32,
+    /// A point or spot light's radius, m: a sphere of uniform radiance around `position`, whose intensity (W/sr)
+    /// is `intensity` every way it shines (0: a point).
+    pub radius: f32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -922,6 +925,13 @@ material = { kind = "dielectric", ior = 1.5 }
             e.contains("light[0].angular_diameter_deg") && e.contains("a spot light has no angular diameter"),
             "{e}"
         );
+        // A spot's bulb; a sun has none (its size is an angle).
+        let bulb = BASE.replace("intensity = 1.0", "intensity = 1.0\nradius = 0.05");
+        assert_eq!(parse(&bulb).unwrap().lights[0].radius, 0.05);
+        let e = parse(&bulb.replace("0.05", "-1.0")).unwrap_err().to_string();
+        assert!(e.contains("light[0].radius") && e.contains(">= 0"), "{e}");
+        let e = parse(&sun.replace("intensity = 1.0", "intensity = 1.0\nradius = 0.05")).unwrap_err().to_string();
+        assert!(e.contains("light[0].radius") && e.contains("a directional light has no radius"), "{e}");
     }
 
     #[test]

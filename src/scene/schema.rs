@@ -38,6 +38,7 @@ pub struct LightDef {
     pub intensity: Option<S<f32>>,
     pub color: Option<S<[f32; 3]>>,
     pub angular_diameter_deg: Option<S<f32>>,
+    pub radius: Option<S<f32>>,
 }
 
 #[derive(Deserialize, Debug)]

@@ -134,6 +134,23 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
         }
     };
     let angular_radius = angular_radius(cx, i, d)?;
+    let radius = match (&d.radius, kind) {
+        (None, _) => 0.0,
+        (Some(r), LightKind::Directional) => {
+            return Err(cx.err(
+                r.span(),
+                f("radius"),
+                "a directional light has no radius (a sun's size is its `angular_diameter_deg`)",
+            ))
+        }
+        (Some(r), _) => {
+            let v = *r.get_ref();
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(cx.err(r.span(), f("radius"), format!("must be finite and >= 0 (got {v})")));
+            }
+            v
+        }
+    };
     let required = |v: Option<S<[f32; 3]>>, name: &str| {
         v.ok_or_else(|| cx.err(l.span(), f(name), format!("a light needs `{name}` (missing field `{name}`)")))
     };
@@ -196,7 +213,7 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
         }
         None => Vec3::ONE,
     };
-    Ok(Light { kind, position: position.into(), target: target.into(), cone, intensity, color, angular_radius })
+    Ok(Light { kind, position: position.into(), target: target.into(), cone, intensity, color, angular_radius, radius })
 }
 
 /// The Sun's mean angular diameter seen from the Earth, degrees: a `sun`'s by default.

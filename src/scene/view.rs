@@ -504,6 +504,7 @@ mod tests {
             intensity: 1.0,
             color: Vec3::ONE,
             angular_radius: 0.0,
+            radius: 0.0,
         }
     }
 
