@@ -352,6 +352,14 @@ impl Renderer {
         if index >= self.scene.lights.len() {
             return Err(Error::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
         }
+        let sized = light.radius.is_finite() && light.radius >= 0.0;
+        if !(sized && (0.0..=10f32.to_radians()).contains(&light.angular_radius)) {
+            return Err(Error::BadInput(format!(
+                "light {index}: a radius must be finite and >= 0 m (got {}), an angular radius within [0, 10]° (got {}°)",
+                light.radius,
+                light.angular_radius.to_degrees()
+            )));
+        }
         let old = std::mem::replace(&mut self.scene.lights[index], light);
         let view = CameraView::new(
             &self.scene.cameras.first().cloned().unwrap_or_else(default_camera),

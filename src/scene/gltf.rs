@@ -1310,16 +1310,7 @@ fn visit(
             out.movers.push(Mover { what: Moved::Light(out.lights.len()), animation: a.clone() });
         }
         g.sources.borrow_mut().lights.push(light.index());
-        out.lights.push(Light {
-            kind,
-            position: origin,
-            target,
-            cone,
-            intensity,
-            color,
-            angular_radius: 0.0,
-            radius: 0.0,
-        });
+        out.lights.push(Light::punctual(kind, origin, target, cone, intensity, color));
     }
 
     for c in node.children() {

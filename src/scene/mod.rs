@@ -110,6 +110,13 @@ pub struct Light {
     pub radius: f32,
 }
 
+impl Light {
+    /// A light without size (KHR_lights_punctual's): a point, or parallel rays.
+    pub fn punctual(kind: LightKind, position: Vec3, target: Vec3, cone: f32, intensity: f32, color: Vec3) -> Light {
+        Light { kind, position, target, cone, intensity, color, angular_radius: 0.0, radius: 0.0 }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 /// A camera's projection.
 pub enum Projection {
