@@ -325,20 +325,31 @@ fn a_suns_focal_spot_is_its_angular_size() {
 /// (64M photons: a sun's tilted rays leave the reference's strata, and 8M of them are themselves 2.6% apart).
 #[test]
 fn a_suns_caustic_and_soft_shadow_match_the_reference() {
-    use caustics::reference::{Aov as RefAov, Paths};
+    use caustics::reference::Aov as RefAov;
     let (_gpu, device) = gpu();
     let dir = out_dir("sun_reference");
     let sun = lens_under_sun(&dir, 2.0);
-    let sun = sun.to_str().unwrap();
-    for (aov, ref_aov, photons, bound) in
-        [(Aov::Caustics, RefAov::Caustics, 4_000_000, 0.03), (Aov::Direct, RefAov::Direct, 64_000_000, 0.025)]
-    {
-        let gpu = shot_at(&device, sun, adaptive(5, Metric::FluxError), 0.0, aov, 256);
-        let reference = top_reference(sun, ref_aov, Paths::All, photons, 256);
-        let m = caustics::metrics::compare(&gpu.img, &reference, 64, 0.12);
-        let err = m.rel_l1;
-        eprintln!("{aov:?}: rel-L1 {err:.4} at 64², flux ratio {:.5}", m.flux_ratio);
-        assert!(err < bound, "{aov:?}: rel-L1 {err} against the reference at 64²");
+    let cases = [(Aov::Caustics, RefAov::Caustics, 4_000_000, 0.03), (Aov::Direct, RefAov::Direct, 64_000_000, 0.025)];
+    matches_reference(&device, sun.to_str().unwrap(), 5, 0.12, &cases);
+}
+
+/// `scene`'s `top` AOVs at 256², adaptive flux-error at `level`, against the CPU reference of every path at 64² (a
+/// top camera `extent` m across): per case, the AOV, the reference's, its photons and the bound on rel-L1; the
+/// flux within 1%.
+fn matches_reference(
+    device: &Arc<caustics::gpu::Device>,
+    scene: &str,
+    level: u32,
+    extent: f32,
+    cases: &[(Aov, caustics::reference::Aov, u64, f64)],
+) {
+    for &(aov, ref_aov, photons, bound) in cases {
+        let gpu = shot_at(device, scene, adaptive(level, Metric::FluxError), 0.0, aov, 256);
+        let reference = top_reference(scene, ref_aov, caustics::reference::Paths::All, photons, 256);
+        let m = caustics::metrics::compare(&gpu.img, &reference, 64, extent);
+        eprintln!("{aov:?}: rel-L1 {:.4} at 64², flux ratio {:.5}", m.rel_l1, m.flux_ratio);
+        assert!(m.rel_l1 < bound, "{aov:?}: rel-L1 {} against the reference at 64²", m.rel_l1);
+        assert!((m.flux_ratio - 1.0).abs() < 0.01, "{aov:?}: flux ratio {}", m.flux_ratio);
     }
 }
 
@@ -349,7 +360,7 @@ fn a_suns_caustic_and_soft_shadow_match_the_reference() {
 /// is itself 2.8% from that: the sphere's points leave the reference's strata), flux 1.0006.
 #[test]
 fn a_sphere_light_matches_the_reference() {
-    use caustics::reference::{Aov as RefAov, Paths};
+    use caustics::reference::Aov as RefAov;
     let (_gpu, device) = gpu();
     let dir = out_dir("sphere_light");
     let text = std::fs::read_to_string(scene("sphere.toml")).unwrap();
@@ -357,15 +368,6 @@ fn a_sphere_light_matches_the_reference() {
     assert_ne!(bulb, text);
     let path = dir.join("sphere_light.toml");
     std::fs::write(&path, bulb).unwrap();
-    let path = path.to_str().unwrap();
-    for (aov, ref_aov, photons, bound) in
-        [(Aov::Caustics, RefAov::Caustics, 4_000_000, 0.03), (Aov::Direct, RefAov::Direct, 16_000_000, 0.035)]
-    {
-        let gpu = shot_at(&device, path, adaptive(4, Metric::FluxError), 0.0, aov, 256);
-        let reference = top_reference(path, ref_aov, Paths::All, photons, 256);
-        let m = caustics::metrics::compare(&gpu.img, &reference, 64, 2.0);
-        eprintln!("{aov:?}: rel-L1 {:.4} at 64², flux ratio {:.5}", m.rel_l1, m.flux_ratio);
-        assert!(m.rel_l1 < bound, "{aov:?}: rel-L1 {} against the reference at 64²", m.rel_l1);
-        assert!((m.flux_ratio - 1.0).abs() < 0.01, "{aov:?}: flux ratio {}", m.flux_ratio);
-    }
+    let cases = [(Aov::Caustics, RefAov::Caustics, 4_000_000, 0.03), (Aov::Direct, RefAov::Direct, 16_000_000, 0.035)];
+    matches_reference(&device, path.to_str().unwrap(), 4, 2.0, &cases);
 }
