@@ -39,15 +39,13 @@ bool eye_project(vec3 p, vec3 rd, out vec2 uv) {
 
 #ifdef TRANSPORT_GLSL
 // A record's shape in eye samples: the ray differentials projected into the eye's image (`differential`), its
-// radius at most EYE_SPLAT_RADIUS, else one sample. A sun's `jitter` (m) widens it as the light map's footprint
-// (common/deposit_light_map.glsl).
+// radius at most EYE_SPLAT_RADIUS, else one sample. `jitter` (m) widens it (footprint_widening).
 float eye_footprint(vec3 p, RayDiff rdf, bool differential, float jitter) {
     if (!differential) return 1.0;
     GpuView cam = u_frame.frame.camera;
     vec2 mx = view_px_diff(cam, p, rdf.dpx), my = view_px_diff(cam, p, rdf.dpy);
     if (jitter > 0.0) {
-        float sample_side = cam.window.z * cam.extent.z * (view_is_ortho(cam) ? 1.0 : view_dist(cam, p));
-        float f = clamp(jitter / sample_side / max(sqrt(abs(mx.x * my.y - mx.y * my.x)), 1.0), 1.0, 3.0);
+        float f = footprint_widening(jitter / view_sample_side(cam, view_dist(cam, p)), sqrt(abs(mx.x * my.y - mx.y * my.x)));
         mx *= f;
         my *= f;
     }
@@ -80,7 +78,7 @@ void eye_splat(GpuSplat s, vec3 rgb) {
     k.r = min(k.r, vec2(float(EYE_SPLAT_RADIUS)));
     vec2 e = splat_extent(k);
     ivec2 lo = max(ivec2(ceil(s.texel - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(s.texel + e - 0.5)), size - 1);
-    float sample_side = cam.window.z * cam.extent.z * (view_is_ortho(cam) ? 1.0 : g0.w);
+    float sample_side = view_sample_side(cam, g0.w);
     float reach = (max(k.r.x, k.r.y) + 1.0) * sample_side;
     float sum = 0.0;
     for (int pass = 0; pass < 2; pass++) {

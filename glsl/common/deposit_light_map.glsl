@@ -21,16 +21,13 @@ bool light_map_project(GpuView lv, usampler2D recv, vec3 p, vec3 n, vec3 arrival
 #ifdef TRANSPORT_GLSL
 // A record's shape in the map (common/photon_bindings.glsl SplatShape): the parallelogram the photon's cell covers
 // where it lands, from its ray differentials (`differential`) clamped around the radius r that traversal gave
-// it, else the round radius r. `jitter` (m): how far a sun's photon may land from where its cell's straight ray
-// would (the disk's image over its last segment), each cell taking another direction of the disk: where that is
-// wider than the footprint, the footprint grows with it, up to 3 times, so that the tents of neighbouring cells
-// overlap where their directions scatter them (noise), at a blur well under the disk's own.
+// it, else the round radius r. `jitter` (m): how far a light with size scatters the photon's landing, which widens
+// the footprint (footprint_widening), at a blur well under the light's own.
 float light_map_footprint(GpuView lv, vec3 p, RayDiff rdf, uint r, bool differential, float jitter) {
     vec2 mx = view_px_diff(lv, p, rdf.dpx), my = view_px_diff(lv, p, rdf.dpy);
     if (jitter > 0.0) {
-        float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : view_dist(lv, p));
         float side = differential ? sqrt(abs(mx.x * my.y - mx.y * my.x)) : float(r);
-        float f = clamp(jitter / texel / max(side, 1.0), 1.0, 3.0);
+        float f = footprint_widening(jitter / view_sample_side(lv, view_dist(lv, p)), side);
         mx *= f;
         my *= f;
         r = min(uint(ceil(float(r) * f)), MAX_SPLAT_RADIUS);

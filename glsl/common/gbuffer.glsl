@@ -48,7 +48,7 @@ bool view_holds(GpuView lv, vec3 p, out vec2 uv) {
 // Whether the distance r_dist that lv's texel at p stores is p's own (within four texels' footprint).
 bool stored_distance_is(GpuView lv, vec3 p, float r_dist) {
     float d = view_dist(lv, p);
-    float texel = lv.window.z * lv.extent.z * (view_is_ortho(lv) ? 1.0 : d);
+    float texel = view_sample_side(lv, d);
     return r_dist > 0.0 && abs(r_dist - d) < 4.0 * texel + 1e-3 * d;
 }
 

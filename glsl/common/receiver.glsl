@@ -30,14 +30,17 @@ float linear_depth(GpuView v, float z) {
 // such disk (4x4 tests) gives the blockers' mean depth, then 8x8 tests spread uniformly over that disk, the pattern
 // turned by an angle hashed from p's texel (noise, which the eye's samples average, in place of 64 bands). Where the
 // search finds no blocker, p sees the whole sun; a penumbra under 1.5 texels takes the 3x3 tent.
+// The penumbra's radius (m) that blockers at depth zb cast at depth z from a light of `size` (soft_lit_fraction).
+float penumbra(bool ortho, float size, float z, float zb) { return (z - zb) * (ortho ? size : size / max(zb, 1e-3)); }
+
 float soft_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float texel, float slope, float bias_texels,
                         float light_size, out bool hard) {
     hard = false;
     ivec2 size = textureSize(shadow, 0);
     bool ortho = view_is_ortho(v);
     float near = v.down.w;
-    float widest = ortho ? (img.z - near) * light_size : light_size * (img.z - near) / max(near, 1e-3);
-    float search = clamp(widest / texel, 1.0, ortho ? float(max(size.x, size.y)) : 128.0);
+    // The widest penumbra: blockers at the near plane.
+    float search = clamp(penumbra(ortho, light_size, img.z, near) / texel, 1.0, ortho ? float(max(size.x, size.y)) : 128.0);
     float blockers = 0.0, depth = 0.0;
     for (int j = 0; j < 4; j++) {
         for (int i = 0; i < 4; i++) {
@@ -52,8 +55,7 @@ float soft_lit_fraction(GpuView v, sampler2D shadow, vec3 img, vec2 st, float te
         }
     }
     if (blockers == 0.0) return 1.0;
-    float zb = depth / blockers;
-    float w = (img.z - zb) * (ortho ? light_size : light_size / max(zb, 1e-3)) / texel;
+    float w = penumbra(ortho, light_size, img.z, depth / blockers) / texel;
     if (w < 1.5) {
         hard = true;
         return 1.0;
@@ -77,7 +79,7 @@ float lit_fraction_in(GpuView v, sampler2D shadow, float bias_texels, float ligh
     vec3 img = view_image(v, p);
     vec2 uv = (img.xy - v.window.xy) / v.window.zw;
     if (!uv_inside_strict(uv)) return 1.0;
-    float texel = v.window.z * v.extent.z * (view_is_ortho(v) ? 1.0 : img.z);
+    float texel = view_sample_side(v, img.z);
     vec3 l = -view_dir_to(v, p);
     float cos_t = clamp(abs(dot(n, l)), 0.05, 1.0);
     if (light_size > 0.0) {

@@ -9,12 +9,15 @@
 #include "common/emitter.glsl"
 
 
-// The photon ray of a cell: the emitter's ray through the cell's center, with the cell's own sample
-// (common/emitter.glsl).
-void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {
+// The photon ray of a cell: the emitter's ray through the cell's center with sample u (common/emitter.glsl; (0.5,
+// 0.5): the straight ray of a light with size).
+void cell_ray_at(uint level, uvec2 xy, vec2 u, out vec3 ro, out vec3 rd) {
     GpuView v = u_frame.light.photon_view;
-    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), emitter_cell_sample(level, xy), ro, rd);
+    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), u, ro, rd);
 }
+
+// The photon ray of a cell, with the cell's own sample.
+void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) { cell_ray_at(level, xy, emitter_cell_sample(level, xy), ro, rd); }
 
 // A cell's ray and its differentials across one cell side (emitter_ray_diff).
 RayDiff cell_ray_diff(uint level, uvec2 xy, vec3 rd) {
@@ -154,6 +157,12 @@ float footprint_radii(vec2 mx, vec2 my, uint r_cell) {
     return splat_pack(uvec2(shear_y ? vec2(ra, rb) : vec2(rb, ra)), s, shear_y);
 }
 
+// A sun's or a sphere light's photon lands up to `jitter` samples from where its cell's straight ray would (the
+// light's image over the ray's last segment), each cell taking another point of the light: a footprint of side
+// `side` samples grows by this factor, to that scatter and at most 3 times, so that neighbouring tents overlap
+// where the light's size scatters them (common/deposit_light_map.glsl, common/deposit_eye.glsl).
+float footprint_widening(float jitter, float side) { return clamp(jitter / max(side, 1.0), 1.0, 3.0); }
+
 const uint DOM_OK = 0u;       // landed on a receiver after >= 1 specular interaction
 const uint DOM_DIRECT = 1u;   // landed on a receiver with none
 const uint DOM_ESCAPED = 2u;
@@ -172,10 +181,9 @@ const uint DOM_LONG = 4u;     // still in the glass after CHECK_INTERACTIONS: wh
 // throughput (the product of the branch fractions it kept: the share of the cell's flux that follows it).
 uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out float throughput) {
     vec3 ro, rd;
-    // The straight ray: a sun's cells refine where its center's caustic needs them (their sampled directions are
-    // the waves').
-    GpuView v = u_frame.light.photon_view;
-    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), vec2(0.5), ro, rd);
+    // The straight ray: a light with size refines where its center's caustic needs it (the sampled rays are the
+    // waves').
+    cell_ray_at(level, xy, vec2(0.5), ro, rd);
     map_px = vec2(-1e9);
     events = 0u;
     throughput = 1.0;

@@ -38,6 +38,10 @@ float view_dist(GpuView v, vec3 p) {
     return view_is_ortho(v) ? dot(d, v.forward.xyz) : length(d);
 }
 
+// The side (m) of one of the view's samples (texels, pixels) at distance `dist` along its ray: its window's side per
+// sample, times the distance for a perspective view.
+float view_sample_side(GpuView v, float dist) { return v.window.z * v.extent.z * (view_is_ortho(v) ? 1.0 : dist); }
+
 // Direction of the view ray through p (from the origin towards p).
 vec3 view_dir_to(GpuView v, vec3 p) {
     return view_is_ortho(v) ? v.forward.xyz : normalize(p - v.origin.xyz);

@@ -76,10 +76,11 @@ fn inside(o: &crate::scene::Object, p: Vec3) -> bool {
 pub fn emitters(scene: &Scene) -> Result<Vec<Emitter>> {
     let mut out = Vec::new();
     for (index, light) in scene.lights.iter().enumerate() {
+        // Only a light with size scans the meshes (this runs every frame).
         let r2 = light.radius * light.radius;
         let reached =
             |o: &&crate::scene::Object| o.mesh.positions.iter().any(|p| p.distance_squared(light.position) < r2);
-        if let Some(o) = scene.objects.iter().find(reached) {
+        if let Some(o) = scene.objects.iter().filter(|_| light.radius > 0.0).find(reached) {
             return Err(Error::BadInput(format!(
                 "{}: light {index}'s sphere (radius {} m) reaches into `{}`; a light with size must stand clear of every object",
                 scene.path.display(),
