@@ -44,7 +44,8 @@ vec3 flux_rgb(ivec2 q, ivec2 size) { return vec3(texelFetch(t_flux, q, 0).r); }
 layout(set = 0, binding = RS_RECEIVERS) uniform usampler2D t_recv;
 layout(set = 0, binding = RS_IRRADIANCE, rgba32f) uniform image2D o_irradiance;
 
-// add: add to the irradiance already there (a frame's remaining batches) instead of writing it.
+// keep, scale: the irradiance written is keep times what the map holds plus scale times this flux's (a frame's
+// remaining batches add to it; a progressive accumulation's photon set is averaged into it).
 layout(push_constant) uniform ResolvePushBlock { ResolvePush pc; };
 
 layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
@@ -70,9 +71,8 @@ void main() {
     // photons write all three.
     uint c = u_frame.pass.channel;
     bool all_channels = c == 0u || c >= CHANNEL_RGB;
-    bool add = pc.add != 0u;
-    vec4 prev = add || !all_channels && c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
+    vec4 prev = pc.keep != 0.0 || !all_channels && c > 1u ? imageLoad(o_irradiance, p) : vec4(0.0);
     bvec3 mine = all_channels ? bvec3(true) : equal(uvec3(1u, 2u, 3u), uvec3(c));
-    vec3 rgb = mix(prev.rgb, (add ? prev.rgb : vec3(0.0)) + e, mine);
+    vec3 rgb = mix(prev.rgb, pc.keep * prev.rgb + pc.scale * e, mine);
     imageStore(o_irradiance, p, vec4(rgb, 0.0));
 }

@@ -18,14 +18,14 @@ void main() {
     uvec2 cell = photons[j];
     uint level = cell_level(cell);
     uvec2 xy = cell_xy(cell);
-    Hit h = trace_cell(level, xy);
-    uint r = cell_splat_radius(cell);
+    Hit h = trace_cell(level, xy, true);
+    uint r = max(1u, uint(round(float(cell_splat_radius(cell)) * set_narrowing())));
     bool ok = h.status == HIT_OK;
     splats[j] = GpuSplat(h.map_px, ok ? h.flux : 0.0, ok ? float(r) : 0.0);
     if (pc.debug != 0u && level >= pc.debug_min_level) {
         uint k = atomicAdd(debug_header.x, 1u);
         if (k < debug_header.y) {
-            vec2 uv = cell_center_uv(level, xy);
+            vec2 uv = cell_sample_uv(level, xy);
             debug_photons[k] =
                 GpuDebugPhoton(xy.x, xy.y, level | (h.status << 8) | (r << 16), h.flux, uv, h.map_px, vec4(h.pos, 0.0));
         }

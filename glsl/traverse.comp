@@ -172,7 +172,7 @@ uint children_verdict(uint level, uvec2 xy) {
     // children that both reached the map farther apart than the bound).
     for (uint j = 0u; j < 4u; j++) {
         uint k = CHILD_ORDER[j];
-        Hit h = trace_cell(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1));
+        Hit h = trace_cell(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), false);
         status[k] = h.status;
         p[k] = h.map_px;
         if (j == 0u) continue;
@@ -286,7 +286,7 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
             t_min = min(t_min, thr);
             rest += intensity * cell_measure(level + 1u, c) * (1.0 - thr);
         } else {
-            Hit h = trace_cell(level + 1u, c);
+            Hit h = trace_cell(level + 1u, c, false);
             status[k] = h.status;
             events[k] = 0u;
             p[k] = h.map_px;

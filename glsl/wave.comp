@@ -551,7 +551,7 @@ void main() {
     uint depth = 0u;
     if (i < in_count && !(can_abort && aborted)) {
         Traced t = traced_ray(i, stride, in_count, capacity);
-        if (WAVE_SPECTRAL) ray_nm = photon_wavelength(cell_xy(t.cell), cell_level(t.cell));
+        if (WAVE_SPECTRAL) ray_nm = photon_wavelength(cell_xy(t.cell), cell_level(t.cell) | (u_frame.frame.sample_index << 5u));
         phi = t.phi;
         side = t.side;
         depth = t.depth;

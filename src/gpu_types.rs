@@ -81,8 +81,12 @@ pub struct FrameUniforms {
     /// 1: the eye deposit is on: a landing the light's caustic map cannot hold is deposited in the eye's image
     /// where the camera sees it (docs/design.md "The eye deposit").
     pub eye_deposit: u32,
-    /// To a multiple of 16 bytes, as std140 places the struct.
-    pub pad: [u32; 2],
+    /// Progressive accumulation (docs/design.md "Frames that build on each other"): the index of this frame's
+    /// photon set among those the caustic maps average (0: a new average, whose photons leave their cells'
+    /// centers; k > 0 shifts every cell's sample by the k-th point of a low-discrepancy sequence), and the weight
+    /// 1 / (k + 1) that reads the eye deposit's flux, summed over the sets, as their mean.
+    pub sample_index: u32,
+    pub deposit_weight: f32,
 }
 
 /// A light's part of the uniforms: its views, its power, and its color as a spectrum.
@@ -504,9 +508,11 @@ pub struct GpuDebugPhoton {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ResolvePush {
-    /// 1: add to what the caustic map holds (the rest of a frame's batches, traced after the first submission ran
-    /// out of batch slots); 0: write it.
-    pub add: u32,
+    /// The irradiance written is `keep` times what the map holds plus `scale` times the flux's: (0, 1) writes it;
+    /// (1, w) adds the rest of a frame's batches (traced after the first submission ran out of batch slots);
+    /// (k / (k + 1), 1 / (k + 1)) averages the k-th photon set of a progressive accumulation into the k before it.
+    pub keep: f32,
+    pub scale: f32,
 }
 
 /// Push constants of glsl/eye_shade.comp.

@@ -319,3 +319,45 @@ fn profile_prints_the_waves_with_their_rays() {
     assert!(rays[rays.len() - 1] < rays[1], "the waves thin out: {rays:?}");
     assert!(!text.contains("transport_bounces.wave_"), "no line per wave: {text}");
 }
+
+/// `render --accumulate`: N photon sets (or seconds), averaged into the written picture; its stats say how many.
+/// A count of 0, a malformed value, or a combination with --frames or --no-reuse exits 2 before any output.
+#[test]
+fn accumulate_averages_photon_sets_and_checks_its_value() {
+    let dir = out_dir("cli_accumulate");
+    for (args, needle) in [
+        (vec!["--accumulate", "0"], "give a number of photon sets"),
+        (vec!["--accumulate", "5x"], "give a number of photon sets"),
+        (vec!["--accumulate", "-3s"], "give a number of photon sets"),
+        (vec!["--accumulate", "3", "--frames", "2"], "--accumulate averages photon sets"),
+        (vec!["--accumulate", "3", "--no-reuse"], "--accumulate averages photon sets"),
+    ] {
+        let e = render_refused(&dir, &args);
+        assert!(e.contains(needle), "{args:?}: {e}");
+    }
+    let (out, stats) = (dir.join("c.exr"), dir.join("c.json"));
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/sphere.toml");
+    let o = caustics(&[
+        "render",
+        "--scene",
+        scene,
+        "--camera",
+        "top",
+        "--aov",
+        "caustics",
+        "--size",
+        "32x32",
+        "--level",
+        "0",
+        "--accumulate",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr_of(&o));
+    assert!(stderr_of(&o).contains("averaged 3 photon sets"), "{}", stderr_of(&o));
+    let v = read_json(&stats);
+    assert_eq!((v["photon_sets"].as_u64(), v["frames"].as_u64()), (Some(3), Some(3)), "{v}");
+}

@@ -13,10 +13,11 @@
 #include "common/view.glsl"
 #include "common/gbuffer.glsl"
 
-// The flux of eye sample q, of an eye image of `size` samples.
+// The flux of eye sample q, of an eye image of `size` samples: the mean over a progressive accumulation's photon
+// sets, whose flux the store sums (deposit_weight: 1 / their count).
 vec3 eye_deposit_flux(ivec2 q, ivec2 size) {
     uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
-    return vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]);
+    return vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]) * u_frame.frame.deposit_weight;
 }
 
 // The eye deposit's irradiance at sample q (W/m^2), on a receiver of normal n at distance `dist` along the sample's
@@ -49,6 +50,9 @@ float eye_footprint(vec3 p, RayDiff rdf, bool differential, float jitter) {
         mx *= f;
         my *= f;
     }
+    float k = set_narrowing();
+    mx *= k;
+    my *= k;
     uint r = uint(clamp(round(sqrt(abs(mx.x * my.y - mx.y * my.x))), 1.0, float(EYE_SPLAT_RADIUS)));
     return footprint_radii(mx, my, r);
 }

@@ -32,6 +32,10 @@ float light_map_footprint(GpuView lv, vec3 p, RayDiff rdf, uint r, bool differen
         my *= f;
         r = min(uint(ceil(float(r) * f)), MAX_SPLAT_RADIUS);
     }
+    float k = set_narrowing();
+    mx *= k;
+    my *= k;
+    r = max(1u, uint(round(float(r) * k)));
     return differential ? footprint_radii(mx, my, r) : float(r);
 }
 #endif

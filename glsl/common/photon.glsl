@@ -70,6 +70,21 @@ float cell_side(uint level) { return u_frame.light.photon_view.window.z / float(
 // Exact: (x + 0.5) needs at most 23 bits at level 16 and the divisor is a power of two.
 vec2 cell_center_uv(uint level, uvec2 xy) { return (vec2(xy) + 0.5) / float(LEVEL0_RES << level); }
 
+// Where the cell's photon samples it: its center, shifted by a progressive accumulation's photon set
+// (emitter_set_offset: none for the first). The traversal's checks trace the centers, so every set refines alike.
+vec2 cell_sample_uv(uint level, uvec2 xy) {
+    return (vec2(xy) + 0.5 + emitter_set_offset()) / float(LEVEL0_RES << level);
+}
+
+// A progressive accumulation's k-th photon set (FrameUniforms.sample_index) splats footprints (k + 1)^(-1/4) as
+// wide, down to one texel of the deposit, so that the average's blur (the mean of its sets' squared widths, about
+// 2 / sqrt(n) of one set's after n sets) falls as its noise does, and the average converges to the unblurred
+// caustic (progressive photon mapping's radius reduction, alpha = 1/2). Narrowing by sqrt(k + 1), as the sets' grid
+// refines, left each early set sparse and noisy: the error fell more slowly over the first 16 sets
+// (docs/experiments.md). Both deposits' footprints take it (after a light's widening), and the two-interface
+// trace's radius.
+float set_narrowing() { return inversesqrt(sqrt(float(u_frame.frame.sample_index + 1u))); }
+
 // A splat radius (caustic-map texels) for a light-view square of `side`: its size on the map.
 uint side_splat_radius(float side) {
     float texel = u_frame.light.receiver_view.window.z * u_frame.light.receiver_view.extent.z;
@@ -96,8 +111,10 @@ float cell_measure(uint level, uvec2 xy) {
     return emitter_measure(v, view_xy_of_uv(v, cell_center_uv(level, xy)), cell_side(level));
 }
 
-Hit trace_cell(uint level, uvec2 xy) {
-    return trace_photon(cell_center_uv(level, xy), cell_side(level), leaf_covered(level, xy));
+// The two-interface trace of a cell's center (the traversal's checks), or of its photon's sample (`sampled`).
+Hit trace_cell(uint level, uvec2 xy, bool sampled) {
+    vec2 uv = sampled ? cell_sample_uv(level, xy) : cell_center_uv(level, xy);
+    return trace_photon(uv, cell_side(level), leaf_covered(level, xy));
 }
 
 #endif

@@ -9,21 +9,23 @@
 #include "common/emitter.glsl"
 
 
-// The photon ray of a cell: the emitter's ray through the cell's center with sample u (common/emitter.glsl; (0.5,
-// 0.5): the straight ray of a light with size).
-void cell_ray_at(uint level, uvec2 xy, vec2 u, out vec3 ro, out vec3 rd) {
+// The emitter's ray through the photon grid's point uv with sample u (common/emitter.glsl; (0.5, 0.5): the
+// straight ray of a light with size).
+void cell_ray_at(vec2 uv, vec2 u, out vec3 ro, out vec3 rd) {
     GpuView v = u_frame.light.photon_view;
-    emitter_ray(v, view_xy_of_uv(v, cell_center_uv(level, xy)), u, ro, rd);
+    emitter_ray(v, view_xy_of_uv(v, uv), u, ro, rd);
 }
 
-// The photon ray of a cell, with the cell's own sample.
-void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) { cell_ray_at(level, xy, emitter_cell_sample(level, xy), ro, rd); }
+// The photon ray of a cell: at its sample (cell_sample_uv), with the cell's own point of a light with size.
+void cell_ray(uint level, uvec2 xy, out vec3 ro, out vec3 rd) {
+    cell_ray_at(cell_sample_uv(level, xy), emitter_cell_sample(level, xy), ro, rd);
+}
 
 // A cell's ray and its differentials across one cell side (emitter_ray_diff).
 RayDiff cell_ray_diff(uint level, uvec2 xy, vec3 rd) {
     GpuView v = u_frame.light.photon_view;
     vec2 side = v.window.zw / float(LEVEL0_RES << level);
-    return emitter_ray_diff(v, view_xy_of_uv(v, cell_center_uv(level, xy)), side, rd);
+    return emitter_ray_diff(v, view_xy_of_uv(v, cell_sample_uv(level, xy)), side, rd);
 }
 
 // A ray's differentials in a queue: four half-float pairs. Only the parts across the ray's unit direction D are
@@ -183,7 +185,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
     vec3 ro, rd;
     // The straight ray: a light with size refines where its center's caustic needs it (the sampled rays are the
     // waves').
-    cell_ray_at(level, xy, vec2(0.5), ro, rd);
+    cell_ray_at(cell_center_uv(level, xy), vec2(0.5), ro, rd);
     map_px = vec2(-1e9);
     events = 0u;
     throughput = 1.0;

@@ -149,6 +149,10 @@ pub struct FrameReport {
     /// The light-view stages, the photons and the caustic map were reused from the last frame (nothing they
     /// depend on changed); only the eye and composite passes ran.
     pub reused: bool,
+    /// The photon sets the frame's caustic maps average (progressive accumulation,
+    /// [`crate::Renderer::set_accumulation`]): 1 for a frame that traced afresh, k + 1 for one that added the k-th
+    /// set of unchanged inputs, and the count its maps hold for a frame that reused them.
+    pub photon_sets: u32,
     /// The photon level this frame rendered (below the chosen one while the viewer refines progressively).
     pub level: u32,
     /// A viewer preview: one eye sample per pixel (glass traced as in a still under exact transport).

@@ -4,7 +4,7 @@
 
 use super::deposit::Deposit;
 use super::{Aov, Ctx, Rec};
-use crate::gpu_types::{TransportState, TraversalState};
+use crate::gpu_types::{ResolvePush, TransportState, TraversalState};
 use crate::passes::composite::{CompositeInputs, LightMaps};
 use crate::passes::coverage::CoverageInputs;
 use crate::passes::eye::{EyeGbuffer, EyeInputs};
@@ -73,6 +73,8 @@ impl Ctx<'_> {
     }
 
     /// Step 6: caustic flux → irradiance. `add`: add to the map (a continuation's remaining batches).
+    /// Step 6 into the pass's irradiance map. `add`: the rest of a frame's batches, added to what the map holds;
+    /// else this frame's photon set, which a progressive accumulation's k-th set averages into the k before it.
     pub(super) fn resolve(&self, rec: &mut Rec, add: bool) -> VkResult<()> {
         rec.ts.mark(rec.cmd, "resolve");
         let flux = if !self.resolve_texels {
@@ -82,10 +84,12 @@ impl Ctx<'_> {
         } else {
             FluxSource::Texels(&self.r.flux_texels)
         };
+        let weight = self.data.frame.deposit_weight;
+        let blend = ResolvePush { keep: if add { 1.0 } else { 1.0 - weight }, scale: weight };
         // A light's later color passes write their channel and keep the earlier ones.
-        let keep = self.channel != 0 || add;
+        let keep = self.channel != 0 || blend.keep != 0.0;
         let r = &self.r;
-        self.p.resolve.record(rec.cmd, rec.sync, self.ubo, flux, &r.geo, &r.irradiance, self.nearest, keep, add)
+        self.p.resolve.record(rec.cmd, rec.sync, self.ubo, flux, &r.geo, &r.irradiance, self.nearest, keep, blend)
     }
 
     /// No refractor: the irradiance map is zero (no caustic pass is recorded).

@@ -41,8 +41,8 @@ impl ResolvePass {
     }
 
     /// Resolve `flux` into `out` (its channel, for a color pass); `keep`: keep what `out` holds (a light's later
-    /// channel passes); `add`: add to it instead (the rest of a frame's batches, traced after the first submission
-    /// ran out of batch slots).
+    /// channel passes); `blend`: how the flux's irradiance joins what `out` holds (written, added to it, or
+    /// averaged into it; [`ResolvePush`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -54,7 +54,7 @@ impl ResolvePass {
         out: &Image,
         s: &Sampler,
         keep: bool,
-        add: bool,
+        blend: ResolvePush,
     ) -> VkResult<()> {
         let out_use = if keep { Use::ImageWrite(out) } else { Use::ImageOverwrite(out) };
         let (pipeline, flux_use) = match flux {
@@ -70,7 +70,7 @@ impl ResolvePass {
             (RS_IRRADIANCE, out_use),
         ]);
         pipeline.bind_uses(cmd, sync, &uses)?;
-        pipeline.push(cmd, &ResolvePush { add: add as u32 });
+        pipeline.push(cmd, &blend);
         let (gx, gy) = groups_2d(out.extent.width, out.extent.height);
         unsafe { self.device.cmd_dispatch(cmd, gx, gy, 1) };
         Ok(())

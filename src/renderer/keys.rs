@@ -83,6 +83,19 @@ pub(crate) struct Caches {
     /// The eye view (the camera's uniform bytes and the eye targets' generation) that the eye deposit's flux was
     /// deposited or cleared for.
     pub eye_deposit: Option<(Vec<u8>, u64)>,
+    /// The photon sets the caustic maps (and the eye deposit) average now: 1 after a frame that traced afresh.
+    pub sets: u32,
+}
+
+/// What a frame does with the last frame's maps ([`Caches::plan`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct MapPlan {
+    /// The last frame's maps serve this one: nothing is traced.
+    pub reused: bool,
+    /// Clear the eye deposit before the photons.
+    pub clear: bool,
+    /// The index of the photon set this frame traces among those its maps average (0: they start afresh).
+    pub set: u32,
 }
 
 /// Whether the last caustic frame's light all landed in the lights' own maps (every pass's account, once its frame
@@ -101,29 +114,42 @@ pub(crate) fn light_maps_hold_all(reports: &[LightReport]) -> bool {
 }
 
 impl Caches {
-    /// Whether a frame with the caustic inputs `key` reuses the last frame's maps (`reuse`: reuse is on), and whether
-    /// it clears the eye deposit first. `eye_view`: the eye view the eye deposit is for, when it runs. The deposit
-    /// depends on the eye too: maps that held every landing serve any eye view (the frame then clears the deposit
-    /// for a new one), else only the eye view they were deposited for. A frame that traces clears the deposit; a
-    /// continuation (`continuation`) adds to it and reuses nothing.
+    /// What a frame with the caustic inputs `key` does with the last frame's maps: reuse them (`reuse`: reuse is
+    /// on), add another photon set to their average (while they average fewer than `sets` of the same inputs), or
+    /// trace afresh; and whether it clears the eye deposit first. `eye_view`: the eye view the eye deposit is for,
+    /// when it runs. The deposit depends on the eye too: maps that held every landing serve any eye view (the frame
+    /// then clears the deposit for a new one), else only the eye view they were deposited for. A frame that traces
+    /// afresh clears the deposit; a continuation (`continuation`) adds to it and reuses nothing.
     pub fn plan(
         &mut self,
         key: &CausticKey,
         eye_view: Option<(Vec<u8>, u64)>,
         reuse: bool,
         continuation: bool,
-    ) -> (bool, bool) {
+        sets: u32,
+    ) -> MapPlan {
         let same_eye = self.eye_deposit == eye_view;
-        let reused = !continuation
-            && reuse
+        if continuation {
+            return MapPlan { reused: false, clear: false, set: self.sets.saturating_sub(1) };
+        }
+        let same = reuse
             && self.caustic.as_ref().is_some_and(|(k, reports)| {
                 k == key && (eye_view.is_none() || same_eye || light_maps_hold_all(reports))
             });
-        let clear = eye_view.is_some() && !continuation && (!reused || !same_eye);
-        if eye_view.is_some() && (!reused || clear) {
+        let plan = match (same, self.sets < sets) {
+            // Another photon set into the average: the eye deposit keeps its sum unless the eye moved (then every
+            // landing was in the lights' maps, and it holds nothing).
+            (true, true) => MapPlan { reused: false, clear: eye_view.is_some() && !same_eye, set: self.sets },
+            (true, false) => MapPlan { reused: true, clear: eye_view.is_some() && !same_eye, set: self.sets - 1 },
+            (false, _) => MapPlan { reused: false, clear: eye_view.is_some(), set: 0 },
+        };
+        if !plan.reused {
+            self.sets = plan.set + 1;
+        }
+        if eye_view.is_some() && (!plan.reused || plan.clear) {
             self.eye_deposit = eye_view;
         }
-        (reused, clear)
+        plan
     }
 
     /// Forget both: the next frame recomputes everything.
@@ -131,5 +157,6 @@ impl Caches {
         self.caustic = None;
         self.eye = None;
         self.eye_deposit = None;
+        self.sets = 0;
     }
 }

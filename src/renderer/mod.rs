@@ -32,7 +32,7 @@ use crate::settings::{CarriedColor, ResolvedSettings, Settings, Transport};
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, SubmitSync, Tracker};
 use ash::vk;
-use keys::{Caches, CausticKey, EyeKey, TargetsKey};
+use keys::{Caches, CausticKey, EyeKey, MapPlan, TargetsKey};
 use queue::{FrameQueue, Pending};
 use std::sync::Arc;
 use std::time::Instant;
@@ -169,6 +169,8 @@ pub struct Renderer {
     config: ResolvedSettings,
     /// Reuse the caustic stages when nothing they depend on changed (off for profiling, which times them).
     reuse: bool,
+    /// The photon sets a still frame's caustic maps average at most (1: each frame traces one set).
+    accumulation: u32,
     /// Bumped whenever the scene's geometry or materials change.
     scene_generation: u64,
     /// The geometry or materials changed: the scene's buffers are rebuilt before the next frame.
@@ -293,6 +295,7 @@ impl Renderer {
             settings,
             config,
             reuse: true,
+            accumulation: 1,
             scene_generation: 0,
             geometry_dirty: false,
             instances,
@@ -414,6 +417,15 @@ impl Renderer {
     /// or recompute every stage of every frame (profiling and benchmarks).
     pub fn set_reuse(&mut self, reuse: bool) {
         self.reuse = reuse;
+    }
+
+    /// Progressive accumulation: while nothing the caustic maps depend on changes (nor, where the eye deposit runs,
+    /// the eye view), each frame traces a fresh photon set (each cell sampled at a new point of a low-discrepancy
+    /// sequence) and its maps average it with the sets before, up to `sets` of them; later frames then reuse the
+    /// average. Any change starts a new average. 1 (the default): each frame traces one set, and reuses it.
+    /// Needs reuse on ([`Renderer::set_reuse`]).
+    pub fn set_accumulation(&mut self, sets: u32) {
+        self.accumulation = sets.max(1);
     }
 
     /// The eye view of `camera` at `width`×`height`.
@@ -770,12 +782,7 @@ impl Renderer {
         self.last_slot = slot;
         let s = self.frame_settings(desc);
         let camera = desc.camera;
-        // The caustics and direct AOVs are point samples at the pixel centers; the beauty is supersampled.
-        let aa = match desc.aov {
-            Some(Aov::Caustics) | Some(Aov::Direct) => 1,
-            _ if desc.preview => 1,
-            _ => s.aa,
-        };
+        let aa = eye_samples(desc, s.aa);
         let emitters = views::emitters(&self.scene)?;
         self.ensure_targets(&s, emitters.len(), camera.width, camera.height, aa)?;
         if s.transport == Transport::Exact && !self.scene_buffers.bvh.has(s.bvh_layout) {
@@ -826,7 +833,7 @@ impl Renderer {
             self.targets_key,
         );
         let targets = self.targets.as_mut().expect("targets");
-        let data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &emitters, &views, targets, nc);
+        let mut data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &emitters, &views, targets, nc);
         // The deposits that run: the light maps, and the eye deposit where the targets hold it.
         let eye_deposit = targets.eye_deposit(&s);
         let deposits: Vec<Deposit> = DEPOSITS.into_iter().filter(|&d| d != Deposit::Eye || eye_deposit).collect();
@@ -834,7 +841,9 @@ impl Renderer {
             .iter()
             .any(|d| d.declares().follows_camera)
             .then(|| (bytemuck::bytes_of(&data[0].frame.camera).to_vec(), self.targets_generation));
-        let (reused, clear_deposits) = self.caches.plan(&key, eye_view, self.reuse, continuation.is_some());
+        let plan = self.caches.plan(&key, eye_view, self.reuse, continuation.is_some(), self.accumulation);
+        let MapPlan { reused, clear: clear_deposits, set } = plan;
+        uniforms::set_photon_set(&mut data, set);
         // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
         // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
         let eye_key = EyeKey {
@@ -913,6 +922,7 @@ impl Renderer {
         rec.record_time += rec.mark.elapsed().as_secs_f64();
         let mut report = rec.report;
         report.scene = scene_report;
+        report.photon_sets = set + 1;
         report.record_ms = rec.record_time * 1e3;
         report.barrier_batches = rec.sync.flushes() - flushes;
         if host_cmd.is_none() {
@@ -934,6 +944,16 @@ impl Renderer {
             external: host_cmd.is_some(),
         });
         Ok(())
+    }
+}
+
+/// The eye samples per pixel side of a frame: the caustics and direct AOVs are point samples at the pixel centers,
+/// and so is a preview; the beauty is supersampled `aa`×`aa`.
+fn eye_samples(desc: &FrameDesc, aa: u32) -> u32 {
+    match desc.aov {
+        Some(Aov::Caustics) | Some(Aov::Direct) => 1,
+        _ if desc.preview => 1,
+        _ => aa,
     }
 }
 

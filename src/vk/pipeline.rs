@@ -583,7 +583,7 @@ mod tests {
         assert_eq!(p.iface.names[1], "t_flux");
         assert_eq!(p.iface.written, [false, false, false, true]);
         let push = p.iface.push.as_ref().expect("a push block");
-        assert_eq!((push.name.as_str(), push.size), ("ResolvePush", 4));
+        assert_eq!((push.name.as_str(), push.size), ("ResolvePush", 8));
         // The texel variant reads binding 1 as a texel buffer (a `samplerBuffer`).
         let texels = Pipeline::compute(&device, "resolve, texels", shaders::RESOLVE_COMP_TEXELS.words()).unwrap();
         assert_eq!(texels.iface.kinds[1], Some(BindKind::Texels));

@@ -13,9 +13,21 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
     if let Some(n) = args.sequence {
         check_sequence(args, n)?;
     }
+    if args.accumulate.is_some() && (args.frames != 1 || args.no_reuse) {
+        return Err(Error::BadInput(
+            "--accumulate averages photon sets into one picture: not with --frames, which repeats a frame, or \
+             --no-reuse, which starts every frame afresh"
+                .into(),
+        ));
+    }
     let settings = args.method.settings()?;
     let mut session = Session::open(&args.scene, settings, first_picture_scene)?;
     session.renderer.set_reuse(!args.no_reuse);
+    session.renderer.set_accumulation(match args.accumulate {
+        Some(Accumulate::Sets(n)) => n,
+        Some(Accumulate::Seconds(_)) => u32::MAX,
+        None => 1,
+    });
     session.announce_defaults();
     session.plan(Some(aov))?;
     let mut reports = Vec::new();
@@ -30,7 +42,7 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
             if let Ok(c) = session.renderer.scene().camera(Some(&session.camera.name)) {
                 session.camera = c.clone();
             }
-            let (report, img) = session.frame(Some(aov))?;
+            let (report, img) = converge(&mut session, aov, args.accumulate, &mut reports)?;
             let image = img.ok_or_else(|| Error::Failed("no image was read back".into()))?;
             write_aov(&session, args, aov, &image, &sequence_path(&args.out, k), &mut extra)?;
             reports.push(report);
@@ -38,6 +50,11 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         }
         bar.finish_and_clear();
         extra.insert("sequence".into(), json!({"frames": n, "fps": args.fps, "start_s": args.scene.seconds()?}));
+    } else if args.accumulate.is_some() {
+        let (report, img) = converge(&mut session, aov, args.accumulate, &mut reports)?;
+        reports.push(report);
+        let image = img.ok_or_else(|| Error::Failed("no image was read back".into()))?;
+        write_aov(&session, args, aov, &image, &args.out, &mut extra)?;
     } else {
         let mut image = None;
         for i in 0..args.frames {
@@ -78,6 +95,57 @@ pub fn run_render(args: &RenderArgs) -> Result<()> {
         session.device().info.name
     );
     validation_verdict(&session)
+}
+
+/// One picture at the scene's current time: a frame, or with `--accumulate` the average of its photon sets (each
+/// a frame; the earlier frames' reports go to `reports`). Returns the last frame's report and image.
+fn converge(
+    session: &mut Session,
+    aov: Aov,
+    accumulate: Option<Accumulate>,
+    reports: &mut Vec<FrameReport>,
+) -> Result<(FrameReport, Option<AovData>)> {
+    let start = std::time::Instant::now();
+    let (sets, seconds) = match accumulate {
+        None => return session.frame(Some(aov)),
+        Some(Accumulate::Sets(n)) => (n, f64::INFINITY),
+        Some(Accumulate::Seconds(t)) => (u32::MAX, t),
+    };
+    let bar = accumulate_bar(accumulate);
+    loop {
+        let (report, image) = session.frame(Some(aov))?;
+        bar.set_position(report.photon_sets as u64);
+        let done = report.photon_sets >= sets || start.elapsed().as_secs_f64() >= seconds;
+        if done || report.reused {
+            bar.finish_and_clear();
+            eprintln!(
+                "averaged {} photon sets ({} photons each) in {:.1} s",
+                report.photon_sets,
+                report.photons(),
+                start.elapsed().as_secs_f64()
+            );
+            return Ok((report, image));
+        }
+        reports.push(report);
+    }
+}
+
+/// A progress bar for --accumulate's photon sets on stderr (drawn only when stderr is a terminal).
+fn accumulate_bar(accumulate: Option<Accumulate>) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let (bar, template) = match accumulate {
+        Some(Accumulate::Sets(n)) => {
+            (indicatif::ProgressBar::new(n as u64), "{bar:40} photon set {pos}/{len}  eta {eta}")
+        }
+        _ => (indicatif::ProgressBar::new_spinner(), "{spinner} photon set {pos}  {elapsed}"),
+    };
+    if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
+        bar.set_style(style);
+    }
+    bar
 }
 
 /// Write a frame's AOV to `path` (PNG or EXR with its metadata); a caustics or direct AOV's flux goes in `extra`.

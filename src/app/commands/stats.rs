@@ -69,6 +69,7 @@ pub fn stats_json(session: &Session, frames: &[FrameReport], extra: Value) -> Va
         "cpu_record_ms": stage("cpu_record"),
         "frames": frames.len(),
         "caustics_reused": last.reused,
+        "photon_sets": last.photon_sets,
         "reused_frames": frames.iter().filter(|f| f.reused).count(),
         "eye_reused_frames": frames.iter().filter(|f| f.eye_reused).count(),
         "lights": light_rows(&session.renderer, &last),

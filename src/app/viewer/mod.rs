@@ -120,6 +120,10 @@ pub struct ViewArgs {
     /// only adds a frame of latency).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=3))]
     pub frames_in_flight: Option<u32>,
+    /// While the view and the scene hold still, each frame adds a fresh photon set to the caustic maps' average,
+    /// up to this many (1: off); any change starts a new average (default: 64 on GPUs, 8 on CPU devices).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub accumulate: Option<u32>,
     /// Scripted input: one step per line, `FRAMES VERB [ARGS]` with the verbs `orbit DEG`, `drag DX DY`,
     /// `key NAME` and `still`; the viewer quits after the last step, and --stats gains each step's frame rate and
     /// time to converge (docs/viewer.md).
@@ -534,6 +538,8 @@ struct Viewer {
     interactive_ms: f64,
     /// Preview frames are drawn at 1/preview_scale of the window's resolution per side, upscaled when presented.
     preview_scale: u32,
+    /// The photon sets a still view's caustic maps average (`--accumulate`).
+    accumulate: u32,
     /// --preview-scale N (N > 0): fixed; else adapted to keep a preview's eye view near `refine::PREVIEW_EYE_MS`.
     preview_scale_fixed: bool,
     /// Each frame submitted and not yet reported, oldest first (frames complete in the order they were submitted).
@@ -645,6 +651,7 @@ impl Viewer {
                 INTERACTIVE_MS_GPU
             }),
             preview_scale: args.preview_scale.max(1),
+            accumulate: args.accumulate.unwrap_or(if device.info.is_cpu() { 8 } else { 64 }),
             preview_scale_fixed: args.preview_scale > 0,
             in_flight: VecDeque::new(),
             shown_level: 0,
@@ -1106,14 +1113,8 @@ impl Viewer {
                 self.counters.minimized_frames_skipped += 1;
                 return Ok(());
             };
-            eprintln!(
-                "swapchain: {:?} {:?}, {} images, {}x{}",
-                sc.format.format,
-                sc.present_mode,
-                sc.images.len(),
-                sc.extent.width,
-                sc.extent.height
-            );
+            let (format, mode, images, e) = (sc.format.format, sc.present_mode, sc.images.len(), sc.extent);
+            eprintln!("swapchain: {format:?} {mode:?}, {images} images, {}x{}", e.width, e.height);
             self.swapchain = Some(sc);
             self.dirty = false;
         }
@@ -1176,6 +1177,7 @@ impl Viewer {
         self.last_camera = Some(camera.clone());
         let preview = refine::is_preview(self.progressive, moved, interacting, level, chosen);
         let scale = refine::draw_scale(preview, capture, self.preview_scale);
+        renderer.set_accumulation(refine::photon_sets(moved || interacting, level, chosen, self.accumulate));
         let view = renderer.camera_view(&camera, (extent.width / scale).max(1), (extent.height / scale).max(1));
         renderer.submit(
             &FrameDesc { camera: &view, aov: None, level: Some(level), preview },
@@ -1311,8 +1313,12 @@ impl Viewer {
             String::new()
         };
         let preview = if report.preview && scale > 1 { format!(" — preview 1/{scale}") } else { String::new() };
+        let converging = match report.photon_sets {
+            n if n > 1 && n < self.accumulate => format!(" — converging: {n}/{} photon sets", self.accumulate),
+            _ => String::new(),
+        };
         self.window.set_title(&format!(
-            "caustics — {} — {}{refining}{preview} — {fps:.1} fps — GPU {gpu:.1} ms",
+            "caustics — {} — {}{refining}{preview}{converging} — {fps:.1} fps — GPU {gpu:.1} ms",
             self.scene_name,
             self.describe()
         ));

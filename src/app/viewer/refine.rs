@@ -33,6 +33,17 @@ pub fn is_preview(progressive: bool, moved: bool, interacting: bool, level: u32,
     progressive && (moved || interacting || level < chosen)
 }
 
+/// The photon sets the next frame's caustic maps may average ([`caustics::Renderer::set_accumulation`]): a view
+/// still at the chosen level converges, each frame adding a set, up to `accumulate`; a moving or refining one keeps
+/// (and reuses) the average it has until a change of what the maps depend on starts a new one.
+pub fn photon_sets(moving: bool, level: u32, chosen: u32, accumulate: u32) -> u32 {
+    if moving || level < chosen {
+        1
+    } else {
+        accumulate
+    }
+}
+
 /// The scale a frame is drawn at (the copy to the swapchain image scales it up): a preview's, except for a
 /// screenshot's frame, drawn at full resolution.
 pub fn draw_scale(preview: bool, capture: bool, preview_scale: u32) -> u32 {
