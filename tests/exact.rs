@@ -75,7 +75,8 @@ struct Case {
 fn exact_matches_all_paths_reference() {
     let cases = [
         Case { scene: "sphere.toml", rel_l1: 0.0075, ratio: 1.0001 },
-        Case { scene: "bunny.toml", rel_l1: 0.0360, ratio: 1.0023 },
+        // (3.60%, 1.0023 against the reference before it took the GPU's rule for interpolated normals.)
+        Case { scene: "bunny.toml", rel_l1: 0.0312, ratio: 1.0001 },
         Case { scene: "tilted_cube.toml", rel_l1: 0.0100, ratio: 1.0000 },
         Case { scene: "ior24.toml", rel_l1: 0.0163, ratio: 0.9990 },
         // A convex mirror spreads the reflected light thinly: level 3's photons land far apart. Their differential
@@ -87,8 +88,9 @@ fn exact_matches_all_paths_reference() {
         Case { scene: "bowl.toml", rel_l1: 0.0066, ratio: 0.9991 },
         // Media: water in a glass, three kinds of interface (glass | air, water | glass, water | air). The light the
         // glass scatters beyond the lamp's receiver view (0.28 mW in the image, at the image's edges) is the eye
-        // deposit's; without it rel-L1 is 3.28% and the flux ratio 0.9971.
-        Case { scene: "glass_of_water.toml", rel_l1: 0.0285, ratio: 1.0023 },
+        // deposit's; without it rel-L1 was 3.28% and the flux ratio 0.9971 (2.85% and 1.0023 with it, against the
+        // reference before it took the GPU's rule for interpolated normals).
+        Case { scene: "glass_of_water.toml", rel_l1: 0.0250, ratio: 0.9993 },
     ];
     let (_gpu, device) = gpu();
     for c in &cases {

@@ -12,7 +12,7 @@ use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// Bump when a change to the tracer changes its images.
-const TRACER_VERSION: u32 = 5;
+const TRACER_VERSION: u32 = 6;
 
 /// 64-bit FNV-1a, stable across Rust versions and platforms (std's hashers are not).
 struct Fnv(u64);

@@ -280,10 +280,12 @@ enum Interaction {
 }
 
 /// Reflect or refract at a dielectric interface between IOR `ior` (behind the geometric normal) and `outside` (in
-/// front of it), chosen by Russian roulette with probability F (`xi` uniform in [0, 1)). Inside/outside comes
-/// from the geometric normal; the interpolated normal gives F and the directions, unless it faces away from the
-/// ray or sends the photon to the wrong side of the surface, in which case the geometric normal is used (the
-/// `bool` tells).
+/// front of it), chosen by Russian roulette with probability F (`xi` uniform in [0, 1)), by the rules of
+/// docs/design.md "Shading normals" as the GPU's `split_interface` applies them. Inside/outside comes from the
+/// geometric normal. F and the directions come from the interpolated normal where it lies on the geometric
+/// normal's side and faces the ray, else from the geometric normal. The branch is chosen by that F; a direction it
+/// would send to the wrong side of the surface is recomputed about the geometric normal, with the same F (a
+/// refraction that cannot be made so reflects). The `bool` tells whether the geometric normal gave the direction.
 fn interact(d: DVec3, hit: &Hit, ior: f64, outside: f64, xi: f64) -> Option<(Interaction, bool)> {
     if ior == MIRROR {
         return mirror(d, hit);
@@ -291,30 +293,35 @@ fn interact(d: DVec3, hit: &Hit, ior: f64, outside: f64, xi: f64) -> Option<(Int
     let entering = d.dot(hit.ng) < 0.0;
     let eta = if entering { outside / ior } else { ior / outside };
     let ng_f = if entering { hit.ng } else { -hit.ng };
-    let ns = if hit.ns.dot(hit.ng) > 0.0 { hit.ns } else { hit.ng };
-    let ns_f = if entering { ns } else { -ns };
-    for (k, n) in [ns_f, ng_f].into_iter().enumerate() {
-        let cos_i = -d.dot(n);
-        if cos_i <= 0.0 {
-            continue;
+    let ns_f = if entering { hit.ns } else { -hit.ns };
+    let use_ns = hit.ns.dot(hit.ng) > 0.0 && -d.dot(ns_f) > 0.0;
+    let n = if use_ns { ns_f } else { ng_f };
+    let cos_i = -d.dot(n);
+    if cos_i <= 0.0 {
+        return None;
+    }
+    let f = fresnel(cos_i, eta);
+    if let Some(cos_t) = f.cos_t.filter(|_| xi >= f.reflectance) {
+        let t = refract(d, n, eta, cos_i, cos_t).normalize();
+        if t.dot(ng_f) < 0.0 {
+            return Some((Interaction::Refracted { dir: t }, !use_ns));
         }
-        let f = fresnel(cos_i, eta);
-        match f.cos_t {
-            Some(cos_t) if xi >= f.reflectance => {
-                let t = refract(d, n, eta, cos_i, cos_t).normalize();
-                if t.dot(ng_f) < 0.0 {
-                    return Some((Interaction::Refracted { dir: t }, k == 1));
-                }
-            }
-            _ => {
-                let r = reflect(d, n).normalize();
-                if r.dot(ng_f) > 0.0 {
-                    return Some((Interaction::Reflected { dir: r, tir: f.cos_t.is_none() }, k == 1));
-                }
+        // The interpolated normal bends the ray back out: refract about the geometric normal instead.
+        let c = -d.dot(ng_f);
+        if let Some(cos_tg) = fresnel(c, eta).cos_t.filter(|_| c > 0.0) {
+            let t = refract(d, ng_f, eta, c, cos_tg).normalize();
+            if t.dot(ng_f) < 0.0 {
+                return Some((Interaction::Refracted { dir: t }, true));
             }
         }
     }
-    None
+    let tir = f.cos_t.is_none();
+    let r = reflect(d, n).normalize();
+    if r.dot(ng_f) > 0.0 {
+        return Some((Interaction::Reflected { dir: r, tir }, !use_ns));
+    }
+    let r = reflect(d, ng_f).normalize();
+    (r.dot(ng_f) > 0.0).then_some((Interaction::Reflected { dir: r, tir }, true))
 }
 
 /// The `ior` entry of a mirror object.
