@@ -233,3 +233,33 @@ fn a_still_scene_converges_as_photon_sets_accumulate() {
     assert!(!r.reused && r.photon_sets == 1, "a change starts a new average");
     assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
 }
+
+/// No ghost: after a still glass's maps have averaged 16 photon sets, the glass jumps 0.25 m; the next frame is a
+/// new average of one set, equal to a fresh renderer's frame of the moved glass (nothing of the old caustic is
+/// left), and the sets then accumulate again from there.
+#[test]
+fn a_glass_that_jumps_leaves_no_ghost() {
+    let (_gpu, device) = common::gpu();
+    let mut s = open(&device, true);
+    s.set_accumulation(16);
+    let glass = (0..s.scene().objects.len())
+        .map(caustics::InstanceId::from_index)
+        .find(|&i| s.scene().objects[i.index()].name == "glass")
+        .expect("the glass ball");
+    for n in 1..=16 {
+        assert_eq!(frame(&mut s, "top").0.photon_sets, n);
+    }
+    let (_, before) = frame(&mut s, "top");
+    let moved = glam::Mat4::from_translation(glam::Vec3::new(0.25, 0.0, 0.0)) * s.transform(glass).unwrap();
+    s.set_transform(glass, moved).unwrap();
+    let (r, after) = frame(&mut s, "top");
+    assert!(!r.reused && r.photon_sets == 1, "the jump starts a new average");
+    let mut fresh = open(&device, true);
+    fresh.set_transform(glass, moved).unwrap();
+    let (_, expected) = frame(&mut fresh, "top");
+    same(&after, &expected, "the frame after the jump against a fresh render of the moved glass", 1e-5);
+    let m = compare(&after, &before, 64, 2.0);
+    assert!(m.peak_offset_m > 0.15, "the caustic moved with the glass: {m:?}");
+    assert_eq!(frame(&mut s, "top").0.photon_sets, 2, "and accumulates again");
+    assert_eq!(caustics::gpu::validation_message_count(), 0, "validation messages");
+}
