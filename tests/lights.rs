@@ -371,3 +371,29 @@ fn a_sphere_light_matches_the_reference() {
     let cases = [(Aov::Caustics, RefAov::Caustics, 4_000_000, 0.03), (Aov::Direct, RefAov::Direct, 16_000_000, 0.035)];
     matches_reference(&device, path.to_str().unwrap(), 4, 2.0, &cases);
 }
+
+/// `Renderer::set_light` refuses what the scene file refuses, and keeps the light it had: a radius that is negative
+/// or not finite, an angular radius past 10°, a radius on a directional light (a sun has an angular size), an
+/// angular radius on a spot or point light (a bulb has a radius).
+#[test]
+fn set_light_refuses_a_size_the_light_cannot_have() {
+    let (_gpu, device) = gpu();
+    let mut r = renderer(&device, &scene("sphere.toml"), Settings::default());
+    let spot = r.scene().lights[0].clone();
+    let mut sun = spot.clone();
+    sun.kind = caustics::scene::LightKind::Directional;
+    let cases = [
+        (caustics::scene::Light { radius: -0.1, ..spot.clone() }, "a radius must be finite"),
+        (caustics::scene::Light { radius: f32::NAN, ..spot.clone() }, "a radius must be finite"),
+        (caustics::scene::Light { angular_radius: 0.3, ..sun.clone() }, "an angular radius within [0, 10]"),
+        (caustics::scene::Light { radius: 0.1, ..sun.clone() }, "a directional light (a sun) has an angular radius"),
+        (caustics::scene::Light { angular_radius: 0.01, ..spot.clone() }, "a spot or point light a radius"),
+    ];
+    for (light, needle) in cases {
+        let e = r.set_light(0, light).expect_err("refused").to_string();
+        assert!(e.contains(needle), "{e}");
+        assert_eq!(r.scene().lights[0], spot, "the light it had is kept");
+    }
+    r.set_light(0, caustics::scene::Light { radius: 0.05, ..spot.clone() }).expect("a bulb");
+    r.set_light(0, caustics::scene::Light { angular_radius: 0.01, ..sun }).expect("a sun");
+}

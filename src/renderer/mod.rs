@@ -363,6 +363,14 @@ impl Renderer {
                 light.angular_radius.to_degrees()
             )));
         }
+        // As the scene file says it: a sun has an angular size, a bulb a radius.
+        let directional = light.kind == crate::scene::LightKind::Directional;
+        if (directional && light.radius > 0.0) || (!directional && light.angular_radius > 0.0) {
+            return Err(Error::BadInput(format!(
+                "light {index}: a directional light (a sun) has an angular radius and no radius, a spot or point light \
+                 a radius and no angular radius"
+            )));
+        }
         let old = std::mem::replace(&mut self.scene.lights[index], light);
         let view = CameraView::new(
             &self.scene.cameras.first().cloned().unwrap_or_else(default_camera),
