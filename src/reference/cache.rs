@@ -2,8 +2,9 @@
 //!
 //! Entries live in `$CAUSTICS_CACHE_DIR`, else `$CARGO_TARGET_DIR/reference-cache`, else the crate's
 //! `target/reference-cache`. The key hashes everything the image depends on: the scene file's bytes, the bytes of
-//! every mesh file it names, the camera, AOV, paths, photon count, size and seed, plus a version number of the
-//! tracer itself. The thread count is not part of it (the image does not depend on it).
+//! every mesh file it names, the camera, AOV, paths, photon count, size and seed, plus the tracer's own source
+//! (every file of src/reference but this one), so that any change to the tracer traces its references again. The
+//! thread count is not part of it (the image does not depend on it).
 
 use super::{trace, RefParams};
 use crate::error::{Error, Result};
@@ -11,8 +12,14 @@ use crate::image_io::{self, RgbImage};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
-/// Bump when a change to the tracer changes its images.
-const TRACER_VERSION: u32 = 6;
+/// The tracer's source: src/reference's files but this cache (a test checks that none is missing).
+const TRACER_SOURCE: [(&str, &str); 5] = [
+    ("geometry.rs", include_str!("geometry.rs")),
+    ("mod.rs", include_str!("mod.rs")),
+    ("optics.rs", include_str!("optics.rs")),
+    ("sampling.rs", include_str!("sampling.rs")),
+    ("tracer.rs", include_str!("tracer.rs")),
+];
 
 /// 64-bit FNV-1a, stable across Rust versions and platforms (std's hashers are not).
 struct Fnv(u64);
@@ -73,7 +80,8 @@ pub fn cache_key(scene_path: &Path, p: &RefParams) -> Result<String> {
     let read =
         |path: &Path| std::fs::read(path).map_err(|e| Error::BadInput(format!("{}: cannot read: {e}", path.display())));
     let text = read(scene_path)?;
-    let mut parts: Vec<Vec<u8>> = vec![TRACER_VERSION.to_le_bytes().to_vec(), text.clone()];
+    let mut parts: Vec<Vec<u8>> = TRACER_SOURCE.iter().map(|(_, source)| source.as_bytes().to_vec()).collect();
+    parts.push(text.clone());
     for mesh in mesh_files(scene_path, &String::from_utf8_lossy(&text)) {
         parts.push(read(&mesh)?);
     }
@@ -112,4 +120,23 @@ pub fn cached_in(dir: &Path, scene_path: &Path, p: &RefParams) -> Result<RgbImag
     image_io::write_text(&dir.join(format!("{key}.json")), &json)?;
     image_io::write_exr(&exr, &out.image)?;
     Ok(out.image)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The key covers every file of the tracer: a file added to src/reference must join `TRACER_SOURCE`.
+    #[test]
+    fn the_key_holds_every_file_of_the_tracer() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/reference");
+        let mut files: Vec<String> = std::fs::read_dir(&dir)
+            .expect("src/reference")
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.ends_with(".rs") && n != "cache.rs")
+            .collect();
+        files.sort();
+        let listed: Vec<&str> = TRACER_SOURCE.iter().map(|(name, _)| *name).collect();
+        assert_eq!(files, listed, "src/reference's files against TRACER_SOURCE");
+    }
 }
