@@ -14,13 +14,13 @@ const OVER: &[(&str, &str, usize)] = &[
     ("src/app/soak.rs", "run_soak", 185),
     ("src/app/bench.rs", "run_bench", 203),
     ("src/renderer/mod.rs", "record_into", 179),
-    ("src/scene/gltf.rs", "visit", 172),
-    ("src/scene/gltf.rs", "animations", 163),
+    ("src/scene/gltf/nodes.rs", "visit", 172),
+    ("src/scene/gltf/animations.rs", "animations", 163),
     ("src/app/temporal.rs", "run_temporal", 159),
     ("src/app/viewer/mod.rs", "redraw", 146),
     ("src/targets.rs", "new", 139),
-    ("src/scene/gltf.rs", "mesh_objects", 139),
-    ("src/scene/gltf.rs", "parse", 139),
+    ("src/scene/gltf/nodes.rs", "mesh_objects", 139),
+    ("src/scene/gltf/mod.rs", "parse", 139),
     ("src/scene_gpu.rs", "new", 136),
 ];
 
