@@ -4,11 +4,9 @@
 //! reported by the CLI with exit code 2.
 
 pub mod animation;
-mod draco;
 pub mod environment;
 mod gltf;
 pub mod mesh;
-mod meshopt;
 pub mod morph;
 pub mod mtl;
 mod schema;

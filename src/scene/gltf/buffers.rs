@@ -13,7 +13,7 @@ pub(super) fn load_buffers(
         let at = format!("buffers[{}]", b.index());
         let data = match b.source() {
             // EXT_meshopt_compression's fallback without data: its views are decoded into it.
-            gltf::buffer::Source::Bin if crate::scene::meshopt::is_fallback(&b) => {
+            gltf::buffer::Source::Bin if super::meshopt::is_fallback(&b) => {
                 if b.length() > 1 << 31 {
                     return Err(cx.err(format!("{at}.byteLength"), "is too large"));
                 }

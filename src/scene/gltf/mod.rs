@@ -18,7 +18,9 @@ use std::path::Path;
 mod accessors;
 mod animations;
 mod buffers;
+mod draco;
 mod materials;
+mod meshopt;
 mod nodes;
 
 use accessors::*;
@@ -41,8 +43,8 @@ const SUPPORTED: &[&str] = &[
     "KHR_texture_transform",
     WEBP,
     INSTANCING,
-    super::meshopt::EXTENSION,
-    super::draco::EXTENSION,
+    meshopt::EXTENSION,
+    draco::EXTENSION,
     POINTER,
 ];
 
@@ -228,8 +230,8 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
 
     // The crate's validation: indices in range, required fields present, enums valid. Required extensions were
     // checked above (the crate does not know the ones we ignore).
-    // A Draco primitive's accessors have no bufferView: the decoded data gives them one (src/scene/draco.rs).
-    let draco = super::draco::accessors(root);
+    // A Draco primitive's accessors have no bufferView: the decoded data gives them one (src/scene/gltf/draco.rs).
+    let draco = draco::accessors(root);
     let mut problems = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |p: &dyn Fn() -> gltf::json::Path, e: VError| {
         let p = p().to_string();
@@ -262,8 +264,8 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     }
 
     let mut buffers = load_buffers(&cx, &document, blob, path)?;
-    super::meshopt::decode_views(&cx, &document, &mut buffers)?;
-    let document = super::draco::inflate(&cx, &document, &mut buffers)?.unwrap_or(document);
+    meshopt::decode_views(&cx, &document, &mut buffers)?;
+    let document = draco::inflate(&cx, &document, &mut buffers)?.unwrap_or(document);
 
     // Materials, converted once (and warned about once), with the textures their base colors name; per material,
     // the TEXCOORD set its texture reads.

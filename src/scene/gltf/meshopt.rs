@@ -3,8 +3,8 @@
 //! that accessors read it as any other view. Every count, stride and range is checked before the decoder runs: its
 //! C code asserts on them, and it is safe for untrusted bytes only within them.
 
-use super::gltf::Cx;
-use super::SceneError;
+use super::Cx;
+use crate::scene::SceneError;
 use serde_json::Value;
 
 pub const EXTENSION: &str = "EXT_meshopt_compression";

@@ -5,8 +5,8 @@
 //! returned document then reads them as any other. Morph targets stay uncompressed, in the points' order (the
 //! extension requires encoders to keep it, as glTF-Transform does with its sequential encoding for such meshes).
 
-use super::gltf::Cx;
-use super::SceneError;
+use super::Cx;
+use crate::scene::SceneError;
 use gltf::json::{self, validation::Checked, Index};
 use serde_json::Value;
 
