@@ -19,7 +19,7 @@ void main() {
     uint level = cell_level(cell);
     uvec2 xy = cell_xy(cell);
     Hit h = trace_cell(level, xy, true);
-    uint r = max(1u, uint(round(float(cell_splat_radius(cell)) * set_narrowing())));
+    uint r = set_narrowed_radius(cell_splat_radius(cell));
     bool ok = h.status == HIT_OK;
     splats[j] = GpuSplat(h.map_px, ok ? h.flux : 0.0, ok ? float(r) : 0.0);
     if (pc.debug != 0u && level >= pc.debug_min_level) {

@@ -83,10 +83,20 @@ pub struct FrameUniforms {
     pub eye_deposit: u32,
     /// Progressive accumulation (docs/design.md "Frames that build on each other"): the index of this frame's
     /// photon set among those the caustic maps average (0: a new average, whose photons leave their cells'
-    /// centers; k > 0 shifts every cell's sample by the k-th point of a low-discrepancy sequence), and the weight
-    /// 1 / (k + 1) that reads the eye deposit's flux, summed over the sets, as their mean.
+    /// centers; k > 0 shifts every cell's sample by the k-th point of a low-discrepancy sequence). Its weight in
+    /// the average is 1 / (k + 1) ([`FrameUniforms::set_weight`]).
     pub sample_index: u32,
-    pub deposit_weight: f32,
+    /// To a multiple of 16 bytes, as std140 places the struct.
+    pub pad: u32,
+}
+
+impl FrameUniforms {
+    /// The weight of this frame's photon set in a progressive accumulation's average, 1 / (k + 1): the resolve
+    /// blends the set's irradiance with it, and the eye deposit's lookup reads the sets' summed flux as their mean
+    /// (glsl/common/deposit_eye.glsl computes the same).
+    pub fn set_weight(&self) -> f32 {
+        1.0 / (self.sample_index + 1) as f32
+    }
 }
 
 /// A light's part of the uniforms: its views, its power, and its color as a spectrum.

@@ -14,10 +14,10 @@
 #include "common/gbuffer.glsl"
 
 // The flux of eye sample q, of an eye image of `size` samples: the mean over a progressive accumulation's photon
-// sets, whose flux the store sums (deposit_weight: 1 / their count).
+// sets, whose flux the store sums (1 / their count, as FrameUniforms::set_weight).
 vec3 eye_deposit_flux(ivec2 q, ivec2 size) {
     uint i = uint(q.y * size.x + q.x), plane = uint(size.x * size.y);
-    return vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]) * u_frame.frame.deposit_weight;
+    return vec3(eye_flux[i], eye_flux[i + plane], eye_flux[i + 2u * plane]) * (1.0 / float(u_frame.frame.sample_index + 1u));
 }
 
 // The eye deposit's irradiance at sample q (W/m^2), on a receiver of normal n at distance `dist` along the sample's

@@ -35,7 +35,7 @@ float light_map_footprint(GpuView lv, vec3 p, RayDiff rdf, uint r, bool differen
     float k = set_narrowing();
     mx *= k;
     my *= k;
-    r = max(1u, uint(round(float(r) * k)));
+    r = set_narrowed_radius(r);
     return differential ? footprint_radii(mx, my, r) : float(r);
 }
 #endif

@@ -83,6 +83,9 @@ uint emitter_spread_bits(uint v) {
     v = (v | (v << 2)) & 0x33333333u;
     return (v | (v << 1)) & 0x55555555u;
 }
+// A point of the unit square from two 32-bit fixed-point fractions (their top 24 bits: exact in a float).
+vec2 emitter_unit(uvec2 q) { return vec2(q >> 8u) * (1.0 / 16777216.0); }
+
 // A progressive accumulation's k-th photon set (FrameUniforms.sample_index) rotates it by the k-th point of the
 // 4D R-sequence's last two dimensions, so that the sets fill each cell's disk evenly, apart from where they sample the
 // cell (emitter_set_offset).
@@ -91,7 +94,7 @@ vec2 emitter_cell_sample(uint level, uvec2 xy) {
     uint h = emitter_hash(level + 0x9e3779b9u);
     uint k = u_frame.frame.sample_index;
     uvec2 q = uvec2(n * 0xC13FA9A9u + h, n * 0x91E10DA5u + emitter_hash(h)) + k * uvec2(0xA0F2EC75u, 0x89E18285u);
-    return vec2(q >> 8u) * (1.0 / 16777216.0);
+    return emitter_unit(q);
 }
 
 // Where a progressive accumulation's k-th photon set samples each cell, as an offset from its center in cells:
@@ -99,8 +102,7 @@ vec2 emitter_cell_sample(uint level, uvec2 xy) {
 // so that the sets' points fill every cell evenly and any n of them average as a stratified grid n times finer.
 vec2 emitter_set_offset() {
     uint k = u_frame.frame.sample_index;
-    uvec2 q = k * uvec2(0xC13FA9A9u, 0x91E10DA5u) + 0x80000000u;
-    return vec2(q >> 8u) * (1.0 / 16777216.0) - 0.5;
+    return emitter_unit(k * uvec2(0xC13FA9A9u, 0x91E10DA5u) + 0x80000000u) - 0.5;
 }
 
 // Shirley and Chiu's concentric map of the unit square onto the unit disk (area-preserving).

@@ -85,6 +85,9 @@ vec2 cell_sample_uv(uint level, uvec2 xy) {
 // trace's radius.
 float set_narrowing() { return inversesqrt(sqrt(float(u_frame.frame.sample_index + 1u))); }
 
+// A round splat radius of r texels narrowed so (at least one texel).
+uint set_narrowed_radius(uint r) { return max(1u, uint(round(float(r) * set_narrowing()))); }
+
 // A splat radius (caustic-map texels) for a light-view square of `side`: its size on the map.
 uint side_splat_radius(float side) {
     float texel = u_frame.light.receiver_view.window.z * u_frame.light.receiver_view.extent.z;

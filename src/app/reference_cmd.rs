@@ -159,18 +159,8 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
 
 /// A progress bar on stderr for the tracer (drawn only when stderr is a terminal).
 pub fn progress_bar() -> Progress {
-    use std::io::IsTerminal;
-    let bar = if std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::new(0);
-        if let Ok(style) =
-            indicatif::ProgressStyle::with_template("{bar:40} {human_pos}/{human_len} photons  {per_sec}  eta {eta}")
-        {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let template = "{bar:40} {human_pos}/{human_len} photons  {per_sec}  eta {eta}";
+    let bar = crate::app::stderr_bar(|| indicatif::ProgressBar::new(0), template);
     Progress(std::sync::Arc::new(move |done, total| {
         bar.set_length(total);
         bar.set_position(done);

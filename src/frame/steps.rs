@@ -84,7 +84,7 @@ impl Ctx<'_> {
         } else {
             FluxSource::Texels(&self.r.flux_texels)
         };
-        let weight = self.data.frame.deposit_weight;
+        let weight = self.data.frame.set_weight();
         let blend = ResolvePush { keep: if add { 1.0 } else { 1.0 - weight }, scale: weight };
         // A light's later color passes write their channel and keep the earlier ones.
         let keep = self.channel != 0 || blend.keep != 0.0;

@@ -125,7 +125,7 @@ pub(crate) fn frame_data(
         weak_block: s.weak_block as f32,
         eye_deposit: targets.eye_deposit(s) as u32,
         sample_index: 0,
-        deposit_weight: 1.0,
+        pad: 0,
     };
     // Where a light with size aims each cell's rays: through the cell at the glass's middle, along the axis (a
     // beam) or from the light (a sphere).
@@ -197,11 +197,9 @@ impl GpuView {
     }
 }
 
-/// A progressive accumulation's photon set `set` (0: a new average) in every pass's uniforms: its index, and the
-/// weight that reads the eye deposit's sum of the sets as their mean.
+/// A progressive accumulation's photon set `set` (0: a new average) in every pass's uniforms.
 pub(super) fn set_photon_set(data: &mut [FrameData], set: u32) {
     for d in data {
         d.frame.sample_index = set;
-        d.frame.deposit_weight = 1.0 / (set + 1) as f32;
     }
 }

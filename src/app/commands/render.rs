@@ -132,20 +132,13 @@ fn converge(
 
 /// A progress bar for --accumulate's photon sets on stderr (drawn only when stderr is a terminal).
 fn accumulate_bar(accumulate: Option<Accumulate>) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
+    match accumulate {
+        Some(Accumulate::Sets(n)) => crate::app::stderr_bar(
+            || indicatif::ProgressBar::new(n as u64),
+            "{bar:40} photon set {pos}/{len}  eta {eta}",
+        ),
+        _ => crate::app::stderr_bar(indicatif::ProgressBar::new_spinner, "{spinner} photon set {pos}  {elapsed}"),
     }
-    let (bar, template) = match accumulate {
-        Some(Accumulate::Sets(n)) => {
-            (indicatif::ProgressBar::new(n as u64), "{bar:40} photon set {pos}/{len}  eta {eta}")
-        }
-        _ => (indicatif::ProgressBar::new_spinner(), "{spinner} photon set {pos}  {elapsed}"),
-    };
-    if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
-        bar.set_style(style);
-    }
-    bar
 }
 
 /// Write a frame's AOV to `path` (PNG or EXR with its metadata); a caustics or direct AOV's flux goes in `extra`.
@@ -217,15 +210,7 @@ pub(super) fn sequence_path(out: &Path, k: u32) -> PathBuf {
 
 /// A progress bar for a sequence's frames on stderr (drawn only when stderr is a terminal).
 pub(super) fn sequence_bar(n: u32) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(n as u64);
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} frame {pos}/{len}  {per_sec}  eta {eta}") {
-        bar.set_style(style);
-    }
-    bar
+    crate::app::stderr_bar(|| indicatif::ProgressBar::new(n as u64), "{bar:40} frame {pos}/{len}  {per_sec}  eta {eta}")
 }
 
 /// The EXR header metadata of a rendered AOV (docs/design.md, "CLI contract").
