@@ -525,6 +525,13 @@ pub struct ResolvePush {
     pub scale: f32,
 }
 
+/// Push constants of glsl/overlay.vert: the target's size in the overlay's points (its vertices' unit).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct OverlayPush {
+    pub size: [f32; 2],
+}
+
 /// Push constants of glsl/eye_shade.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -77,6 +77,11 @@ pub use renderer::{
     InstanceId, MeshId, Pipelines, RecordTarget, RecordedFrame, Renderer, Views, MAX_FRAMES_IN_FLIGHT,
 };
 
+/// The viewer's overlay: textured 2D triangles over a finished frame (src/passes/overlay.rs).
+pub mod overlay {
+    pub use crate::passes::overlay::{OverlayMesh, OverlayPainter, OverlayTarget, OverlayVertex};
+}
+
 /// Constants the renderer and its shaders share (src/shader_consts.rs): grid sizes, limits and the layouts of the
 /// GPU's buffers.
 pub mod consts {

@@ -447,3 +447,5 @@ pub const SU_OBJECT_INDICES: u32 = 2;
 pub const SU_WORLD_INDICES: u32 = 3;
 /// glsl/geometry.frag (the eye's receivers): the albedo textures.
 pub const GE_ALBEDO_TEXTURES: u32 = 0;
+/// glsl/overlay.frag (the viewer's overlay): the texture its triangles sample.
+pub const OV_TEXTURE: u32 = 0;

@@ -127,6 +127,8 @@ fn spawn_view(dir: &Path, name: &str, display: Option<&str>, args: &[&str]) -> (
         } else {
             &["--transport", "two-interface"][..]
         })
+        // Nor do they draw the overlay unless they name it: they compare the presented frame with the headless one.
+        .args(if args.contains(&"--overlay") { &[][..] } else { &["--overlay", "off"][..] })
         .env("CAUSTICS_VALIDATION", "1")
         .env("RUST_LOG", "warn")
         .env_remove("WAYLAND_DISPLAY")
@@ -674,4 +676,58 @@ fn a_click_drops_into_the_water_under_it() {
     let (near, far) = (near.0 / near.1 as f64, far.0 / far.1 as f64);
     eprintln!("mean |click - still| near the click {near:.3}, far from it {far:.3} (of 255)");
     assert!(near > 2.0 && near > 10.0 * far, "near {near}, far {far}");
+}
+
+/// The overlay (F1, `--overlay`) is drawn into the presented image over the frame, and only where its panel is:
+/// the same frame with it off is the same bytes elsewhere. Its buttons act as their keys do: a scripted click on
+/// "level +" (where the first run's stats put that button) raises the level, and drops nothing into the scene.
+/// Validation, synchronization included, stays clean. Measured: the panel differs by a mean of 58 levels, the rest
+/// by 0.
+#[test]
+fn the_overlay_is_presented_over_the_frame_and_its_buttons_act() {
+    let dir = out_dir("viewer_overlay");
+    let x = Xvfb::start();
+    let (on_png, off_png) = (dir.join("on.png"), dir.join("off.png"));
+    let base = ["--scene", SPHERE, "--camera", "top", "--size", "960x540", "--accumulate", "1"];
+    let run = |name: &str, overlay: &str, extra: &[&str]| {
+        let mut args = base.to_vec();
+        args.extend(["--overlay", overlay]);
+        args.extend_from_slice(extra);
+        args.extend_from_slice(FAST);
+        view_ok(&dir, name, &x.display, &args)
+    };
+    let on = run("on", "on", &["--frames", "3", "--screenshot", on_png.to_str().unwrap()]);
+    run("off", "off", &["--frames", "3", "--screenshot", off_png.to_str().unwrap()]);
+    let o = &on["overlay"];
+    assert_eq!(o["visible"], true);
+    assert!(o["triangles"].as_u64().unwrap() > 100 && o["textures"].as_u64().unwrap() >= 1, "{o}");
+    let rect =
+        |v: &serde_json::Value| -> Vec<f64> { v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    let panel = rect(&o["panel"]);
+    let (w, _, _, with) = luma(&on_png);
+    let (_, _, _, without) = luma(&off_png);
+    let (mut inside, mut n_inside, mut outside) = (0.0, 0usize, 0u8);
+    for (i, (p, q)) in with.chunks_exact(4).zip(without.chunks_exact(4)).enumerate() {
+        let (px, py) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+        let d = (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap();
+        // The panel's shadow reaches up to 35 pixels past its rectangle (egui's offset of 20 and blur of 15).
+        if px >= panel[0] - 40.0 && px <= panel[2] + 40.0 && py >= panel[1] - 40.0 && py <= panel[3] + 40.0 {
+            inside += d as f64;
+            n_inside += 1;
+        } else {
+            outside = outside.max(d);
+        }
+    }
+    let inside = inside / n_inside as f64;
+    eprintln!("overlay panel {panel:?}: mean difference inside {inside:.1}, largest outside {outside}");
+    assert!(inside > 20.0, "the overlay is not in the presented image (mean difference {inside:.1})");
+    assert!(outside <= 2, "the overlay changed the frame outside its panel by {outside} levels");
+
+    let level_up = rect(&o["buttons"]["LevelUp"]);
+    let (fx, fy) = ((level_up[0] + level_up[2]) / 2.0 / 960.0, (level_up[1] + level_up[3]) / 2.0 / 540.0);
+    let script = dir.join("click.txt");
+    std::fs::write(&script, format!("2 still\n1 click {fx:.4} {fy:.4}\n2 still\n")).unwrap();
+    let clicked = run("clicked", "on", &["--script", script.to_str().unwrap()]);
+    assert_eq!(clicked["level"], 3, "the click on level + did not raise the level from 2");
+    assert_eq!(clicked["counters"]["water_drops"], 0, "a click on the panel is not a click into the scene");
 }

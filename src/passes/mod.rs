@@ -5,6 +5,7 @@ pub mod composite;
 pub mod coverage;
 pub mod eye;
 pub mod geometry;
+pub mod overlay;
 pub mod photons;
 pub mod resolve;
 pub mod scene_update;

@@ -71,6 +71,8 @@ pub enum Blend {
     Additive,
     /// Nothing written (an empty write mask): a depth-only draw inside a pass that has color targets.
     Masked,
+    /// Premultiplied color over the target: dst = src + (1 − src.a) dst (the viewer's overlay).
+    Over,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -375,6 +377,14 @@ impl Pipeline {
                         .color_blend_op(vk::BlendOp::ADD)
                         .src_alpha_blend_factor(vk::BlendFactor::ONE)
                         .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD),
+                    Blend::Over => b
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
                         .alpha_blend_op(vk::BlendOp::ADD),
                 }
             })

@@ -28,6 +28,7 @@ pub enum Action {
     Profile,
     Trace,
     Reset,
+    Overlay,
     Help,
     Quit,
 }
@@ -124,6 +125,11 @@ pub const CONTROLS: &[Control] = &[
         keys: &[("t", Action::Trace)],
     },
     Control { input: "R", help: "reset the camera, the light and the glass", keys: &[("r", Action::Reset)] },
+    Control {
+        input: "F1",
+        help: "show or hide the overlay: GPU ms per stage, the frame's photons and energy, buttons for these keys",
+        keys: &[("F1", Action::Overlay)],
+    },
     Control { input: "H", help: "print these controls", keys: &[("h", Action::Help)] },
     Control { input: "Esc Q", help: "quit", keys: &[("Escape", Action::Quit), ("q", Action::Quit)] },
 ];

@@ -14,6 +14,7 @@
 
 mod controls;
 mod orbit;
+mod overlay;
 mod present;
 mod refine;
 mod script;
@@ -29,7 +30,9 @@ use caustics::consts::*;
 use caustics::error::{Error, Result};
 use caustics::gpu::{ContextDesc, Device, Instance, SubmitSync, VkError};
 use caustics::image_io;
+use caustics::overlay::OverlayPainter;
 use caustics::scene::{Camera, Light, Material, Projection, Scene};
+use caustics::settings::OnOff;
 use caustics::settings::{parse_size, Method, Metric, Quality, Settings};
 use caustics::{FrameDesc, FrameOutput, FrameReport, Renderer, SlotVerdict};
 use glam::{Quat, Vec3};
@@ -155,6 +158,10 @@ pub struct ViewArgs {
     /// Print the controls (keys and mouse) as a Markdown table and exit.
     #[arg(long)]
     pub print_controls: bool,
+    /// The overlay over the frame: GPU ms per stage, the frame's photons and energy account, and buttons for the
+    /// keys (F1 toggles it).
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    pub overlay: OnOff,
 }
 
 /// Each object's transform as the scene placed it (a glTF node's world transform; the identity for a TOML
@@ -561,6 +568,9 @@ struct Viewer {
     title_gpu_ms: f64,
     screenshot_request: bool,
     capture: Option<Capture>,
+    /// The overlay (overlay.rs) and what draws it.
+    overlay: overlay::Overlay,
+    painter: OverlayPainter,
     resize: Option<ResizeCycle>,
     /// --script: scripted input, step by step.
     script: Option<Script>,
@@ -605,6 +615,8 @@ impl Viewer {
         let cpu_device = device.info.is_cpu();
         renderer.set_frames_in_flight(args.frames_in_flight.unwrap_or(if cpu_device { 1 } else { 2 }) as usize)?;
         let presenter = Presenter::new(&device);
+        let painter = OverlayPainter::new(&device, caustics::MAX_FRAMES_IN_FLIGHT)?;
+        let overlay = overlay::Overlay::new(&window, args.overlay == OnOff::On, 4096);
         eprintln!(
             "caustics view: {} on {} ({}){}",
             scene_name,
@@ -667,6 +679,8 @@ impl Viewer {
             title_gpu_ms: 0.0,
             screenshot_request: false,
             capture: None,
+            overlay,
+            painter,
             resize: (args.resize_cycle > 0).then(|| ResizeCycle::new(args.resize_cycle, (width, height))),
             script,
             simulated_minimize_until: None,
@@ -700,6 +714,14 @@ impl Viewer {
     }
 
     fn window_event(&mut self, event: WindowEvent) -> Result<()> {
+        // What the overlay takes (a click on a button, a drag over its panel) the scene does not get too.
+        if self.overlay.on_window_event(&self.window, &event) {
+            if let WindowEvent::MouseInput { state: ElementState::Released, .. } = event {
+                // A drag that began in the scene ends over the panel: it ends, and is no click.
+                (self.input.left, self.input.right) = (false, false);
+            }
+            return Ok(());
+        }
         match event {
             WindowEvent::CloseRequested | WindowEvent::Destroyed => self.quit = true,
             WindowEvent::Resized(size) => {
@@ -852,6 +874,7 @@ impl Viewer {
                 }
                 eprintln!("camera, light and glass reset");
             }
+            Overlay => self.overlay.visible = !self.overlay.visible,
             Help => print!("{}", help_text()),
             Quit => self.quit = true,
         }
@@ -1126,17 +1149,19 @@ impl Viewer {
         // Everything that may fail for reasons other than a broken device happens before the acquire: once an image
         // is acquired, its semaphore must be waited on by a submit.
         self.script_input()?;
+        let drawn = self.build_overlay()?;
         self.apply_input(dt, extent);
         let capture = self.screenshot_request
             || self.capture_every_frame
             || (self.frames > 0 && self.counters.presented + 1 >= self.frames as u64);
-        let Viewer { renderer, presenter, swapchain, orbit, counters, .. } = self;
+        let overlay_on = !drawn.meshes.is_empty();
+        let Viewer { renderer, presenter, swapchain, orbit, counters, painter, .. } = self;
         let sc = swapchain.as_ref().expect("swapchain");
         counters.max_images_per_swapchain = counters.max_images_per_swapchain.max(sc.images.len() as u64);
         // The frame-in-flight slot this frame takes: this waits for the frame that last used it, so that its
         // acquire semaphore, uniforms and readback buffer are free again.
         let slot = renderer.next_slot()?;
-        presenter.prepare(sc, capture)?;
+        presenter.prepare(sc, capture, overlay_on)?;
         let index = match sc.acquire(slot)? {
             Acquired::OutOfDate => {
                 counters.acquire_out_of_date += 1;
@@ -1161,8 +1186,12 @@ impl Viewer {
             wait: vec![(sc.acquire_semaphores[slot], vk::PipelineStageFlags2::ALL_TRANSFER)],
             signal: vec![sc.render_done[index as usize]],
         };
+        let meshes = drawn.meshes();
+        let pixels_per_point = drawn.pixels_per_point;
+        let mut overlay = overlay_on.then_some(present::Overlay { painter, slot, meshes: &meshes, pixels_per_point });
+        let mut recorded = Ok(());
         let mut finish = |_: &Device, cmd: vk::CommandBuffer, out: &FrameOutput| {
-            presenter.record(cmd, out.beauty, sc, index, capture)
+            recorded = presenter.record(cmd, out.beauty, (sc, index), capture, overlay.take());
         };
         // Progressive refinement and previews (refine.rs).
         let chosen = renderer.config().level;
@@ -1184,6 +1213,7 @@ impl Viewer {
             Some(&mut finish),
             &sync,
         )?;
+        recorded?;
         self.in_flight.push_back(InFlight { scale, step: self.script.as_ref().map(|s| s.current_step()) });
         self.shown_level = level;
         if capture {
@@ -1215,14 +1245,7 @@ impl Viewer {
             push_bounded(&mut self.intervals, (now - t).as_secs_f64() * 1e3);
         }
         if capture {
-            self.capture = self.presenter.read_capture()?;
-            if std::mem::take(&mut self.screenshot_request) {
-                if let Some(c) = &self.capture {
-                    let path = free_name("caustics-screenshot", "png");
-                    image_io::write_png(&path, c.width, c.height, &c.rgba)?;
-                    eprintln!("wrote {} ({}x{})", path.display(), c.width, c.height);
-                }
-            }
+            self.save_capture()?;
         }
         self.take_reports()?;
         self.resize_tick();
@@ -1234,6 +1257,39 @@ impl Viewer {
             self.quit = true;
         }
         Ok(())
+    }
+
+    /// Read the screenshot the frame recorded (it is done), and save it where S asked for one.
+    fn save_capture(&mut self) -> Result<()> {
+        self.capture = self.presenter.read_capture()?;
+        if std::mem::take(&mut self.screenshot_request) {
+            if let Some(c) = &self.capture {
+                let path = free_name("caustics-screenshot", "png");
+                image_io::write_png(&path, c.width, c.height, &c.rgba)?;
+                eprintln!("wrote {} ({}x{})", path.display(), c.width, c.height);
+            }
+        }
+        Ok(())
+    }
+
+    /// Build this frame's overlay (nothing while it is hidden), and act on its buttons' clicks.
+    fn build_overlay(&mut self) -> Result<overlay::Drawn> {
+        let fps = match self.intervals.iter().rev().take(30).sum::<f64>() {
+            ms if ms > 0.0 => self.intervals.len().min(30) as f64 * 1e3 / ms,
+            _ => 0.0,
+        };
+        let shown = overlay::Shown {
+            scene: &self.scene_name,
+            settings: self.describe(),
+            last: self.ring.back(),
+            playing: self.renderer.scene().is_animated().then_some(self.scene_playing),
+            fps,
+        };
+        let (drawn, clicked) = self.overlay.build(&self.window, &shown, &mut self.painter);
+        for action in clicked {
+            self.act(action)?;
+        }
+        Ok(drawn)
     }
 
     /// --script: this frame's scripted input (a camera orbit, a light drag, a key).
@@ -1250,7 +1306,11 @@ impl Viewer {
             Verb::Key(action) if first => self.act(action)?,
             Verb::Click(fx, fy) => {
                 let e = self.swapchain.as_ref().map_or(vk::Extent2D { width: 1, height: 1 }, |s| s.extent);
-                self.input.drop = Some((fx as f64 * e.width as f64, fy as f64 * e.height as f64));
+                let at = (fx as f64 * e.width as f64, fy as f64 * e.height as f64);
+                // A click on the overlay's panel is the panel's, as a real one is.
+                if !self.overlay.click(at, self.window.scale_factor() as f32) {
+                    self.input.drop = Some(at);
+                }
             }
             Verb::Key(_) | Verb::Still => {}
         }
@@ -1292,6 +1352,7 @@ impl Viewer {
                 self.counters.incomplete_frames += 1;
             }
             self.update_title(&report, drawn_at);
+            self.overlay.add_frame(&report);
             push_bounded(&mut self.ring, report);
         }
         Ok(())
@@ -1395,6 +1456,14 @@ impl Viewer {
             "camera_position": self.orbit.camera().position.to_array(),
             "light": {"position": light.position.to_array(), "target": light.target.to_array()},
             "ior": self.ior(),
+            "overlay": {
+                "visible": self.overlay.visible,
+                "build_ms": self.overlay.build_ms,
+                "triangles": self.overlay.triangles,
+                "textures": self.painter.texture_count(),
+                "panel": self.overlay.panel.map(|r| [r.min.x, r.min.y, r.max.x, r.max.y]),
+                "buttons": self.overlay.buttons.iter().map(|(name, r)| (name.clone(), json!([r.min.x, r.min.y, r.max.x, r.max.y]))).collect::<serde_json::Map<_, _>>(),
+            },
             "method": s.method,
             "metric": if s.method == Method::Adaptive { json!(s.metric) } else { Value::Null },
             "target_error": crate::app::commands::flux_error(s).then_some(s.target_error),

@@ -7,10 +7,13 @@
 //! - sRGB swapchain: a blit would encode the bytes a second time, so the blit goes to an intermediate image of the
 //!   swapchain format's UNORM twin and a copy (bits unchanged: the formats are size-compatible) moves it into the
 //!   swapchain image.
+//! - The overlay (overlay.rs) is drawn into the swapchain image after the blit where its images allow it (a UNORM
+//!   format with COLOR_ATTACHMENT usage), else into the intermediate image before the copy.
 
 use crate::app::viewer::swapchain::{is_bgra, is_srgb, unorm_twin, Swapchain};
 use ash::vk;
 use caustics::gpu::{Access, Barriers, Buffer, Device, Image, VkError, VkResult};
+use caustics::overlay::{OverlayMesh, OverlayPainter, OverlayTarget};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -31,6 +34,14 @@ pub struct Capture {
     pub height: u32,
     pub rgba: Vec<u8>,
     pub source: CaptureSource,
+}
+
+/// The overlay a frame draws: its painter, the frame's slot, its meshes and the window's pixels per point.
+pub struct Overlay<'a> {
+    pub painter: &'a mut OverlayPainter,
+    pub slot: usize,
+    pub meshes: &'a [OverlayMesh<'a>],
+    pub pixels_per_point: f32,
 }
 
 pub struct Presenter {
@@ -65,11 +76,12 @@ impl Presenter {
         props.optimal_tiling_features.contains(vk::FormatFeatureFlags::BLIT_DST)
     }
 
-    /// Make the per-swapchain resources (the intermediate image for sRGB formats, the screenshot buffer).
-    pub fn prepare(&mut self, swapchain: &Swapchain, capture: bool) -> VkResult<()> {
+    /// Make the per-swapchain resources (the intermediate image for sRGB formats, or to draw the overlay into;
+    /// the screenshot buffer).
+    pub fn prepare(&mut self, swapchain: &Swapchain, capture: bool, overlay: bool) -> VkResult<()> {
         let format = swapchain.format.format;
         let extent = swapchain.extent;
-        let direct = !is_srgb(format) && self.blit_dst_supported(format);
+        let direct = !is_srgb(format) && self.blit_dst_supported(format) && (!overlay || !swapchain.views.is_empty());
         if direct {
             self.intermediate = None;
         } else {
@@ -84,7 +96,8 @@ impl Presenter {
                 // SAMPLED only because vk::Image always makes a view, and a view needs a view-compatible usage.
                 let usage = vk::ImageUsageFlags::TRANSFER_DST
                     | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::SAMPLED;
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::COLOR_ATTACHMENT;
                 self.intermediate = Some(Image::new(&self.device, "present intermediate", twin, extent, usage)?);
             }
         }
@@ -105,8 +118,16 @@ impl Presenter {
     }
 
     /// Record: beauty → swapchain image `index` (acquired; the submit waits for its semaphore at ALL_TRANSFER),
-    /// optionally a copy of it into the screenshot buffer, then the transition to PRESENT_SRC.
-    pub fn record(&mut self, cmd: vk::CommandBuffer, beauty: &Image, swapchain: &Swapchain, index: u32, capture: bool) {
+    /// with `overlay` drawn over it (prepared with `overlay` true), optionally a copy of it into the screenshot
+    /// buffer, then the transition to PRESENT_SRC.
+    pub fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        beauty: &Image,
+        (swapchain, index): (&Swapchain, u32),
+        capture: bool,
+        overlay: Option<Overlay>,
+    ) -> VkResult<()> {
         let d = &*self.device;
         let target = swapchain.images[index as usize];
         let range = Swapchain::subresource_range();
@@ -149,12 +170,40 @@ impl Presenter {
             unsafe { d.cmd_blit_image2(cmd, &info) };
         };
         match &self.intermediate {
-            None => blit_to(target),
+            None => {
+                blit_to(target);
+                if let Some(o) = overlay {
+                    let into = OverlayTarget {
+                        image: target,
+                        view: swapchain.views[index as usize],
+                        format: swapchain.format.format,
+                        extent,
+                        before: Access::TransferDst,
+                        after: Access::TransferDst,
+                    };
+                    o.painter.record(cmd, o.slot, into, o.meshes, o.pixels_per_point)?
+                }
+            }
             Some(im) => {
                 let mut b = Barriers::new();
                 b.image(im, &[Access::FrameStart], &[Access::TransferDst]).flush(d, cmd);
                 blit_to(im.raw);
-                b.image(im, &[Access::TransferDst], &[Access::TransferSrc]).flush(d, cmd);
+                match overlay {
+                    Some(o) => {
+                        let into = OverlayTarget {
+                            image: im.raw,
+                            view: im.view,
+                            format: im.format,
+                            extent: im.extent,
+                            before: Access::TransferDst,
+                            after: Access::TransferSrc,
+                        };
+                        o.painter.record(cmd, o.slot, into, o.meshes, o.pixels_per_point)?
+                    }
+                    None => {
+                        b.image(im, &[Access::TransferDst], &[Access::TransferSrc]).flush(d, cmd);
+                    }
+                }
                 let region = vk::ImageCopy2::default()
                     .src_subresource(full_layers())
                     .dst_subresource(full_layers())
@@ -168,16 +217,35 @@ impl Presenter {
                 unsafe { d.cmd_copy_image2(cmd, &info) };
             }
         }
-        let mut last = Access::TransferDst;
         let mut post = Barriers::new();
+        let last = self.record_capture(cmd, beauty, (swapchain, index), capture, &mut post);
+        // The render-done semaphore is signalled at ALL_COMMANDS, which covers this transition.
+        post.image_raw(target, range, &[last], &[Access::Present]).flush(&self.device, cmd);
+        Ok(())
+    }
+
+    /// Record the copy of the presented image (or, where the swapchain's cannot be read, of `beauty`) into the
+    /// screenshot buffer when `capture`; `post` gets the buffer's barrier for the host. Returns the swapchain
+    /// image's last use.
+    fn record_capture(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        beauty: &Image,
+        (swapchain, index): (&Swapchain, u32),
+        capture: bool,
+        post: &mut Barriers,
+    ) -> Access {
+        let d = &*self.device;
+        let target = swapchain.images[index as usize];
+        let mut last = Access::TransferDst;
         self.capture_layout = None;
         if let (true, Some(buf)) = (capture, &self.capture) {
             let mut b = Barriers::new();
             b.buffer(buf, &[Access::FrameStart], &[Access::TransferDst]);
             let (image, size, bgra, source) = if swapchain.usage.contains(vk::ImageUsageFlags::TRANSFER_SRC) {
-                b.image_raw(target, range, &[Access::TransferDst], &[Access::TransferSrc]);
+                b.image_raw(target, Swapchain::subresource_range(), &[Access::TransferDst], &[Access::TransferSrc]);
                 last = Access::TransferSrc;
-                (target, extent, is_bgra(swapchain.format.format), CaptureSource::Swapchain)
+                (target, swapchain.extent, is_bgra(swapchain.format.format), CaptureSource::Swapchain)
             } else {
                 (beauty.raw, beauty.extent, false, CaptureSource::Beauty)
             };
@@ -193,8 +261,7 @@ impl Presenter {
             post.buffer(buf, &[Access::TransferDst], &[Access::HostRead]);
             self.capture_layout = Some((size.width, size.height, bgra, source));
         }
-        // The render-done semaphore is signalled at ALL_COMMANDS, which covers this transition.
-        post.image_raw(target, range, &[last], &[Access::Present]).flush(d, cmd);
+        last
     }
 
     /// The screenshot recorded by the last [`Self::record`] (call after its submit completed).

@@ -179,6 +179,9 @@ pub struct Swapchain {
     loader: ash::khr::swapchain::Device,
     pub raw: vk::SwapchainKHR,
     pub images: Vec<vk::Image>,
+    /// A view of each image where the overlay can be drawn into it (COLOR_ATTACHMENT usage, a UNORM format), else
+    /// none: the overlay is drawn into the presenter's intermediate image.
+    pub views: Vec<vk::ImageView>,
     pub format: vk::SurfaceFormatKHR,
     pub extent: vk::Extent2D,
     pub present_mode: vk::PresentModeKHR,
@@ -242,9 +245,9 @@ impl Swapchain {
                 "swapchain images do not support TRANSFER_DST (needed for the blit)".into(),
             ));
         }
-        // TRANSFER_SRC lets screenshots copy the presented image itself.
-        let usage =
-            vk::ImageUsageFlags::TRANSFER_DST | (caps.supported_usage_flags & vk::ImageUsageFlags::TRANSFER_SRC);
+        // TRANSFER_SRC lets screenshots copy the presented image itself; COLOR_ATTACHMENT, the overlay draw into it.
+        let optional = vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+        let usage = vk::ImageUsageFlags::TRANSFER_DST | (caps.supported_usage_flags & optional);
         let mut count = caps.min_image_count.max(2);
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
@@ -297,6 +300,7 @@ impl Swapchain {
             loader,
             raw,
             images,
+            views: Vec::new(),
             format,
             extent,
             present_mode,
@@ -307,6 +311,17 @@ impl Swapchain {
         };
         for (i, image) in swapchain.images.iter().enumerate() {
             device.set_name(*image, &format!("swapchain image {i}"));
+        }
+        if usage.contains(vk::ImageUsageFlags::COLOR_ATTACHMENT) && !is_srgb(format.format) {
+            for i in 0..swapchain.images.len() {
+                let info = vk::ImageViewCreateInfo::default()
+                    .image(swapchain.images[i])
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(format.format)
+                    .subresource_range(Self::subresource_range());
+                let view = unsafe { device.create_image_view(&info, None) }.check("vkCreateImageView")?;
+                swapchain.views.push(view);
+            }
         }
         for slot in 0..MAX_FRAMES_IN_FLIGHT {
             let s = swapchain.semaphore(&format!("acquire {slot}"))?;
@@ -396,6 +411,9 @@ impl Drop for Swapchain {
                 if s != vk::Semaphore::null() {
                     self.device.destroy_semaphore(s, None);
                 }
+            }
+            for v in self.views.drain(..) {
+                self.device.destroy_image_view(v, None);
             }
             self.loader.destroy_swapchain(self.raw, None);
         }
