@@ -13,6 +13,7 @@
 //! (exit code 1).
 
 mod controls;
+mod open;
 mod orbit;
 mod overlay;
 mod present;
@@ -222,7 +223,6 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         args,
         size: (width, height),
         pending: Some((scene, camera, settings, script)),
-        scene_path,
         viewer: None,
         outcome: None,
         error: None,
@@ -273,7 +273,6 @@ struct App<'a> {
     args: &'a ViewArgs,
     size: (u32, u32),
     pending: Option<(Scene, Camera, Settings, Option<Script>)>,
-    scene_path: PathBuf,
     viewer: Option<Viewer>,
     outcome: Option<Outcome>,
     error: Option<Error>,
@@ -329,7 +328,6 @@ impl App<'_> {
                 }
                 _ => Value::Null,
             };
-            stats["scene"] = json!(self.scene_path.display().to_string());
             image_io::write_text(p, &serde_json::to_string_pretty(&stats).unwrap_or_default())?;
         }
         if out.validation && messages > 0 {
@@ -410,6 +408,8 @@ struct Counters {
     max_images_per_swapchain: u64,
     /// Clicks that dropped into simulated water.
     water_drops: u64,
+    /// Scenes opened after the first: dropped on the window, or changed on disk.
+    scenes_opened: u64,
 }
 
 /// What the viewer keeps of a frame until its report arrives.
@@ -568,6 +568,9 @@ struct Viewer {
     title_gpu_ms: f64,
     screenshot_request: bool,
     capture: Option<Capture>,
+    /// The open scene file's modification time, and when it was last looked at (open.rs).
+    scene_modified: Option<std::time::SystemTime>,
+    scene_checked: Instant,
     /// The overlay (overlay.rs) and what draws it.
     overlay: overlay::Overlay,
     painter: OverlayPainter,
@@ -589,6 +592,7 @@ impl Viewer {
         (width, height): (u32, u32),
     ) -> Result<Self> {
         let scene_name = scene.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let scene_path = args.scene.clone().unwrap_or_else(first_picture_scene);
         let attrs = Window::default_attributes()
             .with_title(format!("caustics — {scene_name}"))
             .with_inner_size(PhysicalSize::new(width, height));
@@ -647,7 +651,9 @@ impl Viewer {
             scene_playing,
             scene_time,
             frame_dt: args.frame_dt,
-            scene_path: args.scene.clone().unwrap_or_else(first_picture_scene),
+            scene_modified: open::modified(&scene_path),
+            scene_checked: Instant::now(),
+            scene_path,
             environment: args.environment.clone(),
             offsets: vec![Vec3::ZERO; placements.len()],
             placements,
@@ -731,7 +737,13 @@ impl Viewer {
                 }
                 self.dirty = true;
             }
-            WindowEvent::RedrawRequested => self.redraw()?,
+            WindowEvent::RedrawRequested => {
+                self.watch_scene()?;
+                self.redraw()?
+            }
+            WindowEvent::DroppedFile(path) => {
+                self.open_scene(&path)?;
+            }
             WindowEvent::KeyboardInput { event, is_synthetic: false, .. } if event.state == ElementState::Pressed => {
                 if let Some(action) = controls::action_for(&event.logical_key) {
                     if !event.repeat || action.repeats() {
@@ -1312,7 +1324,12 @@ impl Viewer {
                     self.input.drop = Some(at);
                 }
             }
-            Verb::Key(_) | Verb::Still => {}
+            Verb::Drop(i) if first => {
+                if let Some(path) = self.script.as_ref().map(|s| s.files[i].clone()) {
+                    self.open_scene(&path)?;
+                }
+            }
+            Verb::Key(_) | Verb::Drop(_) | Verb::Still => {}
         }
         Ok(())
     }
@@ -1452,6 +1469,7 @@ impl Viewer {
         let light = &self.renderer.scene().lights[0];
         json!({
             "device": {"name": info.name, "driver": info.driver, "kind": caustics::gpu::kind_name(info.kind)},
+            "scene": self.scene_path.display().to_string(),
             "camera": self.camera_name,
             "camera_position": self.orbit.camera().position.to_array(),
             "light": {"position": light.position.to_array(), "target": light.target.to_array()},

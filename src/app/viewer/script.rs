@@ -7,6 +7,7 @@
 //! | `N drag DX DY` | drags the light by DX, DY pixels (as a right-button drag: x right, y down) |
 //! | `N click FX FY` | clicks at FX, FY (fractions of the window's width and height from its top left): a drop into the water there |
 //! | `N key NAME` | presses the key NAME of the controls table (`]`, `ArrowLeft`, `Space`, ...) on its first frame |
+//! | `N drop FILE` | drops the scene FILE (relative to the script's folder) on the window on its first frame: it opens |
 //! | `N still` | nothing: the viewer refines what the last change left |
 //!
 //! The viewer quits after the last step. Its stats gain a `script` list with, for each step: the frames presented,
@@ -25,6 +26,8 @@ pub enum Verb {
     Drag(f32, f32),
     Key(Action),
     Click(f32, f32),
+    /// A file dropped on the window: the script's `files[i]`.
+    Drop(usize),
     Still,
 }
 
@@ -51,6 +54,8 @@ struct StepLog {
 
 pub struct Script {
     pub steps: Vec<ScriptStep>,
+    /// The files its `drop` steps name, relative to the script's folder resolved.
+    pub files: Vec<std::path::PathBuf>,
     current: usize,
     frame_in_step: u32,
     logs: Vec<StepLog>,
@@ -77,6 +82,7 @@ impl Script {
 
     pub fn parse(path: &Path, text: &str) -> Result<Script> {
         let mut steps = Vec::new();
+        let mut files = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let body = raw.split('#').next().unwrap_or("").trim();
@@ -88,8 +94,9 @@ impl Script {
             let frames: u32 = count.parse().ok().filter(|&n| (1..=1_000_000).contains(&n)).ok_or_else(|| {
                 bad(path, line, &format!("`{count}`: a step starts with its frame count (1 to 1000000)"))
             })?;
-            let verb_word =
-                words.next().ok_or_else(|| bad(path, line, "missing the verb (orbit, drag, click, key, still)"))?;
+            let verb_word = words
+                .next()
+                .ok_or_else(|| bad(path, line, "missing the verb (orbit, drag, click, key, drop, still)"))?;
             let verb = match verb_word {
                 "orbit" => Verb::Orbit(number(path, line, "the orbit angle (degrees per frame)", words.next())?),
                 "drag" => {
@@ -120,12 +127,21 @@ impl Script {
                     }
                     Verb::Click(fx, fy)
                 }
+                "drop" => {
+                    let name = words.next().ok_or_else(|| bad(path, line, "missing the dropped file"))?;
+                    let file = path.parent().unwrap_or(Path::new(".")).join(name);
+                    if !file.is_file() {
+                        return Err(bad(path, line, &format!("drop {name}: no such file ({})", file.display())));
+                    }
+                    files.push(file);
+                    Verb::Drop(files.len() - 1)
+                }
                 "still" => Verb::Still,
                 other => {
                     return Err(bad(
                         path,
                         line,
-                        &format!("unknown verb `{other}` (expected orbit, drag, click, key or still)"),
+                        &format!("unknown verb `{other}` (expected orbit, drag, click, key, drop or still)"),
                     ))
                 }
             };
@@ -138,7 +154,7 @@ impl Script {
             return Err(Error::BadInput(format!("--script {}: no steps", path.display())));
         }
         let logs = vec![StepLog::default(); steps.len()];
-        Ok(Script { steps, current: 0, frame_in_step: 0, logs })
+        Ok(Script { steps, files, current: 0, frame_in_step: 0, logs })
     }
 
     /// Every frame the script still has to present.
@@ -239,6 +255,8 @@ mod tests {
             ("3 key F13", "moves.txt:1: unknown key `F13`"),
             ("3 key q", "moves.txt:1: key `q` is not scriptable"),
             ("3 still now", "moves.txt:1: unexpected `now`"),
+            ("1 drop no-such-scene.toml", "moves.txt:1: drop no-such-scene.toml: no such file"),
+            ("1 drop", "moves.txt:1: missing the dropped file"),
             ("# nothing", "no steps"),
         ] {
             let e = Script::parse(p, text).err().expect(text).to_string();
