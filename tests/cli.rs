@@ -320,6 +320,34 @@ fn profile_prints_the_waves_with_their_rays() {
     assert!(!text.contains("transport_bounces.wave_"), "no line per wave: {text}");
 }
 
+/// `profile --plot` writes its SVG report: a bar per timed frame with a rectangle per stage it ran, and a legend
+/// line per stage with the median that `--json` reports for it.
+#[test]
+fn profile_plots_each_frame_s_stages() {
+    let dir = out_dir("cli_profile_plot");
+    let svg = dir.join("profile.svg");
+    let args = ["profile", "--level", "1", "--frames", "3", "--warmup", "0", "--size", "64x64", "--json"];
+    let out = caustics(&[&args[..], &["--plot", svg.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let stats: serde_json::Value = serde_json::from_slice(&out.stdout).expect("profile --json");
+    let text = std::fs::read_to_string(&svg).expect("the report");
+    let stages: Vec<(&String, f64)> = stats["gpu_ms"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(k, _)| !["gpu_total", "frame_wall", "cpu_record"].contains(&k.as_str()))
+        .map(|(k, v)| (k, v["median"].as_f64().unwrap()))
+        .collect();
+    assert!(stages.len() >= 5, "{}", stats["gpu_ms"]);
+    for (stage, median) in &stages {
+        let line = format!("{stage}  {median:.2} ms");
+        assert!(text.contains(&line), "no legend line `{line}` in the report");
+    }
+    // Each frame ran every stage (profile reuses nothing): a rectangle each, and one a legend entry.
+    let rects = text.matches("<rect").count();
+    assert!(rects >= 4 * stages.len(), "{rects} rectangles for {} stages over 3 frames", stages.len());
+}
+
 /// `render --accumulate`: N photon sets (or seconds), averaged into the written picture; its stats say how many.
 /// A count of 0, a malformed value, or a combination with --frames or --no-reuse exits 2 before any output.
 #[test]

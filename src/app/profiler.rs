@@ -147,3 +147,80 @@ pub fn chrome_trace(frames: &[FrameReport]) -> Value {
         "metadata": {"tid 0": "frames (wall clock)", "tid 1": "GPU stages (timestamp queries)"}
     })
 }
+
+/// Tableau-20: the report's stage colors (one per stage for up to 20 stages).
+const STAGE_COLORS: [(u8, u8, u8); 20] = [
+    (31, 119, 180),
+    (174, 199, 232),
+    (255, 127, 14),
+    (255, 187, 120),
+    (44, 160, 44),
+    (152, 223, 138),
+    (214, 39, 40),
+    (255, 152, 150),
+    (148, 103, 189),
+    (197, 176, 213),
+    (140, 86, 75),
+    (196, 156, 148),
+    (227, 119, 194),
+    (247, 182, 210),
+    (127, 127, 127),
+    (199, 199, 199),
+    (188, 189, 34),
+    (219, 219, 141),
+    (23, 190, 207),
+    (158, 218, 229),
+];
+
+/// The SVG report of `profile --plot`: each frame a bar of its stages' GPU ms stacked bottom up (in first-seen
+/// order), and beside the bars a legend of each stage with its median over the frames that ran it.
+pub fn stage_plot(frames: &[FrameReport], title: &str) -> Result<String, Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    let summaries = summaries_by_label(frames, |f| &f.stages);
+    let peak = frames.iter().map(|f| f.stages.iter().map(|(_, ms)| ms).sum::<f64>()).fold(0.0, f64::max);
+    let color = |i: usize| {
+        let (r, g, b) = STAGE_COLORS[i % STAGE_COLORS.len()];
+        RGBColor(r, g, b)
+    };
+    let n = frames.len().max(1);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1040, 560)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(&format!("GPU ms per stage: {title}"), ("sans-serif", 18))?;
+        let (left, right) = root.split_horizontally(720);
+        let mut chart = ChartBuilder::on(&left)
+            .margin(16)
+            .x_label_area_size(40)
+            .y_label_area_size(64)
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, 0.0..(peak * 1.05).max(1e-3))?;
+        chart
+            .configure_mesh()
+            .x_desc("frame")
+            .y_desc("GPU ms")
+            .x_labels(n.min(20))
+            .x_label_formatter(&|v| format!("{}", v.round() as i64 + 1))
+            .disable_x_mesh()
+            .draw()?;
+        for (i, (label, _)) in summaries.iter().enumerate() {
+            let bars = frames.iter().enumerate().filter_map(|(k, f)| {
+                let at = f.stages.iter().position(|(l, _)| *l == label)?;
+                let below: f64 = f.stages[..at].iter().map(|(_, ms)| ms).sum();
+                let top = below + f.stages[at].1;
+                Some(Rectangle::new([(k as f64 - 0.4, below), (k as f64 + 0.4, top)], color(i).filled()))
+            });
+            chart.draw_series(bars)?;
+        }
+        let font = ("sans-serif", 13).into_font();
+        for (i, (label, summary)) in summaries.iter().enumerate().rev() {
+            // The legend reads top down as the bars stack bottom up.
+            let y = 24 + 20 * (summaries.len() - 1 - i) as i32;
+            right.draw(&Rectangle::new([(8, y), (20, y + 12)], color(i).filled()))?;
+            let text = format!("{label}  {:.2} ms", summary.median);
+            right.draw(&Text::new(text, (28, y), font.clone()))?;
+        }
+        right.draw(&Text::new("stage, median over the frames", (8, 4), font.clone()))?;
+        root.present()?;
+    }
+    Ok(svg)
+}

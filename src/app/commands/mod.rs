@@ -440,6 +440,9 @@ pub struct ProfileArgs {
     /// Write a Chrome trace (Perfetto, chrome://tracing).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Write an SVG report: each timed frame's GPU ms as a bar of its stages, and each stage's median.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
 }
 
 /// A loaded scene with its camera, and a device.

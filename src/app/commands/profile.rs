@@ -1,4 +1,4 @@
-//! `caustics profile`: frames timed stage by stage, with a Chrome trace.
+//! `caustics profile`: frames timed stage by stage, with a Chrome trace and an SVG report.
 
 use super::*;
 
@@ -6,7 +6,7 @@ pub fn run_profile(args: &ProfileArgs) -> Result<()> {
     if args.frames == Some(0) {
         return Err(Error::BadInput("--frames must be at least 1".into()));
     }
-    if let Some(p) = &args.trace {
+    for p in args.trace.iter().chain(&args.plot) {
         image_io::check_output_dir(p)?;
     }
     let settings = args.method.settings()?;
@@ -82,6 +82,13 @@ pub fn run_profile(args: &ProfileArgs) -> Result<()> {
     }
     if let Some(p) = &args.trace {
         image_io::write_text(p, &serde_json::to_string(&profiler::chrome_trace(&reports)).unwrap_or_default())?;
+        eprintln!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.plot {
+        let title = format!("{} on {}", session.scene_path.display(), session.device().info.name);
+        let svg = profiler::stage_plot(&reports, &title)
+            .map_err(|e| Error::Failed(format!("{}: cannot draw the plot: {e}", p.display())))?;
+        image_io::write_text(p, &svg)?;
         eprintln!("wrote {}", p.display());
     }
     validation_verdict(&session)
