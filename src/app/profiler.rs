@@ -136,6 +136,7 @@ pub fn chrome_trace(frames: &[FrameReport]) -> Value {
     let mut t0 = 0.0;
     for (i, f) in frames.iter().enumerate() {
         events.push(json!({"name": format!("frame {i}"), "ph": "X", "pid": 1, "tid": 0, "ts": t0 * 1e3, "dur": f.frame_ms * 1e3, "cat": "frame"}));
+        events.push(json!({"name": "record", "ph": "X", "pid": 1, "tid": 2, "ts": t0 * 1e3, "dur": f.record_ms * 1e3, "cat": "cpu"}));
         for (label, start, dur) in &f.segments {
             events.push(json!({"name": label, "ph": "X", "pid": 1, "tid": 1, "ts": (t0 + start) * 1e3, "dur": dur * 1e3, "cat": "gpu"}));
         }
@@ -144,7 +145,11 @@ pub fn chrome_trace(frames: &[FrameReport]) -> Value {
     json!({
         "traceEvents": events,
         "displayTimeUnit": "ms",
-        "metadata": {"tid 0": "frames (wall clock)", "tid 1": "GPU stages (timestamp queries)"}
+        "metadata": {
+            "tid 0": "frames (wall clock)",
+            "tid 1": "GPU stages (timestamp queries)",
+            "tid 2": "CPU: recording the frame's commands"
+        }
     })
 }
 
@@ -223,4 +228,31 @@ pub fn stage_plot(frames: &[FrameReport], title: &str) -> Result<String, Box<dyn
         root.present()?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The trace puts each frame on three tracks: its wall-clock span, its GPU stages where the timestamps put them,
+    /// and the CPU's recording of its commands.
+    #[test]
+    fn the_chrome_trace_has_the_frames_gpu_stages_and_cpu_recording() {
+        let frame = |record_ms| {
+            let mut f = FrameReport::default();
+            (f.frame_ms, f.record_ms) = (10.0, record_ms);
+            f.segments = vec![("eye", 1.0, 2.0), ("composite", 3.0, 0.5)];
+            f
+        };
+        let trace = chrome_trace(&[frame(0.25), frame(0.5)]);
+        let events = trace["traceEvents"].as_array().unwrap();
+        let on = |tid: u64| events.iter().filter(|e| e["tid"] == tid).collect::<Vec<_>>();
+        assert_eq!(on(0).len(), 2);
+        assert_eq!(on(1).len(), 4);
+        let cpu = on(2);
+        assert_eq!(cpu.len(), 2);
+        // The second frame starts where the first one's wall-clock span ends; durations are in µs.
+        assert_eq!((cpu[1]["ts"].as_f64(), cpu[1]["dur"].as_f64()), (Some(10_000.0), Some(500.0)));
+        assert_eq!(on(1)[2]["ts"].as_f64(), Some(11_000.0));
+    }
 }

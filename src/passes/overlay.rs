@@ -276,10 +276,36 @@ impl OverlayPainter {
             .image_raw(target.image, range, &[target.before], &[Access::ColorAttachment])
             .flush(&self.device, cmd);
         let s = &self.slots[slot];
-        let vertices = s.vertices.as_ref().expect("vertices").raw;
-        let indices = s.indices.as_ref().expect("indices").raw;
+        let buffers = (s.vertices.as_ref().expect("vertices").raw, s.indices.as_ref().expect("indices").raw);
         let device = self.device.clone();
         self.pipeline(target.format)?;
+        // The render area holds what the meshes draw (each one's bounds within its clip rectangle), not the whole
+        // target: a CPU device loads and stores only its tiles.
+        let area = meshes.iter().filter_map(|m| clip_pixels(drawn_bounds(m), pixels_per_point, extent)).reduce(union);
+        if let Some(area) = area {
+            self.draw(cmd, &target, area, buffers, meshes, pixels_per_point);
+        }
+        Barriers::new().image_raw(target.image, range, &[Access::ColorAttachment], &[target.after]).flush(&device, cmd);
+        for id in std::mem::take(&mut self.frees) {
+            if let Some(t) = self.textures.remove(&id) {
+                self.slots[slot].retired.push(t.image);
+            }
+        }
+        Ok(())
+    }
+
+    /// Draw `meshes` (their vertices and indices in `buffers`) inside `area` of `target`, with the pipeline of its
+    /// format (made).
+    fn draw(
+        &self,
+        cmd: vk::CommandBuffer,
+        target: &OverlayTarget,
+        area: vk::Rect2D,
+        (vertices, indices): (vk::Buffer, vk::Buffer),
+        meshes: &[OverlayMesh],
+        pixels_per_point: f32,
+    ) {
+        let (device, extent) = (&self.device, target.extent);
         let pipeline = &self.pipelines[&target.format];
         let attachment = vk::RenderingAttachmentInfo::default()
             .image_view(target.view)
@@ -287,7 +313,7 @@ impl OverlayPainter {
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::STORE);
         let rendering = vk::RenderingInfo::default()
-            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+            .render_area(area)
             .layer_count(1)
             .color_attachments(std::slice::from_ref(&attachment));
         let points = [extent.width as f32 / pixels_per_point, extent.height as f32 / pixels_per_point];
@@ -323,13 +349,27 @@ impl OverlayPainter {
             first_index += n;
         }
         unsafe { device.cmd_end_rendering(cmd) };
-        Barriers::new().image_raw(target.image, range, &[Access::ColorAttachment], &[target.after]).flush(&device, cmd);
-        for id in std::mem::take(&mut self.frees) {
-            if let Some(t) = self.textures.remove(&id) {
-                self.slots[slot].retired.push(t.image);
-            }
-        }
-        Ok(())
+    }
+}
+
+/// What a mesh can draw, in points: its vertices' bounds within its clip rectangle (min x, min y, max x, max y),
+/// one pixel wider each way for the rasterizer's rounding.
+fn drawn_bounds(m: &OverlayMesh) -> [f32; 4] {
+    let mut b = [f32::MAX, f32::MAX, f32::MIN, f32::MIN];
+    for v in m.vertices {
+        b = [b[0].min(v.pos[0]), b[1].min(v.pos[1]), b[2].max(v.pos[0]), b[3].max(v.pos[1])];
+    }
+    [(b[0] - 1.0).max(m.clip[0]), (b[1] - 1.0).max(m.clip[1]), (b[2] + 1.0).min(m.clip[2]), (b[3] + 1.0).min(m.clip[3])]
+}
+
+/// The smallest rectangle holding `a` and `b`.
+fn union(a: vk::Rect2D, b: vk::Rect2D) -> vk::Rect2D {
+    let (x0, y0) = (a.offset.x.min(b.offset.x), a.offset.y.min(b.offset.y));
+    let x1 = (a.offset.x + a.extent.width as i32).max(b.offset.x + b.extent.width as i32);
+    let y1 = (a.offset.y + a.extent.height as i32).max(b.offset.y + b.extent.height as i32);
+    vk::Rect2D {
+        offset: vk::Offset2D { x: x0, y: y0 },
+        extent: vk::Extent2D { width: (x1 - x0) as u32, height: (y1 - y0) as u32 },
     }
 }
 
@@ -365,5 +405,7 @@ mod tests {
         assert_eq!((r.offset.x, r.offset.y, r.extent.width, r.extent.height), (0, 20, 80, 30));
         assert!(clip_pixels([60.0, 0.0, 70.0, 10.0], 2.0, e).is_none(), "wholly right of the target");
         assert!(clip_pixels([10.0, 10.0, 10.0, 20.0], 1.0, e).is_none(), "empty");
+        let u = union(r, clip_pixels([50.0, 5.0, 60.0, 8.0], 1.0, e).unwrap());
+        assert_eq!((u.offset.x, u.offset.y, u.extent.width, u.extent.height), (0, 5, 80, 45));
     }
 }

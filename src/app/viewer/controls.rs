@@ -20,6 +20,7 @@ pub enum Action {
     Dense,
     AdaptiveMaxLevel,
     AdaptiveMaxError,
+    AdaptiveFluxError,
     Transport,
     Animate,
     PlayScene,
@@ -89,9 +90,14 @@ pub const CONTROLS: &[Control] = &[
         keys: &[(",", Action::ResolutionDown), (".", Action::ResolutionUp)],
     },
     Control {
-        input: "1 2 3",
-        help: "method: dense / adaptive max-level / adaptive max-error",
-        keys: &[("1", Action::Dense), ("2", Action::AdaptiveMaxLevel), ("3", Action::AdaptiveMaxError)],
+        input: "1 2 3 4",
+        help: "method: dense / adaptive max-level / adaptive max-error / adaptive flux-error (the default)",
+        keys: &[
+            ("1", Action::Dense),
+            ("2", Action::AdaptiveMaxLevel),
+            ("3", Action::AdaptiveMaxError),
+            ("4", Action::AdaptiveFluxError),
+        ],
     },
     Control {
         input: "X",

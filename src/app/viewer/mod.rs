@@ -837,6 +837,10 @@ impl Viewer {
                 q.method = Method::Adaptive;
                 q.metric = Metric::MaxError;
             }))?,
+            AdaptiveFluxError => self.change_settings(with(&|q| {
+                q.method = Method::Adaptive;
+                q.metric = Metric::FluxError;
+            }))?,
             Transport => {
                 let transport = match c.transport {
                     caustics::settings::Transport::Exact => caustics::settings::Transport::TwoInterface,
@@ -1296,10 +1300,15 @@ impl Viewer {
             last: self.ring.back(),
             playing: self.renderer.scene().is_animated().then_some(self.scene_playing),
             fps,
+            light: self.renderer.scene().lights[0].position,
         };
         let (drawn, clicked) = self.overlay.build(&self.window, &shown, &mut self.painter);
-        for action in clicked {
+        for action in clicked.actions {
             self.act(action)?;
+        }
+        if let Some(position) = clicked.light {
+            let light = Light { position, ..self.renderer.scene().lights[0].clone() };
+            self.set_light(light);
         }
         Ok(drawn)
     }

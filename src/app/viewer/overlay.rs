@@ -30,6 +30,15 @@ pub struct Shown<'a> {
     pub last: Option<&'a FrameReport>,
     pub playing: Option<bool>,
     pub fps: f64,
+    /// The first light's position (m).
+    pub light: glam::Vec3,
+}
+
+/// What the panel's controls asked for this frame: the keys' actions, and a new position for the first light.
+#[derive(Default)]
+pub struct Asked {
+    pub actions: Vec<Action>,
+    pub light: Option<glam::Vec3>,
 }
 
 /// A built overlay, ready to draw: its meshes (in points) and the window's pixels per point.
@@ -171,10 +180,10 @@ impl Overlay {
 
     /// Build this frame's overlay: egui lays it out from the input since the last build, the painter gets the
     /// textures that changed, and the actions its buttons asked for are returned. Nothing is built while hidden.
-    pub fn build(&mut self, window: &Window, shown: &Shown, painter: &mut OverlayPainter) -> (Drawn, Vec<Action>) {
+    pub fn build(&mut self, window: &Window, shown: &Shown, painter: &mut OverlayPainter) -> (Drawn, Asked) {
         let input = self.state.take_egui_input(window);
         if !self.visible {
-            return (Drawn::default(), Vec::new());
+            return (Drawn::default(), Asked::default());
         }
         let start = Instant::now();
         let (image, scale) = self.graph_image();
@@ -185,7 +194,7 @@ impl Overlay {
             }
             None => self.graph = Some((self.ctx.load_texture("stages", image, egui::TextureOptions::NEAREST), scale)),
         }
-        let mut actions = Vec::new();
+        let mut actions = Asked::default();
         let (mut buttons, mut panel) = (Vec::new(), None);
         let output = self.ctx.run(input, |ctx| panel = self.panel(ctx, shown, &mut actions, &mut buttons));
         (self.buttons, self.panel) = (buttons, panel);
@@ -223,7 +232,7 @@ impl Overlay {
         &self,
         ctx: &egui::Context,
         shown: &Shown,
-        actions: &mut Vec<Action>,
+        actions: &mut Asked,
         buttons: &mut Vec<(String, Rect)>,
     ) -> Option<Rect> {
         let frame = egui::Frame::window(&ctx.style()).fill(Color32::from_black_alpha(200));
@@ -240,7 +249,7 @@ impl Overlay {
         window.map(|w| w.response.rect)
     }
 
-    fn contents(&self, ui: &mut egui::Ui, shown: &Shown, actions: &mut Vec<Action>, buttons: &mut Vec<(String, Rect)>) {
+    fn contents(&self, ui: &mut egui::Ui, shown: &Shown, actions: &mut Asked, buttons: &mut Vec<(String, Rect)>) {
         ui.label(format!("{} — {:.1} fps", shown.scene, shown.fps));
         ui.label(egui::RichText::new(&shown.settings).small());
         ui.separator();
@@ -362,12 +371,12 @@ fn frame_facts(ui: &mut egui::Ui, r: &FrameReport) {
 }
 
 /// Buttons for what the keys do (docs/viewer.md's table): each asks for the key's action.
-fn controls(ui: &mut egui::Ui, shown: &Shown, actions: &mut Vec<Action>, buttons: &mut Vec<(String, Rect)>) {
+fn controls(ui: &mut egui::Ui, shown: &Shown, actions: &mut Asked, buttons: &mut Vec<(String, Rect)>) {
     let mut button = |ui: &mut egui::Ui, text: &str, hint: &str, action: Action| {
         let r = ui.button(text).on_hover_text(hint);
         buttons.push((format!("{action:?}"), r.rect));
         if r.clicked() {
-            actions.push(action);
+            actions.actions.push(action);
         }
     };
     ui.horizontal(|ui| {
@@ -375,6 +384,7 @@ fn controls(ui: &mut egui::Ui, shown: &Shown, actions: &mut Vec<Action>, buttons
         button(ui, "dense", "1", Action::Dense);
         button(ui, "max-level", "2", Action::AdaptiveMaxLevel);
         button(ui, "max-error", "3", Action::AdaptiveMaxError);
+        button(ui, "flux-error", "4", Action::AdaptiveFluxError);
         button(ui, "transport", "X: exact or two-interface", Action::Transport);
     });
     ui.horizontal(|ui| {
@@ -387,6 +397,17 @@ fn controls(ui: &mut egui::Ui, shown: &Shown, actions: &mut Vec<Action>, buttons
         ui.label("IOR");
         button(ui, "−", "[", Action::IorDown);
         button(ui, "+", "]", Action::IorUp);
+    });
+    ui.horizontal(|ui| {
+        ui.label("light (m)");
+        let mut p = shown.light;
+        let mut changed = false;
+        for v in [&mut p.x, &mut p.y, &mut p.z] {
+            changed |= ui.add(egui::DragValue::new(v).speed(0.01).max_decimals(2)).changed();
+        }
+        if changed {
+            actions.light = Some(p);
+        }
     });
     ui.horizontal(|ui| {
         button(ui, "orbit light", "Space", Action::Animate);
