@@ -1301,6 +1301,8 @@ impl Viewer {
             playing: self.renderer.scene().is_animated().then_some(self.scene_playing),
             fps,
             light: self.renderer.scene().lights[0].position,
+            target_error: crate::app::commands::flux_error(self.renderer.config())
+                .then_some(self.renderer.config().target_error),
         };
         let (drawn, clicked) = self.overlay.build(&self.window, &shown, &mut self.painter);
         for action in clicked.actions {

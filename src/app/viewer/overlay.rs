@@ -32,6 +32,8 @@ pub struct Shown<'a> {
     pub fps: f64,
     /// The first light's position (m).
     pub light: glam::Vec3,
+    /// Under the flux-error metric, its target error: the rel-L1 at 64² that merging photons may add.
+    pub target_error: Option<f32>,
 }
 
 /// What the panel's controls asked for this frame: the keys' actions, and a new position for the first light.
@@ -239,11 +241,7 @@ impl Overlay {
         let window = egui::Window::new("caustics").frame(frame).default_pos(Pos2::new(8.0, 8.0)).resizable(false).show(
             ctx,
             |ui| {
-                // A window too short for the panel scrolls it.
-                let max_height = (ctx.content_rect().height() - 48.0).max(80.0);
-                egui::ScrollArea::vertical()
-                    .max_height(max_height)
-                    .show(ui, |ui| self.contents(ui, shown, actions, buttons))
+                self.contents(ui, shown, actions, buttons);
             },
         );
         window.map(|w| w.response.rect)
@@ -260,7 +258,7 @@ impl Overlay {
         self.legend(ui);
         if let Some(r) = shown.last {
             ui.separator();
-            frame_facts(ui, r);
+            frame_facts(ui, r, shown.target_error);
         }
     }
 
@@ -340,9 +338,9 @@ impl Overlay {
     }
 }
 
-/// What the last frame traced: photons, level, photon sets, reuse, and exact transport's energy account (each term
-/// as a share of the emitted flux).
-fn frame_facts(ui: &mut egui::Ui, r: &FrameReport) {
+/// What the last frame traced: photons, level, photon sets, reuse, the flux-error metric's target error, and exact
+/// transport's energy account (each term as a share of the emitted flux).
+fn frame_facts(ui: &mut egui::Ui, r: &FrameReport, target_error: Option<f32>) {
     let mut line = format!("{} photons, level {}", r.photons(), r.level);
     if r.photon_sets > 1 {
         line += &format!(", {} photon sets", r.photon_sets);
@@ -354,6 +352,10 @@ fn frame_facts(ui: &mut egui::Ui, r: &FrameReport) {
         line += ", preview";
     }
     ui.monospace(line);
+    if let Some(e) = target_error {
+        let text = format!("target error {:.2}% (rel-L1 at 64² that merging photons may add)", 100.0 * e);
+        ui.label(egui::RichText::new(text).small());
+    }
     if let Some(t) = &r.transport {
         let account = t.account();
         let emitted = account[0];
