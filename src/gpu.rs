@@ -4,6 +4,7 @@
 
 pub use crate::vk::context::{kind_name, AllocationTotals, Imported};
 pub use crate::vk::debug::messenger_info as validation_messenger_info;
+pub use crate::vk::image::COLOR_RANGE;
 pub use crate::vk::{
     validation_message_count, Access, Barriers, Buffer, Check, Context, ContextDesc, Device, DeviceInfo, Image,
     Instance, Sampler, SubmitSync, VkError, VkResult,

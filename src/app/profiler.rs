@@ -153,8 +153,8 @@ pub fn chrome_trace(frames: &[FrameReport]) -> Value {
     })
 }
 
-/// Tableau-20: the report's stage colors (one per stage for up to 20 stages).
-const STAGE_COLORS: [(u8, u8, u8); 20] = [
+/// Tableau-20: the stage colors of the report and of the viewer's overlay (one per stage for up to 20 stages).
+pub const STAGE_COLORS: [(u8, u8, u8); 20] = [
     (31, 119, 180),
     (174, 199, 232),
     (255, 127, 14),

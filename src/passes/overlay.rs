@@ -10,6 +10,7 @@
 use crate::gpu_types::OverlayPush;
 use crate::shaders;
 use crate::shaders::consts::OV_TEXTURE;
+use crate::vk::image::COLOR_RANGE;
 use crate::vk::pipeline::{ordered, Bind, Blend, ColorTarget, GraphicsDesc, Pipeline};
 use crate::vk::{Access, Barriers, Buffer, Device, Image, Sampler, VkResult};
 use ash::vk;
@@ -264,13 +265,7 @@ impl OverlayPainter {
             }
         }
         let extent = target.extent;
-        let range = vk::ImageSubresourceRange {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            base_mip_level: 0,
-            level_count: 1,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
+        let range = COLOR_RANGE;
         // The vertices and indices are the host's writes, which the submission makes visible.
         Barriers::new()
             .image_raw(target.image, range, &[target.before], &[Access::ColorAttachment])

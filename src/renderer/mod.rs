@@ -978,13 +978,7 @@ fn default_camera() -> Camera {
 
 /// Copy the beauty image (a transfer source) into the host's image, with its layout transitions.
 fn copy_to_target(d: &Device, cmd: vk::CommandBuffer, beauty: &crate::vk::Image, t: &RecordTarget) {
-    let range = vk::ImageSubresourceRange {
-        aspect_mask: vk::ImageAspectFlags::COLOR,
-        base_mip_level: 0,
-        level_count: 1,
-        base_array_layer: 0,
-        layer_count: 1,
-    };
+    let range = crate::vk::image::COLOR_RANGE;
     let barrier = |old,
                    new,
                    src: (vk::PipelineStageFlags2, vk::AccessFlags2),

@@ -7,6 +7,16 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
+/// The color aspect of an image's first mip level and layer: a swapchain image's, or any single-level color
+/// target's.
+pub const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    base_mip_level: 0,
+    level_count: 1,
+    base_array_layer: 0,
+    layer_count: 1,
+};
+
 /// A 2D image with its memory and a view, freed when dropped.
 pub struct Image {
     device: Arc<Device>,

@@ -4,6 +4,7 @@
 //! draws it (caustics::overlay::OverlayPainter, through the presenter), so that it is in the presented image and
 //! in its screenshots. `F1` toggles it, and `view --overlay off` starts without it.
 
+use crate::app::profiler::STAGE_COLORS;
 use crate::app::viewer::controls::Action;
 use caustics::overlay::{OverlayMesh, OverlayPainter, OverlayVertex};
 use caustics::{FrameReport, ACCOUNT_TERMS};
@@ -92,23 +93,10 @@ fn texture_key(id: egui::TextureId) -> u64 {
     }
 }
 
-/// A stage's color in the graph and its legend (a fixed palette, by the order stages were first seen).
+/// A stage's color in the graph and its legend: `profile --plot`'s palette, by the order stages were first seen.
 fn stage_color(i: usize) -> Color32 {
-    const PALETTE: [Color32; 12] = [
-        Color32::from_rgb(0x4e, 0x79, 0xa7),
-        Color32::from_rgb(0xf2, 0x8e, 0x2b),
-        Color32::from_rgb(0xe1, 0x57, 0x59),
-        Color32::from_rgb(0x76, 0xb7, 0xb2),
-        Color32::from_rgb(0x59, 0xa1, 0x4f),
-        Color32::from_rgb(0xed, 0xc9, 0x48),
-        Color32::from_rgb(0xb0, 0x7a, 0xa1),
-        Color32::from_rgb(0xff, 0x9d, 0xa7),
-        Color32::from_rgb(0x9c, 0x75, 0x5f),
-        Color32::from_rgb(0xba, 0xb0, 0xac),
-        Color32::from_rgb(0x86, 0xbc, 0xb6),
-        Color32::from_rgb(0xd3, 0x72, 0x95),
-    ];
-    PALETTE[i % PALETTE.len()]
+    let (r, g, b) = STAGE_COLORS[i % STAGE_COLORS.len()];
+    Color32::from_rgb(r, g, b)
 }
 
 /// The smallest of 1, 2, 5 × 10^k ms at or above `ms`: the graph's full scale.

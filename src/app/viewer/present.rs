@@ -12,7 +12,7 @@
 
 use crate::app::viewer::swapchain::{is_bgra, is_srgb, unorm_twin, Swapchain};
 use ash::vk;
-use caustics::gpu::{Access, Barriers, Buffer, Device, Image, VkError, VkResult};
+use caustics::gpu::{Access, Barriers, Buffer, Device, Image, VkError, VkResult, COLOR_RANGE};
 use caustics::overlay::{OverlayMesh, OverlayPainter, OverlayTarget};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
@@ -130,7 +130,7 @@ impl Presenter {
     ) -> VkResult<()> {
         let d = &*self.device;
         let target = swapchain.images[index as usize];
-        let range = Swapchain::subresource_range();
+        let range = COLOR_RANGE;
         let extent = swapchain.extent;
         // The acquire's semaphore wait covers ALL_TRANSFER; starting the layout transition from that stage chains
         // it after the wait (the presentation engine's reads of the previous contents are over by then).
@@ -243,7 +243,7 @@ impl Presenter {
             let mut b = Barriers::new();
             b.buffer(buf, &[Access::FrameStart], &[Access::TransferDst]);
             let (image, size, bgra, source) = if swapchain.usage.contains(vk::ImageUsageFlags::TRANSFER_SRC) {
-                b.image_raw(target, Swapchain::subresource_range(), &[Access::TransferDst], &[Access::TransferSrc]);
+                b.image_raw(target, COLOR_RANGE, &[Access::TransferDst], &[Access::TransferSrc]);
                 last = Access::TransferSrc;
                 (target, swapchain.extent, is_bgra(swapchain.format.format), CaptureSource::Swapchain)
             } else {

@@ -7,7 +7,7 @@
 
 use ash::vk;
 use caustics::gpu::{Check, VkError, VkResult};
-use caustics::gpu::{Device, Instance};
+use caustics::gpu::{Device, Instance, COLOR_RANGE};
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 use std::ffi::CStr;
 use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
@@ -318,7 +318,7 @@ impl Swapchain {
                     .image(swapchain.images[i])
                     .view_type(vk::ImageViewType::TYPE_2D)
                     .format(format.format)
-                    .subresource_range(Self::subresource_range());
+                    .subresource_range(COLOR_RANGE);
                 let view = unsafe { device.create_image_view(&info, None) }.check("vkCreateImageView")?;
                 swapchain.views.push(view);
             }
@@ -388,16 +388,6 @@ impl Swapchain {
             Ok(true) => Ok(Presented::Suboptimal),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Presented::OutOfDate),
             Err(e) => Err(e).check("vkQueuePresentKHR"),
-        }
-    }
-
-    pub fn subresource_range() -> vk::ImageSubresourceRange {
-        vk::ImageSubresourceRange {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            base_mip_level: 0,
-            level_count: 1,
-            base_array_layer: 0,
-            layer_count: 1,
         }
     }
 }
