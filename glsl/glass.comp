@@ -52,25 +52,27 @@ layout(local_size_x = TILE_WG, local_size_y = TILE_WG) in;
 
 // Direct and caustic irradiance at receiver point p (shading normal ns), which the eye's ray reaches along d, from
 // one light, its caustics averaged over the pixel's footprint: the square of side `width` on the tangent plane
-// (axes t1, t2), in its caustic map.
+// (axes t1, t2), in its caustic map (`maps`: else direct light only).
 vec3 light_irradiance(GpuView lv, vec3 power, float bias, float spread, sampler2D shadow, sampler2D irr, usampler2D recv,
-                      vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
+                      vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width, bool maps) {
+    vec3 e = direct_irradiance_in(lv, power, bias, spread, shadow, p, ns);
+    if (!maps) return e;
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, p + t1 * width) - uv, dy = view_uv(lv, p + t2 * width) - uv;
-    return direct_irradiance_in(lv, power, bias, spread, shadow, p, ns) + light_map_irradiance(lv, irr, recv, p, ns, d, dx, dy);
+    return e + light_map_irradiance(lv, irr, recv, p, ns, d, dx, dy);
 }
 
 // The same summed over the pass's lights (GLASS_LIGHT_COUNT of them).
-vec3 lights_irradiance(vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width) {
+vec3 lights_irradiance(vec3 p, vec3 ns, vec3 d, vec3 t1, vec3 t2, float width, bool maps) {
     vec3 e = light_irradiance(u_frame.light.receiver_view, u_frame.light.light_power, u_frame.frame.shadow_bias, shadow_size(u_frame.light), t_shadow,
-                              t_irradiance, t_recv, p, ns, d, t1, t2, width);
+                              t_irradiance, t_recv, p, ns, d, t1, t2, width, maps);
     if (GLASS_LIGHT_COUNT > 1u) {
         e += light_irradiance(u_light1.light.receiver_view, u_light1.light.light_power, u_light1.frame.shadow_bias, shadow_size(u_light1.light), t_shadow1,
-                              t_irradiance1, t_recv1, p, ns, d, t1, t2, width);
+                              t_irradiance1, t_recv1, p, ns, d, t1, t2, width, maps);
     }
     if (GLASS_LIGHT_COUNT > 2u) {
         e += light_irradiance(u_light2.light.receiver_view, u_light2.light.light_power, u_light2.frame.shadow_bias, shadow_size(u_light2.light), t_shadow2,
-                              t_irradiance2, t_recv2, p, ns, d, t1, t2, width);
+                              t_irradiance2, t_recv2, p, ns, d, t1, t2, width, maps);
     }
     return e;
 }
@@ -161,7 +163,12 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             vec3 n_eye = dot(ns, d) > 0.0 ? -ns : ns;
             vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
             vec3 t2 = cross(ns, t1);
-            vec3 e = lights_irradiance(p, ns, d, t1, t2, width) + environment_irradiance(n_eye);
+            // Under camera-driven refinement the eye deposit holds every landing on a point the eye's samples see
+            // directly (common/deposit.glsl): the lights' maps are read only elsewhere, as the eye shading does.
+            vec2 uv_eye;
+            bool maps = u_frame.frame.refine != REFINE_CAMERA || u_frame.frame.eye_deposit == 0u ||
+                        !receiver_seen(u_frame.frame.camera, t_radiance, p, uv_eye);
+            vec3 e = lights_irradiance(p, ns, d, t1, t2, width, maps) + environment_irradiance(n_eye);
             // The eye deposit holds every light's: the first glass pass adds it.
             if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e += eye_deposit_at(p, ns);
             L += w * albedo / RECV_PI * e;

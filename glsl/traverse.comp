@@ -51,6 +51,7 @@ const uint LANES = 4u;  // invocations per candidate
 // The dominant paths of each candidate's four children (index 4 * candidate + child), traced one per lane, and
 // whether a candidate's were traced.
 shared vec2 s_dom_p[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
+shared vec3 s_dom_land[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
 shared uint s_dom_status[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
 shared uint s_dom_events[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
 shared float s_dom_thr[TRAVERSE_WG_SIDE * TRAVERSE_WG_SIDE];
@@ -62,17 +63,18 @@ const uint LANES = 1u;
 
 // Child k's dominant path (trace_dominant) for the metrics' checks: from the lanes' shared results when they traced
 // it (TRAVERSE_COOP), else traced here.
-uint child_dominant(uint level, uvec2 xy, uint k, out vec2 p, out uint events, out float thr) {
+uint child_dominant(uint level, uvec2 xy, uint k, out vec2 p, out vec3 land, out uint events, out float thr) {
 #ifdef TRAVERSE_COOP
     if (s_dom_ok[g_cand]) {
         uint j = 4u * g_cand + k;
         p = s_dom_p[j];
+        land = s_dom_land[j];
         events = s_dom_events[j];
         thr = s_dom_thr[j];
         return s_dom_status[j];
     }
 #endif
-    return trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p, events, thr);
+    return trace_dominant(level + 1u, 2u * xy + uvec2(k & 1u, k >> 1), p, land, events, thr);
 }
 
 // Whether the frame traces exact transport (else the two-interface model). The wide layout's variants run only
@@ -142,12 +144,13 @@ uint children_verdict_exact(uint level, uvec2 xy) {
     vec2 p[4];
     uint status[4], events[4];
     float thr;
+    vec3 land;
     // Diagonal children first: they land farthest apart, so a cell that refines is usually known to after two.
     // Every early return is a REFINE the four traces would have given (the tests below only tighten as children are
     // added), so the verdicts, and the photons, are the same as tracing all four.
     for (uint j = 0u; j < 4u; j++) {
         uint k = CHILD_ORDER[j];
-        status[k] = child_dominant(level, xy, k, p[k], events[k], thr);
+        status[k] = child_dominant(level, xy, k, p[k], land, events[k], thr);
         if (status[k] == DOM_LONG) return CHILDREN_REFINE;  // trapped in the glass: where it lands is unknown
         if (j == 0u) continue;
         if (status[k] != status[0]) return CHILDREN_REFINE;
@@ -225,6 +228,17 @@ const uint FE_DROP = 3u;
 // for 0.02% to 6% more photons and the same error or less.
 const float FE_PREDICT = 2.0;
 
+// Camera-driven refinement (`--refine camera`; docs/design.md, "Camera-driven refinement"): the error is measured
+// in the camera's image, box-filtered to 64², where light-driven refinement measures it in the light's caustic map.
+// A landing's position is then in units of that image's boxes, and the camera's view holds it (`seen`) when it lies
+// in front of the eye within one box of the image's edges, which a merged photon's tent may reach across.
+bool camera_box(vec3 p, out vec2 q) {
+    GpuView cam = u_frame.frame.camera;
+    vec3 img = view_image(cam, p);
+    q = (img.xy - cam.window.xy) / cam.window.zw * 64.0;
+    return (view_is_ortho(cam) || img.z > 0.0) && all(greaterThan(q, vec2(-1.0))) && all(lessThan(q, vec2(65.0)));
+}
+
 // The levels below `level` whose cells are checked: the last level's are not (they are leaves).
 uint checked_levels_below(uint level) {
     return level + 2u <= u_frame.frame.max_level ? u_frame.frame.max_level - level - 1u : 0u;
@@ -260,7 +274,12 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     float t_max = 0.0, t_min = 1.0, rest = 0.0;
     float cell_flux = intensity * cell_measure(level, xy);
     float budget = u_frame.frame.tau * cell_flux;
-    float w = float(u_frame.frame.caustic_res) / 64.0;
+    // The error's image: the caustic map (q = p, in its texels; w: a 64² box's side), or the camera's (q in its
+    // boxes, w = 1), which holds only the landings it sees (`seen`).
+    bool camera = u_frame.frame.refine == REFINE_CAMERA;
+    float w = camera ? 1.0 : float(u_frame.frame.caustic_res) / 64.0;
+    vec2 q[4];
+    bool seen[4];
     // A cell refines when E exceeds this (twice the budget where the look-ahead may still emit the children).
     float refine_above = level + 1u < u_frame.frame.max_level ? 2.0 * budget : budget;
     // Where the children would be checked, a cell that refines on the same-endings bound goes on tracing until
@@ -274,9 +293,10 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
     for (uint j = 0u; j < 4u; j++) {
         uint k = CHILD_ORDER[j];
         uvec2 c = 2u * xy + uvec2(k & 1u, k >> 1);
+        vec3 land;
         if (exact) {
             float thr;
-            status[k] = child_dominant(level, xy, k, p[k], events[k], thr);
+            status[k] = child_dominant(level, xy, k, p[k], land, events[k], thr);
             // A path still in the glass after the checks' cap may land anywhere with its dominant flux: it counts
             // as a child that ends differently, carrying that flux (an upper bound on what it deposits).
             bool known = status[k] == DOM_OK || status[k] == DOM_LONG;
@@ -290,10 +310,13 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
             status[k] = h.status;
             events[k] = 0u;
             p[k] = h.map_px;
+            land = h.pos;
             phi[k] = h.status == HIT_OK ? h.flux : 0.0;
             float full = intensity * cell_measure(level + 1u, c);
             t_max = max(t_max, full > 0.0 ? h.flux / full : 0.0);
         }
+        q[k] = p[k];
+        seen[k] = status[k] == ok && (!camera || camera_box(land, q[k]));
         // Stop tracing once the verdict can only be REFINE. Both bounds below only grow as children are added:
         // the mixed-endings E (t_max and the landed flux), and, while the children so far all landed, a lower
         // bound on the same-endings E: for any centroid c, |p_a - c|_1 + |p_b - c|_1 >= |p_a - p_b|_1, so
@@ -312,7 +335,8 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
             float lower = 0.0;
             for (uint i = 0u; i < j; i++) {
                 uint b = CHILD_ORDER[i];
-                vec2 d = abs(p[k] - p[b]);
+                if (!seen[k] || !seen[b]) continue;  // (a pair's bound holds where the image holds both)
+                vec2 d = abs(q[k] - q[b]);
                 lower = max(lower, 2.0 * min(phi[k], phi[b]) * min(1.0, (d.x + d.y) / w));
             }
             if (lower > stop_above) {
@@ -340,12 +364,15 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
         skip = predicted_skip_mixed(level, e_mixed / budget);
         return FE_REFINE;
     }
-    vec2 c = total > 0.0 ? (phi[0] * p[0] + phi[1] * p[1] + phi[2] * p[2] + phi[3] * p[3]) / total
-                         : 0.25 * (p[0] + p[1] + p[2] + p[3]);
+    vec2 c = total > 0.0 ? (phi[0] * q[0] + phi[1] * q[1] + phi[2] * q[2] + phi[3] * q[3]) / total
+                         : 0.25 * (q[0] + q[1] + q[2] + q[3]);
+    // Where the camera sees some of the four landings but not all, merging may move each seen child's flux out of
+    // its view or across it: the bound is its whole flux, twice. Where it sees none, merging changes nothing it sees.
+    bool all_seen = seen[0] && seen[1] && seen[2] && seen[3];
     float e = 0.0, spread = 0.0;
     for (uint k = 0u; k < 4u; k++) {
-        vec2 d = abs(p[k] - c);
-        e += 2.0 * phi[k] * min(1.0, (d.x + d.y) / w);
+        vec2 d = abs(q[k] - c);
+        if (seen[k]) e += 2.0 * phi[k] * (all_seen ? min(1.0, (d.x + d.y) / w) : 1.0);
         for (uint b = k + 1u; b < 4u; b++) spread = max(spread, distance(p[k], p[b]));
     }
     if (e <= budget) {
@@ -359,7 +386,9 @@ uint flux_error_verdict(uint level, uvec2 xy, bool merge_only, out uint radius, 
         radius = uint(clamp(ceil(0.5 * spread), 1.0, float(MAX_SPLAT_RADIUS)));
         return FE_CHILDREN;
     }
-    skip = predicted_skip(level, e / budget);
+    // (A bound in proportion to the seen flux does not halve from one level to the next, and the children that lie
+    // outside the view need no refinement: where the view holds some of the four, each child is checked.)
+    skip = all_seen ? predicted_skip(level, e / budget) : 0u;
     return FE_REFINE;
 }
 
@@ -484,15 +513,9 @@ void main() {
         g_cand = me;
         bool traced = have && needs_checks(cell_level(cell), cell);
         if (traced) {
-            vec2 p;
-            uint events;
-            float thr;
             uvec2 c = 2u * cell_xy(cell) + uvec2(lane & 1u, lane >> 1);
             uint j = LANES * me + lane;
-            s_dom_status[j] = trace_dominant(cell_level(cell) + 1u, c, p, events, thr);
-            s_dom_p[j] = p;
-            s_dom_events[j] = events;
-            s_dom_thr[j] = thr;
+            s_dom_status[j] = trace_dominant(cell_level(cell) + 1u, c, s_dom_p[j], s_dom_land[j], s_dom_events[j], s_dom_thr[j]);
         }
         if (lane == 0u) s_dom_ok[me] = traced;
         barrier();

@@ -86,8 +86,9 @@ pub struct FrameUniforms {
     /// centers; k > 0 shifts every cell's sample by the k-th point of a low-discrepancy sequence). Its weight in
     /// the average is 1 / (k + 1) ([`FrameUniforms::set_weight`]).
     pub sample_index: u32,
-    /// To a multiple of 16 bytes, as std140 places the struct.
-    pub pad: u32,
+    /// What the flux-error metric measures its error in: REFINE_LIGHT (the light's caustic map) or REFINE_CAMERA
+    /// (the camera's image; `Refine::code`).
+    pub refine: u32,
 }
 
 impl FrameUniforms {

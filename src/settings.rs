@@ -28,6 +28,39 @@ pub enum Metric {
     FluxError,
 }
 
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+/// What the flux-error metric measures its error in (docs/design.md, "Camera-driven refinement").
+pub enum Refine {
+    /// The light's caustic map, box-filtered to 64²: photons go where the caustic needs them, wherever it is seen.
+    #[default]
+    Light,
+    /// The camera's image, box-filtered to 64²: a cell whose landings the camera does not see is final at the
+    /// check level, and one it sees refines as finely as its image needs, so a zoomed view gets the photons. The
+    /// caustic maps then depend on the camera.
+    Camera,
+}
+
+impl Refine {
+    /// The name `--refine` uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Refine::Light => "light",
+            Refine::Camera => "camera",
+        }
+    }
+
+    /// FrameUniforms::refine: REFINE_LIGHT or REFINE_CAMERA (src/shader_consts.rs), which glsl/traverse.comp tests.
+    pub fn code(self) -> u32 {
+        use crate::shaders::consts::{REFINE_CAMERA, REFINE_LIGHT};
+        match self {
+            Refine::Light => REFINE_LIGHT,
+            Refine::Camera => REFINE_CAMERA,
+        }
+    }
+}
+
 impl Metric {
     /// The name `--metric` and the bench use.
     pub fn name(self) -> &'static str {
@@ -181,6 +214,8 @@ pub struct Quality {
     pub method: Method,
     /// Adaptive traversal's stopping metric.
     pub metric: Metric,
+    /// What the flux-error metric measures its error in: the light's caustic map or the camera's image.
+    pub refine: Refine,
     /// Photon grid level: 64·2^level cells per side (dense), or the maximal traversal level (adaptive). None: the
     /// device's default ([`default_level`]).
     pub level: Option<u32>,
@@ -209,6 +244,7 @@ impl Default for Quality {
             transport: Transport::Exact,
             method: Method::Adaptive,
             metric: Metric::FluxError,
+            refine: Refine::Light,
             level: None,
             target_error: DEFAULT_TARGET_ERROR,
             caustic_res: 1024,
@@ -316,6 +352,8 @@ pub struct ResolvedSettings {
     pub method: Method,
     /// See [`Quality::metric`].
     pub metric: Metric,
+    /// See [`Quality::refine`].
+    pub refine: Refine,
     /// The photon level (the device's default resolved).
     pub level: u32,
     /// See [`Quality::target_error`].
@@ -610,6 +648,7 @@ impl Settings {
             transport: q.transport,
             method: q.method,
             metric: q.metric,
+            refine: q.refine,
             level,
             target_error: q.target_error,
             caustic_res: q.caustic_res,

@@ -101,6 +101,12 @@ pub const METRIC_MAX_ERROR: u32 = 1;
 /// `--metric flux-error`.
 pub const METRIC_FLUX_ERROR: u32 = 2;
 
+// What the flux-error metric measures its error in (`Refine::code`, FrameUniforms::refine; traverse.comp).
+/// `--refine light`: the light's caustic map.
+pub const REFINE_LIGHT: u32 = 0;
+/// `--refine camera`: the camera's image.
+pub const REFINE_CAMERA: u32 = 1;
+
 // The indirect-command buffer's slots (`IndirectCommand`, src/gpu_types.rs): one dispatch per traversal level
 // (0..MAX_LEVELS), then these.
 /// The two-interface trace's dispatch.

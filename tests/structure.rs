@@ -10,7 +10,7 @@ const GLSL_LIMIT: usize = 150;
 
 /// (file, function, its length in lines when the limits were set).
 const OVER: &[(&str, &str, usize)] = &[
-    ("glsl/traverse.comp", "main", 168),
+    ("glsl/traverse.comp", "main", 162),
     ("src/app/soak.rs", "run_soak", 185),
     ("src/app/bench.rs", "run_bench", 203),
     ("src/renderer/mod.rs", "record_into", 179),

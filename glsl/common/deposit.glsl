@@ -20,11 +20,18 @@ bool deposit_landing(vec3 p, vec3 ng, vec3 rd, RayDiff rdf, uint r_cell, bool di
                      out GpuSplat record) {
     GpuView rv = u_frame.light.receiver_view;
     vec2 uv;
+    // Camera-driven refinement refines as finely as the camera's image needs, which the light's map may not
+    // resolve: what the camera sees goes to the eye deposit first.
+    bool eye = u_frame.frame.eye_deposit != 0u, eye_first = eye && u_frame.frame.refine == REFINE_CAMERA;
+    if (eye_first && eye_project(p, rd, uv)) {
+        record = GpuSplat(uv * vec2(textureSize(t_eye, 0)), flux, -eye_footprint(p, rdf, differential, jitter));
+        return true;
+    }
     if (light_map_project(rv, t_recv, p, ng, rd, uv)) {
         record = GpuSplat(uv * rv.extent.xy, flux, light_map_footprint(rv, p, rdf, r_cell, differential, jitter));
         return true;
     }
-    if (u_frame.frame.eye_deposit != 0u && eye_project(p, rd, uv)) {
+    if (eye && !eye_first && eye_project(p, rd, uv)) {
         record = GpuSplat(uv * vec2(textureSize(t_eye, 0)), flux, -eye_footprint(p, rdf, differential, jitter));
         return true;
     }

@@ -26,6 +26,9 @@ vec3 eye_deposit_irradiance(GpuView cam, ivec2 q, ivec2 size, vec3 n, float dist
     return eye_deposit_flux(q, size) / view_texel_area(cam, q, n, dist);
 }
 
+// An eye record's radii are in 1/EYE_SUBSAMPLE samples.
+const float EYE_SUBSAMPLE = 8.0;
+
 #ifdef PHOTON_BINDINGS_GLSL
 // Whether the camera sees a landing at p arriving along rd (its receivers' eye g-buffer sees p, on the side rd
 // arrives on). uv: p's uv in the eye's image.
@@ -42,7 +45,7 @@ bool eye_project(vec3 p, vec3 rd, out vec2 uv) {
 // A record's shape in eye samples: the ray differentials projected into the eye's image (`differential`), its
 // radius at most EYE_SPLAT_RADIUS, else one sample. `jitter` (m) widens it (footprint_widening).
 float eye_footprint(vec3 p, RayDiff rdf, bool differential, float jitter) {
-    if (!differential) return 1.0;
+    if (!differential) return EYE_SUBSAMPLE;  // one sample
     GpuView cam = u_frame.frame.camera;
     vec2 mx = view_px_diff(cam, p, rdf.dpx), my = view_px_diff(cam, p, rdf.dpy);
     if (jitter > 0.0) {
@@ -50,10 +53,12 @@ float eye_footprint(vec3 p, RayDiff rdf, bool differential, float jitter) {
         mx *= f;
         my *= f;
     }
-    float k = set_narrowing();
+    // In eighths of a sample (EYE_SUBSAMPLE: eye_splat divides), so that the tents of a lattice of photons a few
+    // samples apart tile it: radii rounded to whole samples leave a moiré of their rounding.
+    float k = set_narrowing() * EYE_SUBSAMPLE;
     mx *= k;
     my *= k;
-    uint r = uint(clamp(round(sqrt(abs(mx.x * my.y - mx.y * my.x))), 1.0, float(EYE_SPLAT_RADIUS)));
+    uint r = uint(clamp(round(sqrt(abs(mx.x * my.y - mx.y * my.x))), EYE_SUBSAMPLE, EYE_SUBSAMPLE * float(EYE_SPLAT_RADIUS)));
     return footprint_radii(mx, my, r);
 }
 #endif
@@ -70,7 +75,8 @@ vec3 eye_point(GpuView cam, ivec2 q, float dist) {
 // The eye deposit's record s (its shape negated), each watt adding `rgb`: its tent (radii at most
 // EYE_SPLAT_RADIUS) over the eye samples that see the surface its center sees (on that surface's tangent plane
 // within the tent's reach, facing the same way), its weights normalized over them, so that it deposits all its
-// flux on the receiver it landed on and none across an edge.
+// flux on the receiver it landed on and none across an edge. The taps beyond the image's edges count as the same
+// surface, and take their share out of view.
 void eye_splat(GpuSplat s, vec3 rgb) {
     GpuView cam = u_frame.frame.camera;
     ivec2 size = textureSize(t_eye, 0);
@@ -79,9 +85,9 @@ void eye_splat(GpuSplat s, vec3 rgb) {
     if (!(g0.w > 0.0)) return;  // the wave saw a receiver there
     vec3 p0 = eye_point(cam, c, g0.w);
     SplatShape k = splat_shape(-s.shape);
-    k.r = min(k.r, vec2(float(EYE_SPLAT_RADIUS)));
+    k.r = clamp(k.r / EYE_SUBSAMPLE, vec2(1.0), vec2(float(EYE_SPLAT_RADIUS)));  // (a narrower tent may miss every sample)
     vec2 e = splat_extent(k);
-    ivec2 lo = max(ivec2(ceil(s.texel - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(s.texel + e - 0.5)), size - 1);
+    ivec2 lo = ivec2(ceil(s.texel - e - 0.5)), hi = ivec2(floor(s.texel + e - 0.5));
     float sample_side = view_sample_side(cam, g0.w);
     float reach = (max(k.r.x, k.r.y) + 1.0) * sample_side;
     float sum = 0.0;
@@ -92,6 +98,10 @@ void eye_splat(GpuSplat s, vec3 rgb) {
                 ivec2 q = ivec2(x, y);
                 float w = splat_weight(q, s.texel, k);
                 if (w == 0.0) continue;
+                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+                    sum += pass == 0 ? w : 0.0;
+                    continue;
+                }
                 vec4 g = geo_fetch(t_eye, q);
                 if (!(g.w > 0.0) || dot(g.xyz, g0.xyz) < 0.9) continue;
                 if (abs(dot(eye_point(cam, q, g.w) - p0, g0.xyz)) > reach) continue;

@@ -179,14 +179,16 @@ const uint DOM_LONG = 4u;     // still in the glass after CHECK_INTERACTIONS: wh
 #endif
 
 // Follow a cell's dominant path (the larger branch at every interface) to where it ends, for the max-error
-// and flux-error metrics: its status, the landing texel of the caustic map, its interaction count, and its
-// throughput (the product of the branch fractions it kept: the share of the cell's flux that follows it).
-uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out float throughput) {
+// and flux-error metrics: its status, the landing texel of the caustic map and the landing point (world space), its
+// interaction count, and its throughput (the product of the branch fractions it kept: the share of the cell's flux
+// that follows it).
+uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out vec3 land, out uint events, out float throughput) {
     vec3 ro, rd;
     // The straight ray: a light with size refines where its center's caustic needs it (the sampled rays are the
     // waves').
     cell_ray_at(cell_center_uv(level, xy), vec2(0.5), ro, rd);
     map_px = vec2(-1e9);
+    land = vec3(0.0);
     events = 0u;
     throughput = 1.0;
     for (uint k = 0u; k <= MAX_INTERACTIONS; k++) {
@@ -197,6 +199,7 @@ uint trace_dominant(uint level, uvec2 xy, out vec2 map_px, out uint events, out 
         if (!inst_is_dielectric(hit.inst)) {
             GpuView rv = u_frame.light.receiver_view;
             map_px = view_uv(rv, p) * rv.extent.xy;
+            land = p;
             return events == 0u ? DOM_DIRECT : DOM_OK;
         }
         if (k == MAX_INTERACTIONS) break;

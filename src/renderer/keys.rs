@@ -2,8 +2,10 @@
 //! the last frame's reuses that frame's maps (or its whole beauty image).
 
 use crate::frame::LightReport;
+use crate::gpu_types::GpuView;
+use crate::scene::view::CameraView;
 use crate::scene::Light;
-use crate::settings::ResolvedSettings;
+use crate::settings::{Method, Metric, Refine, ResolvedSettings};
 
 /// What the targets' allocation depends on: the sizes of the light maps and buffers, the passes, the ray size and
 /// the frames in flight (the output size only touches the eye-sized targets).
@@ -48,6 +50,9 @@ pub(crate) struct CausticKey {
     pub transforms: (Vec<glam::Mat4>, Option<(u32, u64)>),
     pub settings: ResolvedSettings,
     pub targets: Option<TargetsKey>,
+    /// The camera's uniform bytes where camera-driven refinement makes the photons depend on it (`--refine
+    /// camera`), else None.
+    pub camera: Option<Vec<u8>>,
 }
 
 impl CausticKey {
@@ -57,9 +62,13 @@ impl CausticKey {
         transforms: (Vec<glam::Mat4>, Option<(u32, u64)>),
         s: &ResolvedSettings,
         targets: Option<TargetsKey>,
+        camera: &CameraView,
     ) -> Self {
         let settings = ResolvedSettings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..s.clone() };
-        CausticKey { lights: lights.to_vec(), scene_generation, transforms, settings, targets }
+        // Camera-driven refinement chooses the photons by what the camera sees: a new eye view traces afresh.
+        let camera_driven = s.refine == Refine::Camera && s.method == Method::Adaptive && s.metric == Metric::FluxError;
+        let camera = camera_driven.then(|| bytemuck::bytes_of(&GpuView::from_camera(camera)).to_vec());
+        CausticKey { lights: lights.to_vec(), scene_generation, transforms, settings, targets, camera }
     }
 }
 

@@ -832,13 +832,13 @@ impl Renderer {
         // changed since the last frame submitted, only the eye and composite passes are recorded (the queue runs
         // frames in order, so a frame in flight that computes the maps finishes them before this one reads them).
         // Water changes with the scene's time; rigid motion is in the transforms.
-        let deform_time = self.deform_key();
         let key = CausticKey::new(
             &self.scene.lights,
             self.scene_generation,
-            (self.instances.transforms(), deform_time),
+            (self.instances.transforms(), self.deform_key()),
             &s,
             self.targets_key,
+            camera,
         );
         let targets = self.targets.as_mut().expect("targets");
         let mut data = uniforms::pass_data(&self.scene, &self.scene_buffers, &s, &emitters, &views, targets, nc);

@@ -125,7 +125,7 @@ pub(crate) fn frame_data(
         weak_block: s.weak_block as f32,
         eye_deposit: targets.eye_deposit(s) as u32,
         sample_index: 0,
-        pad: 0,
+        refine: s.refine.code(),
     };
     // Where a light with size aims each cell's rays: through the cell at the glass's middle, along the axis (a
     // beam) or from the light (a sphere).

@@ -9,8 +9,8 @@ use caustics::image_io::{self, RgbImage};
 use caustics::scene::{Camera, Projection, Scene};
 use caustics::settings::BvhLayout;
 use caustics::settings::{
-    parse_size, CoopChecks, Driven, Footprint, Method, Metric, OnOff, Quality, ResolvedSettings, Settings, Splat,
-    Transport, Tuning, DEFAULT_TARGET_ERROR,
+    parse_size, CoopChecks, Driven, Footprint, Method, Metric, OnOff, Quality, Refine, ResolvedSettings, Settings,
+    Splat, Transport, Tuning, DEFAULT_TARGET_ERROR,
 };
 use caustics::{Aov, AovData, Frame, FrameDesc, FrameReport, Renderer};
 use serde_json::{json, Value};
@@ -146,6 +146,11 @@ pub struct QualityArgs {
     /// (adaptive only; dense warns that it ignores it).
     #[arg(long, value_enum)]
     pub metric: Option<Metric>,
+    /// What the flux-error metric measures its error in: the light's caustic map (photons where the caustic needs
+    /// them) or the camera's image (photons where the camera sees the caustic, as finely as its pixels need; a new
+    /// camera then traces afresh) (--metric flux-error only; others warn that they ignore it).
+    #[arg(long, value_enum, default_value_t = Quality::default().refine)]
+    pub refine: Refine,
     /// Photon grid level: 64·2^N cells per side (dense), or the maximal traversal level (adaptive) [default: 5 on a
     /// GPU, 4 on a CPU device].
     #[arg(long, allow_negative_numbers = true, value_parser = level_arg)]
@@ -303,6 +308,7 @@ impl QualityArgs {
             transport: self.transport,
             method: self.method,
             metric: self.metric.unwrap_or(Quality::default().metric),
+            refine: self.refine,
             level: self.level,
             target_error: self.target_error.unwrap_or(DEFAULT_TARGET_ERROR),
             caustic_res: self.caustic_res,
@@ -343,7 +349,12 @@ impl MethodArgs {
                 }
             }
         }
-        for (flag, given) in [("--target-error", q.target_error.is_some()), ("--tau", self.tuning.tau.is_some())] {
+        let refine_given = q.refine != Quality::default().refine;
+        for (flag, given) in [
+            ("--target-error", q.target_error.is_some()),
+            ("--tau", self.tuning.tau.is_some()),
+            ("--refine", refine_given),
+        ] {
             if given && (method == Method::Dense || metric != Metric::FluxError) {
                 log::warn!("{flag} applies to --method adaptive --metric flux-error only; ignored");
             }

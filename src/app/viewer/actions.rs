@@ -51,6 +51,13 @@ impl Viewer {
                 };
                 self.change_settings(with(&|q| q.transport = transport))?
             }
+            Refine => {
+                let refine = match c.refine {
+                    caustics::settings::Refine::Light => caustics::settings::Refine::Camera,
+                    caustics::settings::Refine::Camera => caustics::settings::Refine::Light,
+                };
+                self.change_settings(with(&|q| q.refine = refine))?
+            }
             Animate => self.toggle_animation(),
             NextAnimation => self.next_animation()?,
             PlayScene => {
@@ -102,11 +109,12 @@ impl Viewer {
 
     pub(super) fn describe(&self) -> String {
         let s = &self.renderer.config();
-        let method = match (s.method, s.metric) {
-            (Method::Dense, _) => "dense",
-            (Method::Adaptive, Metric::MaxLevel) => "adaptive max-level",
-            (Method::Adaptive, Metric::MaxError) => "adaptive max-error",
-            (Method::Adaptive, Metric::FluxError) => "adaptive flux-error",
+        let method = match (s.method, s.metric, s.refine) {
+            (Method::Dense, ..) => "dense",
+            (Method::Adaptive, Metric::MaxLevel, _) => "adaptive max-level",
+            (Method::Adaptive, Metric::MaxError, _) => "adaptive max-error",
+            (Method::Adaptive, Metric::FluxError, caustics::settings::Refine::Light) => "adaptive flux-error",
+            (Method::Adaptive, Metric::FluxError, caustics::settings::Refine::Camera) => "adaptive flux-error (camera)",
         };
         let ior = self.ior();
         let transport = match s.transport {

@@ -22,6 +22,7 @@ pub enum Action {
     AdaptiveMaxError,
     AdaptiveFluxError,
     Transport,
+    Refine,
     Animate,
     PlayScene,
     NextAnimation,
@@ -103,6 +104,12 @@ pub const CONTROLS: &[Control] = &[
         input: "X",
         help: "transport: exact (every glass path) / two-interface (the papers' model, cheaper)",
         keys: &[("x", Action::Transport)],
+    },
+    Control {
+        input: "C",
+        help: "flux-error refinement: light-driven (the caustic map's error) / camera-driven (the image's: photons \
+               where the camera looks, traced again when it moves)",
+        keys: &[("c", Action::Refine)],
     },
     Control {
         input: "Space",
@@ -202,6 +209,7 @@ mod tests {
         assert_eq!(action_for(&Key::Named(NamedKey::ArrowLeft)), Some(Action::LightLeft));
         assert_eq!(action_for(&Key::Named(NamedKey::Escape)), Some(Action::Quit));
         assert_eq!(action_for(&Key::Character("x".into())), Some(Action::Transport));
+        assert_eq!(action_for(&Key::Character("C".into())), Some(Action::Refine));
         assert_eq!(action_for(&Key::Character("z".into())), None);
         assert!(help_text().contains("screenshot"));
     }

@@ -376,6 +376,7 @@ fn controls(ui: &mut egui::Ui, shown: &Shown, actions: &mut Asked, buttons: &mut
         button(ui, "max-error", "3", Action::AdaptiveMaxError);
         button(ui, "flux-error", "4", Action::AdaptiveFluxError);
         button(ui, "transport", "X: exact or two-interface", Action::Transport);
+        button(ui, "refine", "C: flux-error by the light's map or by the camera's image", Action::Refine);
     });
     ui.horizontal(|ui| {
         ui.label("level");
