@@ -491,8 +491,9 @@ fn sigterm_still_writes_the_screenshot() {
     assert_validation_clean(&read_json(&stats));
 }
 
-/// Two frames in flight (the default on GPUs; asked for here, since lavapipe's default is one) through 200 frames of scripted, mixed interaction: camera orbits, light
-/// drags, an IOR change, a transport and a method switch, and still frames in between. Validation (with
+/// Two frames in flight (the default on GPUs; asked for here, since lavapipe's default is one) through 240 frames of scripted, mixed interaction: camera orbits, light
+/// drags, an IOR change, a transport and a method switch, camera-driven refinement while orbiting, and still frames
+/// in between. Validation (with
 /// synchronization validation) must stay silent, every scripted frame must be presented, and the reuse the
 /// viewer claims must have happened: still frames present the last image again, orbit frames reuse the caustic
 /// map, and every step after a change converges to the chosen level at full quality.
@@ -504,7 +505,7 @@ fn two_frames_in_flight_through_mixed_interaction() {
     std::fs::write(
         &script,
         "10 still\n40 orbit 3\n10 still\n40 drag 4 2\n20 still\n1 key ]\n19 still\n1 key x\n20 drag -4 0\n\
-         1 key 3\n38 still\n",
+         1 key 3\n38 still\n1 key 4\n1 key c\n20 orbit 3\n18 still\n",
     )
     .unwrap();
     let args = [
@@ -528,7 +529,7 @@ fn two_frames_in_flight_through_mixed_interaction() {
     ];
     let s = view_ok(&dir, "mixed", &x.display, &args);
     let n = |v: &serde_json::Value| v.as_u64().unwrap_or_else(|| panic!("not a count: {v}"));
-    assert_eq!(n(&s["frames_presented"]), 200);
+    assert_eq!(n(&s["frames_presented"]), 240);
     assert_eq!(n(&s["frames_in_flight"]), 2);
     let c = &s["counters"];
     eprintln!("{}", serde_json::to_string(c).unwrap());
@@ -536,7 +537,7 @@ fn two_frames_in_flight_through_mixed_interaction() {
     assert!(n(&c["eye_reused_frames"]) >= 20, "still frames present the last image again: {c}");
     assert!(n(&c["preview_frames"]) >= 100, "moving frames are previews: {c}");
     let steps = s["script"].as_array().expect("script stats");
-    assert_eq!(steps.len(), 11);
+    assert_eq!(steps.len(), 15);
     for st in steps {
         assert_eq!(st["frames_presented"], st["frames_completed"], "{st}");
         let step = st["step"].as_str().unwrap();
