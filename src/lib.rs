@@ -67,6 +67,22 @@ mod renderer;
 mod scene_gpu;
 mod shaders;
 mod targets;
+#[cfg(feature = "tracy")]
+mod tracy;
+
+/// A Tracy CPU zone named `$name` from here to the end of the enclosing block, where Tracy's client runs
+/// (`--features tracy`; nothing otherwise).
+#[cfg(feature = "tracy")]
+macro_rules! cpu_zone {
+    ($name:literal) => {
+        let _zone = tracy_client::Client::running().map(|c| c.span(tracy_client::span_location!($name), 0));
+    };
+}
+#[cfg(not(feature = "tracy"))]
+macro_rules! cpu_zone {
+    ($name:literal) => {};
+}
+pub(crate) use cpu_zone;
 mod vk;
 
 pub use error::{Error, Result};

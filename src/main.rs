@@ -96,6 +96,9 @@ fn main() {
         })
         .init();
     let cli = Cli::parse();
+    // Tracy's client (`--features tracy`): it sends the renderer's zones while Tracy's profiler is connected.
+    #[cfg(feature = "tracy")]
+    let _tracy = tracy_client::Client::start();
     if let Err(e) = run(cli) {
         eprintln!("error: {}", app::flags::message(&e));
         std::process::exit(e.exit_code());

@@ -132,6 +132,9 @@ pub struct FrameReport {
     pub substages: Vec<(&'static str, f64)>,
     /// Every timed interval: (label, start ms from the frame's first timestamp, duration ms).
     pub segments: Vec<(&'static str, f64, f64)>,
+    /// The frame's first timestamp in the device's ticks (its clock, masked to the queue's valid bits): where
+    /// `segments` start on the GPU's clock (the Tracy zones place them there).
+    pub gpu_start_tick: Option<u64>,
     /// Sum of the stages (excluding host round trips of the CPU-driven traversal).
     pub gpu_ms: f64,
     /// Wall-clock time from the start of recording until the results were available.

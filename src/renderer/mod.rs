@@ -663,6 +663,7 @@ impl Renderer {
                 "a recorded frame has not been completed: call Renderer::complete after its submission finishes".into(),
             ));
         }
+        crate::cpu_zone!("record and submit");
         self.record_into(None, desc, finish, sync, None)
     }
 

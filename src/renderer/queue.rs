@@ -57,6 +57,9 @@ pub(crate) struct FrameQueue {
     submitted: u64,
     /// GPU-driven batching: slots recorded next frame (adapted from frame to frame; 0: not known yet).
     slots_hint: u32,
+    /// Each completed frame's GPU zones, where Tracy's client runs (`--features tracy`).
+    #[cfg(feature = "tracy")]
+    tracy: Option<crate::tracy::TracyGpu>,
 }
 
 impl FrameQueue {
@@ -68,6 +71,8 @@ impl FrameQueue {
             frames_in_flight: 1,
             submitted: 0,
             slots_hint: 0,
+            #[cfg(feature = "tracy")]
+            tracy: crate::tracy::TracyGpu::new(device),
         })
     }
 
@@ -148,6 +153,7 @@ impl FrameQueue {
         targets: Option<&Targets>,
         caches: &mut Caches,
     ) -> Result<(FrameReport, Option<AovData>)> {
+        crate::cpu_zone!("complete");
         let FrameSlot { recorder, timestamps } = &mut self.slots[p.slot];
         if !p.external {
             recorder.wait()?;
@@ -155,6 +161,11 @@ impl FrameQueue {
         let mut report = p.report;
         report.frame_ms = p.start.elapsed().as_secs_f64() * 1e3;
         report.segments = timestamps.resolve()?;
+        report.gpu_start_tick = timestamps.first_tick();
+        #[cfg(feature = "tracy")]
+        if let Some(t) = self.tracy.as_mut() {
+            t.frame(&report);
+        }
         if timestamps.overflowed() {
             log::warn!("more stages than timestamp queries: the per-stage GPU times of this frame are truncated");
         }

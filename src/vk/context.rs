@@ -163,6 +163,9 @@ pub struct DeviceInfo {
     /// VK_KHR_push_descriptor's maxPushDescriptors: the most bindings a pipeline's (push-descriptor) layout may
     /// have.
     pub max_push_descriptors: u32,
+    /// VK_EXT_calibrated_timestamps with the device's time domain: the device's clock can be read from the host
+    /// ([`Device::calibrated`]; the Tracy zones calibrate with it).
+    pub calibrated_timestamps: bool,
 }
 
 impl DeviceInfo {
@@ -200,6 +203,8 @@ pub struct Device {
     pub push_descriptor: ash::khr::push_descriptor::Device,
     /// VK_EXT_debug_utils' device entry points, for object names, when the instance has the extension.
     pub debug_utils: Option<ash::ext::debug_utils::Device>,
+    /// VK_EXT_calibrated_timestamps' entry points, where [`DeviceInfo::calibrated_timestamps`] says so.
+    pub calibrated: Option<ash::ext::calibrated_timestamps::Device>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     /// Created here (destroyed with this), or a host's (left to it).
     owned: bool,
@@ -274,6 +279,7 @@ fn describe(
         device_local_bytes,
         min_subgroup_size,
         max_push_descriptors: push.max_push_descriptors,
+        calibrated_timestamps: false,
     }
 }
 
@@ -354,13 +360,18 @@ impl Device {
                 log::info!("skipping {name}: no graphics+compute queue with timestamps");
                 continue;
             };
-            let info = describe(
+            let mut info = describe(
                 raw,
                 physical,
                 &props,
                 families[family].timestamp_valid_bits,
                 has(ash::ext::shader_atomic_float::NAME),
             );
+            info.calibrated_timestamps = has(ash::ext::calibrated_timestamps::NAME) && {
+                let ext = ash::ext::calibrated_timestamps::Instance::new(&instance.entry, raw);
+                let domains = unsafe { ext.get_physical_device_calibrateable_time_domains(physical) };
+                domains.is_ok_and(|d| d.contains(&vk::TimeDomainEXT::DEVICE))
+            };
             out.push(Candidate { physical, info, queue_family: family as u32 });
         }
         Ok(out)
@@ -463,6 +474,9 @@ impl Device {
         if desc.swapchain {
             extensions.push(ash::khr::swapchain::NAME.as_ptr());
         }
+        if c.info.calibrated_timestamps {
+            extensions.push(ash::ext::calibrated_timestamps::NAME.as_ptr());
+        }
         let priorities = [1.0f32];
         let queues =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(c.queue_family).queue_priorities(&priorities)];
@@ -486,6 +500,8 @@ impl Device {
         })?;
         let push_descriptor = ash::khr::push_descriptor::Device::new(raw_instance, &raw);
         let debug_utils = instance.debug.as_ref().map(|_| ash::ext::debug_utils::Device::new(raw_instance, &raw));
+        let calibrated =
+            c.info.calibrated_timestamps.then(|| ash::ext::calibrated_timestamps::Device::new(raw_instance, &raw));
         log::info!("device: {} ({}), driver {}", c.info.name, kind_name(c.info.kind), c.info.driver);
         Ok(Arc::new(Device {
             instance,
@@ -496,6 +512,7 @@ impl Device {
             queue_family: c.queue_family,
             push_descriptor,
             debug_utils,
+            calibrated,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             owned: true,
             wait_idles: Default::default(),
@@ -684,6 +701,7 @@ impl Context {
             queue_family,
             push_descriptor,
             debug_utils: None,
+            calibrated: None,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             owned: false,
             wait_idles: Default::default(),

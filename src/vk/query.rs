@@ -13,13 +13,22 @@ pub struct Timestamps {
     capacity: u32,
     labels: Vec<&'static str>,
     overflowed: bool,
+    /// The first timestamp that [`Timestamps::resolve`] read, in device ticks (masked to the valid bits).
+    first_tick: Option<u64>,
 }
 
 impl Timestamps {
     pub fn new(device: &Arc<Device>, capacity: u32) -> VkResult<Self> {
         let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
         let pool = unsafe { device.create_query_pool(&info, None) }.check("vkCreateQueryPool")?;
-        Ok(Timestamps { device: device.clone(), pool, capacity, labels: Vec::new(), overflowed: false })
+        Ok(Timestamps {
+            device: device.clone(),
+            pool,
+            capacity,
+            labels: Vec::new(),
+            overflowed: false,
+            first_tick: None,
+        })
     }
 
     /// Reset the pool at the start of a command buffer.
@@ -41,8 +50,9 @@ impl Timestamps {
     }
 
     /// Every interval: (label, start ms from the first timestamp, duration ms). Call after the work completed.
-    pub fn resolve(&self) -> VkResult<Vec<(&'static str, f64, f64)>> {
+    pub fn resolve(&mut self) -> VkResult<Vec<(&'static str, f64, f64)>> {
         let n = self.labels.len();
+        self.first_tick = None;
         if n < 2 {
             return Ok(Vec::new());
         }
@@ -60,6 +70,7 @@ impl Timestamps {
         let bits = self.device.info.timestamp_valid_bits;
         let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
         let ms = |dt: u64| (dt & mask) as f64 * self.device.info.timestamp_period as f64 * 1e-6;
+        self.first_tick = Some(ticks[0] & mask);
         let out = (0..n - 1)
             .filter(|&i| !self.labels[i].is_empty())
             .map(|i| (self.labels[i], ms(ticks[i].wrapping_sub(ticks[0])), ms(ticks[i + 1].wrapping_sub(ticks[i]))))
@@ -70,6 +81,11 @@ impl Timestamps {
     /// Marks so far this frame: the index of the next mark's interval in [`Timestamps::resolve`]'s list.
     pub fn len(&self) -> usize {
         self.labels.len()
+    }
+
+    /// The frame's first timestamp, in device ticks, once [`Timestamps::resolve`] read it.
+    pub fn first_tick(&self) -> Option<u64> {
+        self.first_tick
     }
 
     pub fn overflowed(&self) -> bool {
