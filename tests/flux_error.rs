@@ -298,7 +298,7 @@ fn default_check_level_follows_the_level() {
 /// refinement measures the merging error in the camera's image, refines what the camera sees, leaves the rest at the
 /// check level, and deposits what it sees in the eye's samples. Measured on lavapipe at level 4 against this 8M-photon
 /// reference (whose own noise is most of the second figure): light-driven 14.5% at 64² with 481,480 photons,
-/// camera-driven 1.7% with 478,018; against a 128M-photon reference, 14.4% and 0.64%.
+/// camera-driven 1.5% with 478,018; against a 128M-photon reference, 14.4% and 0.50%.
 #[test]
 fn camera_driven_refinement_resolves_a_zoomed_view() {
     use caustics::settings::Refine;

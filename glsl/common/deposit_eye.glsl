@@ -75,8 +75,9 @@ vec3 eye_point(GpuView cam, ivec2 q, float dist) {
 // The eye deposit's record s (its shape negated), each watt adding `rgb`: its tent (radii at most
 // EYE_SPLAT_RADIUS) over the eye samples that see the surface its center sees (on that surface's tangent plane
 // within the tent's reach, facing the same way), its weights normalized over them, so that it deposits all its
-// flux on the receiver it landed on and none across an edge. The taps beyond the image's edges count as the same
-// surface, and take their share out of view.
+// flux on the receiver it landed on and none across an edge. At the image's edges it keeps its flux on the samples
+// inside: a landing outside the image deposits nothing here, so one inside keeps all of its flux in view, as the
+// reference counts the landings inside the view.
 void eye_splat(GpuSplat s, vec3 rgb) {
     GpuView cam = u_frame.frame.camera;
     ivec2 size = textureSize(t_eye, 0);
@@ -87,7 +88,7 @@ void eye_splat(GpuSplat s, vec3 rgb) {
     SplatShape k = splat_shape(-s.shape);
     k.r = clamp(k.r / EYE_SUBSAMPLE, vec2(1.0), vec2(float(EYE_SPLAT_RADIUS)));  // (a narrower tent may miss every sample)
     vec2 e = splat_extent(k);
-    ivec2 lo = ivec2(ceil(s.texel - e - 0.5)), hi = ivec2(floor(s.texel + e - 0.5));
+    ivec2 lo = max(ivec2(ceil(s.texel - e - 0.5)), ivec2(0)), hi = min(ivec2(floor(s.texel + e - 0.5)), size - 1);
     float sample_side = view_sample_side(cam, g0.w);
     float reach = (max(k.r.x, k.r.y) + 1.0) * sample_side;
     float sum = 0.0;
@@ -98,10 +99,6 @@ void eye_splat(GpuSplat s, vec3 rgb) {
                 ivec2 q = ivec2(x, y);
                 float w = splat_weight(q, s.texel, k);
                 if (w == 0.0) continue;
-                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
-                    sum += pass == 0 ? w : 0.0;
-                    continue;
-                }
                 vec4 g = geo_fetch(t_eye, q);
                 if (!(g.w > 0.0) || dot(g.xyz, g0.xyz) < 0.9) continue;
                 if (abs(dot(eye_point(cam, q, g.w) - p0, g0.xyz)) > reach) continue;
