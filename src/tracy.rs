@@ -83,7 +83,5 @@ fn device_ticks(device: &Device) -> Option<i64> {
     let ext = device.calibrated.as_ref()?;
     let info = [vk::CalibratedTimestampInfoEXT::default().time_domain(vk::TimeDomainEXT::DEVICE)];
     let (ticks, _deviation) = unsafe { ext.get_calibrated_timestamps(&info) }.ok()?;
-    let bits = device.info.timestamp_valid_bits;
-    let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
-    Some((ticks[0] & mask) as i64)
+    Some((ticks[0] & device.info.timestamp_mask()) as i64)
 }

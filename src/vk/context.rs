@@ -173,6 +173,16 @@ impl DeviceInfo {
     pub fn is_cpu(&self) -> bool {
         self.kind == vk::PhysicalDeviceType::CPU
     }
+
+    /// The bits of a timestamp that count (`timestamp_valid_bits` of the queue's family).
+    pub fn timestamp_mask(&self) -> u64 {
+        let bits = self.timestamp_valid_bits;
+        if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        }
+    }
 }
 
 /// What [`Device::allocation_report`] returns.

@@ -67,8 +67,7 @@ impl Timestamps {
                 )
                 .check("vkGetQueryPoolResults")?;
         }
-        let bits = self.device.info.timestamp_valid_bits;
-        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        let mask = self.device.info.timestamp_mask();
         let ms = |dt: u64| (dt & mask) as f64 * self.device.info.timestamp_period as f64 * 1e-6;
         self.first_tick = Some(ticks[0] & mask);
         let out = (0..n - 1)
