@@ -85,10 +85,8 @@ void main() {
     vec2 uv = view_uv(lv, p);
     vec2 dx = view_uv(lv, on_plane(cam, q + ivec2(1, 0), p, n)) - uv;
     vec2 dy = view_uv(lv, on_plane(cam, q + ivec2(0, 1), p, n)) - uv;
-    // Under camera-driven refinement every landing the camera sees is in the eye deposit (common/deposit.glsl), and
-    // the light's map holds here only the blur of landings beyond the view's edges: it is not read.
-    bool eye_first = u_frame.frame.eye_deposit != 0u && u_frame.frame.refine == REFINE_CAMERA;
-    vec3 e_caustic = eye_first ? vec3(0.0) : caustic_irradiance(p, n, rd, dx, dy);
+    // Under camera-driven refinement the eye deposit holds every landing the camera sees: the map is not read.
+    vec3 e_caustic = eye_deposit_first() ? vec3(0.0) : caustic_irradiance(p, n, rd, dx, dy);
     // The eye deposit holds every light's: the first light's shading adds it.
     if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e_caustic += eye_deposit_irradiance(cam, q, size, n, g.w);
     // The environment lights the side the eye sees (its radiance is 0 in further lights' uniforms).

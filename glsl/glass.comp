@@ -164,10 +164,9 @@ vec3 trace_glass(vec3 ro, vec3 rd, uint c) {
             vec3 t1 = normalize(cross(ns, abs(ns.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
             vec3 t2 = cross(ns, t1);
             // Under camera-driven refinement the eye deposit holds every landing on a point the eye's samples see
-            // directly (common/deposit.glsl): the lights' maps are read only elsewhere, as the eye shading does.
+            // directly: the lights' maps are read only elsewhere, as the eye shading does.
             vec2 uv_eye;
-            bool maps = u_frame.frame.refine != REFINE_CAMERA || u_frame.frame.eye_deposit == 0u ||
-                        !receiver_seen(u_frame.frame.camera, t_radiance, p, uv_eye);
+            bool maps = !eye_deposit_first() || !receiver_seen(u_frame.frame.camera, t_radiance, p, uv_eye);
             vec3 e = lights_irradiance(p, ns, d, t1, t2, width, maps) + environment_irradiance(n_eye);
             // The eye deposit holds every light's: the first glass pass adds it.
             if (pc.add == 0u && u_frame.frame.eye_deposit != 0u) e += eye_deposit_at(p, ns);

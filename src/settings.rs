@@ -352,7 +352,8 @@ pub struct ResolvedSettings {
     pub method: Method,
     /// See [`Quality::metric`].
     pub metric: Metric,
-    /// See [`Quality::refine`].
+    /// See [`Quality::refine`]: camera-driven only under adaptive flux-error (the other methods ignore it, as the
+    /// CLI warns), so that the traversal, the deposits and the reuse rule all read this one value.
     pub refine: Refine,
     /// The photon level (the device's default resolved).
     pub level: u32,
@@ -648,7 +649,11 @@ impl Settings {
             transport: q.transport,
             method: q.method,
             metric: q.metric,
-            refine: q.refine,
+            refine: if q.method == Method::Adaptive && q.metric == Metric::FluxError {
+                q.refine
+            } else {
+                Refine::Light
+            },
             level,
             target_error: q.target_error,
             caustic_res: q.caustic_res,
@@ -907,5 +912,17 @@ mod tests {
             assert_ne!(c.coop_checks, CoopChecks::Auto);
             assert!([2, 4].contains(&c.weak_block));
         }
+    }
+
+    #[test]
+    fn camera_driven_refinement_resolves_under_flux_error_only() {
+        let resolved = |method, metric| {
+            let mut s = Settings::default();
+            (s.quality.method, s.quality.metric, s.quality.refine) = (method, metric, Refine::Camera);
+            s.resolve_with(DeviceClass::Cpu, LAVAPIPE_BINDING_LIMIT, 1 << 30).unwrap().refine
+        };
+        assert_eq!(resolved(Method::Adaptive, Metric::FluxError), Refine::Camera);
+        assert_eq!(resolved(Method::Adaptive, Metric::MaxError), Refine::Light);
+        assert_eq!(resolved(Method::Dense, Metric::FluxError), Refine::Light);
     }
 }

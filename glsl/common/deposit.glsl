@@ -22,7 +22,7 @@ bool deposit_landing(vec3 p, vec3 ng, vec3 rd, RayDiff rdf, uint r_cell, bool di
     vec2 uv;
     // Camera-driven refinement refines as finely as the camera's image needs, which the light's map may not
     // resolve: what the camera sees goes to the eye deposit first.
-    bool eye = u_frame.frame.eye_deposit != 0u, eye_first = eye && u_frame.frame.refine == REFINE_CAMERA;
+    bool eye = u_frame.frame.eye_deposit != 0u, eye_first = eye_deposit_first();
     if (eye_first && eye_project(p, rd, uv)) {
         record = GpuSplat(uv * vec2(textureSize(t_eye, 0)), flux, -eye_footprint(p, rdf, differential, jitter));
         return true;

@@ -26,6 +26,11 @@ vec3 eye_deposit_irradiance(GpuView cam, ivec2 q, ivec2 size, vec3 n, float dist
     return eye_deposit_flux(q, size) / view_texel_area(cam, q, n, dist);
 }
 
+// Camera-driven refinement (`--refine camera`): every landing the camera sees goes to the eye deposit before the
+// light's map (common/deposit.glsl), so the receiver points the eye's samples see read the eye deposit alone (the
+// light's map holds there only the tents of landings beyond the view's edges).
+bool eye_deposit_first() { return u_frame.frame.eye_deposit != 0u && u_frame.frame.refine == REFINE_CAMERA; }
+
 // An eye record's radii are in 1/EYE_SUBSAMPLE samples.
 const float EYE_SUBSAMPLE = 8.0;
 

@@ -5,7 +5,7 @@ use crate::frame::LightReport;
 use crate::gpu_types::GpuView;
 use crate::scene::view::CameraView;
 use crate::scene::Light;
-use crate::settings::{Method, Metric, Refine, ResolvedSettings};
+use crate::settings::{Refine, ResolvedSettings};
 
 /// What the targets' allocation depends on: the sizes of the light maps and buffers, the passes, the ray size and
 /// the frames in flight (the output size only touches the eye-sized targets).
@@ -66,8 +66,7 @@ impl CausticKey {
     ) -> Self {
         let settings = ResolvedSettings { aa: 1, sky: None, eye_depth: 0, exposure_ev: 0.0, ..s.clone() };
         // Camera-driven refinement chooses the photons by what the camera sees: a new eye view traces afresh.
-        let camera_driven = s.refine == Refine::Camera && s.method == Method::Adaptive && s.metric == Metric::FluxError;
-        let camera = camera_driven.then(|| bytemuck::bytes_of(&GpuView::from_camera(camera)).to_vec());
+        let camera = (s.refine == Refine::Camera).then(|| bytemuck::bytes_of(&GpuView::from_camera(camera)).to_vec());
         CausticKey { lights: lights.to_vec(), scene_generation, transforms, settings, targets, camera }
     }
 }

@@ -52,7 +52,8 @@ impl Viewer {
                 self.change_settings(with(&|q| q.transport = transport))?
             }
             Refine => {
-                let refine = match c.refine {
+                // The requested refinement: the resolved one is light-driven under other methods.
+                let refine = match self.renderer.settings().quality.refine {
                     caustics::settings::Refine::Light => caustics::settings::Refine::Camera,
                     caustics::settings::Refine::Camera => caustics::settings::Refine::Light,
                 };
