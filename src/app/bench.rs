@@ -335,16 +335,7 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         image_io::check_output_dir(p)?;
     }
     if let Some(src) = &args.from_json {
-        let text = std::fs::read_to_string(src)
-            .map_err(|e| Error::BadInput(format!("{}: cannot read: {e}", src.display())))?;
-        let doc: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| Error::BadInput(format!("{}: not a bench JSON: {e}", src.display())))?;
-        let rows: Vec<BenchRow> = serde_json::from_value(doc["rows"].clone())
-            .map_err(|e| Error::BadInput(format!("{}: rows: {e}", src.display())))?;
-        let device = doc["device"].as_str().unwrap_or("").to_string();
-        write_reports(args, &device, &rows)?;
-        println!("{}", bench_report::markdown_report(&rows));
-        return Ok(());
+        return report_from_json(args, src);
     }
     let levels = parse_levels(&args.levels)?;
     let pts = points(args)?;
@@ -352,184 +343,258 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
     let mut rows: Vec<BenchRow> = Vec::new();
     let mut device = String::new();
     for scene_path in &scenes {
-        let scene_args = SceneArgs {
-            scene: Some(scene_path.clone()),
-            camera: Some(args.camera.clone()),
-            size: Some(args.size.clone()),
-            ..SceneArgs::default()
-        };
-        let base = Settings {
-            quality: Quality {
-                caustic_res: args.caustic_res,
-                photon_budget_mib: args.photon_budget,
-                ..Quality::default()
-            },
-            tuning: args.tuning.tuning(Driven::Gpu, TRAVERSE_WG),
-        };
-        let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
-        // Max-level's image per (transport, level), and the flux-error rows to score against it once the scene's
-        // sweep is done (the methods may come in any order).
-        let mut max_level_images: HashMap<(&'static str, u32), RgbImage> = HashMap::new();
-        let mut flux_error_rows: Vec<(usize, &'static str, u32, RgbImage)> = Vec::new();
-        // Every timed frame runs every stage.
-        session.renderer.set_reuse(false);
-        device = format!("{} ({})", session.device().info.name, session.device().info.driver);
-        let photons = reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0));
-        let refs = references(args, scene_path, session.width, session.height, photons)?;
-        // GPUs ramp their clocks up under load, and lavapipe compiles shaders on first use: render for a while
-        // before the first timed point, or it comes out several times slower than the later ones.
-        let warm = Instant::now();
-        while warm.elapsed().as_secs_f64() < args.warmup_s {
-            session.frame(None)?;
-        }
-        let name = scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let intensity = session.renderer.scene().lights.first().map_or(0.0, |l| l.intensity as f64);
-        for (&transport, p) in args.transports.iter().flat_map(|t| pts.iter().map(move |p| (t, p))) {
-            let key = format!("{} {}", transport_name(transport), p.key());
-            for &level in &levels {
-                if p.method == Method::Dense && level > 12 {
-                    continue;
-                }
-                let s = Settings {
-                    quality: Quality {
-                        transport,
-                        method: p.method,
-                        metric: p.metric,
-                        level: Some(level),
-                        target_error: p.target_error,
-                        ..base.quality.clone()
-                    },
-                    tuning: Tuning { driven: p.driven, traverse_wg: p.wg, ..base.tuning.clone() },
-                };
-                session.renderer.set_settings(s)?;
-                let t = Instant::now();
-                session.frame(None)?; // warm-up: lavapipe compiles shaders on first use
-                let warm = t.elapsed().as_secs_f64();
-                let mut frames = Vec::new();
-                let mut image = None;
-                for i in 0..args.frames {
-                    let last = i + 1 == args.frames;
-                    let (r, img) = session.frame(if last { Some(Aov::Caustics) } else { None })?;
-                    frames.push(r);
-                    if last {
-                        image = img.as_ref().and_then(to_rgb);
-                    }
-                }
-                let image = image.ok_or_else(|| Error::Failed("no caustics image was read back".into()))?;
-                let last = frames.last().expect("frames").clone();
-                let st = last.state.unwrap_or(bytemuck::Zeroable::zeroed());
-                // Only the resolutions the image carries (a 64² image scored at 256² would measure the filter).
-                let score = |r: &Option<RgbImage>, res| {
-                    r.as_ref()
-                        .filter(|r| metrics::max_comparison_res(&image, r) >= res)
-                        .map(|r| metrics::compare(&image, r, res, 2.0))
-                };
-                let (m64, m256) = (score(&refs.main, 64), score(&refs.main, 256));
-                let (o64, o256) = (score(&refs.other, 64), score(&refs.other, 256));
-                let nan = f64::NAN;
-                let flux_error = p.method == Method::Adaptive && p.metric == Metric::FluxError;
-                let row = BenchRow {
-                    scene: name.clone(),
-                    transport: transport_name(transport).into(),
-                    method: format!("{:?}", p.method).to_lowercase(),
-                    metric: (p.method == Method::Adaptive).then(|| p.label.clone()),
-                    level,
-                    equivalent_res: LEVEL0_RES << level,
-                    driven: if p.driven == Driven::Gpu { "gpu".into() } else { "cpu".into() },
-                    photons: st.photons_total as u64,
-                    rays_traced: last.transport.map(|t| t.rays_traced as u64),
-                    gpu_ms_median: median_of(&frames, |f| f.gpu_ms) + 0.0,
-                    frame_ms_median: median_of(&frames, |f| f.frame_ms) + 0.0,
-                    rel_l1_64: m64.map(|m| m.rel_l1).unwrap_or(nan),
-                    rel_l1_256: m256.map(|m| m.rel_l1).unwrap_or(nan),
-                    flux_ratio: m64.map(|m| m.flux_ratio).unwrap_or(nan),
-                    peak_offset_m: m256.map(|m| m.peak_offset_m).unwrap_or(nan),
-                    extra: json!({
-                        "reference_paths": args.paths,
-                        "reference_noise": refs.noise.map(|(n64, n256)| json!({"rel_l1_64": n64, "rel_l1_256": n256})),
-                        "other_reference": {
-                            "rel_l1_64": o64.map(|m| m.rel_l1), "rel_l1_256": o256.map(|m| m.rel_l1),
-                            "flux_ratio": o64.map(|m| m.flux_ratio),
-                        },
-                        "traverse_wg": p.wg,
-                        "target_error": flux_error.then_some(p.target_error),
-                        "tau": flux_error.then(|| caustics::calibration::tau_for_target_error(p.target_error)),
-                        "traverse_ms": stage_median(&frames, "traverse"),
-                        "photon_trace_ms": stage_median(&frames, "photon_trace"),
-                        "transport_ms": stage_median(&frames, "transport"),
-                        "splat_ms": stage_median(&frames, "splat"),
-                        "light_gbuffer_ms": stage_median(&frames, "light_gbuffer"),
-                        "eye_ms": stage_median(&frames, "eye"),
-                        "stats_ms": stage_median(&frames, "stats"),
-                        "host_roundtrip_ms": stage_median(&frames, caustics::HOST_ROUNDTRIP),
-                        "host_readbacks_per_frame": last.host_readbacks,
-                        "batches": st.batches_committed,
-                        "overflow_events": st.batches_aborted,
-                        "photon_buffer_bytes": 8 * st.peak_used as u64,
-                        "warmup_s": warm,
-                        "exact_transport": exact_extra(&last, intensity),
-                    }),
-                };
-                eprintln!(
-                    "{name} {key:<42} L{level:<2} {:>10} photons {:>11} rays  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {}  256² {}  flux {}",
-                    row.photons,
-                    row.rays_traced.map_or_else(|| "–".to_string(), |n| n.to_string()),
-                    row.gpu_ms_median,
-                    row.frame_ms_median,
-                    bench_report::num(row.rel_l1_64, 4),
-                    bench_report::num(row.rel_l1_256, 4),
-                    bench_report::num(row.flux_ratio, 4)
-                );
-                let slow = row.frame_ms_median > args.max_frame_s * 1e3;
-                if flux_error {
-                    flux_error_rows.push((rows.len(), transport_name(transport), level, image));
-                } else if p.method == Method::Adaptive && p.metric == Metric::MaxLevel {
-                    max_level_images.entry((transport_name(transport), level)).or_insert(image);
-                }
-                rows.push(row);
-                if slow {
-                    eprintln!("{name} {key}: frames take over {} s; skipping its deeper levels", args.max_frame_s);
-                    break;
-                }
-            }
-        }
-        for (i, transport, level, image) in flux_error_rows {
-            if let Some(ml) = max_level_images.get(&(transport, level)) {
-                let added = metrics::compare(&image, ml, 64, 2.0).rel_l1;
-                let r = &mut rows[i];
-                eprintln!(
-                    "{} {} {} L{level}: rel-L1 64² against max-level (added by merging) {added:.6}",
-                    r.scene,
-                    r.transport,
-                    r.metric.as_deref().unwrap_or("")
-                );
-                if let serde_json::Value::Object(m) = &mut r.extra {
-                    m.insert("added_rel_l1_64".into(), json!(added));
-                }
-            }
-        }
-        if let Some((noise, _)) = refs.noise {
-            let best = rows.iter().filter(|r| r.scene == name).map(|r| r.rel_l1_64).fold(f64::INFINITY, f64::min);
-            if noise > NOISE_WARN * best {
-                eprintln!(
-                    "warning: {name}: the reference's noise (rel-L1 64² {:.4}%) is over {:.0}% of the smallest error \
-                     ({:.4}%): the errors near it mostly measure the reference, and their differences shrink; raise \
-                     --reference-photons (4× the photons halve the noise)",
-                    100.0 * noise,
-                    100.0 * NOISE_WARN,
-                    100.0 * best
-                );
-            }
-        }
-        crate::app::commands::validation_verdict(&session)?;
+        device = bench_scene(args, scene_path, &levels, &pts, &mut rows)?;
     }
-    let doc = json!({"device": device, "args": args, "reference_photons": reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0)), "rows": rows});
+    let photons = reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0));
+    let doc = json!({"device": device, "args": args, "reference_photons": photons, "rows": rows});
     if let Some(p) = &args.json {
         image_io::write_text(p, &serde_json::to_string_pretty(&doc).unwrap_or_default())?;
     }
     write_reports(args, &device, &rows)?;
     println!("{}", bench_report::markdown_table(&rows));
     Ok(())
+}
+
+/// `--from-json`: the reports of an earlier run's JSON, without rendering.
+fn report_from_json(args: &BenchArgs, src: &Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(src).map_err(|e| Error::BadInput(format!("{}: cannot read: {e}", src.display())))?;
+    let doc: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Error::BadInput(format!("{}: not a bench JSON: {e}", src.display())))?;
+    let rows: Vec<BenchRow> = serde_json::from_value(doc["rows"].clone())
+        .map_err(|e| Error::BadInput(format!("{}: rows: {e}", src.display())))?;
+    let device = doc["device"].as_str().unwrap_or("").to_string();
+    write_reports(args, &device, &rows)?;
+    println!("{}", bench_report::markdown_report(&rows));
+    Ok(())
+}
+
+/// What one scene's sweep shares: its name, its light's intensity, the settings the points start from, and the
+/// references the rows are scored against.
+struct SceneBench {
+    name: String,
+    intensity: f64,
+    base: Settings,
+    refs: References,
+}
+
+/// One scene's sweep over the transports, points and levels: its rows appended to `rows`, each flux-error row also
+/// scored against max-level's image at its level. Returns the device's description.
+fn bench_scene(
+    args: &BenchArgs,
+    scene_path: &Path,
+    levels: &[u32],
+    pts: &[Point],
+    rows: &mut Vec<BenchRow>,
+) -> Result<String> {
+    let scene_args = SceneArgs {
+        scene: Some(scene_path.to_path_buf()),
+        camera: Some(args.camera.clone()),
+        size: Some(args.size.clone()),
+        ..SceneArgs::default()
+    };
+    let base = Settings {
+        quality: Quality { caustic_res: args.caustic_res, photon_budget_mib: args.photon_budget, ..Quality::default() },
+        tuning: args.tuning.tuning(Driven::Gpu, TRAVERSE_WG),
+    };
+    let mut session = Session::open(&scene_args, base.clone(), crate::app::commands::default_scene)?;
+    // Max-level's image per (transport, level), and the flux-error rows to score against it once the scene's
+    // sweep is done (the methods may come in any order).
+    let mut max_level_images: HashMap<(&'static str, u32), RgbImage> = HashMap::new();
+    let mut flux_error_rows: Vec<(usize, &'static str, u32, RgbImage)> = Vec::new();
+    // Every timed frame runs every stage.
+    session.renderer.set_reuse(false);
+    let device = format!("{} ({})", session.device().info.name, session.device().info.driver);
+    let photons = reference_photons(args.reference_photons, levels.iter().copied().max().unwrap_or(0));
+    let refs = references(args, scene_path, session.width, session.height, photons)?;
+    // GPUs ramp their clocks up under load, and lavapipe compiles shaders on first use: render for a while
+    // before the first timed point, or it comes out several times slower than the later ones.
+    let warm = Instant::now();
+    while warm.elapsed().as_secs_f64() < args.warmup_s {
+        session.frame(None)?;
+    }
+    let sb = SceneBench {
+        name: scene_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+        intensity: session.renderer.scene().lights.first().map_or(0.0, |l| l.intensity as f64),
+        base,
+        refs,
+    };
+    for (&transport, p) in args.transports.iter().flat_map(|t| pts.iter().map(move |p| (t, p))) {
+        let key = format!("{} {}", transport_name(transport), p.key());
+        for &level in levels {
+            if p.method == Method::Dense && level > 12 {
+                continue;
+            }
+            let (row, image) = bench_point(args, &mut session, &sb, transport, p, level)?;
+            eprintln!(
+                "{} {key:<42} L{level:<2} {:>10} photons {:>11} rays  GPU {:>9.2} ms  frame {:>9.2} ms  rel-L1 64² {}  256² {}  flux {}",
+                sb.name,
+                row.photons,
+                row.rays_traced.map_or_else(|| "–".to_string(), |n| n.to_string()),
+                row.gpu_ms_median,
+                row.frame_ms_median,
+                bench_report::num(row.rel_l1_64, 4),
+                bench_report::num(row.rel_l1_256, 4),
+                bench_report::num(row.flux_ratio, 4)
+            );
+            let slow = row.frame_ms_median > args.max_frame_s * 1e3;
+            if p.method == Method::Adaptive && p.metric == Metric::FluxError {
+                flux_error_rows.push((rows.len(), transport_name(transport), level, image));
+            } else if p.method == Method::Adaptive && p.metric == Metric::MaxLevel {
+                max_level_images.entry((transport_name(transport), level)).or_insert(image);
+            }
+            rows.push(row);
+            if slow {
+                eprintln!("{} {key}: frames take over {} s; skipping its deeper levels", sb.name, args.max_frame_s);
+                break;
+            }
+        }
+    }
+    for (i, transport, level, image) in flux_error_rows {
+        if let Some(ml) = max_level_images.get(&(transport, level)) {
+            let added = metrics::compare(&image, ml, 64, 2.0).rel_l1;
+            let r = &mut rows[i];
+            eprintln!(
+                "{} {} {} L{level}: rel-L1 64² against max-level (added by merging) {added:.6}",
+                r.scene,
+                r.transport,
+                r.metric.as_deref().unwrap_or("")
+            );
+            if let serde_json::Value::Object(m) = &mut r.extra {
+                m.insert("added_rel_l1_64".into(), json!(added));
+            }
+        }
+    }
+    warn_of_reference_noise(&sb, rows);
+    crate::app::commands::validation_verdict(&session)?;
+    Ok(device)
+}
+
+/// One point of the sweep at one level: a warm-up frame, then `--frames` timed frames, the last read back and
+/// scored. Returns its row and the last frame's caustics.
+fn bench_point(
+    args: &BenchArgs,
+    session: &mut Session,
+    sb: &SceneBench,
+    transport: Transport,
+    p: &Point,
+    level: u32,
+) -> Result<(BenchRow, RgbImage)> {
+    let s = Settings {
+        quality: Quality {
+            transport,
+            method: p.method,
+            metric: p.metric,
+            level: Some(level),
+            target_error: p.target_error,
+            ..sb.base.quality.clone()
+        },
+        tuning: Tuning { driven: p.driven, traverse_wg: p.wg, ..sb.base.tuning.clone() },
+    };
+    session.renderer.set_settings(s)?;
+    let t = Instant::now();
+    session.frame(None)?; // warm-up: lavapipe compiles shaders on first use
+    let warm = t.elapsed().as_secs_f64();
+    let mut frames = Vec::new();
+    let mut image = None;
+    for i in 0..args.frames {
+        let last = i + 1 == args.frames;
+        let (r, img) = session.frame(if last { Some(Aov::Caustics) } else { None })?;
+        frames.push(r);
+        if last {
+            image = img.as_ref().and_then(to_rgb);
+        }
+    }
+    let image = image.ok_or_else(|| Error::Failed("no caustics image was read back".into()))?;
+    let row = bench_row(args, sb, transport, p, level, &frames, &image, warm);
+    Ok((row, image))
+}
+
+/// The row of a point's timed `frames`, whose last frame's caustics are `image`.
+#[allow(clippy::too_many_arguments)]
+fn bench_row(
+    args: &BenchArgs,
+    sb: &SceneBench,
+    transport: Transport,
+    p: &Point,
+    level: u32,
+    frames: &[FrameReport],
+    image: &RgbImage,
+    warm: f64,
+) -> BenchRow {
+    let last = frames.last().expect("frames").clone();
+    let st = last.state.unwrap_or(bytemuck::Zeroable::zeroed());
+    // Only the resolutions the image carries (a 64² image scored at 256² would measure the filter).
+    let score = |r: &Option<RgbImage>, res| {
+        r.as_ref()
+            .filter(|r| metrics::max_comparison_res(image, r) >= res)
+            .map(|r| metrics::compare(image, r, res, 2.0))
+    };
+    let (m64, m256) = (score(&sb.refs.main, 64), score(&sb.refs.main, 256));
+    let (o64, o256) = (score(&sb.refs.other, 64), score(&sb.refs.other, 256));
+    let nan = f64::NAN;
+    let flux_error = p.method == Method::Adaptive && p.metric == Metric::FluxError;
+    BenchRow {
+        scene: sb.name.clone(),
+        transport: transport_name(transport).into(),
+        method: format!("{:?}", p.method).to_lowercase(),
+        metric: (p.method == Method::Adaptive).then(|| p.label.clone()),
+        level,
+        equivalent_res: LEVEL0_RES << level,
+        driven: if p.driven == Driven::Gpu { "gpu".into() } else { "cpu".into() },
+        photons: st.photons_total as u64,
+        rays_traced: last.transport.map(|t| t.rays_traced as u64),
+        gpu_ms_median: median_of(frames, |f| f.gpu_ms) + 0.0,
+        frame_ms_median: median_of(frames, |f| f.frame_ms) + 0.0,
+        rel_l1_64: m64.map(|m| m.rel_l1).unwrap_or(nan),
+        rel_l1_256: m256.map(|m| m.rel_l1).unwrap_or(nan),
+        flux_ratio: m64.map(|m| m.flux_ratio).unwrap_or(nan),
+        peak_offset_m: m256.map(|m| m.peak_offset_m).unwrap_or(nan),
+        extra: json!({
+            "reference_paths": args.paths,
+            "reference_noise": sb.refs.noise.map(|(n64, n256)| json!({"rel_l1_64": n64, "rel_l1_256": n256})),
+            "other_reference": {
+                "rel_l1_64": o64.map(|m| m.rel_l1), "rel_l1_256": o256.map(|m| m.rel_l1),
+                "flux_ratio": o64.map(|m| m.flux_ratio),
+            },
+            "traverse_wg": p.wg,
+            "target_error": flux_error.then_some(p.target_error),
+            "tau": flux_error.then(|| caustics::calibration::tau_for_target_error(p.target_error)),
+            "traverse_ms": stage_median(frames, "traverse"),
+            "photon_trace_ms": stage_median(frames, "photon_trace"),
+            "transport_ms": stage_median(frames, "transport"),
+            "splat_ms": stage_median(frames, "splat"),
+            "light_gbuffer_ms": stage_median(frames, "light_gbuffer"),
+            "eye_ms": stage_median(frames, "eye"),
+            "stats_ms": stage_median(frames, "stats"),
+            "host_roundtrip_ms": stage_median(frames, caustics::HOST_ROUNDTRIP),
+            "host_readbacks_per_frame": last.host_readbacks,
+            "batches": st.batches_committed,
+            "overflow_events": st.batches_aborted,
+            "photon_buffer_bytes": 8 * st.peak_used as u64,
+            "warmup_s": warm,
+            "exact_transport": exact_extra(&last, sb.intensity),
+        }),
+    }
+}
+
+/// A warning when the scene's reference is so noisy that the errors near its noise mostly measure it.
+fn warn_of_reference_noise(sb: &SceneBench, rows: &[BenchRow]) {
+    let Some((noise, _)) = sb.refs.noise else {
+        return;
+    };
+    let best = rows.iter().filter(|r| r.scene == sb.name).map(|r| r.rel_l1_64).fold(f64::INFINITY, f64::min);
+    if noise > NOISE_WARN * best {
+        eprintln!(
+            "warning: {}: the reference's noise (rel-L1 64² {:.4}%) is over {:.0}% of the smallest error \
+             ({:.4}%): the errors near it mostly measure the reference, and their differences shrink; raise \
+             --reference-photons (4× the photons halve the noise)",
+            sb.name,
+            100.0 * noise,
+            100.0 * NOISE_WARN,
+            100.0 * best
+        );
+    }
 }
 
 #[cfg(test)]

@@ -23,7 +23,7 @@
 use crate::app::commands::{to_rgb, SceneArgs, Session};
 use caustics::error::{Error, Result};
 use caustics::image_io;
-use caustics::scene::{LightKind, Material, Scene};
+use caustics::scene::{Light, LightKind, Material, Scene};
 use caustics::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
 use caustics::Aov;
 use glam::{Quat, Vec3};
@@ -322,29 +322,12 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         return Err(Error::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
     }
     let scene0 = session.renderer.scene().clone();
-    let light0 = scene0.lights[0].clone();
-    // A light straight above its target is first tilted 25°, so that its orbit moves it (as the viewer does).
-    let mut d = light0.position - light0.target;
-    if d.normalize().dot(Vec3::Y).abs() > 0.99 {
-        d = Quat::from_rotation_z(-25f32.to_radians()) * d;
-    }
-    let cone_power = match light0.kind {
-        LightKind::Spot => light0.intensity as f64 * std::f64::consts::TAU * (1.0 - (light0.cone as f64).cos()),
-        LightKind::Directional => f64::INFINITY,
-        LightKind::Point => light0.intensity as f64 * 4.0 * std::f64::consts::PI,
-    };
+    let orbit = Orbit::of(&scene0.lights[0]);
     let s_count = steps.len();
     let period = s_count * args.angles as usize;
     let warmup = (2 * period).min(args.frames as usize);
-    let mut reference: Vec<Option<f64>> = vec![None; period];
-    let mut memory = Memory::new(args.frames as usize, s_count, warmup);
-    let mut failures: Vec<String> = Vec::with_capacity(21);
-    let mut worst_flux_dev = 0.0f64;
-    let mut worst_residual = 0.0f64;
-    let mut ms_by_transport = [(0.0f64, 0u32); 2];
+    let mut checks = Checks::new(args, period, Memory::new(args.frames as usize, s_count, warmup));
     let mut ior_now = f32::NAN;
-    let start = Instant::now();
-    let rss_start = rss_bytes();
     for i in 0..args.frames as usize {
         let (si, ai) = (i % s_count, (i / s_count) % args.angles as usize);
         let step = &steps[si];
@@ -352,7 +335,7 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         let mut scene =
             if step.ior != ior_now { with_ior(&scene0, step.ior) } else { session.renderer.scene().clone() };
         ior_now = step.ior;
-        scene.lights[0].position = light0.target + Quat::from_rotation_y(angle) * d;
+        scene.lights[0].position = orbit.at(angle);
         session.renderer.set_scene(scene)?;
         session.renderer.set_settings(Settings {
             quality: Quality {
@@ -365,37 +348,116 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
             tuning: base.tuning.clone(),
         })?;
         (session.width, session.height) = step.size;
+        if !checks.frame(&mut session, &orbit, i, step, (si, ai), s_count)? {
+            break;
+        }
+    }
+    checks.finish(args, &session, &steps, warmup, orbit.cone_power)
+}
+
+/// The light's orbit: around its target, at its distance, tilted 25° first when it stands straight above (so that
+/// the orbit moves it, as the viewer's does).
+struct Orbit {
+    target: Vec3,
+    arm: Vec3,
+    /// The power the light sends into its cone, W (a bound on any frame's caustic flux).
+    cone_power: f64,
+}
+
+impl Orbit {
+    fn of(light: &Light) -> Self {
+        let mut arm = light.position - light.target;
+        if arm.normalize().dot(Vec3::Y).abs() > 0.99 {
+            arm = Quat::from_rotation_z(-25f32.to_radians()) * arm;
+        }
+        let cone_power = match light.kind {
+            LightKind::Spot => light.intensity as f64 * std::f64::consts::TAU * (1.0 - (light.cone as f64).cos()),
+            LightKind::Directional => f64::INFINITY,
+            LightKind::Point => light.intensity as f64 * 4.0 * std::f64::consts::PI,
+        };
+        Orbit { target: light.target, arm, cone_power }
+    }
+
+    /// The light's position at `angle` (radians) around the vertical through its target.
+    fn at(&self, angle: f32) -> Vec3 {
+        self.target + Quat::from_rotation_y(angle) * self.arm
+    }
+}
+
+/// What the soak has checked so far: the first visits' flux, the failures and the worst figures. Sized up front:
+/// the soak's own records must not grow the heap it measures.
+struct Checks {
+    flux_tolerance: f64,
+    frames: u32,
+    reference: Vec<Option<f64>>,
+    failures: Vec<String>,
+    worst_flux_dev: f64,
+    worst_residual: f64,
+    ms_by_transport: [(f64, u32); 2],
+    memory: Memory,
+    start: Instant,
+    rss_start: u64,
+}
+
+impl Checks {
+    fn new(args: &SoakArgs, period: usize, memory: Memory) -> Self {
+        Checks {
+            flux_tolerance: args.flux_tolerance,
+            frames: args.frames,
+            reference: vec![None; period],
+            failures: Vec::with_capacity(21),
+            worst_flux_dev: 0.0,
+            worst_residual: 0.0,
+            ms_by_transport: [(0.0, 0); 2],
+            memory,
+            start: Instant::now(),
+            rss_start: rss_bytes(),
+        }
+    }
+
+    /// Render frame `i` (setting `si` at light position `ai`) and check it. Returns whether the soak goes on (a
+    /// validation message ends it).
+    fn frame(
+        &mut self,
+        session: &mut Session,
+        orbit: &Orbit,
+        i: usize,
+        step: &Step,
+        (si, ai): (usize, usize),
+        s_count: usize,
+    ) -> Result<bool> {
         let t = Instant::now();
         let (report, img) = session.frame(Some(Aov::Caustics))?;
         let wall = t.elapsed().as_secs_f64() * 1e3;
-        let slot = &mut ms_by_transport[(step.transport == Transport::Exact) as usize];
+        let slot = &mut self.ms_by_transport[(step.transport == Transport::Exact) as usize];
         *slot = (slot.0 + wall, slot.1 + 1);
         let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| Error::Failed("no caustics AOV read back".into()))?;
         let area = session.pixel_area().expect("orthographic");
         let flux = rgb.data.iter().map(|p| p[0] as f64).sum::<f64>() * area;
+        let failures = &mut self.failures;
         let mut fail = |m: String| {
             if failures.len() < 20 {
                 eprintln!("soak: frame {i} ({}, light {ai}): {m}", step.name());
             }
             failures.push(m);
         };
-        if !(flux.is_finite() && flux > 0.0 && flux <= cone_power) {
-            fail(format!("caustic flux {flux} W outside (0, {cone_power}] W"));
+        if !(flux.is_finite() && flux > 0.0 && flux <= orbit.cone_power) {
+            fail(format!("caustic flux {flux} W outside (0, {}] W", orbit.cone_power));
         }
         let key = ai * s_count + si;
-        match reference[key] {
-            None => reference[key] = Some(flux),
+        match self.reference[key] {
+            None => self.reference[key] = Some(flux),
             Some(r) => {
                 let dev = (flux - r).abs() / r.abs().max(1e-12);
-                worst_flux_dev = worst_flux_dev.max(dev);
-                if dev > args.flux_tolerance {
+                self.worst_flux_dev = self.worst_flux_dev.max(dev);
+                if dev > self.flux_tolerance {
                     fail(format!("caustic flux {flux} W against {r} W at its first visit (rel. {dev:.2e})"));
                 }
             }
         }
         if let Some(ts) = report.transport {
             let residual = ts.residual();
-            worst_residual = worst_residual.max(residual);
+            self.worst_residual = self.worst_residual.max(residual);
             if residual > 1e-6 {
                 fail(format!("exact transport's energy account residual {residual:.2e}"));
             }
@@ -403,79 +465,94 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         let messages = caustics::gpu::validation_message_count();
         if session.validation && messages > 0 {
             fail(format!("{messages} validation messages"));
-            break;
+            return Ok(false);
         }
-        let (rss, gpu) = memory.observe(i, si, session.device().allocation_report(), &mut fail);
-        if (i + 1) % 100 == 0 {
+        let (rss, gpu) = self.memory.observe(i, si, session.device().allocation_report(), &mut fail);
+        if (i + 1).is_multiple_of(100) {
             eprintln!(
                 "soak: {}/{} frames, {:.0} s, RSS {:.1} MiB, GPU {} allocations {:.1} MiB, worst flux deviation {:.2e}",
                 i + 1,
-                args.frames,
-                start.elapsed().as_secs_f64(),
+                self.frames,
+                self.start.elapsed().as_secs_f64(),
                 rss as f64 / 1048576.0,
                 gpu.allocations,
                 gpu.allocated_bytes as f64 / 1048576.0,
-                worst_flux_dev
+                self.worst_flux_dev
             );
         }
+        Ok(true)
     }
-    let mib = |b: u64| b as f64 / 1048576.0;
-    let (rss_json, drift) = memory.rss_summary(rss_start, args.rss_bound_mib);
-    if drift > args.rss_bound_mib * 1048576.0 {
-        failures.push(format!(
-            "resident memory's floor rose {:.1} MiB after the warm-up (least of the last quarter of the frames \
-             against the first's), over the bound of {} MiB",
+
+    /// The resident memory's verdict, the summary (printed, and written to `--json`), and the soak's result.
+    fn finish(
+        mut self,
+        args: &SoakArgs,
+        session: &Session,
+        steps: &[Step],
+        warmup: usize,
+        cone_power: f64,
+    ) -> Result<()> {
+        let mib = |b: u64| b as f64 / 1048576.0;
+        let (rss_json, drift) = self.memory.rss_summary(self.rss_start, args.rss_bound_mib);
+        if drift > args.rss_bound_mib * 1048576.0 {
+            self.failures.push(format!(
+                "resident memory's floor rose {:.1} MiB after the warm-up (least of the last quarter of the frames \
+                 against the first's), over the bound of {} MiB",
+                drift / 1048576.0,
+                args.rss_bound_mib
+            ));
+        }
+        let ms = |k: usize| self.ms_by_transport[k].0 / self.ms_by_transport[k].1.max(1) as f64;
+        let memory = &self.memory;
+        let summary = json!({
+            "device": session.device().info.name,
+            "validation": {"enabled": session.validation, "messages": caustics::gpu::validation_message_count()},
+            "scene": session.scene_path.display().to_string(),
+            "frames": args.frames,
+            "period_frames": self.reference.len(),
+            "warmup_frames": warmup,
+            "schedule": steps.iter().map(Step::name).collect::<Vec<_>>(),
+            "light_positions": args.angles,
+            "wall_s": self.start.elapsed().as_secs_f64(),
+            "mean_frame_ms": {"two_interface": ms(0), "exact": ms(1)},
+            "rss_mib": rss_json,
+            "heap": {"slack_bytes": HEAP_SLACK_BYTES, "worst_change_bytes": memory.worst_heap_change},
+            "gpu": {
+                "warmup_block_peak_mib": mib(memory.warm_capacity),
+                "allocations_per_setting": memory.gpu_alloc.iter().map(|a| a.map(|(n, b)| json!({"count": n, "mib": mib(b)}))).collect::<Vec<_>>(),
+            },
+            "flux": {"tolerance": args.flux_tolerance, "worst_relative_deviation": self.worst_flux_dev, "cone_power_w": cone_power},
+            "exact_worst_residual": self.worst_residual,
+            "failures": self.failures.len(),
+            "first_failures": self.failures.iter().take(20).collect::<Vec<_>>(),
+            "samples": memory.samples_json(),
+        });
+        if let Some(p) = &args.json {
+            image_io::write_text(p, &serde_json::to_string_pretty(&summary).unwrap_or_default())?;
+        }
+        let f = |k: &str| rss_json[k].as_f64().unwrap_or(f64::NAN);
+        eprintln!(
+            "soak: {} frames in {:.0} s; RSS peak {:.1} MiB in the warm-up, {:.1}..{:.1} MiB after ({:+.2} MiB per 1000 frames); \
+             floor drift {:+.1} MiB; heap change at most {} bytes; worst flux deviation {:.2e}; exact residual {:.1e}; {} failures",
+            args.frames,
+            self.start.elapsed().as_secs_f64(),
+            f("warmup_peak"),
+            f("min_after_warmup"),
+            f("max_after_warmup"),
+            f("slope_mib_per_1000_frames"),
             drift / 1048576.0,
-            args.rss_bound_mib
-        ));
+            memory.worst_heap_change,
+            self.worst_flux_dev,
+            self.worst_residual,
+            self.failures.len()
+        );
+        if !self.failures.is_empty() {
+            return Err(Error::Failed(format!(
+                "soak: {} failed checks (first: {})",
+                self.failures.len(),
+                self.failures[0]
+            )));
+        }
+        crate::app::commands::validation_verdict(session)
     }
-    let summary = json!({
-        "device": session.device().info.name,
-        "validation": {"enabled": session.validation, "messages": caustics::gpu::validation_message_count()},
-        "scene": session.scene_path.display().to_string(),
-        "frames": args.frames,
-        "period_frames": period,
-        "warmup_frames": warmup,
-        "schedule": steps.iter().map(Step::name).collect::<Vec<_>>(),
-        "light_positions": args.angles,
-        "wall_s": start.elapsed().as_secs_f64(),
-        "mean_frame_ms": {
-            "two_interface": ms_by_transport[0].0 / ms_by_transport[0].1.max(1) as f64,
-            "exact": ms_by_transport[1].0 / ms_by_transport[1].1.max(1) as f64,
-        },
-        "rss_mib": rss_json,
-        "heap": {"slack_bytes": HEAP_SLACK_BYTES, "worst_change_bytes": memory.worst_heap_change},
-        "gpu": {
-            "warmup_block_peak_mib": mib(memory.warm_capacity),
-            "allocations_per_setting": memory.gpu_alloc.iter().map(|a| a.map(|(n, b)| json!({"count": n, "mib": mib(b)}))).collect::<Vec<_>>(),
-        },
-        "flux": {"tolerance": args.flux_tolerance, "worst_relative_deviation": worst_flux_dev, "cone_power_w": cone_power},
-        "exact_worst_residual": worst_residual,
-        "failures": failures.len(),
-        "first_failures": failures.iter().take(20).collect::<Vec<_>>(),
-        "samples": memory.samples_json(),
-    });
-    if let Some(p) = &args.json {
-        image_io::write_text(p, &serde_json::to_string_pretty(&summary).unwrap_or_default())?;
-    }
-    let f = |k: &str| rss_json[k].as_f64().unwrap_or(f64::NAN);
-    eprintln!(
-        "soak: {} frames in {:.0} s; RSS peak {:.1} MiB in the warm-up, {:.1}..{:.1} MiB after ({:+.2} MiB per 1000 frames); \
-         floor drift {:+.1} MiB; heap change at most {} bytes; worst flux deviation {:.2e}; exact residual {:.1e}; {} failures",
-        args.frames,
-        start.elapsed().as_secs_f64(),
-        f("warmup_peak"),
-        f("min_after_warmup"),
-        f("max_after_warmup"),
-        f("slope_mib_per_1000_frames"),
-        drift / 1048576.0,
-        memory.worst_heap_change,
-        worst_flux_dev,
-        worst_residual,
-        failures.len()
-    );
-    if !failures.is_empty() {
-        return Err(Error::Failed(format!("soak: {} failed checks (first: {})", failures.len(), failures[0])));
-    }
-    crate::app::commands::validation_verdict(&session)
 }

@@ -122,6 +122,32 @@ pub(crate) fn light_maps_hold_all(reports: &[LightReport]) -> bool {
 }
 
 impl Caches {
+    /// Whether the frame reuses the whole eye view (`reused`: it reuses the caustic maps), and the eye key it leaves
+    /// for the next frame. The eye view is reused with the same caustic inputs, the same uniforms (camera, views,
+    /// exposure, sky, in `data`), the same kernels and targets, and only by frames that read back no eye AOV other
+    /// than the composite's outputs; a caustics or direct AOV frame composites no beauty (src/frame/mod.rs), so no
+    /// later frame reuses its eye.
+    pub fn eye_reused(
+        &mut self,
+        key: &CausticKey,
+        data: &[crate::gpu_types::FrameData],
+        desc: &crate::renderer::FrameDesc,
+        reused: bool,
+        targets_generation: u64,
+    ) -> bool {
+        use crate::renderer::Aov;
+        let eye_key = EyeKey {
+            caustic: key.clone(),
+            uniforms: bytemuck::cast_slice(data).to_vec(),
+            preview: desc.preview,
+            targets_generation,
+        };
+        let beauty = matches!(desc.aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr));
+        let eye_reused = reused && beauty && self.eye.as_ref() == Some(&eye_key);
+        self.eye = beauty.then_some(eye_key);
+        eye_reused
+    }
+
     /// What a frame with the caustic inputs `key` does with the last frame's maps: reuse them (`reuse`: reuse is
     /// on), add another photon set to their average (while they average fewer than `sets` of the same inputs), or
     /// trace afresh; and whether it clears the eye deposit first. `eye_view`: the eye view the eye deposit is for,

@@ -32,7 +32,7 @@ use crate::settings::{CarriedColor, ResolvedSettings, Settings, Transport};
 use crate::targets::Targets;
 use crate::vk::{Device, Recorder, Sampler, SubmitSync, Tracker};
 use ash::vk;
-use keys::{Caches, CausticKey, EyeKey, MapPlan, TargetsKey};
+use keys::{Caches, CausticKey, MapPlan, TargetsKey};
 use queue::{FrameQueue, Pending};
 use std::sync::Arc;
 use std::time::Instant;
@@ -773,27 +773,15 @@ impl Renderer {
         deforms.then_some((self.scene.time.to_bits(), self.water.events))
     }
 
-    /// Record a frame into `host_cmd` (the host's command buffer; the host submits it) or into the next slot's own
-    /// command buffer, which is then submitted with `sync`.
-    fn record_into(
+    /// The BVH the frame's transport traces (built, and its layout uploaded, once needed) and the scene update the
+    /// frame runs, with its report. `rebuilt`: whether the scene's buffers were rebuilt before this frame; `before`:
+    /// the device's wait-idles, the recorder's blocking submits and the BVH's BLAS builds before it.
+    fn bvh_and_scene_update(
         &mut self,
-        host_cmd: Option<vk::CommandBuffer>,
-        desc: &FrameDesc,
-        finish: Option<Finish>,
-        sync: &SubmitSync,
-        continuation: Option<&ContinuationPlan>,
-    ) -> Result<()> {
-        let start = Instant::now();
-        let (idles, submits, builds) =
-            (self.device.wait_idle_count(), self.recorder.blocking_submits, self.scene_buffers.bvh.blas_builds);
-        let rebuilt = self.update_scene()?;
-        let slot = self.next_slot()?;
-        self.last_slot = slot;
-        let s = self.frame_settings(desc);
-        let camera = desc.camera;
-        let aa = eye_samples(desc, s.aa);
-        let emitters = views::emitters(&self.scene)?;
-        self.ensure_targets(&s, emitters.len(), camera.width, camera.height, aa)?;
+        s: &ResolvedSettings,
+        rebuilt: bool,
+        (idles, submits, builds): (u64, u64, usize),
+    ) -> Result<(SceneUpdate, crate::frame::SceneUpdateReport)> {
         if s.transport == Transport::Exact && !self.scene_buffers.bvh.has(s.bvh_layout) {
             // The waves and the eye view's glass trace the BVH: built, and this layout uploaded, once needed. The
             // buffers it replaces are bound by the frames in flight.
@@ -824,6 +812,31 @@ impl Renderer {
             blocking_submits: self.recorder.blocking_submits - submits,
             wait_idles: self.device.wait_idle_count() - idles,
         };
+        Ok((scene_update, scene_report))
+    }
+
+    /// Record a frame into `host_cmd` (the host's command buffer; the host submits it) or into the next slot's own
+    /// command buffer, which is then submitted with `sync`.
+    fn record_into(
+        &mut self,
+        host_cmd: Option<vk::CommandBuffer>,
+        desc: &FrameDesc,
+        finish: Option<Finish>,
+        sync: &SubmitSync,
+        continuation: Option<&ContinuationPlan>,
+    ) -> Result<()> {
+        let start = Instant::now();
+        let (idles, submits, builds) =
+            (self.device.wait_idle_count(), self.recorder.blocking_submits, self.scene_buffers.bvh.blas_builds);
+        let rebuilt = self.update_scene()?;
+        let slot = self.next_slot()?;
+        self.last_slot = slot;
+        let s = self.frame_settings(desc);
+        let camera = desc.camera;
+        let aa = eye_samples(desc, s.aa);
+        let emitters = views::emitters(&self.scene)?;
+        self.ensure_targets(&s, emitters.len(), camera.width, camera.height, aa)?;
+        let (scene_update, scene_report) = self.bvh_and_scene_update(&s, rebuilt, (idles, submits, builds))?;
         // Color: 3 passes per light view (red, green, blue) when some glass disperses, or absorbs unequally and
         // the photons cannot carry their color, else 1.
         let nc = self.color_passes(&s);
@@ -853,18 +866,7 @@ impl Renderer {
         let plan = self.caches.plan(&key, eye_view, self.reuse, continuation.is_some(), self.accumulation);
         let MapPlan { reused, clear: clear_deposits, set } = plan;
         uniforms::set_photon_set(&mut data, set);
-        // Reuse of the whole eye view: same caustic inputs, same uniforms (camera, views, exposure, sky), same
-        // kernels and targets. Only for frames that read back no eye AOV other than the composite's outputs.
-        let eye_key = EyeKey {
-            caustic: key.clone(),
-            uniforms: bytemuck::cast_slice(&data).to_vec(),
-            preview: desc.preview,
-            targets_generation: self.targets_generation,
-        };
-        let beauty = matches!(desc.aov, None | Some(Aov::Beauty) | Some(Aov::BeautyHdr));
-        let eye_reused = reused && beauty && self.caches.eye.as_ref() == Some(&eye_key);
-        // A caustics or direct AOV frame composites no beauty (src/frame/mod.rs): no later frame reuses its eye.
-        self.caches.eye = beauty.then_some(eye_key);
+        let eye_reused = self.caches.eye_reused(&key, &data, desc, reused, self.targets_generation);
         for (ubo, d) in targets.ubos[slot].iter_mut().zip(&data) {
             ubo.write(0, std::slice::from_ref(d))?;
         }
@@ -898,42 +900,19 @@ impl Renderer {
             slot,
         };
         let frame_slot = &mut self.queue.slots[slot];
-        let cmd = match host_cmd {
-            Some(cmd) => cmd,
-            None => frame_slot.recorder.begin()?,
-        };
-        let mut rec = Rec {
-            recorder: host_cmd.is_none().then_some(&mut frame_slot.recorder),
-            ts: &mut frame_slot.timestamps,
-            sync: &mut self.tracker,
-            cmd,
-            report: FrameReport::default(),
-            record_time: 0.0,
-            mark: Instant::now(),
-        };
-        let flushes = rec.sync.flushes();
-        let recorded = crate::frame::record_frame(&res, &plan, &mut rec);
-        let (lights_end, aov) = match recorded {
-            Ok(r) => r,
-            Err(e) => {
-                // What the queue will run of this frame is not known: forget what the tracker and caches knew.
-                rec.sync.forget();
-                self.caches.clear();
-                // Nor whether the scene update ran: the scene's buffers are rebuilt before the next frame.
-                self.geometry_dirty = true;
-                return Err(e.into());
-            }
-        };
-        if let Some(f) = finish {
-            f(&self.device, rec.cmd, &FrameOutput { beauty: &targets.eye.beauty, hdr: &targets.eye.hdr });
-        }
-        rec.ts.mark(rec.cmd, "");
-        rec.record_time += rec.mark.elapsed().as_secs_f64();
-        let mut report = rec.report;
+        let (mut report, lights_end, aov) =
+            match record_commands(&res, &plan, frame_slot, &mut self.tracker, host_cmd, finish) {
+                Ok(r) => r,
+                Err(e) => {
+                    // What the queue will run of this frame is not known: forget what the caches knew; nor whether
+                    // the scene update ran: the scene's buffers are rebuilt before the next frame.
+                    self.caches.clear();
+                    self.geometry_dirty = true;
+                    return Err(e.into());
+                }
+            };
         report.scene = scene_report;
         report.photon_sets = set + 1;
-        report.record_ms = rec.record_time * 1e3;
-        report.barrier_batches = rec.sync.flushes() - flushes;
         if host_cmd.is_none() {
             frame_slot.recorder.submit_with(sync)?;
         }
@@ -954,6 +933,44 @@ impl Renderer {
         });
         Ok(())
     }
+}
+
+/// Record `plan`'s commands into `host_cmd`, or into `frame_slot`'s own command buffer (begun here; the caller
+/// submits it), then the host's `finish`. Returns the frame's report with its recording time and barrier batches,
+/// the end of its light stages and the AOV it reads back. A recording error makes `tracker` forget what it knew.
+fn record_commands(
+    res: &FrameResources,
+    plan: &FramePlan,
+    frame_slot: &mut queue::FrameSlot,
+    tracker: &mut Tracker,
+    host_cmd: Option<vk::CommandBuffer>,
+    finish: Option<Finish>,
+) -> crate::vk::VkResult<(FrameReport, usize, Option<Aov>)> {
+    let cmd = match host_cmd {
+        Some(cmd) => cmd,
+        None => frame_slot.recorder.begin()?,
+    };
+    let mut rec = Rec {
+        recorder: host_cmd.is_none().then_some(&mut frame_slot.recorder),
+        ts: &mut frame_slot.timestamps,
+        sync: tracker,
+        cmd,
+        report: FrameReport::default(),
+        record_time: 0.0,
+        mark: Instant::now(),
+    };
+    let flushes = rec.sync.flushes();
+    let (lights_end, aov) = crate::frame::record_frame(res, plan, &mut rec).inspect_err(|_| rec.sync.forget())?;
+    if let Some(f) = finish {
+        let eye = &res.targets.eye;
+        f(res.device, rec.cmd, &FrameOutput { beauty: &eye.beauty, hdr: &eye.hdr });
+    }
+    rec.ts.mark(rec.cmd, "");
+    rec.record_time += rec.mark.elapsed().as_secs_f64();
+    let mut report = rec.report;
+    report.record_ms = rec.record_time * 1e3;
+    report.barrier_batches = rec.sync.flushes() - flushes;
+    Ok((report, lights_end, aov))
 }
 
 /// The eye samples per pixel side of a frame: the caustics and direct AOVs are point samples at the pixel centers,
