@@ -118,22 +118,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     for p in [&args.json, &args.markdown].into_iter().flatten() {
         image_io::check_output_dir(p)?;
     }
-    let paths = match args.paths.as_str() {
-        "two-refractions" => Paths::TwoRefractions,
-        "all" => Paths::All,
-        p => return Err(Error::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
-    };
-    let methods: Vec<(String, Method, Metric)> = args
-        .methods
-        .iter()
-        .map(|m| match m.as_str() {
-            "dense" => Ok((m.clone(), Method::Dense, Metric::MaxLevel)),
-            "max-level" => Ok((m.clone(), Method::Adaptive, Metric::MaxLevel)),
-            "max-error" => Ok((m.clone(), Method::Adaptive, Metric::MaxError)),
-            "flux-error" => Ok((m.clone(), Method::Adaptive, Metric::FluxError)),
-            _ => Err(Error::BadInput(format!("--methods `{m}`: expected dense, max-level, max-error or flux-error"))),
-        })
-        .collect::<Result<_>>()?;
+    let (paths, methods) = paths_and_methods(args)?;
     let base = Settings {
         quality: Quality {
             transport: args.transport,
@@ -178,8 +163,6 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         refs.push(plane64(&reference_at(&session.scene_path, &scene, &params)?));
     }
     eprintln!("temporal: {} references ready in {:.1} s", refs.len(), t.elapsed().as_secs_f64());
-    let sum = |p: &[f64]| p.iter().sum::<f64>();
-    let l1 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f64>();
     let ref_change: f64 =
         (1..refs.len()).map(|t| l1(&refs[t], &refs[t - 1]) / sum(&refs[t])).sum::<f64>() / (refs.len() - 1) as f64;
     let mut rows = Vec::new();
@@ -201,33 +184,90 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
             let rgb = img.as_ref().and_then(to_rgb).ok_or_else(|| Error::Failed("no caustics AOV".into()))?;
             planes.push(plane64(&rgb));
         }
-        let n = planes.len();
-        let error = (0..n).map(|t| l1(&planes[t], &refs[t]) / sum(&refs[t])).sum::<f64>() / n as f64;
-        let max_error = (0..n).map(|t| l1(&planes[t], &refs[t]) / sum(&refs[t])).fold(0.0, f64::max);
-        let flicker_t: Vec<f64> = (1..n)
-            .map(|t| {
-                let num: f64 = (0..refs[t].len())
-                    .map(|i| ((planes[t][i] - planes[t - 1][i]) - (refs[t][i] - refs[t - 1][i])).abs())
-                    .sum();
-                num / sum(&refs[t])
-            })
-            .collect();
-        let flicker = flicker_t.iter().sum::<f64>() / flicker_t.len() as f64;
-        let change = (1..n).map(|t| l1(&planes[t], &planes[t - 1]) / sum(&refs[t])).sum::<f64>() / (n - 1) as f64;
-        let gpu_ms = ms.iter().sum::<f64>() / ms.len() as f64;
-        eprintln!(
-            "temporal: {name} L{}: error {error:.4} (max {max_error:.4}), flicker {flicker:.4} (max {:.4}), change {change:.4}, reference change {ref_change:.4}, {gpu_ms:.1} GPU ms",
-            args.level,
-            flicker_t.iter().cloned().fold(0.0, f64::max)
-        );
-        rows.push(json!({
-            "method": name, "level": args.level, "mean_rel_l1": error, "max_rel_l1": max_error,
-            "flicker": flicker, "max_flicker": flicker_t.iter().cloned().fold(0.0, f64::max),
-            "frame_change": change, "gpu_ms_mean": gpu_ms,
-        }));
+        rows.push(method_row(name, args.level, &planes, &refs, &ms, ref_change));
     }
     crate::app::commands::validation_verdict(&session)?;
-    let md = markdown(args, &session, ref_change, &rows);
+    write_outputs(args, &session, (step, half_height), ref_change, &rows)
+}
+
+/// `--paths` and `--methods` (each method's name, method and metric).
+#[allow(clippy::type_complexity)]
+fn paths_and_methods(args: &TemporalArgs) -> Result<(Paths, Vec<(String, Method, Metric)>)> {
+    let paths = match args.paths.as_str() {
+        "two-refractions" => Paths::TwoRefractions,
+        "all" => Paths::All,
+        p => return Err(Error::BadInput(format!("--paths `{p}`: expected two-refractions or all"))),
+    };
+    let methods: Vec<(String, Method, Metric)> = args
+        .methods
+        .iter()
+        .map(|m| match m.as_str() {
+            "dense" => Ok((m.clone(), Method::Dense, Metric::MaxLevel)),
+            "max-level" => Ok((m.clone(), Method::Adaptive, Metric::MaxLevel)),
+            "max-error" => Ok((m.clone(), Method::Adaptive, Metric::MaxError)),
+            "flux-error" => Ok((m.clone(), Method::Adaptive, Metric::FluxError)),
+            _ => Err(Error::BadInput(format!("--methods `{m}`: expected dense, max-level, max-error or flux-error"))),
+        })
+        .collect::<Result<_>>()?;
+    Ok((paths, methods))
+}
+
+/// The sum of a plane.
+fn sum(p: &[f64]) -> f64 {
+    p.iter().sum::<f64>()
+}
+
+/// L1 distance of two planes.
+fn l1(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f64>()
+}
+
+/// One method's row: its frames' `planes` against the references `refs` (mean and max rel-L1, the flicker: the
+/// rel-L1 of the frame-to-frame change against the reference's, and the frame-to-frame change), and the mean of
+/// its GPU ms.
+fn method_row(
+    name: &str,
+    level: u32,
+    planes: &[Vec<f64>],
+    refs: &[Vec<f64>],
+    ms: &[f64],
+    ref_change: f64,
+) -> serde_json::Value {
+    let n = planes.len();
+    let error = (0..n).map(|t| l1(&planes[t], &refs[t]) / sum(&refs[t])).sum::<f64>() / n as f64;
+    let max_error = (0..n).map(|t| l1(&planes[t], &refs[t]) / sum(&refs[t])).fold(0.0, f64::max);
+    let flicker_t: Vec<f64> = (1..n)
+        .map(|t| {
+            let num: f64 = (0..refs[t].len())
+                .map(|i| ((planes[t][i] - planes[t - 1][i]) - (refs[t][i] - refs[t - 1][i])).abs())
+                .sum();
+            num / sum(&refs[t])
+        })
+        .collect();
+    let flicker = flicker_t.iter().sum::<f64>() / flicker_t.len() as f64;
+    let change = (1..n).map(|t| l1(&planes[t], &planes[t - 1]) / sum(&refs[t])).sum::<f64>() / (n - 1) as f64;
+    let gpu_ms = ms.iter().sum::<f64>() / ms.len() as f64;
+    eprintln!(
+        "temporal: {name} L{}: error {error:.4} (max {max_error:.4}), flicker {flicker:.4} (max {:.4}), change {change:.4}, reference change {ref_change:.4}, {gpu_ms:.1} GPU ms",
+        level,
+        flicker_t.iter().cloned().fold(0.0, f64::max)
+    );
+    json!({
+        "method": name, "level": level, "mean_rel_l1": error, "max_rel_l1": max_error,
+        "flicker": flicker, "max_flicker": flicker_t.iter().cloned().fold(0.0, f64::max),
+        "frame_change": change, "gpu_ms_mean": gpu_ms,
+    })
+}
+
+/// The table on stdout, and the `--markdown` and `--json` files.
+fn write_outputs(
+    args: &TemporalArgs,
+    session: &Session,
+    (step, half_height): (f32, f32),
+    ref_change: f64,
+    rows: &[serde_json::Value],
+) -> Result<()> {
+    let md = markdown(args, session, ref_change, rows);
     print!("{md}");
     if let Some(p) = &args.markdown {
         image_io::write_text(p, &md)?;
