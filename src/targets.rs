@@ -127,78 +127,47 @@ pub struct PhotonBuffers {
     pub pyramid_offsets: Vec<u32>,
 }
 
-pub struct Targets {
-    /// The uniforms of each frame in flight (`ubos[slot]`), and within it of each pass: light-major, one per light
-    /// and color channel (its views, power and channel). The host writes a slot's uniforms only after the frame
-    /// that last used that slot has finished.
-    pub ubos: Vec<Vec<Buffer>>,
-    pub light: LightTargets,
-    /// Each light's receiver g-buffer, shadow map, flux and irradiance maps.
-    pub receivers: Vec<ReceiverTargets>,
-    pub eye: EyeTargets,
-    pub photon: PhotonBuffers,
-    /// Host-visible, one per frame in flight: the traversal state, the debug dump, the guard, and one AOV image.
-    pub readbacks: Vec<Buffer>,
-    pub width: u32,
-    pub height: u32,
-    /// Eye-view supersampling factor per side (the eye buffers are `aa` times the output size).
-    pub aa: u32,
-}
-
-fn ext(w: u32, h: u32) -> vk::Extent2D {
-    vk::Extent2D { width: w, height: h }
-}
-
-impl Targets {
-    /// Whether a frame under `s` runs the eye deposit: asked for (exact transport, a compute splat), a flux map
-    /// the compute splat adds into, and an eye deposit within one binding.
-    pub fn eye_deposit(&self, s: &Settings) -> bool {
-        s.eye_deposit
-            && self.eye.deposit_fits
-            && self.receivers.first().is_some_and(|r| r.flux.format == vk::Format::R32_SFLOAT)
-    }
-
-    /// `aa`: eye-view supersampling per side; `lights`: how many light views get their own receiver maps
-    /// (1..=MAX_LIGHTS·CUBE_FACES); `passes`: uniforms, one per light view and color channel; `slots`: frames in
-    /// flight.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        device: &Arc<Device>,
-        s: &Settings,
-        width: u32,
-        height: u32,
-        aa: u32,
-        lights: usize,
-        passes: usize,
-        slots: usize,
-    ) -> VkResult<Self> {
+impl LightTargets {
+    /// The refractors' and receivers' g-buffers from the light, `s.gbuffer_side()` a side.
+    fn new(device: &Arc<Device>, s: &Settings) -> VkResult<Self> {
         use vk::ImageUsageFlags as U;
         let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
-        let r = ext(s.gbuffer_side(), s.gbuffer_side());
-        let m = ext(s.caustic_res, s.caustic_res);
         let color = U::COLOR_ATTACHMENT | U::SAMPLED;
-        let light = LightTargets {
+        let r = ext(s.gbuffer_side(), s.gbuffer_side());
+        Ok(LightTargets {
             front: img("light front", GEO_FORMAT, r, color)?,
             front_aux: img("light front ior", AUX_FORMAT, r, color)?,
             back: img("light back", GEO_FORMAT, r, color)?,
             depth: img("light depth", DEPTH_FORMAT, r, U::DEPTH_STENCIL_ATTACHMENT)?,
-        };
-        let receiver = || -> VkResult<ReceiverTargets> {
-            Ok(ReceiverTargets {
-                geo: img("receivers from light", GEO_FORMAT, m, color)?,
-                shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
-                flux: img(
-                    "caustic flux map",
-                    crate::passes::flux_format(device),
-                    m,
-                    color | U::TRANSFER_SRC | U::TRANSFER_DST,
-                )?,
-                flux_texels: flux_texels(device, s)?,
-                irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
-            })
-        };
-        let receivers = (0..lights.max(1)).map(|_| receiver()).collect::<VkResult<Vec<_>>>()?;
-        let eye = EyeTargets::new(device, width, height, aa, s.binding_limit)?;
+        })
+    }
+}
+
+impl ReceiverTargets {
+    /// One light view's receiver maps, `s.caustic_res` a side.
+    fn new(device: &Arc<Device>, s: &Settings) -> VkResult<Self> {
+        use vk::ImageUsageFlags as U;
+        let img = |name: &str, format, e, usage| Image::new(device, name, format, e, usage);
+        let color = U::COLOR_ATTACHMENT | U::SAMPLED;
+        let m = ext(s.caustic_res, s.caustic_res);
+        Ok(ReceiverTargets {
+            geo: img("receivers from light", GEO_FORMAT, m, color)?,
+            shadow: img("shadow map", DEPTH_FORMAT, m, U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED)?,
+            flux: img(
+                "caustic flux map",
+                crate::passes::flux_format(device),
+                m,
+                color | U::TRANSFER_SRC | U::TRANSFER_DST,
+            )?,
+            flux_texels: flux_texels(device, s)?,
+            irradiance: img("caustic irradiance map", HDR_FORMAT, m, U::STORAGE | U::SAMPLED | U::TRANSFER_DST)?,
+        })
+    }
+}
+
+impl PhotonBuffers {
+    /// The photon stage's buffers, for `s.photon_capacity()` photons.
+    fn new(device: &Arc<Device>, s: &Settings) -> VkResult<Self> {
         use vk::BufferUsageFlags as B;
         let gpu = MemoryLocation::GpuOnly;
         let capacity = s.photon_capacity();
@@ -212,7 +181,7 @@ impl Targets {
             Buffer::new(device, name, bytes, B::STORAGE_BUFFER | B::UNIFORM_TEXEL_BUFFER, gpu)?
                 .with_texel_view(vk::Format::R32G32B32A32_UINT, 16)
         };
-        let photon = PhotonBuffers {
+        Ok(PhotonBuffers {
             state: Buffer::new(
                 device,
                 "traversal state",
@@ -264,24 +233,61 @@ impl Targets {
             queues: [ray_queue("ray queue 0")?, ray_queue("ray queue 1")?],
             capacity,
             pyramid_offsets,
-        };
+        })
+    }
+}
 
+pub struct Targets {
+    /// The uniforms of each frame in flight (`ubos[slot]`), and within it of each pass: light-major, one per light
+    /// and color channel (its views, power and channel). The host writes a slot's uniforms only after the frame
+    /// that last used that slot has finished.
+    pub ubos: Vec<Vec<Buffer>>,
+    pub light: LightTargets,
+    /// Each light's receiver g-buffer, shadow map, flux and irradiance maps.
+    pub receivers: Vec<ReceiverTargets>,
+    pub eye: EyeTargets,
+    pub photon: PhotonBuffers,
+    /// Host-visible, one per frame in flight: the traversal state, the debug dump, the guard, and one AOV image.
+    pub readbacks: Vec<Buffer>,
+    pub width: u32,
+    pub height: u32,
+    /// Eye-view supersampling factor per side (the eye buffers are `aa` times the output size).
+    pub aa: u32,
+}
+
+fn ext(w: u32, h: u32) -> vk::Extent2D {
+    vk::Extent2D { width: w, height: h }
+}
+
+impl Targets {
+    /// Whether a frame under `s` runs the eye deposit: asked for (exact transport, a compute splat), a flux map
+    /// the compute splat adds into, and an eye deposit within one binding.
+    pub fn eye_deposit(&self, s: &Settings) -> bool {
+        s.eye_deposit
+            && self.eye.deposit_fits
+            && self.receivers.first().is_some_and(|r| r.flux.format == vk::Format::R32_SFLOAT)
+    }
+
+    /// `aa`: eye-view supersampling per side; `lights`: how many light views get their own receiver maps
+    /// (1..=MAX_LIGHTS·CUBE_FACES); `passes`: uniforms, one per light view and color channel; `slots`: frames in
+    /// flight.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        device: &Arc<Device>,
+        s: &Settings,
+        width: u32,
+        height: u32,
+        aa: u32,
+        lights: usize,
+        passes: usize,
+        slots: usize,
+    ) -> VkResult<Self> {
+        let light = LightTargets::new(device, s)?;
+        let receivers = (0..lights.max(1)).map(|_| ReceiverTargets::new(device, s)).collect::<VkResult<Vec<_>>>()?;
+        let eye = EyeTargets::new(device, width, height, aa, s.binding_limit)?;
+        let photon = PhotonBuffers::new(device, s)?;
         Ok(Targets {
-            ubos: (0..slots.max(1))
-                .map(|_| {
-                    (0..passes.max(1))
-                        .map(|_| {
-                            Buffer::new(
-                                device,
-                                "frame uniforms",
-                                std::mem::size_of::<FrameData>() as u64,
-                                B::UNIFORM_BUFFER,
-                                MemoryLocation::CpuToGpu,
-                            )
-                        })
-                        .collect::<VkResult<Vec<_>>>()
-                })
-                .collect::<VkResult<Vec<_>>>()?,
+            ubos: Self::frame_uniforms(device, slots, passes)?,
             light,
             receivers,
             eye,
@@ -291,6 +297,25 @@ impl Targets {
             height,
             aa,
         })
+    }
+
+    /// The uniforms' buffers: `passes` for each of `slots` frames in flight.
+    fn frame_uniforms(device: &Arc<Device>, slots: usize, passes: usize) -> VkResult<Vec<Vec<Buffer>>> {
+        (0..slots.max(1))
+            .map(|_| {
+                (0..passes.max(1))
+                    .map(|_| {
+                        Buffer::new(
+                            device,
+                            "frame uniforms",
+                            std::mem::size_of::<FrameData>() as u64,
+                            vk::BufferUsageFlags::UNIFORM_BUFFER,
+                            MemoryLocation::CpuToGpu,
+                        )
+                    })
+                    .collect::<VkResult<Vec<_>>>()
+            })
+            .collect()
     }
 
     fn readback_buffers(

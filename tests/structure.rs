@@ -14,7 +14,6 @@ const OVER: &[(&str, &str, usize)] = &[
     ("src/scene/gltf/nodes.rs", "visit", 172),
     ("src/scene/gltf/animations.rs", "animations", 163),
     ("src/app/viewer/mod.rs", "redraw", 146),
-    ("src/targets.rs", "new", 139),
     ("src/scene/gltf/nodes.rs", "mesh_objects", 139),
     ("src/scene/gltf/mod.rs", "parse", 139),
     ("src/scene_gpu.rs", "new", 136),
