@@ -612,13 +612,20 @@ fn refractor_ior(m: &Material) -> f32 {
     }
 }
 
-impl SceneBuffers {
-    pub(crate) fn new(
-        device: &Arc<Device>,
-        recorder: &mut Recorder,
-        scene: &Scene,
-        instances: &SceneInstances,
-    ) -> VkResult<Self> {
+/// The scene's triangles as the GPU holds them: the receivers' draw range, then the refractors', in world space
+/// and (for the scene update's refits and deformers) in object space, with each object's ranges.
+struct Geometry {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    object_vertices: Vec<Vertex>,
+    object_indices: Vec<u32>,
+    objects: Vec<ObjectRange>,
+    receivers: DrawRange,
+    refractors: DrawRange,
+}
+
+impl Geometry {
+    fn gather(scene: &Scene, instances: &SceneInstances) -> Self {
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         let mut object_vertices = Vec::new();
@@ -672,6 +679,19 @@ impl SceneBuffers {
         };
         let receivers = push(false);
         let refractors = push(true);
+        Geometry { vertices, indices, object_vertices, object_indices, objects, receivers, refractors }
+    }
+}
+
+impl SceneBuffers {
+    pub(crate) fn new(
+        device: &Arc<Device>,
+        recorder: &mut Recorder,
+        scene: &Scene,
+        instances: &SceneInstances,
+    ) -> VkResult<Self> {
+        let Geometry { vertices, indices, object_vertices, object_indices, objects, receivers, refractors } =
+            Geometry::gather(scene, instances);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let vertices = upload_buffer(
             device,

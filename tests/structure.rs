@@ -16,7 +16,6 @@ const OVER: &[(&str, &str, usize)] = &[
     ("src/app/viewer/mod.rs", "redraw", 146),
     ("src/scene/gltf/nodes.rs", "mesh_objects", 139),
     ("src/scene/gltf/mod.rs", "parse", 139),
-    ("src/scene_gpu.rs", "new", 136),
 ];
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
