@@ -228,8 +228,66 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     // Extensions first: a required extension we cannot honor makes everything else meaningless.
     check_extensions(&cx, root)?;
 
-    // The crate's validation: indices in range, required fields present, enums valid. Required extensions were
-    // checked above (the crate does not know the ones we ignore).
+    validate(&cx, root)?;
+
+    let mut buffers = load_buffers(&cx, &document, blob, path)?;
+    meshopt::decode_views(&cx, &document, &mut buffers)?;
+    let document = draco::inflate(&cx, &document, &mut buffers)?.unwrap_or(document);
+
+    // Materials, converted once (and warned about once), with the textures their base colors name; per material,
+    // the TEXCOORD set its texture reads.
+    let mut textures = Textures::new(&document);
+    let (materials, tex_coords): (Vec<Material>, Vec<Option<u32>>) = document
+        .materials()
+        .map(|m| material(&cx, &m, &buffers, path, &mut textures))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
+    // Per material: the priority of a glass volume (`extras.priority`; 0: none).
+    let priorities = document.materials().map(|m| priority(&cx, &m, &materials)).collect::<Result<Vec<_>, _>>()?;
+    // The glTF default material: white, metallic 1, roughness 1 → diffuse white.
+    let default_material = Material::diffuse(Vec3::ONE);
+
+    let roots = root_nodes(&cx, &document);
+
+    let mut out = Scene::new(Vec::new(), Vec::new());
+    out.path = path.to_path_buf();
+    out.textures = textures.list;
+    let mut visiting = vec![false; document.nodes().len()];
+    let Played { tracks, period, names, chosen } = animations(&cx, &document, &buffers, &options.animation)?;
+    out.animations = names;
+    out.playing = chosen;
+    // Only skins stand where their joints are at rest.
+    let rest_world = if document.skins().len() > 0 { rest_worlds(&document) } else { Vec::new() };
+    let g = Globals {
+        document: &document,
+        sources: Default::default(),
+        buffers: &buffers,
+        materials: &materials,
+        tex_coords: &tex_coords,
+        priorities: &priorities,
+        default_material,
+        tracks: &tracks,
+        period,
+        rest_world: &rest_world,
+    };
+    for n in roots {
+        visit(&cx, &n, &Placement::root(), &g, &mut visiting, &mut out)?;
+    }
+    let object_materials: Vec<Material> = out.objects.iter().map(|o| o.material).collect();
+    out.properties =
+        pointer_tracks(&cx, &document, &buffers, &pointers, &g.sources.borrow(), &object_materials, chosen)?;
+    out.place_properties();
+    check_lights_and_objects(&cx, &mut out)?;
+    out.place_directional_lights();
+    Ok(out)
+}
+
+/// The gltf crate's validation (indices in range, required fields present, enums valid), but for what this loader
+/// reads itself (the extensions it checked, Draco's accessors, WebP-only textures), and the animation targets the
+/// crate leaves unchecked.
+fn validate(cx: &Cx, root: &gltf::json::Root) -> Result<(), SceneError> {
+    // Required extensions were checked before (the crate does not know the ones we ignore).
     // A Draco primitive's accessors have no bufferView: the decoded data gives them one (src/scene/gltf/draco.rs).
     let draco = draco::accessors(root);
     let mut problems = Vec::new();
@@ -262,25 +320,12 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
             }
         }
     }
+    Ok(())
+}
 
-    let mut buffers = load_buffers(&cx, &document, blob, path)?;
-    meshopt::decode_views(&cx, &document, &mut buffers)?;
-    let document = draco::inflate(&cx, &document, &mut buffers)?.unwrap_or(document);
-
-    // Materials, converted once (and warned about once), with the textures their base colors name; per material,
-    // the TEXCOORD set its texture reads.
-    let mut textures = Textures::new(&document);
-    let (materials, tex_coords): (Vec<Material>, Vec<Option<u32>>) = document
-        .materials()
-        .map(|m| material(&cx, &m, &buffers, path, &mut textures))
-        .collect::<Result<Vec<_>, _>>()?
-        .into_iter()
-        .unzip();
-    // Per material: the priority of a glass volume (`extras.priority`; 0: none).
-    let priorities = document.materials().map(|m| priority(&cx, &m, &materials)).collect::<Result<Vec<_>, _>>()?;
-    // The glTF default material: white, metallic 1, roughness 1 → diffuse white.
-    let default_material = Material::diffuse(Vec3::ONE);
-
+/// The nodes the loaded scene holds: the default scene's (else the first scene's, with a warning when there are
+/// several), else every node that is nobody's child.
+fn root_nodes<'a>(cx: &Cx, document: &'a gltf::Document) -> Vec<gltf::Node<'a>> {
     let scene = document.default_scene().or_else(|| document.scenes().next());
     if let Some(sc) = &scene {
         let n = document.scenes().len();
@@ -289,7 +334,7 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
             cx.warn("scenes", &format!("the file has {n} scenes: scenes[{}] ({which}) is loaded", sc.index()));
         }
     }
-    let roots: Vec<gltf::Node> = match &scene {
+    match &scene {
         Some(s) => s.nodes().collect(),
         None => {
             // No scene: every node that is nobody's child is a root.
@@ -301,36 +346,12 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
             }
             document.nodes().filter(|n| !child[n.index()]).collect()
         }
-    };
-
-    let mut out = Scene::new(Vec::new(), Vec::new());
-    out.path = path.to_path_buf();
-    out.textures = textures.list;
-    let mut visiting = vec![false; document.nodes().len()];
-    let Played { tracks, period, names, chosen } = animations(&cx, &document, &buffers, &options.animation)?;
-    out.animations = names;
-    out.playing = chosen;
-    // Only skins stand where their joints are at rest.
-    let rest_world = if document.skins().len() > 0 { rest_worlds(&document) } else { Vec::new() };
-    let g = Globals {
-        document: &document,
-        sources: Default::default(),
-        buffers: &buffers,
-        materials: &materials,
-        tex_coords: &tex_coords,
-        priorities: &priorities,
-        default_material,
-        tracks: &tracks,
-        period,
-        rest_world: &rest_world,
-    };
-    for n in roots {
-        visit(&cx, &n, &Placement::root(), &g, &mut visiting, &mut out)?;
     }
-    let object_materials: Vec<Material> = out.objects.iter().map(|o| o.material).collect();
-    out.properties =
-        pointer_tracks(&cx, &document, &buffers, &pointers, &g.sources.borrow(), &object_materials, chosen)?;
-    out.place_properties();
+}
+
+/// A loaded scene's lights and objects as the renderer needs them: a light at least, none at the center of what it
+/// aims at, at most MAX_LIGHTS, and a triangle mesh (point lights are aimed here).
+fn check_lights_and_objects(cx: &Cx, out: &mut Scene) -> Result<(), SceneError> {
     if out.lights.is_empty() {
         return Err(cx.err(
             "extensions.KHR_lights_punctual",
@@ -353,8 +374,7 @@ pub fn parse(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene, 
     if out.objects.is_empty() {
         return Err(cx.err("meshes", "the scene has no triangle meshes"));
     }
-    out.place_directional_lights();
-    Ok(out)
+    Ok(())
 }
 
 /// What every node's visit reads: the buffers, the materials, the animation tracks and the nodes' rest placement.
