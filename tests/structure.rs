@@ -13,7 +13,6 @@ const OVER: &[(&str, &str, usize)] = &[
     ("glsl/traverse.comp", "main", 162),
     ("src/scene/gltf/nodes.rs", "visit", 172),
     ("src/scene/gltf/animations.rs", "animations", 163),
-    ("src/app/viewer/mod.rs", "redraw", 146),
     ("src/scene/gltf/nodes.rs", "mesh_objects", 139),
 ];
 

@@ -655,27 +655,9 @@ impl Viewer {
         if self.inject_device_loss.is_some_and(|n| self.counters.presented >= n as u64) {
             return Err(VkError::DeviceLost("vkQueueSubmit2 (injected by --inject-device-loss)").into());
         }
-        let size = self.window.inner_size();
-        let window_extent = vk::Extent2D { width: size.width, height: size.height };
-        if let Some(sc) = self.swapchain.as_mut() {
-            if self.dirty {
-                if !sc.recreate(window_extent)? {
-                    self.counters.minimized_frames_skipped += 1;
-                    return Ok(());
-                }
-                self.counters.swapchain_recreations += 1;
-                self.dirty = false;
-            }
-        } else {
-            let desc = SwapchainDesc { extent: window_extent, vsync: self.vsync, prefer_srgb: self.prefer_srgb };
-            let Some(sc) = Swapchain::new(self.device(), &self.surface, desc)? else {
-                self.counters.minimized_frames_skipped += 1;
-                return Ok(());
-            };
-            let (format, mode, images, e) = (sc.format.format, sc.present_mode, sc.images.len(), sc.extent);
-            eprintln!("swapchain: {format:?} {mode:?}, {images} images, {}x{}", e.width, e.height);
-            self.swapchain = Some(sc);
-            self.dirty = false;
+        if !self.ensure_swapchain()? {
+            self.counters.minimized_frames_skipped += 1;
+            return Ok(());
         }
         let start = Instant::now();
         let dt = self.last_frame_start.map(|t| (start - t).as_secs_f32().min(ANIMATION_MAX_STEP_S)).unwrap_or(0.0);
@@ -772,7 +754,39 @@ impl Viewer {
         if !presented {
             return self.take_reports();
         }
-        counters.presented += 1;
+        self.presented(capture)
+    }
+
+    /// The swapchain at the window's size: created, or recreated where the last frame found it out of date. False
+    /// while the window has no area (minimized).
+    fn ensure_swapchain(&mut self) -> Result<bool> {
+        let size = self.window.inner_size();
+        let window_extent = vk::Extent2D { width: size.width, height: size.height };
+        if let Some(sc) = self.swapchain.as_mut() {
+            if self.dirty {
+                if !sc.recreate(window_extent)? {
+                    return Ok(false);
+                }
+                self.counters.swapchain_recreations += 1;
+                self.dirty = false;
+            }
+        } else {
+            let desc = SwapchainDesc { extent: window_extent, vsync: self.vsync, prefer_srgb: self.prefer_srgb };
+            let Some(sc) = Swapchain::new(self.device(), &self.surface, desc)? else {
+                return Ok(false);
+            };
+            let (format, mode, images, e) = (sc.format.format, sc.present_mode, sc.images.len(), sc.extent);
+            eprintln!("swapchain: {format:?} {mode:?}, {images} images, {}x{}", e.width, e.height);
+            self.swapchain = Some(sc);
+            self.dirty = false;
+        }
+        Ok(true)
+    }
+
+    /// What follows a presented frame: the counters, the present interval, the screenshot (`capture`), the reports,
+    /// the resize cycle, and whether the viewer quits (its frame count, or its script, done).
+    fn presented(&mut self, capture: bool) -> Result<()> {
+        self.counters.presented += 1;
         if let Some(s) = self.script.as_mut() {
             s.presented();
         }
