@@ -171,6 +171,84 @@ pub(super) struct Keyframes {
     pub(super) per_key: usize,
 }
 
+/// The animation `choice` names: None for all of them; an index or name the file lacks is an error listing what it
+/// has.
+fn chosen_animation(cx: &Cx, names: &[String], choice: &AnimationChoice) -> Result<Option<usize>, SceneError> {
+    let listing = || {
+        let all: Vec<String> = names.iter().enumerate().map(|(i, n)| format!("{i} \"{n}\"")).collect();
+        if all.is_empty() {
+            "the file has none".to_string()
+        } else {
+            format!("the file has {}", all.join(", "))
+        }
+    };
+    Ok(match choice {
+        AnimationChoice::All => None,
+        AnimationChoice::Index(i) if *i < names.len() => Some(*i),
+        AnimationChoice::Index(i) => {
+            return Err(cx.err("animations", format!("animation {i}: no animation has that index ({})", listing())))
+        }
+        AnimationChoice::Name(n) => match names.iter().position(|x| x == n) {
+            Some(i) => Some(i),
+            None => {
+                return Err(cx.err("animations", format!("animation `{n}`: no animation has that name ({})", listing())))
+            }
+        },
+    })
+}
+
+/// A channel's keyframes as node `t`'s track of `property` (`width`: the values per keyframe, the targets for
+/// morph weights; `s_at`: the sampler, for messages).
+fn set_track(
+    cx: &Cx,
+    t: &mut NodeTracks,
+    property: gltf::animation::Property,
+    kf: Keyframes,
+    s_at: &str,
+    width: usize,
+) -> Result<(), SceneError> {
+    use gltf::animation::Property;
+    let Keyframes { times, interpolation, values, per_key } = kf;
+    match property {
+        Property::Translation | Property::Scale => {
+            let v: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
+            let (values, tangents) = split(v, per_key);
+            let scale = property == Property::Scale;
+            if scale && values.iter().any(|x| x.abs().min_element() < 1e-9) {
+                return Err(cx.err(format!("{s_at}.output"), "scales must be non-zero"));
+            }
+            let track = Some(Track { times, values, tangents, interpolation });
+            if scale {
+                t.scale = track;
+            } else {
+                t.translation = track;
+            }
+        }
+        Property::Rotation => {
+            let v: Vec<Quat> = values.chunks_exact(4).map(Quat::from_slice).collect();
+            if per_key == 1 && v.iter().any(|q| q.length() < 1e-6) {
+                return Err(cx.err(format!("{s_at}.output"), "rotations must be non-zero quaternions"));
+            }
+            let (values, tangents) = split(v, per_key);
+            if values.iter().any(|q| q.length() < 1e-6) {
+                return Err(cx.err(format!("{s_at}.output"), "rotations must be non-zero quaternions"));
+            }
+            let values = values.into_iter().map(unit).collect();
+            t.rotation = Some(Track { times, values, tangents, interpolation });
+        }
+        Property::MorphTargetWeights => {
+            // Keyframe-major: per keyframe (and per spline part) one weight per target.
+            let per_target = (0..width).map(|k| {
+                let v: Vec<f32> = values.iter().skip(k).step_by(width).copied().collect();
+                let (values, tangents) = split(v, per_key);
+                Track { times: times.clone(), values, tangents, interpolation }
+            });
+            t.weights = Some(per_target.collect());
+        }
+    }
+    Ok(())
+}
+
 /// Read and check a sampler's keyframes ([`Keyframes`]): times finite and increasing, at least one; values finite,
 /// as many as the keyframes need. `what` names the property in messages.
 pub(super) fn keyframes(
@@ -273,27 +351,7 @@ pub(super) fn animations(
             _ => format!("animations[{}]", a.index()),
         })
         .collect();
-    let listing = || {
-        let all: Vec<String> = names.iter().enumerate().map(|(i, n)| format!("{i} \"{n}\"")).collect();
-        if all.is_empty() {
-            "the file has none".to_string()
-        } else {
-            format!("the file has {}", all.join(", "))
-        }
-    };
-    let chosen = match choice {
-        AnimationChoice::All => None,
-        AnimationChoice::Index(i) if *i < names.len() => Some(*i),
-        AnimationChoice::Index(i) => {
-            return Err(cx.err("animations", format!("animation {i}: no animation has that index ({})", listing())))
-        }
-        AnimationChoice::Name(n) => match names.iter().position(|x| x == n) {
-            Some(i) => Some(i),
-            None => {
-                return Err(cx.err("animations", format!("animation `{n}`: no animation has that name ({})", listing())))
-            }
-        },
-    };
+    let chosen = chosen_animation(cx, &names, choice)?;
     let mut period = 0.0f32;
     // Per node and property: the animation that animates it.
     let mut owner: std::collections::HashMap<(usize, &'static str), usize> = Default::default();
@@ -338,47 +396,9 @@ pub(super) fn animations(
             owner.insert((n, key), anim.index());
             // Weights are SCALAR, one per target per keyframe; the TRS properties one VEC3 or VEC4 per keyframe.
             let comps = if key == "weights" { 1 } else { width };
-            let Keyframes { times, interpolation, values, per_key } =
-                keyframes(cx, &ch.sampler(), &s_at, buffers, comps, width, key)?;
-            period = period.max(*times.last().unwrap_or(&0.0));
-            let t = &mut tracks[n];
-            match property {
-                Property::Translation | Property::Scale => {
-                    let v: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
-                    let (values, tangents) = split(v, per_key);
-                    let scale = property == Property::Scale;
-                    if scale && values.iter().any(|x| x.abs().min_element() < 1e-9) {
-                        return Err(cx.err(format!("{s_at}.output"), "scales must be non-zero"));
-                    }
-                    let track = Some(Track { times, values, tangents, interpolation });
-                    if scale {
-                        t.scale = track;
-                    } else {
-                        t.translation = track;
-                    }
-                }
-                Property::Rotation => {
-                    let v: Vec<Quat> = values.chunks_exact(4).map(Quat::from_slice).collect();
-                    if per_key == 1 && v.iter().any(|q| q.length() < 1e-6) {
-                        return Err(cx.err(format!("{s_at}.output"), "rotations must be non-zero quaternions"));
-                    }
-                    let (values, tangents) = split(v, per_key);
-                    if values.iter().any(|q| q.length() < 1e-6) {
-                        return Err(cx.err(format!("{s_at}.output"), "rotations must be non-zero quaternions"));
-                    }
-                    let values = values.into_iter().map(unit).collect();
-                    t.rotation = Some(Track { times, values, tangents, interpolation });
-                }
-                Property::MorphTargetWeights => {
-                    // Keyframe-major: per keyframe (and per spline part) one weight per target.
-                    let per_target = (0..width).map(|k| {
-                        let v: Vec<f32> = values.iter().skip(k).step_by(width).copied().collect();
-                        let (values, tangents) = split(v, per_key);
-                        Track { times: times.clone(), values, tangents, interpolation }
-                    });
-                    t.weights = Some(per_target.collect());
-                }
-            }
+            let kf = keyframes(cx, &ch.sampler(), &s_at, buffers, comps, width, key)?;
+            period = period.max(*kf.times.last().unwrap_or(&0.0));
+            set_track(cx, &mut tracks[n], property, kf, &s_at, width)?;
         }
     }
     Ok(Played { tracks, period, names, chosen })

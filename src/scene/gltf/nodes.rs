@@ -150,122 +150,154 @@ pub(super) fn visit(
 
     node_mesh(cx, node, &place, g, out)?;
 
-    let origin = world.transform_point3(Vec3::ZERO);
-    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     if let Some(cam) = node.camera() {
-        let cam_at = format!("cameras[{}]", cam.index());
-        let (projection, aspect) = match cam.projection() {
-            gltf::camera::Projection::Perspective(p) => {
-                let fov = p.yfov();
-                if !(fov > 0.0 && fov < std::f32::consts::PI) {
-                    return Err(cx.err(format!("{cam_at}.perspective.yfov"), format!("must lie in (0, π) (got {fov})")));
-                }
-                let aspect = p.aspect_ratio();
-                if let Some(a) = aspect.filter(|a| !(a.is_finite() && *a > 0.0)) {
-                    return Err(cx.err(format!("{cam_at}.perspective.aspectRatio"), format!("must be > 0 (got {a})")));
-                }
-                (Projection::Perspective { fov }, aspect)
-            }
-            gltf::camera::Projection::Orthographic(o) => {
-                let (w, h) = (o.xmag(), o.ymag());
-                if !(h.is_finite() && h > 0.0) {
-                    return Err(cx.err(format!("{cam_at}.orthographic.ymag"), format!("must be > 0 (got {h})")));
-                }
-                if !(w.is_finite() && w > 0.0) {
-                    return Err(cx.err(format!("{cam_at}.orthographic.xmag"), format!("must be > 0 (got {w})")));
-                }
-                (Projection::Orthographic { half_height: h }, Some(w / h))
-            }
-        };
-        let up = world.transform_vector3(Vec3::Y);
-        if forward == Vec3::ZERO || !up.is_finite() || forward.cross(up.normalize_or_zero()).length() < 1e-4 {
-            return Err(cx.err(at.clone(), "the camera node's transform is degenerate"));
-        }
-        let mut name = node
-            .name()
-            .or(cam.name())
-            .filter(|n| !n.is_empty())
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("camera{}", out.cameras.len()));
-        if out.cameras.iter().any(|c| c.name == name) {
-            let mut k = 2;
-            while out.cameras.iter().any(|c| c.name == format!("{name}-{k}")) {
-                k += 1;
-            }
-            cx.warn(&at, &format!("camera name `{name}` is taken; this camera is `{name}-{k}`"));
-            name = format!("{name}-{k}");
-        }
-        if let Some(a) = &animation {
-            out.movers.push(Mover { what: Moved::Camera(out.cameras.len()), animation: a.clone() });
-        }
-        g.sources.borrow_mut().cameras.push(cam.index());
-        out.cameras.push(Camera {
-            name,
-            projection,
-            position: origin,
-            target: origin + forward,
-            up: up.normalize(),
-            aspect,
-        });
+        node_camera(cx, node, &cam, world, animation.as_ref(), g, out)?;
     }
-
     if let Some(light) = node.light() {
-        let l_at = format!("extensions.KHR_lights_punctual.lights[{}]", light.index());
-        let c = light.color();
-        let color = Vec3::new(c[0], c[1], c[2]);
-        if !color.is_finite() || color.min_element() < 0.0 {
-            return Err(cx.err(format!("{l_at}.color"), "components must be finite and >= 0"));
-        }
-        let raw = light.intensity();
-        if !(raw.is_finite() && raw >= 0.0) {
-            return Err(cx.err(format!("{l_at}.intensity"), format!("must be finite and >= 0 (got {raw})")));
-        }
-        let intensity = raw / LUMENS_PER_WATT;
-        if forward == Vec3::ZERO {
-            return Err(cx.err(at, "the light node's transform is degenerate"));
-        }
-        if let Some(r) = light.range() {
-            cx.warn(
-                &format!("{l_at}.range"),
-                &format!("range {r} m is ignored: the light falls off as 1/d² with no cutoff (a hint the spec allows to ignore)"),
-            );
-        }
-        let (kind, cone) = match light.kind() {
-            gltf::khr_lights_punctual::Kind::Point => (LightKind::Point, std::f32::consts::PI),
-            gltf::khr_lights_punctual::Kind::Directional => (LightKind::Directional, 0.0),
-            gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, inner_cone_angle } => {
-                let deg = outer_cone_angle.to_degrees();
-                if !(deg > 0.0 && deg < 90.0) {
-                    return Err(cx.err(
-                        format!("{l_at}.spot.outerConeAngle"),
-                        format!("the cone half-angle must lie in (0, π/2) (got {outer_cone_angle})"),
-                    ));
-                }
-                if inner_cone_angle < outer_cone_angle * 0.999 {
-                    cx.warn(
-                        &format!("{l_at}.spot"),
-                        &format!(
-                            "the spot's soft edge from {:.1}° to {deg:.1}° is drawn hard at {deg:.1}° (innerConeAngle is ignored)",
-                            inner_cone_angle.to_degrees()
-                        ),
-                    );
-                }
-                (LightKind::Spot, outer_cone_angle)
-            }
-        };
-        // A point light shines every way; its maps aim at the glass (Scene::aim_point_lights, once loaded).
-        let target = if kind == LightKind::Point { Vec3::NAN } else { origin + forward };
-        if let Some(a) = &animation {
-            out.movers.push(Mover { what: Moved::Light(out.lights.len()), animation: a.clone() });
-        }
-        g.sources.borrow_mut().lights.push(light.index());
-        out.lights.push(Light::punctual(kind, origin, target, cone, intensity, color));
+        node_light(cx, &light, &at, world, animation.as_ref(), g, out)?;
     }
 
     for c in node.children() {
         visit(cx, &c, &place, g, visiting, out)?;
     }
     visiting[node.index()] = false;
+    Ok(())
+}
+
+/// The camera on `node` (glTF's `camera`), placed by its world transform and moved by its `animation`.
+fn node_camera(
+    cx: &Cx,
+    node: &gltf::Node,
+    cam: &gltf::Camera,
+    world: Mat4,
+    animation: Option<&Animation>,
+    g: &Globals,
+    out: &mut Scene,
+) -> Result<(), SceneError> {
+    let at = format!("nodes[{}]", node.index());
+    let origin = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let cam_at = format!("cameras[{}]", cam.index());
+    let (projection, aspect) = match cam.projection() {
+        gltf::camera::Projection::Perspective(p) => {
+            let fov = p.yfov();
+            if !(fov > 0.0 && fov < std::f32::consts::PI) {
+                return Err(cx.err(format!("{cam_at}.perspective.yfov"), format!("must lie in (0, π) (got {fov})")));
+            }
+            let aspect = p.aspect_ratio();
+            if let Some(a) = aspect.filter(|a| !(a.is_finite() && *a > 0.0)) {
+                return Err(cx.err(format!("{cam_at}.perspective.aspectRatio"), format!("must be > 0 (got {a})")));
+            }
+            (Projection::Perspective { fov }, aspect)
+        }
+        gltf::camera::Projection::Orthographic(o) => {
+            let (w, h) = (o.xmag(), o.ymag());
+            if !(h.is_finite() && h > 0.0) {
+                return Err(cx.err(format!("{cam_at}.orthographic.ymag"), format!("must be > 0 (got {h})")));
+            }
+            if !(w.is_finite() && w > 0.0) {
+                return Err(cx.err(format!("{cam_at}.orthographic.xmag"), format!("must be > 0 (got {w})")));
+            }
+            (Projection::Orthographic { half_height: h }, Some(w / h))
+        }
+    };
+    let up = world.transform_vector3(Vec3::Y);
+    if forward == Vec3::ZERO || !up.is_finite() || forward.cross(up.normalize_or_zero()).length() < 1e-4 {
+        return Err(cx.err(at.clone(), "the camera node's transform is degenerate"));
+    }
+    let mut name = node
+        .name()
+        .or(cam.name())
+        .filter(|n| !n.is_empty())
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("camera{}", out.cameras.len()));
+    if out.cameras.iter().any(|c| c.name == name) {
+        let mut k = 2;
+        while out.cameras.iter().any(|c| c.name == format!("{name}-{k}")) {
+            k += 1;
+        }
+        cx.warn(&at, &format!("camera name `{name}` is taken; this camera is `{name}-{k}`"));
+        name = format!("{name}-{k}");
+    }
+    if let Some(a) = animation {
+        out.movers.push(Mover { what: Moved::Camera(out.cameras.len()), animation: a.clone() });
+    }
+    g.sources.borrow_mut().cameras.push(cam.index());
+    out.cameras.push(Camera {
+        name,
+        projection,
+        position: origin,
+        target: origin + forward,
+        up: up.normalize(),
+        aspect,
+    });
+    Ok(())
+}
+
+/// The light on a node (KHR_lights_punctual), placed by the node's world transform and moved by its `animation`.
+fn node_light(
+    cx: &Cx,
+    light: &gltf::khr_lights_punctual::Light,
+    at: &str,
+    world: Mat4,
+    animation: Option<&Animation>,
+    g: &Globals,
+    out: &mut Scene,
+) -> Result<(), SceneError> {
+    let origin = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let l_at = format!("extensions.KHR_lights_punctual.lights[{}]", light.index());
+    let c = light.color();
+    let color = Vec3::new(c[0], c[1], c[2]);
+    if !color.is_finite() || color.min_element() < 0.0 {
+        return Err(cx.err(format!("{l_at}.color"), "components must be finite and >= 0"));
+    }
+    let raw = light.intensity();
+    if !(raw.is_finite() && raw >= 0.0) {
+        return Err(cx.err(format!("{l_at}.intensity"), format!("must be finite and >= 0 (got {raw})")));
+    }
+    let intensity = raw / LUMENS_PER_WATT;
+    if forward == Vec3::ZERO {
+        return Err(cx.err(at, "the light node's transform is degenerate"));
+    }
+    if let Some(r) = light.range() {
+        cx.warn(
+            &format!("{l_at}.range"),
+            &format!(
+                "range {r} m is ignored: the light falls off as 1/d² with no cutoff (a hint the spec allows to ignore)"
+            ),
+        );
+    }
+    let (kind, cone) = match light.kind() {
+        gltf::khr_lights_punctual::Kind::Point => (LightKind::Point, std::f32::consts::PI),
+        gltf::khr_lights_punctual::Kind::Directional => (LightKind::Directional, 0.0),
+        gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, inner_cone_angle } => {
+            let deg = outer_cone_angle.to_degrees();
+            if !(deg > 0.0 && deg < 90.0) {
+                return Err(cx.err(
+                    format!("{l_at}.spot.outerConeAngle"),
+                    format!("the cone half-angle must lie in (0, π/2) (got {outer_cone_angle})"),
+                ));
+            }
+            if inner_cone_angle < outer_cone_angle * 0.999 {
+                cx.warn(
+                    &format!("{l_at}.spot"),
+                    &format!(
+                        "the spot's soft edge from {:.1}° to {deg:.1}° is drawn hard at {deg:.1}° (innerConeAngle is ignored)",
+                        inner_cone_angle.to_degrees()
+                    ),
+                );
+            }
+            (LightKind::Spot, outer_cone_angle)
+        }
+    };
+    // A point light shines every way; its maps aim at the glass (Scene::aim_point_lights, once loaded).
+    let target = if kind == LightKind::Point { Vec3::NAN } else { origin + forward };
+    if let Some(a) = animation {
+        out.movers.push(Mover { what: Moved::Light(out.lights.len()), animation: a.clone() });
+    }
+    g.sources.borrow_mut().lights.push(light.index());
+    out.lights.push(Light::punctual(kind, origin, target, cone, intensity, color));
     Ok(())
 }
 
@@ -407,26 +439,7 @@ pub(super) fn mesh_objects(
         None => places.to_vec(),
     };
     let count = mesh.primitives().len();
-    let targets_of = |p: &gltf::Primitive| p.morph_targets().len();
-    let n_targets = mesh.primitives().next().map_or(0, |p| targets_of(&p));
-    if let Some(p) = mesh.primitives().find(|p| targets_of(p) != n_targets) {
-        return Err(cx.err(
-            format!("{mesh_at}.primitives[{}].targets", p.index()),
-            format!(
-                "{} morph targets where the mesh's first primitive has {n_targets}: every primitive needs the same",
-                targets_of(&p)
-            ),
-        ));
-    }
-    // The weights: the node's, else the mesh's, else zero.
-    let weights: Vec<f32> = match node.weights().or(mesh.weights()) {
-        Some(w) => w.to_vec(),
-        None => vec![0.0; n_targets],
-    };
-    if weights.len() != n_targets || weights.iter().any(|w| !w.is_finite()) {
-        let field = if node.weights().is_some() { format!("{at}.weights") } else { format!("{mesh_at}.weights") };
-        return Err(cx.err(field, format!("needs one finite weight per morph target ({n_targets})")));
-    }
+    let (n_targets, weights) = morph_weights(cx, node, mesh)?;
     for p in mesh.primitives() {
         let p_at = format!("{mesh_at}.primitives[{}]", p.index());
         let name = if count > 1 { format!("{base_name}#{}", p.index()) } else { base_name.clone() };
@@ -443,20 +456,7 @@ pub(super) fn mesh_objects(
         }
         let (material, priority) =
             p.material().index().map_or((g.default_material, 0), |i| (materials[i], g.priorities[i]));
-        // A textured material reads its TEXCOORD set (the texture coordinates are not transformed with the node).
-        if let Some(set) = p.material().index().and_then(|i| g.tex_coords[i]) {
-            let a = p.get(&gltf::Semantic::TexCoords(set)).ok_or_else(|| {
-                cx.err(
-                    format!("{p_at}.attributes"),
-                    format!("its material's base color texture reads TEXCOORD_{set}, which the primitive lacks"),
-                )
-            })?;
-            let uvs = read_uvs(cx, &a, &format!("{p_at}.attributes.TEXCOORD_{set}"), buffers)?;
-            if uvs.len() != m.positions.len() {
-                return Err(cx.err(format!("{p_at}.attributes.TEXCOORD_{set}"), "needs one uv per position"));
-            }
-            m.uvs = uvs;
-        }
+        primitive_uvs(cx, &p, &p_at, g, &mut m)?;
         // Still weights are baked into the mesh; animated ones deform it on the GPU.
         let mut morph = None;
         if n_targets > 0 {
@@ -518,6 +518,53 @@ pub(super) fn mesh_objects(
             g.sources.borrow_mut().materials.push(p.material().index());
             out.objects.push(Object { animation: Some(anim), priority, ..Object::new(name, material, placed) });
         }
+    }
+    Ok(())
+}
+
+/// The morph targets every primitive of `mesh` has (the same number, or an error naming the first that differs),
+/// and the weights: the node's, else the mesh's, else zero, one finite weight per target.
+fn morph_weights(cx: &Cx, node: &gltf::Node, mesh: &gltf::Mesh) -> Result<(usize, Vec<f32>), SceneError> {
+    let at = format!("nodes[{}]", node.index());
+    let mesh_at = format!("meshes[{}]", mesh.index());
+    let targets_of = |p: &gltf::Primitive| p.morph_targets().len();
+    let n_targets = mesh.primitives().next().map_or(0, |p| targets_of(&p));
+    if let Some(p) = mesh.primitives().find(|p| targets_of(p) != n_targets) {
+        return Err(cx.err(
+            format!("{mesh_at}.primitives[{}].targets", p.index()),
+            format!(
+                "{} morph targets where the mesh's first primitive has {n_targets}: every primitive needs the same",
+                targets_of(&p)
+            ),
+        ));
+    }
+    // The weights: the node's, else the mesh's, else zero.
+    let weights: Vec<f32> = match node.weights().or(mesh.weights()) {
+        Some(w) => w.to_vec(),
+        None => vec![0.0; n_targets],
+    };
+    if weights.len() != n_targets || weights.iter().any(|w| !w.is_finite()) {
+        let field = if node.weights().is_some() { format!("{at}.weights") } else { format!("{mesh_at}.weights") };
+        return Err(cx.err(field, format!("needs one finite weight per morph target ({n_targets})")));
+    }
+    Ok((n_targets, weights))
+}
+
+/// A textured material's texture coordinates: the primitive's TEXCOORD set the material reads, one uv per position,
+/// into `m` (the texture coordinates are not transformed with the node).
+fn primitive_uvs(cx: &Cx, p: &gltf::Primitive, p_at: &str, g: &Globals, m: &mut Mesh) -> Result<(), SceneError> {
+    if let Some(set) = p.material().index().and_then(|i| g.tex_coords[i]) {
+        let a = p.get(&gltf::Semantic::TexCoords(set)).ok_or_else(|| {
+            cx.err(
+                format!("{p_at}.attributes"),
+                format!("its material's base color texture reads TEXCOORD_{set}, which the primitive lacks"),
+            )
+        })?;
+        let uvs = read_uvs(cx, &a, &format!("{p_at}.attributes.TEXCOORD_{set}"), g.buffers)?;
+        if uvs.len() != m.positions.len() {
+            return Err(cx.err(format!("{p_at}.attributes.TEXCOORD_{set}"), "needs one uv per position"));
+        }
+        m.uvs = uvs;
     }
     Ok(())
 }
