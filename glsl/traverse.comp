@@ -484,6 +484,66 @@ uint decide(uint level, uvec2 cell, out uvec2 out_cell, out uint no_check) {
     return ACT_REFINE;
 }
 
+// The work group's reservation (its first invocation's): one for all its photons and children, against two bounds:
+// the batch's entries (state.capacity) and its photons alone (u_frame.frame.batch_photons). On overflow the batch is
+// aborted (and later split) or, with batching off, the group's entries are dropped and counted; either way nothing
+// is written past the buffer. Without batching state.capacity is traversal.w itself, and the photons, counted in
+// `used` too, cannot exceed it, so only the first bound can fail there.
+void reserve() {
+    uint entries = s_emit_n + 4u * s_child_n;
+    s_reserved = false;
+    if (entries > 0u) {
+        uint base = atomicAdd(state.used, entries);
+        bool fits = base + entries <= state.capacity;
+        if (fits) {
+            s_emit_base = atomicAdd(state.emit_count, s_emit_n);
+            fits = s_emit_base + s_emit_n <= u_frame.frame.batch_photons;
+        }
+        if (fits) {
+            s_reserved = true;
+            s_child_base = atomicAdd(state.write_count, 4u * s_child_n);
+        } else if (state.batching != 0u) {
+            atomicExchange(state.aborted, 1u);
+        } else {
+            atomicAdd(state.used, 0u - entries);
+            atomicAdd(state.overflow_dropped, entries);
+        }
+    }
+}
+
+// A candidate's outputs into the reserved entries: its photon (with its weak-branch siblings), its four children
+// as photons, the fused last level's leaves, or its four children as the next level's candidates.
+void write_outputs(uint action, uvec2 out_cell, uint slot, uint siblings, uint leaves, uint level) {
+    if (action == ACT_EMIT) {
+        photons[state.capacity - 1u - (s_emit_base + slot)] = with_siblings(out_cell, siblings);
+    } else if (action == ACT_EMIT_CHILDREN) {
+        uvec2 xy = cell_xy(out_cell);
+        uint r = cell_radius(out_cell);
+        for (uint k = 0u; k < 4u; k++) {
+            uvec2 c = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
+            photons[state.capacity - 1u - (s_emit_base + slot + k)] =
+                weak_by_siblings(level + 1u) ? with_siblings(c, 7u) : c;
+        }
+    } else if (action == ACT_EMIT_LEAVES) {
+        uvec2 xy = cell_xy(out_cell);
+        uint j = 0u;
+        for (uint k = 0u; k < 4u; k++) {
+            if ((leaves & (1u << k)) != 0u) {
+                photons[state.capacity - 1u - (s_emit_base + slot + j)] =
+                    pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), 0u);
+                j++;
+            }
+        }
+    } else if (action == ACT_REFINE) {
+        uvec2 xy = cell_xy(out_cell);
+        uint r = cell_radius(out_cell);
+        uint base = state.read_offset + state.read_count + s_child_base + 4u * slot;
+        for (uint k = 0u; k < 4u; k++) {
+            photons[base + k] = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
+        }
+    }
+}
+
 void main() {
     uint lid = gl_LocalInvocationIndex;
     if (lid == 0u) {
@@ -573,63 +633,9 @@ void main() {
         if (!whole) siblings = 0u;
     }
 #endif
-    if (lid == 0u) {
-        // One reservation per work group for all its photons and children, against two bounds: the batch's entries
-        // (state.capacity) and its photons alone (u_frame.frame.batch_photons). On overflow the batch is aborted (and later
-        // split) or, with batching off, the group's entries are dropped and counted; either way nothing is written
-        // past the buffer. Without batching state.capacity is traversal.w itself, and the photons, counted in
-        // `used` too, cannot exceed it, so only the first bound can fail there.
-        uint entries = s_emit_n + 4u * s_child_n;
-        s_reserved = false;
-        if (entries > 0u) {
-            uint base = atomicAdd(state.used, entries);
-            bool fits = base + entries <= state.capacity;
-            if (fits) {
-                s_emit_base = atomicAdd(state.emit_count, s_emit_n);
-                fits = s_emit_base + s_emit_n <= u_frame.frame.batch_photons;
-            }
-            if (fits) {
-                s_reserved = true;
-                s_child_base = atomicAdd(state.write_count, 4u * s_child_n);
-            } else if (state.batching != 0u) {
-                atomicExchange(state.aborted, 1u);
-            } else {
-                atomicAdd(state.used, 0u - entries);
-                atomicAdd(state.overflow_dropped, entries);
-            }
-        }
-    }
+    if (lid == 0u) reserve();
     barrier();
-    if (s_reserved) {
-        if (action == ACT_EMIT) {
-            photons[state.capacity - 1u - (s_emit_base + slot)] = with_siblings(out_cell, siblings);
-        } else if (action == ACT_EMIT_CHILDREN) {
-            uvec2 xy = cell_xy(out_cell);
-            uint r = cell_radius(out_cell);
-            for (uint k = 0u; k < 4u; k++) {
-                uvec2 c = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
-                photons[state.capacity - 1u - (s_emit_base + slot + k)] =
-                    weak_by_siblings(level + 1u) ? with_siblings(c, 7u) : c;
-            }
-        } else if (action == ACT_EMIT_LEAVES) {
-            uvec2 xy = cell_xy(out_cell);
-            uint j = 0u;
-            for (uint k = 0u; k < 4u; k++) {
-                if ((leaves & (1u << k)) != 0u) {
-                    photons[state.capacity - 1u - (s_emit_base + slot + j)] =
-                        pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), 0u);
-                    j++;
-                }
-            }
-        } else if (action == ACT_REFINE) {
-            uvec2 xy = cell_xy(out_cell);
-            uint r = cell_radius(out_cell);
-            uint base = state.read_offset + state.read_count + s_child_base + 4u * slot;
-            for (uint k = 0u; k < 4u; k++) {
-                photons[base + k] = pack_cell(level + 1u, 2u * xy.x + (k & 1u), 2u * xy.y + (k >> 1), r);
-            }
-        }
-    }
+    if (s_reserved) write_outputs(action, out_cell, slot, siblings, leaves, level);
     if (lid == 0u) {
         // One atomic per work group instead of one per invocation.
         uint refined = s_child_n + s_leaf_cells, emitted = s_emit_n - s_leaf_emit;

@@ -1,6 +1,7 @@
 //! The code stays in pieces a reader can hold: no Rust function longer than 120 lines (src/, build.rs, build/,
-//! tests/, examples/), and no GLSL function longer than 150. The functions that were longer when the limits were set are listed below with their lengths
-//! then: each may only shrink, and leaves the list once it fits (the test says so), so the list only gets shorter.
+//! tests/, examples/), and no GLSL function longer than 150. The functions that were longer when the limits were set
+//! were listed below with their lengths then, each allowed only to shrink until it fit; all of them fit now, and the
+//! list stays empty: a function over its limit fails the test.
 
 use std::path::{Path, PathBuf};
 
@@ -9,7 +10,7 @@ const RUST_LIMIT: usize = 120;
 const GLSL_LIMIT: usize = 150;
 
 /// (file, function, its length in lines when the limits were set).
-const OVER: &[(&str, &str, usize)] = &[("glsl/traverse.comp", "main", 162)];
+const OVER: &[(&str, &str, usize)] = &[];
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap().flatten() {
