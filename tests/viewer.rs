@@ -733,6 +733,27 @@ fn the_overlay_is_presented_over_the_frame_and_its_buttons_act() {
     assert_eq!(clicked["counters"]["water_drops"], 0, "a click on the panel is not a click into the scene");
 }
 
+/// A window shorter than the overlay's panel scrolls the panel: it stays within the window, with its buttons on
+/// it. Measured: 960×300, the panel from y = 0 to 268 (to 435, past the window, before it scrolled).
+#[test]
+fn the_overlay_panel_fits_a_short_window() {
+    let dir = out_dir("viewer_overlay_short");
+    let x = Xvfb::start();
+    let mut args = vec!["--scene", SPHERE, "--camera", "top", "--size", "960x300", "--accumulate", "1"];
+    args.extend(["--overlay", "on", "--frames", "3"]);
+    args.extend_from_slice(FAST);
+    let s = view_ok(&dir, "short", &x.display, &args);
+    let o = &s["overlay"];
+    let rect =
+        |v: &serde_json::Value| -> Vec<f64> { v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    let panel = rect(&o["panel"]);
+    eprintln!("overlay panel in a 960x300 window: {panel:?}");
+    assert!(panel[1] >= 0.0 && panel[3] <= 300.0, "the panel {panel:?} leaves the 300-pixel window");
+    assert!(panel[3] - panel[1] > 150.0, "the panel {panel:?} shrank to nothing");
+    let level_up = rect(&o["buttons"]["LevelUp"]);
+    assert!(level_up[3] <= panel[3], "the level button {level_up:?} lies below the panel {panel:?}");
+}
+
 /// A scene file dropped on the window opens in place of the open one (a scripted drop, which takes the path that a
 /// real drop's event carries), with the new scene's first perspective camera, and its frame is the headless
 /// renderer's frame of that file from that camera. Measured: at most 1 level apart.

@@ -226,10 +226,15 @@ impl Overlay {
         buttons: &mut Vec<(String, Rect)>,
     ) -> Option<Rect> {
         let frame = egui::Frame::window(&ctx.style()).fill(Color32::from_black_alpha(200));
+        // A window shorter than the panel scrolls it (80 px: the title bar, the frame's margins and the panel's
+        // place below the window's top, with as much below it).
+        let max_height = (ctx.content_rect().height() - 80.0).max(80.0);
         let window = egui::Window::new("caustics").frame(frame).default_pos(Pos2::new(8.0, 8.0)).resizable(false).show(
             ctx,
             |ui| {
-                self.contents(ui, shown, actions, buttons);
+                egui::ScrollArea::vertical().max_height(max_height).show(ui, |ui| {
+                    self.contents(ui, shown, actions, buttons);
+                });
             },
         );
         window.map(|w| w.response.rect)
