@@ -251,6 +251,16 @@ fn check_lights(scene: &Scene) -> Result<()> {
             scene.path.display()
         )));
     }
+    let narrow =
+        |l: &crate::scene::Light| l.kind == crate::scene::LightKind::Spot && !crate::scene::spot_cone_ok(l.cone);
+    if let Some(i) = scene.lights.iter().position(narrow) {
+        return Err(Error::BadInput(format!(
+            "{}: light {i}: a spot light's cone half-angle must lie in [{}, 90) degrees (got {}°)",
+            scene.path.display(),
+            crate::scene::MIN_CONE_DEG,
+            scene.lights[i].cone.to_degrees()
+        )));
+    }
     Ok(())
 }
 
@@ -354,6 +364,13 @@ impl Renderer {
     pub fn set_light(&mut self, index: usize, light: crate::scene::Light) -> Result<()> {
         if index >= self.scene.lights.len() {
             return Err(Error::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
+        }
+        if light.kind == crate::scene::LightKind::Spot && !crate::scene::spot_cone_ok(light.cone) {
+            return Err(Error::BadInput(format!(
+                "light {index}: a spot light's cone half-angle must lie in [{}, 90) degrees (got {}°)",
+                crate::scene::MIN_CONE_DEG,
+                light.cone.to_degrees()
+            )));
         }
         let sized = light.radius.is_finite() && light.radius >= 0.0;
         if !(sized && (0.0..=10f32.to_radians()).contains(&light.angular_radius)) {

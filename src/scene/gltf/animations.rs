@@ -40,7 +40,6 @@ pub(super) fn pointer_tracks(
             let (values, tangents) = split(k.values.iter().map(|v| f(*v)).collect(), k.per_key);
             Ok(Track { times: k.times.clone(), values, tangents, interpolation: k.interpolation })
         };
-        let quarter = std::f32::consts::FRAC_PI_2;
         let (of_light, of_camera) = (&sources.lights, &sources.cameras);
         // The scene lights (cameras) made from glTF light (camera) `i`: one per node that holds it.
         let each = |of: &[usize], i: usize| -> Vec<usize> {
@@ -72,7 +71,7 @@ pub(super) fn pointer_tracks(
                 out.extend(each(of_light, i).into_iter().map(|k| P::LightIntensity(k, track.clone())));
             }
             T::Cone(i) => {
-                let track = scalar(&|v| v, &|v| v > 0.0 && v < quarter, "must lie in (0, π/2)")?;
+                let track = scalar(&|v| v, &|v| crate::scene::spot_cone_ok(v), "must lie in [0.1°, π/2)")?;
                 out.extend(each(of_light, i).into_iter().map(|k| P::LightCone(k, track.clone())));
             }
             T::Fov(i) => {

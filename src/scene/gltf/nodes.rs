@@ -273,10 +273,13 @@ fn node_light(
         gltf::khr_lights_punctual::Kind::Directional => (LightKind::Directional, 0.0),
         gltf::khr_lights_punctual::Kind::Spot { outer_cone_angle, inner_cone_angle } => {
             let deg = outer_cone_angle.to_degrees();
-            if !(deg > 0.0 && deg < 90.0) {
+            if !crate::scene::spot_cone_ok(outer_cone_angle) {
                 return Err(cx.err(
                     format!("{l_at}.spot.outerConeAngle"),
-                    format!("the cone half-angle must lie in (0, π/2) (got {outer_cone_angle})"),
+                    format!(
+                        "the cone half-angle must lie in [{}°, π/2) (got {outer_cone_angle})",
+                        crate::scene::MIN_CONE_DEG
+                    ),
                 ));
             }
             if inner_cone_angle < outer_cone_angle * 0.999 {

@@ -190,11 +190,11 @@ fn light(cx: &Ctx, i: usize, l: &S<LightDef>) -> Result<Light, SceneError> {
     let cone = match (kind, &d.cone_deg) {
         (LightKind::Spot, Some(c)) => {
             let v = *c.get_ref();
-            if !(v > 0.0 && v < 90.0) {
+            if !(crate::scene::MIN_CONE_DEG..90.0).contains(&v) {
                 return Err(cx.err(
                     c.span(),
                     f("cone_deg"),
-                    format!("cone half-angle must lie in (0, 90) degrees (got {v})"),
+                    format!("cone half-angle must lie in [{}, 90) degrees (got {v})", crate::scene::MIN_CONE_DEG),
                 ));
             }
             v.to_radians()
