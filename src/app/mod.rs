@@ -26,3 +26,25 @@ pub fn stderr_bar(make: impl FnOnce() -> indicatif::ProgressBar, template: &str)
     }
     bar
 }
+
+/// A light's orbit, as `temporal` and `soak` move the scene's first light: around the vertical through its target,
+/// at its distance, tilted 25° first when it stands straight above (so that the orbit moves it).
+pub struct LightOrbit {
+    target: glam::Vec3,
+    arm: glam::Vec3,
+}
+
+impl LightOrbit {
+    pub fn of(light: &caustics::scene::Light) -> Self {
+        let mut arm = light.position - light.target;
+        if arm.normalize().dot(glam::Vec3::Y).abs() > 0.99 {
+            arm = glam::Quat::from_rotation_z(-25f32.to_radians()) * arm;
+        }
+        LightOrbit { target: light.target, arm }
+    }
+
+    /// The light's position at `angle` (radians) along the orbit.
+    pub fn at(&self, angle: f32) -> glam::Vec3 {
+        self.target + glam::Quat::from_rotation_y(angle) * self.arm
+    }
+}

@@ -21,12 +21,12 @@
 //! in turn and the whole schedule repeats every S·A frames.
 
 use crate::app::commands::{to_rgb, SceneArgs, Session};
+use crate::app::LightOrbit;
 use caustics::error::{Error, Result};
 use caustics::image_io;
 use caustics::scene::{Light, LightKind, Material, Scene};
 use caustics::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
 use caustics::Aov;
-use glam::{Quat, Vec3};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -322,7 +322,8 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
         return Err(Error::BadInput(format!("--camera {}: the soak needs an orthographic camera", args.camera)));
     }
     let scene0 = session.renderer.scene().clone();
-    let orbit = Orbit::of(&scene0.lights[0]);
+    let orbit = LightOrbit::of(&scene0.lights[0]);
+    let cone_power = cone_power(&scene0.lights[0]);
     let s_count = steps.len();
     let period = s_count * args.angles as usize;
     let warmup = (2 * period).min(args.frames as usize);
@@ -348,39 +349,19 @@ pub fn run_soak(args: &SoakArgs) -> Result<()> {
             tuning: base.tuning.clone(),
         })?;
         (session.width, session.height) = step.size;
-        if !checks.frame(&mut session, &orbit, i, step, (si, ai), s_count)? {
+        if !checks.frame(&mut session, cone_power, i, step, (si, ai), s_count)? {
             break;
         }
     }
-    checks.finish(args, &session, &steps, warmup, orbit.cone_power)
+    checks.finish(args, &session, &steps, warmup, cone_power)
 }
 
-/// The light's orbit: around its target, at its distance, tilted 25° first when it stands straight above (so that
-/// the orbit moves it, as the viewer's does).
-struct Orbit {
-    target: Vec3,
-    arm: Vec3,
-    /// The power the light sends into its cone, W (a bound on any frame's caustic flux).
-    cone_power: f64,
-}
-
-impl Orbit {
-    fn of(light: &Light) -> Self {
-        let mut arm = light.position - light.target;
-        if arm.normalize().dot(Vec3::Y).abs() > 0.99 {
-            arm = Quat::from_rotation_z(-25f32.to_radians()) * arm;
-        }
-        let cone_power = match light.kind {
-            LightKind::Spot => light.intensity as f64 * std::f64::consts::TAU * (1.0 - (light.cone as f64).cos()),
-            LightKind::Directional => f64::INFINITY,
-            LightKind::Point => light.intensity as f64 * 4.0 * std::f64::consts::PI,
-        };
-        Orbit { target: light.target, arm, cone_power }
-    }
-
-    /// The light's position at `angle` (radians) around the vertical through its target.
-    fn at(&self, angle: f32) -> Vec3 {
-        self.target + Quat::from_rotation_y(angle) * self.arm
+/// The power a light sends into its cone, W: a bound on any frame's caustic flux.
+fn cone_power(light: &Light) -> f64 {
+    match light.kind {
+        LightKind::Spot => light.intensity as f64 * std::f64::consts::TAU * (1.0 - (light.cone as f64).cos()),
+        LightKind::Directional => f64::INFINITY,
+        LightKind::Point => light.intensity as f64 * 4.0 * std::f64::consts::PI,
     }
 }
 
@@ -420,7 +401,7 @@ impl Checks {
     fn frame(
         &mut self,
         session: &mut Session,
-        orbit: &Orbit,
+        cone_power: f64,
         i: usize,
         step: &Step,
         (si, ai): (usize, usize),
@@ -441,8 +422,8 @@ impl Checks {
             }
             failures.push(m);
         };
-        if !(flux.is_finite() && flux > 0.0 && flux <= orbit.cone_power) {
-            fail(format!("caustic flux {flux} W outside (0, {}] W", orbit.cone_power));
+        if !(flux.is_finite() && flux > 0.0 && flux <= cone_power) {
+            fail(format!("caustic flux {flux} W outside (0, {cone_power}] W"));
         }
         let key = ai * s_count + si;
         match self.reference[key] {

@@ -14,6 +14,7 @@
 //! change at half the photons to see it).
 
 use crate::app::commands::{to_rgb, SceneArgs, Session};
+use crate::app::LightOrbit;
 use caustics::error::{Error, Result};
 use caustics::image_io::{self, RgbImage};
 use caustics::metrics;
@@ -21,7 +22,6 @@ use caustics::reference::{self, Paths, RefParams};
 use caustics::scene::{Projection, Scene};
 use caustics::settings::{Method, Metric, Quality, Settings, Transport, Tuning};
 use caustics::Aov;
-use glam::{Quat, Vec3};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -79,11 +79,10 @@ fn plane64(img: &RgbImage) -> Vec<f64> {
     metrics::box_filter(&metrics::luminance_plane(img), img.width as usize, img.height as usize, ow, oh)
 }
 
-/// The scene with its light turned by `deg` about the vertical axis through its target.
-fn orbit(scene: &Scene, d: Vec3, deg: f32) -> Scene {
+/// The scene with its first light `deg` along its orbit.
+fn orbit(scene: &Scene, orbit: &LightOrbit, deg: f32) -> Scene {
     let mut s = scene.clone();
-    let l = &mut s.lights[0];
-    l.position = l.target + Quat::from_rotation_y(deg.to_radians()) * d;
+    s.lights[0].position = orbit.at(deg.to_radians());
     s
 }
 
@@ -142,11 +141,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         }
     };
     let scene0 = session.renderer.scene().clone();
-    let light = &scene0.lights[0];
-    let mut d = light.position - light.target;
-    if d.normalize().dot(Vec3::Y).abs() > 0.99 {
-        d = Quat::from_rotation_z(-25f32.to_radians()) * d;
-    }
+    let light_orbit = LightOrbit::of(&scene0.lights[0]);
     let params = RefParams {
         camera: Some(args.camera.clone()),
         paths,
@@ -158,7 +153,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
     let t = Instant::now();
     let mut refs = Vec::new();
     for k in 0..args.frames {
-        let scene = orbit(&scene0, d, k as f32 * step);
+        let scene = orbit(&scene0, &light_orbit, k as f32 * step);
         let params = RefParams { time: time(k), ..params.clone() };
         refs.push(plane64(&reference_at(&session.scene_path, &scene, &params)?));
     }
@@ -174,7 +169,7 @@ pub fn run_temporal(args: &TemporalArgs) -> Result<()> {
         let mut planes = Vec::new();
         let mut ms = Vec::new();
         for k in 0..args.frames {
-            session.renderer.set_scene(orbit(&scene0, d, k as f32 * step))?;
+            session.renderer.set_scene(orbit(&scene0, &light_orbit, k as f32 * step))?;
             session.renderer.set_time(time(k))?;
             if k == 0 {
                 session.frame(None)?; // warm-up: lavapipe compiles shaders on first use
