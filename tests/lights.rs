@@ -374,7 +374,7 @@ fn a_sphere_light_matches_the_reference() {
 
 /// `Renderer::set_light` refuses what the scene file refuses, and keeps the light it had: a radius that is negative
 /// or not finite, an angular radius past 10°, a radius on a directional light (a sun has an angular size), an
-/// angular radius on a spot or point light (a bulb has a radius).
+/// angular radius on a spot or point light (a bulb has a radius), and a spot's cone too narrow for its light view.
 #[test]
 fn set_light_refuses_a_size_the_light_cannot_have() {
     let (_gpu, device) = gpu();
@@ -388,6 +388,7 @@ fn set_light_refuses_a_size_the_light_cannot_have() {
         (caustics::scene::Light { angular_radius: 0.3, ..sun.clone() }, "an angular radius within [0, 10]"),
         (caustics::scene::Light { radius: 0.1, ..sun.clone() }, "a directional light (a sun) has an angular radius"),
         (caustics::scene::Light { angular_radius: 0.01, ..spot.clone() }, "a spot or point light a radius"),
+        (caustics::scene::Light { cone: 1e-30, ..spot.clone() }, "light 0: a spot light's cone half-angle"),
     ];
     for (light, needle) in cases {
         let e = r.set_light(0, light).expect_err("refused").to_string();

@@ -251,14 +251,21 @@ fn check_lights(scene: &Scene) -> Result<()> {
             scene.path.display()
         )));
     }
-    let narrow =
-        |l: &crate::scene::Light| l.kind == crate::scene::LightKind::Spot && !crate::scene::spot_cone_ok(l.cone);
-    if let Some(i) = scene.lights.iter().position(narrow) {
+    for (i, l) in scene.lights.iter().enumerate() {
+        check_cone(l, || format!("{}: light {i}", scene.path.display()))?;
+    }
+    Ok(())
+}
+
+/// A spot light's cone is one its light view can be fitted to ([`crate::scene::spot_cone_ok`]); `which` names the
+/// light in the error.
+fn check_cone(light: &crate::scene::Light, which: impl FnOnce() -> String) -> Result<()> {
+    if light.kind == crate::scene::LightKind::Spot && !crate::scene::spot_cone_ok(light.cone) {
         return Err(Error::BadInput(format!(
-            "{}: light {i}: a spot light's cone half-angle must lie in [{}, 90) degrees (got {}°)",
-            scene.path.display(),
+            "{}: a spot light's cone half-angle must lie in [{}, 90) degrees (got {}°)",
+            which(),
             crate::scene::MIN_CONE_DEG,
-            scene.lights[i].cone.to_degrees()
+            light.cone.to_degrees()
         )));
     }
     Ok(())
@@ -365,13 +372,7 @@ impl Renderer {
         if index >= self.scene.lights.len() {
             return Err(Error::BadInput(format!("light {index}: the scene has {} lights", self.scene.lights.len())));
         }
-        if light.kind == crate::scene::LightKind::Spot && !crate::scene::spot_cone_ok(light.cone) {
-            return Err(Error::BadInput(format!(
-                "light {index}: a spot light's cone half-angle must lie in [{}, 90) degrees (got {}°)",
-                crate::scene::MIN_CONE_DEG,
-                light.cone.to_degrees()
-            )));
-        }
+        check_cone(&light, || format!("light {index}"))?;
         let sized = light.radius.is_finite() && light.radius >= 0.0;
         if !(sized && (0.0..=10f32.to_radians()).contains(&light.angular_radius)) {
             return Err(Error::BadInput(format!(
